@@ -1,0 +1,47 @@
+// What one measurement run is made of, from raw gauge samples to the lift error table.
+// Shared by acquisition (produces samples), compensation (analyses) and storage (keeps).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace gaugeloop {
+
+inline constexpr int kDegreesPerRevolution = 360;
+
+// One value per whole degree, index = degree in [0, 360).
+using DegreeTable = std::array<double, kDegreesPerRevolution>;
+
+// Gauge readings of one revolution of the work spindle, one per whole machine degree of C.
+// Units: mm of gauge reading (probe lift), not yet zeroed.
+struct RevolutionSamples {
+  std::int64_t revolution = 0;  // the amplifier's revolution count, unwrapped
+  DegreeTable lift_mm{};
+};
+
+// The raw result of acquisition: complete revolutions only, never mixed.
+// Invariant: every revolution has all 360 degrees.
+struct MeasuredRun {
+  std::vector<RevolutionSamples> revolutions;
+  std::int64_t polls = 0;                  // requests made to the gauge during the run
+  std::int64_t reconnects = 0;             // times the link was re-established
+  std::int64_t discarded_revolutions = 0;  // started but incomplete, thrown away
+};
+
+// The diagnosis of one averaged lobe against its design.
+// Frame: cam frame, index = cam angle in whole degrees (0 at the nose).
+struct LobeAnalysis {
+  DegreeTable design_lift_mm{};  // what a flat probe should read on the design lobe
+  DegreeTable mean_lift_mm{};    // average over revolutions, zeroed on the base circle
+  DegreeTable spread_um{};       // per-degree standard deviation across revolutions
+  DegreeTable error_um{};        // mean - design
+  double zero_offset_mm = 0.0;   // gauge reading subtracted to zero the base circle
+  double max_abs_error_um = 0.0;
+  double rms_error_um = 0.0;
+  double peak_to_valley_um = 0.0;
+  double repeatability_um = 0.0;  // largest per-degree spread
+};
+
+}  // namespace gaugeloop

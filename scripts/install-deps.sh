@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# Installs every Debian package gaugeloop needs to build, test and benchmark.
+# This is the only place packages are named. It installs only what is missing, so it is
+# cheap to run before every build. Needs root (or sudo) when something is missing.
+set -euo pipefail
+
+packages=(
+  # toolchain
+  g++ cmake ninja-build make pkgconf
+  # libraries the product links
+  libmodbus-dev      # gauge link and simulator (Modbus TCP/RTU)
+  libeigen3-dev      # spline, kinematics, FFT
+  libsqlite3-dev     # run history
+  libcli11-dev       # command line
+  libtomlplusplus-dev  # part and config files
+  nlohmann-json3-dev   # --json output
+  libspdlog-dev libfmt-dev  # logging and formatting
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev
+  sqlite3            # the CLI users query the database with; tests use it too
+  mbpoll             # independent Modbus client: tests read the simulator with it
+  socat              # pseudo-terminal pairs for Modbus RTU tests
+  locales            # a decimal-comma locale, to test that output ignores the C locale
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  status=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)
+  [[ "$status" == "install ok installed" ]] || missing+=("$p")
+done
+
+generate_test_locale() {
+  # de_DE.UTF-8 writes 1,5: tests check that tables and the database never do.
+  if ! locale -a 2>/dev/null | grep -qi '^de_DE\.utf-\?8$'; then
+    echo "install-deps: generating locale de_DE.UTF-8 for the tests"
+    $sudo localedef -i de_DE -f UTF-8 de_DE.UTF-8
+  fi
+}
+
+sudo=""
+if [[ $(id -u) -ne 0 ]] && command -v sudo >/dev/null 2>&1; then sudo="sudo"; fi
+
+if [[ ${#missing[@]} -eq 0 ]]; then
+  generate_test_locale
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}"
+if [[ $(id -u) -ne 0 && -z "$sudo" ]]; then
+  echo "install-deps: missing packages and not root: run as root: apt-get install ${missing[*]}" >&2
+  exit 1
+fi
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+generate_test_locale

@@ -1,0 +1,80 @@
+// Atomic file replacement: contents land whole, failures leave the old file and no debris.
+#include "core/atomic_file.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/part.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class AtomicFileTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("gaugeloop-atomic-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(AtomicFileTest, ReplacesContentsAndLeavesNoTemporaryFile) {
+  const fs::path f = dir_ / "CAM.SPF";
+  ASSERT_TRUE(write_file_atomically(f, "old\n").ok());
+  ASSERT_TRUE(write_file_atomically(f, "new contents\n").ok());
+  EXPECT_EQ(slurp(f), "new contents\n");
+  int entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir_)) ++entries;
+  EXPECT_EQ(entries, 1);
+}
+
+TEST_F(AtomicFileTest, MissingDirectoryFailsWithThePath) {
+  const fs::path f = dir_ / "no-such-dir" / "CAM.SPF";
+  Status s = write_file_atomically(f, "x");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().code, ErrorCode::kIo);
+  EXPECT_NE(s.error().message.find("no-such-dir"), std::string::npos);
+  EXPECT_FALSE(fs::exists(f));
+}
+
+TEST_F(AtomicFileTest, RenameOntoADirectoryFailsAndCleansUp) {
+  const fs::path f = dir_ / "CAM.SPF";
+  fs::create_directories(f);  // a directory where the file should go: rename must fail
+  Status s = write_file_atomically(f, "x");
+  ASSERT_FALSE(s.ok());
+  int entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir_)) ++entries;
+  EXPECT_EQ(entries, 1) << "the temporary file must be removed";
+}
+
+TEST(CamAngle, MapsMachineAngleToCamFrame) {
+  Part p;
+  EXPECT_DOUBLE_EQ(cam_angle_at_probe_deg(p, 10.0), 10.0);
+  p.rotation_sense = -1;
+  EXPECT_DOUBLE_EQ(cam_angle_at_probe_deg(p, 10.0), 350.0);
+  p.c_offset_deg = 5.0;
+  p.probe_offset_deg = 2.0;
+  EXPECT_DOUBLE_EQ(cam_angle_at_probe_deg(p, 10.0), 357.0);  // -(10 - 5 - 2) = -3
+  p.rotation_sense = 1;
+  EXPECT_DOUBLE_EQ(cam_angle_at_probe_deg(p, 7.0), 0.0);
+  EXPECT_LT(cam_angle_at_probe_deg(p, 7.0 - 1e-15), 360.0);
+}
+
+}  // namespace
+}  // namespace gaugeloop
