@@ -1,0 +1,59 @@
+// Text form of a per-degree table as kept in run_revolutions.lift_mm.
+#include "storage/degree_json.h"
+
+#include <array>
+#include <cassert>
+#include <charconv>
+#include <cmath>
+#include <cstddef>
+
+#include <nlohmann/json.hpp>
+
+namespace gaugeloop::storage_internal {
+
+std::string degree_table_to_json(const DegreeTable& table) {
+  std::string json;
+  json.reserve(table.size() * 10 + 2);
+  json += '[';
+  // Wide enough for any finite double in fixed notation (up to 309 integer digits).
+  std::array<char, 400> buffer{};
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    assert(std::isfinite(table[i]));
+    if (i != 0) json += ',';
+    const auto [end, ec] =
+        std::to_chars(buffer.data(), buffer.data() + buffer.size(), table[i], std::chars_format::fixed, kJsonDecimals);
+    assert(ec == std::errc());
+    json.append(buffer.data(), end);
+  }
+  json += ']';
+  return json;
+}
+
+Result<DegreeTable> degree_table_from_json(std::string_view text) {
+  const nlohmann::json parsed = nlohmann::json::parse(text, /*cb=*/nullptr,
+                                                      /*allow_exceptions=*/false);
+  if (parsed.is_discarded()) {
+    return make_error(ErrorCode::kInvalidInput, "not valid JSON");
+  }
+  if (!parsed.is_array() || parsed.size() != static_cast<std::size_t>(kDegreesPerRevolution)) {
+    return make_error(
+        ErrorCode::kInvalidInput,
+        "expected a JSON array of " + std::to_string(kDegreesPerRevolution) + " numbers, found " +
+            (parsed.is_array() ? "an array of " + std::to_string(parsed.size()) : std::string(parsed.type_name())));
+  }
+  DegreeTable table{};
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    const nlohmann::json& item = parsed[i];
+    if (!item.is_number()) {
+      return make_error(ErrorCode::kInvalidInput,
+                        "element " + std::to_string(i) + " is a " + item.type_name() + ", not a number");
+    }
+    table[i] = item.get<double>();
+    if (!std::isfinite(table[i])) {
+      return make_error(ErrorCode::kInvalidInput, "element " + std::to_string(i) + " is out of range");
+    }
+  }
+  return table;
+}
+
+}  // namespace gaugeloop::storage_internal

@@ -1,0 +1,252 @@
+// The database file as other tools see it: schema version, WAL, the run_samples view,
+// concurrent readers, and what open() says when it cannot open.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <fstream>
+#include <string>
+
+#include "storage/migrations.h"
+#include "storage/run_store.h"
+#include "storage_test_support.h"
+
+namespace gaugeloop {
+namespace {
+
+using storage_internal::latest_schema_version;
+using storage_internal::migrations;
+using testing::make_record;
+using testing::RawDb;
+using testing::run_unprivileged;
+using testing::sample_lift_mm;
+using testing::TempDir;
+
+bool contains(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+
+TEST(Migrations, AreNumberedOneUpInOrder) {
+  int expected = 1;
+  for (const auto& m : migrations()) EXPECT_EQ(m.version, expected++);
+  EXPECT_EQ(latest_schema_version(), expected - 1);
+}
+
+TEST(Schema, UserVersionIsTheLatestMigrationAfterOpen) {
+  TempDir dir;
+  ASSERT_TRUE(RunStore::open(dir.db()).ok());
+  RawDb raw(dir.db());
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), latest_schema_version());
+}
+
+TEST(Schema, JournalModeIsWal) {
+  TempDir dir;
+  ASSERT_TRUE(RunStore::open(dir.db()).ok());
+  RawDb raw(dir.db());
+  EXPECT_EQ(raw.query_text("PRAGMA journal_mode"), "wal");
+}
+
+TEST(Schema, OpeningTwiceIsIdempotent) {
+  TempDir dir;
+  std::int64_t id = 0;
+  {
+    Result<RunStore> first = RunStore::open(dir.db());
+    ASSERT_TRUE(first.ok()) << first.error().message;
+    Result<std::int64_t> inserted = first->insert_run(make_record("a", "2026-11-22T02:34:44Z"));
+    ASSERT_TRUE(inserted.ok()) << inserted.error().message;
+    id = *inserted;
+    // A second store while the first is still open, and another after it closed.
+    Result<RunStore> second = RunStore::open(dir.db());
+    ASSERT_TRUE(second.ok()) << second.error().message;
+  }
+  Result<RunStore> third = RunStore::open(dir.db());
+  ASSERT_TRUE(third.ok()) << third.error().message;
+  EXPECT_TRUE(third->load_run(id).ok());
+
+  RawDb raw(dir.db());
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), latest_schema_version());
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE type = 'table'"
+                          " AND name IN ('runs', 'run_revolutions', 'run_profile')"),
+            3);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM runs"), 1);
+}
+
+TEST(Schema, HasTheIndexesForListing) {
+  TempDir dir;
+  ASSERT_TRUE(RunStore::open(dir.db()).ok());
+  RawDb raw(dir.db());
+  EXPECT_EQ(raw.query_text("SELECT group_concat(name, ',') FROM"
+                           " (SELECT name FROM pragma_index_info('runs_by_part_lobe_started')"
+                           " ORDER BY seqno)"),
+            "part,lobe,started_utc");
+  EXPECT_EQ(raw.query_text("SELECT name FROM pragma_index_info('runs_by_started')"), "started_utc");
+}
+
+TEST(Schema, RefusesADatabaseFromANewerGaugeloop) {
+  TempDir dir;
+  ASSERT_TRUE(RunStore::open(dir.db()).ok());
+  {
+    RawDb raw(dir.db());
+    ASSERT_EQ(raw.exec("PRAGMA user_version = 99"), SQLITE_OK);
+  }
+  Result<RunStore> store = RunStore::open(dir.db());
+  ASSERT_FALSE(store.ok());
+  EXPECT_EQ(store.error().code, ErrorCode::kStorage);
+  EXPECT_TRUE(contains(store.error().message, "schema version 99")) << store.error().message;
+  EXPECT_TRUE(contains(store.error().message, dir.db().string()));
+}
+
+TEST(Schema, ProfileColumnsRefuseNull) {
+  // The backstop behind insert_run's validation: SQLite binds NaN as NULL.
+  TempDir dir;
+  Result<RunStore> store = RunStore::open(dir.db());
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  ASSERT_TRUE(store->insert_run(make_record("a", "2026-11-22T02:34:44Z")).ok());
+  RawDb raw(dir.db());
+  EXPECT_EQ(raw.exec("UPDATE run_profile SET error_um = NULL WHERE angle_deg = 3"), SQLITE_CONSTRAINT);
+  EXPECT_EQ(raw.exec("UPDATE runs SET status = 'pushed'"), SQLITE_CONSTRAINT) << "a pushed run must name its NC file";
+}
+
+TEST(Schema, RunSamplesViewHasOneRowPerDegreeOfEachRevolution) {
+  TempDir dir;
+  Result<RunStore> store = RunStore::open(dir.db());
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  constexpr int kRevolutions = 4;
+  Result<std::int64_t> id = store->insert_run(make_record("a", "2026-11-22T02:34:44Z", kRevolutions));
+  ASSERT_TRUE(id.ok()) << id.error().message;
+  // A second run, so the view's rows are seen to belong to the right run.
+  ASSERT_TRUE(store->insert_run(make_record("b", "2026-11-22T03:00:00Z", 3)).ok());
+
+  RawDb raw(dir.db());
+  const std::string run = std::to_string(*id);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_samples WHERE run_id = " + run), 360 * kRevolutions);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_samples"), 360 * (kRevolutions + 3));
+  EXPECT_EQ(raw.query_int("SELECT count(DISTINCT angle_deg) FROM run_samples WHERE run_id = " + run), 360);
+  EXPECT_EQ(raw.query_int("SELECT max(angle_deg) FROM run_samples"), 359);
+  for (const auto& [rev, deg] : {std::pair{0, 0}, std::pair{2, 123}, std::pair{3, 359}}) {
+    const double lift =
+        raw.query_double("SELECT lift_mm FROM run_samples WHERE run_id = " + run +
+                         " AND revolution_index = " + std::to_string(rev) + " AND angle_deg = " + std::to_string(deg));
+    EXPECT_NEAR(lift, sample_lift_mm(rev, deg), 0.5e-6 + 1e-12) << rev << "/" << deg;
+  }
+}
+
+TEST(Schema, RawLiftsAreReadableJsonWithSixDecimals) {
+  TempDir dir;
+  Result<RunStore> store = RunStore::open(dir.db());
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  ASSERT_TRUE(store->insert_run(make_record("a", "2026-11-22T02:34:44Z")).ok());
+  RawDb raw(dir.db());
+  const std::string json = raw.query_text("SELECT lift_mm FROM run_revolutions WHERE revolution_index = 0");
+  // sample_lift_mm(0, 0) = 1.5 exactly.
+  EXPECT_EQ(json.substr(0, 10), "[1.500000,") << json.substr(0, 40);
+  EXPECT_EQ(raw.query_int("SELECT json_array_length(lift_mm) FROM run_revolutions LIMIT 1"), 360);
+}
+
+// WAL: a reader on another connection is not blocked by a writer holding the write lock.
+// Deterministic: the lock is held by a raw connection for the whole test, no threads.
+TEST(Concurrency, ReaderOpensListsAndLoadsWhileAnotherConnectionHoldsTheWriteLock) {
+  TempDir dir;
+  Result<RunStore> writer = RunStore::open(dir.db());
+  ASSERT_TRUE(writer.ok()) << writer.error().message;
+  const RunRecord record = make_record("a", "2026-11-22T02:34:44Z");
+  Result<std::int64_t> id = writer->insert_run(record);
+  ASSERT_TRUE(id.ok()) << id.error().message;
+
+  RawDb locker(dir.db());
+  ASSERT_EQ(locker.exec("BEGIN IMMEDIATE"), SQLITE_OK) << locker.errmsg();
+  ASSERT_EQ(locker.exec("UPDATE runs SET note = 'uncommitted'"), SQLITE_OK) << locker.errmsg();
+
+  Result<RunStore> reader = RunStore::open(dir.db());
+  ASSERT_TRUE(reader.ok()) << reader.error().message;
+  Result<std::vector<RunSummary>> runs = reader->list_runs({});
+  ASSERT_TRUE(runs.ok()) << runs.error().message;
+  ASSERT_EQ(runs->size(), 1u);
+  Result<StoredRun> loaded = reader->load_run(*id);
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  EXPECT_EQ(loaded->note, record.note) << "saw another connection's uncommitted write";
+  EXPECT_TRUE(writer->list_runs({}).ok());
+
+  ASSERT_EQ(locker.exec("COMMIT"), SQLITE_OK) << locker.errmsg();
+  loaded = reader->load_run(*id);
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  EXPECT_EQ(loaded->note, "uncommitted");
+}
+
+// ---- open() failures ----
+
+TEST(OpenFailure, ParentThatIsAFileIsAClearIoError) {
+  TempDir dir;
+  const std::filesystem::path blocker = dir.path() / "not-a-dir";
+  std::ofstream(blocker) << "x";
+  const std::filesystem::path db = blocker / "runs" / "runs.sqlite";
+  Result<RunStore> store = RunStore::open(db);
+  ASSERT_FALSE(store.ok());
+  EXPECT_EQ(store.error().code, ErrorCode::kIo);
+  EXPECT_TRUE(contains(store.error().message, db.string())) << store.error().message;
+  EXPECT_TRUE(contains(store.error().message, "--data-dir is writable")) << store.error().message;
+}
+
+TEST(OpenFailure, PathThatIsADirectoryIsAClearStorageError) {
+  TempDir dir;
+  Result<RunStore> store = RunStore::open(dir.path());
+  ASSERT_FALSE(store.ok());
+  EXPECT_EQ(store.error().code, ErrorCode::kStorage);
+  EXPECT_EQ(store.error().message, "cannot open run database " + dir.path().string() +
+                                       ": unable to open database file;"
+                                       " check the --data-dir is writable");
+}
+
+TEST(OpenFailure, UnwritableDirectoryIsAClearStorageError) {
+  TempDir dir;
+  dir.share();
+  const std::filesystem::path ro = dir.path() / "ro";
+  std::filesystem::create_directory(ro);
+  std::filesystem::permissions(ro, std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec |
+                                       std::filesystem::perms::others_read | std::filesystem::perms::others_exec);
+  const std::string failure = run_unprivileged([&]() -> std::string {
+    Result<RunStore> store = RunStore::open(ro / "runs.sqlite");
+    if (store.ok()) return "opened a database in a read-only directory";
+    if (store.error().code != ErrorCode::kStorage) return "wrong code: " + store.error().message;
+    if (!contains(store.error().message, "cannot open run database " + (ro / "runs.sqlite").string()) ||
+        !contains(store.error().message, "writable")) {
+      return "unclear message: " + store.error().message;
+    }
+    return "";
+  });
+  EXPECT_EQ(failure, "");
+}
+
+TEST(OpenFailure, ReadOnlyFileIsRefusedAtOpenNotAtTheFirstInsert) {
+  TempDir dir;
+  dir.share();
+  ASSERT_TRUE(RunStore::open(dir.db()).ok());
+  std::filesystem::permissions(dir.db().parent_path(), std::filesystem::perms::all);  // the directory is not the point
+  std::filesystem::permissions(dir.db(), std::filesystem::perms::owner_read | std::filesystem::perms::others_read);
+  const std::string failure = run_unprivileged([&]() -> std::string {
+    Result<RunStore> store = RunStore::open(dir.db());
+    if (store.ok()) return "opened a read-only database for writing";
+    if (store.error().code != ErrorCode::kStorage) return "wrong code: " + store.error().message;
+    if (!contains(store.error().message, "read-only")) return "unclear message: " + store.error().message;
+    return "";
+  });
+  EXPECT_EQ(failure, "");
+}
+
+TEST(OpenFailure, AFileThatIsNotADatabaseSaysSo) {
+  TempDir dir;
+  std::filesystem::create_directories(dir.db().parent_path());
+  std::ofstream(dir.db()) << std::string(4096, 'x');
+  Result<RunStore> store = RunStore::open(dir.db());
+  ASSERT_FALSE(store.ok());
+  EXPECT_EQ(store.error().code, ErrorCode::kStorage);
+  EXPECT_TRUE(contains(store.error().message, "not a database")) << store.error().message;
+  EXPECT_TRUE(contains(store.error().message, dir.db().string())) << store.error().message;
+}
+
+TEST(OpenFailure, EmptyPathIsInvalidInput) {
+  Result<RunStore> store = RunStore::open("");
+  ASSERT_FALSE(store.ok());
+  EXPECT_EQ(store.error().code, ErrorCode::kInvalidInput);
+}
+
+}  // namespace
+}  // namespace gaugeloop

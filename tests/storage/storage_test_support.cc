@@ -1,0 +1,163 @@
+// Helpers for storage tests: a temporary directory, sample runs, and a raw SQLite handle.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "storage_test_support.h"
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace gaugeloop::testing {
+
+TempDir::TempDir() {
+  std::string pattern = (std::filesystem::temp_directory_path() / "gaugeloop-storage-XXXXXX").string();
+  std::vector<char> buffer(pattern.begin(), pattern.end());
+  buffer.push_back('\0');
+  const char* made = mkdtemp(buffer.data());
+  EXPECT_NE(made, nullptr) << "mkdtemp failed for " << pattern;
+  path_ = made != nullptr ? std::filesystem::path(made) : std::filesystem::path();
+}
+
+void TempDir::share() const {
+  std::filesystem::permissions(path_, std::filesystem::perms::owner_all | std::filesystem::perms::group_read |
+                                          std::filesystem::perms::group_exec | std::filesystem::perms::others_read |
+                                          std::filesystem::perms::others_exec);
+}
+
+std::string run_unprivileged(const std::function<std::string()>& check) {
+  if (::geteuid() != 0) return check();
+  int fds[2];
+  if (::pipe(fds) != 0) return "pipe failed";
+  const pid_t pid = ::fork();
+  if (pid < 0) return "fork failed";
+  if (pid == 0) {
+    ::close(fds[0]);
+    std::string result;
+    if (::setgid(65534) != 0 || ::setuid(65534) != 0) {
+      result = "cannot switch to user nobody";
+    } else {
+      result = check();
+    }
+    [[maybe_unused]] auto n = ::write(fds[1], result.data(), result.size());
+    ::close(fds[1]);
+    ::_exit(result.empty() ? 0 : 1);
+  }
+  ::close(fds[1]);
+  std::string out;
+  char buf[512];
+  ssize_t n;
+  while ((n = ::read(fds[0], buf, sizeof buf)) > 0) out.append(buf, static_cast<size_t>(n));
+  ::close(fds[0]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  if (!WIFEXITED(status)) return "unprivileged check crashed";
+  if (WEXITSTATUS(status) != 0 && out.empty()) return "unprivileged check failed";
+  return out;
+}
+
+TempDir::~TempDir() {
+  if (path_.empty()) return;
+  std::error_code ec;
+  // A test may have made parts read-only; give them back before removing.
+  std::filesystem::permissions(path_, std::filesystem::perms::owner_all, std::filesystem::perm_options::add, ec);
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(path_, ec)) {
+    std::filesystem::permissions(entry.path(), std::filesystem::perms::owner_all, std::filesystem::perm_options::add,
+                                 ec);
+  }
+  std::filesystem::remove_all(path_, ec);
+}
+
+double sample_lift_mm(int revolution_index, int degree) {
+  return 1.5 + 3.2 * std::sin(degree * 0.0174532925199) + 0.0000123456789 * revolution_index + 1e-7 * degree;
+}
+
+RunRecord make_record(const std::string& part, const std::string& started_utc, int revolutions) {
+  RunRecord r;
+  r.started_utc = started_utc;
+  r.finished_utc = started_utc;
+  r.machine = "grinder-1";
+  r.part = part;
+  r.lobe = 2;
+  r.gauge = "tcp:127.0.0.1:1502";
+  r.note = "first shift, wheel dressed";
+  for (int i = 0; i < revolutions; ++i) {
+    RevolutionSamples rev;
+    rev.revolution = 100 + i;
+    for (int deg = 0; deg < kDegreesPerRevolution; ++deg) {
+      rev.lift_mm[static_cast<std::size_t>(deg)] = sample_lift_mm(i, deg);
+    }
+    r.measured.revolutions.push_back(rev);
+  }
+  r.measured.polls = 1234;
+  r.measured.reconnects = 1;
+  r.measured.discarded_revolutions = 2;
+  for (std::size_t d = 0; d < static_cast<std::size_t>(kDegreesPerRevolution); ++d) {
+    const double x = static_cast<double>(d);
+    r.analysis.design_lift_mm[d] = 0.01 * x + 1.0 / 3.0;
+    r.analysis.mean_lift_mm[d] = 0.01 * x + 1.0 / 7.0;
+    r.analysis.spread_um[d] = 0.1 + x / 1000.0;
+    r.analysis.error_um[d] = std::cos(x) * 4.0;
+    r.correction_um[d] = -std::cos(x) * 4.0 + 1.0 / 11.0;
+  }
+  r.analysis.zero_offset_mm = 0.123456789012;
+  r.analysis.max_abs_error_um = 4.0;
+  r.analysis.rms_error_um = 2.8284271247;
+  r.analysis.peak_to_valley_um = 8.0;
+  r.analysis.repeatability_um = 0.459;
+  return r;
+}
+
+RawDb::RawDb(const std::filesystem::path& path) {
+  const int rc = sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE, nullptr);
+  EXPECT_EQ(rc, SQLITE_OK) << "raw open of " << path << ": " << sqlite3_errstr(rc);
+}
+
+RawDb::~RawDb() { sqlite3_close_v2(db_); }
+
+int RawDb::exec(const std::string& sql) { return sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, nullptr); }
+
+namespace {
+
+// Steps `sql` once and hands the statement to `read` if there is a row.
+template <typename T, typename Read>
+T query_one(sqlite3* db, const std::string& sql, T empty, Read read) {
+  sqlite3_stmt* stmt = nullptr;
+  int rc = sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr);
+  EXPECT_EQ(rc, SQLITE_OK) << sql << ": " << sqlite3_errmsg(db);
+  T value = empty;
+  if (rc == SQLITE_OK) {
+    rc = sqlite3_step(stmt);
+    EXPECT_TRUE(rc == SQLITE_ROW || rc == SQLITE_DONE) << sql << ": " << sqlite3_errmsg(db);
+    if (rc == SQLITE_ROW) value = read(stmt);
+  }
+  sqlite3_finalize(stmt);
+  return value;
+}
+
+}  // namespace
+
+std::int64_t RawDb::query_int(const std::string& sql) {
+  return query_one<std::int64_t>(db_, sql, 0, [](sqlite3_stmt* s) { return sqlite3_column_int64(s, 0); });
+}
+
+double RawDb::query_double(const std::string& sql) {
+  return query_one<double>(db_, sql, 0.0, [](sqlite3_stmt* s) { return sqlite3_column_double(s, 0); });
+}
+
+std::string RawDb::query_text(const std::string& sql) {
+  return query_one<std::string>(db_, sql, std::string(), [](sqlite3_stmt* s) {
+    const unsigned char* text = sqlite3_column_text(s, 0);
+    return text != nullptr ? std::string(reinterpret_cast<const char*>(text)) : std::string();
+  });
+}
+
+RawDb::Counts RawDb::counts() {
+  return {query_int("SELECT count(*) FROM runs"), query_int("SELECT count(*) FROM run_revolutions"),
+          query_int("SELECT count(*) FROM run_profile")};
+}
+
+}  // namespace gaugeloop::testing

@@ -1,0 +1,73 @@
+// Helpers for storage tests: a temporary directory, sample runs, and a raw SQLite handle.
+#pragma once
+
+#include <sqlite3.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include "storage/run_store.h"
+
+namespace gaugeloop::testing {
+
+// A fresh directory under the system temp dir, removed with everything in it on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }
+  // Lets other users traverse and read the directory (mkdtemp makes it private).
+  void share() const;
+  std::filesystem::path db() const { return path_ / "data" / "runs.sqlite"; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// Runs `check` as an unprivileged user, so permission checks mean something when the tests
+// run as root (as CI does): as root it forks, switches the child to nobody (65534) and runs
+// `check` there; otherwise it runs `check` in place. `check` returns "" on success or what
+// went wrong. Files `check` touches must be reachable by nobody (see TempDir::share).
+std::string run_unprivileged(const std::function<std::string()>& check);
+
+// The raw lift the sample run holds at (revolution index, machine degree): deliberately not
+// a multiple of 1e-6 mm, so the 6-decimal JSON rounding shows.
+double sample_lift_mm(int revolution_index, int degree);
+
+// A valid record: `revolutions` revolutions (amplifier counts 100, 101, ...), every table
+// filled with distinct values, so any mix-up between columns or degrees shows.
+RunRecord make_record(const std::string& part, const std::string& started_utc, int revolutions = 3);
+
+// A second, plain SQLite connection to a database file, for what RunStore does not expose.
+// Test failures are reported through gtest; every call is deterministic (no busy waits: the
+// busy timeout is 0).
+class RawDb {
+ public:
+  explicit RawDb(const std::filesystem::path& path);
+  ~RawDb();
+  RawDb(const RawDb&) = delete;
+  RawDb& operator=(const RawDb&) = delete;
+
+  // Returns the SQLite result code; expects SQLITE_OK unless told otherwise.
+  int exec(const std::string& sql);
+  // The first column of the first row, as an integer (0 if there is no row).
+  std::int64_t query_int(const std::string& sql);
+  double query_double(const std::string& sql);
+  std::string query_text(const std::string& sql);
+  std::string errmsg() const { return sqlite3_errmsg(db_); }
+
+  struct Counts {
+    std::int64_t runs, revolutions, profile;
+  };
+  Counts counts();
+
+ private:
+  sqlite3* db_ = nullptr;
+};
+
+}  // namespace gaugeloop::testing
