@@ -1,0 +1,72 @@
+// The seam between the poller and a gauge amplifier: one consistent snapshot per call.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/result.h"
+
+namespace gaugeloop {
+
+// Status word bits of a gauge amplifier (the simulator's map; see docs/simulator.md).
+enum GaugeStatusBit : std::uint16_t {
+  kGaugeReady = 1u << 0,
+  kGaugeOverRange = 1u << 1,
+  kGaugeUnderRange = 1u << 2,
+  kGaugeProbeMissing = 1u << 3,
+};
+
+// One reading of the amplifier, taken in one request so the fields belong together.
+struct GaugeSnapshot {
+  double reading_mm = 0.0;       // LVDT reading, gauge zero (not yet zeroed on the base circle)
+  double angle_deg = 0.0;        // work spindle (C) encoder angle, machine frame, [0, 360)
+  std::uint16_t revolution = 0;  // encoder revolution count, wraps at 65536
+  std::uint16_t sequence = 0;    // amplifier sample number, wraps; unchanged = same sample
+  std::uint16_t status = 0;      // GaugeStatusBit flags
+};
+
+// Human-readable list of the fault bits set in a status word, e.g. "over-range, probe missing".
+std::string describe_gauge_status(std::uint16_t status);
+
+// True when the status says the reading can be used: ready and no fault bit.
+inline bool gauge_status_ok(std::uint16_t status) {
+  return (status & kGaugeReady) != 0 && (status & (kGaugeOverRange | kGaugeUnderRange | kGaugeProbeMissing)) == 0;
+}
+
+// The amplifier's latch buffer: at each encoder degree mark it latches the reading into a
+// ring of `ring_size` entries; `write_count` counts every latch since the amplifier started
+// (wrapping at 2^32), so entry i lives in slot i % ring_size until overwritten.
+struct LatchState {
+  std::uint32_t write_count = 0;
+  int ring_size = 0;
+};
+
+// One latched entry: the reading at a whole machine degree of C.
+struct LatchedSample {
+  double reading_mm = 0.0;
+  int degree = 0;            // machine degree 0..359 at which it latched
+  std::uint16_t status = 0;  // GaugeStatusBit flags at that moment
+};
+
+// A link to one gauge amplifier. Not thread-safe: one per thread.
+// Errors: kGaugeUnreachable (no connection, or it dropped), kGaugeTimeout (no reply in time),
+// kGaugeProtocol (exception reply or malformed data). After any error the caller should
+// disconnect() and connect() again before the next read.
+class GaugeClient {
+ public:
+  virtual ~GaugeClient() = default;
+  virtual Status connect() = 0;
+  virtual void disconnect() = 0;
+  virtual bool connected() const = 0;
+  virtual Result<GaugeSnapshot> read_snapshot() = 0;
+  // Latched mode (amplifiers with an encoder-triggered hold input).
+  virtual Result<LatchState> read_latch_state() = 0;
+  // Entries in slots first_slot .. first_slot + count - 1, in one request where the map
+  // allows; the caller keeps the range inside the ring.
+  virtual Result<std::vector<LatchedSample>> read_latched(int first_slot, int count) = 0;
+  // Where the gauge is, for messages: "tcp:127.0.0.1:1502".
+  virtual std::string address() const = 0;
+};
+
+}  // namespace gaugeloop

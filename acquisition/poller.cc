@@ -1,0 +1,461 @@
+// Live and latched collection of complete revolutions, with reconnects and whole-revolution
+// rejection.
+#include "acquisition/poller.h"
+
+#include <sys/prctl.h>
+
+#include <algorithm>
+#include <bitset>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <thread>
+
+namespace gaugeloop {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// One usable poll, on the unwrapped angle axis: u = revolution * 360 + angle.
+struct Poll {
+  double u_deg = 0.0;
+  double reading_mm = 0.0;
+  std::uint16_t sequence = 0;
+  std::uint16_t status = 0;
+};
+
+struct RevolutionInProgress {
+  DegreeTable lift_mm{};
+  std::bitset<kDegreesPerRevolution> filled;
+  std::string broken;  // non-empty: why this revolution cannot be used
+};
+
+std::string fmt1(double v) {
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(1);
+  os << v;
+  return os.str();
+}
+
+std::string missing_degrees(const RevolutionInProgress& rev) {
+  std::vector<int> missing;
+  for (int d = 0; d < kDegreesPerRevolution; ++d) {
+    if (!rev.filled.test(static_cast<size_t>(d))) missing.push_back(d);
+  }
+  return format_degree_ranges(missing);
+}
+
+// Keeps the link up for one run: connects, counts consecutive failures, backs off
+// exponentially between reconnects and gives up after max_attempts.
+class LinkKeeper {
+ public:
+  LinkKeeper(GaugeClient& gauge, const PollerSettings& settings, MeasuredRun& run)
+      : gauge_(gauge), settings_(settings), run_(run), backoff_(settings.backoff_initial) {}
+
+  // Makes sure the link is up before a request. An error means the attempts are spent.
+  Status ensure(const std::string& where_now) {
+    while (!gauge_.connected()) {
+      if (attempted_connect_) {
+        std::this_thread::sleep_for(backoff_);  // backoff between reconnects, not synchronisation
+        backoff_ = std::min(backoff_ * 2, settings_.backoff_max);
+      }
+      const bool first = !attempted_connect_;
+      attempted_connect_ = true;
+      Status s = gauge_.connect();
+      if (s) {
+        if (!first && ever_connected_) ++run_.reconnects;
+        ever_connected_ = true;
+        return {};
+      }
+      if (Status give_up = failed(s.error(), where_now); !give_up) return give_up;
+    }
+    return {};
+  }
+
+  // Records a failed request or connect. An error means the attempts are spent; its message
+  // says the gauge stopped answering (or could not be reached) and that nothing was stored.
+  Status failed(const Error& e, const std::string& where_now) {
+    ++failures_;
+    if (gauge_.connected()) gauge_.disconnect();  // start clean after any error: flushes late replies
+    if (failures_ < settings_.max_attempts) return {};
+    Error out = e;
+    if (!ever_connected_) {
+      out.message += " (" + std::to_string(failures_) + " attempts)";
+    } else {
+      out.message = "gauge at " + gauge_.address() + " stopped answering " + where_now + ": " + e.message +
+                    " (gave up after " + std::to_string(failures_) + " attempts); no run was stored";
+    }
+    return out;
+  }
+
+  void succeeded() {
+    failures_ = 0;
+    backoff_ = settings_.backoff_initial;
+  }
+
+ private:
+  GaugeClient& gauge_;
+  const PollerSettings& settings_;
+  MeasuredRun& run_;
+  std::chrono::milliseconds backoff_;
+  int failures_ = 0;
+  bool attempted_connect_ = false;
+  bool ever_connected_ = false;
+};
+
+}  // namespace
+
+std::string_view sampling_mode_name(SamplingMode mode) { return mode == SamplingMode::kLive ? "live" : "latched"; }
+
+std::string format_degree_ranges(const std::vector<int>& degrees) {
+  if (degrees.empty()) return "none";
+  std::string out;
+  size_t i = 0;
+  while (i < degrees.size()) {
+    size_t j = i;
+    while (j + 1 < degrees.size() && degrees[j + 1] == degrees[j] + 1) ++j;
+    if (!out.empty()) out += ", ";
+    out += std::to_string(degrees[i]);
+    if (j > i) out += "-" + std::to_string(degrees[j]);
+    i = j + 1;
+  }
+  return out;
+}
+
+Status validate(const PollerSettings& s) {
+  if (s.revolutions < 3) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "revolutions = " + std::to_string(s.revolutions) +
+                          ": a run needs at least 3 revolutions to average and to judge repeatability");
+  }
+  if (!(s.max_interpolation_gap_deg > 0.0 && s.max_interpolation_gap_deg <= 5.0)) {
+    return make_error(ErrorCode::kInvalidInput, "max_interpolation_gap_deg must be in (0, 5]");
+  }
+  if (!(s.poll_step_deg >= 0.0 && s.poll_step_deg < s.max_interpolation_gap_deg)) {
+    return make_error(ErrorCode::kInvalidInput, "poll_step_deg must be in [0, max_interpolation_gap_deg)");
+  }
+  if (s.spare_revolutions < 0 || s.max_attempts < 1) {
+    return make_error(ErrorCode::kInvalidInput, "spare_revolutions must be >= 0 and max_attempts >= 1");
+  }
+  return {};
+}
+
+Poller::Poller(GaugeClient& gauge, PollerSettings settings) : gauge_(gauge), settings_(std::move(settings)) {}
+
+Result<MeasuredRun> Poller::measure() {
+  if (Status s = validate(settings_); !s) return s.error();
+  // Pacing sleeps are short; the default 50 us timer slack would stretch them.
+  ::prctl(PR_SET_TIMERSLACK, 1000UL, 0UL, 0UL, 0UL);
+  return settings_.mode == SamplingMode::kLive ? measure_live() : measure_latched();
+}
+
+Result<MeasuredRun> Poller::measure_live() {
+  const int wanted = settings_.revolutions;
+  MeasuredRun run;
+  LinkKeeper link(gauge_, settings_, run);
+  const auto deadline = Clock::now() + settings_.run_timeout;
+
+  std::map<std::int64_t, RevolutionInProgress> in_progress;
+  Poll prev;  // the last new sample, valid when have_prev
+  bool have_prev = false;
+  std::optional<std::int64_t> start_rev;  // first revolution index we collect
+  std::int64_t next_rev = 0;              // next revolution to keep or discard
+  std::int64_t rev_unwrapped = 0;
+  std::uint16_t last_rev_raw = 0;
+  bool have_rev = false;
+  auto last_new_sample = Clock::now();
+  double rate_deg_per_s = 0.0;  // spindle rate from successive new samples, smoothed
+  Clock::time_point last_poll_at{};
+  std::string last_discard;  // why the most recent revolution was thrown away
+
+  auto where_now = [&]() {
+    return "during revolution " + std::to_string(run.revolutions.size() + 1) + " of " + std::to_string(wanted);
+  };
+
+  // Marks every revolution touched by [from_u, to_u] as unusable.
+  auto break_span = [&](double from_u, double to_u, const std::string& why) {
+    if (!start_rev) return;
+    const auto r0 = std::max<std::int64_t>(next_rev, static_cast<std::int64_t>(std::floor(from_u / 360.0)));
+    const auto r1 = static_cast<std::int64_t>(std::floor(to_u / 360.0));
+    for (auto r = r0; r <= r1; ++r) {
+      auto& rev = in_progress[r];
+      if (rev.broken.empty()) rev.broken = why;
+    }
+  };
+
+  // Fills the whole degrees t with q.u < t <= p.u, interpolating between q and p.
+  auto fill_between = [&](const Poll& q, const Poll& p) {
+    if (!gauge_status_ok(q.status) || !gauge_status_ok(p.status)) {
+      const std::uint16_t bad = gauge_status_ok(q.status) ? p.status : q.status;
+      break_span(q.u_deg, p.u_deg,
+                 "gauge status " + describe_gauge_status(bad) + " near degree " +
+                     std::to_string(static_cast<int>(std::fmod(p.u_deg, 360.0))));
+      return;
+    }
+    if (p.u_deg - q.u_deg > settings_.max_interpolation_gap_deg) return;  // left missing
+    for (auto t = static_cast<std::int64_t>(std::floor(q.u_deg)) + 1;
+         t <= static_cast<std::int64_t>(std::floor(p.u_deg)); ++t) {
+      const std::int64_t r = t >= 0 ? t / 360 : (t - 359) / 360;
+      if (r < next_rev) continue;
+      const int deg = static_cast<int>(t - r * 360);
+      const double w = (static_cast<double>(t) - q.u_deg) / (p.u_deg - q.u_deg);
+      auto& rev = in_progress[r];
+      rev.lift_mm[deg] = q.reading_mm + w * (p.reading_mm - q.reading_mm);
+      rev.filled.set(static_cast<size_t>(deg));
+    }
+  };
+
+  // Moves revolutions that lie wholly behind `u` out of `in_progress`: kept or discarded.
+  auto finish_behind = [&](double u) -> Status {
+    const auto current = static_cast<std::int64_t>(std::floor(u / 360.0));
+    for (auto r = next_rev; r < current && static_cast<int>(run.revolutions.size()) < wanted; ++r) {
+      auto it = in_progress.find(r);
+      RevolutionInProgress rev = it == in_progress.end() ? RevolutionInProgress{} : std::move(it->second);
+      if (it != in_progress.end()) in_progress.erase(it);
+      if (rev.broken.empty() && rev.filled.all()) {
+        run.revolutions.push_back(RevolutionSamples{r, rev.lift_mm});
+        if (on_revolution_) on_revolution_(static_cast<int>(run.revolutions.size()));
+      } else {
+        ++run.discarded_revolutions;
+        last_discard = "revolution " + std::to_string(r) + ": " + (rev.broken.empty() ? "" : rev.broken + "; ") +
+                       "missing degrees " + missing_degrees(rev);
+      }
+      next_rev = r + 1;
+    }
+    const std::int64_t elapsed = current - *start_rev;
+    if (static_cast<int>(run.revolutions.size()) < wanted && elapsed > wanted + settings_.spare_revolutions) {
+      return make_error(ErrorCode::kIncompleteRun,
+                        "only " + std::to_string(run.revolutions.size()) + " of " + std::to_string(wanted) +
+                            " revolutions were complete after " + std::to_string(elapsed) +
+                            " revolutions of the work spindle; last discarded " + last_discard +
+                            ". Check the gauge status, and that the link keeps up with the spindle "
+                            "(slower spindle, or latched mode)");
+    }
+    return {};
+  };
+
+  while (static_cast<int>(run.revolutions.size()) < wanted) {
+    if (Clock::now() > deadline) {
+      return make_error(ErrorCode::kIncompleteRun,
+                        "run timed out after " + std::to_string(settings_.run_timeout.count()) + " ms " + where_now() +
+                            (last_discard.empty() ? std::string() : "; last discarded " + last_discard));
+    }
+    if (!gauge_.connected()) {
+      if (Status s = link.ensure(where_now()); !s) return s.error();
+      last_new_sample = Clock::now();
+    }
+    if (settings_.poll_step_deg > 0.0 && rate_deg_per_s > 0.0) {
+      // Pacing, not synchronisation: wait until the spindle has turned about poll_step_deg.
+      const auto wait = std::chrono::duration<double>(settings_.poll_step_deg / rate_deg_per_s);
+      const auto capped = std::min<std::chrono::duration<double>>(wait, settings_.max_poll_interval);
+      const auto due = last_poll_at + std::chrono::duration_cast<Clock::duration>(capped);
+      if (due - Clock::now() > std::chrono::microseconds(20)) std::this_thread::sleep_until(due);
+    }
+    last_poll_at = Clock::now();
+    Result<GaugeSnapshot> r = gauge_.read_snapshot();
+    ++run.polls;
+    if (!r) {
+      if (have_prev) break_span(prev.u_deg, prev.u_deg, "link fault: " + r.error().message);
+      have_prev = false;  // never interpolate across a failed read
+      if (Status s = link.failed(r.error(), where_now()); !s) return s.error();
+      continue;
+    }
+    const GaugeSnapshot& snap = *r;
+    if (have_prev && snap.sequence == prev.sequence) {
+      // Same amplifier sample as last time. A gauge whose sample number stops is frozen.
+      if (Clock::now() - last_new_sample > settings_.stale_after) {
+        const Error frozen =
+            make_error(ErrorCode::kGaugeTimeout,
+                       "the gauge's sample number stayed at " + std::to_string(snap.sequence) + " for more than " +
+                           std::to_string(settings_.stale_after.count()) + " ms (frozen amplifier)");
+        break_span(prev.u_deg, prev.u_deg, frozen.message);
+        have_prev = false;
+        if (Status s = link.failed(frozen, where_now()); !s) return s.error();
+      }
+      continue;
+    }
+    link.succeeded();
+    const auto now = Clock::now();
+
+    if (!have_rev) {
+      rev_unwrapped = snap.revolution;
+      have_rev = true;
+    } else {
+      rev_unwrapped += static_cast<std::int16_t>(static_cast<std::uint16_t>(snap.revolution - last_rev_raw));
+    }
+    last_rev_raw = snap.revolution;
+    const Poll cur{rev_unwrapped * 360.0 + snap.angle_deg, snap.reading_mm, snap.sequence, snap.status};
+    if (have_prev && cur.u_deg > prev.u_deg) {
+      const double dt_s = std::chrono::duration<double>(now - last_new_sample).count();
+      if (dt_s > 0.0) {
+        const double rate = (cur.u_deg - prev.u_deg) / dt_s;
+        rate_deg_per_s = rate_deg_per_s > 0.0 ? 0.9 * rate_deg_per_s + 0.1 * rate : rate;
+      }
+    }
+    last_new_sample = now;
+    if (!start_rev) {
+      start_rev = rev_unwrapped + 1;
+      next_rev = *start_rev;
+    }
+
+    if (have_prev) {
+      if (cur.u_deg < prev.u_deg) {
+        break_span(cur.u_deg, prev.u_deg,
+                   "encoder angle went backwards from " + fmt1(std::fmod(prev.u_deg, 360.0)) + " to " +
+                       fmt1(snap.angle_deg) + " deg");
+      } else {
+        fill_between(prev, cur);
+      }
+    }
+    prev = cur;
+    have_prev = true;
+    if (Status s = finish_behind(cur.u_deg); !s) return s.error();
+  }
+  return run;
+}
+
+Result<MeasuredRun> Poller::measure_latched() {
+  const int wanted = settings_.revolutions;
+  MeasuredRun run;
+  LinkKeeper link(gauge_, settings_, run);
+  const auto deadline = Clock::now() + settings_.run_timeout;
+
+  bool have_next = false;
+  std::uint32_t next = 0;       // latch index of the next entry to read
+  std::int64_t read_total = 0;  // entries consumed, unwrapped: revolution numbers come from it
+  int expected_degree = -1;     // -1: waiting for degree 0 to start a revolution
+  std::int64_t started = 0;     // revolutions begun
+  RevolutionInProgress rev;
+  std::int64_t rev_number = 0;
+  std::string last_discard;
+  auto last_progress = Clock::now();
+  // Latch rate, from the first state read to the latest: paces the drain.
+  std::optional<std::pair<Clock::time_point, std::uint32_t>> rate_origin;
+  double entries_per_s = 0.0;
+  auto drain_pause = [&](int ring_size) {
+    if (entries_per_s <= 0.0) return std::chrono::duration<double>(settings_.latch_idle_wait);
+    const double block = 125 / 4;
+    const double wait_s = std::min(block, ring_size / 4.0) / entries_per_s;
+    return std::min(std::chrono::duration<double>(wait_s), std::chrono::duration<double>(settings_.latch_max_wait));
+  };
+
+  auto where_now = [&]() {
+    return "during revolution " + std::to_string(run.revolutions.size() + 1) + " of " + std::to_string(wanted);
+  };
+  auto discard = [&](const std::string& why) {
+    if (expected_degree > 0) {
+      ++run.discarded_revolutions;
+      last_discard = "revolution " + std::to_string(rev_number) + ": " + why;
+    }
+    expected_degree = -1;
+  };
+
+  while (static_cast<int>(run.revolutions.size()) < wanted) {
+    if (Clock::now() > deadline) {
+      return make_error(ErrorCode::kIncompleteRun,
+                        "run timed out after " + std::to_string(settings_.run_timeout.count()) + " ms " + where_now() +
+                            (last_discard.empty() ? std::string() : "; last discarded " + last_discard));
+    }
+    if (run.discarded_revolutions > settings_.spare_revolutions) {
+      return make_error(ErrorCode::kIncompleteRun, "only " + std::to_string(run.revolutions.size()) + " of " +
+                                                       std::to_string(wanted) + " revolutions were complete after " +
+                                                       std::to_string(started) +
+                                                       " revolutions of the work spindle; last discarded " +
+                                                       last_discard + ". Check the gauge status and the encoder");
+    }
+    if (Status s = link.ensure(where_now()); !s) return s.error();
+    Result<LatchState> state = gauge_.read_latch_state();
+    ++run.polls;
+    if (!state) {
+      discard("link fault: " + state.error().message);
+      have_next = false;  // after a fault, resume from the newest entry
+      if (Status s = link.failed(state.error(), where_now()); !s) return s.error();
+      continue;
+    }
+    const auto now = Clock::now();
+    if (!rate_origin) {
+      rate_origin = {now, state->write_count};
+    } else if (now - rate_origin->first > std::chrono::milliseconds(5)) {
+      entries_per_s = static_cast<double>(state->write_count - rate_origin->second) /
+                      std::chrono::duration<double>(now - rate_origin->first).count();
+    }
+    if (!have_next) {
+      next = state->write_count;
+      have_next = true;
+    }
+    const std::uint32_t available = state->write_count - next;  // modulo 2^32
+    if (available > static_cast<std::uint32_t>(state->ring_size)) {
+      discard("latch buffer overrun: the poller fell " +
+              std::to_string(available - static_cast<std::uint32_t>(state->ring_size)) +
+              " entries behind the ring; missing degrees follow");
+      next = state->write_count;
+      continue;
+    }
+    if (available == 0) {
+      if (Clock::now() - last_progress > settings_.stale_after) {
+        const Error frozen = make_error(ErrorCode::kGaugeTimeout, "the latch buffer did not advance for " +
+                                                                      std::to_string(settings_.stale_after.count()) +
+                                                                      " ms (frozen amplifier or stopped spindle)");
+        discard(frozen.message);
+        last_progress = Clock::now();
+        if (Status s = link.failed(frozen, where_now()); !s) return s.error();
+        continue;
+      }
+      std::this_thread::sleep_for(drain_pause(state->ring_size));  // pacing: nothing new to read yet
+      continue;
+    }
+    link.succeeded();
+    last_progress = Clock::now();
+    const int slot = static_cast<int>(next % static_cast<std::uint32_t>(state->ring_size));
+    const int count = std::min({static_cast<int>(available), 125 / 4, state->ring_size - slot});
+    Result<std::vector<LatchedSample>> entries = gauge_.read_latched(slot, count);
+    ++run.polls;
+    if (!entries) {
+      discard("link fault: " + entries.error().message);
+      have_next = false;
+      if (Status s = link.failed(entries.error(), where_now()); !s) return s.error();
+      continue;
+    }
+    next += static_cast<std::uint32_t>(entries->size());
+    if (static_cast<std::uint32_t>(count) == available) {
+      std::this_thread::sleep_for(drain_pause(state->ring_size));  // pacing: drained, let a block gather
+    }
+    for (const LatchedSample& e : *entries) {
+      ++read_total;
+      if (expected_degree >= 0 && e.degree != expected_degree) {
+        // Also catches an entry overwritten during the read: the ring (not a multiple of
+        // 360 entries) then holds a different degree in that slot.
+        discard("encoder degree jumped from " + std::to_string((expected_degree + 359) % 360) + " to " +
+                std::to_string(e.degree));
+      }
+      if (expected_degree < 0) {
+        if (e.degree != 0) continue;  // wait for the start of a revolution
+        rev = RevolutionInProgress{};
+        rev_number = read_total / kDegreesPerRevolution;
+        ++started;
+      }
+      if (!gauge_status_ok(e.status) && rev.broken.empty()) {
+        rev.broken = "gauge status " + describe_gauge_status(e.status) + " at degree " + std::to_string(e.degree);
+      }
+      rev.lift_mm[e.degree] = e.reading_mm;
+      rev.filled.set(static_cast<size_t>(e.degree));
+      expected_degree = (e.degree + 1) % kDegreesPerRevolution;
+      if (e.degree == kDegreesPerRevolution - 1) {
+        if (rev.broken.empty() && rev.filled.all()) {
+          run.revolutions.push_back(RevolutionSamples{rev_number, rev.lift_mm});
+          if (on_revolution_) on_revolution_(static_cast<int>(run.revolutions.size()));
+          if (static_cast<int>(run.revolutions.size()) == wanted) break;
+        } else {
+          ++run.discarded_revolutions;
+          last_discard = "revolution " + std::to_string(rev_number) + ": " + rev.broken;
+        }
+        expected_degree = -1;  // next entry (degree 0) starts the next revolution
+      }
+    }
+  }
+  return run;
+}
+
+}  // namespace gaugeloop

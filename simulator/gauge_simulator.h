@@ -1,0 +1,107 @@
+// A virtual gauge amplifier: a Modbus TCP server that reports an LVDT touching a turning lobe.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "compensation/periodic_spline.h"
+#include "core/lift_table.h"
+#include "core/part.h"
+#include "core/result.h"
+
+typedef struct _modbus modbus_t;
+typedef struct _modbus_mapping_t modbus_mapping_t;
+
+namespace gaugeloop {
+
+// Input registers of the simulated amplifier (function 04), 0-based; docs/simulator.md.
+namespace sim_registers {
+inline constexpr int kReading = 0;       // int32, counts of 0.1 um, high word first (ABCD)
+inline constexpr int kStatus = 2;        // bit 0 ready, 1 over-range, 2 under-range, 3 probe missing
+inline constexpr int kAngle = 3;         // uint32, C angle in 0.001 deg, [0, 360000), ABCD
+inline constexpr int kRevolution = 5;    // uint16 revolution count, wraps
+inline constexpr int kSequence = 6;      // uint16 amplifier sample number, wraps
+inline constexpr int kReadingFloat = 7;  // float32, reading in mm, ABCD
+inline constexpr int kSnapshotCount = 9;
+// Latch buffer: the reading latched at every encoder degree mark.
+inline constexpr int kLatchCount = 100;        // uint32, ABCD: marks latched since start
+inline constexpr int kLatchRingSize = 102;     // uint16: entries in the ring
+inline constexpr int kLatchEntryWords = 103;   // uint16: registers per entry (4)
+inline constexpr int kLatchRing = 1000;        // entry k at 1000 + 4k: reading int32 ABCD, degree, status
+inline constexpr int kLatchRingEntries = 512;  // 1.4 revolutions: not a multiple of 360 on purpose
+inline constexpr int kCount = kLatchRing + 4 * kLatchRingEntries;
+}  // namespace sim_registers
+
+struct SimulatorSettings {
+  std::string host = "127.0.0.1";
+  int port = 0;                      // 0: the system picks a free port; read it back with port()
+  double speed_rpm = 60.0;           // work spindle speed
+  double time_scale = 1.0;           // simulated seconds per wall-clock second
+  double sample_rate_hz = 10000.0;   // amplifier update rate; the sample number counts these
+  double lobe_error_peak_um = 15.0;  // repeatable form error of the ground lobe, largest |value|
+  double noise_rms_um = 0.3;         // gauge noise, Gaussian, per amplifier sample
+  double gauge_offset_mm = 0.25;     // reading on the base circle: the gauge is not zeroed
+  std::uint64_t seed = 1;            // noise is a pure function of (seed, sample number)
+  // Fault: stop answering (requests are read, never replied to) once the spindle has turned
+  // this many revolutions after the first request. Negative: never.
+  int silent_after_revolutions = -1;
+};
+
+// Checks settings; the message names the setting.
+Status validate(const SimulatorSettings& settings);
+
+// Runs a Modbus TCP server on its own thread from start() until stop() or destruction.
+// The register values are computed from the clock at the moment each request arrives, so
+// any number of clients see one spindle. Thread-safe: the accessors and fault setters may
+// be called from any thread.
+class GaugeSimulator {
+ public:
+  // Builds the lobe from the design and starts serving. Errors: kInvalidInput for bad
+  // settings or geometry, kIo when the address cannot be bound.
+  static Result<std::unique_ptr<GaugeSimulator>> start(const Part& part, const LiftTable& design,
+                                                       const SimulatorSettings& settings);
+  ~GaugeSimulator();
+  GaugeSimulator(const GaugeSimulator&) = delete;
+  GaugeSimulator& operator=(const GaugeSimulator&) = delete;
+
+  void stop();
+  int port() const { return port_; }
+  const SimulatorSettings& settings() const { return settings_; }
+  std::int64_t requests_served() const { return requests_.load(); }
+
+  // The repeatable form error built into the simulated lobe at a cam angle (deg), in um.
+  double lobe_error_um(double cam_angle_deg) const;
+  // What the gauge would read at a cam angle without noise or gauge offset, in mm.
+  double true_lift_mm(double cam_angle_deg) const;
+
+  void set_silent(bool silent) { silent_.store(silent); }
+
+ private:
+  GaugeSimulator(const Part& part, const SimulatorSettings& settings, PeriodicSpline lift);
+  Status listen();
+  void serve();
+  void update_registers();
+
+  Part part_;
+  SimulatorSettings settings_;
+  PeriodicSpline lift_;  // flat-probe reading of the design lobe, cam frame
+  double max_d1_ = 1.0;
+  double max_d2_ = 1.0;
+  double error_scale_ = 0.0;
+  modbus_t* ctx_ = nullptr;
+  modbus_mapping_t* mapping_ = nullptr;
+  int listen_fd_ = -1;
+  int wake_fd_ = -1;
+  int port_ = 0;
+  std::thread thread_;
+  std::atomic<std::int64_t> requests_{0};
+  std::atomic<bool> silent_{false};
+  std::int64_t first_request_revolution_ = -1;  // serve thread only
+  std::int64_t latched_marks_ = 0;              // serve thread only
+  std::int64_t start_ns_ = 0;
+};
+
+}  // namespace gaugeloop

@@ -1,0 +1,271 @@
+// Poller against a scripted gauge: binning, whole-revolution rejection and link faults.
+#include "acquisition/poller.h"
+
+#include <gtest/gtest.h>
+
+#include "scripted_gauge.h"
+
+namespace gaugeloop {
+namespace {
+
+using testing::Fault;
+using testing::ScriptedGauge;
+
+PollerSettings fast_settings(SamplingMode mode = SamplingMode::kLive) {
+  PollerSettings s;
+  s.mode = mode;
+  // The scripted spindle advances per request, not with the clock: no waiting helps it.
+  s.backoff_initial = std::chrono::milliseconds(0);
+  s.backoff_max = std::chrono::milliseconds(0);
+  s.latch_idle_wait = std::chrono::microseconds(0);
+  s.latch_max_wait = std::chrono::milliseconds(0);
+  return s;
+}
+
+// Linear interpolation of a sine of amplitude 0.5 mm between polls 0.3 deg apart errs by at
+// most A * (h in rad)^2 / 8 = 0.5 * (0.3 * pi / 180)^2 / 8 = 1.7e-6 mm.
+constexpr double kInterpolationTolMm = 1.8e-6;
+
+TEST(Poller, CollectsCompleteRevolutionsFromTheNextBoundary) {
+  ScriptedGauge g;
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  ASSERT_EQ(run->revolutions.size(), 3u);
+  EXPECT_EQ(run->discarded_revolutions, 0);
+  for (size_t i = 0; i < 3; ++i) {
+    const auto& rev = run->revolutions[i];
+    EXPECT_EQ(rev.revolution, static_cast<std::int64_t>(i) + 1) << "starts at the boundary after the first poll";
+    for (int d = 0; d < 360; ++d) {
+      EXPECT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm) << "degree " << d;
+    }
+  }
+}
+
+TEST(Poller, UnwrapsTheRevolutionCounterAcrossItsWrap) {
+  ScriptedGauge g;
+  g.revolution_base = 65534;
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->revolutions[0].revolution, 65535);
+  EXPECT_EQ(run->revolutions[2].revolution, 65537);
+}
+
+TEST(Poller, RevolutionWithAGapIsDiscardedWholeAndReplaced) {
+  ScriptedGauge g;
+  g.faults[1700] = Fault::kSkip;  // in revolution 2: 1700 reads * 0.3 deg = 510 deg
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 1);
+  ASSERT_EQ(run->revolutions.size(), 3u);
+  EXPECT_EQ(run->revolutions[0].revolution, 2) << "revolution 1 had the gap";
+  for (const auto& rev : run->revolutions) {
+    for (int d = 0; d < 360; ++d) {
+      ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm)
+          << "revolution " << rev.revolution << " degree " << d << ": values must come from that revolution";
+    }
+  }
+}
+
+TEST(Poller, OverRangeDiscardsTheRevolution) {
+  ScriptedGauge g;
+  g.faults[1500] = Fault::kOverRange;
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 1);
+  EXPECT_EQ(run->revolutions[0].revolution, 2);
+}
+
+TEST(Poller, EncoderJumpingBackDiscardsTheRevolution) {
+  ScriptedGauge g;
+  g.faults[1500] = Fault::kAngleBack;
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 1);
+}
+
+TEST(Poller, RepeatedSampleIsNotTakenAsNew) {
+  ScriptedGauge g;
+  g.step_deg = 0.2;  // a repeat leaves 0.4 deg between new samples: within the 0.5 deg limit
+  for (int i = 100; i < 2000; i += 7) g.faults[i] = Fault::kRepeat;
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 0);
+  const auto& rev = run->revolutions[0];
+  for (int d = 0; d < 360; ++d) ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm);
+}
+
+TEST(Poller, ReconnectsAfterATimeoutAndDropsThatRevolution) {
+  ScriptedGauge g;
+  g.faults[1500] = Fault::kTimeout;
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->reconnects, 1);
+  EXPECT_EQ(g.connects, 2);
+  EXPECT_EQ(run->discarded_revolutions, 1);
+  EXPECT_EQ(run->revolutions.size(), 3u);
+}
+
+TEST(Poller, GaugeThatStopsAnsweringFailsWithoutSamples) {
+  ScriptedGauge g;
+  g.faults[1500] = Fault::kTimeout;
+  g.dead_after_faults = true;
+  PollerSettings s = fast_settings();
+  s.max_attempts = 4;
+  Poller p(g, s);
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kGaugeTimeout);
+  EXPECT_NE(run.error().message.find("stopped answering during revolution"), std::string::npos) << run.error().message;
+  EXPECT_NE(run.error().message.find("4 attempts"), std::string::npos) << run.error().message;
+  EXPECT_EQ(g.reads, 1500 + 3) << "gives up after max_attempts consecutive failures";
+}
+
+TEST(Poller, UnreachableGaugeFailsAfterTheConfiguredAttempts) {
+  ScriptedGauge g;
+  g.fail_connects = 100;
+  PollerSettings s = fast_settings();
+  s.max_attempts = 3;
+  Poller p(g, s);
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kGaugeUnreachable);
+  EXPECT_EQ(g.connects, 3);
+  EXPECT_EQ(g.reads, 0);
+}
+
+TEST(Poller, RecoversWhenTheGaugeComesBackBeforeTheAttemptsRunOut) {
+  ScriptedGauge g;
+  g.fail_connects = 2;
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(g.connects, 3);
+}
+
+TEST(Poller, TooSlowAPollRateLeavesDegreesMissingAndNamesThem) {
+  ScriptedGauge g;
+  g.step_deg = 1.5;  // polls further apart than max_interpolation_gap_deg: never invent degrees
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kIncompleteRun);
+  EXPECT_NE(run.error().message.find("only 0 of 3 revolutions"), std::string::npos) << run.error().message;
+  EXPECT_NE(run.error().message.find("missing degrees 0-359"), std::string::npos) << run.error().message;
+}
+
+TEST(Poller, RefusesFewerThanThreeRevolutions) {
+  ScriptedGauge g;
+  PollerSettings s = fast_settings();
+  s.revolutions = 2;
+  Poller p(g, s);
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kInvalidInput);
+  EXPECT_EQ(g.reads, 0);
+}
+
+TEST(Poller, ReportsEachCompletedRevolution) {
+  ScriptedGauge g;
+  Poller p(g, fast_settings());
+  std::vector<int> seen;
+  p.set_on_revolution([&](int n) { seen.push_back(n); });
+  ASSERT_TRUE(p.measure().ok());
+  EXPECT_EQ(seen, (std::vector<int>{1, 2, 3}));
+}
+
+// Latched mode: each entry is the reading at its degree, so values must match exactly.
+
+TEST(LatchedPoller, DrainsWholeRevolutionsFromDegreeZero) {
+  ScriptedGauge g;
+  Poller p(g, fast_settings(SamplingMode::kLatched));
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  ASSERT_EQ(run->revolutions.size(), 3u);
+  EXPECT_EQ(run->discarded_revolutions, 0);
+  for (size_t i = 1; i < 3; ++i) EXPECT_GT(run->revolutions[i].revolution, run->revolutions[i - 1].revolution);
+  // Marks 0..259 precede the first degree 0 (mark k is degree (k + 100) % 360), so
+  // revolution n holds marks 260 + 360 n + d. Values match exactly: nothing is interpolated.
+  for (size_t n = 0; n < 3; ++n) {
+    for (int d = 0; d < 360; ++d) {
+      ASSERT_EQ(run->revolutions[n].lift_mm[d], g.latched_mm(260 + 360 * n + static_cast<std::uint64_t>(d)))
+          << "revolution " << n << " degree " << d;
+    }
+  }
+  EXPECT_LT(g.latch_count, 1000000u) << "the 32-bit latch count wrapped during the run";
+}
+
+TEST(LatchedPoller, BufferOverrunDiscardsTheRevolution) {
+  ScriptedGauge g;
+  g.latch_faults[130] = Fault::kSkip;  // 130 * 7 = 910 marks in: the second revolution
+  Poller p(g, fast_settings(SamplingMode::kLatched));
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 1);
+  EXPECT_EQ(run->revolutions.size(), 3u);
+}
+
+TEST(LatchedPoller, DegreeJumpDiscardsTheRevolution) {
+  ScriptedGauge g;
+  g.latch_faults[80] = Fault::kAngleBack;
+  Poller p(g, fast_settings(SamplingMode::kLatched));
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 1);
+}
+
+TEST(LatchedPoller, OverRangeDiscardsTheRevolution) {
+  ScriptedGauge g;
+  g.latch_faults[80] = Fault::kOverRange;
+  Poller p(g, fast_settings(SamplingMode::kLatched));
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 1);
+}
+
+TEST(LatchedPoller, ReconnectsAfterATimeout) {
+  ScriptedGauge g;
+  g.latch_faults[80] = Fault::kTimeout;
+  Poller p(g, fast_settings(SamplingMode::kLatched));
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->reconnects, 1);
+  EXPECT_EQ(run->discarded_revolutions, 1);
+}
+
+TEST(LatchedPoller, GaugeThatStopsAnsweringFails) {
+  ScriptedGauge g;
+  g.latch_faults[130] = Fault::kTimeout;
+  g.latch_dead_after_faults = true;
+  Poller p(g, fast_settings(SamplingMode::kLatched));
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kGaugeTimeout);
+  EXPECT_NE(run.error().message.find("stopped answering during revolution 2 of 3"), std::string::npos)
+      << run.error().message;
+}
+
+TEST(LatchedPoller, TooManyBadRevolutionsFailsNamingTheLast) {
+  ScriptedGauge g;
+  for (int k = 60; k < 2000; k += 40) g.latch_faults[k] = Fault::kOverRange;  // every revolution
+  Poller p(g, fast_settings(SamplingMode::kLatched));
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kIncompleteRun);
+  EXPECT_NE(run.error().message.find("over-range"), std::string::npos) << run.error().message;
+}
+
+TEST(DegreeRanges, FormatsRuns) {
+  EXPECT_EQ(format_degree_ranges({}), "none");
+  EXPECT_EQ(format_degree_ranges({3}), "3");
+  EXPECT_EQ(format_degree_ranges({1, 2, 3, 7, 9, 10}), "1-3, 7, 9-10");
+}
+
+}  // namespace
+}  // namespace gaugeloop
