@@ -1,0 +1,13 @@
+// The sample part, its lift table and the NC template, built into the binary so that
+// `gaugeloop demo` and `gaugeloop sim` need no files.
+#pragma once
+
+#include <string_view>
+
+namespace gaugeloop::embedded {
+
+extern const std::string_view kDemoPartToml;  // examples/intake_flat.toml
+extern const std::string_view kDemoLiftCsv;   // examples/intake_flat.csv
+extern const std::string_view kNcTemplate;    // examples/sinumerik/cam_table.spf
+
+}  // namespace gaugeloop::embedded

@@ -1,0 +1,175 @@
+// The measurement pipeline, wiring acquisition, compensation, storage and nc_out.
+#include "app/measure_job.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <map>
+#include <system_error>
+
+#include "compensation/flat_probe.h"
+#include "compensation/periodic_spline.h"
+#include "compensation/wheel_path.h"
+#include "core/atomic_file.h"
+#include "nc_out/curve_table.h"
+#include "nc_out/nc_template.h"
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+namespace {
+
+// The wheel path is computed on a fine psi grid and resampled by spline onto the C grid, so
+// any c_offset_deg and either sense of rotation give a table from C0 to C360.
+constexpr double kFinePathStepDeg = 0.1;
+
+std::string utc_now() {
+  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+Result<std::vector<CurvePoint>> machine_curve(const WheelPath& path, const Part& part, double step_deg) {
+  Result<PeriodicSpline> x_of_psi = PeriodicSpline::fit(path.psi_deg, path.x_mm);
+  if (!x_of_psi) return x_of_psi.error();
+  const int n = static_cast<int>(std::lround(360.0 / step_deg));
+  std::vector<CurvePoint> points;
+  points.reserve(static_cast<size_t>(n) + 1);
+  for (int k = 0; k < n; ++k) {
+    const double c = k * step_deg;
+    // C = s * psi + c0  =>  psi = s * (C - c0)
+    const double psi = part.rotation_sense * (c - part.c_offset_deg);
+    points.push_back({c, x_of_psi->value(psi)});
+  }
+  points.push_back({360.0, points.front().x_mm});
+  return points;
+}
+
+std::map<std::string, std::string> template_values(const JobSettings& s) {
+  return {{"program_name", s.nc_program},
+          {"part", s.part.name},
+          {"lobe", std::to_string(s.part.lobe)},
+          {"version", GAUGELOOP_VERSION},
+          {"run_id", "0"},
+          {"created_utc", ""},
+          {"point_count", "0"},
+          {"c_step_deg", fixed(s.table_step_deg, 3)},
+          {"correction_max_um", "0"},
+          {"table_number", std::to_string(s.table_number)},
+          {"table_blocks", ""}};
+}
+
+Error in_step(const std::string& step, Error e) {
+  e.message = std::string(step) + ": " + e.message;
+  return e;
+}
+
+}  // namespace
+
+Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
+  const double steps = 360.0 / s.table_step_deg;
+  if (!(s.table_step_deg > 0.0) || std::abs(steps - std::round(steps)) > 1e-9 || steps < 36) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "table step " + fixed(s.table_step_deg, 4) + " deg must divide 360 into at least 36 steps");
+  }
+  // Checks that need no gauge, so bad input costs no measurement.
+  Result<PeriodicSpline> design = PeriodicSpline::fit(s.design.angle_deg, s.design.lift_mm);
+  if (!design) return in_step("design lift table " + s.design.source, design.error());
+  Result<WheelPath> design_path = compute_wheel_path(*design, s.part, kFinePathStepDeg);
+  if (!design_path) return in_step("wheel path", design_path.error());
+  Result<DegreeTable> design_reading = flat_probe_reading(*design, s.part);
+  if (!design_reading) return in_step("flat-probe reading", design_reading.error());
+  if (auto r = render_nc_template(s.nc_template, s.nc_template_name, template_values(s)); !r) return r.error();
+  std::error_code ec;
+  std::filesystem::create_directories(s.nc_dir, ec);
+  if (ec) {
+    return make_error(ErrorCode::kIo, "NC output directory " + s.nc_dir.string() + ": " + ec.message());
+  }
+  Result<RunStore> store = RunStore::open(s.db_path);
+  if (!store) return store.error();
+  DegreeTable in_force{};
+  std::optional<std::int64_t> in_force_run;
+  if (s.build_on_table_in_force) {
+    Result<std::optional<std::int64_t>> last = store->last_pushed_run(s.machine, s.part.name, s.part.lobe);
+    if (!last) return last.error();
+    if (*last) {
+      Result<StoredRun> previous = store->load_run(**last);
+      if (!previous) return in_step("correction in force (run " + std::to_string(**last) + ")", previous.error());
+      in_force = previous->correction_um;
+      in_force_run = *last;
+    }
+  }
+
+  // Acquire.
+  const std::string started = utc_now();
+  Poller poller(gauge, s.poller);
+  Result<MeasuredRun> measured = poller.measure();
+  if (!measured) return measured.error();
+  const std::string finished = utc_now();
+
+  // Analyse and correct.
+  Result<LobeAnalysis> analysis = analyse_lobe(*measured, *design_reading, s.part, s.analysis);
+  if (!analysis) return in_step("analysis", analysis.error());
+  Result<DegreeTable> correction = next_correction(*analysis, in_force, s.compensation);
+  if (!correction) return in_step("compensation", correction.error());
+  Result<WheelPath> path = corrected_wheel_path(s.design, *correction, s.part, kFinePathStepDeg);
+  if (!path) return in_step("corrected wheel path", path.error());
+  Result<std::vector<CurvePoint>> points = machine_curve(*path, s.part, s.table_step_deg);
+  if (!points) return in_step("curve table", points.error());
+  if (Status v = validate_curve_points(*points); !v) return in_step("curve table", v.error());
+  double correction_max_um = 0.0;
+  for (double c : *correction) correction_max_um = std::max(correction_max_um, std::abs(c));
+
+  // Store the run: one transaction, all or nothing.
+  RunRecord record;
+  record.started_utc = started;
+  record.finished_utc = finished;
+  record.machine = s.machine;
+  record.part = s.part.name;
+  record.lobe = s.part.lobe;
+  record.gauge = gauge.address();
+  record.note = s.note;
+  record.measured = *measured;
+  record.analysis = *analysis;
+  record.correction_um = *correction;
+  record.correction_in_force_run = in_force_run;
+  Result<std::int64_t> run_id = store->insert_run(record);
+  if (!run_id) return run_id.error();
+
+  // Render and push the table.
+  auto values = template_values(s);
+  values["run_id"] = std::to_string(*run_id);
+  values["created_utc"] = finished;
+  values["point_count"] = std::to_string(points->size());
+  values["correction_max_um"] = fixed(correction_max_um, 1);
+  values["table_blocks"] = render_curve_blocks(*points);
+  Result<std::string> program = render_nc_template(s.nc_template, s.nc_template_name, values);
+  if (!program) return program.error();
+  const std::filesystem::path nc_file = s.nc_dir / (s.nc_program + ".SPF");
+  if (Status w = write_file_atomically(nc_file, *program); !w) {
+    return in_step("run " + std::to_string(*run_id) + " is stored, but its table was not pushed", w.error());
+  }
+  if (Status m = store->record_nc_file(*run_id, nc_file.string()); !m) return m.error();
+
+  JobReport report;
+  report.run_id = *run_id;
+  report.measured = std::move(*measured);
+  report.analysis = *analysis;
+  report.correction_max_um = correction_max_um;
+  report.correction_in_force_run = in_force_run;
+  report.table_points = static_cast<int>(points->size());
+  report.nc_file = nc_file;
+  report.db_path = store->path();
+  return report;
+}
+
+}  // namespace gaugeloop

@@ -1,0 +1,28 @@
+// Part files: TOML describing a lobe (lift table, follower, radii, machine angles).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "core/part.h"
+#include "core/result.h"
+
+namespace gaugeloop {
+
+// A part as read from its file, plus the NC program name it is written under.
+struct PartFile {
+  Part part;
+  std::string nc_program;  // subprogram name, letters, digits and '_', starting with a letter
+};
+
+// Parses part TOML. `source_name` is used in messages; a relative `lift_table` is resolved
+// against `base_dir`. Errors (kInvalidInput) name the file, the line and the key, and say
+// what is allowed. Unknown keys are refused, so a typo never silently falls back to a default.
+Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_name,
+                                 const std::filesystem::path& base_dir);
+
+// Reads a part file; a missing file is kNotFound naming the path.
+Result<PartFile> read_part_file(const std::filesystem::path& path);
+
+}  // namespace gaugeloop

@@ -1,0 +1,58 @@
+// Validation and formatting of curve-table points.
+#include "nc_out/curve_table.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace gaugeloop {
+namespace {
+
+std::string point_name(const std::vector<CurvePoint>& points, size_t i) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "point %zu (C%.3f)", i, points[i].c_deg);
+  return buf;
+}
+
+}  // namespace
+
+Status validate_curve_points(const std::vector<CurvePoint>& points) {
+  if (points.size() < 4) {
+    return make_error(ErrorCode::kInvalidInput, "curve table has " + std::to_string(points.size()) +
+                                                    " points; a periodic table needs at least 4");
+  }
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!std::isfinite(points[i].c_deg) || !std::isfinite(points[i].x_mm)) {
+      return make_error(ErrorCode::kRefused,
+                        "curve table " + point_name(points, i) + " has NaN or infinity; nothing was written");
+    }
+    if (i > 0 && !(points[i].c_deg > points[i - 1].c_deg)) {
+      return make_error(ErrorCode::kInternal,
+                        "curve table " + point_name(points, i) + ": C does not increase; nothing was written");
+    }
+  }
+  if (points.front().c_deg != 0.0 || points.back().c_deg != 360.0) {
+    return make_error(ErrorCode::kInternal, "a periodic curve table must run from C0 to C360");
+  }
+  if (std::abs(points.front().x_mm - points.back().x_mm) > 1e-9) {
+    return make_error(ErrorCode::kInternal, "a periodic curve table must end at the X it starts with");
+  }
+  return {};
+}
+
+std::string render_curve_blocks(const std::vector<CurvePoint>& points, const CurveTableFormat& format) {
+  std::string out;
+  out.reserve(points.size() * 24);
+  char buf[96];
+  for (size_t i = 0; i < points.size(); ++i) {
+    // Print -0.0000 as 0.0000: a tiny negative infeed rounds to zero, not to a signed zero.
+    double x = points[i].x_mm;
+    const double q = std::pow(10.0, format.x_decimals);
+    if (std::round(x * q) == 0.0) x = 0.0;
+    std::snprintf(buf, sizeof buf, "%s%sC%.*f X%.*f", i == 0 ? "" : "\n", i == 0 ? "G1 " : "", format.c_decimals,
+                  points[i].c_deg, format.x_decimals, x);
+    out += buf;
+  }
+  return out;
+}
+
+}  // namespace gaugeloop

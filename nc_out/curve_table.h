@@ -1,0 +1,34 @@
+// Sinumerik 840D curve-table blocks (CTABDEF body) for a wheel path X(C).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/result.h"
+
+namespace gaugeloop {
+
+// One table point. Frame: machine frame. C in degrees in [0, 360], X the wheel infeed in mm
+// (0 on the base circle).
+struct CurvePoint {
+  double c_deg = 0.0;
+  double x_mm = 0.0;
+};
+
+struct CurveTableFormat {
+  int c_decimals = 3;  // 0.001 deg
+  int x_decimals = 4;  // 0.1 um
+};
+
+// Checks a periodic table before anything is written: at least 4 points, C strictly
+// increasing from 0 to 360, every X finite and the last X equal to the first (the period
+// closes). The message names the point (index and C) and the rule broken.
+Status validate_curve_points(const std::vector<CurvePoint>& points);
+
+// The table body: one block per point, the first carrying G1 (linear segments), e.g.
+//   G1 C0.000 X0.0000
+//   C1.000 X0.0003
+// Blocks are separated by newlines, with none after the last. Call validate_curve_points first.
+std::string render_curve_blocks(const std::vector<CurvePoint>& points, const CurveTableFormat& format = {});
+
+}  // namespace gaugeloop

@@ -1,0 +1,339 @@
+// The whole loop over loopback: simulator -> libmodbus poller -> SQLite -> analysis -> NC file,
+// and the failures a user meets first, each leaving no run and no table behind.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "acquisition/modbus_gauge.h"
+#include "app/embedded_defaults.h"
+#include "app/measure_job.h"
+#include "app/part_file.h"
+#include "compensation/flat_probe.h"
+#include "compensation/wheel_path.h"
+#include "simulator/gauge_simulator.h"
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+CommandResult run_command(const std::string& args) {
+  const std::string cmd = std::string(GAUGELOOP_BINARY_DIR) + "/bin/gaugeloop " + args + " 2>&1";
+  CommandResult r;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (pipe == nullptr) return r;
+  char buf[1024];
+  while (std::fgets(buf, sizeof buf, pipe) != nullptr) r.output += buf;
+  const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+// Table points parsed back from a written program: (C, X) of every `C... X...` block.
+std::vector<std::pair<double, double>> read_table(const std::string& program) {
+  std::vector<std::pair<double, double>> pts;
+  const std::regex block(R"(^(?:G1 )?C(-?[0-9.]+) X(-?[0-9.]+)$)");
+  std::istringstream in(program);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::smatch m;
+    if (std::regex_match(line, m, block)) pts.emplace_back(std::stod(m[1]), std::stod(m[2]));
+  }
+  return pts;
+}
+
+class FullPathTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("gaugeloop-it-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    auto pf = read_part_file(fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml");
+    ASSERT_TRUE(pf.ok()) << pf.error().message;
+    part_ = *pf;
+    auto design = read_lift_table_csv(part_.part.lift_table);
+    ASSERT_TRUE(design.ok()) << design.error().message;
+    design_ = *design;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  JobSettings job_settings() const {
+    JobSettings js;
+    js.part = part_.part;
+    js.design = design_;
+    js.nc_program = part_.nc_program;
+    js.db_path = dir_ / "gaugeloop.sqlite";
+    js.nc_dir = dir_ / "nc";
+    js.nc_template = std::string(embedded::kNcTemplate);
+    js.nc_template_name = "cam_table.spf";
+    return js;
+  }
+
+  int stored_runs() const {
+    auto store = RunStore::open(dir_ / "gaugeloop.sqlite");
+    EXPECT_TRUE(store.ok());
+    auto runs = store->list_runs({});
+    EXPECT_TRUE(runs.ok());
+    return static_cast<int>(runs->size());
+  }
+
+  fs::path dir_;
+  PartFile part_;
+  LiftTable design_;
+};
+
+TEST_F(FullPathTest, RecoversTheInjectedErrorAndWritesTheCorrectedTable) {
+  SimulatorSettings ss;
+  ss.time_scale = 4.0;  // 60 rpm simulated at 4x: the run takes about a second
+  auto sim = GaugeSimulator::start(part_.part, design_, ss);
+  ASSERT_TRUE(sim.ok()) << sim.error().message;
+  ModbusTcpSettings ms;
+  ms.port = (*sim)->port();
+  ModbusTcpGauge gauge(ms);
+
+  Result<JobReport> report = run_measure_job(gauge, job_settings());
+  ASSERT_TRUE(report.ok()) << report.error().message;
+
+  // The stored run: 3 raw revolutions and the analysis.
+  auto store = RunStore::open(dir_ / "gaugeloop.sqlite");
+  ASSERT_TRUE(store.ok());
+  auto run = store->load_run(report->run_id);
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->revolutions.size(), 3u);
+  EXPECT_EQ(run->summary.degrees_captured, 1080);
+  EXPECT_EQ(run->summary.status, "pushed");
+  EXPECT_EQ(run->summary.nc_file, report->nc_file.string());
+
+  // The injected form error, zeroed like the analysis zeroes (mean over the base-circle
+  // window 150..210 deg), is what the stored error table must show.
+  double window_mean_um = 0.0;
+  for (int d = 150; d <= 210; ++d) window_mean_um += (*sim)->lobe_error_um(d);
+  window_mean_um /= 61.0;
+  // Tolerance: gauge noise 0.3 um RMS per sample, averaged over 3 revolutions: 0.17 um per
+  // degree, so the largest of 360 deviations stays below ~4 sigma = 0.7 um; plus 0.05 um
+  // count rounding and the zero's own noise (0.17 / sqrt(61)). 1.0 um max, 0.3 um RMS.
+  double sum_sq = 0.0;
+  double worst = 0.0;
+  for (int d = 0; d < 360; ++d) {
+    const double expected_um = (*sim)->lobe_error_um(d) - window_mean_um;
+    const double diff = run->analysis.error_um[d] - expected_um;
+    worst = std::max(worst, std::abs(diff));
+    sum_sq += diff * diff;
+  }
+  EXPECT_LT(worst, 1.0) << "largest deviation from the injected error, um";
+  EXPECT_LT(std::sqrt(sum_sq / 360.0), 0.3) << "RMS deviation from the injected error, um";
+  EXPECT_NEAR(run->analysis.max_abs_error_um, report->analysis.max_abs_error_um, 1e-9);
+  EXPECT_GT(run->analysis.max_abs_error_um, 10.0) << "the simulator's 15 um peak error is seen";
+  EXPECT_LT(run->analysis.repeatability_um, 1.0) << "0.3 um noise gives a per-degree spread well under 1 um";
+
+  // The table, checked through the envelope: grind a lobe with the written points and read
+  // it with a flat probe. It must read design - injected error (correction at gain 1).
+  // Tolerance 0.8 um: the harmonic cut-off at 30 leaves 0.4 um of the simulator's error (at
+  // the base-circle junction, 85 deg); smoothing leaves 0.17 * sqrt(61/360) = 0.07 um of
+  // noise per degree, under 0.3 um at the worst of 360; 0.05 um from 4-decimal X.
+  const std::string program = slurp(report->nc_file);
+  EXPECT_NE(program.find("CTABDEF(X,C,1,1)"), std::string::npos);
+  EXPECT_NE(program.find("CTABEND"), std::string::npos);
+  EXPECT_NE(program.find("run " + std::to_string(report->run_id)), std::string::npos);
+  const auto table = read_table(program);
+  ASSERT_EQ(table.size(), 361u);
+  WheelPath written;
+  for (int k = 0; k < 360; ++k) {
+    EXPECT_DOUBLE_EQ(table[k].first, k);
+    written.psi_deg.push_back(table[k].first);  // C = psi for this part (sense 1, c0 0)
+    written.x_mm.push_back(table[k].second);
+  }
+  auto ground = ground_lobe_reading(written, part_.part);
+  ASSERT_TRUE(ground.ok()) << ground.error().message;
+  double worst_ground_um = 0.0;
+  for (int d = 0; d < 360; ++d) {
+    const double design_mm = run->analysis.design_lift_mm[d];
+    const double expected_mm = design_mm - ((*sim)->lobe_error_um(d) - window_mean_um) / 1000.0;
+    worst_ground_um = std::max(worst_ground_um, std::abs((*ground)[d] - expected_mm) * 1000.0);
+  }
+  EXPECT_LT(worst_ground_um, 0.8) << "the table grinds design minus the measured error";
+  EXPECT_DOUBLE_EQ(table[360].first, 360.0);
+  EXPECT_DOUBLE_EQ(table[360].second, table[0].second);
+}
+
+// A real grinder grinds the next part with the pushed table, so the next correction builds
+// on it. This simulator does not grind (its form error stays put), so the second correction
+// is the first plus the same smoothed error: twice the first, within the noise.
+TEST_F(FullPathTest, NextRunBuildsOnTheTableInForce) {
+  SimulatorSettings ss;
+  ss.time_scale = 4.0;
+  auto sim = GaugeSimulator::start(part_.part, design_, ss);
+  ASSERT_TRUE(sim.ok()) << sim.error().message;
+  ModbusTcpSettings ms;
+  ms.port = (*sim)->port();
+  ModbusTcpGauge gauge(ms);
+  Result<JobReport> first = run_measure_job(gauge, job_settings());
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  EXPECT_FALSE(first->correction_in_force_run.has_value());
+  Result<JobReport> second = run_measure_job(gauge, job_settings());
+  ASSERT_TRUE(second.ok()) << second.error().message;
+  ASSERT_TRUE(second->correction_in_force_run.has_value());
+  EXPECT_EQ(*second->correction_in_force_run, first->run_id);
+
+  auto store = RunStore::open(dir_ / "gaugeloop.sqlite");
+  ASSERT_TRUE(store.ok());
+  auto a = store->load_run(first->run_id);
+  auto b = store->load_run(second->run_id);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_EQ(b->correction_in_force_run, first->run_id);
+  // Tolerance: each smoothed error carries 0.07 um of noise per degree (harmonics 0-30 keep
+  // 61/360 of the 0.17 um per-degree noise); their difference stays under 0.5 um.
+  for (int d = 0; d < 360; ++d) {
+    EXPECT_NEAR(b->correction_um[d], 2.0 * a->correction_um[d], 0.5) << "degree " << d;
+  }
+}
+
+TEST_F(FullPathTest, GaugeThatStopsAnsweringMidRunStoresNothingAndWritesNoTable) {
+  SimulatorSettings ss;
+  ss.time_scale = 4.0;
+  ss.silent_after_revolutions = 2;  // the poller has started collecting by then
+  auto sim = GaugeSimulator::start(part_.part, design_, ss);
+  ASSERT_TRUE(sim.ok()) << sim.error().message;
+  ModbusTcpSettings ms;
+  ms.port = (*sim)->port();
+  ms.response_timeout = std::chrono::milliseconds(50);
+  ModbusTcpGauge gauge(ms);
+  JobSettings js = job_settings();
+  js.poller.max_attempts = 3;
+  js.poller.backoff_initial = std::chrono::milliseconds(1);
+  Result<JobReport> report = run_measure_job(gauge, js);
+  ASSERT_FALSE(report.ok());
+  EXPECT_EQ(report.error().code, ErrorCode::kGaugeTimeout);
+  EXPECT_NE(report.error().message.find("stopped answering during revolution"), std::string::npos)
+      << report.error().message;
+  EXPECT_EQ(stored_runs(), 0);
+  EXPECT_FALSE(fs::exists(dir_ / "nc" / (part_.nc_program + ".SPF")));
+}
+
+TEST_F(FullPathTest, DemoTwiceLeavesTwoRunsThatRunsListShows) {
+  const std::string data = "--data-dir " + dir_.string();
+  for (int i = 1; i <= 2; ++i) {
+    CommandResult demo = run_command("demo " + data);
+    ASSERT_EQ(demo.exit_code, 0) << demo.output;
+    EXPECT_NE(demo.output.find("run " + std::to_string(i) + ":"), std::string::npos) << demo.output;
+    EXPECT_NE(demo.output.find("degrees captured  1080 of 1080"), std::string::npos) << demo.output;
+    EXPECT_NE(demo.output.find("CAM_INTAKE_L1.SPF"), std::string::npos) << demo.output;
+  }
+  CommandResult list = run_command("runs list --json " + data);
+  ASSERT_EQ(list.exit_code, 0) << list.output;
+  EXPECT_NE(list.output.find("\"id\": 2"), std::string::npos) << list.output;
+  EXPECT_NE(list.output.find("\"id\": 1"), std::string::npos) << list.output;
+  EXPECT_LT(list.output.find("\"id\": 2"), list.output.find("\"id\": 1")) << "newest first";
+  CommandResult text = run_command("runs list " + data);
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_NE(text.output.find("intake_flat"), std::string::npos) << text.output;
+  EXPECT_TRUE(fs::exists(dir_ / "nc" / "CAM_INTAKE_L1.SPF"));
+}
+
+// Writes a part file beside a lift table text; returns the part path.
+fs::path write_part(const fs::path& dir, const std::string& csv_name, const std::string* csv_text) {
+  if (csv_text != nullptr) std::ofstream(dir / csv_name) << *csv_text;
+  const fs::path part = dir / "part.toml";
+  std::ofstream(part) << "name = \"test\"\nlift_table = \"" << csv_name
+                      << "\"\nfollower = \"flat\"\nbase_circle_radius_mm = 18.0\nwheel_radius_mm = 200.0\n"
+                         "nc_program = \"CAM_TEST\"\n";
+  return part;
+}
+
+TEST_F(FullPathTest, MissingLiftTableFailsBeforeMeasuring) {
+  const fs::path part = write_part(dir_, "missing.csv", nullptr);
+  CommandResult r = run_command("measure --gauge 127.0.0.1:9 --part " + part.string() + " --data-dir " + dir_.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("missing.csv: no such file"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "gaugeloop.sqlite"));
+  EXPECT_FALSE(fs::exists(dir_ / "nc"));
+}
+
+TEST_F(FullPathTest, MalformedLiftTableNamesTheLine) {
+  const std::string csv = "angle_deg,lift_mm\n0,1.0\n1,0.9\n2,oops\n";
+  const fs::path part = write_part(dir_, "bad.csv", &csv);
+  CommandResult r = run_command("measure --gauge 127.0.0.1:9 --part " + part.string() + " --data-dir " + dir_.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad.csv:4: lift `oops` is not a number"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "gaugeloop.sqlite"));
+}
+
+TEST_F(FullPathTest, MalformedPartFileNamesTheKeyAndLine) {
+  const fs::path part = dir_ / "part.toml";
+  std::ofstream(part) << "name = \"x\"\nlift_table = \"a.csv\"\nfolower = \"flat\"\n";
+  CommandResult r = run_command("measure --gauge 127.0.0.1:9 --part " + part.string() + " --data-dir " + dir_.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("part.toml:3: key `folower`: unknown key"), std::string::npos) << r.output;
+}
+
+TEST_F(FullPathTest, UnreachableGaugeStoresNoRunAndWritesNoTable) {
+  // A bound socket that does not listen: connections to it are refused, and the port stays
+  // ours until the test ends.
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  socklen_t len = sizeof addr;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  const std::string gauge = "127.0.0.1:" + std::to_string(ntohs(addr.sin_port));
+  const fs::path part = fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml";
+  CommandResult r =
+      run_command("measure --gauge " + gauge + " --part " + part.string() + " --data-dir " + dir_.string());
+  ::close(fd);
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("cannot connect to the gauge at tcp:" + gauge), std::string::npos) << r.output;
+  EXPECT_EQ(stored_runs(), 0);
+  EXPECT_FALSE(fs::exists(dir_ / "nc" / "CAM_INTAKE_L1.SPF"));
+}
+
+TEST_F(FullPathTest, BadCommandLineIsBadInputAndTouchesNothing) {
+  CommandResult r = run_command("demo --revolutions 2 --data-dir " + dir_.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--revolutions"), std::string::npos) << r.output;
+  r = run_command("measure --gauge nonsense --part x.toml --data-dir " + dir_.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("expected HOST:PORT"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "gaugeloop.sqlite"));
+}
+
+TEST_F(FullPathTest, TemplateWithAnUnknownPlaceholderIsRefusedBeforeMeasuring) {
+  JobSettings js = job_settings();
+  js.nc_template = "CTABDEF(X,C,1,1)\n{{table_blocks}}\n{{tabel_number}}\n";
+  ModbusTcpSettings ms;
+  ms.port = 9;  // never contacted: the template is checked first
+  ModbusTcpGauge gauge(ms);
+  Result<JobReport> report = run_measure_job(gauge, js);
+  ASSERT_FALSE(report.ok());
+  EXPECT_EQ(report.error().code, ErrorCode::kInvalidInput);
+  EXPECT_NE(report.error().message.find("cam_table.spf:3: unknown placeholder {{tabel_number}}"), std::string::npos)
+      << report.error().message;
+  EXPECT_FALSE(fs::exists(dir_ / "gaugeloop.sqlite"));
+}
+
+}  // namespace
+}  // namespace gaugeloop
