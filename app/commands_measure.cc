@@ -1,0 +1,237 @@
+// demo, sim and measure: the commands that talk to a gauge (or run the simulated one).
+#include <signal.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "acquisition/modbus_gauge.h"
+#include "app/cli_common.h"
+#include "app/embedded_defaults.h"
+#include "app/measure_job.h"
+#include "simulator/gauge_simulator.h"
+
+namespace gaugeloop {
+namespace {
+
+Result<std::string> load_template(const std::string& path, std::string& name) {
+  if (path.empty()) {
+    name = "embedded:cam_table.spf";
+    return std::string(embedded::kNcTemplate);
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return make_error(ErrorCode::kNotFound, "NC template " + path + ": cannot be opened; check --template");
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  name = path;
+  return buf.str();
+}
+
+void print_report(const JobReport& r, const Part& part, const std::string& machine) {
+  const auto& a = r.analysis;
+  const int revs = static_cast<int>(r.measured.revolutions.size());
+  std::printf("run %lld: %s lobe %d on %s\n", static_cast<long long>(r.run_id), part.name.c_str(), part.lobe,
+              machine.c_str());
+  std::printf("  revolutions       %d (%lld discarded, %lld reconnects, %lld polls)\n", revs,
+              static_cast<long long>(r.measured.discarded_revolutions), static_cast<long long>(r.measured.reconnects),
+              static_cast<long long>(r.measured.polls));
+  std::printf("  degrees captured  %d of %d\n", revs * kDegreesPerRevolution, revs * kDegreesPerRevolution);
+  std::printf("  max lift error    %.2f um\n", a.max_abs_error_um);
+  std::printf("  RMS lift error    %.2f um\n", a.rms_error_um);
+  std::printf("  peak to valley    %.2f um\n", a.peak_to_valley_um);
+  std::printf("  repeatability     %.2f um (largest per-degree standard deviation)\n", a.repeatability_um);
+  if (r.correction_in_force_run) {
+    std::printf("  correction        %.2f um max, built on run %lld's (the table in force)\n", r.correction_max_um,
+                static_cast<long long>(*r.correction_in_force_run));
+  } else {
+    std::printf("  correction        %.2f um max, from the design\n", r.correction_max_um);
+  }
+  std::printf("  NC file           %s (%d points)\n", r.nc_file.string().c_str(), r.table_points);
+  std::printf("  database          %s\n", r.db_path.string().c_str());
+}
+
+struct MeasureOptions {
+  DataPaths paths;
+  std::string part_path;
+  std::string template_path;
+  int revolutions = 3;
+  double table_step_deg = 1.0;
+  std::string machine = "grinder-1";
+  std::string note;
+  int response_timeout_ms = 200;
+  std::string mode = "latched";  // latched | live
+};
+
+void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
+  add_data_dir_option(cmd, o.paths);
+  cmd.add_option("--nc-dir", o.paths.nc_dir, "Directory the curve-table program is written to [<data-dir>/nc]");
+  cmd.add_option("--template", o.template_path, "NC template with {{placeholders}} [built-in Sinumerik 840D table]");
+  cmd.add_option("--revolutions", o.revolutions, "Complete revolutions to average (at least 3)")
+      ->capture_default_str()
+      ->check(CLI::Range(3, 100));
+  cmd.add_option("--table-step-deg", o.table_step_deg, "C step of the curve table in degrees")->capture_default_str();
+  cmd.add_option("--machine", o.machine, "Machine name stored with the run")->capture_default_str();
+  cmd.add_option("--note", o.note, "Operator note stored with the run");
+  cmd.add_option("--response-timeout-ms", o.response_timeout_ms, "Gauge response timeout")
+      ->capture_default_str()
+      ->check(CLI::Range(10, 10000));
+  cmd.add_option("--mode", o.mode,
+                 "latched: drain the amplifier's per-degree latch buffer; live: poll the reading and interpolate "
+                 "(amplifiers without a latch input, slow spindles)")
+      ->check(CLI::IsMember({"latched", "live"}))
+      ->capture_default_str();
+}
+
+int run_job(GaugeClient& gauge, const LoadedPart& lp, const MeasureOptions& o, bool build_on_table_in_force) {
+  std::string template_name;
+  Result<std::string> tmpl = load_template(o.template_path, template_name);
+  if (!tmpl) return report_error(tmpl.error());
+  JobSettings js;
+  js.part = lp.file.part;
+  js.design = lp.design;
+  js.nc_program = lp.file.nc_program;
+  js.poller.revolutions = o.revolutions;
+  js.poller.mode = o.mode == "live" ? SamplingMode::kLive : SamplingMode::kLatched;
+  js.db_path = o.paths.db();
+  js.nc_dir = o.paths.nc();
+  js.nc_template = std::move(*tmpl);
+  js.nc_template_name = template_name;
+  js.table_step_deg = o.table_step_deg;
+  js.machine = o.machine;
+  js.note = o.note;
+  js.build_on_table_in_force = build_on_table_in_force;
+  Result<JobReport> report = run_measure_job(gauge, js);
+  if (!report) return report_error(report.error());
+  print_report(*report, js.part, js.machine);
+  return kExitOk;
+}
+
+int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {
+  Result<LoadedPart> lp = load_part(o.part_path);
+  if (!lp) return report_error(lp.error());
+  auto sim = GaugeSimulator::start(lp->file.part, lp->design, sim_settings);
+  if (!sim) return report_error(sim.error());
+  std::printf(
+      "simulator: %s lobe %d turning at %.0f rpm on 127.0.0.1:%d (form error %.1f um peak, noise %.1f um RMS)\n",
+      lp->file.part.name.c_str(), lp->file.part.lobe, sim_settings.speed_rpm, (*sim)->port(),
+      sim_settings.lobe_error_peak_um, sim_settings.noise_rms_um);
+  std::printf("measuring %d revolutions in %s mode...\n", o.revolutions, o.mode.c_str());
+  std::fflush(stdout);
+  ModbusTcpSettings ms;
+  ms.port = (*sim)->port();
+  ms.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
+  ModbusTcpGauge gauge(ms);
+  return run_job(gauge, *lp, o, /*build_on_table_in_force=*/false);
+}
+
+int cmd_measure(const MeasureOptions& o, const std::string& gauge_address) {
+  const auto colon = gauge_address.rfind(':');
+  ModbusTcpSettings ms;
+  try {
+    if (colon == std::string::npos) throw std::invalid_argument("no port");
+    ms.host = gauge_address.substr(0, colon);
+    size_t used = 0;
+    ms.port = std::stoi(gauge_address.substr(colon + 1), &used);
+    if (used != gauge_address.size() - colon - 1 || ms.port <= 0 || ms.port > 65535)
+      throw std::invalid_argument("port");
+  } catch (const std::exception&) {
+    return report_error(make_error(ErrorCode::kInvalidInput,
+                                   "--gauge `" + gauge_address + "`: expected HOST:PORT, e.g. 192.168.0.20:502"));
+  }
+  ms.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
+  Result<LoadedPart> lp = load_part(o.part_path);
+  if (!lp) return report_error(lp.error());
+  ModbusTcpGauge gauge(ms);
+  return run_job(gauge, *lp, o, /*build_on_table_in_force=*/true);
+}
+
+int cmd_sim(const std::string& part_path, const SimulatorSettings& settings) {
+  Result<LoadedPart> lp = load_part(part_path);
+  if (!lp) return report_error(lp.error());
+  // Block the stop signals before the server thread starts, so only sigwait below sees them.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  auto sim = GaugeSimulator::start(lp->file.part, lp->design, settings);
+  if (!sim) return report_error(sim.error());
+  std::printf("gaugeloop sim: %s lobe %d at %.0f rpm, Modbus TCP on %s:%d (input registers 0-8, docs/simulator.md)\n",
+              lp->file.part.name.c_str(), lp->file.part.lobe, settings.speed_rpm, settings.host.c_str(),
+              (*sim)->port());
+  std::printf("port %d\n", (*sim)->port());
+  std::fflush(stdout);
+  int sig = 0;
+  sigwait(&stop_signals, &sig);
+  (*sim)->stop();
+  spdlog::info("simulator stopped after {} requests", (*sim)->requests_served());
+  return kExitOk;
+}
+
+void add_simulator_options(CLI::App& cmd, SimulatorSettings& s) {
+  cmd.add_option("--speed-rpm", s.speed_rpm, "Work spindle speed")->capture_default_str();
+  cmd.add_option("--lobe-error-um", s.lobe_error_peak_um, "Peak of the repeatable form error of the simulated lobe")
+      ->capture_default_str();
+  cmd.add_option("--noise-um", s.noise_rms_um, "Gauge noise, RMS")->capture_default_str();
+  cmd.add_option("--seed", s.seed, "Seed of the gauge noise, for a repeatable run [from the clock]");
+}
+
+// A fresh noise seed per start unless --seed gave one: real gauge noise does not repeat.
+void seed_from_clock_unless_given(const CLI::App& cmd, SimulatorSettings& s) {
+  if (cmd.count("--seed") == 0) {
+    s.seed = static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count()) | 1u;
+  }
+}
+
+}  // namespace
+
+void add_measure_commands(CLI::App& app, CommandAction& action) {
+  auto demo_opts = std::make_shared<MeasureOptions>();
+  auto demo_sim = std::make_shared<SimulatorSettings>();
+  CLI::App* demo = app.add_subcommand(
+      "demo",
+      "Start the built-in gauge simulator on a free loopback port, measure the sample intake lobe through it, "
+      "store the run and write the corrected curve table. Needs no files.");
+  add_measure_options(*demo, *demo_opts);
+  demo->add_option("--part", demo_opts->part_path, "Part file to simulate and measure [built-in intake_flat]");
+  add_simulator_options(*demo, *demo_sim);
+  demo->callback([&action, demo, demo_opts, demo_sim] {
+    seed_from_clock_unless_given(*demo, *demo_sim);
+    action = [demo_opts, demo_sim] { return cmd_demo(*demo_opts, *demo_sim); };
+  });
+
+  auto sim_settings = std::make_shared<SimulatorSettings>();
+  auto sim_part = std::make_shared<std::string>();
+  CLI::App* sim = app.add_subcommand(
+      "sim", "Run the gauge simulator alone as a Modbus TCP server, so any Modbus tool can read it. Stops on Ctrl-C.");
+  sim->add_option("--host", sim_settings->host, "Address to listen on")->capture_default_str();
+  sim_settings->port = 1502;
+  sim->add_option("--port", sim_settings->port, "TCP port; 0 picks a free one")->capture_default_str();
+  sim->add_option("--part", *sim_part, "Part file to simulate [built-in intake_flat]");
+  add_simulator_options(*sim, *sim_settings);
+  sim->add_option("--time-scale", sim_settings->time_scale, "Simulated seconds per real second")->capture_default_str();
+  sim->add_option("--silent-after-revs", sim_settings->silent_after_revolutions,
+                  "Fault: stop answering this many revolutions after the first request (-1: never)")
+      ->capture_default_str();
+  sim->callback([&action, sim, sim_settings, sim_part] {
+    seed_from_clock_unless_given(*sim, *sim_settings);
+    action = [sim_settings, sim_part] { return cmd_sim(*sim_part, *sim_settings); };
+  });
+
+  auto measure_opts = std::make_shared<MeasureOptions>();
+  auto gauge_address = std::make_shared<std::string>();
+  CLI::App* measure = app.add_subcommand(
+      "measure",
+      "Measure one run against a gauge amplifier at HOST:PORT, store it and write the corrected curve table.");
+  measure->add_option("--gauge", *gauge_address, "Gauge amplifier, HOST:PORT (Modbus TCP)")->required();
+  measure->add_option("--part", measure_opts->part_path, "Part file (TOML), see examples/")->required();
+  add_measure_options(*measure, *measure_opts);
+  measure->callback([&action, measure_opts, gauge_address] {
+    action = [measure_opts, gauge_address] { return cmd_measure(*measure_opts, *gauge_address); };
+  });
+}
+
+}  // namespace gaugeloop
