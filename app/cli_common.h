@@ -53,5 +53,6 @@ using CommandAction = std::function<int()>;
 // Each group adds its subcommands to `app`; the one named on the command line sets `action`.
 void add_measure_commands(CLI::App& app, CommandAction& action);  // demo, sim, measure
 void add_runs_commands(CLI::App& app, CommandAction& action);     // runs ...
+void add_profile_commands(CLI::App& app, CommandAction& action);  // profile
 
 }  // namespace gaugeloop

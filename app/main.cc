@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   CommandAction action;
   add_measure_commands(app, action);
   add_runs_commands(app, action);
+  add_profile_commands(app, action);
 
   try {
     app.parse(argc, argv);
