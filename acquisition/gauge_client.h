@@ -40,6 +40,7 @@ inline bool gauge_status_ok(std::uint16_t status) {
 struct LatchState {
   std::uint32_t write_count = 0;
   int ring_size = 0;
+  int entries_per_read = 31;  // most entries one request can carry (125 registers)
 };
 
 // One latched entry: the reading at a whole machine degree of C.

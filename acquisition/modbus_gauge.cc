@@ -9,7 +9,10 @@
 
 namespace gaugeloop {
 
-ModbusTcpGauge::ModbusTcpGauge(ModbusTcpSettings settings) : settings_(std::move(settings)) {}
+ModbusTcpGauge::ModbusTcpGauge(ModbusTcpSettings settings)
+    : settings_(std::move(settings)), blocks_(snapshot_blocks(settings_.map)) {
+  for (const ReadBlock& b : blocks_) words_.emplace_back(static_cast<size_t>(b.count));
+}
 
 ModbusTcpGauge::~ModbusTcpGauge() { disconnect(); }
 
@@ -44,15 +47,17 @@ void ModbusTcpGauge::disconnect() {
   ctx_ = nullptr;
 }
 
-Status ModbusTcpGauge::read_registers(int address, int count, std::uint16_t* dest) {
+Status ModbusTcpGauge::read_registers(RegisterTable table, int address, int count, std::uint16_t* dest) {
   if (ctx_ == nullptr) {
     return make_error(ErrorCode::kGaugeUnreachable, "gauge at " + this->address() + " is not connected");
   }
-  const int n = modbus_read_input_registers(ctx_, address, count, dest);
+  const int n = table == RegisterTable::kInput ? modbus_read_input_registers(ctx_, address, count, dest)
+                                               : modbus_read_registers(ctx_, address, count, dest);
   if (n == count) return {};
   const int err = n < 0 ? errno : EMBMDATA;
-  const std::string where = "reading input registers " + std::to_string(address) + ".." +
-                            std::to_string(address + count - 1) + " of the gauge at " + this->address();
+  const std::string where = "reading " + std::string(register_table_name(table)) + " registers " +
+                            std::to_string(address) + ".." + std::to_string(address + count - 1) + " of the gauge at " +
+                            this->address();
   if (err == ETIMEDOUT) {
     modbus_flush(ctx_);
     disconnect();
@@ -69,19 +74,47 @@ Status ModbusTcpGauge::read_registers(int address, int count, std::uint16_t* des
 }
 
 Result<GaugeSnapshot> ModbusTcpGauge::read_snapshot() {
-  const RegisterMap& map = settings_.map;
-  std::uint16_t regs[MODBUS_MAX_READ_REGISTERS];
-  if (Status s = read_registers(map.start_address, map.count, regs); !s) return s.error();
-  return decode_snapshot(map, std::span<const std::uint16_t>(regs, static_cast<size_t>(map.count)));
+  for (size_t b = 0; b < blocks_.size(); ++b) {
+    if (Status s = read_registers(blocks_[b].table, blocks_[b].start, blocks_[b].count, words_[b].data()); !s) {
+      return s.error();
+    }
+  }
+  GaugeSnapshot snap = decode_snapshot(settings_.map, blocks_, words_, ++polls_);
+  if (!settings_.map.revolution.present) {
+    // A wrap is the angle dropping by more than half a turn between polls.
+    if (last_angle_deg_ >= 0.0 && snap.angle_deg < last_angle_deg_ - 180.0) ++inferred_revolution_;
+    last_angle_deg_ = snap.angle_deg;
+    snap.revolution = inferred_revolution_;
+  }
+  return snap;
 }
 
 Result<LatchState> ModbusTcpGauge::read_latch_state() {
-  const RegisterMap& map = settings_.map;
+  const LatchSpec& l = settings_.map.latch;
+  if (!l.present) {
+    return make_error(ErrorCode::kInvalidInput, "the register map of the gauge at " + address() +
+                                                    " has no latch buffer; use live mode (--mode live)");
+  }
   std::uint16_t regs[3];
-  if (Status s = read_registers(map.latch_count_address, 3, regs); !s) return s.error();
+  const int words = l.ring_size > 0 ? 2 : l.ring_size_address - l.count_address + 1;
+  if (l.ring_size == 0 && (words < 3 || words > 125)) {
+    // Not adjacent to the count: two requests.
+    if (Status s = read_registers(l.table, l.count_address, 2, regs); !s) return s.error();
+    if (Status s = read_registers(l.table, l.ring_size_address, 1, regs + 2); !s) return s.error();
+  } else if (l.ring_size == 0) {
+    std::vector<std::uint16_t> block(static_cast<size_t>(words));
+    if (Status s = read_registers(l.table, l.count_address, words, block.data()); !s) return s.error();
+    regs[0] = block[0];
+    regs[1] = block[1];
+    regs[2] = block.back();
+  } else {
+    if (Status s = read_registers(l.table, l.count_address, 2, regs); !s) return s.error();
+    regs[2] = static_cast<std::uint16_t>(l.ring_size);
+  }
   LatchState st;
-  st.write_count = decode_u32(regs[0], regs[1], map.word_order);
-  st.ring_size = regs[map.latch_ring_size_address - map.latch_count_address];
+  st.write_count = decode_u32(regs[0], regs[1], l.order);
+  st.ring_size = regs[2];
+  st.entries_per_read = latched_entries_per_read(settings_.map);
   if (st.ring_size < 2) {
     return make_error(ErrorCode::kGaugeProtocol, "gauge at " + address() + " reports a latch ring of " +
                                                      std::to_string(st.ring_size) +
@@ -92,12 +125,14 @@ Result<LatchState> ModbusTcpGauge::read_latch_state() {
 
 Result<std::vector<LatchedSample>> ModbusTcpGauge::read_latched(int first_slot, int count) {
   const RegisterMap& map = settings_.map;
-  const int words = count * map.latch_entry_words;
+  const int words = count * map.latch.entry_words;
   std::uint16_t regs[MODBUS_MAX_READ_REGISTERS];
   if (words > MODBUS_MAX_READ_REGISTERS) {
     return make_error(ErrorCode::kInternal, "read_latched: " + std::to_string(count) + " entries exceed one request");
   }
-  if (Status s = read_registers(map.latch_ring_address + first_slot * map.latch_entry_words, words, regs); !s) {
+  if (Status s =
+          read_registers(map.latch.table, map.latch.ring_address + first_slot * map.latch.entry_words, words, regs);
+      !s) {
     return s.error();
   }
   return decode_latched(map, std::span<const std::uint16_t>(regs, static_cast<size_t>(words)));

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "acquisition/gauge_client.h"
 #include "acquisition/register_map.h"
@@ -40,12 +41,18 @@ class ModbusTcpGauge final : public GaugeClient {
   std::string address() const override;
 
  private:
-  // Reads `count` input registers at `address` into `dest`; on failure returns the error,
-  // with errno turned into a code, after flushing and closing the link where needed.
-  Status read_registers(int address, int count, std::uint16_t* dest);
+  // Reads `count` registers of `table` at `address` into `dest`; on failure returns the
+  // error, with errno turned into a code, after flushing and closing the link where needed.
+  Status read_registers(RegisterTable table, int address, int count, std::uint16_t* dest);
 
   ModbusTcpSettings settings_;
+  std::vector<ReadBlock> blocks_;  // the requests of one snapshot
+  std::vector<std::vector<std::uint16_t>> words_;
   modbus_t* ctx_ = nullptr;
+  std::uint64_t polls_ = 0;
+  // Revolution count inferred from the angle wrapping, for maps without a revolution field.
+  std::uint16_t inferred_revolution_ = 0;
+  double last_angle_deg_ = -1.0;
 };
 
 }  // namespace gaugeloop

@@ -334,10 +334,9 @@ Result<MeasuredRun> Poller::measure_latched() {
   // Latch rate, from the first state read to the latest: paces the drain.
   std::optional<std::pair<Clock::time_point, std::uint32_t>> rate_origin;
   double entries_per_s = 0.0;
-  auto drain_pause = [&](int ring_size) {
+  auto drain_pause = [&](const LatchState& latch) {
     if (entries_per_s <= 0.0) return std::chrono::duration<double>(settings_.latch_idle_wait);
-    const double block = 125 / 4;
-    const double wait_s = std::min(block, ring_size / 4.0) / entries_per_s;
+    const double wait_s = std::min<double>(latch.entries_per_read, latch.ring_size / 4.0) / entries_per_s;
     return std::min(std::chrono::duration<double>(wait_s), std::chrono::duration<double>(settings_.latch_max_wait));
   };
 
@@ -403,13 +402,13 @@ Result<MeasuredRun> Poller::measure_latched() {
         if (Status s = link.failed(frozen, where_now()); !s) return s.error();
         continue;
       }
-      std::this_thread::sleep_for(drain_pause(state->ring_size));  // pacing: nothing new to read yet
+      std::this_thread::sleep_for(drain_pause(*state));  // pacing: nothing new to read yet
       continue;
     }
     link.succeeded();
     last_progress = Clock::now();
     const int slot = static_cast<int>(next % static_cast<std::uint32_t>(state->ring_size));
-    const int count = std::min({static_cast<int>(available), 125 / 4, state->ring_size - slot});
+    const int count = std::min({static_cast<int>(available), state->entries_per_read, state->ring_size - slot});
     Result<std::vector<LatchedSample>> entries = gauge_.read_latched(slot, count);
     ++run.polls;
     if (!entries) {
@@ -420,7 +419,7 @@ Result<MeasuredRun> Poller::measure_latched() {
     }
     next += static_cast<std::uint32_t>(entries->size());
     if (static_cast<std::uint32_t>(count) == available) {
-      std::this_thread::sleep_for(drain_pause(state->ring_size));  // pacing: drained, let a block gather
+      std::this_thread::sleep_for(drain_pause(*state));  // pacing: drained, let a block gather
     }
     for (const LatchedSample& e : *entries) {
       ++read_total;

@@ -1,11 +1,14 @@
-// Where the gauge amplifier keeps each value, and how to decode 16-bit words into numbers.
+// Where a gauge amplifier keeps each value, and how to decode its 16-bit words into numbers.
 #pragma once
 
 #include <cstdint>
 #include <span>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "acquisition/gauge_client.h"
+#include "core/result.h"
 
 namespace gaugeloop {
 
@@ -14,39 +17,109 @@ namespace gaugeloop {
 // BADC = high word first, bytes swapped; DCBA = low word first, bytes swapped.
 enum class WordOrder { kABCD, kCDAB, kBADC, kDCBA };
 
+enum class RegisterTable {
+  kHolding,  // function 03
+  kInput,    // function 04
+};
+
+enum class ValueType { kInt16, kUInt16, kInt32, kUInt32, kFloat32 };
+
+// Registers a value of this type occupies: 1 or 2.
+int register_count(ValueType type);
+
+std::string_view word_order_name(WordOrder order);
+std::string_view register_table_name(RegisterTable table);
+std::string_view value_type_name(ValueType type);
+
 // Decodes two registers (as received, in address order) into 32 bits. Written here rather
-// than using libmodbus's float helpers, whose names are mirrored on little-endian hosts.
+// than using libmodbus 3.1.6's float helpers, whose names are mirrored on little-endian hosts.
 std::uint32_t decode_u32(std::uint16_t first, std::uint16_t second, WordOrder order);
 float decode_float32(std::uint16_t first, std::uint16_t second, WordOrder order);
 
-// The input-register block of the gauge, read in one request so the snapshot is consistent.
-// Defaults are the simulator's map (docs/simulator.md); issue 4 makes it configuration.
-struct RegisterMap {
-  int start_address = 0;                 // 0-based address of the block
-  int count = 7;                         // registers in the block
-  int reading_offset = 0;                // int32 counts
-  double reading_mm_per_count = 0.0001;  // 0.1 um
-  int status_offset = 2;
-  int angle_offset = 3;  // uint32 counts
-  double angle_deg_per_count = 0.001;
-  int revolution_offset = 5;
-  int sequence_offset = 6;
-  WordOrder word_order = WordOrder::kABCD;
-
-  // Latch buffer (latched mode).
-  int latch_count_address = 100;      // uint32 write count
-  int latch_ring_size_address = 102;  // uint16 entries in the ring
-  int latch_ring_address = 1000;      // first entry
-  int latch_entry_words = 4;          // reading int32 (2), degree uint16, status uint16
+// One value in the amplifier: raw register(s) -> number -> raw * scale + offset.
+struct FieldSpec {
+  bool present = true;  // optional fields may be absent
+  RegisterTable table = RegisterTable::kInput;
+  int address = 0;  // 0-based
+  ValueType type = ValueType::kUInt16;
+  WordOrder order = WordOrder::kABCD;  // for 32-bit types
+  double scale = 1.0;
+  double offset = 0.0;
 };
+
+// The raw number a field holds (before scale and offset). `words` starts at the field.
+double decode_raw(const FieldSpec& field, std::span<const std::uint16_t> words);
+
+// Status word bits. A reading is ready when every bit of ready_mask is set; each fault
+// mask means that fault when any of its bits is set. A zero mask is not used.
+struct StatusMasks {
+  std::uint16_t ready = 0x0001;
+  std::uint16_t over_range = 0x0002;
+  std::uint16_t under_range = 0x0004;
+  std::uint16_t probe_missing = 0x0008;
+};
+
+// The amplifier's status word translated to GaugeStatusBit flags.
+std::uint16_t translate_status(std::uint16_t raw, const StatusMasks& masks);
+
+// The latch buffer for latched mode: a count of latched degree marks (uint32, the map's word
+// order), the ring size (fixed, or read from a register), and the ring of entries.
+struct LatchSpec {
+  bool present = true;
+  RegisterTable table = RegisterTable::kInput;
+  int count_address = 100;
+  int ring_size = 0;  // > 0: fixed size; 0: read from ring_size_address
+  int ring_size_address = 102;
+  int ring_address = 1000;
+  int entry_words = 4;
+  int reading_offset = 0;              // within an entry; decoded like the reading field (type, order, scale)
+  int degree_offset = 2;               // uint16 whole machine degree
+  int status_offset = 3;               // uint16 status word; -1: none
+  WordOrder order = WordOrder::kABCD;  // of the count
+};
+
+// Where the gauge keeps what the poller needs. Defaults are the simulator's map
+// (docs/simulator.md); a gauge config file (docs/gauge.md) describes any other amplifier.
+struct RegisterMap {
+  // Gauge reading, scaled to mm (defaults: int32 counts of 0.1 um).
+  FieldSpec reading{true, RegisterTable::kInput, 0, ValueType::kInt32, WordOrder::kABCD, 0.0001, 0.0};
+  FieldSpec status{true, RegisterTable::kInput, 2, ValueType::kUInt16, WordOrder::kABCD, 1.0, 0.0};
+  // Work spindle angle, scaled to degrees (defaults: uint32 counts of 0.001 deg).
+  FieldSpec angle{true, RegisterTable::kInput, 3, ValueType::kUInt32, WordOrder::kABCD, 0.001, 0.0};
+  // Revolution count; absent: a revolution is counted when the angle wraps.
+  FieldSpec revolution{true, RegisterTable::kInput, 5, ValueType::kUInt16, WordOrder::kABCD, 1.0, 0.0};
+  // Amplifier sample number; absent: every poll counts as a new sample (no stale detection).
+  FieldSpec sequence{true, RegisterTable::kInput, 6, ValueType::kUInt16, WordOrder::kABCD, 1.0, 0.0};
+  StatusMasks masks;
+  LatchSpec latch;
+};
+
+// Checks a map: required fields present, addresses in range, fields not overlapping, 32-bit
+// types only where a value needs them, latch layout inside its entry. Messages name the field.
+Status validate(const RegisterMap& map);
+
+// A run of registers read in one request.
+struct ReadBlock {
+  RegisterTable table = RegisterTable::kInput;
+  int start = 0;
+  int count = 0;
+};
+
+// The requests that read every live field: fields of one table whose registers lie within
+// kMaxBlockGap of each other share one request (at most 125 registers), so a snapshot that
+// the amplifier keeps contiguous costs one request.
+inline constexpr int kMaxBlockGap = 8;
+std::vector<ReadBlock> snapshot_blocks(const RegisterMap& map);
+
+// Decodes a snapshot from the registers of `blocks` (one span per block, in order).
+// `polls` stands in for the sequence number when the map has none.
+GaugeSnapshot decode_snapshot(const RegisterMap& map, const std::vector<ReadBlock>& blocks,
+                              const std::vector<std::vector<std::uint16_t>>& words, std::uint64_t polls);
 
 // Entries per request: a Modbus read returns at most 125 registers.
 int latched_entries_per_read(const RegisterMap& map);
 
-// Decodes `count` consecutive entries of the ring.
+// Decodes consecutive ring entries.
 std::vector<LatchedSample> decode_latched(const RegisterMap& map, std::span<const std::uint16_t> regs);
-
-// Decodes one block (exactly map.count registers from map.start_address).
-GaugeSnapshot decode_snapshot(const RegisterMap& map, std::span<const std::uint16_t> regs);
 
 }  // namespace gaugeloop

@@ -11,6 +11,7 @@
 #include "acquisition/modbus_gauge.h"
 #include "app/cli_common.h"
 #include "app/embedded_defaults.h"
+#include "app/gauge_config.h"
 #include "app/measure_job.h"
 #include "simulator/gauge_simulator.h"
 
@@ -63,6 +64,7 @@ struct MeasureOptions {
   std::string note;
   int response_timeout_ms = 200;
   std::string mode = "latched";  // latched | live
+  std::string gauge_config;      // measure only
 };
 
 void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
@@ -128,20 +130,30 @@ int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {
 }
 
 int cmd_measure(const MeasureOptions& o, const std::string& gauge_address) {
-  const auto colon = gauge_address.rfind(':');
   ModbusTcpSettings ms;
-  try {
-    if (colon == std::string::npos) throw std::invalid_argument("no port");
-    ms.host = gauge_address.substr(0, colon);
-    size_t used = 0;
-    ms.port = std::stoi(gauge_address.substr(colon + 1), &used);
-    if (used != gauge_address.size() - colon - 1 || ms.port <= 0 || ms.port > 65535)
-      throw std::invalid_argument("port");
-  } catch (const std::exception&) {
-    return report_error(make_error(ErrorCode::kInvalidInput,
-                                   "--gauge `" + gauge_address + "`: expected HOST:PORT, e.g. 192.168.0.20:502"));
-  }
   ms.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
+  if (!o.gauge_config.empty()) {
+    Result<ModbusTcpSettings> from_file = read_gauge_file(o.gauge_config, ms);
+    if (!from_file) return report_error(from_file.error());
+    ms = std::move(*from_file);
+  }
+  if (!gauge_address.empty()) {
+    const auto colon = gauge_address.rfind(':');
+    try {
+      if (colon == std::string::npos) throw std::invalid_argument("no port");
+      size_t used = 0;
+      const int port = std::stoi(gauge_address.substr(colon + 1), &used);
+      if (used != gauge_address.size() - colon - 1 || port <= 0 || port > 65535) throw std::invalid_argument("port");
+      ms.host = gauge_address.substr(0, colon);
+      ms.port = port;
+    } catch (const std::exception&) {
+      return report_error(make_error(ErrorCode::kInvalidInput,
+                                     "--gauge `" + gauge_address + "`: expected HOST:PORT, e.g. 192.168.0.20:502"));
+    }
+  } else if (o.gauge_config.empty()) {
+    return report_error(make_error(ErrorCode::kInvalidInput,
+                                   "no gauge: give --gauge HOST:PORT or a --gauge-config file with a [link] table"));
+  }
   Result<LoadedPart> lp = load_part(o.part_path);
   if (!lp) return report_error(lp.error());
   ModbusTcpGauge gauge(ms);
@@ -226,7 +238,10 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
   CLI::App* measure = app.add_subcommand(
       "measure",
       "Measure one run against a gauge amplifier at HOST:PORT, store it and write the corrected curve table.");
-  measure->add_option("--gauge", *gauge_address, "Gauge amplifier, HOST:PORT (Modbus TCP)")->required();
+  measure->add_option("--gauge", *gauge_address,
+                      "Gauge amplifier, HOST:PORT (Modbus TCP); overrides the config's [link]");
+  measure->add_option("--gauge-config", measure_opts->gauge_config,
+                      "Gauge config (TOML): link and register map, see docs/gauge.md [the simulator's map]");
   measure->add_option("--part", measure_opts->part_path, "Part file (TOML), see examples/")->required();
   add_measure_options(*measure, *measure_opts);
   measure->callback([&action, measure_opts, gauge_address] {

@@ -20,6 +20,7 @@ packages=(
   sqlite3            # the CLI users query the database with; tests use it too
   mbpoll             # independent Modbus client: tests read the simulator with it
   socat              # pseudo-terminal pairs for Modbus RTU tests
+  python3-pymodbus   # an independent Modbus server: tests read a gauge served by it
   locales            # a decimal-comma locale, to test that output ignores the C locale
 )
 

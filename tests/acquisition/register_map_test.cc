@@ -1,4 +1,4 @@
-// Decoding 32-bit values in each word order, and the snapshot layout.
+// Decoding values in each type and word order, grouping fields into requests, and map checks.
 #include "acquisition/register_map.h"
 
 #include <gtest/gtest.h>
@@ -24,22 +24,124 @@ TEST(WordOrder, DecodesFloat32) {
   EXPECT_EQ(decode_float32(0x0000, 0xC03F, WordOrder::kDCBA), 1.5f);
 }
 
-TEST(RegisterMap, DecodesTheSimulatorBlock) {
+TEST(FieldDecode, DecodesEveryTypeWithSign) {
+  const std::array<std::uint16_t, 2> minus_two = {0xFFFF, 0xFFFE};
+  FieldSpec f;
+  f.type = ValueType::kInt16;
+  EXPECT_EQ(decode_raw(f, std::span<const std::uint16_t>(minus_two).subspan(1)), -2.0);
+  f.type = ValueType::kUInt16;
+  EXPECT_EQ(decode_raw(f, std::span<const std::uint16_t>(minus_two).subspan(1)), 65534.0);
+  f.type = ValueType::kInt32;
+  EXPECT_EQ(decode_raw(f, minus_two), -2.0);
+  f.type = ValueType::kUInt32;
+  EXPECT_EQ(decode_raw(f, minus_two), 4294967294.0);
+  f.type = ValueType::kFloat32;
+  f.order = WordOrder::kCDAB;
+  const std::array<std::uint16_t, 2> one_and_half = {0x0000, 0x3FC0};
+  EXPECT_EQ(decode_raw(f, one_and_half), 1.5);
+}
+
+TEST(StatusMasks, TranslateTheAmplifiersBitsToOurs) {
+  StatusMasks m;  // simulator: ready bit 0, over 1, under 2, probe missing 3
+  EXPECT_EQ(translate_status(0x0001, m), kGaugeReady);
+  EXPECT_EQ(translate_status(0x0003, m), kGaugeReady | kGaugeOverRange);
+  EXPECT_EQ(translate_status(0x0000, m), 0);
+  StatusMasks other{0x8000, 0x0100, 0x0200, 0x0400};  // another amplifier's layout
+  EXPECT_EQ(translate_status(0x8400, other), kGaugeReady | kGaugeProbeMissing);
+  EXPECT_FALSE(gauge_status_ok(translate_status(0x0001, other))) << "bit 0 means nothing to this amplifier";
+}
+
+TEST(SnapshotBlocks, TheSimulatorsContiguousFieldsAreOneRequest) {
+  const auto blocks = snapshot_blocks(RegisterMap{});
+  ASSERT_EQ(blocks.size(), 1u);
+  EXPECT_EQ(blocks[0].table, RegisterTable::kInput);
+  EXPECT_EQ(blocks[0].start, 0);
+  EXPECT_EQ(blocks[0].count, 7);
+}
+
+TEST(SnapshotBlocks, SplitsByTableAndByDistantAddresses) {
+  RegisterMap m;
+  m.reading = {true, RegisterTable::kHolding, 40, ValueType::kFloat32, WordOrder::kCDAB, 1.0, 0.0};
+  m.status.address = 200;  // input, far from angle at 3
+  const auto blocks = snapshot_blocks(m);
+  ASSERT_EQ(blocks.size(), 3u);
+  EXPECT_EQ(blocks[0].table, RegisterTable::kHolding);
+  EXPECT_EQ(blocks[0].start, 40);
+  EXPECT_EQ(blocks[0].count, 2);
+  EXPECT_EQ(blocks[1].start, 3);  // angle 3-4, revolution 5, sequence 6
+  EXPECT_EQ(blocks[1].count, 4);
+  EXPECT_EQ(blocks[2].start, 200);
+}
+
+TEST(Snapshot, DecodesTheSimulatorBlock) {
   // reading -12345 counts (= -1.2345 mm), status ready, angle 123.456 deg, rev 7, seq 9
   const std::uint32_t reading = static_cast<std::uint32_t>(-12345);
-  const std::array<std::uint16_t, 7> regs = {static_cast<std::uint16_t>(reading >> 16),
-                                             static_cast<std::uint16_t>(reading & 0xffff),
-                                             1,
-                                             0x0001,
-                                             static_cast<std::uint16_t>(123456 - 65536),
-                                             7,
-                                             9};
-  GaugeSnapshot s = decode_snapshot(RegisterMap{}, regs);
+  const RegisterMap map;
+  const auto blocks = snapshot_blocks(map);
+  const std::vector<std::vector<std::uint16_t>> words = {{static_cast<std::uint16_t>(reading >> 16),
+                                                          static_cast<std::uint16_t>(reading & 0xffff), 1, 0x0001,
+                                                          static_cast<std::uint16_t>(123456 - 65536), 7, 9}};
+  GaugeSnapshot s = decode_snapshot(map, blocks, words, 0);
   EXPECT_NEAR(s.reading_mm, -1.2345, 1e-12);
   EXPECT_NEAR(s.angle_deg, 123.456, 1e-9);
-  EXPECT_EQ(s.status, 1);
+  EXPECT_EQ(s.status, kGaugeReady);
   EXPECT_EQ(s.revolution, 7);
   EXPECT_EQ(s.sequence, 9);
+}
+
+TEST(Snapshot, MissingOptionalFieldsHaveStandIns) {
+  RegisterMap m;
+  m.status.present = false;
+  m.sequence.present = false;
+  const auto blocks = snapshot_blocks(m);
+  const std::vector<std::vector<std::uint16_t>> words = {{0, 10, 0, 0, 1000, 3}};
+  ASSERT_EQ(blocks[0].count, 6);
+  GaugeSnapshot s = decode_snapshot(m, blocks, words, 41);
+  EXPECT_EQ(s.status, kGaugeReady) << "no status word: always ready";
+  EXPECT_EQ(s.sequence, 41) << "no sequence: the poll count, so every poll is a new sample";
+  EXPECT_NEAR(s.angle_deg, 1.0, 1e-12);
+}
+
+TEST(LatchedDecode, FollowsTheEntryLayoutAndTheReadingField) {
+  RegisterMap m;
+  m.reading = {true, RegisterTable::kHolding, 0, ValueType::kFloat32, WordOrder::kCDAB, 1.0, 0.5};
+  m.latch.entry_words = 3;
+  m.latch.degree_offset = 0;
+  m.latch.reading_offset = 1;
+  m.latch.status_offset = -1;
+  const std::vector<std::uint16_t> regs = {359, 0x0000, 0x3FC0, 0, 0x0000, 0x4000};
+  const auto e = decode_latched(m, regs);
+  ASSERT_EQ(e.size(), 2u);
+  EXPECT_EQ(e[0].degree, 359);
+  EXPECT_DOUBLE_EQ(e[0].reading_mm, 2.0);  // 1.5 + offset 0.5
+  EXPECT_EQ(e[1].degree, 0);
+  EXPECT_DOUBLE_EQ(e[1].reading_mm, 2.5);
+  EXPECT_EQ(e[1].status, kGaugeReady);
+}
+
+struct BadMap {
+  const char* expected;
+  void (*spoil)(RegisterMap&);
+};
+
+TEST(RegisterMapValidation, RefusesBrokenMapsNamingTheField) {
+  const BadMap cases[] = {
+      {"`reading` is required", [](RegisterMap& m) { m.reading.present = false; }},
+      {"`angle` is required", [](RegisterMap& m) { m.angle.present = false; }},
+      {"`reading` and `status` overlap at input register 1", [](RegisterMap& m) { m.status.address = 1; }},
+      {"`revolution` must be UINT16 or UINT32, not FLOAT32",
+       [](RegisterMap& m) { m.revolution.type = ValueType::kFloat32; }},
+      {"`angle` needs a finite, non-zero scale", [](RegisterMap& m) { m.angle.scale = 0.0; }},
+      {"latch entry layout", [](RegisterMap& m) { m.latch.degree_offset = 4; }},
+  };
+  EXPECT_TRUE(validate(RegisterMap{}).ok());
+  for (const BadMap& c : cases) {
+    RegisterMap m;
+    c.spoil(m);
+    Status s = validate(m);
+    ASSERT_FALSE(s.ok()) << c.expected;
+    EXPECT_NE(s.error().message.find(c.expected), std::string::npos) << s.error().message;
+  }
 }
 
 TEST(GaugeStatus, NamesFaultBits) {

@@ -1,0 +1,152 @@
+// toml++ reading of gauge configs into ModbusTcpSettings and a RegisterMap.
+#include "app/gauge_config.h"
+
+#include <fstream>
+#include <sstream>
+
+#include "app/toml_reader.h"
+
+namespace gaugeloop {
+namespace {
+
+const toml::table* subtable(const toml::table& t, std::string_view key, TomlReader& r) {
+  const toml::node* n = t.get(key);
+  if (n == nullptr) return nullptr;
+  if (!n->is_table()) {
+    r.fail(r.where(key) + ": expected a table ([" + std::string(key) + "])");
+    return nullptr;
+  }
+  return n->as_table();
+}
+
+WordOrder word_order(const std::string& s) {
+  return s == "CDAB"   ? WordOrder::kCDAB
+         : s == "BADC" ? WordOrder::kBADC
+         : s == "DCBA" ? WordOrder::kDCBA
+                       : WordOrder::kABCD;
+}
+
+RegisterTable register_table(const std::string& s) {
+  return s == "holding" ? RegisterTable::kHolding : RegisterTable::kInput;
+}
+
+ValueType value_type(const std::string& s) {
+  return s == "INT16"     ? ValueType::kInt16
+         : s == "INT32"   ? ValueType::kInt32
+         : s == "UINT32"  ? ValueType::kUInt32
+         : s == "FLOAT32" ? ValueType::kFloat32
+                          : ValueType::kUInt16;
+}
+
+// Reads [map.<name>] into `f`; absent table = absent field. Returns the reader's error state.
+void read_field(const toml::table& map, std::string_view name, std::string_view source, WordOrder default_order,
+                FieldSpec& f, TomlReader& parent, bool is_status, StatusMasks* masks) {
+  const toml::table* t = subtable(map, name, parent);
+  if (t == nullptr) {
+    f.present = false;
+    return;
+  }
+  TomlReader r(*t, source, "map." + std::string(name) + ".");
+  if (is_status) {
+    r.allow_only(
+        {"register", "address", "type", "ready_mask", "over_range_mask", "under_range_mask", "probe_missing_mask"});
+  } else {
+    r.allow_only({"register", "address", "type", "byte_order", "scale", "offset"});
+  }
+  f.present = true;
+  f.table = register_table(r.choice("register", "input", {"holding", "input"}));
+  f.address = static_cast<int>(r.integer("address", std::nullopt, 0, 65535));
+  f.type = value_type(r.choice("type", is_status ? std::optional<std::string>("UINT16") : std::nullopt,
+                               {"INT16", "UINT16", "INT32", "UINT32", "FLOAT32"}));
+  if (is_status) {
+    masks->ready = static_cast<std::uint16_t>(r.integer("ready_mask", 0x0001, 0, 0xffff));
+    masks->over_range = static_cast<std::uint16_t>(r.integer("over_range_mask", 0, 0, 0xffff));
+    masks->under_range = static_cast<std::uint16_t>(r.integer("under_range_mask", 0, 0, 0xffff));
+    masks->probe_missing = static_cast<std::uint16_t>(r.integer("probe_missing_mask", 0, 0, 0xffff));
+  } else {
+    f.order = word_order(
+        r.choice("byte_order", std::string(word_order_name(default_order)), {"ABCD", "CDAB", "BADC", "DCBA"}));
+    f.scale = r.number("scale", 1.0, -1e12, 1e12);
+    f.offset = r.number("offset", 0.0, -1e12, 1e12);
+  }
+  if (r.error) parent.fail(r.error->message);
+}
+
+}  // namespace
+
+Result<ModbusTcpSettings> parse_gauge_toml(std::string_view text, std::string_view source_name,
+                                           const ModbusTcpSettings& defaults) {
+  Result<toml::table> parsed = parse_toml(text, source_name);
+  if (!parsed) return parsed.error();
+  const toml::table& top = *parsed;
+  TomlReader r(top, source_name);
+  r.allow_only({"link", "map"});
+  ModbusTcpSettings out = defaults;
+
+  if (const toml::table* link = subtable(top, "link", r)) {
+    TomlReader lr(*link, source_name, "link.");
+    lr.allow_only({"transport", "host", "port", "unit_id", "response_timeout_ms"});
+    lr.choice("transport", "tcp", {"tcp"});  // RTU: issue 4, next step
+    out.host = lr.text("host", defaults.host);
+    out.port = static_cast<int>(lr.integer("port", defaults.port, 1, 65535));
+    out.unit_id = static_cast<int>(lr.integer("unit_id", defaults.unit_id, 0, 247));
+    out.response_timeout =
+        std::chrono::milliseconds(lr.integer("response_timeout_ms", defaults.response_timeout.count(), 10, 10000));
+    if (lr.error) r.fail(lr.error->message);
+  }
+
+  if (const toml::table* map = subtable(top, "map", r)) {
+    TomlReader mr(*map, source_name, "map.");
+    mr.allow_only({"byte_order", "reading", "angle", "revolution", "sequence", "status", "latch"});
+    const WordOrder order = word_order(mr.choice("byte_order", "ABCD", {"ABCD", "CDAB", "BADC", "DCBA"}));
+    RegisterMap m;
+    read_field(*map, "reading", source_name, order, m.reading, mr, false, nullptr);
+    read_field(*map, "angle", source_name, order, m.angle, mr, false, nullptr);
+    read_field(*map, "revolution", source_name, order, m.revolution, mr, false, nullptr);
+    read_field(*map, "sequence", source_name, order, m.sequence, mr, false, nullptr);
+    read_field(*map, "status", source_name, order, m.status, mr, true, &m.masks);
+    m.latch.present = false;
+    if (const toml::table* latch = subtable(*map, "latch", mr)) {
+      TomlReader lr(*latch, source_name, "map.latch.");
+      lr.allow_only({"register", "count_address", "ring_size", "ring_size_address", "ring_address", "entry_words",
+                     "reading_offset", "degree_offset", "status_offset"});
+      LatchSpec& l = m.latch;
+      l.present = true;
+      l.table = register_table(lr.choice("register", "input", {"holding", "input"}));
+      l.count_address = static_cast<int>(lr.integer("count_address", std::nullopt, 0, 65534));
+      l.ring_size = static_cast<int>(lr.integer("ring_size", 0, 0, 65535));
+      if (l.ring_size == 0) {
+        l.ring_size_address = static_cast<int>(lr.integer("ring_size_address", std::nullopt, 0, 65535));
+      } else if (lr.has("ring_size_address")) {
+        lr.fail(lr.where("ring_size_address") + ": give either ring_size or ring_size_address, not both");
+      }
+      l.ring_address = static_cast<int>(lr.integer("ring_address", std::nullopt, 0, 65535));
+      l.entry_words = static_cast<int>(lr.integer("entry_words", std::nullopt, 1, 125));
+      l.reading_offset = static_cast<int>(lr.integer("reading_offset", 0, 0, 124));
+      l.degree_offset = static_cast<int>(lr.integer("degree_offset", std::nullopt, 0, 124));
+      l.status_offset = static_cast<int>(lr.integer("status_offset", -1, -1, 124));
+      l.order = order;
+      if (lr.error) mr.fail(lr.error->message);
+    }
+    if (mr.error) r.fail(mr.error->message);
+    if (!r.error) {
+      if (Status v = validate(m); !v) r.fail(std::string(source_name) + ": " + v.error().message);
+    }
+    out.map = m;
+  }
+  if (r.error) return *r.error;
+  return out;
+}
+
+Result<ModbusTcpSettings> read_gauge_file(const std::filesystem::path& path, const ModbusTcpSettings& defaults) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    return make_error(ErrorCode::kNotFound,
+                      "gauge config " + path.string() + ": cannot be opened; check the --gauge-config path");
+  }
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  return parse_gauge_toml(buf.str(), path.string(), defaults);
+}
+
+}  // namespace gaugeloop

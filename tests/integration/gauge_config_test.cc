@@ -1,0 +1,169 @@
+// Gauge config files, and the poller against an independent Modbus server (pymodbus) whose
+// register map and word orders differ from the simulator's.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <numbers>
+
+#include "acquisition/modbus_gauge.h"
+#include "acquisition/poller.h"
+#include "app/gauge_config.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path example(const char* name) { return fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "gauges" / name; }
+
+TEST(GaugeConfig, TheSimulatorExampleIsTheDefaultMap) {
+  auto cfg = read_gauge_file(example("simulator.toml"));
+  ASSERT_TRUE(cfg.ok()) << cfg.error().message;
+  const RegisterMap def;
+  const RegisterMap& m = cfg->map;
+  auto same = [](const FieldSpec& a, const FieldSpec& b) {
+    return a.present == b.present && a.table == b.table && a.address == b.address && a.type == b.type &&
+           a.order == b.order && a.scale == b.scale && a.offset == b.offset;
+  };
+  EXPECT_TRUE(same(m.reading, def.reading));
+  EXPECT_TRUE(same(m.status, def.status));
+  EXPECT_TRUE(same(m.angle, def.angle));
+  EXPECT_TRUE(same(m.revolution, def.revolution));
+  EXPECT_TRUE(same(m.sequence, def.sequence));
+  EXPECT_EQ(m.masks.ready, def.masks.ready);
+  EXPECT_EQ(m.masks.probe_missing, def.masks.probe_missing);
+  EXPECT_EQ(m.latch.count_address, def.latch.count_address);
+  EXPECT_EQ(m.latch.ring_size_address, def.latch.ring_size_address);
+  EXPECT_EQ(m.latch.ring_address, def.latch.ring_address);
+  EXPECT_EQ(m.latch.status_offset, def.latch.status_offset);
+  EXPECT_EQ(cfg->port, 1502);
+}
+
+TEST(GaugeConfig, ReadsAnotherAmplifiersMap) {
+  auto cfg = read_gauge_file(example("other_amplifier.toml"));
+  ASSERT_TRUE(cfg.ok()) << cfg.error().message;
+  EXPECT_EQ(cfg->map.reading.type, ValueType::kFloat32);
+  EXPECT_EQ(cfg->map.reading.order, WordOrder::kCDAB) << "from [map] byte_order";
+  EXPECT_EQ(cfg->map.sequence.order, WordOrder::kDCBA) << "a field's own byte_order wins";
+  EXPECT_FALSE(cfg->map.revolution.present);
+  EXPECT_EQ(cfg->map.masks.ready, 0x8000);
+  EXPECT_EQ(cfg->map.latch.ring_size, 400);
+  EXPECT_EQ(cfg->response_timeout.count(), 500);
+}
+
+struct BadConfig {
+  const char* text;
+  const char* expected;
+};
+
+TEST(GaugeConfig, RefusesMistakesNamingFileLineAndKey) {
+  const BadConfig cases[] = {
+      {"[link]\nprot = 502\n", "gauge.toml:2: key `link.prot`: unknown key"},
+      {"[map.reading]\naddress = 0\ntype = \"INT64\"\n", "gauge.toml:3: key `map.reading.type`: `INT64` is not one of"},
+      {"[map.reading]\naddress = 0\ntype = \"INT32\"\n", "`angle` is required"},
+      {"[map]\nbyte_order = \"ABDC\"\n", "gauge.toml:2: key `map.byte_order`"},
+      {"[map.status]\naddress = 70000\n", "gauge.toml:2: key `map.status.address`: 70000 is out of range"},
+      {"[link\n", "gauge.toml:1"},
+  };
+  for (const BadConfig& c : cases) {
+    auto cfg = parse_gauge_toml(c.text, "gauge.toml");
+    ASSERT_FALSE(cfg.ok()) << c.text;
+    EXPECT_EQ(cfg.error().code, ErrorCode::kInvalidInput);
+    EXPECT_NE(cfg.error().message.find(c.expected), std::string::npos) << cfg.error().message;
+  }
+}
+
+// The pymodbus peer as a child process: started with its spindle speed, its port read from
+// its first line of output, stopped by closing its stdin.
+class PymodbusPeer {
+ public:
+  explicit PymodbusPeer(double speed_rpm) {
+    int in[2];
+    int out[2];
+    if (::pipe(in) != 0 || ::pipe(out) != 0) return;
+    pid_ = ::fork();
+    if (pid_ == 0) {
+      ::dup2(in[0], 0);
+      ::dup2(out[1], 1);
+      ::close(in[1]);
+      ::close(out[0]);
+      const std::string script = std::string(GAUGELOOP_SOURCE_DIR) + "/tests/peers/pymodbus_gauge.py";
+      const std::string speed = std::to_string(speed_rpm);
+      // Debian's interpreter: python3-pymodbus is installed for it, not for others on PATH.
+      ::execl("/usr/bin/python3", "python3", script.c_str(), speed.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    ::close(in[0]);
+    ::close(out[1]);
+    stdin_ = in[1];
+    FILE* f = ::fdopen(out[0], "r");
+    char line[128] = {};
+    if (f != nullptr && std::fgets(line, sizeof line, f) != nullptr) std::sscanf(line, "port %d", &port_);
+    if (f != nullptr) std::fclose(f);
+  }
+  ~PymodbusPeer() {
+    if (stdin_ >= 0) ::close(stdin_);  // the peer exits when its stdin closes
+    if (pid_ > 0) {
+      int status = 0;
+      ::waitpid(pid_, &status, 0);
+    }
+  }
+  int port() const { return port_; }
+
+ private:
+  pid_t pid_ = -1;
+  int stdin_ = -1;
+  int port_ = 0;
+};
+
+double peer_lift_mm(int deg) {
+  const double rad = deg * std::numbers::pi / 180.0;
+  return 2.0 + 1.5 * std::cos(rad) + 0.2 * std::sin(3.0 * rad);
+}
+
+Result<MeasuredRun> measure_peer(int port, SamplingMode mode) {
+  auto cfg = read_gauge_file(example("other_amplifier.toml"));
+  if (!cfg) return cfg.error();
+  cfg->port = port;
+  ModbusTcpGauge gauge(*cfg);
+  PollerSettings ps;
+  ps.mode = mode;
+  ps.spare_revolutions = 6;
+  Poller poller(gauge, ps);
+  return poller.measure();
+}
+
+TEST(PymodbusPeer, LatchedRunDecodesItsMap) {
+  PymodbusPeer peer(60.0);
+  ASSERT_GT(peer.port(), 0) << "the pymodbus peer did not start (python3-pymodbus: scripts/install-deps.sh)";
+  Result<MeasuredRun> run = measure_peer(peer.port(), SamplingMode::kLatched);
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  ASSERT_EQ(run->revolutions.size(), 3u);
+  // Latched entries are the peer's formula at whole degrees, through float32: 1e-6 mm.
+  for (const auto& rev : run->revolutions) {
+    for (int d = 0; d < 360; ++d) ASSERT_NEAR(rev.lift_mm[d], peer_lift_mm(d), 1e-6) << "degree " << d;
+  }
+}
+
+// Live mode: snapshots with no revolution counter (counted from the angle wrapping) and the
+// angle in 0.01 deg. Interpolating the peer's lobe (|H''| <= 1.5+1.8 mm/rad^2) between polls
+// at most 0.5 deg apart errs by at most 3.3 * (0.5 * pi / 180)^2 / 8 = 3.1e-5 mm; the angle's
+// 0.01 deg steps add |H'| * 0.01 deg = 1.5 * 1.75e-4 = 2.6e-4 mm. Tolerance 5e-4 mm.
+TEST(PymodbusPeer, LiveRunCountsRevolutionsFromTheAngle) {
+  PymodbusPeer peer(20.0);  // 20 rpm: 4 ms per half degree for a Python server to answer in
+  ASSERT_GT(peer.port(), 0) << "the pymodbus peer did not start (python3-pymodbus: scripts/install-deps.sh)";
+  Result<MeasuredRun> run = measure_peer(peer.port(), SamplingMode::kLive);
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  ASSERT_EQ(run->revolutions.size(), 3u);
+  for (const auto& rev : run->revolutions) {
+    for (int d = 0; d < 360; ++d) ASSERT_NEAR(rev.lift_mm[d], peer_lift_mm(d), 5e-4) << "degree " << d;
+  }
+}
+
+}  // namespace
+}  // namespace gaugeloop
