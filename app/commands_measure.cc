@@ -225,11 +225,18 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
   sim->add_option("--part", *sim_part, "Part file to simulate [built-in intake_flat]");
   add_simulator_options(*sim, *sim_settings);
   sim->add_option("--time-scale", sim_settings->time_scale, "Simulated seconds per real second")->capture_default_str();
-  sim->add_option("--silent-after-revs", sim_settings->silent_after_revolutions,
-                  "Fault: stop answering this many revolutions after the first request (-1: never)")
-      ->capture_default_str();
-  sim->callback([&action, sim, sim_settings, sim_part] {
+  auto fault_specs = std::make_shared<std::vector<std::string>>();
+  sim->add_option("--fault", *fault_specs,
+                  "Fault KIND@START[+DURATION][:PARAM], START and DURATION in revolutions after the first request; "
+                  "repeatable. Kinds: refuse, drop, silent, exception, late, frozen, over-range, under-range, "
+                  "probe-missing, jump, drift (docs/simulator.md)");
+  sim->callback([&action, sim, sim_settings, sim_part, fault_specs] {
     seed_from_clock_unless_given(*sim, *sim_settings);
+    for (const std::string& text : *fault_specs) {
+      Result<FaultSpec> f = parse_fault_spec(text);
+      if (!f) throw CLI::ValidationError("--fault", f.error().message);
+      sim_settings->faults.push_back(*f);
+    }
     action = [sim_settings, sim_part] { return cmd_sim(*sim_part, *sim_settings); };
   });
 

@@ -16,6 +16,7 @@
 #include <cstring>
 #include <numbers>
 #include <optional>
+#include <thread>
 #include <vector>
 
 #include "compensation/flat_probe.h"
@@ -114,6 +115,7 @@ Result<std::unique_ptr<GaugeSimulator>> GaugeSimulator::start(const Part& part, 
     probe = PeriodicSpline::fit(*reading);
   }
   std::unique_ptr<GaugeSimulator> sim(new GaugeSimulator(part, settings, std::move(*probe)));
+  for (const FaultSpec& f : settings.faults) sim->inject(f);
   if (Status s = sim->listen(); !s) return s.error();
   sim->start_ns_ = now_ns();
   sim->thread_ = std::thread([raw = sim.get()] { raw->serve(); });
@@ -121,53 +123,156 @@ Result<std::unique_ptr<GaugeSimulator>> GaugeSimulator::start(const Part& part, 
 }
 
 Status GaugeSimulator::listen() {
-  ctx_ = modbus_new_tcp(settings_.host.c_str(), settings_.port);
   if (ctx_ == nullptr) {
-    return make_error(ErrorCode::kInvalidInput,
-                      "simulator address " + settings_.host + " is not usable: " + modbus_strerror(errno));
-  }
-  mapping_ = modbus_mapping_new_start_address(0, 0, 0, 0, 0, 0, 0, sim_registers::kCount);
-  if (mapping_ == nullptr) return make_error(ErrorCode::kInternal, "cannot allocate the simulator's registers");
-  listen_fd_ = modbus_tcp_listen(ctx_, 16);
-  if (listen_fd_ < 0) {
-    return make_error(ErrorCode::kIo, "simulator cannot listen on " + settings_.host + ":" +
-                                          std::to_string(settings_.port) + ": " + modbus_strerror(errno) +
-                                          "; choose another port or 0 for any free one");
+    // The context only frames requests and replies; the sockets are ours (see serve()).
+    ctx_ = modbus_new_tcp(settings_.host.c_str(), settings_.port);
+    if (ctx_ == nullptr) {
+      return make_error(ErrorCode::kInvalidInput,
+                        "simulator address " + settings_.host + " is not usable: " + modbus_strerror(errno));
+    }
+    mapping_ = modbus_mapping_new_start_address(0, 0, 0, 0, 0, 0, 0, sim_registers::kCount);
+    if (mapping_ == nullptr) return make_error(ErrorCode::kInternal, "cannot allocate the simulator's registers");
+    wake_fd_ = ::eventfd(0, EFD_CLOEXEC);
+    if (wake_fd_ < 0) return make_error(ErrorCode::kIo, std::string("eventfd: ") + std::strerror(errno));
   }
   sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(port_ != 0 ? port_ : settings_.port));
+  if (::inet_pton(AF_INET, settings_.host.c_str(), &addr.sin_addr) != 1) {
+    return make_error(ErrorCode::kInvalidInput, "simulator address " + settings_.host + " is not an IPv4 address");
+  }
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  const int yes = 1;
+  ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::listen(fd, 16) != 0) {
+    const int err = errno;
+    if (fd >= 0) ::close(fd);
+    return make_error(ErrorCode::kIo, "simulator cannot listen on " + settings_.host + ":" +
+                                          std::to_string(ntohs(addr.sin_port)) + ": " + std::strerror(err) +
+                                          "; choose another port or 0 for any free one");
+  }
   socklen_t len = sizeof addr;
-  if (::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
-    return make_error(ErrorCode::kIo, std::string("simulator cannot read its port back: ") + std::strerror(errno));
+  if (::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
+    const int err = errno;
+    ::close(fd);
+    return make_error(ErrorCode::kIo, std::string("simulator cannot read its port back: ") + std::strerror(err));
   }
   port_ = ntohs(addr.sin_port);
-  wake_fd_ = ::eventfd(0, EFD_CLOEXEC);
-  if (wake_fd_ < 0) return make_error(ErrorCode::kIo, std::string("eventfd: ") + std::strerror(errno));
+  listen_fd_ = fd;
   return {};
 }
 
-void GaugeSimulator::update_registers() {
-  const double t_s = static_cast<double>(now_ns() - start_ns_) * 1e-9 * settings_.time_scale;
+void GaugeSimulator::close_listener() {
+  if (listen_fd_ >= 0) {
+    ::close(listen_fd_);
+    listen_fd_ = -1;
+  }
+}
+
+void GaugeSimulator::inject(const FaultSpec& fault) {
+  std::lock_guard lock(faults_mutex_);
+  faults_.push_back(fault);
+  delivered_.push_back(false);
+}
+
+GaugeSimulator::FaultState GaugeSimulator::fault_state(std::int64_t now_ns, bool deliver) {
+  FaultState st;
+  if (first_request_ns_ < 0) return st;
+  // The schedule runs in revolutions at the nominal speed since the first request.
+  const double rev_per_ns = 1e-9 * settings_.time_scale * settings_.speed_rpm / 60.0;
+  const double sched_rev = static_cast<double>(now_ns - first_request_ns_) * rev_per_ns;
+  std::lock_guard lock(faults_mutex_);
+  for (size_t i = 0; i < faults_.size(); ++i) {
+    const FaultSpec& f = faults_[i];
+    const double end = f.duration_rev < 0.0 ? 1e300 : f.start_rev + f.duration_rev;
+    const bool started = sched_rev >= f.start_rev;
+    const bool active = started && sched_rev < end;
+    switch (f.kind) {
+      case FaultKind::kRefuse:
+        st.refuse |= active;
+        break;
+      case FaultKind::kSilent:
+        st.silent |= active;
+        break;
+      case FaultKind::kFrozen:
+        st.frozen |= active;
+        break;
+      case FaultKind::kException:
+        if (active) st.exception = f.param > 0 ? static_cast<int>(f.param) : MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
+        break;
+      case FaultKind::kOverRange:
+        if (active) st.status |= 0x0002;
+        break;
+      case FaultKind::kUnderRange:
+        if (active) st.status |= 0x0004;
+        break;
+      case FaultKind::kProbeMissing:
+        if (active) st.status |= 0x0008;
+        break;
+      case FaultKind::kSpeedDrift:
+        if (started) {
+          const double pct = f.param != 0.0 ? f.param : 5.0;
+          st.drift_turns += (std::min(sched_rev, end) - f.start_rev) * pct / 100.0;
+        }
+        break;
+      case FaultKind::kAngleJump:
+        if (started) st.angle_offset_deg += f.param != 0.0 ? f.param : 30.0;  // for good, once started
+        break;
+      case FaultKind::kDrop:
+      case FaultKind::kLate:
+        if (started && !delivered_[i]) {
+          if (f.kind == FaultKind::kDrop) st.drop = true;
+          if (f.kind == FaultKind::kLate) st.late_ms = f.param > 0 ? static_cast<int>(f.param) : 300;
+          if (deliver) delivered_[i] = true;
+        }
+        break;
+    }
+  }
+  return st;
+}
+
+void GaugeSimulator::update_registers(std::int64_t now_ns, const FaultState& faults) {
+  if (faults.frozen) {
+    was_frozen_ = true;  // the amplifier stands still: same sample, same latch count
+    return;
+  }
+  const double t_s = static_cast<double>(now_ns - start_ns_) * 1e-9 * settings_.time_scale;
   const auto n = static_cast<std::uint64_t>(t_s * settings_.sample_rate_hz);
   const double sample_t_s = static_cast<double>(n) / settings_.sample_rate_hz;  // amplifier holds its last sample
-  const double turns = sample_t_s * settings_.speed_rpm / 60.0;
+  const double turns = sample_t_s * settings_.speed_rpm / 60.0 + faults.drift_turns;
   const auto whole_turns = static_cast<std::int64_t>(std::floor(turns));
   const double c_deg = (turns - static_cast<double>(whole_turns)) * 360.0;
   const double beta = cam_angle_at_probe_deg(part_, c_deg);
   const double reading_mm =
       true_lift_mm(beta) + settings_.gauge_offset_mm + settings_.noise_rms_um * 1e-3 * gaussian(settings_.seed, n);
+  const std::uint16_t status = static_cast<std::uint16_t>(1u | faults.status);  // ready, plus any fault bits
+  // The encoder reports the true angle plus any jump it has suffered.
+  double reported_deg = std::fmod(c_deg + faults.angle_offset_deg, 360.0);
+  if (reported_deg < 0.0) reported_deg += 360.0;
+  const double reported_turns = turns + faults.angle_offset_deg / 360.0;
 
   std::uint16_t* regs = mapping_->tab_input_registers;
   put_u32(regs, sim_registers::kReading,
           static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(reading_mm * 10000.0))));
-  regs[sim_registers::kStatus] = 1;  // ready
-  put_u32(regs, sim_registers::kAngle, static_cast<std::uint32_t>(std::min(359999.0, std::floor(c_deg * 1000.0))));
-  regs[sim_registers::kRevolution] = static_cast<std::uint16_t>(whole_turns & 0xffff);
+  regs[sim_registers::kStatus] = status;
+  put_u32(regs, sim_registers::kAngle,
+          static_cast<std::uint32_t>(std::min(359999.0, std::floor(reported_deg * 1000.0))));
+  regs[sim_registers::kRevolution] =
+      static_cast<std::uint16_t>(static_cast<std::int64_t>(std::floor(reported_turns)) & 0xffff);
   regs[sim_registers::kSequence] = static_cast<std::uint16_t>(n & 0xffff);
   put_u32(regs, sim_registers::kReadingFloat, std::bit_cast<std::uint32_t>(static_cast<float>(reading_mm)));
 
   // Latch every encoder degree mark passed since the last request (at most a ring's worth:
-  // older ones would have been overwritten anyway). Mark i is C = i mod 360, exactly.
+  // older ones would have been overwritten anyway). Mark i is at C = i mod 360 exactly; the
+  // encoder labels it with its own (possibly jumped) degree.
   const auto marks = static_cast<std::int64_t>(std::floor(turns * 360.0)) + 1;
+  const auto jump = static_cast<std::int64_t>(std::lround(faults.angle_offset_deg));
+  if (was_frozen_) {
+    // Back from a freeze: the marks passed meanwhile were never latched. The count jumps
+    // ahead over ring entries that still hold old readings.
+    latched_marks_ = std::max(latched_marks_, marks - 1);
+    was_frozen_ = false;
+  }
   for (std::int64_t i = std::max(latched_marks_, marks - sim_registers::kLatchRingEntries); i < marks; ++i) {
     const double mark_beta = cam_angle_at_probe_deg(part_, static_cast<double>(i % 360));
     const double mark_mm =
@@ -175,50 +280,73 @@ void GaugeSimulator::update_registers() {
         settings_.noise_rms_um * 1e-3 * gaussian(settings_.seed ^ 0x6c61746368ULL, static_cast<std::uint64_t>(i));
     const int at = sim_registers::kLatchRing + 4 * static_cast<int>(i % sim_registers::kLatchRingEntries);
     put_u32(regs, at, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(mark_mm * 10000.0))));
-    regs[at + 2] = static_cast<std::uint16_t>(i % 360);
-    regs[at + 3] = 1;  // ready
+    regs[at + 2] = static_cast<std::uint16_t>(((i + jump) % 360 + 360) % 360);
+    regs[at + 3] = status;
   }
   latched_marks_ = std::max(latched_marks_, marks);
   put_u32(regs, sim_registers::kLatchCount, static_cast<std::uint32_t>(latched_marks_ & 0xffffffff));
   regs[sim_registers::kLatchRingSize] = sim_registers::kLatchRingEntries;
   regs[sim_registers::kLatchEntryWords] = 4;
-
-  if (first_request_revolution_ < 0) first_request_revolution_ = whole_turns;
-  if (settings_.silent_after_revolutions >= 0 &&
-      whole_turns - first_request_revolution_ >= settings_.silent_after_revolutions) {
-    silent_.store(true);
-  }
 }
 
 void GaugeSimulator::serve() {
   std::vector<int> clients;
   std::vector<std::uint8_t> query(MODBUS_TCP_MAX_ADU_LENGTH);
+  auto close_clients = [&clients] {
+    for (int c : clients) ::close(c);
+    clients.clear();
+  };
   while (true) {
+    const FaultState now_state = fault_state(now_ns(), /*deliver=*/false);
+    if (now_state.refuse && listen_fd_ >= 0) {
+      close_listener();  // connection refused from now on
+      close_clients();
+    } else if (!now_state.refuse && listen_fd_ < 0) {
+      if (!listen()) break;  // the port was taken meanwhile: nothing sensible left to do
+    }
     std::vector<pollfd> fds;
     fds.push_back({wake_fd_, POLLIN, 0});
-    fds.push_back({listen_fd_, POLLIN, 0});
+    if (listen_fd_ >= 0) fds.push_back({listen_fd_, POLLIN, 0});
+    const size_t first_client = fds.size();
     for (int c : clients) fds.push_back({c, POLLIN, 0});
-    if (::poll(fds.data(), fds.size(), -1) < 0) {
+    // While refusing, wake now and then to notice the end of the fault.
+    if (::poll(fds.data(), fds.size(), listen_fd_ < 0 ? 5 : -1) < 0) {
       if (errno == EINTR) continue;
       break;
     }
     if (fds[0].revents != 0) break;  // stop() was called
-    if (fds[1].revents & POLLIN) {
+    if (listen_fd_ >= 0 && (fds[1].revents & POLLIN)) {
       const int c = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
       if (c >= 0) clients.push_back(c);
     }
     std::vector<int> closed;
-    for (size_t i = 2; i < fds.size(); ++i) {
+    for (size_t i = first_client; i < fds.size(); ++i) {
       if (fds[i].revents == 0) continue;
       const int fd = fds[i].fd;
       modbus_set_socket(ctx_, fd);
       const int rc = modbus_receive(ctx_, query.data());
-      if (rc > 0) {
-        ++requests_;
-        update_registers();
-        if (!silent_.load()) modbus_reply(ctx_, query.data(), rc, mapping_);
-      } else if (rc < 0) {
-        closed.push_back(fd);  // client went away or sent garbage
+      if (rc <= 0) {
+        if (rc < 0) closed.push_back(fd);  // client went away or sent garbage
+        continue;
+      }
+      ++requests_;
+      const std::int64_t t = now_ns();
+      if (first_request_ns_ < 0) first_request_ns_ = t;
+      const FaultState faults = fault_state(t, /*deliver=*/true);
+      update_registers(t, faults);
+      if (faults.drop) {
+        closed.push_back(fd);  // the connection drops mid-run: no reply
+        continue;
+      }
+      if (silent_.load() || faults.silent) continue;
+      if (faults.late_ms > 0) {
+        // A late reply: the client has given up by then and must not take it for the next.
+        std::this_thread::sleep_for(std::chrono::milliseconds(faults.late_ms));
+      }
+      if (faults.exception != 0) {
+        modbus_reply_exception(ctx_, query.data(), static_cast<unsigned int>(faults.exception));
+      } else {
+        modbus_reply(ctx_, query.data(), rc, mapping_);
       }
     }
     for (int fd : closed) {
@@ -226,7 +354,7 @@ void GaugeSimulator::serve() {
       clients.erase(std::remove(clients.begin(), clients.end(), fd), clients.end());
     }
   }
-  for (int c : clients) ::close(c);
+  close_clients();
 }
 
 void GaugeSimulator::stop() {
@@ -235,16 +363,13 @@ void GaugeSimulator::stop() {
     [[maybe_unused]] auto w = ::write(wake_fd_, &one, sizeof one);
     thread_.join();
   }
-  if (listen_fd_ >= 0) {
-    ::close(listen_fd_);
-    listen_fd_ = -1;
-  }
+  close_listener();
   if (wake_fd_ >= 0) {
     ::close(wake_fd_);
     wake_fd_ = -1;
   }
   if (ctx_ != nullptr) {
-    modbus_set_socket(ctx_, -1);  // sockets were closed above; keep modbus_free from closing again
+    modbus_set_socket(ctx_, -1);  // the sockets are closed already; keep modbus_free from closing one again
     modbus_free(ctx_);
     ctx_ = nullptr;
   }

@@ -4,13 +4,16 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "compensation/periodic_spline.h"
 #include "core/lift_table.h"
 #include "core/part.h"
 #include "core/result.h"
+#include "simulator/faults.h"
 
 typedef struct _modbus modbus_t;
 typedef struct _modbus_mapping_t modbus_mapping_t;
@@ -45,9 +48,7 @@ struct SimulatorSettings {
   double noise_rms_um = 0.3;         // gauge noise, Gaussian, per amplifier sample
   double gauge_offset_mm = 0.25;     // reading on the base circle: the gauge is not zeroed
   std::uint64_t seed = 1;            // noise is a pure function of (seed, sample number)
-  // Fault: stop answering (requests are read, never replied to) once the spindle has turned
-  // this many revolutions after the first request. Negative: never.
-  int silent_after_revolutions = -1;
+  std::vector<FaultSpec> faults;     // scheduled from the first request (simulator/faults.h)
 };
 
 // Checks settings; the message names the setting.
@@ -55,8 +56,9 @@ Status validate(const SimulatorSettings& settings);
 
 // Runs a Modbus TCP server on its own thread from start() until stop() or destruction.
 // The register values are computed from the clock at the moment each request arrives, so
-// any number of clients see one spindle. Thread-safe: the accessors and fault setters may
-// be called from any thread.
+// any number of clients see one spindle. Faults follow a schedule counted in spindle
+// revolutions from the first request (docs/simulator.md). Thread-safe: the accessors,
+// set_silent and inject may be called from any thread.
 class GaugeSimulator {
  public:
   // Builds the lobe from the design and starts serving. Errors: kInvalidInput for bad
@@ -77,13 +79,32 @@ class GaugeSimulator {
   // What the gauge would read at a cam angle without noise or gauge offset, in mm.
   double true_lift_mm(double cam_angle_deg) const;
 
+  // Stops (or resumes) answering at once, whatever the schedule says.
   void set_silent(bool silent) { silent_.store(silent); }
+  // Adds a fault to the schedule; its start counts from the first request, like the others.
+  void inject(const FaultSpec& fault);
 
  private:
+  // What the schedule asks of the server at one moment.
+  struct FaultState {
+    bool refuse = false;
+    bool silent = false;
+    bool frozen = false;
+    int exception = 0;         // Modbus exception code; 0: none
+    std::uint16_t status = 0;  // amplifier status bits to set
+    double drift_turns = 0.0;  // turns gained from speed drift so far
+    double angle_offset_deg = 0.0;
+    bool drop = false;  // events due, delivered to the request that sees them
+    int late_ms = 0;
+  };
+
   GaugeSimulator(const Part& part, const SimulatorSettings& settings, PeriodicSpline lift);
   Status listen();
+  void close_listener();
   void serve();
-  void update_registers();
+  // The schedule at time `now_ns`; marks events as delivered when `deliver` is set.
+  FaultState fault_state(std::int64_t now_ns, bool deliver);
+  void update_registers(std::int64_t now_ns, const FaultState& faults);
 
   Part part_;
   SimulatorSettings settings_;
@@ -99,9 +120,14 @@ class GaugeSimulator {
   std::thread thread_;
   std::atomic<std::int64_t> requests_{0};
   std::atomic<bool> silent_{false};
-  std::int64_t first_request_revolution_ = -1;  // serve thread only
-  std::int64_t latched_marks_ = 0;              // serve thread only
   std::int64_t start_ns_ = 0;
+  std::int64_t first_request_ns_ = -1;  // serve thread only: zero of the fault schedule
+  std::int64_t latched_marks_ = 0;      // serve thread only
+  bool was_frozen_ = false;             // serve thread only
+
+  std::mutex faults_mutex_;
+  std::vector<FaultSpec> faults_;
+  std::vector<bool> delivered_;  // per fault: event delivered
 };
 
 }  // namespace gaugeloop

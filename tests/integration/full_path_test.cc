@@ -215,7 +215,7 @@ TEST_F(FullPathTest, NextRunBuildsOnTheTableInForce) {
 TEST_F(FullPathTest, GaugeThatStopsAnsweringMidRunStoresNothingAndWritesNoTable) {
   SimulatorSettings ss;
   ss.time_scale = 4.0;
-  ss.silent_after_revolutions = 2;  // the poller has started collecting by then
+  ss.faults.push_back({FaultKind::kSilent, 2.0});  // the poller has started collecting by then
   auto sim = GaugeSimulator::start(part_.part, design_, ss);
   ASSERT_TRUE(sim.ok()) << sim.error().message;
   ModbusTcpSettings ms;

@@ -1,0 +1,178 @@
+// Every fault the simulator injects, met by the latched poller over a real loopback link.
+// Faults are scheduled in spindle revolutions after the first request, so they fall inside
+// the run whatever the machine's speed. The simulated spindle turns 60 rpm at 4x time
+// scale: a revolution takes 250 ms of wall time.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "acquisition/modbus_gauge.h"
+#include "acquisition/poller.h"
+#include "core/lift_table.h"
+#include "simulator/gauge_simulator.h"
+
+namespace gaugeloop {
+namespace {
+
+class SimulatorFaultTest : public ::testing::Test {
+ protected:
+  // Starts a simulator with `fault` and measures one latched run through it.
+  Result<MeasuredRun> measure_with(const char* fault_text,
+                                   std::chrono::milliseconds response_timeout = std::chrono::milliseconds(100)) {
+    Part part;
+    part.base_circle_radius_mm = 18.0;
+    part.wheel_radius_mm = 200.0;
+    auto table = read_lift_table_csv(std::filesystem::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.csv");
+    EXPECT_TRUE(table.ok());
+    SimulatorSettings ss;
+    ss.time_scale = 4.0;
+    Result<FaultSpec> fault = parse_fault_spec(fault_text);
+    EXPECT_TRUE(fault.ok()) << fault.error().message;
+    ss.faults.push_back(*fault);
+    auto sim = GaugeSimulator::start(part, *table, ss);
+    EXPECT_TRUE(sim.ok()) << sim.error().message;
+    sim_ = std::move(*sim);
+    ModbusTcpSettings ms;
+    ms.port = sim_->port();
+    ms.response_timeout = response_timeout;
+    ModbusTcpGauge gauge(ms);
+    PollerSettings ps;
+    ps.backoff_initial = std::chrono::milliseconds(10);
+    ps.backoff_max = std::chrono::milliseconds(100);
+    Poller poller(gauge, ps);
+    return poller.measure();
+  }
+
+  // The revolutions read the lobe: 8.5 mm nose + 0.25 mm gauge offset, 0.25 mm base circle,
+  // within 0.05 mm (the 15 um form error and 0.3 um noise are far inside).
+  static void expect_lobe(const MeasuredRun& run) {
+    ASSERT_EQ(run.revolutions.size(), 3u);
+    for (const auto& rev : run.revolutions) {
+      EXPECT_NEAR(rev.lift_mm[0], 8.75, 0.05);
+      EXPECT_NEAR(rev.lift_mm[180], 0.25, 0.05);
+    }
+  }
+
+  std::unique_ptr<GaugeSimulator> sim_;
+};
+
+TEST_F(SimulatorFaultTest, ConnectionRefusedForAWhileIsRidden) {
+  Result<MeasuredRun> run = measure_with("refuse@1.5+0.4");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_GE(run->reconnects, 1);
+  EXPECT_GE(run->discarded_revolutions, 1);
+  expect_lobe(*run);
+}
+
+TEST_F(SimulatorFaultTest, ConnectionDroppedMidRunReconnects) {
+  Result<MeasuredRun> run = measure_with("drop@1.5");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->reconnects, 1);
+  EXPECT_GE(run->discarded_revolutions, 1);
+  expect_lobe(*run);
+}
+
+TEST_F(SimulatorFaultTest, ResponseTimeoutsForAWhileAreRidden) {
+  Result<MeasuredRun> run = measure_with("silent@1.5+0.3");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_GE(run->reconnects, 1);
+  expect_lobe(*run);
+}
+
+TEST_F(SimulatorFaultTest, ExceptionRepliesForAWhileAreRidden) {
+  Result<MeasuredRun> run = measure_with("exception@1.5+0.3");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_GE(run->reconnects, 1);
+  expect_lobe(*run);
+}
+
+TEST_F(SimulatorFaultTest, PermanentExceptionFailsNamingIt) {
+  Result<MeasuredRun> run = measure_with("exception@1.5:4");
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kGaugeProtocol);
+  EXPECT_NE(run.error().message.find("stopped answering"), std::string::npos) << run.error().message;
+  EXPECT_NE(run.error().message.find("failure"), std::string::npos)
+      << "exception 4, server failure: " << run.error().message;
+}
+
+// A reply 300 ms late on a 100 ms timeout. Unflushed, it would be taken as the answer to
+// the next request and every value after it would be one request stale; the values below
+// show it was not.
+TEST_F(SimulatorFaultTest, LateReplyIsFlushedNotMistakenForTheNext) {
+  Result<MeasuredRun> run = measure_with("late@1.5:300");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_GE(run->reconnects, 1);
+  expect_lobe(*run);
+  for (int d = 0; d < 360; ++d) {
+    ASSERT_NEAR(run->revolutions[2].lift_mm[d], run->revolutions[0].lift_mm[d], 0.0021) << "degree " << d;
+  }
+}
+
+TEST_F(SimulatorFaultTest, FrozenAmplifierIsDetectedAndItsRevolutionDropped) {
+  Result<MeasuredRun> run = measure_with("frozen@1.5+1.5");  // 375 ms: longer than stale_after (200 ms)
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_GE(run->reconnects, 1) << "a latch count that stands still is a fault: the link is reset";
+  EXPECT_GE(run->discarded_revolutions, 1);
+  expect_lobe(*run);
+}
+
+TEST_F(SimulatorFaultTest, OverRangeDiscardsTheRevolutionItTouches) {
+  Result<MeasuredRun> run = measure_with("over-range@1.5+0.2");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_GE(run->discarded_revolutions, 1);
+  EXPECT_EQ(run->reconnects, 0);
+  expect_lobe(*run);
+}
+
+TEST_F(SimulatorFaultTest, ProbeMissingDiscardsTheRevolutionItTouches) {
+  Result<MeasuredRun> run = measure_with("probe-missing@1.5+0.2");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_GE(run->discarded_revolutions, 1);
+  expect_lobe(*run);
+}
+
+TEST_F(SimulatorFaultTest, UnderRangeForGoodFailsTheRunNamingIt) {
+  Result<MeasuredRun> run = measure_with("under-range@0.5");
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kIncompleteRun);
+  EXPECT_NE(run.error().message.find("under-range"), std::string::npos) << run.error().message;
+}
+
+// The encoder loses 30 degrees: the revolution it happens in is discarded, and later ones
+// are taken as they come, labelled by the jumped encoder: degree d then reads the lobe at
+// d - 30 (the analysis reports such a shift as a phase error).
+TEST_F(SimulatorFaultTest, AngleJumpDiscardsThatRevolution) {
+  Result<MeasuredRun> run = measure_with("jump@1.5:30");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_GE(run->discarded_revolutions, 1);
+  const auto& last = run->revolutions.back();
+  EXPECT_NEAR(last.lift_mm[30], sim_->true_lift_mm(0.0) + 0.25, 0.002);
+}
+
+// Latched samples are taken per degree, whatever the speed: drift costs nothing.
+TEST_F(SimulatorFaultTest, SpeedDriftLeavesLatchedRunsWhole) {
+  Result<MeasuredRun> run = measure_with("drift@0.5+5:10");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 0);
+  expect_lobe(*run);
+}
+
+TEST(FaultSpec, ParsesTheTextForm) {
+  auto f = parse_fault_spec("over-range@1.5+0.25");
+  ASSERT_TRUE(f.ok()) << f.error().message;
+  EXPECT_EQ(f->kind, FaultKind::kOverRange);
+  EXPECT_DOUBLE_EQ(f->start_rev, 1.5);
+  EXPECT_DOUBLE_EQ(f->duration_rev, 0.25);
+  f = parse_fault_spec("late@2:300");
+  ASSERT_TRUE(f.ok());
+  EXPECT_DOUBLE_EQ(f->param, 300.0);
+  EXPECT_LT(f->duration_rev, 0.0);
+  for (const char* bad : {"overrange@1", "silent", "drop@1+2", "silent@-1", "silent@1+0", "late@1:x"}) {
+    auto b = parse_fault_spec(bad);
+    ASSERT_FALSE(b.ok()) << bad;
+    EXPECT_NE(b.error().message.find("KIND@START"), std::string::npos) << b.error().message;
+  }
+}
+
+}  // namespace
+}  // namespace gaugeloop
