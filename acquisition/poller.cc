@@ -47,63 +47,7 @@ std::string missing_degrees(const RevolutionInProgress& rev) {
   return format_degree_ranges(missing);
 }
 
-// Keeps the link up for one run: connects, counts consecutive failures, backs off
-// exponentially between reconnects and gives up after max_attempts.
-class LinkKeeper {
- public:
-  LinkKeeper(GaugeClient& gauge, const PollerSettings& settings, MeasuredRun& run)
-      : gauge_(gauge), settings_(settings), run_(run), backoff_(settings.backoff_initial) {}
-
-  // Makes sure the link is up before a request. An error means the attempts are spent.
-  Status ensure(const std::string& where_now) {
-    while (!gauge_.connected()) {
-      if (attempted_connect_) {
-        std::this_thread::sleep_for(backoff_);  // backoff between reconnects, not synchronisation
-        backoff_ = std::min(backoff_ * 2, settings_.backoff_max);
-      }
-      const bool first = !attempted_connect_;
-      attempted_connect_ = true;
-      Status s = gauge_.connect();
-      if (s) {
-        if (!first && ever_connected_) ++run_.reconnects;
-        ever_connected_ = true;
-        return {};
-      }
-      if (Status give_up = failed(s.error(), where_now); !give_up) return give_up;
-    }
-    return {};
-  }
-
-  // Records a failed request or connect. An error means the attempts are spent; its message
-  // says the gauge stopped answering (or could not be reached) and that nothing was stored.
-  Status failed(const Error& e, const std::string& where_now) {
-    ++failures_;
-    if (gauge_.connected()) gauge_.disconnect();  // start clean after any error: flushes late replies
-    if (failures_ < settings_.max_attempts) return {};
-    Error out = e;
-    if (!ever_connected_) {
-      out.message += " (" + std::to_string(failures_) + " attempts)";
-    } else {
-      out.message = "gauge at " + gauge_.address() + " stopped answering " + where_now + ": " + e.message +
-                    " (gave up after " + std::to_string(failures_) + " attempts); no run was stored";
-    }
-    return out;
-  }
-
-  void succeeded() {
-    failures_ = 0;
-    backoff_ = settings_.backoff_initial;
-  }
-
- private:
-  GaugeClient& gauge_;
-  const PollerSettings& settings_;
-  MeasuredRun& run_;
-  std::chrono::milliseconds backoff_;
-  int failures_ = 0;
-  bool attempted_connect_ = false;
-  bool ever_connected_ = false;
-};
+LinkPolicy link_policy(const PollerSettings& s) { return {s.max_attempts, s.backoff_initial, s.backoff_max}; }
 
 }  // namespace
 
@@ -154,7 +98,7 @@ Result<MeasuredRun> Poller::measure() {
 Result<MeasuredRun> Poller::measure_live() {
   const int wanted = settings_.revolutions;
   MeasuredRun run;
-  LinkKeeper link(gauge_, settings_, run);
+  GaugeLink link(gauge_, link_policy(settings_));
   const auto deadline = Clock::now() + settings_.run_timeout;
 
   std::map<std::int64_t, RevolutionInProgress> in_progress;
@@ -242,7 +186,7 @@ Result<MeasuredRun> Poller::measure_live() {
                         "run timed out after " + std::to_string(settings_.run_timeout.count()) + " ms " + where_now() +
                             (last_discard.empty() ? std::string() : "; last discarded " + last_discard));
     }
-    if (!gauge_.connected()) {
+    if (link.state() != LinkState::kConnected || !gauge_.connected()) {
       if (Status s = link.ensure(where_now()); !s) return s.error();
       last_new_sample = Clock::now();
     }
@@ -313,13 +257,14 @@ Result<MeasuredRun> Poller::measure_live() {
     have_prev = true;
     if (Status s = finish_behind(cur.u_deg); !s) return s.error();
   }
+  run.reconnects = link.reconnects();
   return run;
 }
 
 Result<MeasuredRun> Poller::measure_latched() {
   const int wanted = settings_.revolutions;
   MeasuredRun run;
-  LinkKeeper link(gauge_, settings_, run);
+  GaugeLink link(gauge_, link_policy(settings_));
   const auto deadline = Clock::now() + settings_.run_timeout;
 
   bool have_next = false;
@@ -454,6 +399,7 @@ Result<MeasuredRun> Poller::measure_latched() {
       }
     }
   }
+  run.reconnects = link.reconnects();
   return run;
 }
 

@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "acquisition/gauge_client.h"
+#include "acquisition/gauge_link.h"
 #include "core/result.h"
 #include "core/run.h"
 
