@@ -4,7 +4,7 @@ ASAN_DIR ?= build-asan
 JOBS ?= $(shell nproc)
 CMAKE_GEN := -G Ninja
 
-.PHONY: all deps build build-asan demo test test-normal test-asan clean
+.PHONY: all deps build build-asan demo test test-normal test-asan bench clean
 
 all: build
 
@@ -31,6 +31,10 @@ test-asan: build-asan
 
 # Every test, in a normal build and under AddressSanitizer + UndefinedBehaviorSanitizer.
 test: test-normal test-asan
+
+# Every benchmark, one after the other (figures: docs/PERFORMANCE.md). Run on a quiet machine.
+bench: build
+	@for b in $(BUILD_DIR)/bin/*_bench; do echo "== $$b"; $$b || exit 1; done
 
 clean:
 	rm -rf $(BUILD_DIR) $(ASAN_DIR)

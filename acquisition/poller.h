@@ -29,11 +29,12 @@ struct PollerSettings {
   // interpolation errs by up to h^2 / 8 * |H''|: 0.2 um at 0.5 deg on the sample intake
   // nose (H'' = -0.0063 mm/deg^2), 0.008 um at the paced 0.1 deg.
   double max_interpolation_gap_deg = 0.5;
-  // Polls are paced to about this much spindle rotation apart (estimated from the angle
-  // the gauge reports), instead of as fast as the link allows: far less CPU and bus load,
-  // and a thread that sleeps between polls is woken promptly by the scheduler under load.
-  // 0 polls back to back. The wait is capped at max_poll_interval.
-  double poll_step_deg = 0.1;
+  // 0 (default): live mode polls back to back, as fast as the link answers. > 0: polls are
+  // paced to about this much spindle rotation apart, sleeping in between. Sleeping saves
+  // CPU but a sleep can overrun by milliseconds (measured: 0.1 % of 0.5 ms sleeps took over
+  // 3 ms on this project's VM), and each overrun past max_interpolation_gap_deg loses a
+  // degree; pace only when half a degree lasts far longer than that (below about 5 rpm).
+  double poll_step_deg = 0.0;
   std::chrono::microseconds max_poll_interval{2000};
   int spare_revolutions = 3;                      // revolutions allowed beyond `revolutions` to replace bad ones
   int max_attempts = 5;                           // consecutive failed reads or reconnects before giving up

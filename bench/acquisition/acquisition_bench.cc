@@ -1,0 +1,139 @@
+// Acquisition benchmarks against the in-process simulator over loopback TCP:
+//  - request throughput of the gauge client against a bare libmodbus read loop, same run;
+//  - the highest spindle speed at which a 3-revolution run misses no degree, per mode;
+//  - CPU time of the poller's thread during a run.
+// Results and the command that produced them: docs/PERFORMANCE.md.
+#include <benchmark/benchmark.h>
+#include <modbus/modbus.h>
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include "acquisition/modbus_gauge.h"
+#include "acquisition/poller.h"
+#include "core/lift_table.h"
+#include "simulator/gauge_simulator.h"
+
+namespace gaugeloop {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::unique_ptr<GaugeSimulator> start_sim(double speed_rpm) {
+  Part part;
+  part.base_circle_radius_mm = 18.0;
+  part.wheel_radius_mm = 200.0;
+  auto table = read_lift_table_csv(std::filesystem::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.csv");
+  SimulatorSettings ss;
+  ss.speed_rpm = speed_rpm;
+  ss.sample_rate_hz = 100000.0;  // a fast amplifier: the bus, not the amplifier, sets the limit
+  auto sim = GaugeSimulator::start(part, *table, ss);
+  if (!sim) {
+    std::fprintf(stderr, "simulator: %s\n", sim.error().message.c_str());
+    std::abort();  // a benchmark on a simulator that did not start measures nothing
+  }
+  return std::move(*sim);
+}
+
+double thread_cpu_s() {
+  rusage u{};
+  ::getrusage(RUSAGE_THREAD, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
+}
+
+// Alternates 500 bare libmodbus reads of the snapshot block with 500 snapshot reads through
+// ModbusTcpGauge (block planning, decoding, status translation), on two connections to the
+// same simulator, so both see the same machine at the same moment.
+void BM_SnapshotReadsVersusBareLibmodbus(benchmark::State& state) {
+  auto sim = start_sim(60.0);
+  modbus_t* bare = modbus_new_tcp("127.0.0.1", sim->port());
+  modbus_connect(bare);
+  ModbusTcpSettings ms;
+  ms.port = sim->port();
+  ModbusTcpGauge gauge(ms);
+  (void)gauge.connect();
+  std::uint16_t regs[16];
+  double bare_s = 0.0;
+  double ours_s = 0.0;
+  std::int64_t reads = 0;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    for (int i = 0; i < 500; ++i) benchmark::DoNotOptimize(modbus_read_input_registers(bare, 0, 7, regs));
+    const auto t1 = Clock::now();
+    for (int i = 0; i < 500; ++i) benchmark::DoNotOptimize(gauge.read_snapshot());
+    const auto t2 = Clock::now();
+    bare_s += std::chrono::duration<double>(t1 - t0).count();
+    ours_s += std::chrono::duration<double>(t2 - t1).count();
+    reads += 500;
+  }
+  state.counters["bare_reads_per_s"] = static_cast<double>(reads) / bare_s;
+  state.counters["gauge_reads_per_s"] = static_cast<double>(reads) / ours_s;
+  state.counters["ratio"] = bare_s / ours_s;  // gaugeloop's rate over the bare loop's
+  modbus_close(bare);
+  modbus_free(bare);
+}
+BENCHMARK(BM_SnapshotReadsVersusBareLibmodbus)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+// One 3-revolution run with no spare revolution: true if every degree of every revolution
+// was sampled. Also reports the poller thread's CPU time over the run's wall time.
+bool clean_run(SamplingMode mode, double rpm, double* cpu_fraction, int spares = 0) {
+  auto sim = start_sim(rpm);
+  ModbusTcpSettings ms;
+  ms.port = sim->port();
+  ModbusTcpGauge gauge(ms);
+  PollerSettings ps;
+  ps.mode = mode;
+  ps.spare_revolutions = spares;
+  ps.run_timeout = std::chrono::milliseconds(20000);
+  Poller poller(gauge, ps);
+  const double cpu0 = thread_cpu_s();
+  const auto t0 = Clock::now();
+  const bool ok = poller.measure().ok();
+  if (cpu_fraction != nullptr) {
+    *cpu_fraction = (thread_cpu_s() - cpu0) / std::chrono::duration<double>(Clock::now() - t0).count();
+  }
+  return ok;
+}
+
+// The highest speed of the ladder at which two runs in a row complete: with `spares` 0, no
+// revolution may miss a degree; with the product's default 3, up to 3 may be replaced.
+void max_clean_rpm(benchmark::State& state, SamplingMode mode, int spares = 0) {
+  // Up to the simulator's limit of 10000 rpm.
+  const double ladder[] = {30, 60, 120, 240, 480, 600, 900, 1200, 1800, 2400, 3000, 4500, 6000, 9000, 10000};
+  double best = 0.0;
+  for (auto _ : state) {
+    best = 0.0;
+    for (double rpm : ladder) {
+      if (!clean_run(mode, rpm, nullptr, spares) || !clean_run(mode, rpm, nullptr, spares)) break;
+      best = rpm;
+    }
+  }
+  state.counters["max_clean_rpm"] = best;
+}
+
+void BM_MaxCleanRpmLatchedTcp(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLatched); }
+void BM_MaxCleanRpmLiveTcp(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLive); }
+void BM_MaxCompleteRpmLiveTcp(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLive, 3); }
+BENCHMARK(BM_MaxCleanRpmLatchedTcp)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_MaxCleanRpmLiveTcp)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_MaxCompleteRpmLiveTcp)->Iterations(1)->Unit(benchmark::kSecond);
+
+// CPU of the poller's thread during a 60 rpm run: how much of one core measuring costs.
+void poller_cpu(benchmark::State& state, SamplingMode mode) {
+  double fraction = 0.0;
+  for (auto _ : state) clean_run(mode, 60.0, &fraction);
+  state.counters["poller_cpu_percent"] = fraction * 100.0;
+}
+void BM_PollerCpuLatched60Rpm(benchmark::State& state) { poller_cpu(state, SamplingMode::kLatched); }
+void BM_PollerCpuLive60Rpm(benchmark::State& state) { poller_cpu(state, SamplingMode::kLive); }
+BENCHMARK(BM_PollerCpuLatched60Rpm)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_PollerCpuLive60Rpm)->Iterations(1)->Unit(benchmark::kSecond);
+
+}  // namespace
+}  // namespace gaugeloop
+
+BENCHMARK_MAIN();
