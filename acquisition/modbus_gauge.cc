@@ -9,21 +9,32 @@
 
 namespace gaugeloop {
 
-ModbusTcpGauge::ModbusTcpGauge(ModbusTcpSettings settings)
+ModbusGauge::ModbusGauge(ModbusSettings settings)
     : settings_(std::move(settings)), blocks_(snapshot_blocks(settings_.map)) {
   for (const ReadBlock& b : blocks_) words_.emplace_back(static_cast<size_t>(b.count));
 }
 
-ModbusTcpGauge::~ModbusTcpGauge() { disconnect(); }
+ModbusGauge::~ModbusGauge() { disconnect(); }
 
-std::string ModbusTcpGauge::address() const { return "tcp:" + settings_.host + ":" + std::to_string(settings_.port); }
+std::string ModbusGauge::address() const {
+  if (settings_.transport == ModbusTransport::kRtu) {
+    return "rtu:" + settings_.device + "@" + std::to_string(settings_.baud) + "/" + settings_.parity + "/unit " +
+           std::to_string(settings_.unit_id);
+  }
+  return "tcp:" + settings_.host + ":" + std::to_string(settings_.port);
+}
 
-Status ModbusTcpGauge::connect() {
+Status ModbusGauge::connect() {
   disconnect();
-  modbus_t* ctx = modbus_new_tcp(settings_.host.c_str(), settings_.port);
+  const bool rtu = settings_.transport == ModbusTransport::kRtu;
+  modbus_t* ctx = rtu ? modbus_new_rtu(settings_.device.c_str(), settings_.baud, settings_.parity, settings_.data_bits,
+                                       settings_.stop_bits)
+                      : modbus_new_tcp(settings_.host.c_str(), settings_.port);
   if (ctx == nullptr) {
-    return make_error(ErrorCode::kInvalidInput, "gauge address " + address() + " is not usable: " +
-                                                    modbus_strerror(errno) + "; give an IPv4 address and a port");
+    return make_error(ErrorCode::kInvalidInput,
+                      "gauge address " + address() + " is not usable: " + modbus_strerror(errno) +
+                          (rtu ? "; check the device, baud (e.g. 115200), parity (N, E, O), data and stop bits"
+                               : "; give an IPv4 address and a port"));
   }
   modbus_set_slave(ctx, settings_.unit_id);
   modbus_set_error_recovery(ctx, MODBUS_ERROR_RECOVERY_NONE);
@@ -34,20 +45,21 @@ Status ModbusTcpGauge::connect() {
     modbus_free(ctx);
     return make_error(ErrorCode::kGaugeUnreachable,
                       "cannot connect to the gauge at " + address() + ": " + modbus_strerror(err) +
-                          "; check the address, the port and that the amplifier is on the network");
+                          (rtu ? "; check the serial device exists and is not in use"
+                               : "; check the address, the port and that the amplifier is on the network"));
   }
   ctx_ = ctx;
   return {};
 }
 
-void ModbusTcpGauge::disconnect() {
+void ModbusGauge::disconnect() {
   if (ctx_ == nullptr) return;
   modbus_close(ctx_);
   modbus_free(ctx_);
   ctx_ = nullptr;
 }
 
-Status ModbusTcpGauge::read_registers(RegisterTable table, int address, int count, std::uint16_t* dest) {
+Status ModbusGauge::read_registers(RegisterTable table, int address, int count, std::uint16_t* dest) {
   if (ctx_ == nullptr) {
     return make_error(ErrorCode::kGaugeUnreachable, "gauge at " + this->address() + " is not connected");
   }
@@ -73,7 +85,7 @@ Status ModbusTcpGauge::read_registers(RegisterTable table, int address, int coun
   return make_error(ErrorCode::kGaugeUnreachable, where + ": " + modbus_strerror(err) + " (link lost)");
 }
 
-Result<GaugeSnapshot> ModbusTcpGauge::read_snapshot() {
+Result<GaugeSnapshot> ModbusGauge::read_snapshot() {
   for (size_t b = 0; b < blocks_.size(); ++b) {
     if (Status s = read_registers(blocks_[b].table, blocks_[b].start, blocks_[b].count, words_[b].data()); !s) {
       return s.error();
@@ -89,7 +101,7 @@ Result<GaugeSnapshot> ModbusTcpGauge::read_snapshot() {
   return snap;
 }
 
-Result<LatchState> ModbusTcpGauge::read_latch_state() {
+Result<LatchState> ModbusGauge::read_latch_state() {
   const LatchSpec& l = settings_.map.latch;
   if (!l.present) {
     return make_error(ErrorCode::kInvalidInput, "the register map of the gauge at " + address() +
@@ -123,7 +135,7 @@ Result<LatchState> ModbusTcpGauge::read_latch_state() {
   return st;
 }
 
-Result<std::vector<LatchedSample>> ModbusTcpGauge::read_latched(int first_slot, int count) {
+Result<std::vector<LatchedSample>> ModbusGauge::read_latched(int first_slot, int count) {
   const RegisterMap& map = settings_.map;
   const int words = count * map.latch.entry_words;
   std::uint16_t regs[MODBUS_MAX_READ_REGISTERS];

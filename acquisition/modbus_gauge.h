@@ -1,4 +1,4 @@
-// A gauge amplifier reached over Modbus TCP through libmodbus.
+// A gauge amplifier reached over Modbus TCP or RTU through libmodbus.
 #pragma once
 
 #include <chrono>
@@ -13,22 +13,34 @@ typedef struct _modbus modbus_t;  // libmodbus stays private to acquisition/
 
 namespace gaugeloop {
 
-struct ModbusTcpSettings {
+enum class ModbusTransport { kTcp, kRtu };
+
+struct ModbusSettings {
+  ModbusTransport transport = ModbusTransport::kTcp;
+  // TCP
   std::string host = "127.0.0.1";
   int port = 502;
+  // RTU: serial line
+  std::string device = "/dev/ttyUSB0";
+  int baud = 115200;
+  char parity = 'N';  // N, E or O
+  int data_bits = 8;
+  int stop_bits = 1;
+
   int unit_id = 1;  // Modbus unit (slave) id the amplifier answers to
   std::chrono::milliseconds response_timeout{200};
   RegisterMap map;
 };
 
-// Owns one libmodbus context. Not thread-safe (libmodbus contexts are not): one per thread.
+// Owns one libmodbus context, TCP or RTU. Not thread-safe (libmodbus contexts are not):
+// one per thread.
 // Never uses MODBUS_ERROR_RECOVERY_LINK, which can block for seconds; the poller reconnects.
-class ModbusTcpGauge final : public GaugeClient {
+class ModbusGauge final : public GaugeClient {
  public:
-  explicit ModbusTcpGauge(ModbusTcpSettings settings);
-  ~ModbusTcpGauge() override;
-  ModbusTcpGauge(const ModbusTcpGauge&) = delete;
-  ModbusTcpGauge& operator=(const ModbusTcpGauge&) = delete;
+  explicit ModbusGauge(ModbusSettings settings);
+  ~ModbusGauge() override;
+  ModbusGauge(const ModbusGauge&) = delete;
+  ModbusGauge& operator=(const ModbusGauge&) = delete;
 
   Status connect() override;
   void disconnect() override;
@@ -45,7 +57,7 @@ class ModbusTcpGauge final : public GaugeClient {
   // error, with errno turned into a code, after flushing and closing the link where needed.
   Status read_registers(RegisterTable table, int address, int count, std::uint16_t* dest);
 
-  ModbusTcpSettings settings_;
+  ModbusSettings settings_;
   std::vector<ReadBlock> blocks_;  // the requests of one snapshot
   std::vector<std::vector<std::uint16_t>> words_;
   modbus_t* ctx_ = nullptr;

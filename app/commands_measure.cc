@@ -122,18 +122,18 @@ int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {
       sim_settings.lobe_error_peak_um, sim_settings.noise_rms_um);
   std::printf("measuring %d revolutions in %s mode...\n", o.revolutions, o.mode.c_str());
   std::fflush(stdout);
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = (*sim)->port();
   ms.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   return run_job(gauge, *lp, o, /*build_on_table_in_force=*/false);
 }
 
 int cmd_measure(const MeasureOptions& o, const std::string& gauge_address) {
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
   if (!o.gauge_config.empty()) {
-    Result<ModbusTcpSettings> from_file = read_gauge_file(o.gauge_config, ms);
+    Result<ModbusSettings> from_file = read_gauge_file(o.gauge_config, ms);
     if (!from_file) return report_error(from_file.error());
     ms = std::move(*from_file);
   }
@@ -156,7 +156,7 @@ int cmd_measure(const MeasureOptions& o, const std::string& gauge_address) {
   }
   Result<LoadedPart> lp = load_part(o.part_path);
   if (!lp) return report_error(lp.error());
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   return run_job(gauge, *lp, o, /*build_on_table_in_force=*/true);
 }
 
@@ -171,10 +171,18 @@ int cmd_sim(const std::string& part_path, const SimulatorSettings& settings) {
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
   auto sim = GaugeSimulator::start(lp->file.part, lp->design, settings);
   if (!sim) return report_error(sim.error());
-  std::printf("gaugeloop sim: %s lobe %d at %.0f rpm, Modbus TCP on %s:%d (input registers 0-8, docs/simulator.md)\n",
-              lp->file.part.name.c_str(), lp->file.part.lobe, settings.speed_rpm, settings.host.c_str(),
-              (*sim)->port());
-  std::printf("port %d\n", (*sim)->port());
+  if (settings.rtu_device.empty()) {
+    std::printf("gaugeloop sim: %s lobe %d at %.0f rpm, Modbus TCP on %s:%d (registers: docs/simulator.md)\n",
+                lp->file.part.name.c_str(), lp->file.part.lobe, settings.speed_rpm, settings.host.c_str(),
+                (*sim)->port());
+    std::printf("port %d\n", (*sim)->port());
+  } else {
+    std::printf(
+        "gaugeloop sim: %s lobe %d at %.0f rpm, Modbus RTU on %s at %d baud, unit %d (registers: "
+        "docs/simulator.md)\n",
+        lp->file.part.name.c_str(), lp->file.part.lobe, settings.speed_rpm, settings.rtu_device.c_str(),
+        settings.rtu_baud, settings.unit_id);
+  }
   std::fflush(stdout);
   int sig = 0;
   sigwait(&stop_signals, &sig);
@@ -222,6 +230,11 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
   sim->add_option("--host", sim_settings->host, "Address to listen on")->capture_default_str();
   sim_settings->port = 1502;
   sim->add_option("--port", sim_settings->port, "TCP port; 0 picks a free one")->capture_default_str();
+  sim->add_option("--rtu", sim_settings->rtu_device,
+                  "Serve Modbus RTU on this serial device instead of TCP (e.g. one end of a socat pty pair)");
+  sim->add_option("--baud", sim_settings->rtu_baud, "RTU baud rate; replies keep to its line time")
+      ->capture_default_str();
+  sim->add_option("--unit-id", sim_settings->unit_id, "RTU unit id the simulator answers to")->capture_default_str();
   sim->add_option("--part", *sim_part, "Part file to simulate [built-in intake_flat]");
   add_simulator_options(*sim, *sim_settings);
   sim->add_option("--time-scale", sim_settings->time_scale, "Simulated seconds per real second")->capture_default_str();

@@ -12,9 +12,9 @@ namespace gaugeloop {
 // Parses a gauge config. A missing [link] keeps `defaults`' link settings; a missing [map]
 // keeps the simulator's register map; a [map] describes the whole map (fields it leaves out
 // are absent, and reading and angle are required). Errors name the file, line and key.
-Result<ModbusTcpSettings> parse_gauge_toml(std::string_view text, std::string_view source_name,
-                                           const ModbusTcpSettings& defaults = {});
+Result<ModbusSettings> parse_gauge_toml(std::string_view text, std::string_view source_name,
+                                           const ModbusSettings& defaults = {});
 
-Result<ModbusTcpSettings> read_gauge_file(const std::filesystem::path& path, const ModbusTcpSettings& defaults = {});
+Result<ModbusSettings> read_gauge_file(const std::filesystem::path& path, const ModbusSettings& defaults = {});
 
 }  // namespace gaugeloop

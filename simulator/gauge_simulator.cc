@@ -122,7 +122,37 @@ Result<std::unique_ptr<GaugeSimulator>> GaugeSimulator::start(const Part& part, 
   return sim;
 }
 
+namespace {
+
+// Line time of a request and its reply on a serial bus: 8N1 is 10 bits a character, with
+// parity 11, plus 3.5 characters of silence after each frame (Modbus RTU framing).
+std::chrono::microseconds rtu_line_time(const SimulatorSettings& s, int request_bytes, int reply_bytes) {
+  const double bits_per_char = s.rtu_parity == 'N' ? 10.0 : 11.0;
+  const double chars = request_bytes + reply_bytes + 7.0;
+  return std::chrono::microseconds(static_cast<std::int64_t>(chars * bits_per_char * 1e6 / s.rtu_baud));
+}
+
+}  // namespace
+
 Status GaugeSimulator::listen() {
+  if (!settings_.rtu_device.empty()) {
+    if (ctx_ != nullptr) return {};
+    ctx_ = modbus_new_rtu(settings_.rtu_device.c_str(), settings_.rtu_baud, settings_.rtu_parity, 8, 1);
+    if (ctx_ == nullptr) {
+      return make_error(ErrorCode::kInvalidInput, "simulator serial line " + settings_.rtu_device + ": " +
+                                                      modbus_strerror(errno) + "; check the baud and parity");
+    }
+    modbus_set_slave(ctx_, settings_.unit_id);
+    if (modbus_connect(ctx_) != 0) {
+      return make_error(ErrorCode::kIo,
+                        "simulator cannot open " + settings_.rtu_device + ": " + modbus_strerror(errno));
+    }
+    mapping_ = modbus_mapping_new_start_address(0, 0, 0, 0, 0, 0, 0, sim_registers::kCount);
+    if (mapping_ == nullptr) return make_error(ErrorCode::kInternal, "cannot allocate the simulator's registers");
+    wake_fd_ = ::eventfd(0, EFD_CLOEXEC);
+    if (wake_fd_ < 0) return make_error(ErrorCode::kIo, std::string("eventfd: ") + std::strerror(errno));
+    return {};
+  }
   if (ctx_ == nullptr) {
     // The context only frames requests and replies; the sockets are ours (see serve()).
     ctx_ = modbus_new_tcp(settings_.host.c_str(), settings_.port);
@@ -289,7 +319,45 @@ void GaugeSimulator::update_registers(std::int64_t now_ns, const FaultState& fau
   regs[sim_registers::kLatchEntryWords] = 4;
 }
 
+void GaugeSimulator::serve_rtu() {
+  std::vector<std::uint8_t> query(MODBUS_RTU_MAX_ADU_LENGTH);
+  const int serial = modbus_get_socket(ctx_);
+  while (true) {
+    pollfd fds[2] = {{wake_fd_, POLLIN, 0}, {serial, POLLIN, 0}};
+    if (::poll(fds, 2, -1) < 0) {
+      if (errno == EINTR) continue;
+      break;
+    }
+    if (fds[0].revents != 0) break;  // stop() was called
+    const int rc = modbus_receive(ctx_, query.data());
+    if (rc <= 0) {
+      if (rc < 0) modbus_flush(ctx_);  // a garbled frame: drop it, as a real slave would
+      continue;                        // 0: a request for another unit
+    }
+    const auto received = std::chrono::steady_clock::now();
+    ++requests_;
+    const std::int64_t t = now_ns();
+    if (first_request_ns_ < 0) first_request_ns_ = t;
+    const FaultState faults = fault_state(t, /*deliver=*/true);
+    update_registers(t, faults);
+    if (silent_.load() || faults.silent || faults.drop) continue;
+    // Registers requested (functions 03 and 04): the reply carries 2 bytes each.
+    const int registers = rc >= 6 ? (query[4] << 8) | query[5] : 0;
+    std::this_thread::sleep_until(received + rtu_line_time(settings_, rc, 5 + 2 * registers) +
+                                  std::chrono::milliseconds(faults.late_ms));
+    if (faults.exception != 0) {
+      modbus_reply_exception(ctx_, query.data(), static_cast<unsigned int>(faults.exception));
+    } else {
+      modbus_reply(ctx_, query.data(), rc, mapping_);
+    }
+  }
+}
+
 void GaugeSimulator::serve() {
+  if (!settings_.rtu_device.empty()) {
+    serve_rtu();
+    return;
+  }
   std::vector<int> clients;
   std::vector<std::uint8_t> query(MODBUS_TCP_MAX_ADU_LENGTH);
   auto close_clients = [&clients] {
@@ -369,7 +437,11 @@ void GaugeSimulator::stop() {
     wake_fd_ = -1;
   }
   if (ctx_ != nullptr) {
-    modbus_set_socket(ctx_, -1);  // the sockets are closed already; keep modbus_free from closing one again
+    if (!settings_.rtu_device.empty()) {
+      modbus_close(ctx_);  // the serial line is libmodbus's own
+    } else {
+      modbus_set_socket(ctx_, -1);  // the sockets are closed already; keep modbus_free from closing one again
+    }
     modbus_free(ctx_);
     ctx_ = nullptr;
   }

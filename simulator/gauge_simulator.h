@@ -40,7 +40,14 @@ inline constexpr int kCount = kLatchRing + 4 * kLatchRingEntries;
 
 struct SimulatorSettings {
   std::string host = "127.0.0.1";
-  int port = 0;                      // 0: the system picks a free port; read it back with port()
+  int port = 0;  // 0: the system picks a free port; read it back with port()
+  // Modbus RTU instead of TCP when set: the serial device to serve on (e.g. one end of a
+  // socat pty pair), at this line setting and unit id. The simulator holds each reply back
+  // for the line time of request and reply at `rtu_baud`, so a pty behaves like the bus.
+  std::string rtu_device;
+  int rtu_baud = 115200;
+  char rtu_parity = 'N';
+  int unit_id = 1;
   double speed_rpm = 60.0;           // work spindle speed
   double time_scale = 1.0;           // simulated seconds per wall-clock second
   double sample_rate_hz = 10000.0;   // amplifier update rate; the sample number counts these
@@ -54,7 +61,7 @@ struct SimulatorSettings {
 // Checks settings; the message names the setting.
 Status validate(const SimulatorSettings& settings);
 
-// Runs a Modbus TCP server on its own thread from start() until stop() or destruction.
+// Runs a Modbus TCP (or RTU) server on its own thread from start() until stop() or destruction.
 // The register values are computed from the clock at the moment each request arrives, so
 // any number of clients see one spindle. Faults follow a schedule counted in spindle
 // revolutions from the first request (docs/simulator.md). Thread-safe: the accessors,
@@ -70,7 +77,7 @@ class GaugeSimulator {
   GaugeSimulator& operator=(const GaugeSimulator&) = delete;
 
   void stop();
-  int port() const { return port_; }
+  int port() const { return port_; }  // TCP only
   const SimulatorSettings& settings() const { return settings_; }
   std::int64_t requests_served() const { return requests_.load(); }
 
@@ -102,6 +109,7 @@ class GaugeSimulator {
   Status listen();
   void close_listener();
   void serve();
+  void serve_rtu();
   // The schedule at time `now_ns`; marks events as delivered when `deliver` is set.
   FaultState fault_state(std::int64_t now_ns, bool deliver);
   void update_registers(std::int64_t now_ns, const FaultState& faults);

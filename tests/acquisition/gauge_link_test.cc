@@ -107,7 +107,7 @@ TEST_F(GaugeLinkTest, FailedIsTerminal) {
 
 TEST_F(GaugeLinkTest, AClientThatClosedItselfIsReopened) {
   ASSERT_TRUE(link_.ensure("").ok());
-  gauge_.disconnect();  // as ModbusTcpGauge does after a timeout
+  gauge_.disconnect();  // as ModbusGauge does after a timeout
   ASSERT_TRUE(link_.ensure("").ok());
   EXPECT_EQ(seen_, (std::vector<Transition>{
                        {kDisconnected, kConnected}, {kConnected, kBackingOff}, {kBackingOff, kConnected}}));

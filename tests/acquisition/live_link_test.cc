@@ -24,9 +24,9 @@ TEST(LiveLink, PollerMeasuresThreeRevolutionsOverLoopback) {
   ss.speed_rpm = 15.0;
   auto sim = GaugeSimulator::start(part, *table, ss);
   ASSERT_TRUE(sim.ok()) << sim.error().message;
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = (*sim)->port();
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   PollerSettings ps;
   ps.mode = SamplingMode::kLive;
   ps.spare_revolutions = 6;  // a stall of the machine costs a revolution, not the test
@@ -58,9 +58,9 @@ TEST(LiveLink, PacedPollingSpacesThePolls) {
   ss.speed_rpm = 15.0;
   auto sim = GaugeSimulator::start(part, *table, ss);
   ASSERT_TRUE(sim.ok()) << sim.error().message;
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = (*sim)->port();
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   PollerSettings ps;
   ps.mode = SamplingMode::kLive;
   ps.poll_step_deg = 0.2;

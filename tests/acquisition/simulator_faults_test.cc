@@ -32,10 +32,10 @@ class SimulatorFaultTest : public ::testing::Test {
     auto sim = GaugeSimulator::start(part, *table, ss);
     EXPECT_TRUE(sim.ok()) << sim.error().message;
     sim_ = std::move(*sim);
-    ModbusTcpSettings ms;
+    ModbusSettings ms;
     ms.port = sim_->port();
     ms.response_timeout = response_timeout;
-    ModbusTcpGauge gauge(ms);
+    ModbusGauge gauge(ms);
     PollerSettings ps;
     ps.backoff_initial = std::chrono::milliseconds(10);
     ps.backoff_max = std::chrono::milliseconds(100);

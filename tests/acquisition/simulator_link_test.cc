@@ -41,9 +41,9 @@ std::unique_ptr<GaugeSimulator> start_sim(SimulatorSettings s = {}) {
 TEST(SimulatorLink, BindsAnEphemeralPortAndAnswersASnapshot) {
   auto sim = start_sim();
   ASSERT_GT(sim->port(), 0);
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = sim->port();
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   ASSERT_TRUE(gauge.connect().ok());
   Result<GaugeSnapshot> s = gauge.read_snapshot();
   ASSERT_TRUE(s.ok()) << s.error().message;
@@ -74,9 +74,9 @@ TEST(SimulatorLink, RefusedConnectionIsUnreachable) {
   ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
   socklen_t len = sizeof addr;
   ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = ntohs(addr.sin_port);
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   Status st = gauge.connect();
   ::close(fd);
   ASSERT_FALSE(st.ok());
@@ -87,10 +87,10 @@ TEST(SimulatorLink, RefusedConnectionIsUnreachable) {
 TEST(SimulatorLink, SilentGaugeTimesOut) {
   auto sim = start_sim();
   sim->set_silent(true);
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = sim->port();
   ms.response_timeout = std::chrono::milliseconds(50);
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   ASSERT_TRUE(gauge.connect().ok());
   Result<GaugeSnapshot> s = gauge.read_snapshot();
   ASSERT_FALSE(s.ok());
@@ -113,9 +113,9 @@ TEST(SimulatorLink, LatchedPollerMeasuresThreeRevolutionsOverLoopback) {
   SimulatorSettings s;
   s.time_scale = 4.0;  // 60 rpm simulated at 4x: the run takes about a second
   auto sim = start_sim(s);
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = sim->port();
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   Poller poller(gauge, PollerSettings{});
   Result<MeasuredRun> run = poller.measure();
   ASSERT_TRUE(run.ok()) << run.error().message;

@@ -111,9 +111,9 @@ TEST_F(FullPathTest, RecoversTheInjectedErrorAndWritesTheCorrectedTable) {
   ss.time_scale = 4.0;  // 60 rpm simulated at 4x: the run takes about a second
   auto sim = GaugeSimulator::start(part_.part, design_, ss);
   ASSERT_TRUE(sim.ok()) << sim.error().message;
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = (*sim)->port();
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
 
   Result<JobReport> report = run_measure_job(gauge, job_settings());
   ASSERT_TRUE(report.ok()) << report.error().message;
@@ -188,9 +188,9 @@ TEST_F(FullPathTest, NextRunBuildsOnTheTableInForce) {
   ss.time_scale = 4.0;
   auto sim = GaugeSimulator::start(part_.part, design_, ss);
   ASSERT_TRUE(sim.ok()) << sim.error().message;
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = (*sim)->port();
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   Result<JobReport> first = run_measure_job(gauge, job_settings());
   ASSERT_TRUE(first.ok()) << first.error().message;
   EXPECT_FALSE(first->correction_in_force_run.has_value());
@@ -218,10 +218,10 @@ TEST_F(FullPathTest, GaugeThatStopsAnsweringMidRunStoresNothingAndWritesNoTable)
   ss.faults.push_back({FaultKind::kSilent, 2.0});  // the poller has started collecting by then
   auto sim = GaugeSimulator::start(part_.part, design_, ss);
   ASSERT_TRUE(sim.ok()) << sim.error().message;
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = (*sim)->port();
   ms.response_timeout = std::chrono::milliseconds(50);
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   JobSettings js = job_settings();
   js.poller.max_attempts = 3;
   js.poller.backoff_initial = std::chrono::milliseconds(1);
@@ -324,9 +324,9 @@ TEST_F(FullPathTest, BadCommandLineIsBadInputAndTouchesNothing) {
 TEST_F(FullPathTest, TemplateWithAnUnknownPlaceholderIsRefusedBeforeMeasuring) {
   JobSettings js = job_settings();
   js.nc_template = "CTABDEF(X,C,1,1)\n{{table_blocks}}\n{{tabel_number}}\n";
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = 9;  // never contacted: the template is checked first
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   Result<JobReport> report = run_measure_job(gauge, js);
   ASSERT_FALSE(report.ok());
   EXPECT_EQ(report.error().code, ErrorCode::kInvalidInput);

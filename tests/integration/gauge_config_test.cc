@@ -56,6 +56,19 @@ TEST(GaugeConfig, ReadsAnotherAmplifiersMap) {
   EXPECT_EQ(cfg->response_timeout.count(), 500);
 }
 
+TEST(GaugeConfig, ReadsAnRtuLink) {
+  auto cfg = parse_gauge_toml(
+      "[link]\ntransport = \"rtu\"\ndevice = \"/dev/ttyS1\"\nbaud = 19200\nparity = \"E\"\nunit_id = 7\n",
+      "gauge.toml");
+  ASSERT_TRUE(cfg.ok()) << cfg.error().message;
+  EXPECT_EQ(cfg->transport, ModbusTransport::kRtu);
+  EXPECT_EQ(cfg->device, "/dev/ttyS1");
+  EXPECT_EQ(cfg->baud, 19200);
+  EXPECT_EQ(cfg->parity, 'E');
+  EXPECT_EQ(cfg->unit_id, 7);
+  EXPECT_EQ(cfg->stop_bits, 1);
+}
+
 struct BadConfig {
   const char* text;
   const char* expected;
@@ -69,6 +82,10 @@ TEST(GaugeConfig, RefusesMistakesNamingFileLineAndKey) {
       {"[map]\nbyte_order = \"ABDC\"\n", "gauge.toml:2: key `map.byte_order`"},
       {"[map.status]\naddress = 70000\n", "gauge.toml:2: key `map.status.address`: 70000 is out of range"},
       {"[link\n", "gauge.toml:1"},
+      {"[link]\ntransport = \"rtu\"\ndevice = \"/dev/ttyS1\"\nport = 502\n",
+       "gauge.toml:4: key `link.port`: a TCP setting in an RTU link"},
+      {"[link]\nbaud = 9600\n", "gauge.toml:2: key `link.baud`: a serial setting in a TCP link"},
+      {"[link]\ntransport = \"rtu\"\n", "key `link.device` is missing"},
   };
   for (const BadConfig& c : cases) {
     auto cfg = parse_gauge_toml(c.text, "gauge.toml");
@@ -130,7 +147,7 @@ Result<MeasuredRun> measure_peer(int port, SamplingMode mode) {
   auto cfg = read_gauge_file(example("other_amplifier.toml"));
   if (!cfg) return cfg.error();
   cfg->port = port;
-  ModbusTcpGauge gauge(*cfg);
+  ModbusGauge gauge(*cfg);
   PollerSettings ps;
   ps.mode = mode;
   ps.spare_revolutions = 6;
