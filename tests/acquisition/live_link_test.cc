@@ -10,19 +10,15 @@
 #include "acquisition/poller.h"
 #include "core/lift_table.h"
 #include "simulator/gauge_simulator.h"
+#include "tests/support/intake_simulator.h"
 
 namespace gaugeloop {
 namespace {
 
 TEST(LiveLink, PollerMeasuresThreeRevolutionsOverLoopback) {
-  Part part;
-  part.base_circle_radius_mm = 18.0;
-  part.wheel_radius_mm = 200.0;
-  auto table = read_lift_table_csv(std::filesystem::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.csv");
-  ASSERT_TRUE(table.ok());
   SimulatorSettings ss;
   ss.speed_rpm = 15.0;
-  auto sim = GaugeSimulator::start(part, *table, ss);
+  auto sim = testing::start_intake_simulator(ss);
   ASSERT_TRUE(sim.ok()) << sim.error().message;
   ModbusSettings ms;
   ms.port = (*sim)->port();
@@ -49,14 +45,9 @@ TEST(LiveLink, PollerMeasuresThreeRevolutionsOverLoopback) {
 // instead of back to back (30,000 a revolution on loopback at 15 rpm). The bound fails only
 // if pacing breaks.
 TEST(LiveLink, PacedPollingSpacesThePolls) {
-  Part part;
-  part.base_circle_radius_mm = 18.0;
-  part.wheel_radius_mm = 200.0;
-  auto table = read_lift_table_csv(std::filesystem::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.csv");
-  ASSERT_TRUE(table.ok());
   SimulatorSettings ss;
   ss.speed_rpm = 15.0;
-  auto sim = GaugeSimulator::start(part, *table, ss);
+  auto sim = testing::start_intake_simulator(ss);
   ASSERT_TRUE(sim.ok()) << sim.error().message;
   ModbusSettings ms;
   ms.port = (*sim)->port();

@@ -14,6 +14,7 @@
 #include "acquisition/poller.h"
 #include "core/lift_table.h"
 #include "simulator/gauge_simulator.h"
+#include "tests/support/intake_simulator.h"
 #include "tests/support/pty_pair.h"
 
 namespace gaugeloop {
@@ -22,16 +23,11 @@ namespace {
 using testing::PtyPair;
 
 std::unique_ptr<GaugeSimulator> start_rtu_sim(const std::string& device, double rpm) {
-  Part part;
-  part.base_circle_radius_mm = 18.0;
-  part.wheel_radius_mm = 200.0;
-  auto table = read_lift_table_csv(std::filesystem::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.csv");
-  EXPECT_TRUE(table.ok());
   SimulatorSettings ss;
   ss.rtu_device = device;
   ss.unit_id = 7;
   ss.speed_rpm = rpm;
-  auto sim = GaugeSimulator::start(part, *table, ss);
+  auto sim = testing::start_intake_simulator(ss);
   EXPECT_TRUE(sim.ok()) << sim.error().message;
   return sim.ok() ? std::move(*sim) : nullptr;
 }

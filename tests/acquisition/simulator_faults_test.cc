@@ -10,6 +10,7 @@
 #include "acquisition/poller.h"
 #include "core/lift_table.h"
 #include "simulator/gauge_simulator.h"
+#include "tests/support/intake_simulator.h"
 
 namespace gaugeloop {
 namespace {
@@ -19,17 +20,12 @@ class SimulatorFaultTest : public ::testing::Test {
   // Starts a simulator with `fault` and measures one latched run through it.
   Result<MeasuredRun> measure_with(const char* fault_text,
                                    std::chrono::milliseconds response_timeout = std::chrono::milliseconds(100)) {
-    Part part;
-    part.base_circle_radius_mm = 18.0;
-    part.wheel_radius_mm = 200.0;
-    auto table = read_lift_table_csv(std::filesystem::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.csv");
-    EXPECT_TRUE(table.ok());
     SimulatorSettings ss;
     ss.time_scale = 4.0;
     Result<FaultSpec> fault = parse_fault_spec(fault_text);
     EXPECT_TRUE(fault.ok()) << fault.error().message;
     ss.faults.push_back(*fault);
-    auto sim = GaugeSimulator::start(part, *table, ss);
+    auto sim = testing::start_intake_simulator(ss);
     EXPECT_TRUE(sim.ok()) << sim.error().message;
     sim_ = std::move(*sim);
     ModbusSettings ms;

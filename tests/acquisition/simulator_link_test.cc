@@ -14,26 +14,13 @@
 #include "acquisition/poller.h"
 #include "core/lift_table.h"
 #include "simulator/gauge_simulator.h"
+#include "tests/support/intake_simulator.h"
 
 namespace gaugeloop {
 namespace {
 
-Part intake_part() {
-  Part p;
-  p.name = "intake_flat";
-  p.base_circle_radius_mm = 18.0;
-  p.wheel_radius_mm = 200.0;
-  return p;
-}
-
-LiftTable intake_table() {
-  auto t = read_lift_table_csv(std::filesystem::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.csv");
-  EXPECT_TRUE(t.ok());
-  return *t;
-}
-
 std::unique_ptr<GaugeSimulator> start_sim(SimulatorSettings s = {}) {
-  auto sim = GaugeSimulator::start(intake_part(), intake_table(), s);
+  auto sim = testing::start_intake_simulator(s);
   EXPECT_TRUE(sim.ok()) << sim.error().message;
   return std::move(*sim);
 }
