@@ -10,27 +10,26 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
+#include <string>
+#include <vector>
 
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/poller.h"
-#include "core/lift_table.h"
 #include "simulator/gauge_simulator.h"
+#include "tests/support/intake_simulator.h"
+#include "tests/support/pty_pair.h"
 
 namespace gaugeloop {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::unique_ptr<GaugeSimulator> start_sim(double speed_rpm) {
-  Part part;
-  part.base_circle_radius_mm = 18.0;
-  part.wheel_radius_mm = 200.0;
-  auto table = read_lift_table_csv(std::filesystem::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.csv");
+std::unique_ptr<GaugeSimulator> start_sim(double speed_rpm, const std::string& rtu_device = {}) {
   SimulatorSettings ss;
   ss.speed_rpm = speed_rpm;
   ss.sample_rate_hz = 100000.0;  // a fast amplifier: the bus, not the amplifier, sets the limit
-  auto sim = GaugeSimulator::start(part, *table, ss);
+  ss.rtu_device = rtu_device;    // empty: TCP; else RTU at 115200 baud, replies held to line time
+  auto sim = testing::start_intake_simulator(ss);
   if (!sim) {
     std::fprintf(stderr, "simulator: %s\n", sim.error().message.c_str());
     std::abort();  // a benchmark on a simulator that did not start measures nothing
@@ -46,15 +45,15 @@ double thread_cpu_s() {
 }
 
 // Alternates 500 bare libmodbus reads of the snapshot block with 500 snapshot reads through
-// ModbusTcpGauge (block planning, decoding, status translation), on two connections to the
+// ModbusGauge (block planning, decoding, status translation), on two connections to the
 // same simulator, so both see the same machine at the same moment.
 void BM_SnapshotReadsVersusBareLibmodbus(benchmark::State& state) {
   auto sim = start_sim(60.0);
   modbus_t* bare = modbus_new_tcp("127.0.0.1", sim->port());
   modbus_connect(bare);
-  ModbusTcpSettings ms;
+  ModbusSettings ms;
   ms.port = sim->port();
-  ModbusTcpGauge gauge(ms);
+  ModbusGauge gauge(ms);
   (void)gauge.connect();
   std::uint16_t regs[16];
   double bare_s = 0.0;
@@ -80,15 +79,21 @@ BENCHMARK(BM_SnapshotReadsVersusBareLibmodbus)->Unit(benchmark::kMillisecond)->M
 
 // One 3-revolution run with no spare revolution: true if every degree of every revolution
 // was sampled. Also reports the poller thread's CPU time over the run's wall time.
-bool clean_run(SamplingMode mode, double rpm, double* cpu_fraction, int spares = 0) {
-  auto sim = start_sim(rpm);
-  ModbusTcpSettings ms;
+bool clean_run(SamplingMode mode, double rpm, double* cpu_fraction, int spares = 0, bool rtu = false) {
+  testing::PtyPair pty;  // only used for RTU
+  auto sim = start_sim(rpm, rtu ? pty.simulator_end() : std::string());
+  ModbusSettings ms;
   ms.port = sim->port();
-  ModbusTcpGauge gauge(ms);
+  if (rtu) {
+    ms.transport = ModbusTransport::kRtu;
+    ms.device = pty.gauge_end();
+    ms.baud = 115200;
+  }
+  ModbusGauge gauge(ms);
   PollerSettings ps;
   ps.mode = mode;
   ps.spare_revolutions = spares;
-  ps.run_timeout = std::chrono::milliseconds(20000);
+  ps.run_timeout = std::chrono::milliseconds(40000);
   Poller poller(gauge, ps);
   const double cpu0 = thread_cpu_s();
   const auto t0 = Clock::now();
@@ -101,14 +106,16 @@ bool clean_run(SamplingMode mode, double rpm, double* cpu_fraction, int spares =
 
 // The highest speed of the ladder at which two runs in a row complete: with `spares` 0, no
 // revolution may miss a degree; with the product's default 3, up to 3 may be replaced.
-void max_clean_rpm(benchmark::State& state, SamplingMode mode, int spares = 0) {
-  // Up to the simulator's limit of 10000 rpm.
-  const double ladder[] = {30, 60, 120, 240, 480, 600, 900, 1200, 1800, 2400, 3000, 4500, 6000, 9000, 10000};
+void max_clean_rpm(benchmark::State& state, SamplingMode mode, int spares = 0, bool rtu = false) {
+  // Up to the simulator's limit of 10000 rpm; RTU from 20 rpm, as its bus is slow.
+  const std::vector<double> tcp_ladder = {30,   60,   120,  240,  480,  600,  900,  1200,
+                                          1800, 2400, 3000, 4500, 6000, 9000, 10000};
+  const std::vector<double> rtu_ladder = {20, 30, 45, 60, 90, 120, 150, 180, 210, 240, 300};
   double best = 0.0;
   for (auto _ : state) {
     best = 0.0;
-    for (double rpm : ladder) {
-      if (!clean_run(mode, rpm, nullptr, spares) || !clean_run(mode, rpm, nullptr, spares)) break;
+    for (double rpm : rtu ? rtu_ladder : tcp_ladder) {
+      if (!clean_run(mode, rpm, nullptr, spares, rtu) || !clean_run(mode, rpm, nullptr, spares, rtu)) break;
       best = rpm;
     }
   }
@@ -118,7 +125,11 @@ void max_clean_rpm(benchmark::State& state, SamplingMode mode, int spares = 0) {
 void BM_MaxCleanRpmLatchedTcp(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLatched); }
 void BM_MaxCleanRpmLiveTcp(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLive); }
 void BM_MaxCompleteRpmLiveTcp(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLive, 3); }
+void BM_MaxCleanRpmLatchedRtu(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLatched, 0, true); }
+void BM_MaxCleanRpmLiveRtu(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLive, 0, true); }
 BENCHMARK(BM_MaxCleanRpmLatchedTcp)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_MaxCleanRpmLatchedRtu)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_MaxCleanRpmLiveRtu)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCleanRpmLiveTcp)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCompleteRpmLiveTcp)->Iterations(1)->Unit(benchmark::kSecond);
 
