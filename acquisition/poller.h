@@ -23,12 +23,13 @@ std::string_view sampling_mode_name(SamplingMode mode);
 struct PollerSettings {
   SamplingMode mode = SamplingMode::kLatched;
   int revolutions = 3;  // complete revolutions wanted; never fewer than 3
-  // Live mode: a degree takes the reading interpolated linearly between the two polls that
-  // straddle it, but only if those polls are at most this far apart. Farther apart, nobody
-  // sampled near the degree and it stays missing: a degree is never invented. Linear
-  // interpolation errs by up to h^2 / 8 * |H''|: 0.2 um at 0.5 deg on the sample intake
-  // nose (H'' = -0.0063 mm/deg^2), 0.008 um at the paced 0.1 deg.
-  double max_interpolation_gap_deg = 0.5;
+  // Live mode: a degree takes the reading interpolated between the two polls that straddle
+  // it, by the cubic through them and their neighbours, but only if those two polls are at
+  // most this far apart. Farther apart, nobody sampled near the degree and it stays missing:
+  // a degree is never invented. The cubic errs by about h^4/24 |H''''| at poll spacing h:
+  // under 0.001 um at 1 deg on the sample lobes, where linear interpolation would err by
+  // h^2/8 |H''| = 0.8 um on the intake nose.
+  double max_interpolation_gap_deg = 1.0;
   // 0 (default): live mode polls back to back, as fast as the link answers. > 0: polls are
   // paced to about this much spindle rotation apart, sleeping in between. Sleeping saves
   // CPU but a sleep can overrun by milliseconds (measured: 0.1 % of 0.5 ms sleeps took over
@@ -53,8 +54,8 @@ struct PollerSettings {
 Status validate(const PollerSettings& settings);
 
 // Collects one run, one sample per whole machine degree of C.
-// - Live mode polls the snapshot, paced to poll_step_deg of spindle rotation, and
-//   interpolates each degree between the two polls around it. It works with any amplifier
+// - Live mode polls the snapshot and interpolates each degree between the two polls around
+//   it (the cubic through those two and their neighbours). It works with any amplifier
 //   but needs the link to keep up with the spindle (docs/acquisition.md).
 // - Latched mode reads the amplifier's latch buffer: the reading taken at each encoder
 //   degree. Entries must arrive in unbroken degree order; a buffer overrun (the poller fell

@@ -22,9 +22,10 @@ PollerSettings fast_settings(SamplingMode mode = SamplingMode::kLive) {
   return s;
 }
 
-// Linear interpolation of a sine of amplitude 0.5 mm between polls 0.3 deg apart errs by at
-// most A * (h in rad)^2 / 8 = 0.5 * (0.3 * pi / 180)^2 / 8 = 1.7e-6 mm.
-constexpr double kInterpolationTolMm = 1.8e-6;
+// Cubic interpolation of a sine of amplitude 0.5 mm between polls 0.3 deg apart errs by about
+// h^4/24 * A * (pi/180)^4 = 0.3^4 / 24 * 0.5 * 9.3e-8 = 1.6e-11 mm; linear interpolation
+// would err by up to A * (h in rad)^2 / 8 = 1.7e-6 mm, so this bound also checks the cubic.
+constexpr double kInterpolationTolMm = 1e-9;
 
 TEST(Poller, CollectsCompleteRevolutionsFromTheNextBoundary) {
   ScriptedGauge g;
@@ -90,7 +91,7 @@ TEST(Poller, EncoderJumpingBackDiscardsTheRevolution) {
 
 TEST(Poller, RepeatedSampleIsNotTakenAsNew) {
   ScriptedGauge g;
-  g.step_deg = 0.2;  // a repeat leaves 0.4 deg between new samples: within the 0.5 deg limit
+  g.step_deg = 0.4;  // a repeat leaves 0.8 deg between new samples: within the 1 deg limit
   for (int i = 100; i < 2000; i += 7) g.faults[i] = Fault::kRepeat;
   Poller p(g, fast_settings());
   Result<MeasuredRun> run = p.measure();
@@ -151,7 +152,7 @@ TEST(Poller, RecoversWhenTheGaugeComesBackBeforeTheAttemptsRunOut) {
 
 TEST(Poller, TooSlowAPollRateLeavesDegreesMissingAndNamesThem) {
   ScriptedGauge g;
-  g.step_deg = 1.5;  // polls further apart than max_interpolation_gap_deg: never invent degrees
+  g.step_deg = 1.5;  // polls further apart than max_interpolation_gap_deg (1 deg): never invent degrees
   Poller p(g, fast_settings());
   Result<MeasuredRun> run = p.measure();
   ASSERT_FALSE(run.ok());
