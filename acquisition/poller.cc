@@ -17,6 +17,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// Live mode fills a gap between two polls by a straight line only up to this length.
+constexpr double kLinearGapDeg = 0.5;
+
 // One usable poll, on the unwrapped angle axis: u = revolution * 360 + angle.
 struct Poll {
   double u_deg = 0.0;
@@ -134,11 +137,23 @@ Result<MeasuredRun> Poller::measure_live() {
     }
   };
 
-  // Fills the whole degrees t with a.u < t <= b.u from the interpolating polynomial through
-  // `support` (2 to 4 polls of the chain, a and b among them, in order): linear, quadratic or
-  // cubic. The cubic errs by about h^4/24 |H''''| at spacing h: under 0.001 um at h = 1 deg
-  // on the sample lobes.
-  auto fill_segment = [&](const Poll& a, const Poll& b, const std::vector<Poll>& support) {
+  // Fills the whole degrees t with a.u < t <= b.u. The cubic through `left`, a, b and `right`
+  // is used when both neighbours lie between h/2 and 2h from the segment (h = its length):
+  // then its error is about h^4/24 |H''''|, under 0.001 um at h = 1 deg on the sample lobes,
+  // and noise is not amplified (clustered nodes would turn 0.3 um of noise into microns).
+  // Otherwise a segment up to kLinearGapDeg is filled linearly (error h^2/8 |H''|: 0.2 um at
+  // 0.5 deg on the intake nose), and a longer one stays missing.
+  auto fill_segment = [&](const Poll* left, const Poll& a, const Poll& b, const Poll* right) {
+    const double h = b.u_deg - a.u_deg;
+    auto spaced = [h](double d) { return d >= 0.5 * h && d <= 2.0 * h; };
+    std::vector<const Poll*> support;
+    if (left != nullptr && right != nullptr && spaced(a.u_deg - left->u_deg) && spaced(right->u_deg - b.u_deg)) {
+      support = {left, &a, &b, right};
+    } else if (h <= kLinearGapDeg) {
+      support = {&a, &b};
+    } else {
+      return;  // left missing: no well-spaced support for a segment this long
+    }
     for (auto t = static_cast<std::int64_t>(std::floor(a.u_deg)) + 1;
          t <= static_cast<std::int64_t>(std::floor(b.u_deg)); ++t) {
       const std::int64_t r = t >= 0 ? t / 360 : (t - 359) / 360;
@@ -148,9 +163,9 @@ Result<MeasuredRun> Poller::measure_live() {
       for (size_t i = 0; i < support.size(); ++i) {
         double w = 1.0;
         for (size_t j = 0; j < support.size(); ++j) {
-          if (j != i) w *= (static_cast<double>(t) - support[j].u_deg) / (support[i].u_deg - support[j].u_deg);
+          if (j != i) w *= (static_cast<double>(t) - support[j]->u_deg) / (support[i]->u_deg - support[j]->u_deg);
         }
-        value += w * support[i].reading_mm;
+        value += w * support[i]->reading_mm;
       }
       auto& rev = in_progress[r];
       rev.lift_mm[deg] = value;
@@ -163,14 +178,12 @@ Result<MeasuredRun> Poller::measure_live() {
   auto fill_chain = [&](bool closing) {
     const size_t n = chain.size();
     if (!closing && n >= 3) {
-      // Segment chain[n-3] -> chain[n-2], with up to one more poll on either side.
-      const std::vector<Poll> support(chain.begin() + static_cast<long>(n >= 4 ? n - 4 : n - 3), chain.end());
-      fill_segment(chain[n - 3], chain[n - 2], support);
+      // Segment chain[n-3] -> chain[n-2], with a neighbour on either side.
+      fill_segment(n >= 4 ? &chain[n - 4] : nullptr, chain[n - 3], chain[n - 2], &chain[n - 1]);
       filled_to_u = chain[n - 2].u_deg;
     }
     if (closing && n >= 2) {
-      const std::vector<Poll> support(chain.begin() + static_cast<long>(n >= 3 ? n - 3 : n - 2), chain.end());
-      fill_segment(chain[n - 2], chain[n - 1], support);
+      fill_segment(n >= 3 ? &chain[n - 3] : nullptr, chain[n - 2], chain[n - 1], nullptr);
       filled_to_u = chain[n - 1].u_deg;
     }
     if (closing) chain.clear();
@@ -182,6 +195,7 @@ Result<MeasuredRun> Poller::measure_live() {
     const bool ok = gauge_status_ok(cur.status);
     if (!chain.empty()) {
       const Poll last = chain.back();
+      if (ok && cur.u_deg == last.u_deg) return;  // a new sample at the same angle adds nothing
       const bool backwards = cur.u_deg < last.u_deg;
       const bool too_far = cur.u_deg - last.u_deg > settings_.max_interpolation_gap_deg;
       if (!ok || backwards || too_far) {

@@ -24,11 +24,11 @@ struct PollerSettings {
   SamplingMode mode = SamplingMode::kLatched;
   int revolutions = 3;  // complete revolutions wanted; never fewer than 3
   // Live mode: a degree takes the reading interpolated between the two polls that straddle
-  // it, by the cubic through them and their neighbours, but only if those two polls are at
-  // most this far apart. Farther apart, nobody sampled near the degree and it stays missing:
-  // a degree is never invented. The cubic errs by about h^4/24 |H''''| at poll spacing h:
-  // under 0.001 um at 1 deg on the sample lobes, where linear interpolation would err by
-  // h^2/8 |H''| = 0.8 um on the intake nose.
+  // it, and only if those polls are at most this far apart. Farther apart, nobody sampled
+  // near the degree and it stays missing: a degree is never invented. Between 0.5 deg and
+  // this limit a degree is filled only by the cubic through well-spaced neighbours (error
+  // about h^4/24 |H''''|: under 0.001 um at 1 deg on the sample lobes); up to 0.5 deg a
+  // straight line will do (h^2/8 |H''|: 0.2 um at 0.5 deg on the intake nose).
   double max_interpolation_gap_deg = 1.0;
   // 0 (default): live mode polls back to back, as fast as the link answers. > 0: polls are
   // paced to about this much spindle rotation apart, sleeping in between. Sleeping saves

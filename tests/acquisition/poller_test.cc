@@ -101,6 +101,36 @@ TEST(Poller, RepeatedSampleIsNotTakenAsNew) {
   for (int d = 0; d < 360; ++d) ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm);
 }
 
+TEST(Poller, ANewSampleAtAnUnchangedAngleIsHarmless) {
+  ScriptedGauge g;
+  for (int i = 100; i < 4000; i += 5) g.faults[i] = Fault::kStall;
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 0);
+  for (const auto& rev : run->revolutions) {
+    for (int d = 0; d < 360; ++d) {
+      ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm) << "degree " << d;
+    }
+  }
+}
+
+// Polls 0.05 deg apart, then one 0.8 deg gap: too long for a straight line (0.5 deg), and
+// its neighbours are too close to carry a cubic without amplifying noise. The degree in it
+// stays missing and its revolution is replaced.
+TEST(Poller, ALongGapBetweenCrowdedPollsIsLeftMissing) {
+  ScriptedGauge g;
+  g.step_deg = 0.05;
+  g.skip_deg = 0.75;
+  g.u_deg = 0.01;
+  g.faults[10000] = Fault::kSkip;  // 500 deg in: revolution 1
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 1);
+  EXPECT_EQ(run->revolutions[0].revolution, 2);
+}
+
 TEST(Poller, ReconnectsAfterATimeoutAndDropsThatRevolution) {
   ScriptedGauge g;
   g.faults[1500] = Fault::kTimeout;

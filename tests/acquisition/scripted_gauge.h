@@ -17,6 +17,7 @@ enum class Fault {
   kOverRange,  // status says over-range
   kSkip,       // the spindle moves on `skip_deg` without being polled
   kAngleBack,  // the encoder angle jumps back 10 degrees
+  kStall,      // a new sample, but the spindle has not moved since the last one
 };
 
 class ScriptedGauge final : public GaugeClient {
@@ -116,6 +117,9 @@ class ScriptedGauge final : public GaugeClient {
           break;
         case Fault::kAngleBack:
           u_deg -= 10.0;
+          break;
+        case Fault::kStall:
+          u_deg -= step_deg;
           break;
         case Fault::kTimeout:
           break;
