@@ -138,14 +138,15 @@ Result<MeasuredRun> Poller::measure_live() {
   };
 
   // Fills the whole degrees t with a.u < t <= b.u. The cubic through `left`, a, b and `right`
-  // is used when both neighbours lie between h/2 and 2h from the segment (h = its length):
+  // is used when both neighbours lie between h/3 and 3h from the segment (h = its length):
   // then its error is about h^4/24 |H''''|, under 0.001 um at h = 1 deg on the sample lobes,
-  // and noise is not amplified (clustered nodes would turn 0.3 um of noise into microns).
+  // its weights stay under about 1.5, so noise is not amplified (clustered nodes would turn
+  // 0.3 um of noise into microns).
   // Otherwise a segment up to kLinearGapDeg is filled linearly (error h^2/8 |H''|: 0.2 um at
   // 0.5 deg on the intake nose), and a longer one stays missing.
   auto fill_segment = [&](const Poll* left, const Poll& a, const Poll& b, const Poll* right) {
     const double h = b.u_deg - a.u_deg;
-    auto spaced = [h](double d) { return d >= 0.5 * h && d <= 2.0 * h; };
+    auto spaced = [h](double d) { return d >= h / 3.0 && d <= 3.0 * h; };
     std::vector<const Poll*> support;
     if (left != nullptr && right != nullptr && spaced(a.u_deg - left->u_deg) && spaced(right->u_deg - b.u_deg)) {
       support = {left, &a, &b, right};

@@ -172,7 +172,7 @@ TEST(PymodbusPeer, LatchedRunDecodesItsMap) {
 // at most 0.5 deg apart errs by at most 3.3 * (0.5 * pi / 180)^2 / 8 = 3.1e-5 mm; the angle's
 // 0.01 deg steps add |H'| * 0.01 deg = 1.5 * 1.75e-4 = 2.6e-4 mm. Tolerance 5e-4 mm.
 TEST(PymodbusPeer, LiveRunCountsRevolutionsFromTheAngle) {
-  PymodbusPeer peer(20.0);  // 20 rpm: 4 ms per half degree for a Python server to answer in
+  PymodbusPeer peer(12.0);  // 12 rpm: 14 ms per degree for a Python server to answer in
   ASSERT_GT(peer.port(), 0) << "the pymodbus peer did not start (python3-pymodbus: scripts/install-deps.sh)";
   Result<MeasuredRun> run = measure_peer(peer.port(), SamplingMode::kLive);
   ASSERT_TRUE(run.ok()) << run.error().message;
