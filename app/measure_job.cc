@@ -68,6 +68,34 @@ std::map<std::string, std::string> template_values(const JobSettings& s) {
           {"table_blocks", ""}};
 }
 
+// The settings a run was made with, one "key = value" a line in a fixed order, so that
+// `runs compare` can show what differs and equal settings hash alike.
+std::string settings_text(const JobSettings& s) {
+  std::string out;
+  auto line = [&out](const std::string& key, const std::string& value) { out += key + " = " + value + "\n"; };
+  auto num = [](double v) { return fixed(v, 6); };
+  line("design.lift_table", s.design.source);
+  line("part.follower", std::string(follower_kind_name(s.part.follower)));
+  line("part.follower_radius_mm", num(s.part.follower_radius_mm));
+  line("part.base_circle_radius_mm", num(s.part.base_circle_radius_mm));
+  line("part.wheel_radius_mm", num(s.part.wheel_radius_mm));
+  line("part.rotation_sense", std::to_string(s.part.rotation_sense));
+  line("part.c_offset_deg", num(s.part.c_offset_deg));
+  line("part.probe_offset_deg", num(s.part.probe_offset_deg));
+  line("poller.mode", std::string(sampling_mode_name(s.poller.mode)));
+  line("poller.revolutions", std::to_string(s.poller.revolutions));
+  line("analysis.base_circle_center_deg", num(s.analysis.base_circle_center_deg));
+  line("analysis.base_circle_half_width_deg", num(s.analysis.base_circle_half_width_deg));
+  line("compensation.gain", num(s.compensation.gain));
+  line("compensation.max_harmonic", std::to_string(s.compensation.max_harmonic));
+  line("compensation.max_correction_um", num(s.compensation.max_correction_um));
+  line("compensation.builds_on_table_in_force", s.build_on_table_in_force ? "true" : "false");
+  line("nc.template", s.nc_template_name);
+  line("nc.table_step_deg", num(s.table_step_deg));
+  line("nc.table_number", std::to_string(s.table_number));
+  return out;
+}
+
 Error in_step(const std::string& step, Error e) {
   e.message = std::string(step) + ": " + e.message;
   return e;
@@ -96,80 +124,106 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
   }
   Result<RunStore> store = RunStore::open(s.db_path);
   if (!store) return store.error();
-  DegreeTable in_force{};
-  std::optional<std::int64_t> in_force_run;
-  if (s.build_on_table_in_force) {
-    Result<std::optional<std::int64_t>> last = store->last_pushed_run(s.machine, s.part.name, s.part.lobe);
-    if (!last) return last.error();
-    if (*last) {
-      Result<StoredRun> previous = store->load_run(**last);
-      if (!previous) return in_step("correction in force (run " + std::to_string(**last) + ")", previous.error());
-      in_force = previous->correction_um;
-      in_force_run = *last;
+
+  // From here on a failure is also kept in the database as an event (a fault or a refusal),
+  // naming the run when one was stored, so `gaugeloop events` shows why a run is missing.
+  std::optional<std::int64_t> stored_run;
+  Result<JobReport> result = [&]() -> Result<JobReport> {
+    DegreeTable in_force{};
+    std::optional<std::int64_t> in_force_run;
+    if (s.build_on_table_in_force) {
+      Result<std::optional<std::int64_t>> last = store->last_pushed_run(s.machine, s.part.name, s.part.lobe);
+      if (!last) return last.error();
+      if (*last) {
+        Result<StoredRun> previous = store->load_run(**last);
+        if (!previous) return in_step("correction in force (run " + std::to_string(**last) + ")", previous.error());
+        in_force = previous->correction_um;
+        in_force_run = *last;
+      }
     }
+
+    // Acquire.
+    const std::string started = utc_now();
+    Poller poller(gauge, s.poller);
+    Result<MeasuredRun> measured = poller.measure();
+    if (!measured) return measured.error();
+    const std::string finished = utc_now();
+
+    // Analyse and correct.
+    Result<LobeAnalysis> analysis = analyse_lobe(*measured, *design_reading, s.part, s.analysis);
+    if (!analysis) return in_step("analysis", analysis.error());
+    Result<DegreeTable> correction = next_correction(*analysis, in_force, s.compensation);
+    if (!correction) return in_step("compensation", correction.error());
+    Result<WheelPath> path = corrected_wheel_path(s.design, *correction, s.part, kFinePathStepDeg);
+    if (!path) return in_step("corrected wheel path", path.error());
+    Result<std::vector<CurvePoint>> points = machine_curve(*path, s.part, s.table_step_deg);
+    if (!points) return in_step("curve table", points.error());
+    if (Status v = validate_curve_points(*points); !v) return in_step("curve table", v.error());
+    double correction_max_um = 0.0;
+    for (double c : *correction) correction_max_um = std::max(correction_max_um, std::abs(c));
+
+    // Store the run: one transaction, all or nothing.
+    RunRecord record;
+    record.started_utc = started;
+    record.finished_utc = finished;
+    record.machine = s.machine;
+    record.part = s.part.name;
+    record.lobe = s.part.lobe;
+    record.gauge = gauge.address();
+    record.note = s.note;
+    record.measured = *measured;
+    record.analysis = *analysis;
+    record.correction_um = *correction;
+    record.correction_in_force_run = in_force_run;
+    record.geometry = s.part;
+    record.settings = settings_text(s);
+    Result<std::int64_t> run_id = store->insert_run(record);
+    if (!run_id) return run_id.error();
+    stored_run = *run_id;
+
+    // Render and push the table.
+    auto values = template_values(s);
+    values["run_id"] = std::to_string(*run_id);
+    values["created_utc"] = finished;
+    values["point_count"] = std::to_string(points->size());
+    values["correction_max_um"] = fixed(correction_max_um, 1);
+    values["table_blocks"] = render_curve_blocks(*points);
+    Result<std::string> program = render_nc_template(s.nc_template, s.nc_template_name, values);
+    if (!program) return program.error();
+    const std::filesystem::path nc_file = s.nc_dir / (s.nc_program + ".SPF");
+    if (Status w = write_file_atomically(nc_file, *program); !w) {
+      return in_step("run " + std::to_string(*run_id) + " is stored, but its table was not pushed", w.error());
+    }
+    NcPush push;
+    push.nc_file = nc_file.string();
+    push.point_count = static_cast<int>(points->size());
+    push.correction_max_um = correction_max_um;
+    if (Status m = store->record_push(*run_id, push, *program); !m) return m.error();
+
+    JobReport report;
+    report.run_id = *run_id;
+    report.measured = std::move(*measured);
+    report.analysis = *analysis;
+    report.correction_max_um = correction_max_um;
+    report.correction_in_force_run = in_force_run;
+    report.table_points = static_cast<int>(points->size());
+    report.nc_file = nc_file;
+    report.db_path = store->path();
+    return report;
+  }();
+
+  if (!result) {
+    EventRecord event;
+    event.kind = event_kind_for(result.error().code);
+    event.code = std::string(error_code_name(result.error().code));
+    event.machine = s.machine;
+    event.part = s.part.name;
+    event.lobe = s.part.lobe;
+    event.run_id = stored_run;
+    event.message = result.error().message;
+    (void)store->record_event(event);  // best effort: the error itself is what the user is told
   }
-
-  // Acquire.
-  const std::string started = utc_now();
-  Poller poller(gauge, s.poller);
-  Result<MeasuredRun> measured = poller.measure();
-  if (!measured) return measured.error();
-  const std::string finished = utc_now();
-
-  // Analyse and correct.
-  Result<LobeAnalysis> analysis = analyse_lobe(*measured, *design_reading, s.part, s.analysis);
-  if (!analysis) return in_step("analysis", analysis.error());
-  Result<DegreeTable> correction = next_correction(*analysis, in_force, s.compensation);
-  if (!correction) return in_step("compensation", correction.error());
-  Result<WheelPath> path = corrected_wheel_path(s.design, *correction, s.part, kFinePathStepDeg);
-  if (!path) return in_step("corrected wheel path", path.error());
-  Result<std::vector<CurvePoint>> points = machine_curve(*path, s.part, s.table_step_deg);
-  if (!points) return in_step("curve table", points.error());
-  if (Status v = validate_curve_points(*points); !v) return in_step("curve table", v.error());
-  double correction_max_um = 0.0;
-  for (double c : *correction) correction_max_um = std::max(correction_max_um, std::abs(c));
-
-  // Store the run: one transaction, all or nothing.
-  RunRecord record;
-  record.started_utc = started;
-  record.finished_utc = finished;
-  record.machine = s.machine;
-  record.part = s.part.name;
-  record.lobe = s.part.lobe;
-  record.gauge = gauge.address();
-  record.note = s.note;
-  record.measured = *measured;
-  record.analysis = *analysis;
-  record.correction_um = *correction;
-  record.correction_in_force_run = in_force_run;
-  Result<std::int64_t> run_id = store->insert_run(record);
-  if (!run_id) return run_id.error();
-
-  // Render and push the table.
-  auto values = template_values(s);
-  values["run_id"] = std::to_string(*run_id);
-  values["created_utc"] = finished;
-  values["point_count"] = std::to_string(points->size());
-  values["correction_max_um"] = fixed(correction_max_um, 1);
-  values["table_blocks"] = render_curve_blocks(*points);
-  Result<std::string> program = render_nc_template(s.nc_template, s.nc_template_name, values);
-  if (!program) return program.error();
-  const std::filesystem::path nc_file = s.nc_dir / (s.nc_program + ".SPF");
-  if (Status w = write_file_atomically(nc_file, *program); !w) {
-    return in_step("run " + std::to_string(*run_id) + " is stored, but its table was not pushed", w.error());
-  }
-  if (Status m = store->record_nc_file(*run_id, nc_file.string()); !m) return m.error();
-
-  JobReport report;
-  report.run_id = *run_id;
-  report.measured = std::move(*measured);
-  report.analysis = *analysis;
-  report.correction_max_um = correction_max_um;
-  report.correction_in_force_run = in_force_run;
-  report.table_points = static_cast<int>(points->size());
-  report.nc_file = nc_file;
-  report.db_path = store->path();
-  return report;
+  return result;
 }
 
 }  // namespace gaugeloop

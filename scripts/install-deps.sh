@@ -22,6 +22,7 @@ packages=(
   socat              # pseudo-terminal pairs for Modbus RTU tests
   python3-pymodbus   # an independent Modbus server: tests read a gauge served by it
   locales            # a decimal-comma locale, to test that output ignores the C locale
+  librsvg2-bin       # rsvg-convert: view a `gaugeloop runs plot` SVG as PNG; not needed to build or test
 )
 
 missing=()

@@ -56,4 +56,24 @@ Result<DegreeTable> degree_table_from_json(std::string_view text) {
   return table;
 }
 
+Result<std::vector<double>> numbers_from_json(std::string_view text) {
+  const nlohmann::json parsed = nlohmann::json::parse(text, /*cb=*/nullptr,
+                                                      /*allow_exceptions=*/false);
+  if (parsed.is_discarded() || !parsed.is_array()) {
+    return make_error(ErrorCode::kInvalidInput, "not a JSON array");
+  }
+  std::vector<double> out;
+  out.reserve(parsed.size());
+  for (std::size_t i = 0; i < parsed.size(); ++i) {
+    if (!parsed[i].is_number()) {
+      return make_error(ErrorCode::kInvalidInput, "element " + std::to_string(i) + " is not a number");
+    }
+    out.push_back(parsed[i].get<double>());
+    if (!std::isfinite(out.back())) {
+      return make_error(ErrorCode::kInvalidInput, "element " + std::to_string(i) + " is out of range");
+    }
+  }
+  return out;
+}
+
 }  // namespace gaugeloop::storage_internal

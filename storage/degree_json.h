@@ -1,9 +1,11 @@
-// Text form of a per-degree table as kept in run_revolutions.lift_mm: a JSON array of 360
-// numbers with 6 decimals. Internal to storage/ (and its tests).
+// Text form of a per-degree table as schema version 1 kept it in run_revolutions.lift_mm: a
+// JSON array of 360 numbers with 6 decimals (read when migrating to version 2), and small JSON
+// number arrays of version 2. Internal to storage/ (and its tests).
 #pragma once
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/result.h"
 #include "core/run.h"
@@ -20,5 +22,8 @@ std::string degree_table_to_json(const DegreeTable& table);
 // Reads a JSON array of exactly 360 finite numbers (any JSON number syntax, any spacing, so a
 // hand-edited row still reads). kInvalidInput otherwise, saying what is wrong.
 Result<DegreeTable> degree_table_from_json(std::string_view text);
+
+// Reads a JSON array of finite numbers of any length. kInvalidInput otherwise.
+Result<std::vector<double>> numbers_from_json(std::string_view text);
 
 }  // namespace gaugeloop::storage_internal

@@ -2,8 +2,11 @@
 #include "storage/migrations.h"
 
 #include <array>
+#include <cstdint>
 #include <string>
 
+#include "storage/degree_blob.h"
+#include "storage/degree_json.h"
 #include "storage/sqlite_db.h"
 
 namespace gaugeloop::storage_internal {
@@ -73,9 +76,307 @@ CREATE VIEW run_samples (run_id, revolution_index, angle_deg, lift_mm) AS
   FROM run_revolutions AS r, json_each(r.lift_mm) AS s;
 )sql";
 
-constexpr std::array<Migration, 1> kMigrations{{
-    {1, "runs, run_revolutions, run_profile, run_samples view", kSchemaV1},
-}};
+// Version 2. Compact per-degree tables (docs/storage.md has the numbers behind the choice):
+// every per-degree table is a BLOB of 360 big-endian int32 counts of 0.1 nm, one row per run,
+// and the version-1 names run_samples and run_profile become views that decode them, so SQL
+// written against version 1 still reads the same columns. Also: the part and lobe catalogue,
+// inspection figures, the settings a run was made with, NC pushes and events.
+constexpr std::string_view kSchemaV2Before = R"sql(
+-- Parts and lobes ever measured. Geometry columns hold the latest values a run reported;
+-- NULL: not known (runs stored by version 1 did not report them).
+CREATE TABLE parts (
+  name                  TEXT PRIMARY KEY,
+  follower              TEXT CHECK (follower IN ('flat', 'roller', 'knife_edge')),
+  follower_radius_mm    REAL,
+  base_circle_radius_mm REAL,
+  wheel_radius_mm       REAL
+) WITHOUT ROWID;
+
+CREATE TABLE lobes (
+  part             TEXT    NOT NULL REFERENCES parts (name),
+  lobe             INTEGER NOT NULL CHECK (lobe >= 1),
+  -- Machine angle C = rotation_sense * psi + c_offset_deg; the probe sits probe_offset_deg
+  -- of C from the wheel contact (BRIEF section 3). Latest values a run reported.
+  rotation_sense   INTEGER CHECK (rotation_sense IN (-1, 1)),
+  c_offset_deg     REAL,
+  probe_offset_deg REAL,
+  PRIMARY KEY (part, lobe)
+) WITHOUT ROWID;
+
+INSERT INTO parts (name) SELECT DISTINCT part FROM runs;
+INSERT INTO lobes (part, lobe) SELECT DISTINCT part, lobe FROM runs;
+
+-- Every run's part and lobe is in the catalogue, however the run was inserted.
+CREATE TRIGGER runs_enter_the_catalogue AFTER INSERT ON runs BEGIN
+  INSERT OR IGNORE INTO parts (name) VALUES (NEW.part);
+  INSERT OR IGNORE INTO lobes (part, lobe) VALUES (NEW.part, NEW.lobe);
+END;
+
+-- The settings a run was made with, as canonical "key = value" lines, stored once per
+-- distinct text. hash: 16 hex digits of the 64-bit FNV-1a hash of text.
+CREATE TABLE settings (
+  hash TEXT PRIMARY KEY,
+  text TEXT NOT NULL
+) WITHOUT ROWID;
+
+ALTER TABLE runs ADD COLUMN settings_hash TEXT REFERENCES settings (hash);
+-- Inspection figures; NULL for runs stored by version 1, which did not compute them.
+ALTER TABLE runs ADD COLUMN phase_error_deg REAL;
+ALTER TABLE runs ADD COLUMN base_circle_runout_um REAL;
+ALTER TABLE runs ADD COLUMN harmonic_amplitude_um TEXT  -- JSON array, harmonics 0..30
+  CHECK (harmonic_amplitude_um IS NULL OR
+         (json_valid(harmonic_amplitude_um) AND json_array_length(harmonic_amplitude_um) = 31));
+-- The frame mapping in force for this run (see lobes); NULL: not known.
+ALTER TABLE runs ADD COLUMN rotation_sense INTEGER CHECK (rotation_sense IN (-1, 1));
+ALTER TABLE runs ADD COLUMN c_offset_deg REAL;
+ALTER TABLE runs ADD COLUMN probe_offset_deg REAL;
+-- When `gaugeloop runs prune` removed the raw samples; NULL: they are still there.
+ALTER TABLE runs ADD COLUMN raw_pruned_utc TEXT;
+
+CREATE INDEX runs_by_machine_started ON runs (machine, started_utc);
+
+-- 0..359, to expand the per-degree BLOBs into rows in the views.
+CREATE TABLE degrees (angle_deg INTEGER PRIMARY KEY);
+WITH RECURSIVE d (a) AS (SELECT 0 UNION ALL SELECT a + 1 FROM d WHERE a < 359)
+INSERT INTO degrees (angle_deg) SELECT a FROM d;
+
+-- Raw gauge readings, one row per run: `lift` holds the revolutions one after the other,
+-- 360 counts each, index = machine degree of C. Deleted by prune.
+CREATE TABLE run_raw (
+  run_id                INTEGER PRIMARY KEY REFERENCES runs (id) ON DELETE CASCADE,
+  amplifier_revolutions TEXT NOT NULL  -- JSON array: the amplifier's count of each revolution
+    CHECK (json_valid(amplifier_revolutions) AND json_array_length(amplifier_revolutions) >= 3),
+  lift                  BLOB NOT NULL
+    CHECK (typeof(lift) = 'blob' AND length(lift) = 1440 * json_array_length(amplifier_revolutions))
+);
+
+-- The analysed lobe and the correction, cam frame, one row per run.
+CREATE TABLE run_tables (
+  run_id      INTEGER PRIMARY KEY REFERENCES runs (id) ON DELETE CASCADE,
+  design_lift BLOB NOT NULL CHECK (typeof(design_lift) = 'blob' AND length(design_lift) = 1440),
+  mean_lift   BLOB NOT NULL CHECK (typeof(mean_lift) = 'blob' AND length(mean_lift) = 1440),
+  spread      BLOB NOT NULL CHECK (typeof(spread) = 'blob' AND length(spread) = 1440),
+  error       BLOB NOT NULL CHECK (typeof(error) = 'blob' AND length(error) = 1440),
+  correction  BLOB NOT NULL CHECK (typeof(correction) = 'blob' AND length(correction) = 1440)
+);
+
+-- Every NC program written from a run, oldest first.
+CREATE TABLE nc_pushes (
+  id                INTEGER PRIMARY KEY AUTOINCREMENT,
+  run_id            INTEGER NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
+  pushed_utc        TEXT    NOT NULL,
+  nc_file           TEXT    NOT NULL,
+  -- NULL: not recorded (pushes made before version 2).
+  point_count       INTEGER,
+  correction_max_um REAL,
+  program_hash      TEXT    -- 64-bit FNV-1a of the program text, 16 hex digits
+);
+CREATE INDEX nc_pushes_by_run ON nc_pushes (run_id);
+INSERT INTO nc_pushes (run_id, pushed_utc, nc_file)
+  SELECT id, finished_utc, nc_file FROM runs WHERE nc_file IS NOT NULL ORDER BY id;
+
+-- Faults and refusals: what went wrong when no run (or no push) came of it.
+CREATE TABLE events (
+  id      INTEGER PRIMARY KEY AUTOINCREMENT,
+  at_utc  TEXT    NOT NULL,
+  kind    TEXT    NOT NULL CHECK (kind IN ('fault', 'refusal')),
+  code    TEXT    NOT NULL,  -- e.g. 'gauge timeout', 'refused'
+  machine TEXT    NOT NULL DEFAULT '',
+  part    TEXT    NOT NULL DEFAULT '',
+  lobe    INTEGER,           -- NULL: not about one lobe
+  run_id  INTEGER REFERENCES runs (id) ON DELETE SET NULL,
+  message TEXT    NOT NULL
+);
+CREATE INDEX events_by_time ON events (at_utc);
+)sql";
+
+// The signed int32 whose 8 hex digits (hex() of 4 big-endian bytes) are in `h`. Each digit:
+// '0'-'9' are 0x30-0x39 and 'A'-'F' are 0x41-0x46, so (code & 15) + 9 * (code >> 6) is its
+// value; a first digit above '7' makes the number negative.
+std::string int32_from_hex_sql(const std::string& h) {
+  std::string sql;
+  for (int i = 1; i <= 8; ++i) {
+    const std::string c = "unicode(substr(" + h + ", " + std::to_string(i) + ", 1))";
+    if (i > 1) sql += " + ";
+    sql += "(((" + c + " & 15) + 9 * (" + c + " >> 6)) << " + std::to_string(4 * (8 - i)) + ")";
+  }
+  return "(" + sql + " - 4294967296 * (unicode(substr(" + h + ", 1, 1)) > 55))";
+}
+
+// Part of the released migration 2, like int32_from_hex_sql: the SQL they produce must never
+// change (Schema.ViewsDecodeNegativeAndExtremeValuesAsTheStoreDoes pins what it decodes).
+std::string schema_v2_after() {
+  const std::string counts = "1e-7";  // mm per count
+  const std::string um = "1e-4";      // um per count
+  auto at = [](const std::string& blob, const std::string& offset) {
+    return "hex(substr(" + blob + ", " + offset + " + 1, 4))";
+  };
+  std::string sql = R"sql(
+DROP VIEW run_samples;
+DROP TABLE run_revolutions;
+DROP TABLE run_profile;
+
+-- Raw samples one per row, for plain SQL: angle_deg here is the machine degree of C.
+CREATE VIEW run_samples (run_id, revolution_index, angle_deg, lift_mm, amplifier_revolution) AS
+  SELECT run_id, revolution_index, angle_deg, )sql";
+  sql += int32_from_hex_sql("h") + " * " + counts + ", amplifier_revolution\n";
+  sql += "  FROM (SELECT r.run_id, CAST(v.key AS INTEGER) AS revolution_index, d.angle_deg,\n";
+  sql +=
+      "               v.value AS amplifier_revolution, " + at("r.lift", "1440 * v.key + 4 * d.angle_deg") + " AS h\n";
+  sql += "        FROM run_raw AS r, json_each(r.amplifier_revolutions) AS v, degrees AS d);\n";
+  sql += R"sql(
+-- The analysed lobe and the correction, one row per cam degree (0 at the nose).
+CREATE VIEW run_profile (run_id, angle_deg, design_lift_mm, mean_lift_mm, spread_um, error_um,
+                         correction_um) AS
+  SELECT run_id, angle_deg, )sql";
+  sql += int32_from_hex_sql("hd") + " * " + counts + ",\n    ";
+  sql += int32_from_hex_sql("hm") + " * " + counts + ",\n    ";
+  sql += int32_from_hex_sql("hs") + " * " + um + ",\n    ";
+  sql += int32_from_hex_sql("he") + " * " + um + ",\n    ";
+  sql += int32_from_hex_sql("hc") + " * " + um + "\n";
+  sql += "  FROM (SELECT t.run_id, d.angle_deg, " + at("t.design_lift", "4 * d.angle_deg") + " AS hd, " +
+         at("t.mean_lift", "4 * d.angle_deg") + " AS hm,\n               " + at("t.spread", "4 * d.angle_deg") +
+         " AS hs, " + at("t.error", "4 * d.angle_deg") + " AS he, " + at("t.correction", "4 * d.angle_deg") +
+         " AS hc\n        FROM run_tables AS t, degrees AS d);\n";
+  sql += R"sql(
+-- The error's harmonic amplitudes, one row per harmonic 0..30.
+CREATE VIEW run_harmonics (run_id, harmonic, amplitude_um) AS
+  SELECT r.id, CAST(h.key AS INTEGER), h.value
+  FROM runs AS r, json_each(r.harmonic_amplitude_um) AS h;
+)sql";
+  return sql;
+}
+
+// Moves the version-1 rows (JSON raw revolutions, one profile row per degree) into the
+// compact tables, run by run. A run whose rows do not add up stops the migration, naming it:
+// nothing is lost, the database stays at version 1.
+Status convert_v1_rows(Connection& conn) {
+  const std::string operation = "migrate the schema to version 2 (convert the stored runs)";
+  auto damaged = [&](std::int64_t run_id, const std::string& what) {
+    return make_error(ErrorCode::kStorage,
+                      "run database " + conn.path.string() + ": cannot " + operation + ": run " +
+                          std::to_string(run_id) + " is damaged: " + what +
+                          "; restore a backup, or delete that run with sqlite3 and open the database again");
+  };
+
+  Result<Statement> ins_raw = Statement::prepare(
+      conn, "INSERT INTO run_raw (run_id, amplifier_revolutions, lift) VALUES (?1, ?2, ?3)", operation);
+  if (!ins_raw.ok()) return ins_raw.error();
+  Result<Statement> revs = Statement::prepare(conn,
+                                              "SELECT run_id, revolution_index, amplifier_revolution, lift_mm"
+                                              " FROM run_revolutions ORDER BY run_id, revolution_index",
+                                              operation);
+  if (!revs.ok()) return revs.error();
+  std::int64_t current = -1;
+  std::string amplifier;
+  std::string lift;
+  int count = 0;
+  auto flush_raw = [&]() -> Status {
+    if (current < 0) return {};
+    ins_raw->reset();
+    ins_raw->bind(1, current);
+    ins_raw->bind(2, std::string_view(amplifier + "]"));
+    ins_raw->bind_blob(3, lift);
+    return ins_raw->run();
+  };
+  for (;;) {
+    Result<bool> row = revs->step();
+    if (!row.ok()) return row.error();
+    if (!*row) break;
+    const std::int64_t run_id = revs->column_int64(0);
+    if (run_id != current) {
+      if (Status s = flush_raw(); !s.ok()) return s;
+      current = run_id;
+      amplifier = "[";
+      lift.clear();
+      count = 0;
+    }
+    if (revs->column_int(1) != count) return damaged(run_id, "revolution " + std::to_string(count) + " is missing");
+    Result<DegreeTable> table = degree_table_from_json(revs->column_text(3));
+    if (!table.ok())
+      return damaged(run_id, "lift_mm of revolution " + std::to_string(count) + ": " + table.error().message);
+    Status s = append_degree_blob(*table, kCountsPerMm, "lift_mm of revolution " + std::to_string(count), lift);
+    if (!s.ok()) return damaged(run_id, s.error().message);
+    if (count > 0) amplifier += ",";
+    amplifier += std::to_string(revs->column_int64(2));
+    ++count;
+  }
+  if (Status s = flush_raw(); !s.ok()) return s;
+
+  Result<Statement> ins_tables = Statement::prepare(conn,
+                                                    "INSERT INTO run_tables (run_id, design_lift, mean_lift, spread,"
+                                                    " error, correction) VALUES (?1, ?2, ?3, ?4, ?5, ?6)",
+                                                    operation);
+  if (!ins_tables.ok()) return ins_tables.error();
+  Result<Statement> prof = Statement::prepare(conn,
+                                              "SELECT run_id, angle_deg, design_lift_mm, mean_lift_mm, spread_um,"
+                                              " error_um, correction_um FROM run_profile ORDER BY run_id, angle_deg",
+                                              operation);
+  if (!prof.ok()) return prof.error();
+  std::array<DegreeTable, 5> tables{};
+  current = -1;
+  int deg = 0;
+  auto flush_tables = [&]() -> Status {
+    if (current < 0) return {};
+    if (deg != kDegreesPerRevolution) {
+      return damaged(current, "its profile has " + std::to_string(deg) + " rows instead of 360");
+    }
+    static constexpr std::array<double, 5> kScale = {kCountsPerMm, kCountsPerMm, kCountsPerUm, kCountsPerUm,
+                                                     kCountsPerUm};
+    static constexpr std::array<std::string_view, 5> kName = {"design_lift_mm", "mean_lift_mm", "spread_um", "error_um",
+                                                              "correction_um"};
+    ins_tables->reset();
+    ins_tables->bind(1, current);
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      std::string blob;
+      Status s = append_degree_blob(tables[i], kScale[i], kName[i], blob);
+      if (!s.ok()) return damaged(current, s.error().message);
+      ins_tables->bind_blob(static_cast<int>(i) + 2, blob);
+    }
+    return ins_tables->run();
+  };
+  for (;;) {
+    Result<bool> row = prof->step();
+    if (!row.ok()) return row.error();
+    if (!*row) break;
+    const std::int64_t run_id = prof->column_int64(0);
+    if (run_id != current) {
+      if (Status s = flush_tables(); !s.ok()) return s;
+      current = run_id;
+      deg = 0;
+    }
+    if (deg >= kDegreesPerRevolution || prof->column_int(1) != deg) {
+      return damaged(run_id, "the profile row for cam degree " + std::to_string(deg) + " is missing");
+    }
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      tables[i][static_cast<std::size_t>(deg)] = prof->column_double(static_cast<int>(i) + 2);
+    }
+    ++deg;
+  }
+  if (Status s = flush_tables(); !s.ok()) return s;
+
+  // A run row without its tables would load as damaged later; say so now, by id.
+  Result<Statement> orphan = Statement::prepare(conn,
+                                                "SELECT id FROM runs WHERE id NOT IN (SELECT run_id FROM run_tables)"
+                                                " OR id NOT IN (SELECT run_id FROM run_raw) ORDER BY id LIMIT 1",
+                                                operation);
+  if (!orphan.ok()) return orphan.error();
+  Result<bool> row = orphan->step();
+  if (!row.ok()) return row.error();
+  if (*row) return damaged(orphan->column_int64(0), "it has no raw revolutions or no profile rows");
+  return {};
+}
+
+const std::array<Migration, 2>& all_migrations() {
+  static const std::array<Migration, 2> kMigrations{{
+      {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
+      {2,
+       "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
+       "figures, nc_pushes, events",
+       std::string(kSchemaV2Before), convert_v1_rows, schema_v2_after()},
+  }};
+  return kMigrations;
+}
 
 Result<int> read_user_version(Connection& conn) {
   Result<Statement> stmt = Statement::prepare(conn, "PRAGMA user_version", "read the schema version");
@@ -94,17 +395,21 @@ Error too_new(const Connection& conn, int version) {
 
 }  // namespace
 
-std::span<const Migration> migrations() { return kMigrations; }
+std::span<const Migration> migrations() { return all_migrations(); }
 
-int latest_schema_version() { return kMigrations.back().version; }
+int latest_schema_version() { return all_migrations().back().version; }
 
-Status apply_migrations(Connection& conn) {
+std::string_view schema_v1_sql() { return kSchemaV1; }
+
+Status apply_migrations(Connection& conn) { return apply_migrations_up_to(conn, latest_schema_version()); }
+
+Status apply_migrations_up_to(Connection& conn, int target) {
   Result<int> version = read_user_version(conn);
   if (!version.ok()) return version.error();
   if (*version > latest_schema_version()) return too_new(conn, *version);
 
-  for (const Migration& m : kMigrations) {
-    if (m.version <= *version) continue;
+  for (const Migration& m : all_migrations()) {
+    if (m.version <= *version || m.version > target) continue;
     const std::string operation = "migrate the schema to version " + std::to_string(m.version);
     Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
     if (!tx.ok()) return tx.error();
@@ -114,8 +419,14 @@ Status apply_migrations(Connection& conn) {
     if (*version > latest_schema_version()) return too_new(conn, *version);
     if (m.version <= *version) continue;  // the transaction rolls back, nothing was written
 
-    const std::string sql = std::string(m.sql) + "\nPRAGMA user_version = " + std::to_string(m.version) + ";";
-    Status applied = exec(conn, sql.c_str(), operation);
+    Status applied = exec(conn, m.sql.c_str(), operation);
+    if (!applied.ok()) return applied;
+    if (m.convert != nullptr) {
+      applied = m.convert(conn);
+      if (!applied.ok()) return applied;
+    }
+    const std::string after = m.sql_after + "\nPRAGMA user_version = " + std::to_string(m.version) + ";";
+    applied = exec(conn, after.c_str(), operation);
     if (!applied.ok()) return applied;
     Status committed = tx->commit();
     if (!committed.ok()) return committed;

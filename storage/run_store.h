@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/part.h"
 #include "core/result.h"
 #include "core/run.h"
 
@@ -35,7 +36,20 @@ struct RunRecord {
   // The run whose correction was in force when the measured part was ground (it must be in
   // the database); empty: the part was ground from the design.
   std::optional<std::int64_t> correction_in_force_run;
+  // The settings the run was made with, as canonical "key = value" lines (part geometry,
+  // analysis, compensation, poller, table step...): stored once per distinct text and named
+  // by settings_hash(text), so two runs made alike show the same hash. Empty: not recorded.
+  std::string settings;
+  // The part as measured. If set, its follower and radii update the parts catalogue, and its
+  // frame mapping (rotation_sense, c_offset_deg, probe_offset_deg) is kept with the run and
+  // updates the lobes catalogue; `runs export` uses it to put revolutions in the cam frame.
+  // name and lobe are ignored (the record's own part and lobe count).
+  std::optional<Part> geometry;
 };
+
+// 16 lower-case hex digits of the 64-bit FNV-1a hash of `text`: names a settings text. Not a
+// cryptographic hash; it tells settings apart, it does not guard them.
+std::string settings_hash(std::string_view text);
 
 // One row of the run list.
 struct RunSummary {
@@ -51,15 +65,34 @@ struct RunSummary {
   double rms_error_um = 0.0;
   double repeatability_um = 0.0;
   std::string nc_file;  // the NC program last pushed from this run; empty if none
+  // Empty for runs stored before schema version 2, which did not compute them.
+  std::optional<double> phase_error_deg;
+  std::optional<double> base_circle_runout_um;
+  double peak_to_valley_um = 0.0;
+  std::string settings_hash;   // empty: not recorded
+  std::string note;            // operator note
+  std::string raw_pruned_utc;  // when prune removed the raw samples; empty: still stored
 };
 
-// A run as read back. Raw lifts come back to 1e-6 mm (the database keeps 6 decimals);
-// every other number comes back exactly as written.
+// One NC program written from a run.
+struct NcPush {
+  std::string pushed_utc;  // ISO 8601 UTC; empty when recording: now
+  std::string nc_file;     // not empty
+  // Recorded by record_push; empty for pushes recorded by record_nc_file or before v2.
+  std::optional<int> point_count;
+  std::optional<double> correction_max_um;
+  std::string program_hash;  // settings_hash() of the program text; empty if unknown
+};
+
+// A run as read back. Per-degree tables (raw lifts, profile, correction) are kept as counts
+// of 0.1 nm and come back to within 0.05 nm (5e-8 mm, 5e-5 um) of what was written; every
+// other number comes back exactly as written.
 struct StoredRun {
   RunSummary summary;
-  std::vector<RevolutionSamples> revolutions;  // machine frame, in the order measured
-  LobeAnalysis analysis;                       // cam frame
-  DegreeTable correction_um{};                 // cam frame
+  // Machine frame, in the order measured. Empty once pruned (summary.raw_pruned_utc set).
+  std::vector<RevolutionSamples> revolutions;
+  LobeAnalysis analysis;        // cam frame
+  DegreeTable correction_um{};  // cam frame
   // The rest of the record, for reports.
   std::string finished_utc;
   std::string gauge;
@@ -68,11 +101,56 @@ struct StoredRun {
   std::int64_t reconnects = 0;
   std::int64_t discarded_revolutions = 0;
   std::optional<std::int64_t> correction_in_force_run;
+  std::string settings;  // the text settings_hash names; empty if not recorded
+  // The frame mapping and geometry the run was measured with; empty if not recorded.
+  // Only follower, radii, rotation_sense, c_offset_deg and probe_offset_deg are filled.
+  std::optional<Part> geometry;
+  std::vector<NcPush> pushes;  // oldest first
 };
 
+// Filters for list_runs and trend. Times are ISO 8601 UTC, "YYYY-MM-DDTHH:MM:SSZ".
 struct RunQuery {
-  int limit = 50;    // at most this many runs; must be >= 1
-  std::string part;  // exact part name; empty = any part
+  int limit = 50;         // at most this many runs; must be >= 1
+  std::string part;       // exact part name; empty = any part
+  int lobe = 0;           // 0 = any lobe
+  std::string machine;    // exact machine name; empty = any
+  std::string status;     // "measured" or "pushed"; empty = any
+  std::string since_utc;  // started at or after; empty = no bound
+  std::string until_utc;  // started before (exclusive); empty = no bound
+};
+
+enum class EventKind {
+  kFault,    // something failed: the gauge, the database, the NC directory...
+  kRefusal,  // a guard or the geometry refused: a correction too large, a lobe not grindable
+};
+std::string_view event_kind_name(EventKind kind);  // "fault", "refusal"
+// kRefused is a refusal; every other code a fault.
+EventKind event_kind_for(ErrorCode code);
+
+// A fault or refusal worth keeping, usually one that stopped a run (so no run row holds it).
+struct EventRecord {
+  std::string at_utc;  // ISO 8601 UTC; empty when recording: now
+  EventKind kind = EventKind::kFault;
+  std::string code;  // error_code_name() of the error, e.g. "gauge timeout"
+  std::string machine;
+  std::string part;
+  int lobe = 0;                        // 0: not about one lobe
+  std::optional<std::int64_t> run_id;  // the run it concerns, if one was stored
+  std::string message;                 // the error message as the user saw it; not empty
+};
+
+struct StoredEvent {
+  std::int64_t id = 0;
+  EventRecord event;
+};
+
+struct EventQuery {
+  int limit = 50;  // newest first, at most this many; >= 1
+  std::string machine;
+  std::string part;
+  std::optional<EventKind> kind;
+  std::string since_utc;  // inclusive
+  std::string until_utc;  // exclusive
 };
 
 // The run database on one file. Owns one SQLite connection.
@@ -102,11 +180,34 @@ class RunStore {
   Result<std::int64_t> insert_run(const RunRecord& run);
 
   // Marks the run "pushed" and remembers the NC program written from it (replacing any
-  // earlier one). kNotFound if there is no such run; kInvalidInput if nc_path is empty.
+  // earlier one as the run's nc_file), and records the push (time: now) in nc_pushes.
+  // kNotFound if there is no such run; kInvalidInput if nc_path is empty.
   Status record_nc_file(std::int64_t run_id, const std::string& nc_path);
 
-  // Runs newest first (by started_utc, then by id).
+  // As record_nc_file, with what was pushed: point count, largest correction and the hash of
+  // the program text, so a later look at the control can tell whether its file is this one.
+  Status record_push(std::int64_t run_id, const NcPush& push, std::string_view program_text = {});
+
+  // Stores a fault or refusal; returns its id. kInvalidInput for an empty message or code, a
+  // malformed time; kStorage if run_id names no run.
+  Result<std::int64_t> record_event(const EventRecord& event);
+
+  // Events newest first.
+  Result<std::vector<StoredEvent>> list_events(const EventQuery& q) const;
+
+  // Runs newest first (by started_utc, then by id). kInvalidInput for a malformed time bound,
+  // a status other than measured/pushed, or a negative lobe.
   Result<std::vector<RunSummary>> list_runs(const RunQuery& q) const;
+
+  // The same filters, oldest first: the runs of a lobe over time (q.limit: the newest that
+  // many, still returned oldest first).
+  Result<std::vector<RunSummary>> trend(const RunQuery& q) const;
+
+  // Deletes the raw samples of runs started before `cutoff_utc` (exclusive), keeping every
+  // summary, profile, correction, push and event, and marks those runs pruned at `now_utc`.
+  // Returns how many runs lost their raw samples. One transaction. The freed pages are reused
+  // by later runs; `VACUUM` in sqlite3 gives them back to the file system.
+  Result<std::int64_t> prune_raw_samples(const std::string& cutoff_utc, const std::string& now_utc);
 
   // The newest run of this machine, part and lobe whose table was pushed: the table in
   // force, with which the next part is ground. Empty if none was pushed yet.

@@ -110,6 +110,16 @@ void Statement::bind(int index, std::string_view text) {
   if (bind_rc_ == SQLITE_OK) bind_rc_ = rc;
 }
 
+void Statement::bind_blob(int index, std::string_view bytes) {
+  int rc = SQLITE_TOOBIG;
+  if (bytes.size() <= static_cast<std::size_t>(INT_MAX)) {
+    // A non-null pointer even when empty, so the value is an empty BLOB, not NULL.
+    rc = sqlite3_bind_blob(stmt_, index, bytes.empty() ? "" : bytes.data(), static_cast<int>(bytes.size()),
+                           SQLITE_TRANSIENT);
+  }
+  if (bind_rc_ == SQLITE_OK) bind_rc_ = rc;
+}
+
 void Statement::bind_null(int index) {
   const int rc = sqlite3_bind_null(stmt_, index);
   if (bind_rc_ == SQLITE_OK) bind_rc_ = rc;
@@ -151,6 +161,13 @@ std::string Statement::column_text(int col) const {
   if (text == nullptr) return {};
   const int size = sqlite3_column_bytes(stmt_, col);
   return std::string(reinterpret_cast<const char*>(text), static_cast<std::size_t>(size));
+}
+
+std::string Statement::column_blob(int col) const {
+  const void* bytes = sqlite3_column_blob(stmt_, col);
+  if (bytes == nullptr) return {};
+  const int size = sqlite3_column_bytes(stmt_, col);
+  return std::string(static_cast<const char*>(bytes), static_cast<std::size_t>(size));
 }
 
 bool Statement::column_is_null(int col) const { return sqlite3_column_type(stmt_, col) == SQLITE_NULL; }

@@ -54,7 +54,8 @@ class Statement {
   void bind(int index, std::int64_t value);
   void bind(int index, int value);
   void bind(int index, double value);
-  void bind(int index, std::string_view text);  // copied by SQLite
+  void bind(int index, std::string_view text);        // copied by SQLite
+  void bind_blob(int index, std::string_view bytes);  // copied by SQLite; a BLOB, not TEXT
   void bind_null(int index);
 
   // true: a row is ready to read; false: the statement is done.
@@ -69,6 +70,7 @@ class Statement {
   int column_int(int col) const;
   double column_double(int col) const;
   std::string column_text(int col) const;  // "" for NULL
+  std::string column_blob(int col) const;  // the bytes; "" for NULL
   bool column_is_null(int col) const;
 
  private:

@@ -18,8 +18,15 @@ using testing::make_record;
 using testing::RawDb;
 using testing::TempDir;
 
-// Raw lifts are stored as JSON with 6 decimals, so they come back to half of 1e-6 mm.
-constexpr double kJsonToleranceMm = 0.5e-6 + 1e-12;
+// Per-degree tables are kept as counts of 0.1 nm: they come back to half a count.
+constexpr double kToleranceMm = 0.5e-7 + 1e-12;
+constexpr double kToleranceUm = 0.5e-4 + 1e-9;
+
+void expect_near_table(const DegreeTable& got, const DegreeTable& want, double tolerance, const char* what) {
+  for (std::size_t d = 0; d < got.size(); ++d) {
+    ASSERT_NEAR(got[d], want[d], tolerance) << what << " degree " << d;
+  }
+}
 
 std::int64_t insert_ok(RunStore& store, const RunRecord& record) {
   Result<std::int64_t> id = store.insert_run(record);
@@ -32,16 +39,31 @@ void expect_same_run(const StoredRun& got, const RunRecord& want) {
   for (std::size_t i = 0; i < got.revolutions.size(); ++i) {
     EXPECT_EQ(got.revolutions[i].revolution, want.measured.revolutions[i].revolution);
     for (std::size_t d = 0; d < 360; ++d) {
-      ASSERT_NEAR(got.revolutions[i].lift_mm[d], want.measured.revolutions[i].lift_mm[d], kJsonToleranceMm)
+      ASSERT_NEAR(got.revolutions[i].lift_mm[d], want.measured.revolutions[i].lift_mm[d], kToleranceMm)
           << "revolution " << i << " degree " << d;
     }
   }
-  // Profile and figures are SQLite REALs: the very same doubles.
-  EXPECT_EQ(got.analysis.design_lift_mm, want.analysis.design_lift_mm);
-  EXPECT_EQ(got.analysis.mean_lift_mm, want.analysis.mean_lift_mm);
-  EXPECT_EQ(got.analysis.spread_um, want.analysis.spread_um);
-  EXPECT_EQ(got.analysis.error_um, want.analysis.error_um);
-  EXPECT_EQ(got.correction_um, want.correction_um);
+  expect_near_table(got.analysis.design_lift_mm, want.analysis.design_lift_mm, kToleranceMm, "design");
+  expect_near_table(got.analysis.mean_lift_mm, want.analysis.mean_lift_mm, kToleranceMm, "mean");
+  expect_near_table(got.analysis.spread_um, want.analysis.spread_um, kToleranceUm, "spread");
+  expect_near_table(got.analysis.error_um, want.analysis.error_um, kToleranceUm, "error");
+  expect_near_table(got.correction_um, want.correction_um, kToleranceUm, "correction");
+  // Figures are SQLite REALs (harmonics: JSON with 17 digits): the very same doubles.
+  EXPECT_EQ(got.analysis.phase_error_deg, want.analysis.phase_error_deg);
+  EXPECT_EQ(got.analysis.base_circle_runout_um, want.analysis.base_circle_runout_um);
+  EXPECT_EQ(got.analysis.harmonic_amplitude_um, want.analysis.harmonic_amplitude_um);
+  EXPECT_EQ(got.settings, want.settings);
+  EXPECT_EQ(got.summary.settings_hash, settings_hash(want.settings));
+  ASSERT_EQ(got.geometry.has_value(), want.geometry.has_value());
+  if (want.geometry) {
+    EXPECT_EQ(got.geometry->follower, want.geometry->follower);
+    EXPECT_EQ(got.geometry->follower_radius_mm, want.geometry->follower_radius_mm);
+    EXPECT_EQ(got.geometry->base_circle_radius_mm, want.geometry->base_circle_radius_mm);
+    EXPECT_EQ(got.geometry->wheel_radius_mm, want.geometry->wheel_radius_mm);
+    EXPECT_EQ(got.geometry->rotation_sense, want.geometry->rotation_sense);
+    EXPECT_EQ(got.geometry->c_offset_deg, want.geometry->c_offset_deg);
+    EXPECT_EQ(got.geometry->probe_offset_deg, want.geometry->probe_offset_deg);
+  }
   EXPECT_EQ(got.analysis.zero_offset_mm, want.analysis.zero_offset_mm);
   EXPECT_EQ(got.analysis.max_abs_error_um, want.analysis.max_abs_error_um);
   EXPECT_EQ(got.analysis.rms_error_um, want.analysis.rms_error_um);
@@ -88,7 +110,7 @@ TEST_F(RunStoreTest, OpenCreatesParentDirectoriesAndFile) {
   EXPECT_EQ(store().path(), dir_.db());
 }
 
-TEST_F(RunStoreTest, InsertThenLoadReturnsTheSameRunToJsonPrecision) {
+TEST_F(RunStoreTest, InsertThenLoadReturnsTheSameRunToATenthOfANanometre) {
   const RunRecord record = make_record("intake-flat", "2026-11-22T02:34:44Z", 4);
   const std::int64_t id = insert_ok(store(), record);
 
@@ -139,13 +161,23 @@ TEST_F(RunStoreTest, ListByPartFiltersOtherParts) {
   const std::int64_t exhaust = insert_ok(store(), make_record("exhaust", "2026-11-22T02:00:00Z"));
   insert_ok(store(), make_record("intake", "2026-11-22T03:00:00Z"));
 
-  Result<std::vector<RunSummary>> runs = store().list_runs({.limit = 50, .part = "exhaust"});
+  Result<std::vector<RunSummary>> runs = store().list_runs([&] {
+    RunQuery q;
+    q.limit = 50;
+    q.part = "exhaust";
+    return q;
+  }());
   ASSERT_TRUE(runs.ok()) << runs.error().message;
   ASSERT_EQ(runs->size(), 1u);
   EXPECT_EQ((*runs)[0].id, exhaust);
   EXPECT_EQ((*runs)[0].part, "exhaust");
 
-  runs = store().list_runs({.limit = 50, .part = "no-such-part"});
+  runs = store().list_runs([&] {
+    RunQuery q;
+    q.limit = 50;
+    q.part = "no-such-part";
+    return q;
+  }());
   ASSERT_TRUE(runs.ok()) << runs.error().message;
   EXPECT_TRUE(runs->empty());
 }
@@ -154,7 +186,12 @@ TEST_F(RunStoreTest, ListKeepsToTheLimit) {
   for (int hour = 10; hour < 15; ++hour) {
     insert_ok(store(), make_record("a", "2026-11-22T" + std::to_string(hour) + ":00:00Z"));
   }
-  Result<std::vector<RunSummary>> runs = store().list_runs({.limit = 2, .part = ""});
+  Result<std::vector<RunSummary>> runs = store().list_runs([&] {
+    RunQuery q;
+    q.limit = 2;
+    q.part = "";
+    return q;
+  }());
   ASSERT_TRUE(runs.ok()) << runs.error().message;
   ASSERT_EQ(runs->size(), 2u);
   EXPECT_EQ((*runs)[0].started_utc, "2026-11-22T14:00:00Z");
@@ -162,7 +199,12 @@ TEST_F(RunStoreTest, ListKeepsToTheLimit) {
 }
 
 TEST_F(RunStoreTest, ListRefusesALimitBelowOne) {
-  Result<std::vector<RunSummary>> runs = store().list_runs({.limit = 0, .part = ""});
+  Result<std::vector<RunSummary>> runs = store().list_runs([&] {
+    RunQuery q;
+    q.limit = 0;
+    q.part = "";
+    return q;
+  }());
   ASSERT_FALSE(runs.ok());
   EXPECT_EQ(runs.error().code, ErrorCode::kInvalidInput);
 }
@@ -280,8 +322,9 @@ class RunStoreRefusalTest : public RunStoreTest {
     RawDb raw(dir_.db());
     const RawDb::Counts n = raw.counts();
     EXPECT_EQ(n.runs, 0);
-    EXPECT_EQ(n.revolutions, 0);
-    EXPECT_EQ(n.profile, 0);
+    EXPECT_EQ(n.raw, 0);
+    EXPECT_EQ(n.tables, 0);
+    EXPECT_EQ(raw.query_int("SELECT count(*) FROM settings"), 0);
     // And the store is still usable afterwards.
     EXPECT_TRUE(store().insert_run(make_record("a", "2026-11-22T02:34:44Z")).ok());
   }
@@ -295,6 +338,21 @@ TEST_F(RunStoreRefusalTest, NaNInTheProfileNamesTableColumnAndDegree) {
   expect_refused(good_, {"run_profile.mean_lift_mm", "cam degree 17", "NaN"});
 }
 
+TEST_F(RunStoreRefusalTest, ALiftBeyondWhatACountCanHoldIsRefused) {
+  good_.analysis.design_lift_mm[42] = 250.0;  // the blob keeps +-214.7 mm
+  expect_refused(good_, {"design_lift_mm", "degree 42", "250", "214.7"});
+}
+
+TEST_F(RunStoreRefusalTest, NaNHarmonicIsRefused) {
+  good_.analysis.harmonic_amplitude_um[7] = kNaN;
+  expect_refused(good_, {"harmonic 7", "NaN"});
+}
+
+TEST_F(RunStoreRefusalTest, RotationSenseOtherThanPlusOrMinusOneIsRefused) {
+  good_.geometry->rotation_sense = 0;
+  expect_refused(good_, {"rotation sense", "+1 or -1"});
+}
+
 TEST_F(RunStoreRefusalTest, NaNInTheCorrectionIsRefused) {
   good_.correction_um[359] = kNaN;
   expect_refused(good_, {"run_profile.correction_um", "cam degree 359"});
@@ -302,7 +360,7 @@ TEST_F(RunStoreRefusalTest, NaNInTheCorrectionIsRefused) {
 
 TEST_F(RunStoreRefusalTest, InfinityInARawRevolutionIsRefused) {
   good_.measured.revolutions[1].lift_mm[5] = std::numeric_limits<double>::infinity();
-  expect_refused(good_, {"run_revolutions.lift_mm of revolution 1", "machine degree 5", "infinity"});
+  expect_refused(good_, {"run_samples.lift_mm of revolution 1", "machine degree 5", "infinity"});
 }
 
 TEST_F(RunStoreRefusalTest, NaNInASummaryFigureIsRefused) {
@@ -336,11 +394,11 @@ TEST_F(RunStoreRefusalTest, EmptyPartIsRefused) {
 }
 
 // A failure inside the transaction, after the runs row is written, rolls back the whole run.
-// The fault is injected through the database itself: a trigger that aborts one profile row.
+// The fault is injected through the database itself: a trigger that aborts the last insert.
 TEST_F(RunStoreTest, FailureHalfWayThroughTheInsertRollsEverythingBack) {
   RawDb raw(dir_.db());
-  ASSERT_EQ(raw.exec("CREATE TRIGGER fail_at_200 BEFORE INSERT ON run_profile"
-                     " WHEN NEW.angle_deg = 200 BEGIN SELECT RAISE(ABORT, 'injected fault'); END"),
+  ASSERT_EQ(raw.exec("CREATE TRIGGER fail_at_200 BEFORE INSERT ON run_tables"
+                     " BEGIN SELECT RAISE(ABORT, 'injected fault'); END"),
             SQLITE_OK)
       << raw.errmsg();
 
@@ -352,39 +410,45 @@ TEST_F(RunStoreTest, FailureHalfWayThroughTheInsertRollsEverythingBack) {
   EXPECT_NE(id.error().message.find("store the run of part a"), std::string::npos);
   const RawDb::Counts n = raw.counts();
   EXPECT_EQ(n.runs, 0);
-  EXPECT_EQ(n.revolutions, 0);
-  EXPECT_EQ(n.profile, 0);
+  EXPECT_EQ(n.raw, 0);
+  EXPECT_EQ(n.tables, 0);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM settings"), 0);
 
   // The connection was left out of the transaction: the next insert works.
   ASSERT_EQ(raw.exec("DROP TRIGGER fail_at_200"), SQLITE_OK) << raw.errmsg();
   Result<std::int64_t> again = store().insert_run(make_record("a", "2026-11-22T02:34:44Z"));
   ASSERT_TRUE(again.ok()) << again.error().message;
-  EXPECT_EQ(raw.counts().profile, 360);
+  EXPECT_EQ(raw.counts().tables, 1);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_profile"), 360);
 }
 
-TEST_F(RunStoreTest, LoadReportsAProfileRowDeletedByHand) {
+TEST_F(RunStoreTest, LoadReportsAProfileDeletedByHand) {
   const std::int64_t id = insert_ok(store(), make_record("a", "2026-11-22T02:34:44Z"));
   RawDb raw(dir_.db());
-  ASSERT_EQ(raw.exec("DELETE FROM run_profile WHERE angle_deg = 90"), SQLITE_OK);
+  ASSERT_EQ(raw.exec("DELETE FROM run_tables"), SQLITE_OK);
   Result<StoredRun> loaded = store().load_run(id);
   ASSERT_FALSE(loaded.ok());
   EXPECT_EQ(loaded.error().code, ErrorCode::kStorage);
-  EXPECT_NE(loaded.error().message.find("cam degree 90 is missing"), std::string::npos) << loaded.error().message;
+  EXPECT_NE(loaded.error().message.find("profile (run_tables) is missing"), std::string::npos)
+      << loaded.error().message;
 }
 
-TEST_F(RunStoreTest, LoadReportsRawLiftsThatAreNotNumbers) {
+TEST_F(RunStoreTest, LoadReportsRawSamplesDeletedByHandButNeverPruned) {
   const std::int64_t id = insert_ok(store(), make_record("a", "2026-11-22T02:34:44Z"));
   RawDb raw(dir_.db());
-  // Still passes the table's CHECK (valid JSON, 360 elements), but holds strings.
-  ASSERT_EQ(raw.exec("UPDATE run_revolutions SET lift_mm = (SELECT json_group_array('x')"
-                     " FROM run_profile WHERE run_id = " +
-                     std::to_string(id) + ") WHERE revolution_index = 1"),
-            SQLITE_OK)
-      << raw.errmsg();
+  ASSERT_EQ(raw.exec("DELETE FROM run_raw"), SQLITE_OK);
   Result<StoredRun> loaded = store().load_run(id);
   ASSERT_FALSE(loaded.ok());
   EXPECT_EQ(loaded.error().code, ErrorCode::kStorage);
-  EXPECT_NE(loaded.error().message.find("lift_mm of revolution 1"), std::string::npos) << loaded.error().message;
+  EXPECT_NE(loaded.error().message.find("raw revolutions are missing but it was never pruned"), std::string::npos)
+      << loaded.error().message;
+}
+
+TEST_F(RunStoreTest, TheSchemaRefusesABlobOfTheWrongLength) {
+  insert_ok(store(), make_record("a", "2026-11-22T02:34:44Z"));
+  RawDb raw(dir_.db());
+  EXPECT_EQ(raw.exec("UPDATE run_tables SET error = zeroblob(1436)"), SQLITE_CONSTRAINT);
+  EXPECT_EQ(raw.exec("UPDATE run_raw SET lift = zeroblob(1440 * 2)"), SQLITE_CONSTRAINT);
 }
 
 // ---- In memory ----

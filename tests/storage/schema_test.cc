@@ -64,8 +64,9 @@ TEST(Schema, OpeningTwiceIsIdempotent) {
   RawDb raw(dir.db());
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), latest_schema_version());
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE type = 'table'"
-                          " AND name IN ('runs', 'run_revolutions', 'run_profile')"),
-            3);
+                          " AND name IN ('runs', 'run_raw', 'run_tables', 'parts', 'lobes', 'settings',"
+                          " 'nc_pushes', 'events', 'degrees')"),
+            9);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM runs"), 1);
 }
 
@@ -95,13 +96,13 @@ TEST(Schema, RefusesADatabaseFromANewerGaugeloop) {
 }
 
 TEST(Schema, ProfileColumnsRefuseNull) {
-  // The backstop behind insert_run's validation: SQLite binds NaN as NULL.
+  // The backstop behind insert_run's validation.
   TempDir dir;
   Result<RunStore> store = RunStore::open(dir.db());
   ASSERT_TRUE(store.ok()) << store.error().message;
   ASSERT_TRUE(store->insert_run(make_record("a", "2026-11-22T02:34:44Z")).ok());
   RawDb raw(dir.db());
-  EXPECT_EQ(raw.exec("UPDATE run_profile SET error_um = NULL WHERE angle_deg = 3"), SQLITE_CONSTRAINT);
+  EXPECT_EQ(raw.exec("UPDATE run_tables SET error = NULL"), SQLITE_CONSTRAINT);
   EXPECT_EQ(raw.exec("UPDATE runs SET status = 'pushed'"), SQLITE_CONSTRAINT) << "a pushed run must name its NC file";
 }
 
@@ -129,16 +130,88 @@ TEST(Schema, RunSamplesViewHasOneRowPerDegreeOfEachRevolution) {
   }
 }
 
-TEST(Schema, RawLiftsAreReadableJsonWithSixDecimals) {
+TEST(Schema, RawLiftsAreBigEndianCountsOfATenthOfANanometre) {
   TempDir dir;
   Result<RunStore> store = RunStore::open(dir.db());
   ASSERT_TRUE(store.ok()) << store.error().message;
   ASSERT_TRUE(store->insert_run(make_record("a", "2026-11-22T02:34:44Z")).ok());
   RawDb raw(dir.db());
-  const std::string json = raw.query_text("SELECT lift_mm FROM run_revolutions WHERE revolution_index = 0");
-  // sample_lift_mm(0, 0) = 1.5 exactly.
-  EXPECT_EQ(json.substr(0, 10), "[1.500000,") << json.substr(0, 40);
-  EXPECT_EQ(raw.query_int("SELECT json_array_length(lift_mm) FROM run_revolutions LIMIT 1"), 360);
+  // sample_lift_mm(0, 0) = 1.5 mm exactly = 15,000,000 counts = 0x00E4E1C0.
+  EXPECT_EQ(raw.query_text("SELECT hex(substr(lift, 1, 4)) FROM run_raw"), "00E4E1C0");
+  EXPECT_EQ(raw.query_int("SELECT length(lift) FROM run_raw"), 3 * 1440);
+  EXPECT_EQ(raw.query_text("SELECT amplifier_revolutions FROM run_raw"), "[100,101,102]");
+}
+
+// The views decode in SQL what C++ encoded, negative values and the extremes included: a
+// person with sqlite3 reads the same numbers gaugeloop does.
+TEST(Schema, ViewsDecodeNegativeAndExtremeValuesAsTheStoreDoes) {
+  TempDir dir;
+  Result<RunStore> store = RunStore::open(dir.db());
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  RunRecord r = make_record("a", "2026-11-22T02:34:44Z");
+  r.measured.revolutions[1].lift_mm[7] = -214.7483647;   // INT32_MIN + 1 counts
+  r.measured.revolutions[2].lift_mm[359] = 214.7483647;  // INT32_MAX counts
+  r.analysis.error_um[10] = -0.0001;                     // -1 count
+  r.analysis.error_um[11] = -123456.7891;
+  r.correction_um[12] = 0.0;
+  Result<std::int64_t> id = store->insert_run(r);
+  ASSERT_TRUE(id.ok()) << id.error().message;
+  Result<StoredRun> loaded = store->load_run(*id);
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+
+  RawDb raw(dir.db());
+  const std::string run = std::to_string(*id);
+  auto sample = [&](int rev, int deg) {
+    return raw.query_double("SELECT lift_mm FROM run_samples WHERE run_id = " + run + " AND revolution_index = " +
+                            std::to_string(rev) + " AND angle_deg = " + std::to_string(deg));
+  };
+  EXPECT_DOUBLE_EQ(sample(1, 7), -214.7483647);
+  EXPECT_DOUBLE_EQ(sample(2, 359), 214.7483647);
+  for (int rev = 0; rev < 3; ++rev) {
+    for (int deg = 0; deg < 360; deg += 17) {
+      EXPECT_DOUBLE_EQ(sample(rev, deg), loaded->revolutions[rev].lift_mm[deg]) << rev << "/" << deg;
+    }
+  }
+  auto profile = [&](const std::string& column, int deg) {
+    return raw.query_double("SELECT " + column + " FROM run_profile WHERE run_id = " + run +
+                            " AND angle_deg = " + std::to_string(deg));
+  };
+  EXPECT_DOUBLE_EQ(profile("error_um", 10), -0.0001);
+  EXPECT_DOUBLE_EQ(profile("error_um", 11), -123456.7891);
+  for (int deg = 0; deg < 360; deg += 7) {
+    EXPECT_DOUBLE_EQ(profile("design_lift_mm", deg), loaded->analysis.design_lift_mm[deg]) << deg;
+    EXPECT_DOUBLE_EQ(profile("mean_lift_mm", deg), loaded->analysis.mean_lift_mm[deg]) << deg;
+    EXPECT_DOUBLE_EQ(profile("spread_um", deg), loaded->analysis.spread_um[deg]) << deg;
+    EXPECT_DOUBLE_EQ(profile("error_um", deg), loaded->analysis.error_um[deg]) << deg;
+    EXPECT_DOUBLE_EQ(profile("correction_um", deg), loaded->correction_um[deg]) << deg;
+  }
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_profile WHERE run_id = " + run), 360);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_harmonics WHERE run_id = " + run), 31);
+  EXPECT_DOUBLE_EQ(raw.query_double("SELECT amplitude_um FROM run_harmonics WHERE harmonic = 3"),
+                   r.analysis.harmonic_amplitude_um[3]);
+}
+
+TEST(Schema, TheCatalogueHoldsEveryPartAndLobeWithTheLatestGeometry) {
+  TempDir dir;
+  Result<RunStore> store = RunStore::open(dir.db());
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  RunRecord first = make_record("a", "2026-11-22T02:34:44Z");
+  ASSERT_TRUE(store->insert_run(first).ok());
+  RunRecord second = make_record("a", "2026-11-22T03:00:00Z");
+  second.geometry->c_offset_deg = 13.0;  // re-clamped
+  ASSERT_TRUE(store->insert_run(second).ok());
+  RunRecord unknown = make_record("b", "2026-11-22T03:10:00Z");
+  unknown.geometry.reset();
+  ASSERT_TRUE(store->insert_run(unknown).ok());
+
+  RawDb raw(dir.db());
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM parts"), 2);
+  EXPECT_EQ(raw.query_text("SELECT follower FROM parts WHERE name = 'a'"), "roller");
+  EXPECT_EQ(raw.query_text("SELECT coalesce(follower, 'unknown') FROM parts WHERE name = 'b'"), "unknown");
+  EXPECT_EQ(raw.query_double("SELECT c_offset_deg FROM lobes WHERE part = 'a' AND lobe = 2"), 13.0);
+  // Each run keeps the mapping it was measured with.
+  EXPECT_EQ(raw.query_double("SELECT c_offset_deg FROM runs WHERE started_utc = '2026-11-22T02:34:44Z'"), 12.5);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM settings"), 1) << "two runs with the same settings share one row";
 }
 
 // WAL: a reader on another connection is not blocked by a writer holding the write lock.

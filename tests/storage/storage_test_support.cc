@@ -108,6 +108,21 @@ RunRecord make_record(const std::string& part, const std::string& started_utc, i
   r.analysis.rms_error_um = 2.8284271247;
   r.analysis.peak_to_valley_um = 8.0;
   r.analysis.repeatability_um = 0.459;
+  r.analysis.phase_error_deg = -0.1234567;
+  r.analysis.base_circle_runout_um = 1.75;
+  for (std::size_t h = 0; h < r.analysis.harmonic_amplitude_um.size(); ++h) {
+    r.analysis.harmonic_amplitude_um[h] = 1.0 / (1.0 + static_cast<double>(h)) + 1e-13;
+  }
+  r.settings = "analysis.base_circle_window_deg = 150..210\ncompensation.gain = 1\n";
+  Part g;
+  g.follower = FollowerKind::kRoller;
+  g.follower_radius_mm = 12.0;
+  g.base_circle_radius_mm = 18.0;
+  g.wheel_radius_mm = 300.0;
+  g.rotation_sense = -1;
+  g.c_offset_deg = 12.5;
+  g.probe_offset_deg = 30.0;
+  r.geometry = g;
   return r;
 }
 
@@ -156,8 +171,8 @@ std::string RawDb::query_text(const std::string& sql) {
 }
 
 RawDb::Counts RawDb::counts() {
-  return {query_int("SELECT count(*) FROM runs"), query_int("SELECT count(*) FROM run_revolutions"),
-          query_int("SELECT count(*) FROM run_profile")};
+  return {query_int("SELECT count(*) FROM runs"), query_int("SELECT count(*) FROM run_raw"),
+          query_int("SELECT count(*) FROM run_tables")};
 }
 
 }  // namespace gaugeloop::testing

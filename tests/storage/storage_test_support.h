@@ -40,7 +40,8 @@ std::string run_unprivileged(const std::function<std::string()>& check);
 double sample_lift_mm(int revolution_index, int degree);
 
 // A valid record: `revolutions` revolutions (amplifier counts 100, 101, ...), every table
-// filled with distinct values, so any mix-up between columns or degrees shows.
+// filled with distinct values, so any mix-up between columns or degrees shows; inspection
+// figures, settings text and geometry (sense -1, c0 12.5, probe offset 30) set.
 RunRecord make_record(const std::string& part, const std::string& started_utc, int revolutions = 3);
 
 // A second, plain SQLite connection to a database file, for what RunStore does not expose.
@@ -61,8 +62,9 @@ class RawDb {
   std::string query_text(const std::string& sql);
   std::string errmsg() const { return sqlite3_errmsg(db_); }
 
+  // Rows of runs, run_raw (one per run with raw samples) and run_tables (one per run).
   struct Counts {
-    std::int64_t runs, revolutions, profile;
+    std::int64_t runs, raw, tables;
   };
   Counts counts();
 

@@ -1,0 +1,315 @@
+// The lobe error of one run as an SVG picture: polar and linear, with the tolerance band.
+#include "app/svg_plot.h"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstddef>
+#include <numbers>
+#include <vector>
+
+namespace gaugeloop {
+namespace {
+
+constexpr int kWidth = 1200;
+constexpr int kHeight = 640;
+
+// Polar panel: the zero-error circle and the radial room for +-scale.
+constexpr double kPolarCx = 300.0;
+constexpr double kPolarCy = 345.0;
+constexpr double kPolarR0 = 125.0;
+constexpr double kPolarSpan = 85.0;
+
+// Linear panel.
+constexpr double kPlotLeft = 640.0;
+constexpr double kPlotRight = 1160.0;
+constexpr double kPlotTop = 120.0;
+constexpr double kPlotBottom = 540.0;
+
+constexpr const char* kErrorColour = "#1f4e9c";
+constexpr const char* kSpreadColour = "#9db8e3";
+constexpr const char* kCorrectionColour = "#d9730d";
+constexpr const char* kToleranceColour = "#d7efd9";
+constexpr const char* kOutColour = "#c62828";
+constexpr const char* kGridColour = "#d0d4da";
+constexpr const char* kTextColour = "#1d2329";
+constexpr const char* kMutedColour = "#5f6b76";
+
+// Fixed notation with `decimals`, '.' as the separator whatever the C locale.
+std::string num(double v, int decimals = 1) {
+  std::array<char, 64> buf{};
+  if (std::abs(v) < 0.5 * std::pow(10.0, -decimals)) v = 0.0;  // no "-0.0"
+  const auto [end, ec] = std::to_chars(buf.data(), buf.data() + buf.size(), v, std::chars_format::fixed, decimals);
+  return ec == std::errc() ? std::string(buf.data(), end) : std::string("0");
+}
+
+std::string escape(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+// A round grid step: 1, 2 or 5 times a power of ten, so that `span` takes about 4 steps.
+double nice_step(double span) {
+  const double raw = std::max(span, 1e-6) / 4.0;
+  const double decade = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0, 10.0}) {
+    if (m * decade >= raw) return m * decade;
+  }
+  return 10.0 * decade;
+}
+
+// Cam angle (degrees, counter-clockwise, 0 at the nose drawn at the top) to the page.
+double polar_x(double deg, double r) { return kPolarCx - r * std::sin(deg * std::numbers::pi / 180.0); }
+double polar_y(double deg, double r) { return kPolarCy - r * std::cos(deg * std::numbers::pi / 180.0); }
+
+struct Text {
+  double x, y;
+  std::string text;
+  int size = 13;
+  const char* anchor = "start";
+  const char* colour = kTextColour;
+  const char* weight = "normal";
+  bool halo = false;  // a white outline, for labels drawn over curves
+};
+
+void add_text(std::string& svg, const Text& t) {
+  svg += "<text x=\"" + num(t.x) + "\" y=\"" + num(t.y) + "\" font-size=\"" + std::to_string(t.size) +
+         "\" text-anchor=\"" + t.anchor + "\" fill=\"" + t.colour + "\" font-weight=\"" + t.weight + "\"" +
+         (t.halo ? " stroke=\"#ffffff\" stroke-width=\"3\" paint-order=\"stroke\"" : "") + ">" + escape(t.text) +
+         "</text>\n";
+}
+
+void add_line(std::string& svg, double x1, double y1, double x2, double y2, const char* colour, double width,
+              const char* dash = nullptr) {
+  svg += "<line x1=\"" + num(x1) + "\" y1=\"" + num(y1) + "\" x2=\"" + num(x2) + "\" y2=\"" + num(y2) + "\" stroke=\"" +
+         colour + "\" stroke-width=\"" + num(width, 2) + "\"";
+  if (dash != nullptr) svg += std::string(" stroke-dasharray=\"") + dash + "\"";
+  svg += "/>\n";
+}
+
+// A closed ring of radius r(deg) around the polar centre, as path data.
+template <typename RadiusOf>
+std::string polar_ring(RadiusOf radius_of) {
+  std::string d;
+  for (int deg = 0; deg < kDegreesPerRevolution; ++deg) {
+    const double r = radius_of(deg);
+    d += (deg == 0 ? "M" : "L") + num(polar_x(deg, r), 2) + "," + num(polar_y(deg, r), 2);
+  }
+  return d + "Z";
+}
+
+std::string circle_path(double r) {
+  return "M" + num(kPolarCx - r, 2) + "," + num(kPolarCy, 2) + "a" + num(r, 2) + "," + num(r, 2) + " 0 1,0 " +
+         num(2 * r, 2) + ",0a" + num(r, 2) + "," + num(r, 2) + " 0 1,0 " + num(-2 * r, 2) + ",0Z";
+}
+
+}  // namespace
+
+std::string render_error_plot_svg(const ErrorPlot& p) {
+  // The scale: the largest error (with its spread) or the tolerance, whichever is larger.
+  double extent = 0.0;
+  std::size_t worst = 0;
+  for (std::size_t d = 0; d < p.error_um.size(); ++d) {
+    const double spread = p.spread_um ? (*p.spread_um)[d] : 0.0;
+    extent = std::max(extent, std::abs(p.error_um[d]) + spread);
+    if (p.correction_um) extent = std::max(extent, std::abs((*p.correction_um)[d]));
+    if (std::abs(p.error_um[d]) > std::abs(p.error_um[worst])) worst = d;
+  }
+  if (p.tolerance_um) extent = std::max(extent, *p.tolerance_um * 1.15);
+  const double step = nice_step(2.0 * extent);
+  const double scale = std::max(step, std::ceil(extent / step) * step);  // axis runs -scale..+scale
+
+  const auto out_of_tolerance = [&](std::size_t d) {
+    return p.tolerance_um && std::abs(p.error_um[d]) > *p.tolerance_um;
+  };
+  int outside = 0;
+  for (std::size_t d = 0; d < p.error_um.size(); ++d) outside += out_of_tolerance(d) ? 1 : 0;
+
+  std::string svg;
+  svg.reserve(64 * 1024);
+  svg += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  svg += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(kWidth) + "\" height=\"" +
+         std::to_string(kHeight) + "\" viewBox=\"0 0 " + std::to_string(kWidth) + " " + std::to_string(kHeight) +
+         "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">\n";
+  svg += "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n";
+  add_text(svg, {40, 46, p.title, 22, "start", kTextColour, "bold"});
+  add_text(svg, {40, 72, p.subtitle, 14, "start", kMutedColour});
+  std::string verdict =
+      "max |error| " + num(std::abs(p.error_um[worst]), 2) + " \u00b5m at cam " + std::to_string(worst) + "\u00b0";
+  if (p.tolerance_um) {
+    verdict += outside == 0 ? " \u00b7 within \u00b1" + num(*p.tolerance_um, 1) + " \u00b5m"
+                            : " \u00b7 " + std::to_string(outside) + " degrees outside \u00b1" +
+                                  num(*p.tolerance_um, 1) + " \u00b5m";
+  }
+  add_text(svg, {kWidth - 40.0, 46, verdict, 16, "end", outside > 0 ? kOutColour : kTextColour, "bold"});
+  add_text(svg, {kWidth - 40.0, 72, "lift error = measured \u2212 design, cam frame, 0\u00b0 at the nose", 13, "end",
+                 kMutedColour});
+
+  // ---- Polar panel ----
+  const double k = kPolarSpan / scale;  // px per um
+  add_text(svg, {kPolarCx, 104, "Polar: error around the zero circle", 14, "middle", kTextColour, "bold"});
+  if (p.tolerance_um) {
+    const double t = *p.tolerance_um * k;
+    svg += "<path d=\"" + circle_path(kPolarR0 + t) + circle_path(kPolarR0 - t) + "\" fill=\"" + kToleranceColour +
+           "\" fill-rule=\"evenodd\" stroke=\"none\"/>\n";
+  }
+  for (double e = -scale; e <= scale + 1e-9; e += step) {
+    const bool zero = std::abs(e) < 1e-9;
+    svg += "<path d=\"" + circle_path(kPolarR0 + e * k) + "\" fill=\"none\" stroke=\"" +
+           (zero ? std::string("#8a949e") : std::string(kGridColour)) + "\" stroke-width=\"" + (zero ? "1.2" : "0.8") +
+           "\"/>\n";
+  }
+  for (int deg = 0; deg < 360; deg += 30) {
+    const double r_in = kPolarR0 - scale * k;
+    const double r_out = kPolarR0 + scale * k;
+    add_line(svg, polar_x(deg, r_in), polar_y(deg, r_in), polar_x(deg, r_out), polar_y(deg, r_out), kGridColour, 0.8);
+    const double r_label = r_out + 16;
+    add_text(svg, {polar_x(deg, r_label), polar_y(deg, r_label) + 4, std::to_string(deg) + "\u00b0", 11, "middle",
+                   kMutedColour});
+  }
+  // Radial scale labels along the 0 deg spoke, to its right.
+  for (double e = -scale; e <= scale + 1e-9; e += step) {
+    add_text(svg, {kPolarCx + 4, kPolarCy - (kPolarR0 + e * k) + 4, (e > 0 ? "+" : "") + num(e, step < 1 ? 1 : 0), 10,
+                   "start", kMutedColour, "normal", true});
+  }
+  svg += "<path d=\"" + polar_ring([&](int d) { return kPolarR0 + p.error_um[static_cast<std::size_t>(d)] * k; }) +
+         "\" fill=\"none\" stroke=\"" + kErrorColour + "\" stroke-width=\"1.8\" stroke-linejoin=\"round\"/>\n";
+  if (p.correction_um) {
+    const DegreeTable& c = *p.correction_um;
+    svg += "<path d=\"" + polar_ring([&](int d) { return kPolarR0 + c[static_cast<std::size_t>(d)] * k; }) +
+           "\" fill=\"none\" stroke=\"" + kCorrectionColour + "\" stroke-width=\"1.2\" stroke-dasharray=\"5,3\"/>\n";
+  }
+  for (std::size_t d = 0; d < p.error_um.size(); ++d) {
+    if (!out_of_tolerance(d)) continue;
+    const double r = kPolarR0 + p.error_um[d] * k;
+    svg += "<circle cx=\"" + num(polar_x(static_cast<double>(d), r), 2) + "\" cy=\"" +
+           num(polar_y(static_cast<double>(d), r), 2) + "\" r=\"2\" fill=\"" + kOutColour + "\"/>\n";
+  }
+  add_text(svg, {kPolarCx, kPolarCy + 4, "nose at 0\u00b0, top", 11, "middle", kMutedColour});
+  add_text(svg, {kPolarCx, kPolarCy + 20, "angles counter-clockwise", 11, "middle", kMutedColour});
+  add_text(svg,
+           {kPolarCx, 604, "radial scale " + num(step, step < 1 ? 1 : 0) + " \u00b5m per ring, outward = more material",
+            12, "middle", kMutedColour});
+
+  // ---- Linear panel ----
+  const double y0 = (kPlotTop + kPlotBottom) / 2.0;
+  const double ky = (kPlotBottom - kPlotTop) / (2.0 * scale);
+  const auto x_of = [](double deg) { return kPlotLeft + (kPlotRight - kPlotLeft) * deg / 360.0; };
+  const auto y_of = [&](double um) { return y0 - um * ky; };
+  add_text(svg, {(kPlotLeft + kPlotRight) / 2, 104, "Linear: error per cam degree", 14, "middle", kTextColour, "bold"});
+  if (p.tolerance_um) {
+    svg += "<rect x=\"" + num(kPlotLeft) + "\" y=\"" + num(y_of(*p.tolerance_um)) + "\" width=\"" +
+           num(kPlotRight - kPlotLeft) + "\" height=\"" + num(2 * *p.tolerance_um * ky) + "\" fill=\"" +
+           kToleranceColour + "\"/>\n";
+  }
+  for (double e = -scale; e <= scale + 1e-9; e += step) {
+    const bool zero = std::abs(e) < 1e-9;
+    add_line(svg, kPlotLeft, y_of(e), kPlotRight, y_of(e), zero ? "#8a949e" : kGridColour, zero ? 1.2 : 0.8);
+    add_text(svg, {kPlotLeft - 8, y_of(e) + 4, (e > 0 ? "+" : "") + num(e, step < 1 ? 1 : 0), 11, "end", kMutedColour});
+  }
+  for (int deg = 0; deg <= 360; deg += 30) {
+    add_line(svg, x_of(deg), kPlotTop, x_of(deg), kPlotBottom, kGridColour, 0.8);
+    add_text(svg, {x_of(deg), kPlotBottom + 18, std::to_string(deg), 11, "middle", kMutedColour});
+  }
+  svg += "<rect x=\"" + num(kPlotLeft) + "\" y=\"" + num(kPlotTop) + "\" width=\"" + num(kPlotRight - kPlotLeft) +
+         "\" height=\"" + num(kPlotBottom - kPlotTop) + "\" fill=\"none\" stroke=\"#8a949e\" stroke-width=\"1\"/>\n";
+  add_text(svg,
+           {(kPlotLeft + kPlotRight) / 2, kPlotBottom + 40, "cam angle (deg, 0 = nose)", 12, "middle", kMutedColour});
+  svg += "<text x=\"" + num(kPlotLeft - 46) + "\" y=\"" + num(y0) +
+         "\" font-size=\"12\" text-anchor=\"middle\" fill=\"" + kMutedColour + "\" transform=\"rotate(-90 " +
+         num(kPlotLeft - 46) + " " + num(y0) + ")\">lift error (\u00b5m)</text>\n";
+
+  // The last point repeats the first at 360 deg: the profile is periodic.
+  const auto polyline = [&](const DegreeTable& t) {
+    std::string pts;
+    for (int deg = 0; deg <= kDegreesPerRevolution; ++deg) {
+      const double v = t[static_cast<std::size_t>(deg % kDegreesPerRevolution)];
+      pts += num(x_of(deg), 2) + "," + num(y_of(v), 2) + " ";
+    }
+    return pts;
+  };
+  if (p.spread_um) {
+    std::string band;
+    for (int deg = 0; deg <= kDegreesPerRevolution; ++deg) {
+      const auto d = static_cast<std::size_t>(deg % kDegreesPerRevolution);
+      band += num(x_of(deg), 2) + "," + num(y_of(p.error_um[d] + (*p.spread_um)[d]), 2) + " ";
+    }
+    for (int deg = kDegreesPerRevolution; deg >= 0; --deg) {
+      const auto d = static_cast<std::size_t>(deg % kDegreesPerRevolution);
+      band += num(x_of(deg), 2) + "," + num(y_of(p.error_um[d] - (*p.spread_um)[d]), 2) + " ";
+    }
+    svg += "<polygon points=\"" + band + "\" fill=\"" + kSpreadColour + "\" fill-opacity=\"0.6\" stroke=\"none\"/>\n";
+  }
+  svg += "<polyline points=\"" + polyline(p.error_um) + "\" fill=\"none\" stroke=\"" + kErrorColour +
+         "\" stroke-width=\"1.8\" stroke-linejoin=\"round\"/>\n";
+  if (p.correction_um) {
+    svg += "<polyline points=\"" + polyline(*p.correction_um) + "\" fill=\"none\" stroke=\"" + kCorrectionColour +
+           "\" stroke-width=\"1.2\" stroke-dasharray=\"5,3\"/>\n";
+  }
+  for (std::size_t d = 0; d < p.error_um.size(); ++d) {
+    if (!out_of_tolerance(d)) continue;
+    svg += "<circle cx=\"" + num(x_of(static_cast<double>(d)), 2) + "\" cy=\"" + num(y_of(p.error_um[d]), 2) +
+           "\" r=\"2\" fill=\"" + kOutColour + "\"/>\n";
+  }
+  // The worst degree, marked and labelled on the side with room.
+  const double wx = x_of(static_cast<double>(worst));
+  const double wy = y_of(p.error_um[worst]);
+  svg += "<circle cx=\"" + num(wx, 2) + "\" cy=\"" + num(wy, 2) + "\" r=\"4.5\" fill=\"none\" stroke=\"" + kTextColour +
+         "\" stroke-width=\"1.4\"/>\n";
+  const bool label_left = worst > 250;
+  const double ly = p.error_um[worst] >= 0 ? wy - 10 : wy + 20;
+  add_text(svg, {wx + (label_left ? -8 : 8), ly,
+                 num(p.error_um[worst], 2) + " \u00b5m at " + std::to_string(worst) + "\u00b0", 12,
+                 label_left ? "end" : "start", kTextColour, "bold"});
+
+  // ---- Legend and footer ----
+  double lx = kPlotLeft - 40;
+  const double ly2 = 606;
+  const auto legend = [&](const std::string& swatch, const std::string& label) {
+    svg += swatch;
+    add_text(svg, {lx + 30, ly2 + 4, label, 12, "start", kTextColour});
+    lx += 30 + 6.5 * static_cast<double>(label.size()) + 18;
+  };
+  legend("<line x1=\"" + num(lx) + "\" y1=\"" + num(ly2) + "\" x2=\"" + num(lx + 24) + "\" y2=\"" + num(ly2) +
+             "\" stroke=\"" + kErrorColour + "\" stroke-width=\"2\"/>\n",
+         "error");
+  if (p.spread_um) {
+    legend("<rect x=\"" + num(lx) + "\" y=\"" + num(ly2 - 6) + "\" width=\"24\" height=\"12\" fill=\"" + kSpreadColour +
+               "\"/>\n",
+           "\u00b1 spread (1 s.d.)");
+  }
+  if (p.correction_um) {
+    legend("<line x1=\"" + num(lx) + "\" y1=\"" + num(ly2) + "\" x2=\"" + num(lx + 24) + "\" y2=\"" + num(ly2) +
+               "\" stroke=\"" + kCorrectionColour + "\" stroke-width=\"1.5\" stroke-dasharray=\"5,3\"/>\n",
+           "correction");
+  }
+  if (p.tolerance_um) {
+    legend("<rect x=\"" + num(lx) + "\" y=\"" + num(ly2 - 6) + "\" width=\"24\" height=\"12\" fill=\"" +
+               kToleranceColour + "\" stroke=\"#9fcfa4\"/>\n",
+           "tolerance \u00b1" + num(*p.tolerance_um, 1) + " \u00b5m");
+  }
+  add_text(svg, {40, kHeight - 10.0, p.footer, 11, "start", kMutedColour});
+  svg += "</svg>\n";
+  return svg;
+}
+
+}  // namespace gaugeloop

@@ -1,0 +1,300 @@
+// The run-history commands as a user runs them: the real binary on a database filled through
+// RunStore, text and --json, and the messages for what cannot be answered.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+CommandResult run_command(const std::string& args) {
+  const std::string cmd = std::string(GAUGELOOP_BINARY_DIR) + "/bin/gaugeloop " + args + " 2>&1";
+  CommandResult r;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (pipe == nullptr) return r;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, pipe) != nullptr) r.output += buf;
+  const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+
+// Raw reading at machine degree c of revolution rev: distinct per degree and revolution.
+double raw_mm(int rev, int c) { return 1.0 + 0.001 * c + 0.0001 * rev; }
+
+RunRecord record(const std::string& part, int lobe, const std::string& machine, const std::string& started,
+                 double max_um) {
+  RunRecord r;
+  r.started_utc = started;
+  r.finished_utc = started;
+  r.machine = machine;
+  r.part = part;
+  r.lobe = lobe;
+  r.gauge = "tcp:127.0.0.1:1502";
+  for (int i = 0; i < 3; ++i) {
+    RevolutionSamples rev;
+    rev.revolution = 10 + i;
+    for (int c = 0; c < 360; ++c) rev.lift_mm[static_cast<std::size_t>(c)] = raw_mm(i, c);
+    r.measured.revolutions.push_back(rev);
+  }
+  for (std::size_t d = 0; d < 360; ++d) {
+    r.analysis.design_lift_mm[d] = 0.5;
+    r.analysis.mean_lift_mm[d] = 0.5 + max_um * std::sin(static_cast<double>(d) * 0.0174533) / 1000.0;
+    r.analysis.error_um[d] = max_um * std::sin(static_cast<double>(d) * 0.0174533);
+    r.analysis.spread_um[d] = 0.2;
+    r.correction_um[d] = 0.9 * r.analysis.error_um[d];
+  }
+  r.analysis.max_abs_error_um = max_um;
+  r.analysis.rms_error_um = max_um / std::sqrt(2.0);
+  r.analysis.peak_to_valley_um = 2 * max_um;
+  r.analysis.repeatability_um = 0.2;
+  r.analysis.phase_error_deg = 0.25;
+  r.analysis.base_circle_runout_um = 1.5;
+  r.settings = "compensation.gain = 1\nanalysis.window = 150..210\n";
+  Part g;
+  g.rotation_sense = 1;
+  g.c_offset_deg = 10.0;
+  g.probe_offset_deg = 0.0;
+  r.geometry = g;
+  return r;
+}
+
+class RunsCommandsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("gaugeloop-runs-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    Result<RunStore> store = RunStore::open(dir_ / "gaugeloop.sqlite");
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    // 1, 2: lobe 1 on g1 over two days; 3: lobe 2; 4: lobe 1 on g2 without frame or settings.
+    ids_.push_back(*store->insert_run(record("intake", 1, "g1", "2020-11-20T08:00:00Z", 12.0)));
+    RunRecord second = record("intake", 1, "g1", "2020-11-21T08:00:00Z", 4.0);
+    second.settings = "compensation.gain = 0.5\nanalysis.window = 150..210\n";
+    second.correction_in_force_run = ids_[0];
+    ids_.push_back(*store->insert_run(second));
+    ids_.push_back(*store->insert_run(record("intake", 2, "g1", "2020-11-21T09:00:00Z", 30.0)));
+    RunRecord bare = record("intake", 1, "g2", "2020-11-22T08:00:00Z", 6.0);
+    bare.geometry.reset();
+    bare.settings.clear();
+    ids_.push_back(*store->insert_run(bare));
+    ASSERT_TRUE(store->record_nc_file(ids_[0], "nc/CAM_INTAKE_L1.SPF").ok());
+    EventRecord e;
+    e.at_utc = "2020-11-21T07:00:00Z";
+    e.kind = EventKind::kRefusal;
+    e.code = "refused";
+    e.machine = "g1";
+    e.part = "intake";
+    e.lobe = 1;
+    e.message = "correction 120.0 um at cam degree 95 exceeds the 100 um guard";
+    ASSERT_TRUE(store->record_event(e).ok());
+    data_ = " --data-dir " + dir_.string();
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  nlohmann::json json_of(const std::string& args) {
+    CommandResult r = run_command(args + data_);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    nlohmann::json j = nlohmann::json::parse(r.output, nullptr, false);
+    EXPECT_FALSE(j.is_discarded()) << r.output;
+    return j;
+  }
+
+  std::vector<std::int64_t> listed(const std::string& args) {
+    std::vector<std::int64_t> out;
+    for (const auto& run : json_of("runs list --json " + args)) out.push_back(run["id"].get<std::int64_t>());
+    return out;
+  }
+
+  fs::path dir_;
+  std::string data_;
+  std::vector<std::int64_t> ids_;
+};
+
+using Ids = std::vector<std::int64_t>;
+
+TEST_F(RunsCommandsTest, ListFiltersByPartLobeMachineTimeAndStatus) {
+  EXPECT_EQ(listed(""), (Ids{ids_[3], ids_[2], ids_[1], ids_[0]}));
+  EXPECT_EQ(listed("--part intake --lobe 1"), (Ids{ids_[3], ids_[1], ids_[0]}));
+  EXPECT_EQ(listed("--machine g2"), (Ids{ids_[3]}));
+  EXPECT_EQ(listed("--status pushed"), (Ids{ids_[0]}));
+  // --until a date includes that whole day.
+  EXPECT_EQ(listed("--since 2020-11-21 --until 2020-11-21"), (Ids{ids_[2], ids_[1]}));
+  EXPECT_EQ(listed("--since 2020-11-21T08:30"), (Ids{ids_[3], ids_[2]}));
+  CommandResult text = run_command("runs list --lobe 2" + data_);
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_TRUE(has(text.output, "30.00")) << text.output;
+  EXPECT_FALSE(has(text.output, "12.00")) << text.output;
+}
+
+TEST_F(RunsCommandsTest, BadTimeIsBadInputSayingWhatToWrite) {
+  CommandResult r = run_command("runs list --since 22.11.2026" + data_);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "--since '22.11.2026' is not a UTC date or time; write 2026-11-22")) << r.output;
+  r = run_command("runs list --until 2026-02-30" + data_);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "not a real date")) << r.output;
+}
+
+TEST_F(RunsCommandsTest, UnknownRunIsBadInputNamingTheDatabaseAndTheWayToTheIds) {
+  for (const std::string cmd : {"runs show 42", "runs export 42", "runs compare 1 42", "runs plot 42 --out x.svg"}) {
+    CommandResult r = run_command(cmd + data_);
+    EXPECT_EQ(r.exit_code, 2) << cmd << ": " << r.output;
+    EXPECT_TRUE(has(r.output, "run 42 is not in run database " + (dir_ / "gaugeloop.sqlite").string())) << r.output;
+    EXPECT_TRUE(has(r.output, "`gaugeloop runs list --data-dir " + dir_.string() + "` shows the ids")) << r.output;
+  }
+  EXPECT_FALSE(fs::exists("x.svg"));
+}
+
+TEST_F(RunsCommandsTest, NoDatabaseIsBadInputAndCreatesNone) {
+  const fs::path empty = dir_ / "empty";
+  CommandResult r = run_command("runs list --data-dir " + empty.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "no run database at " + (empty / "gaugeloop.sqlite").string())) << r.output;
+  EXPECT_FALSE(fs::exists(empty));
+}
+
+TEST_F(RunsCommandsTest, ShowGivesSummaryAnalysisCorrectionAndPushes) {
+  CommandResult r = run_command("runs show " + std::to_string(ids_[0]) + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"intake lobe 1 on g1 (pushed)", "max lift error    12.00 um at cam 90 deg", "+0.250 deg",
+                        "1.50 um (base circle", "from the design", "nc/CAM_INTAKE_L1.SPF", "C = +psi + 10.000 deg"}) {
+    EXPECT_TRUE(has(r.output, f)) << "'" << f << "' not in:\n" << r.output;
+  }
+  const nlohmann::json j = json_of("runs show --json " + std::to_string(ids_[1]));
+  EXPECT_EQ(j["correction_in_force_run"], ids_[0]);
+  EXPECT_EQ(j["phase_error_deg"], 0.25);
+  EXPECT_EQ(j["max_abs_error_at_cam_deg"], 90);
+  EXPECT_EQ(j["settings_hash"], settings_hash("compensation.gain = 0.5\nanalysis.window = 150..210\n"));
+}
+
+TEST_F(RunsCommandsTest, ExportMapsRevolutionsToTheCamFrameWhenTheFrameIsKnown) {
+  CommandResult r = run_command("runs export " + std::to_string(ids_[0]) + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::istringstream in(r.output);
+  std::string line, header;
+  std::vector<std::string> rows;
+  while (std::getline(in, line)) {
+    if (line.rfind("#", 0) == 0) continue;
+    if (header.empty()) {
+      header = line;
+    } else {
+      rows.push_back(line);
+    }
+  }
+  EXPECT_EQ(header,
+            "cam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,error_um,"
+            "correction_um");
+  ASSERT_EQ(rows.size(), 360u);
+  EXPECT_TRUE(has(r.output, "mapped to the CAM frame")) << r.output.substr(0, 600);
+  // c0 = 10, sense +1, probe 0: cam degree 5 was read at machine degree 15.
+  std::istringstream row5(rows[5]);
+  std::vector<double> v;
+  for (std::string cell; std::getline(row5, cell, ',');) v.push_back(std::stod(cell));
+  ASSERT_EQ(v.size(), 9u);
+  EXPECT_EQ(v[0], 5);
+  EXPECT_NEAR(v[2], raw_mm(0, 15), 1e-7);
+  EXPECT_NEAR(v[4], raw_mm(2, 15), 1e-7);
+  EXPECT_NEAR(v[7], 12.0 * std::sin(5 * 0.0174533), 1e-4);
+}
+
+TEST_F(RunsCommandsTest, ExportSaysWhenRevolutionsStayInTheMachineFrame) {
+  CommandResult r = run_command("runs export " + std::to_string(ids_[3]) + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "MACHINE frame: row k holds the reading at C = k deg")) << r.output.substr(0, 800);
+  EXPECT_TRUE(has(r.output, "rev1_at_machine_deg_lift_mm")) << r.output.substr(0, 800);
+  EXPECT_TRUE(has(r.output, "\n15,0.5000000,1.0150000,")) << "machine degree 15 on row 15";
+}
+
+TEST_F(RunsCommandsTest, CompareShowsChangesAndTheSettingsThatDiffer) {
+  CommandResult r = run_command("runs compare " + std::to_string(ids_[0]) + " " + std::to_string(ids_[1]) + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "-8.00")) << r.output;  // max error 12 -> 4
+  EXPECT_TRUE(has(r.output, "- compensation.gain = 1")) << r.output;
+  EXPECT_TRUE(has(r.output, "+ compensation.gain = 0.5")) << r.output;
+  EXPECT_TRUE(has(r.output, "run " + std::to_string(ids_[0]))) << r.output;
+  const nlohmann::json j = json_of("runs compare --json " + std::to_string(ids_[0]) + " " + std::to_string(ids_[1]));
+  EXPECT_DOUBLE_EQ(j["change_b_minus_a"]["max_abs_error_um"].get<double>(), -8.0);
+  EXPECT_NEAR(j["error_difference"]["max_abs_um"].get<double>(), 8.0, 1e-3);
+  EXPECT_EQ(j["error_difference"]["at_cam_deg"], 90);
+  EXPECT_EQ(j["settings_same"], false);
+  EXPECT_EQ(j["b_correction_in_force_run"], ids_[0]);
+}
+
+TEST_F(RunsCommandsTest, TrendIsOneLobeOldestFirstWithPhaseAndRunout) {
+  const nlohmann::json j = json_of("runs trend --json --part intake --lobe 1 --machine g1");
+  ASSERT_EQ(j.size(), 2u);
+  EXPECT_EQ(j[0]["id"], ids_[0]);
+  EXPECT_EQ(j[1]["max_abs_error_um"], 4.0);
+  EXPECT_EQ(j[1]["phase_error_deg"], 0.25);
+  EXPECT_EQ(j[1]["base_circle_runout_um"], 1.5);
+  CommandResult r = run_command("runs trend --part intake --lobe 1 --since 2020-11-21" + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "max error 4.00 -> 6.00 um")) << r.output;
+  r = run_command("runs trend --part intake" + data_);
+  EXPECT_EQ(r.exit_code, 2) << "the lobe is required: " << r.output;
+}
+
+TEST_F(RunsCommandsTest, PlotWritesAnSvgWithTheToleranceBand) {
+  const fs::path svg = dir_ / "run1.svg";
+  CommandResult r =
+      run_command("runs plot " + std::to_string(ids_[0]) + " --tolerance-um 10 --out " + svg.string() + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(svg);
+  std::stringstream s;
+  s << in.rdbuf();
+  const std::string text = s.str();
+  EXPECT_TRUE(has(text, "<svg xmlns=\"http://www.w3.org/2000/svg\"")) << text.substr(0, 200);
+  EXPECT_TRUE(has(text, "tolerance \u00b110.0 \u00b5m"));
+  // 12 um sine against +-10 um: |12 sin d| > 10 for d in 57..123 and 237..303, 134 degrees.
+  EXPECT_TRUE(has(text, "134 degrees outside \u00b110.0 \u00b5m")) << "verdict missing";
+  EXPECT_TRUE(has(text, "</svg>"));
+}
+
+TEST_F(RunsCommandsTest, PruneDropsOldRawSamplesAndKeepsTheSummary) {
+  CommandResult r = run_command("runs prune --raw-older-than-days 0" + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "pruned the raw samples of 4 runs")) << r.output;
+  r = run_command("runs export " + std::to_string(ids_[0]) + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "Raw revolutions were pruned")) << r.output.substr(0, 800);
+  EXPECT_TRUE(has(r.output, "cam_deg,design_lift_mm,mean_lift_mm,")) << r.output.substr(0, 800);
+  const nlohmann::json j = json_of("runs show --json " + std::to_string(ids_[0]));
+  EXPECT_EQ(j["max_abs_error_um"], 12.0);
+  EXPECT_FALSE(j["raw_pruned_utc"].is_null());
+}
+
+TEST_F(RunsCommandsTest, EventsListFaultsAndRefusals) {
+  CommandResult r = run_command("events" + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "refusal")) << r.output;
+  EXPECT_TRUE(has(r.output, "exceeds the 100 um guard")) << r.output;
+  EXPECT_EQ(json_of("events --json --kind fault").size(), 0u);
+  const nlohmann::json j = json_of("events --json --kind refusal --part intake");
+  ASSERT_EQ(j.size(), 1u);
+  EXPECT_EQ(j[0]["lobe"], 1);
+  EXPECT_EQ(j[0]["code"], "refused");
+}
+
+}  // namespace
+}  // namespace gaugeloop

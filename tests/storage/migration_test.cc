@@ -1,0 +1,167 @@
+// Upgrading a database written by schema version 1 (`gaugeloop demo` before issue 5): the
+// data survives, the version-1 names still read the same columns, damage stops the upgrade.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "storage/migrations.h"
+#include "storage/run_store.h"
+#include "storage/sqlite_db.h"
+#include "storage_test_support.h"
+
+namespace gaugeloop {
+namespace {
+
+using testing::RawDb;
+using testing::TempDir;
+
+// What version 1 kept: lifts as 6-decimal JSON, profile values as REALs.
+double v1_lift(int rev, int deg) { return std::round((2.0 + std::sin(deg * 0.01745329) + rev * 1e-3) * 1e6) / 1e6; }
+double v1_error(int run, int deg) { return (run == 1 ? 1.0 : -1.0) * 7.25 * std::cos(deg * 0.01745329); }
+
+// Builds a version-1 database with the version-1 SQL exactly as released, holding run 1
+// (pushed) and run 2 (measured, built on run 1's correction).
+void make_v1_database(const std::filesystem::path& path) {
+  std::filesystem::create_directories(path.parent_path());
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  auto exec = [db](const std::string& sql) {
+    char* err = nullptr;
+    const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err);
+    EXPECT_EQ(rc, SQLITE_OK) << (err != nullptr ? err : "") << " in " << sql.substr(0, 200);
+    sqlite3_free(err);
+  };
+  exec("PRAGMA journal_mode = WAL; BEGIN;");
+  exec(std::string(storage_internal::schema_v1_sql()));
+  exec("PRAGMA user_version = 1;");
+  for (int run = 1; run <= 2; ++run) {
+    exec(
+        "INSERT INTO runs (started_utc, finished_utc, machine, part, lobe, gauge, note, status, revolutions,"
+        " degrees_captured, polls, reconnects, discarded_revolutions, zero_offset_mm, max_abs_error_um,"
+        " rms_error_um, peak_to_valley_um, repeatability_um, nc_file, correction_in_force_run) VALUES ('2026-11-2" +
+        std::to_string(run) + "T08:00:00Z', '2026-11-2" + std::to_string(run) +
+        "T08:00:05Z', 'grinder-1', 'intake_flat', 1, 'tcp:127.0.0.1:1502', 'run " + std::to_string(run) + "', " +
+        (run == 1 ? "'pushed'" : "'measured'") + ", 3, 1080, 410, 0, 0, 0.25, 7.25, 5.1, 14.5, 0.7, " +
+        (run == 1 ? "'nc/CAM_INTAKE_L1.SPF'" : "NULL") + ", " + (run == 1 ? "NULL" : "1") + ")");
+    for (int rev = 0; rev < 3; ++rev) {
+      std::string json = "[";
+      for (int deg = 0; deg < 360; ++deg) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%s%.6f", deg == 0 ? "" : ",", v1_lift(rev, deg));
+        json += buf;
+      }
+      json += "]";
+      exec("INSERT INTO run_revolutions VALUES (" + std::to_string(run) + ", " + std::to_string(rev) + ", " +
+           std::to_string(40 + rev) + ", '" + json + "')");
+    }
+    for (int deg = 0; deg < 360; ++deg) {
+      char buf[256];
+      std::snprintf(buf, sizeof buf, "INSERT INTO run_profile VALUES (%d, %d, %.17g, %.17g, %.17g, %.17g, %.17g)", run,
+                    deg, 1.0 + deg * 0.001, 1.0 + deg * 0.001 + v1_error(run, deg) / 1000.0, 0.2 + deg * 1e-4,
+                    v1_error(run, deg), -0.5 * v1_error(run, deg));
+      exec(buf);
+    }
+  }
+  exec("COMMIT;");
+  sqlite3_close(db);
+}
+
+TEST(MigrationFromV1, KeepsEveryRunAndItsNumbers) {
+  TempDir dir;
+  make_v1_database(dir.db());
+  Result<RunStore> store = RunStore::open(dir.db());
+  ASSERT_TRUE(store.ok()) << store.error().message;
+
+  RawDb raw(dir.db());
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
+  EXPECT_EQ(raw.query_text("PRAGMA integrity_check"), "ok");
+  EXPECT_EQ(raw.query_int("PRAGMA foreign_key_check"), 0) << "no row points at a missing parent";
+
+  for (int run = 1; run <= 2; ++run) {
+    Result<StoredRun> loaded = store->load_run(run);
+    ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+    EXPECT_EQ(loaded->note, "run " + std::to_string(run));
+    EXPECT_EQ(loaded->summary.max_abs_error_um, 7.25);
+    EXPECT_FALSE(loaded->summary.phase_error_deg.has_value()) << "version 1 did not compute it";
+    EXPECT_FALSE(loaded->geometry.has_value());
+    EXPECT_EQ(loaded->settings, "");
+    ASSERT_EQ(loaded->revolutions.size(), 3u);
+    for (int rev = 0; rev < 3; ++rev) {
+      EXPECT_EQ(loaded->revolutions[rev].revolution, 40 + rev);
+      for (int deg = 0; deg < 360; ++deg) {
+        // Version 1 kept 1e-6 mm; version 2 keeps 1e-7 mm: the conversion is exact to 1e-12.
+        ASSERT_NEAR(loaded->revolutions[rev].lift_mm[deg], v1_lift(rev, deg), 1e-12) << rev << "/" << deg;
+      }
+    }
+    for (int deg = 0; deg < 360; ++deg) {
+      ASSERT_NEAR(loaded->analysis.error_um[deg], v1_error(run, deg), 0.5e-4 + 1e-9) << deg;
+      ASSERT_NEAR(loaded->correction_um[deg], -0.5 * v1_error(run, deg), 0.5e-4 + 1e-9) << deg;
+      ASSERT_NEAR(loaded->analysis.design_lift_mm[deg], 1.0 + deg * 0.001, 0.5e-7 + 1e-12) << deg;
+    }
+  }
+  Result<StoredRun> pushed = store->load_run(1);
+  ASSERT_TRUE(pushed.ok());
+  EXPECT_EQ(pushed->summary.status, "pushed");
+  ASSERT_EQ(pushed->pushes.size(), 1u) << "the version-1 push is kept as an nc_pushes row";
+  EXPECT_EQ(pushed->pushes[0].nc_file, "nc/CAM_INTAKE_L1.SPF");
+  EXPECT_EQ(pushed->pushes[0].pushed_utc, "2026-11-21T08:00:05Z");
+  Result<StoredRun> second = store->load_run(2);
+  ASSERT_TRUE(second.ok());
+  EXPECT_EQ(second->correction_in_force_run, 1);
+
+  // The version-1 names read the same columns through the views.
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_samples"), 2 * 3 * 360);
+  EXPECT_NEAR(raw.query_double("SELECT lift_mm FROM run_samples WHERE run_id = 2 AND revolution_index = 1"
+                               " AND angle_deg = 90"),
+              v1_lift(1, 90), 1e-12);
+  EXPECT_NEAR(raw.query_double("SELECT error_um FROM run_profile WHERE run_id = 1 AND angle_deg = 0"), 7.25, 1e-9);
+  EXPECT_EQ(raw.query_text("SELECT type FROM sqlite_schema WHERE name = 'run_profile'"), "view");
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'run_revolutions'"), 0);
+  EXPECT_EQ(raw.query_text("SELECT name FROM parts"), "intake_flat");
+  EXPECT_EQ(raw.query_int("SELECT lobe FROM lobes WHERE part = 'intake_flat'"), 1);
+
+  // And the upgraded database takes new runs.
+  Result<std::int64_t> id = store->insert_run(testing::make_record("intake_flat", "2026-11-23T08:00:00Z"));
+  ASSERT_TRUE(id.ok()) << id.error().message;
+  EXPECT_EQ(*id, 3);
+}
+
+TEST(MigrationFromV1, ADamagedRunStopsTheUpgradeAndLeavesVersion1Intact) {
+  TempDir dir;
+  make_v1_database(dir.db());
+  {
+    RawDb raw(dir.db());
+    ASSERT_EQ(raw.exec("DELETE FROM run_profile WHERE run_id = 2 AND angle_deg = 100"), SQLITE_OK);
+  }
+  Result<RunStore> store = RunStore::open(dir.db());
+  ASSERT_FALSE(store.ok());
+  EXPECT_EQ(store.error().code, ErrorCode::kStorage);
+  EXPECT_NE(store.error().message.find("run 2 is damaged"), std::string::npos) << store.error().message;
+  EXPECT_NE(store.error().message.find("cam degree 100"), std::string::npos) << store.error().message;
+  EXPECT_NE(store.error().message.find(dir.db().string()), std::string::npos) << store.error().message;
+
+  RawDb raw(dir.db());
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 1);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_revolutions"), 6);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name IN ('run_raw', 'parts', 'events')"), 0);
+}
+
+TEST(MigrationFromV1, StepsOneVersionAtATime) {
+  TempDir dir;
+  std::filesystem::create_directories(dir.db().parent_path());
+  storage_internal::Connection conn;
+  conn.path = dir.db();
+  ASSERT_EQ(sqlite3_open(dir.db().c_str(), &conn.db), SQLITE_OK);
+  ASSERT_TRUE(storage_internal::apply_migrations_up_to(conn, 1).ok());
+  RawDb raw(dir.db());
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 1);
+  EXPECT_EQ(raw.query_text("SELECT type FROM sqlite_schema WHERE name = 'run_profile'"), "table");
+  Status s = storage_internal::apply_migrations(conn);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 2);
+  EXPECT_EQ(raw.query_text("SELECT type FROM sqlite_schema WHERE name = 'run_profile'"), "view");
+}
+
+}  // namespace
+}  // namespace gaugeloop
