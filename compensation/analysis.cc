@@ -2,13 +2,18 @@
 #include "compensation/analysis.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <Eigen/Dense>
+#include <unsupported/Eigen/FFT>
 
 #include "compensation/message_text.h"
 
@@ -19,9 +24,42 @@ constexpr size_t kDegrees = static_cast<size_t>(kDegreesPerRevolution);
 constexpr int kMinRevolutions = 3;
 constexpr double kWholeDegreeTolerance = 1e-9;
 constexpr double kBaseCircleToleranceMm = 1e-3;  // 1 um
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+// Runout: base-circle degrees must have the design within 1 um for this many degrees either
+// side, and at least kMinEroded such degrees, else the margin is dropped.
+constexpr int kRampMarginDeg = 3;
+constexpr int kMinEroded = 20;
+// Phase: Gauss-Newton stops below this step; a design whose slope sum is below kNoSlope
+// (mm^2/deg^2 over the turn) is round.
+constexpr int kMaxPhaseIterations = 50;
+constexpr double kPhaseToleranceDeg = 1e-9;
+constexpr double kNoSlope = 1e-12;
+
+// cos and sin of every whole degree, computed once (thread-safe static initialisation).
+struct DegreeTrig {
+  std::array<double, kDegrees> cos{};
+  std::array<double, kDegrees> sin{};
+};
+const DegreeTrig& degree_trig() {
+  static const DegreeTrig trig = [] {
+    DegreeTrig t;
+    for (size_t d = 0; d < kDegrees; ++d) {
+      t.cos[d] = std::cos(static_cast<double>(d) * kRadPerDeg);
+      t.sin[d] = std::sin(static_cast<double>(d) * kRadPerDeg);
+    }
+    return t;
+  }();
+  return trig;
+}
+
+// Eigen's FFT keeps its plan (the twiddle factors) in the object: one per thread, reused.
+Eigen::FFT<double>& thread_fft() {
+  thread_local Eigen::FFT<double> fft;
+  return fft;
+}
 
 // Brings every revolution into the cam frame, one value per whole cam degree.
-Result<std::vector<DegreeTable>> to_cam_frame(const MeasuredRun& run, const Part& part) {
+Result<std::vector<DegreeTable>> to_cam_frame(const MeasuredRun& run, const Part& part, const DesignReading& design) {
   std::vector<double> beta(kDegrees);
   bool whole = true;
   for (size_t c = 0; c < kDegrees; ++c) {
@@ -45,7 +83,10 @@ Result<std::vector<DegreeTable>> to_cam_frame(const MeasuredRun& run, const Part
     }
     return cam;
   }
-  // Fractional offsets: interpolate each revolution periodically in the cam frame.
+  // Fractional offsets: interpolate each revolution periodically in the cam frame. What is
+  // interpolated is the reading less the design's there (design.at: exact, corners and all),
+  // so only the error, which is smooth, is interpolated, and the design is added back at
+  // whole degrees from its table.
   std::vector<size_t> order(kDegrees);
   for (size_t c = 0; c < kDegrees; ++c) order[c] = c;
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return beta[a] < beta[b]; });
@@ -53,22 +94,164 @@ Result<std::vector<DegreeTable>> to_cam_frame(const MeasuredRun& run, const Part
   std::vector<double> value(kDegrees);
   for (size_t k = 0; k < kDegrees; ++k) angle[k] = beta[order[k]];
   for (size_t r = 0; r < run.revolutions.size(); ++r) {
-    for (size_t k = 0; k < kDegrees; ++k) value[k] = run.revolutions[r].lift_mm[order[k]];
+    for (size_t k = 0; k < kDegrees; ++k) value[k] = run.revolutions[r].lift_mm[order[k]] - design.at(angle[k]);
     Result<PeriodicSpline> spline = PeriodicSpline::fit(angle, value);
     if (!spline.ok()) {
       return make_error(ErrorCode::kInternal, "analysis: resampling revolution " +
                                                   std::to_string(run.revolutions[r].revolution) +
                                                   " into the cam frame: " + spline.error().message);
     }
-    for (size_t d = 0; d < kDegrees; ++d) cam[r][d] = spline->value(static_cast<double>(d));
+    for (size_t d = 0; d < kDegrees; ++d) cam[r][d] = spline->value(static_cast<double>(d)) + design.table()[d];
   }
   return cam;
+}
+
+size_t wrap_degree(int d) {
+  return static_cast<size_t>(((d % kDegreesPerRevolution) + kDegreesPerRevolution) % kDegreesPerRevolution);
+}
+
+// error ~ zero + cos_um cos(theta) + sin_um sin(theta) on the base circle (see
+// fit_base_circle_runout for which degrees).
+struct BaseCircleHarmonic {
+  double zero_um = 0.0;
+  double cos_um = 0.0;
+  double sin_um = 0.0;
+  int degrees_used = 0;  // 0: no base circle, all 0
+};
+
+BaseCircleHarmonic fit_base_circle_harmonic(const DegreeTable& error_um, const DegreeTable& design_lift_mm) {
+  // Base-circle degrees, eroded by the ramp margin; without the margin if too few remain.
+  std::vector<bool> on_base(kDegrees);
+  for (size_t d = 0; d < kDegrees; ++d) on_base[d] = std::abs(design_lift_mm[d]) <= kBaseCircleToleranceMm;
+  std::vector<int> used;
+  for (int d = 0; d < kDegreesPerRevolution; ++d) {
+    bool all = true;
+    for (int k = -kRampMarginDeg; k <= kRampMarginDeg && all; ++k) all = on_base[wrap_degree(d + k)];
+    if (all) used.push_back(d);
+  }
+  if (used.size() < static_cast<size_t>(kMinEroded)) {
+    used.clear();
+    for (int d = 0; d < kDegreesPerRevolution; ++d) {
+      if (on_base[static_cast<size_t>(d)]) used.push_back(d);
+    }
+  }
+  BaseCircleHarmonic out;
+  if (used.size() < 3) return out;
+  // Least squares by QR: on a short arc the columns are nearly dependent, and QR keeps what
+  // accuracy there is.
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(used.size()), 3);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(used.size()));
+  const DegreeTrig& trig = degree_trig();
+  for (size_t i = 0; i < used.size(); ++i) {
+    const size_t deg = static_cast<size_t>(used[i]);
+    const Eigen::Index row = static_cast<Eigen::Index>(i);
+    a(row, 0) = 1.0;
+    a(row, 1) = trig.cos[deg];
+    a(row, 2) = trig.sin[deg];
+    b(row) = error_um[static_cast<size_t>(used[i])];
+  }
+  const Eigen::Vector3d c = a.colPivHouseholderQr().solve(b);
+  out.zero_um = c(0);
+  out.cos_um = c(1);
+  out.sin_um = c(2);
+  out.degrees_used = static_cast<int>(used.size());
+  return out;
+}
+
+// The measurement with the base-circle first harmonic and zero taken out, for the phase fit:
+// mean - (zero + e cos(theta - theta0)) / 1000, `fit` taken on mean - design.
+DegreeTable without_base_circle_eccentricity(const DegreeTable& mean_mm, const BaseCircleHarmonic& fit) {
+  const DegreeTrig& trig = degree_trig();
+  DegreeTable shifted = mean_mm;
+  for (size_t d = 0; d < kDegrees; ++d) {
+    shifted[d] -= (fit.zero_um + fit.cos_um * trig.cos[d] + fit.sin_um * trig.sin[d]) / 1000.0;
+  }
+  return shifted;
+}
+
+// The base-circle fit of mean - design.
+BaseCircleHarmonic base_circle_harmonic_of(const DegreeTable& mean_mm, const DegreeTable& design_mm) {
+  DegreeTable error_um{};
+  for (size_t d = 0; d < kDegrees; ++d) error_um[d] = (mean_mm[d] - design_mm[d]) * 1000.0;
+  return fit_base_circle_harmonic(error_um, design_mm);
+}
+
+// The rotation phi (deg, in (-180, 180]) for which mean(theta) ~ design(theta - phi) in
+// least squares, the mean with its base-circle eccentricity (`base`, fitted on
+// mean - design) removed; nullopt when the design has no slope.
+std::optional<double> best_rotation_deg(const DegreeTable& mean_mm, const BaseCircleHarmonic& base,
+                                        const DesignReading& design) {
+  const DegreeTable& design_mm = design.table();
+  const DegreeTable target = without_base_circle_eccentricity(mean_mm, base);
+  // Coarse: the whole-degree shift k maximising sum_d target[d] design[d - k], i.e. the
+  // inverse transform of T conj(D). With both tables zeroed on the base circle that is the
+  // least-squares shift on the whole-degree grid.
+  Eigen::FFT<double>& fft = thread_fft();
+  const std::vector<double> t(target.begin(), target.end());
+  const std::vector<double> s(design_mm.begin(), design_mm.end());
+  std::vector<std::complex<double>> tf;
+  std::vector<std::complex<double>> sf;
+  fft.fwd(tf, t);
+  fft.fwd(sf, s);
+  for (size_t k = 0; k < tf.size(); ++k) tf[k] *= std::conj(sf[k]);
+  std::vector<double> correlation;
+  fft.inv(correlation, tf);
+  const size_t best =
+      static_cast<size_t>(std::max_element(correlation.begin(), correlation.end()) - correlation.begin());
+  double phi = best > kDegrees / 2 ? static_cast<double>(best) - 360.0 : static_cast<double>(best);
+
+  // Fine: Gauss-Newton on r(theta) = target(theta) - design(theta - phi), dr/dphi =
+  // design'(theta - phi) per degree; a step that does not lower the sum of squares is halved.
+  struct Pass {
+    double squares = 0.0;
+    double rj = 0.0;
+    double jj = 0.0;
+  };
+  auto pass = [&](double p) {
+    Pass out;
+    for (int d = 0; d < kDegreesPerRevolution; ++d) {
+      const DesignReading::Sample at = design.sample(d - p);
+      const double r = target[static_cast<size_t>(d)] - at.reading_mm;
+      const double j = at.slope_mm_per_deg;
+      out.squares += r * r;
+      out.rj += r * j;
+      out.jj += j * j;
+    }
+    return out;
+  };
+  Pass current = pass(phi);
+  if (!(current.jj > kNoSlope)) return std::nullopt;
+  for (int iter = 0; iter < kMaxPhaseIterations; ++iter) {
+    double step = -current.rj / current.jj;
+    if (std::abs(step) < kPhaseToleranceDeg) break;  // converged; below this, rounding rules
+    bool accepted = false;
+    for (int halving = 0; halving < 30 && !accepted && std::abs(step) >= kPhaseToleranceDeg; ++halving) {
+      const Pass next = pass(phi + step);
+      if (next.squares <= current.squares && next.jj > kNoSlope) {
+        phi += step;
+        current = next;
+        accepted = true;
+      } else {
+        step *= 0.5;
+      }
+    }
+    if (!accepted) break;  // no descent left: at the minimum to rounding
+  }
+  phi = std::remainder(phi, 360.0);
+  if (phi <= -180.0) phi += 360.0;
+  return phi;
 }
 
 }  // namespace
 
 Result<LobeAnalysis> analyse_lobe(const MeasuredRun& run, const DegreeTable& design_lift_mm, const Part& part,
                                   const AnalysisSettings& settings) {
+  return analyse_lobe(run, DesignReading::interpolating(design_lift_mm), part, settings);
+}
+
+Result<LobeAnalysis> analyse_lobe(const MeasuredRun& run, const DesignReading& design, const Part& part,
+                                  const AnalysisSettings& settings) {
+  const DegreeTable& design_lift_mm = design.table();
   const int revolutions = static_cast<int>(run.revolutions.size());
   if (revolutions < kMinRevolutions) {
     return make_error(ErrorCode::kInvalidInput, "analysis: the run has " + std::to_string(revolutions) +
@@ -146,7 +329,7 @@ Result<LobeAnalysis> analyse_lobe(const MeasuredRun& run, const DegreeTable& des
                           " deg); move base_circle_center_deg / base_circle_half_width_deg onto the base circle");
   }
 
-  Result<std::vector<DegreeTable>> cam = to_cam_frame(run, part);
+  Result<std::vector<DegreeTable>> cam = to_cam_frame(run, part, design);
   if (!cam.ok()) return cam.error();
 
   LobeAnalysis a;
@@ -181,59 +364,76 @@ Result<LobeAnalysis> analyse_lobe(const MeasuredRun& run, const DegreeTable& des
   }
   a.rms_error_um = std::sqrt(squares / kDegreesPerRevolution);
   a.peak_to_valley_um = highest - lowest;
+
+  const BaseCircleHarmonic base = fit_base_circle_harmonic(a.error_um, design_lift_mm);
+  a.base_circle_runout_um = 2.0 * std::hypot(base.cos_um, base.sin_um);
+  // A round design has no timing to report: 0.
+  a.phase_error_deg = best_rotation_deg(a.mean_lift_mm, base, design).value_or(0.0);
+  a.harmonic_amplitude_um = harmonic_amplitudes_um(a.error_um);
   return a;
 }
 
 Result<PhaseFit> fit_phase_error(const LobeAnalysis& analysis, double max_phase_deg) {
-  const PeriodicSpline design = PeriodicSpline::fit(analysis.design_lift_mm);
-  constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-  double phi = 0.0;
-  for (int iter = 0; iter < 50; ++iter) {
-    // r(theta) = mean(theta) - design(theta - phi); dr/dphi = design'(theta - phi) per degree.
-    double rj = 0.0;
-    double jj = 0.0;
-    for (int d = 0; d < kDegreesPerRevolution; ++d) {
-      const double r = analysis.mean_lift_mm[static_cast<size_t>(d)] - design.value(d - phi);
-      const double j = design.d1(d - phi) * kRadPerDeg;
-      rj += r * j;
-      jj += j * j;
-    }
-    if (!(jj > 1e-12)) {
-      return make_error(ErrorCode::kInvalidInput,
-                        "phase fit: the design lift has no slope to align on (a round lobe); no "
-                        "phase error to report");
-    }
-    const double step = -rj / jj;
-    phi += step;
-    if (!(std::abs(phi) <= 90.0)) break;
-    if (std::abs(step) < 1e-12) break;
+  return fit_phase_error(analysis, DesignReading::interpolating(analysis.design_lift_mm), max_phase_deg);
+}
+
+Result<PhaseFit> fit_phase_error(const LobeAnalysis& analysis, const DesignReading& design, double max_phase_deg) {
+  const std::optional<double> phi =
+      best_rotation_deg(analysis.mean_lift_mm, base_circle_harmonic_of(analysis.mean_lift_mm, design.table()), design);
+  if (!phi) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "phase fit: the design lift has no slope to align on (a round lobe); no "
+                      "phase error to report");
   }
-  if (!(std::abs(phi) <= max_phase_deg)) {
-    return make_error(ErrorCode::kRefused, "phase fit: the lobe appears rotated by " + format_fixed(phi, 3) +
+  if (!(std::abs(*phi) <= max_phase_deg)) {
+    return make_error(ErrorCode::kRefused, "phase fit: the lobe appears rotated by " + format_fixed(*phi, 3) +
                                                " deg, more than the " + format_fixed(max_phase_deg, 3) +
                                                " deg accepted; check the clamping, c_offset_deg "
                                                "and probe_offset_deg before compensating");
   }
   PhaseFit fit;
-  fit.phase_error_deg = phi;
+  fit.phase_error_deg = *phi;
   double squares = 0.0;
+  double lowest = std::numeric_limits<double>::infinity();
+  double highest = -std::numeric_limits<double>::infinity();
   for (int d = 0; d < kDegreesPerRevolution; ++d) {
     const size_t i = static_cast<size_t>(d);
-    fit.residual_error_um[i] = (analysis.mean_lift_mm[i] - design.value(d - phi)) * 1000.0;
-    squares += fit.residual_error_um[i] * fit.residual_error_um[i];
+    const double r = (analysis.mean_lift_mm[i] - design.at(d - *phi)) * 1000.0;
+    fit.residual_error_um[i] = r;
+    fit.max_abs_residual_um = std::max(fit.max_abs_residual_um, std::abs(r));
+    squares += r * r;
+    lowest = std::min(lowest, r);
+    highest = std::max(highest, r);
   }
   fit.rms_residual_um = std::sqrt(squares / kDegreesPerRevolution);
+  fit.peak_to_valley_residual_um = highest - lowest;
   return fit;
 }
 
-double first_harmonic_runout_um(const DegreeTable& error_um) {
-  std::complex<double> c1 = 0.0;
-  for (int d = 0; d < kDegreesPerRevolution; ++d) {
-    const double theta = d * std::numbers::pi / 180.0;
-    c1 += error_um[static_cast<size_t>(d)] * std::complex<double>(std::cos(theta), -std::sin(theta));
-  }
-  // Amplitude of the first harmonic is 2 |c1| / N; the indicator swings twice that.
-  return 2.0 * (2.0 * std::abs(c1) / kDegreesPerRevolution);
+BaseCircleRunout fit_base_circle_runout(const DegreeTable& error_um, const DegreeTable& design_lift_mm) {
+  const BaseCircleHarmonic fit = fit_base_circle_harmonic(error_um, design_lift_mm);
+  BaseCircleRunout out;
+  if (fit.degrees_used == 0) return out;
+  out.eccentricity_um = std::hypot(fit.cos_um, fit.sin_um);
+  out.runout_um = 2.0 * out.eccentricity_um;
+  double high = std::atan2(fit.sin_um, fit.cos_um) / kRadPerDeg;
+  if (high < 0.0) high += 360.0;
+  out.high_point_deg = high;
+  out.degrees_used = fit.degrees_used;
+  return out;
+}
+
+std::array<double, 31> harmonic_amplitudes_um(const DegreeTable& values_um) {
+  Eigen::FFT<double>& fft = thread_fft();
+  const std::vector<double> in(values_um.begin(), values_um.end());
+  std::vector<std::complex<double>> spectrum;
+  fft.fwd(spectrum, in);
+  std::array<double, 31> amplitude{};
+  const double n = static_cast<double>(kDegreesPerRevolution);
+  amplitude[0] = std::abs(spectrum[0]) / n;
+  // A real table's harmonic k lives in bins k and N - k with equal magnitude: 2 |X_k| / N.
+  for (size_t k = 1; k < amplitude.size(); ++k) amplitude[k] = 2.0 * std::abs(spectrum[k]) / n;
+  return amplitude;
 }
 
 }  // namespace gaugeloop

@@ -39,4 +39,24 @@ double polar_curvature_per_mm(double r_mm, double r1_mm, double r2_mm);
 // kRefused naming the cam angle range(s) and what to check.
 Status check_lobe_shape(const PeriodicSpline& lift_mm, const FollowerGeometry& geometry);
 
+// check_lobe_shape's conditions for a flat follower, exactly rather than sampled: on each
+// spline piece rb + H and rb + H + H'' are cubics, whose minimum over the piece is at an end
+// or where their derivative (a quadratic) vanishes. Returns the smallest radius of curvature
+// rb + H + H'' over the turn (mm) and where (cam degrees), and the smallest rb + H.
+struct FlatLobeMinima {
+  double radius_of_curvature_mm = 0.0;
+  double radius_at_deg = 0.0;
+  double support_mm = 0.0;  // rb + H
+};
+FlatLobeMinima flat_lobe_minima(const PeriodicSpline& lift_mm, double rb_mm);
+
+// The grid check_lobe_shape samples (dense_angle_grid_deg at this spacing), so a caller that
+// needs the lift there anyway evaluates it once and passes it to the overload below.
+inline constexpr double kShapeCheckSpacingDeg = 0.05;
+
+// check_lobe_shape on lift values already evaluated: lift_at_grid[i] = lift.evaluate(grid[i]),
+// grid = dense_angle_grid_deg(lift, kShapeCheckSpacingDeg).
+Status check_lobe_shape(const std::vector<double>& grid, const std::vector<PeriodicSpline::Point>& lift_at_grid,
+                        const FollowerGeometry& geometry);
+
 }  // namespace gaugeloop

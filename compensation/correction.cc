@@ -1,10 +1,12 @@
 // Smoothing, the learning-control update with its guards, and the corrected wheel path.
 #include "compensation/correction.h"
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <numbers>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <unsupported/Eigen/FFT>
@@ -20,9 +22,11 @@ namespace {
 constexpr size_t kDegrees = static_cast<size_t>(kDegreesPerRevolution);
 constexpr int kNyquist = kDegreesPerRevolution / 2;
 
-// A cam surface point lies on the convex hull when the support in its normal direction is
-// attained there: within this of the point's own normal distance from the axis.
-constexpr double kHullToleranceMm = 1e-6;
+// The design model and the analysis' design table must agree to this (mm): rounding only.
+constexpr double kSameDesignMm = 1e-9;
+
+// Contacts closer than this (degrees of follower angle) are one point.
+constexpr double kSameContactDeg = 1e-9;
 
 }  // namespace
 
@@ -30,7 +34,8 @@ DegreeTable smooth_harmonics(const DegreeTable& values, int max_harmonic) {
   if (max_harmonic >= kNyquist) return values;
   DegreeTable out{};
   if (max_harmonic < 0) return out;
-  Eigen::FFT<double> fft;
+  // Eigen's FFT keeps its plan (the twiddle factors) in the object: one per thread, reused.
+  thread_local Eigen::FFT<double> fft;
   const std::vector<double> in(values.begin(), values.end());
   std::vector<std::complex<double>> spectrum;
   fft.fwd(spectrum, in);  // full spectrum, N bins
@@ -44,10 +49,34 @@ DegreeTable smooth_harmonics(const DegreeTable& values, int max_harmonic) {
   return out;
 }
 
-Result<DegreeTable> next_correction(const LobeAnalysis& analysis, const DegreeTable& correction_in_force_um,
-                                    const CompensationSettings& s) {
+std::string_view compensation_verdict_name(CompensationVerdict verdict) {
+  switch (verdict) {
+    case CompensationVerdict::kApply:
+      return "apply";
+    case CompensationVerdict::kHold:
+      return "hold";
+    case CompensationVerdict::kRefuse:
+      return "refuse";
+  }
+  return "refuse";
+}
+
+std::string CompensationDecision::reasons() const {
+  std::string out;
+  for (const GuardFinding& f : findings) {
+    if (!out.empty()) out += "; ";
+    out += f.reason;
+  }
+  return out;
+}
+
+namespace {
+
+// The step both overloads share; `design` null: no phase part, the whole error is smoothed.
+Result<CompensationDecision> decide(const LobeAnalysis& analysis, const DesignReading* design,
+                                    const DegreeTable& in_force_um, const CompensationSettings& s) {
   if (!(s.gain > 0.0 && s.gain <= 1.0)) {
-    return make_error(ErrorCode::kRefused,
+    return make_error(ErrorCode::kInvalidInput,
                       "compensation: gain " + format_fixed(s.gain, 3) +
                           " is outside (0, 1]; a gain above 1 overshoots and can diverge, 0 or below "
                           "does nothing or the opposite; set a gain in (0, 1]");
@@ -56,41 +85,134 @@ Result<DegreeTable> next_correction(const LobeAnalysis& analysis, const DegreeTa
     return make_error(ErrorCode::kInvalidInput,
                       "compensation: max_harmonic " + std::to_string(s.max_harmonic) + " is outside [0, 180]");
   }
-  if (!(s.max_correction_um > 0.0)) {
-    return make_error(ErrorCode::kInvalidInput,
-                      "compensation: max_correction_um " + format_fixed(s.max_correction_um, 3) + " must be positive");
+  const std::pair<const char*, double> limits[] = {{"max_correction_um", s.max_correction_um},
+                                                   {"max_change_um", s.max_change_um},
+                                                   {"max_repeatability_um", s.max_repeatability_um},
+                                                   {"max_phase_deg", s.max_phase_deg}};
+  for (const auto& [name, value] : limits) {
+    if (!(value > 0.0) || !std::isfinite(value)) {
+      return make_error(ErrorCode::kInvalidInput, std::string("compensation: ") + name + " " + format_fixed(value, 3) +
+                                                      " must be a positive number");
+    }
   }
   for (size_t d = 0; d < kDegrees; ++d) {
-    if (!std::isfinite(analysis.error_um[d]) || !std::isfinite(correction_in_force_um[d])) {
+    if (!std::isfinite(analysis.error_um[d]) || !std::isfinite(in_force_um[d])) {
       return make_error(ErrorCode::kInvalidInput,
                         "compensation: NaN or infinity in the error or in the "
                         "correction in force at cam degree " +
                             std::to_string(d));
     }
   }
-  const DegreeTable smooth = smooth_harmonics(analysis.error_um, s.max_harmonic);
-  DegreeTable next{};
-  size_t worst = 0;
+  const double phi = analysis.phase_error_deg;
+  if (!std::isfinite(phi) || !std::isfinite(analysis.repeatability_um)) {
+    return make_error(ErrorCode::kInvalidInput, "compensation: the analysis' phase or repeatability is not a number");
+  }
+
+  if (design != nullptr) {
+    for (size_t d = 0; d < kDegrees; ++d) {
+      if (!(std::abs(design->table()[d] - analysis.design_lift_mm[d]) <= kSameDesignMm)) {
+        return make_error(ErrorCode::kInvalidInput,
+                          "compensation: the design model does not read what the analysis was made against (cam "
+                          "degree " +
+                              std::to_string(d) + "); pass the DesignReading the analysis used");
+      }
+    }
+  }
+
+  // Fit the phase first, compensate the remainder.
+  DegreeTable phase_part{};
+  if (design != nullptr && phi != 0.0) {
+    for (size_t d = 0; d < kDegrees; ++d) {
+      phase_part[d] = (design->at(static_cast<double>(d) - phi) - design->table()[d]) * 1000.0;
+    }
+  }
+  DegreeTable remainder{};
+  for (size_t d = 0; d < kDegrees; ++d) remainder[d] = analysis.error_um[d] - phase_part[d];
+  const DegreeTable smooth = smooth_harmonics(remainder, s.max_harmonic);
+
+  CompensationDecision out;
+  size_t worst_correction = 0;
+  size_t worst_change = 0;
   for (size_t d = 0; d < kDegrees; ++d) {
-    next[d] = correction_in_force_um[d] + s.gain * smooth[d];
-    if (std::abs(next[d]) > std::abs(next[worst])) worst = d;
+    out.change_um[d] = s.gain * (smooth[d] + phase_part[d]);
+    out.correction_um[d] = in_force_um[d] + out.change_um[d];
+    if (std::abs(out.correction_um[d]) > std::abs(out.correction_um[worst_correction])) worst_correction = d;
+    if (std::abs(out.change_um[d]) > std::abs(out.change_um[worst_change])) worst_change = d;
   }
-  if (std::abs(next[worst]) > s.max_correction_um) {
-    return make_error(ErrorCode::kRefused,
-                      "compensation: the correction would reach " + format_fixed(next[worst], 1) +
-                          " um at cam degree " + std::to_string(worst) + ", beyond the " +
-                          format_fixed(s.max_correction_um, 1) +
-                          " um allowed; check the measurement and the setup, or have an operator approve it");
+  out.largest_correction_um = out.correction_um[worst_correction];
+  out.largest_correction_deg = static_cast<int>(worst_correction);
+  out.largest_change_um = out.change_um[worst_change];
+  out.largest_change_deg = static_cast<int>(worst_change);
+
+  if (std::abs(out.largest_correction_um) > s.max_correction_um) {
+    out.findings.push_back({CompensationGuard::kCorrectionLimit, CompensationVerdict::kRefuse,
+                            "the correction would reach " + format_fixed(out.largest_correction_um, 1) +
+                                " um at cam degree " + std::to_string(worst_correction) + ", beyond the " +
+                                format_fixed(s.max_correction_um, 1) +
+                                " um the wheel path may carry; check the measurement and the setup, or have an "
+                                "operator raise the limit"});
   }
-  return next;
+  if (std::abs(out.largest_change_um) > s.max_change_um) {
+    out.findings.push_back({CompensationGuard::kChangeLimit, CompensationVerdict::kHold,
+                            "the correction would move by " + format_fixed(out.largest_change_um, 1) +
+                                " um at cam degree " + std::to_string(worst_change) +
+                                " from the one in force, more than the " + format_fixed(s.max_change_um, 1) +
+                                " um allowed from one part to the next; check the wheel (dressed, changed?) and "
+                                "measure again, or have an operator approve it"});
+  }
+  if (analysis.repeatability_um > s.max_repeatability_um) {
+    out.findings.push_back({CompensationGuard::kRepeatability, CompensationVerdict::kHold,
+                            "the revolutions disagree by up to " + format_fixed(analysis.repeatability_um, 2) +
+                                " um (largest per-degree standard deviation), more than the " +
+                                format_fixed(s.max_repeatability_um, 2) +
+                                " um a measurement to correct from may show; check the probe tip, coolant and "
+                                "chips on the lobe, and the clamping, and measure again"});
+  }
+  if (std::abs(phi) > s.max_phase_deg) {
+    out.findings.push_back({CompensationGuard::kPhase, CompensationVerdict::kHold,
+                            "the lobe appears turned by " + format_fixed(phi, 3) + " deg, more than the " +
+                                format_fixed(s.max_phase_deg, 3) +
+                                " deg a correction may turn it; in-process that is more often a mis-set "
+                                "probe_offset_deg or a late gauge latch than the grinding: check them, or have an "
+                                "operator approve it"});
+  }
+  for (const GuardFinding& f : out.findings) {
+    if (f.verdict == CompensationVerdict::kRefuse || out.verdict == CompensationVerdict::kApply)
+      out.verdict = f.verdict;
+  }
+  return out;
 }
 
-Result<WheelPath> corrected_wheel_path(const LiftTable& design, const DegreeTable& correction_um, const Part& part,
-                                       double step_deg) {
+}  // namespace
+
+Result<CompensationDecision> decide_correction(const LobeAnalysis& analysis, const DesignReading& design,
+                                               const DegreeTable& correction_in_force_um,
+                                               const CompensationSettings& settings) {
+  return decide(analysis, &design, correction_in_force_um, settings);
+}
+
+Result<CompensationDecision> decide_correction(const LobeAnalysis& analysis, const DegreeTable& correction_in_force_um,
+                                               const CompensationSettings& settings) {
+  return decide(analysis, nullptr, correction_in_force_um, settings);
+}
+
+Result<DegreeTable> next_correction(const LobeAnalysis& analysis, const DegreeTable& correction_in_force_um,
+                                    const CompensationSettings& s) {
+  Result<CompensationDecision> decision = decide_correction(analysis, correction_in_force_um, s);
+  if (!decision.ok()) return decision.error();
+  if (!decision->apply()) {
+    return make_error(ErrorCode::kRefused, std::string("the correction is ") +
+                                               (decision->verdict == CompensationVerdict::kHold ? "held" : "refused") +
+                                               ": " + decision->reasons());
+  }
+  return decision->correction_um;
+}
+
+Result<PeriodicSpline> corrected_lift(const LiftTable& design, const DegreeTable& correction_um, const Part& part) {
   for (size_t d = 0; d < kDegrees; ++d) {
     if (!std::isfinite(correction_um[d])) {
-      return make_error(ErrorCode::kInvalidInput, "corrected wheel path: the correction at cam degree " +
-                                                      std::to_string(d) + " is NaN or infinite");
+      return make_error(ErrorCode::kInvalidInput,
+                        "corrected lift: the correction at cam degree " + std::to_string(d) + " is NaN or infinite");
     }
   }
   Result<PeriodicSpline> lift = PeriodicSpline::fit(design.angle_deg, design.lift_mm);
@@ -107,40 +229,58 @@ Result<WheelPath> corrected_wheel_path(const LiftTable& design, const DegreeTabl
   if (g.kind == FollowerKind::kFlat) {
     for (size_t i = 0; i < n; ++i) lift_correction_um[i] = correction.value(design.angle_deg[i]);
   } else {
-    if (Status shape = check_lobe_shape(*lift, g); !shape.ok()) return shape.error();
     const double rb = g.base_circle_radius_mm;
     const double rr = g.roller_radius_mm;
+    // The support function needs the lobe round the axis, rb + H > 0 (exact, piece by piece;
+    // the sampled check says where). Undercut and a wheel too large are the wheel path's to
+    // refuse, on the corrected lift, which is what will be ground.
+    if (!(flat_lobe_minima(*lift, rb).support_mm > 0.0)) {
+      if (Status shape = check_lobe_shape(*lift, g); !shape.ok()) return shape.error();
+      return make_error(ErrorCode::kRefused, "corrected lift: the design lift of part '" + part.name +
+                                                 "' reaches below minus the base circle radius between the "
+                                                 "check's samples; check the lift table and base_circle_radius_mm");
+    }
+    // The reading at probe angle theta is the support of the pitch curve there, less rr; it
+    // touches the pitch curve at polar angle beta (the follower angle), whose normal is
+    // theta = beta - alpha. So the correction at whole degree theta moves the follower at that
+    // contact by c(theta) / cos(alpha). Each whole degree is carried to its own contact and the
+    // lift corrections are interpolated in beta: where the probe bridges a concave flank, the
+    // bridge's two ends share one normal but take the correction from their own side of it
+    // (the correction may step there, as the reading's slope does), and the flank between
+    // them, which no probe touches, is interpolated.
     const PolarSupport pitch(*lift, rb + rr);
-    std::vector<double> hull_angle;
-    std::vector<double> hull_value;
-    std::vector<bool> on_hull(n, false);
-    for (size_t i = 0; i < n; ++i) {
-      const double beta = design.angle_deg[i];
-      const double rho = rb + rr + lift->value(beta);
-      const double alpha = std::atan(lift->d1(beta) / rho);
-      const double normal_deg = beta - alpha * 180.0 / std::numbers::pi;
-      // rho cos(alpha) is this point's distance from the axis along its own normal.
-      if (pitch.at(normal_deg).support_mm - rho * std::cos(alpha) < kHullToleranceMm) {
-        on_hull[i] = true;
-        lift_correction_um[i] = correction.value(normal_deg) / std::cos(alpha);
-        hull_angle.push_back(beta);
-        hull_value.push_back(lift_correction_um[i]);
-      }
+    std::vector<std::pair<double, double>> contact;  // (beta, lift correction um)
+    contact.reserve(kDegrees);
+    for (size_t d = 0; d < kDegrees; ++d) {
+      const double beta = pitch.at(static_cast<double>(d)).phi_deg;
+      const double alpha = std::atan(lift->d1(beta) / (rb + rr + lift->value(beta)));
+      contact.emplace_back(beta, correction_um[d] / std::cos(alpha));
     }
-    if (hull_angle.size() < n) {
-      Result<PeriodicSpline> bridge = PeriodicSpline::fit(hull_angle, hull_value);
-      if (!bridge.ok()) {
-        return make_error(ErrorCode::kRefused, "corrected wheel path: too few points of the lobe of part '" +
-                                                   part.name + "' touch a flat probe to carry a correction");
-      }
-      for (size_t i = 0; i < n; ++i) {
-        if (!on_hull[i]) lift_correction_um[i] = bridge->value(design.angle_deg[i]);
-      }
+    std::sort(contact.begin(), contact.end());
+    std::vector<double> beta_deg;
+    std::vector<double> value_um;
+    for (const auto& [beta, value] : contact) {
+      // Two probe angles resting on one point (a corner of the pitch curve's hull sampled
+      // twice) add nothing: keep the first.
+      if (!beta_deg.empty() && beta - beta_deg.back() < kSameContactDeg) continue;
+      beta_deg.push_back(beta);
+      value_um.push_back(value);
     }
+    Result<PeriodicSpline> spread = PeriodicSpline::fit(beta_deg, value_um);
+    if (!spread.ok()) {
+      return make_error(ErrorCode::kRefused, "corrected lift: too few points of the lobe of part '" + part.name +
+                                                 "' touch a flat probe to carry a correction");
+    }
+    for (size_t i = 0; i < n; ++i) lift_correction_um[i] = spread->value(design.angle_deg[i]);
   }
   std::vector<double> target(n);
   for (size_t i = 0; i < n; ++i) target[i] = design.lift_mm[i] - lift_correction_um[i] / 1000.0;
-  Result<PeriodicSpline> target_lift = PeriodicSpline::fit(design.angle_deg, target);
+  return PeriodicSpline::fit(design.angle_deg, target);
+}
+
+Result<WheelPath> corrected_wheel_path(const LiftTable& design, const DegreeTable& correction_um, const Part& part,
+                                       double step_deg) {
+  Result<PeriodicSpline> target_lift = corrected_lift(design, correction_um, part);
   if (!target_lift.ok()) return target_lift.error();
   return compute_wheel_path(*target_lift, part, step_deg);
 }

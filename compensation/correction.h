@@ -1,6 +1,11 @@
 // Turning measured lift errors into the correction for the next part, and its wheel path.
 #pragma once
 
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "compensation/flat_probe.h"
 #include "compensation/wheel_path.h"
 #include "core/lift_table.h"
 #include "core/part.h"
@@ -14,26 +19,100 @@ namespace gaugeloop {
 DegreeTable smooth_harmonics(const DegreeTable& values, int max_harmonic);
 
 struct CompensationSettings {
-  double gain = 1.0;                 // g in (0, 1]: fraction of the smoothed error fed back
-  int max_harmonic = 30;             // harmonics kept when smoothing the error, 0..180
-  double max_correction_um = 100.0;  // guard on the correction in force after this step
+  double gain = 1.0;                  // g in (0, 1]: fraction of the smoothed error fed back
+  int max_harmonic = 30;              // harmonics kept when smoothing the error, 0..180
+  double max_correction_um = 100.0;   // refuse: the correction in force after this step, anywhere
+  double max_change_um = 50.0;        // hold: the change from the correction in force, anywhere
+  double max_repeatability_um = 2.0;  // hold: the revolutions disagree by more (largest spread)
+  double max_phase_deg = 0.5;         // hold: the lobe appears turned by more
 };
 
 // Correction convention: a correction c(theta) in um, cam frame, per whole cam degree, in
 // flat-probe reading terms. The next part is ground to the target whose flat-probe reading
 // is design - c (correct the target, BRIEF section 5), so a lobe that measured e um high
 // asks for c to grow by g * e.
-//
-// Returns correction_in_force_um + gain * smooth_harmonics(analysis.error_um, max_harmonic)
-// (iterative learning control: each run builds on the correction in force).
-// Errors: kRefused when gain is outside (0, 1] or when any |correction| exceeds
-// max_correction_um (naming the degree and the value: approve it by hand or find the cause);
-// kInvalidInput for non-finite inputs, max_harmonic outside [0, 180] or a limit <= 0.
+
+// What to do with the correction a measurement asks for.
+//  - kApply: grind the next part with it.
+//  - kHold: keep the correction in force. The measurement is doubtful (its revolutions
+//    disagree), or the step is unusual (a large change since the last part, a large phase);
+//    an operator may approve the proposed correction, or measure again.
+//  - kRefuse: the proposed correction is beyond what the machine may carry at all
+//    (max_correction_um); it is not applied without raising the limit.
+enum class CompensationVerdict { kApply, kHold, kRefuse };
+std::string_view compensation_verdict_name(CompensationVerdict verdict);  // "apply", "hold", "refuse"
+
+// Which guard spoke, so a caller can store or count it without parsing text.
+enum class CompensationGuard {
+  kCorrectionLimit,  // refuse: |correction| > max_correction_um
+  kChangeLimit,      // hold: |correction - in force| > max_change_um
+  kRepeatability,    // hold: repeatability_um > max_repeatability_um
+  kPhase,            // hold: |phase_error_deg| > max_phase_deg
+};
+
+struct GuardFinding {
+  CompensationGuard guard = CompensationGuard::kCorrectionLimit;
+  CompensationVerdict verdict = CompensationVerdict::kHold;  // kHold or kRefuse
+  std::string reason;  // what, where (degree, value, limit) and what to do, in the shop's words
+};
+
+// The outcome of one compensation step. The proposed correction is computed whatever the
+// verdict, so an operator can see it and approve it.
+struct CompensationDecision {
+  CompensationVerdict verdict = CompensationVerdict::kApply;  // the strongest finding's, or kApply
+  DegreeTable correction_um{};  // proposed: in force + gain * step (see decide_correction)
+  DegreeTable change_um{};      // correction_um - correction in force
+  // The value of largest magnitude (signed) and its cam degree.
+  double largest_correction_um = 0.0;
+  int largest_correction_deg = 0;
+  double largest_change_um = 0.0;
+  int largest_change_deg = 0;
+  std::vector<GuardFinding> findings;  // empty when applied, else one per guard tripped
+
+  bool apply() const { return verdict == CompensationVerdict::kApply; }
+  // The findings' reasons joined with "; ", "" when applied.
+  std::string reasons() const;
+};
+
+// One iterative-learning step: fit the phase first, compensate the remainder.
+// With phi = analysis.phase_error_deg and D the design reading model:
+//   phase part  p(theta) = (D(theta - phi) - D(theta)) * 1000, the error a turned lobe
+//               shows at nominal timing, computed exactly, not smoothed: it is one fitted
+//               number and carries no noise, and cutting its harmonics would leave ripple
+//               where the flanks meet the base circle;
+//   remainder   r = error_um - p, smoothed to harmonics 0..max_harmonic (noise is not fed
+//               back);
+//   correction  = correction_in_force + gain * (smooth(r) + p).
+// So a timing error (servo lag, a late latch) is corrected through the lift, as a turn of the
+// target lobe: the table is what holds the correction, and moving c_offset_deg instead would
+// also move the gauge's frame mapping (which uses it) and hide the error rather than remove
+// it. A phase beyond max_phase_deg is held: in-process, the gauge and the wheel share the C
+// axis, and a large apparent phase is more often a mis-set probe_offset_deg.
+// Guards, each a GuardFinding: see CompensationGuard. The verdict is kRefuse if any finding
+// refuses, else kHold if any holds, else kApply.
+// Errors (kInvalidInput): gain outside (0, 1]; max_harmonic outside [0, 180]; a limit that is
+// not a positive number; NaN or infinity in the analysis or the correction in force; a
+// `design` whose table differs from analysis.design_lift_mm (not the model it was made with).
+Result<CompensationDecision> decide_correction(const LobeAnalysis& analysis, const DesignReading& design,
+                                               const DegreeTable& correction_in_force_um,
+                                               const CompensationSettings& settings);
+
+// Without the design model: the phase part cannot be evaluated between whole degrees exactly
+// for a roller lobe (its reading has corners), so the whole error, phase included, is
+// smoothed: step = gain * smooth(error_um). Otherwise as above.
+Result<CompensationDecision> decide_correction(const LobeAnalysis& analysis, const DegreeTable& correction_in_force_um,
+                                               const CompensationSettings& settings);
+
+// The table-only step as a plain result, for callers that do not store held or refused runs:
+// decide_correction(analysis, correction_in_force_um, s); the proposed correction when
+// applied, else kRefused whose message names the verdict and every reason.
+// Errors: as decide_correction.
 Result<DegreeTable> next_correction(const LobeAnalysis& analysis, const DegreeTable& correction_in_force_um,
                                     const CompensationSettings& s);
 
-// The wheel path that grinds the design lobe with `correction_um` applied (convention above).
-// The correction table is interpolated with a PeriodicSpline; at each knot of `design`:
+// The target lift the next part is ground to: the design with `correction_um` applied
+// (convention above), as a periodic spline through the design's knots. The correction table
+// is interpolated with a PeriodicSpline; at each knot of `design`:
 //  - flat follower: target lift = design lift - c(beta) / 1000 (the lift is the reading);
 //  - roller and knife edge: the reading at probe angle theta moves the cam surface point
 //    whose normal is theta; the follower at beta = theta + alpha (alpha the pressure angle)
@@ -41,10 +120,13 @@ Result<DegreeTable> next_correction(const LobeAnalysis& analysis, const DegreeTa
 //    - c(beta - alpha(beta)) / cos(alpha(beta)) / 1000 wherever the cam surface is on its
 //    convex hull (first order in c). A concave flank is invisible to a flat probe; there the
 //    lift correction is interpolated periodically between the neighbouring hull points.
-// Then a periodic spline through the target lifts, and compute_wheel_path. A zero correction
-// gives exactly compute_wheel_path of the design.
-// Errors: as PeriodicSpline::fit (design table), compute_wheel_path; kInvalidInput for a
-// non-finite correction.
+// A zero correction gives exactly the spline of the design.
+// Errors: as PeriodicSpline::fit (design table) and follower_geometry; kRefused (as
+// check_lobe_shape) when a roller lobe's lift reaches below -rb; kInvalidInput for a
+// non-finite correction. The corrected lobe's shape is checked by compute_wheel_path.
+Result<PeriodicSpline> corrected_lift(const LiftTable& design, const DegreeTable& correction_um, const Part& part);
+
+// compute_wheel_path of corrected_lift. Errors: as those two.
 Result<WheelPath> corrected_wheel_path(const LiftTable& design, const DegreeTable& correction_um, const Part& part,
                                        double step_deg);
 

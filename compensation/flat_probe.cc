@@ -2,34 +2,65 @@
 #include "compensation/flat_probe.h"
 
 #include <cmath>
+#include <numbers>
 #include <string>
+#include <utility>
 
 #include "compensation/cam_geometry.h"
 #include "compensation/message_text.h"
 #include "compensation/polar_support.h"
 
 namespace gaugeloop {
+namespace {
 
-Result<DegreeTable> flat_probe_reading(const PeriodicSpline& lift_mm, const Part& part) {
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+
+}  // namespace
+
+Result<DesignReading> DesignReading::of_lobe(const PeriodicSpline& lift_mm, const Part& part) {
   Result<FollowerGeometry> geometry = follower_geometry(part);
   if (!geometry.ok()) return geometry.error();
   const FollowerGeometry& g = geometry.value();
   if (Status shape = check_lobe_shape(lift_mm, g); !shape.ok()) return shape.error();
-
-  DegreeTable reading{};
-  if (g.kind == FollowerKind::kFlat) {
-    // A flat follower's lift is already the support function minus rb (the lobe is convex).
-    for (int d = 0; d < kDegreesPerRevolution; ++d) reading[static_cast<size_t>(d)] = lift_mm.value(d);
-    return reading;
-  }
-  const double rb = g.base_circle_radius_mm;
-  const double rr = g.roller_radius_mm;
-  // Support of the inward offset by rr = support of the pitch curve - rr.
-  const PolarSupport pitch(lift_mm, rb + rr);
-  for (int d = 0; d < kDegreesPerRevolution; ++d) {
-    reading[static_cast<size_t>(d)] = pitch.at(d).support_mm - rr - rb;
-  }
+  // A flat follower's lift is already the support function minus rb (the lobe is convex).
+  // Otherwise: support of the inward offset by rr = support of the pitch curve - rr.
+  DesignReading reading = (g.kind == FollowerKind::kFlat)
+                              ? DesignReading(lift_mm)
+                              : DesignReading(PolarSupport(lift_mm, g.base_circle_radius_mm + g.roller_radius_mm),
+                                              g.roller_radius_mm + g.base_circle_radius_mm);
+  for (int d = 0; d < kDegreesPerRevolution; ++d) reading.table_[static_cast<size_t>(d)] = reading.at(d);
   return reading;
+}
+
+DesignReading DesignReading::interpolating(const DegreeTable& reading_mm) {
+  DesignReading reading(PeriodicSpline::fit(reading_mm));
+  reading.table_ = reading_mm;
+  return reading;
+}
+
+double DesignReading::at(double theta_deg) const {
+  if (spline_) return spline_->value(theta_deg);
+  return support_->at(theta_deg).support_mm - reading_offset_mm_;
+}
+
+double DesignReading::slope_mm_per_deg(double theta_deg) const {
+  if (spline_) return spline_->d1(theta_deg) * kRadPerDeg;
+  return support_->at(theta_deg).tangential_mm * kRadPerDeg;
+}
+
+DesignReading::Sample DesignReading::sample(double theta_deg) const {
+  if (spline_) {
+    const PeriodicSpline::Point p = spline_->evaluate(theta_deg);
+    return {p.value, p.d1 * kRadPerDeg};
+  }
+  const PolarSupport::Point p = support_->at(theta_deg);
+  return {p.support_mm - reading_offset_mm_, p.tangential_mm * kRadPerDeg};
+}
+
+Result<DegreeTable> flat_probe_reading(const PeriodicSpline& lift_mm, const Part& part) {
+  Result<DesignReading> reading = DesignReading::of_lobe(lift_mm, part);
+  if (!reading.ok()) return reading.error();
+  return reading->table();
 }
 
 Result<DegreeTable> ground_lobe_reading(const WheelPath& path, const Part& part) {

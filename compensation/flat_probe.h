@@ -1,7 +1,11 @@
 // What the flat gauge probe reads on a lobe: on the design lobe, and on a lobe a wheel path grinds.
 #pragma once
 
+#include <optional>
+#include <utility>
+
 #include "compensation/periodic_spline.h"
+#include "compensation/polar_support.h"
 #include "compensation/wheel_path.h"
 #include "core/part.h"
 #include "core/result.h"
@@ -9,14 +13,58 @@
 
 namespace gaugeloop {
 
+// What a flat probe reads on the design lobe at ANY cam angle, 0 on the base circle, in mm.
+// Frame: cam frame, theta = the probe's direction (normal of its face) about the cam axis.
+// Two models:
+//  - of_lobe: exact. Flat follower: the lift spline itself. Roller and knife edge: the support
+//    function of the cam surface (PolarSupport on the pitch curve, less rr), to 1e-9 mm,
+//    corners included: where the probe bridges a concave flank onto the base circle the
+//    reading has a corner (on examples/exhaust_roller its slope jumps by 0.25 mm/deg at 63
+//    deg), which no interpolation of whole-degree readings follows (a spline through them
+//    is 5 um out there at 0.05 deg from a knot).
+//  - interpolating: the periodic spline through a whole-degree table, for when only the table
+//    is known (e.g. a stored analysis). Exact at whole degrees, and between them for a flat
+//    follower whose lift table has a knot at every whole degree.
+// table() is the reading at whole degrees, bit for bit what at(d) returns (of_lobe) or the
+// table given (interpolating). Immutable; safe to share between threads.
+class DesignReading {
+ public:
+  // Errors: as follower_geometry (kInvalidInput) and check_lobe_shape (kRefused).
+  static Result<DesignReading> of_lobe(const PeriodicSpline& lift_mm, const Part& part);
+  static DesignReading interpolating(const DegreeTable& reading_mm);
+
+  double at(double theta_deg) const;                // mm
+  double slope_mm_per_deg(double theta_deg) const;  // d reading / d theta (one side at a corner)
+
+  // Both from one evaluation (one support-function solve for a roller).
+  struct Sample {
+    double reading_mm = 0.0;
+    double slope_mm_per_deg = 0.0;
+  };
+  Sample sample(double theta_deg) const;
+  const DegreeTable& table() const { return table_; }
+
+ private:
+  explicit DesignReading(PeriodicSpline spline) : spline_(std::move(spline)) {}
+  DesignReading(PolarSupport support, double reading_offset_mm)
+      : support_(std::move(support)), reading_offset_mm_(reading_offset_mm) {}
+
+  // Exactly one of the two is set: the reading is spline_ (flat lift, or interpolating), or
+  // support_ less reading_offset_mm_ (rr + rb).
+  std::optional<PeriodicSpline> spline_;
+  std::optional<PolarSupport> support_;
+  double reading_offset_mm_ = 0.0;
+  DegreeTable table_{};
+};
+
 // The reading of a flat probe at each whole cam degree theta on the design lobe, in mm,
-// 0 on the base circle. Frame: cam frame, index = theta, the probe's direction (normal of
-// its face) about the cam axis.
+// 0 on the base circle: DesignReading::of_lobe(lift_mm, part)->table(). Frame: cam frame,
+// index = theta, the probe's direction (normal of its face) about the cam axis.
 //  - Flat follower: the lift itself, H(theta).
 //  - Roller and knife edge: the support function of the cam surface (the pitch curve
 //    rho(beta) = rb + rr + H(beta) at polar angle beta, offset inward by rr):
 //      reading(theta) = max over beta of rho(beta) cos(beta - theta) - rr - rb,
-//    maximised to < 1e-7 mm. A concave flank never touches the probe.
+//    to < 1e-9 mm. A concave flank never touches the probe.
 // Errors: as follower_geometry (kInvalidInput) and check_lobe_shape (kRefused).
 Result<DegreeTable> flat_probe_reading(const PeriodicSpline& lift_mm, const Part& part);
 

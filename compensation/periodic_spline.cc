@@ -114,6 +114,10 @@ PeriodicSpline::PeriodicSpline(Eigen::VectorXd knot_deg, Eigen::VectorXd value)
   const double factor = (y(0) + corner_high * y(n - 1) / gamma) / (1.0 + z(0) + corner_high * z(n - 1) / gamma);
   const Eigen::VectorXd m = y - factor * z;
 
+  bool uniform = true;
+  for (Eigen::Index i = 1; i < n && uniform; ++i) uniform = std::abs(h(i) - h(0)) <= 1e-12;
+  if (uniform) uniform_step_deg_ = h(0);
+
   b_.resize(n);
   c_.resize(n);
   d_.resize(n);
@@ -126,14 +130,25 @@ PeriodicSpline::PeriodicSpline(Eigen::VectorXd knot_deg, Eigen::VectorXd value)
 }
 
 void PeriodicSpline::locate(double angle_deg, Eigen::Index& i, double& t) const {
-  double a = std::fmod(angle_deg, kPeriodDeg);
-  if (a < 0.0) a += kPeriodDeg;
-  if (a >= kPeriodDeg) a -= kPeriodDeg;  // -1e-17 + 360 rounds to 360
+  double a = angle_deg;
+  if (!(a >= 0.0 && a < kPeriodDeg)) {
+    a = std::fmod(angle_deg, kPeriodDeg);
+    if (a < 0.0) a += kPeriodDeg;
+    if (a >= kPeriodDeg) a -= kPeriodDeg;  // -1e-17 + 360 rounds to 360
+  }
   const Eigen::Index n = knot_deg_.size();
   if (a < knot_deg_(0)) {
     // Before the first knot: the wrap interval from the last knot across 360.
     i = n - 1;
     t = a + kPeriodDeg - knot_deg_(n - 1);
+    return;
+  }
+  if (uniform_step_deg_ > 0.0) {
+    // k >= 0 here, so truncation is the floor (one instruction; std::floor is a library call
+    // without SSE4.1). A NaN angle lands here as i = 0, t = NaN: NaN values, as promised.
+    const double k = (a - knot_deg_(0)) / uniform_step_deg_;
+    i = (k >= static_cast<double>(n - 1)) ? n - 1 : (k > 0.0 ? static_cast<Eigen::Index>(k) : 0);
+    t = a - knot_deg_(i);
     return;
   }
   const double* begin = knot_deg_.data();
@@ -147,6 +162,29 @@ double PeriodicSpline::value(double angle_deg) const {
   double t = 0.0;
   locate(angle_deg, i, t);
   return a_(i) + t * (b_(i) + t * (c_(i) + t * d_(i)));
+}
+
+PeriodicSpline::Piece PeriodicSpline::piece(Eigen::Index i) const {
+  const Eigen::Index n = knot_deg_.size();
+  Piece p;
+  p.knot_deg = knot_deg_(i);
+  p.width_deg = (i + 1 < n) ? knot_deg_(i + 1) - knot_deg_(i) : knot_deg_(0) + kPeriodDeg - knot_deg_(i);
+  p.a = a_(i);
+  p.b = b_(i);
+  p.c = c_(i);
+  p.d = d_(i);
+  return p;
+}
+
+PeriodicSpline::Point PeriodicSpline::evaluate(double angle_deg) const {
+  Eigen::Index i = 0;
+  double t = 0.0;
+  locate(angle_deg, i, t);
+  Point p;
+  p.value = a_(i) + t * (b_(i) + t * (c_(i) + t * d_(i)));
+  p.d1 = (b_(i) + t * (2.0 * c_(i) + 3.0 * t * d_(i))) * kDegPerRad;
+  p.d2 = (2.0 * c_(i) + 6.0 * t * d_(i)) * kDegPerRad * kDegPerRad;
+  return p;
 }
 
 double PeriodicSpline::d1(double angle_deg) const {

@@ -34,6 +34,27 @@ class PeriodicSpline {
   double d1(double angle_deg) const;  // per rad
   double d2(double angle_deg) const;  // per rad^2
 
+  // All three at once, for one interval search: what the kinematics call in their loops.
+  struct Point {
+    double value = 0.0;
+    double d1 = 0.0;  // per rad
+    double d2 = 0.0;  // per rad^2
+  };
+  Point evaluate(double angle_deg) const;
+
+  // Piece i, from knot i over width_deg (the last wraps across 360):
+  // s(knot_deg + t) = a + b t + c t^2 + d t^3 for t in [0, width_deg], t in DEGREES (so the
+  // per-radian derivatives carry factors of 180/pi). For exact checks on a whole interval.
+  struct Piece {
+    double knot_deg = 0.0;
+    double width_deg = 0.0;
+    double a = 0.0;
+    double b = 0.0;
+    double c = 0.0;
+    double d = 0.0;
+  };
+  Piece piece(Eigen::Index i) const;
+
   // The knots as fitted, strictly increasing in [0, 360), and the values there.
   const Eigen::VectorXd& knots_deg() const { return knot_deg_; }
   const Eigen::VectorXd& knot_values() const { return a_; }
@@ -42,7 +63,8 @@ class PeriodicSpline {
  private:
   PeriodicSpline(Eigen::VectorXd knot_deg, Eigen::VectorXd value);
 
-  // Interval index i and offset t = angle - knot i in degrees, t in [0, h_i).
+  // Interval index i and offset t = angle - knot i in degrees, t in [0, h_i) (to rounding).
+  // O(1) on uniform knots, a binary search otherwise.
   void locate(double angle_deg, Eigen::Index& i, double& t) const;
 
   // On interval i: s(t) = a_i + b_i t + c_i t^2 + d_i t^3, t in degrees from knot i.
@@ -51,6 +73,7 @@ class PeriodicSpline {
   Eigen::VectorXd b_;
   Eigen::VectorXd c_;
   Eigen::VectorXd d_;
+  double uniform_step_deg_ = 0.0;  // the knot spacing when all are equal (1e-12 deg), else 0
 };
 
 }  // namespace gaugeloop

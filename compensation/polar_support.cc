@@ -1,9 +1,8 @@
-// Dense-sample-then-refine maximisation for the support function of a polar curve.
+// Support function of a polar curve: convex hull of a dense sampling, refined on the curve.
 #include "compensation/polar_support.h"
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numbers>
 #include <utility>
 
@@ -13,77 +12,147 @@ namespace gaugeloop {
 namespace {
 
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+constexpr double kContactToleranceDeg = 1e-10;
 
-// Local sample maxima within this much of the best sample are refined: sampling at 0.05 deg
-// (8.7e-4 rad) under-reads a smooth maximum by about r * dphi^2 / 2, 3.8e-4 mm for r = 1 m,
-// so every candidate for the global maximum is kept.
-constexpr double kCandidateMarginMm = 1e-3;
+// z component of (b - a) x (c - b): > 0 for a left (counter-clockwise) turn at b.
+double turn(double ax, double ay, double bx, double by, double cx, double cy) {
+  return (bx - ax) * (cy - by) - (by - ay) * (cx - bx);
+}
 
 }  // namespace
 
 PolarSupport::PolarSupport(PeriodicSpline radius_mm, double radius_offset_mm, double max_spacing_deg)
     : radius_mm_(std::move(radius_mm)), offset_mm_(radius_offset_mm) {
   phi_deg_ = dense_angle_grid_deg(radius_mm_, max_spacing_deg);
-  x_mm_.resize(phi_deg_.size());
-  y_mm_.resize(phi_deg_.size());
-  for (size_t i = 0; i < phi_deg_.size(); ++i) {
+  const size_t n = phi_deg_.size();
+  x_mm_.resize(n);
+  y_mm_.resize(n);
+  size_t farthest = 0;
+  double farthest_r = -1.0;
+  for (size_t i = 0; i < n; ++i) {
     const double r = radius(phi_deg_[i]);
     x_mm_[i] = r * std::cos(phi_deg_[i] * kRadPerDeg);
     y_mm_[i] = r * std::sin(phi_deg_[i] * kRadPerDeg);
+    if (r > farthest_r) {
+      farthest_r = r;
+      farthest = i;
+    }
+  }
+  // Graham scan in the grid's angular order about the axis, which lies inside the curve (it
+  // is star-shaped about it), starting from the point farthest from the axis (on the hull).
+  for (size_t k = 0; k <= n; ++k) {
+    const size_t i = (farthest + k) % n;
+    while (hull_.size() >= 2) {
+      const size_t a = hull_[hull_.size() - 2];
+      const size_t b = hull_.back();
+      if (turn(x_mm_[a], y_mm_[a], x_mm_[b], y_mm_[b], x_mm_[i], y_mm_[i]) > 0.0) break;
+      hull_.pop_back();
+    }
+    hull_.push_back(i);
+  }
+  hull_.pop_back();  // the start again
+  const size_t m = hull_.size();
+  normal_deg_.resize(m);
+  for (size_t e = 0; e < m; ++e) {
+    const size_t a = hull_[e];
+    const size_t b = hull_[(e + 1) % m];
+    // Counter-clockwise edge direction (dx, dy): outward normal (dy, -dx).
+    double nu = std::atan2(-(x_mm_[b] - x_mm_[a]), y_mm_[b] - y_mm_[a]) * kDegPerRad;
+    if (e > 0) {
+      while (nu < normal_deg_[e - 1]) nu += 360.0;
+    }
+    normal_deg_[e] = nu;
   }
 }
 
-PolarSupport::Point PolarSupport::at(double theta_deg) const {
-  const double c = std::cos(theta_deg * kRadPerDeg);
-  const double s = std::sin(theta_deg * kRadPerDeg);
-  const size_t n = phi_deg_.size();
-  std::vector<double> f(n);
-  double best = -std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i < n; ++i) {
-    f[i] = x_mm_[i] * c + y_mm_[i] * s;
-    best = std::max(best, f[i]);
-  }
-  auto objective = [&](double phi) { return radius(phi) * std::cos((phi - theta_deg) * kRadPerDeg); };
-  constexpr double kInvPhi = 0.6180339887498949;  // 1 / golden ratio
-  Point result{best, 0.0};
-  bool have = false;
-  for (size_t i = 0; i < n; ++i) {
-    const size_t ip = (i + n - 1) % n;
-    const size_t in = (i + 1) % n;
-    if (f[i] < best - kCandidateMarginMm || f[i] < f[ip] || f[i] < f[in]) continue;
-    // Bracket [phi(i-1), phi(i+1)], unwrapped around phi(i).
-    double lo = (i == 0) ? phi_deg_[ip] - PeriodicSpline::kPeriodDeg : phi_deg_[ip];
-    double hi = (i + 1 == n) ? phi_deg_[in] + PeriodicSpline::kPeriodDeg : phi_deg_[in];
-    double x1 = hi - kInvPhi * (hi - lo);
-    double x2 = lo + kInvPhi * (hi - lo);
-    double f1 = objective(x1);
-    double f2 = objective(x2);
-    for (int iter = 0; iter < 200 && hi - lo > 1e-10; ++iter) {
-      if (f1 < f2) {
-        lo = x1;
-        x1 = x2;
-        f1 = f2;
-        x2 = lo + kInvPhi * (hi - lo);
-        f2 = objective(x2);
+PolarSupport::Point PolarSupport::refine(double theta_deg, double lo_deg, double hi_deg) const {
+  // f(phi) = r cos(d), d = phi - theta; per radian: f' = r' cos d - r sin d,
+  // f'' = r'' cos d - 2 r' sin d - r cos d. Maximum where f' falls through 0.
+  auto value = [&](double phi) { return radius(phi) * std::cos((phi - theta_deg) * kRadPerDeg); };
+  auto slope = [&](double phi) {
+    const double d = (phi - theta_deg) * kRadPerDeg;
+    const PeriodicSpline::Point r = radius_mm_.evaluate(phi);
+    return r.d1 * std::cos(d) - (offset_mm_ + r.value) * std::sin(d);
+  };
+  double best_phi = lo_deg;
+  const double f_lo = slope(lo_deg);
+  const double f_hi = slope(hi_deg);
+  if (f_lo > 0.0 && f_hi < 0.0) {
+    double lo = lo_deg;
+    double hi = hi_deg;
+    double phi = 0.5 * (lo + hi);
+    for (int iter = 0; iter < 100; ++iter) {
+      const double d = (phi - theta_deg) * kRadPerDeg;
+      const PeriodicSpline::Point rp = radius_mm_.evaluate(phi);
+      const double r = offset_mm_ + rp.value;
+      const double cd = std::cos(d);
+      const double sd = std::sin(d);
+      const double f1 = rp.d1 * cd - r * sd;
+      const double f2 = rp.d2 * cd - 2.0 * rp.d1 * sd - r * cd;
+      if (f1 > 0.0) {
+        lo = phi;
       } else {
-        hi = x2;
-        x2 = x1;
-        f2 = f1;
-        x1 = hi - kInvPhi * (hi - lo);
-        f1 = objective(x1);
+        hi = phi;
       }
+      // Converged: a Newton step below the tolerance is taken even if rounding puts it on
+      // the bracket's edge (bisecting from there would wander off for a dozen steps).
+      const double newton = (f2 < 0.0) ? phi - f1 / f2 * kDegPerRad : phi;
+      if (f2 < 0.0 && std::abs(newton - phi) < kContactToleranceDeg) {
+        phi = newton;
+        break;
+      }
+      phi = (newton > lo && newton < hi) ? newton : 0.5 * (lo + hi);
+      if (hi - lo < kContactToleranceDeg) break;
     }
-    const double phi = 0.5 * (lo + hi);
-    const double value = std::max({objective(phi), f1, f2, f[i]});
-    if (!have || value > result.support_mm) {
+    best_phi = phi;
+  } else if (!(f_lo > 0.0) && !(f_hi < 0.0)) {
+    // f falls then rises: the larger end.
+    best_phi = value(lo_deg) >= value(hi_deg) ? lo_deg : hi_deg;
+  } else {
+    best_phi = (f_lo > 0.0) ? hi_deg : lo_deg;  // monotone: the end it rises to
+  }
+  Point p;
+  const double r = radius(best_phi);
+  const double d = (best_phi - theta_deg) * kRadPerDeg;
+  p.support_mm = r * std::cos(d);
+  p.tangential_mm = r * std::sin(d);
+  double w = std::fmod(best_phi, PeriodicSpline::kPeriodDeg);
+  if (w < 0.0) w += PeriodicSpline::kPeriodDeg;
+  if (w >= PeriodicSpline::kPeriodDeg) w -= PeriodicSpline::kPeriodDeg;  // -1e-17 + 360 rounds to 360
+  p.phi_deg = w;
+  return p;
+}
+
+PolarSupport::Point PolarSupport::at(double theta_deg) const {
+  const size_t n = phi_deg_.size();
+  const size_t m = hull_.size();
+  // theta into [normal[0], normal[0] + 360): the vertex hull_[j] carries the normals between
+  // edge j - 1's and edge j's, so the first edge whose normal is >= theta names it.
+  double t = std::fmod(theta_deg - normal_deg_[0], 360.0);
+  if (t < 0.0) t += 360.0;
+  t += normal_deg_[0];
+  const size_t j =
+      static_cast<size_t>(std::lower_bound(normal_deg_.begin(), normal_deg_.end(), t) - normal_deg_.begin());
+  const size_t vertex = j % m;
+  Point best;
+  bool have = false;
+  for (size_t k : {vertex, (vertex + m - 1) % m, (vertex + 1) % m}) {
+    const size_t g = hull_[k];
+    // A neighbour next to the vertex on the grid brackets nothing the vertex's bracket does
+    // not (the maximum lies within one grid step of the best sample); one across a bridge
+    // is the other end of a near-tie and is refined.
+    if (k != vertex && (g == (hull_[vertex] + 1) % n || hull_[vertex] == (g + 1) % n)) continue;
+    // Bracket [phi(g - 1), phi(g + 1)], unwrapped around phi(g).
+    const double lo = (g == 0) ? phi_deg_[n - 1] - PeriodicSpline::kPeriodDeg : phi_deg_[g - 1];
+    const double hi = (g + 1 == n) ? phi_deg_[0] + PeriodicSpline::kPeriodDeg : phi_deg_[g + 1];
+    const Point p = refine(theta_deg, lo, hi);
+    if (!have || p.support_mm > best.support_mm) {
+      best = p;
       have = true;
-      result.support_mm = value;
-      double w = std::fmod(phi, PeriodicSpline::kPeriodDeg);
-      if (w < 0.0) w += PeriodicSpline::kPeriodDeg;
-      result.phi_deg = w;
     }
   }
-  return result;
+  return best;
 }
 
 }  // namespace gaugeloop

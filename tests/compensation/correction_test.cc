@@ -2,10 +2,13 @@
 #include "compensation/correction.h"
 
 #include <cmath>
+#include <string>
+#include <utility>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "compensation/analysis.h"
 #include "compensation/flat_probe.h"
 #include "test_lobes.h"
 
@@ -64,12 +67,12 @@ TEST(NextCorrection, AddsGainTimesTheSmoothedErrorToTheCorrectionInForce) {
   for (size_t d = 0; d < 360; ++d) EXPECT_NEAR((*next)[d], in_force[d] + 0.5 * injected[d], 1e-9) << d;
 }
 
-TEST(NextCorrection, RefusesAGainOutsideZeroToOne) {
+TEST(NextCorrection, RejectsAGainOutsideZeroToOne) {
   const LobeAnalysis a = analysis_with_error(testing::harmonic_error_um(5.0));
   for (double gain : {0.0, -0.5, 1.5, std::nan("")}) {
     Result<DegreeTable> next = next_correction(a, DegreeTable{}, CompensationSettings{gain, 30, 100.0});
     ASSERT_FALSE(next.ok()) << gain;
-    EXPECT_EQ(next.error().code, ErrorCode::kRefused);
+    EXPECT_EQ(next.error().code, ErrorCode::kInvalidInput);
     EXPECT_THAT(next.error().message, HasSubstr("gain"));
   }
   EXPECT_TRUE(next_correction(a, DegreeTable{}, CompensationSettings{1.0, 30, 100.0}).ok());
@@ -77,16 +80,299 @@ TEST(NextCorrection, RefusesAGainOutsideZeroToOne) {
 
 TEST(NextCorrection, RefusesACorrectionOverTheLimitNamingDegreeAndValue) {
   DegreeTable error{};
-  for (int d = 0; d < 360; ++d) error[static_cast<size_t>(d)] = 60.0 * std::cos((d - 90) * kRadPerDeg);
+  for (int d = 0; d < 360; ++d) error[static_cast<size_t>(d)] = 40.0 * std::cos((d - 90) * kRadPerDeg);
   DegreeTable in_force{};
-  for (int d = 0; d < 360; ++d) in_force[static_cast<size_t>(d)] = 60.0 * std::cos((d - 90) * kRadPerDeg);
+  for (int d = 0; d < 360; ++d) in_force[static_cast<size_t>(d)] = 80.0 * std::cos((d - 90) * kRadPerDeg);
   Result<DegreeTable> next =
       next_correction(analysis_with_error(error), in_force, CompensationSettings{1.0, 30, 100.0});
   ASSERT_FALSE(next.ok());
   EXPECT_EQ(next.error().code, ErrorCode::kRefused);
+  EXPECT_THAT(next.error().message, HasSubstr("refused"));
   EXPECT_THAT(next.error().message, HasSubstr("120.0 um at cam degree 90"));
   // Within the limit the same step is accepted.
   EXPECT_TRUE(next_correction(analysis_with_error(error), in_force, CompensationSettings{1.0, 30, 130.0}).ok());
+}
+
+TEST(NextCorrection, FailsAHeldStepWithTheVerdictAndEveryReason) {
+  LobeAnalysis a = analysis_with_error(testing::harmonic_error_um(5.0));
+  a.repeatability_um = 3.0;
+  a.phase_error_deg = 0.9;
+  Result<DegreeTable> next = next_correction(a, DegreeTable{}, CompensationSettings{});
+  ASSERT_FALSE(next.ok());
+  EXPECT_EQ(next.error().code, ErrorCode::kRefused);
+  EXPECT_THAT(next.error().message, HasSubstr("held"));
+  EXPECT_THAT(next.error().message, HasSubstr("revolutions disagree by up to 3.00 um"));
+  EXPECT_THAT(next.error().message, HasSubstr("turned by 0.900 deg"));
+}
+
+// A correction in force and an error, both cos(theta - 90) shaped, peaks in um.
+struct Step {
+  double in_force_peak_um;
+  double error_peak_um;
+};
+Result<CompensationDecision> decide_step(const Step& step, const CompensationSettings& s = {}) {
+  DegreeTable error{};
+  DegreeTable in_force{};
+  for (size_t d = 0; d < 360; ++d) {
+    const double shape = std::cos((static_cast<double>(d) - 90.0) * kRadPerDeg);
+    error[d] = step.error_peak_um * shape;
+    in_force[d] = step.in_force_peak_um * shape;
+  }
+  return decide_correction(analysis_with_error(error), in_force, s);
+}
+
+TEST(DecideCorrection, AppliesAStepWithinEveryLimit) {
+  Result<CompensationDecision> d = decide_step({30.0, 20.0});
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->verdict, CompensationVerdict::kApply);
+  EXPECT_TRUE(d->apply());
+  EXPECT_TRUE(d->findings.empty());
+  EXPECT_EQ(d->reasons(), "");
+  // Harmonic 1 survives smoothing exactly (1e-9 um: FFT rounding).
+  EXPECT_NEAR(d->largest_correction_um, 50.0, 1e-9);
+  EXPECT_EQ(d->largest_correction_deg, 90);
+  EXPECT_NEAR(d->largest_change_um, 20.0, 1e-9);
+  EXPECT_EQ(d->largest_change_deg, 90);
+  for (size_t deg = 0; deg < 360; ++deg) EXPECT_NEAR(d->correction_um[deg], d->change_um[deg] * 2.5, 1e-9);
+}
+
+TEST(DecideCorrection, RefusesACorrectionBeyondTheLimitYetProposesIt) {
+  Result<CompensationDecision> d = decide_step({80.0, 40.0});
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->verdict, CompensationVerdict::kRefuse);
+  ASSERT_EQ(d->findings.size(), 1u);
+  EXPECT_EQ(d->findings[0].guard, CompensationGuard::kCorrectionLimit);
+  EXPECT_EQ(d->findings[0].verdict, CompensationVerdict::kRefuse);
+  EXPECT_THAT(d->reasons(), HasSubstr("would reach 120.0 um at cam degree 90, beyond the 100.0 um"));
+  EXPECT_NEAR(d->correction_um[90], 120.0, 1e-9);  // the proposal, for an operator to see
+}
+
+TEST(DecideCorrection, HoldsAChangeLargerThanTheLimitSinceTheCorrectionInForce) {
+  Result<CompensationDecision> d = decide_step({-20.0, -60.0});
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->verdict, CompensationVerdict::kHold);
+  ASSERT_EQ(d->findings.size(), 1u);
+  EXPECT_EQ(d->findings[0].guard, CompensationGuard::kChangeLimit);
+  EXPECT_THAT(d->reasons(), HasSubstr("move by -60.0 um at cam degree 90 from the one in force"));
+  // Below the limit, or with a looser one, the same step applies.
+  EXPECT_TRUE(decide_step({-20.0, -45.0})->apply());
+  CompensationSettings loose;
+  loose.max_change_um = 70.0;
+  EXPECT_TRUE(decide_step({-20.0, -60.0}, loose)->apply());
+}
+
+TEST(DecideCorrection, HoldsAMeasurementWhoseRevolutionsDisagree) {
+  LobeAnalysis a = analysis_with_error(testing::harmonic_error_um(5.0));
+  a.repeatability_um = 2.5;
+  Result<CompensationDecision> d = decide_correction(a, DegreeTable{}, CompensationSettings{});
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->verdict, CompensationVerdict::kHold);
+  ASSERT_EQ(d->findings.size(), 1u);
+  EXPECT_EQ(d->findings[0].guard, CompensationGuard::kRepeatability);
+  EXPECT_THAT(d->reasons(), HasSubstr("revolutions disagree by up to 2.50 um"));
+  a.repeatability_um = 1.9;
+  EXPECT_TRUE(decide_correction(a, DegreeTable{}, CompensationSettings{})->apply());
+}
+
+TEST(DecideCorrection, HoldsALobeThatAppearsTurnedTooFar) {
+  LobeAnalysis a = analysis_with_error(testing::harmonic_error_um(5.0));
+  a.phase_error_deg = -0.6;
+  Result<CompensationDecision> d = decide_correction(a, DegreeTable{}, CompensationSettings{});
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->verdict, CompensationVerdict::kHold);
+  ASSERT_EQ(d->findings.size(), 1u);
+  EXPECT_EQ(d->findings[0].guard, CompensationGuard::kPhase);
+  EXPECT_THAT(d->reasons(), HasSubstr("turned by -0.600 deg"));
+  EXPECT_THAT(d->reasons(), HasSubstr("probe_offset_deg"));
+}
+
+TEST(DecideCorrection, ARefusalOutranksAHoldAndEveryReasonIsGiven) {
+  DegreeTable error{};
+  for (size_t d = 0; d < 360; ++d) error[d] = 110.0 * std::cos((static_cast<double>(d) - 90.0) * kRadPerDeg);
+  LobeAnalysis a = analysis_with_error(error);
+  a.repeatability_um = 4.0;
+  Result<CompensationDecision> d = decide_correction(a, DegreeTable{}, CompensationSettings{});
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->verdict, CompensationVerdict::kRefuse);
+  ASSERT_EQ(d->findings.size(), 3u);  // too large, too large a change, doubtful measurement
+  EXPECT_EQ(d->findings[0].guard, CompensationGuard::kCorrectionLimit);
+  EXPECT_EQ(d->findings[1].guard, CompensationGuard::kChangeLimit);
+  EXPECT_EQ(d->findings[2].guard, CompensationGuard::kRepeatability);
+  EXPECT_EQ(compensation_verdict_name(d->verdict), "refuse");
+}
+
+TEST(DecideCorrection, RejectsLimitsThatAreNotPositiveNumbers) {
+  const LobeAnalysis a = analysis_with_error(testing::harmonic_error_um(5.0));
+  const auto code = [&](const CompensationSettings& s) {
+    Result<CompensationDecision> d = decide_correction(a, DegreeTable{}, s);
+    return d.ok() ? ErrorCode::kInternal : d.error().code;
+  };
+  CompensationSettings s;
+  s.max_change_um = 0.0;
+  EXPECT_EQ(code(s), ErrorCode::kInvalidInput);
+  s = {};
+  s.max_repeatability_um = std::nan("");
+  EXPECT_EQ(code(s), ErrorCode::kInvalidInput);
+  s = {};
+  s.max_phase_deg = -1.0;
+  EXPECT_EQ(code(s), ErrorCode::kInvalidInput);
+  s = {};
+  s.max_harmonic = 181;
+  EXPECT_EQ(code(s), ErrorCode::kInvalidInput);
+}
+
+TEST(DecideCorrection, RejectsADesignModelThatIsNotTheAnalysis) {
+  LobeAnalysis a = analysis_with_error(testing::harmonic_error_um(5.0));  // design all 0
+  const DesignReading other = DesignReading::interpolating(testing::harmonic_error_um(1.0));
+  Result<CompensationDecision> d = decide_correction(a, other, DegreeTable{}, CompensationSettings{});
+  ASSERT_FALSE(d.ok());
+  EXPECT_EQ(d.error().code, ErrorCode::kInvalidInput);
+  EXPECT_THAT(d.error().message, HasSubstr("DesignReading"));
+}
+
+// The example lobes the loop is closed on: a flat and a roller follower.
+struct LoopLobe {
+  const char* name;
+  Part part;
+};
+const LoopLobe kLoopLobes[] = {{"intake_flat", testing::intake_flat_part()},
+                               {"exhaust_roller", testing::exhaust_roller_part(45.0)}};
+
+struct Loop {
+  LiftTable design;
+  PeriodicSpline lift;
+  DesignReading reading;
+  WheelPath design_path;
+};
+Loop loop_for(const LoopLobe& lobe) {
+  LiftTable design = testing::example_table(std::string(lobe.name) + ".csv");
+  PeriodicSpline lift = testing::spline_of(design);
+  Result<DesignReading> reading = DesignReading::of_lobe(lift, lobe.part);
+  EXPECT_TRUE(reading.ok());
+  Result<WheelPath> path = compute_wheel_path(lift, lobe.part, 0.1);
+  EXPECT_TRUE(path.ok());
+  return {std::move(design), std::move(lift), std::move(reading).value(), std::move(path).value()};
+}
+
+// How far compensating from a measurement moves the 0.1 deg wheel path, against the
+// measured error itself (all noise when the lobe is its design). `refusal` holds the
+// message when the corrected path is refused.
+struct NoiseEffect {
+  std::string refusal;
+  double noise_rms_um = 0.0;
+  double noise_max_um = 0.0;
+  double move_rms_um = 0.0;
+  double move_max_um = 0.0;
+};
+
+NoiseEffect noise_effect(const LoopLobe& lobe, const Loop& loop, const CompensationSettings& s) {
+  NoiseEffect out;
+  Result<LobeAnalysis> a =
+      analyse_lobe(testing::measured_run(lobe.part, loop.reading.table(), 0.5, 5), loop.reading, lobe.part, {});
+  EXPECT_TRUE(a.ok()) << a.error().message;
+  if (!a.ok()) return out;
+  Result<CompensationDecision> d = decide_correction(*a, loop.reading, DegreeTable{}, s);
+  EXPECT_TRUE(d.ok() && d->apply());
+  if (!d.ok()) return out;
+  Result<WheelPath> next = corrected_wheel_path(loop.design, d->correction_um, lobe.part, 0.1);
+  if (!next.ok()) {
+    out.refusal = next.error().message;
+    return out;
+  }
+  double noise_sq = 0.0;
+  for (double e : a->error_um) {
+    noise_sq += e * e;
+    out.noise_max_um = std::max(out.noise_max_um, std::abs(e));
+  }
+  double move_sq = 0.0;
+  for (size_t k = 0; k < next->x_mm.size(); ++k) {
+    const double move_um = (next->x_mm[k] - loop.design_path.x_mm[k]) * 1000.0;
+    move_sq += move_um * move_um;
+    out.move_max_um = std::max(out.move_max_um, std::abs(move_um));
+  }
+  out.noise_rms_um = std::sqrt(noise_sq / 360.0);
+  out.move_rms_um = std::sqrt(move_sq / static_cast<double>(next->x_mm.size()));
+  return out;
+}
+
+TEST(Compensation, APureNoiseMeasurementMovesTheWheelPathLessThanTheNoise) {
+  // The lobe is exactly its design; the gauge adds 0.5 um RMS of noise per sample (its
+  // repeatability figure then runs at about 2.5 x 0.5 um, under the 2 um hold), 0.29 um per
+  // degree after averaging 3 revolutions. What the correction does is judged in X, the
+  // infeed the NC follows, on the 0.1 deg path.
+  for (const LoopLobe& lobe : kLoopLobes) {
+    const Loop loop = loop_for(lobe);
+    const NoiseEffect e = noise_effect(lobe, loop, CompensationSettings{});
+    ASSERT_EQ(e.refusal, "") << lobe.name;
+    // Keeping harmonics 0..30 keeps 61 of 360 degrees of freedom of white noise: the RMS
+    // falls to sqrt(61/360) = 0.41 of it (measured 0.35: 0.097 of 0.276 um); the noise's
+    // phase fit moves the path by ~1e-4 deg x 0.18 mm/deg = 0.02 um more. Bounds: RMS below
+    // 0.6 of the noise's, the largest move below the largest noise (measured 0.32 of 0.94 um).
+    EXPECT_LT(e.move_rms_um, 0.6 * e.noise_rms_um) << lobe.name;
+    EXPECT_LT(e.move_max_um, e.noise_max_um) << lobe.name;
+    // Without smoothing the noise goes straight into the target lift, and its curvature: on
+    // 1 deg knots 0.29 um of noise is sigma sqrt(6) / h^2 = 2.3 mm/rad^2 of H'' (RMS),
+    // against a radius of curvature of 6 mm at the intake's nose, which turns non-convex (the
+    // path is refused); on the roller the noise moves the path as much as it is.
+    CompensationSettings raw;
+    raw.max_harmonic = 180;
+    const NoiseEffect unsmoothed = noise_effect(lobe, loop, raw);
+    if (lobe.part.follower == FollowerKind::kFlat) {
+      EXPECT_THAT(unsmoothed.refusal, HasSubstr("convex")) << lobe.name;
+    } else {
+      EXPECT_GT(unsmoothed.move_rms_um, 0.8 * unsmoothed.noise_rms_um) << lobe.name;
+    }
+  }
+}
+
+TEST(Compensation, AKnownSmoothErrorIsRemovedThroughTheEnvelope) {
+  // A machine that grinds every lobe with the same repeatable error: a 10 um form error
+  // (harmonics 2..5) and a 0.05 deg lag (the lobe comes out turned). Measure a part it ground
+  // from the design, compensate, grind the next part with the corrected path (its envelope,
+  // read by a flat probe) plus the same machine error, and read it: it must read the design.
+  for (const LoopLobe& lobe : kLoopLobes) {
+    const Loop loop = loop_for(lobe);
+    const DegreeTable form_um = testing::harmonic_error_um(10.0);
+    Result<DegreeTable> turned =
+        flat_probe_reading(testing::spline_of(testing::rotated_table(loop.design, 0.05)), lobe.part);
+    ASSERT_TRUE(turned.ok());
+    DegreeTable machine_error_mm{};
+    DegreeTable measured{};
+    for (size_t d = 0; d < 360; ++d) {
+      machine_error_mm[d] = (*turned)[d] - loop.reading.table()[d] + form_um[d] / 1000.0;
+      measured[d] = loop.reading.table()[d] + machine_error_mm[d];
+    }
+    Result<LobeAnalysis> a =
+        analyse_lobe(testing::measured_run(lobe.part, measured, 0.0, 1), loop.reading, lobe.part, {});
+    ASSERT_TRUE(a.ok()) << a.error().message;
+    Result<CompensationDecision> d = decide_correction(*a, loop.reading, DegreeTable{}, CompensationSettings{});
+    ASSERT_TRUE(d.ok()) << d.error().message;
+    ASSERT_TRUE(d->apply()) << d->reasons();
+    Result<WheelPath> next = corrected_wheel_path(loop.design, d->correction_um, lobe.part, 0.1);
+    ASSERT_TRUE(next.ok()) << next.error().message;
+    Result<DegreeTable> ground = ground_lobe_reading(*next, lobe.part);
+    ASSERT_TRUE(ground.ok()) << ground.error().message;
+    // The next part as the gauge reads it: zeroed on the base-circle window 150..210 deg.
+    DegreeTable next_part{};
+    double window = 0.0;
+    for (size_t deg = 0; deg < 360; ++deg) {
+      next_part[deg] = (*ground)[deg] + machine_error_mm[deg];
+      if (deg >= 150 && deg <= 210) window += next_part[deg] / 61.0;
+    }
+    double worst_um = 0.0;
+    for (size_t deg = 0; deg < 360; ++deg) {
+      worst_um = std::max(worst_um, std::abs(next_part[deg] - window - loop.reading.table()[deg]) * 1000.0);
+    }
+    EXPECT_GT(a->max_abs_error_um, 15.0) << lobe.name;  // what there was to remove
+    // What is left (measured): intake 0.0013 um (the 30-harmonic cut of the form error is
+    // exact, the phase part is exact, the round trip 4e-10 mm); exhaust 0.07 um, the
+    // first-order lift correction on a roller (c^2 / R, see below) and its interpolation
+    // across the concave flank. Tolerance 0.2 um, one part in a hundred of the error.
+    // Without the design model (decide_correction on tables alone) the lag is smoothed with
+    // the form error and the step it makes in the error where the probe bridges the roller
+    // lobe's concave flank rings: 5.3 um left at 296 deg, and iterating does not remove it.
+    EXPECT_LT(worst_um, 0.2) << lobe.name;
+  }
 }
 
 TEST(CorrectedWheelPath, ZeroCorrectionGivesTheDesignPath) {

@@ -3,6 +3,9 @@
 #include "compensation/flat_probe.h"
 
 #include <cmath>
+#include <filesystem>
+#include <set>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -79,19 +82,33 @@ void expect_round_trip(const PeriodicSpline& lift, const Part& part, double step
   EXPECT_LT(largest_difference(*ground, *design), tolerance_mm);
 }
 
-TEST(GroundLobeReading, RoundTripReturnsTheIntakeFlatLift) {
-  // The path is resampled at 0.1 deg and interpolated again by a spline. The lift spline is
-  // only C2 (H''' jumps at the 1 deg knots), so that costs O(h^3 |jump|) rather than O(h^4):
-  // 2.4e-7 mm at a 1 deg step, 4e-10 mm at 0.1 deg (measured). Tolerance 1e-8 mm.
-  expect_round_trip(testing::spline_of(testing::example_table("intake_flat.csv")), testing::intake_flat_part(), 0.1,
-                    1e-8);
+TEST(GroundLobeReading, RoundTripReturnsTheDesignReadingOfEverySampleLobe) {
+  // The issue asks for 1e-4 mm on every sample lobe. The path is resampled at 0.1 deg and
+  // interpolated again by a spline; the lift spline is only C2 (H''' jumps at its knots), so
+  // that costs O(h^3 |jump|). Measured: intake_flat 4.2e-10 mm, intake_flat_half_degree
+  // 1.2e-9 mm (twice the knots, twice the jumps), exhaust_roller 1.7e-10 mm (its concave
+  // flanks neither the probe nor the envelope shows). Tolerance 1e-8 mm, 10^4 tighter than
+  // asked.
+  for (const testing::ExampleLobe& lobe : testing::example_lobes()) {
+    SCOPED_TRACE(lobe.name);
+    expect_round_trip(testing::spline_of(testing::example_table(std::string(lobe.name) + ".csv")), lobe.part, 0.1,
+                      1e-8);
+  }
 }
 
-TEST(GroundLobeReading, RoundTripReturnsTheExhaustRollerReading) {
-  // As above, with the roller's concave flanks, which neither the probe nor the wheel envelope
-  // shows in the reading. 1.7e-10 mm measured; tolerance 1e-8 mm.
-  expect_round_trip(testing::spline_of(testing::example_table("exhaust_roller.csv")),
-                    testing::exhaust_roller_part(45.0), 0.1, 1e-8);
+TEST(ExampleLobes, EveryExampleIsListed) {
+  // A new sample lobe in examples/ must join testing::example_lobes(), so the round trip and
+  // the derivative checks cover it.
+  std::set<std::string> listed;
+  for (const testing::ExampleLobe& lobe : testing::example_lobes()) listed.insert(lobe.name);
+  int found = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(GAUGELOOP_SOURCE_DIR) + "/examples")) {
+    if (entry.path().extension() != ".toml") continue;
+    ++found;
+    EXPECT_TRUE(listed.count(entry.path().stem().string()) == 1)
+        << entry.path() << " is not in testing::example_lobes() (tests/compensation/test_lobes.h)";
+  }
+  EXPECT_EQ(found, static_cast<int>(listed.size()));
 }
 
 TEST(GroundLobeReading, RejectsAMalformedPath) {
