@@ -20,6 +20,7 @@ enum ExitCode : int {
   kExitGauge = 3,
   kExitStorage = 4,
   kExitNcOutput = 5,
+  kExitNotPushed = 6,  // the run is stored, but compensation held or refused its table
 };
 
 int exit_code_for(ErrorCode code);

@@ -44,13 +44,21 @@ void print_report(const JobReport& r, const Part& part, const std::string& machi
   std::printf("  RMS lift error    %.2f um\n", a.rms_error_um);
   std::printf("  peak to valley    %.2f um\n", a.peak_to_valley_um);
   std::printf("  repeatability     %.2f um (largest per-degree standard deviation)\n", a.repeatability_um);
+  std::printf("  phase             %+.3f deg (timing; corrected through the lift)\n", a.phase_error_deg);
+  std::printf("  runout            %.2f um (base circle, total indicator reading)\n", a.base_circle_runout_um);
   if (r.correction_in_force_run) {
     std::printf("  correction        %.2f um max, built on run %lld's (the table in force)\n", r.correction_max_um,
                 static_cast<long long>(*r.correction_in_force_run));
   } else {
     std::printf("  correction        %.2f um max, from the design\n", r.correction_max_um);
   }
-  std::printf("  NC file           %s (%d points)\n", r.nc_file.string().c_str(), r.table_points);
+  if (r.verdict == CompensationVerdict::kApply) {
+    std::printf("  NC file           %s (%d points)\n", r.nc_file.string().c_str(), r.table_points);
+  } else {
+    std::printf("  NC file           not written: compensation %s; the table in force stays\n",
+                std::string(compensation_verdict_name(r.verdict)).c_str());
+    std::printf("  why               %s\n", r.verdict_reasons.c_str());
+  }
   std::printf("  database          %s\n", r.db_path.string().c_str());
 }
 
@@ -108,7 +116,7 @@ int run_job(GaugeClient& gauge, const LoadedPart& lp, const MeasureOptions& o, b
   Result<JobReport> report = run_measure_job(gauge, js);
   if (!report) return report_error(report.error());
   print_report(*report, js.part, js.machine);
-  return kExitOk;
+  return report->verdict == CompensationVerdict::kApply ? kExitOk : kExitNotPushed;
 }
 
 int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {

@@ -13,7 +13,7 @@ namespace gaugeloop {
 // keeps the simulator's register map; a [map] describes the whole map (fields it leaves out
 // are absent, and reading and angle are required). Errors name the file, line and key.
 Result<ModbusSettings> parse_gauge_toml(std::string_view text, std::string_view source_name,
-                                           const ModbusSettings& defaults = {});
+                                        const ModbusSettings& defaults = {});
 
 Result<ModbusSettings> read_gauge_file(const std::filesystem::path& path, const ModbusSettings& defaults = {});
 

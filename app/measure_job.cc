@@ -19,10 +19,6 @@
 namespace gaugeloop {
 namespace {
 
-// The wheel path is computed on a fine psi grid and resampled by spline onto the C grid, so
-// any c_offset_deg and either sense of rotation give a table from C0 to C360.
-constexpr double kFinePathStepDeg = 0.1;
-
 std::string utc_now() {
   const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   std::tm tm{};
@@ -38,18 +34,14 @@ std::string fixed(double v, int decimals) {
   return buf;
 }
 
-Result<std::vector<CurvePoint>> machine_curve(const WheelPath& path, const Part& part, double step_deg) {
-  Result<PeriodicSpline> x_of_psi = PeriodicSpline::fit(path.psi_deg, path.x_mm);
-  if (!x_of_psi) return x_of_psi.error();
-  const int n = static_cast<int>(std::lround(360.0 / step_deg));
+// The curve table: the wheel path on the uniform C grid, computed at each C directly
+// (compute_machine_path), closed by the C360 point equal to C0.
+Result<std::vector<CurvePoint>> machine_curve(const PeriodicSpline& lift_mm, const Part& part, double step_deg) {
+  Result<MachinePath> path = compute_machine_path(lift_mm, part, step_deg);
+  if (!path) return path.error();
   std::vector<CurvePoint> points;
-  points.reserve(static_cast<size_t>(n) + 1);
-  for (int k = 0; k < n; ++k) {
-    const double c = k * step_deg;
-    // C = s * psi + c0  =>  psi = s * (C - c0)
-    const double psi = part.rotation_sense * (c - part.c_offset_deg);
-    points.push_back({c, x_of_psi->value(psi)});
-  }
+  points.reserve(path->c_deg.size() + 1);
+  for (size_t k = 0; k < path->c_deg.size(); ++k) points.push_back({path->c_deg[k], path->x_mm[k]});
   points.push_back({360.0, points.front().x_mm});
   return points;
 }
@@ -89,6 +81,9 @@ std::string settings_text(const JobSettings& s) {
   line("compensation.gain", num(s.compensation.gain));
   line("compensation.max_harmonic", std::to_string(s.compensation.max_harmonic));
   line("compensation.max_correction_um", num(s.compensation.max_correction_um));
+  line("compensation.max_change_um", num(s.compensation.max_change_um));
+  line("compensation.max_repeatability_um", num(s.compensation.max_repeatability_um));
+  line("compensation.max_phase_deg", num(s.compensation.max_phase_deg));
   line("compensation.builds_on_table_in_force", s.build_on_table_in_force ? "true" : "false");
   line("nc.template", s.nc_template_name);
   line("nc.table_step_deg", num(s.table_step_deg));
@@ -112,9 +107,9 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
   // Checks that need no gauge, so bad input costs no measurement.
   Result<PeriodicSpline> design = PeriodicSpline::fit(s.design.angle_deg, s.design.lift_mm);
   if (!design) return in_step("design lift table " + s.design.source, design.error());
-  Result<WheelPath> design_path = compute_wheel_path(*design, s.part, kFinePathStepDeg);
-  if (!design_path) return in_step("wheel path", design_path.error());
-  Result<DegreeTable> design_reading = flat_probe_reading(*design, s.part);
+  Result<std::vector<CurvePoint>> design_curve = machine_curve(*design, s.part, s.table_step_deg);
+  if (!design_curve) return in_step("wheel path", design_curve.error());
+  Result<DesignReading> design_reading = DesignReading::of_lobe(*design, s.part);
   if (!design_reading) return in_step("flat-probe reading", design_reading.error());
   if (auto r = render_nc_template(s.nc_template, s.nc_template_name, template_values(s)); !r) return r.error();
   std::error_code ec;
@@ -152,15 +147,33 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     // Analyse and correct.
     Result<LobeAnalysis> analysis = analyse_lobe(*measured, *design_reading, s.part, s.analysis);
     if (!analysis) return in_step("analysis", analysis.error());
-    Result<DegreeTable> correction = next_correction(*analysis, in_force, s.compensation);
-    if (!correction) return in_step("compensation", correction.error());
-    Result<WheelPath> path = corrected_wheel_path(s.design, *correction, s.part, kFinePathStepDeg);
-    if (!path) return in_step("corrected wheel path", path.error());
-    Result<std::vector<CurvePoint>> points = machine_curve(*path, s.part, s.table_step_deg);
-    if (!points) return in_step("curve table", points.error());
-    if (Status v = validate_curve_points(*points); !v) return in_step("curve table", v.error());
-    double correction_max_um = 0.0;
-    for (double c : *correction) correction_max_um = std::max(correction_max_um, std::abs(c));
+    Result<CompensationDecision> decision = decide_correction(*analysis, *design_reading, in_force, s.compensation);
+    if (!decision) return in_step("compensation", decision.error());
+    const DegreeTable& correction = decision->correction_um;
+    CompensationVerdict verdict = decision->verdict;
+    std::string verdict_reasons = decision->reasons();
+    // The table is computed before the run is stored. A correction the geometry refuses (a
+    // concave flank the wheel no longer fits) is a refusal: the run is stored, nothing pushed.
+    std::vector<CurvePoint> points;
+    if (decision->apply()) {
+      Result<std::vector<CurvePoint>> curve = [&]() -> Result<std::vector<CurvePoint>> {
+        Result<PeriodicSpline> target = corrected_lift(s.design, correction, s.part);
+        if (!target) return in_step("corrected lift", target.error());
+        Result<std::vector<CurvePoint>> c = machine_curve(*target, s.part, s.table_step_deg);
+        if (!c) return in_step("corrected wheel path", c.error());
+        if (Status v = validate_curve_points(*c); !v) return in_step("curve table", v.error());
+        return c;
+      }();
+      if (curve) {
+        points = std::move(*curve);
+      } else if (curve.error().code == ErrorCode::kRefused) {
+        verdict = CompensationVerdict::kRefuse;
+        verdict_reasons = curve.error().message;
+      } else {
+        return curve.error();
+      }
+    }
+    const double correction_max_um = std::abs(decision->largest_correction_um);
 
     // Store the run: one transaction, all or nothing.
     RunRecord record;
@@ -173,7 +186,7 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     record.note = s.note;
     record.measured = *measured;
     record.analysis = *analysis;
-    record.correction_um = *correction;
+    record.correction_um = correction;
     record.correction_in_force_run = in_force_run;
     record.geometry = s.part;
     record.settings = settings_text(s);
@@ -181,13 +194,37 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     if (!run_id) return run_id.error();
     stored_run = *run_id;
 
+    JobReport report;
+    report.run_id = *run_id;
+    report.analysis = *analysis;
+    report.verdict = verdict;
+    report.verdict_reasons = verdict_reasons;
+    report.correction_max_um = correction_max_um;
+    report.correction_in_force_run = in_force_run;
+    report.db_path = store->path();
+    if (verdict != CompensationVerdict::kApply) {
+      // Stored with its proposed correction, not pushed: the table in force stays.
+      EventRecord event;
+      event.kind = EventKind::kRefusal;
+      event.code = "compensation " + std::string(compensation_verdict_name(verdict));
+      event.machine = s.machine;
+      event.part = s.part.name;
+      event.lobe = s.part.lobe;
+      event.run_id = *run_id;
+      event.message =
+          "run " + std::to_string(*run_id) + " is stored, its table was not pushed: " + report.verdict_reasons;
+      if (Result<std::int64_t> e = store->record_event(event); !e) return e.error();
+      report.measured = std::move(*measured);
+      return report;
+    }
+
     // Render and push the table.
     auto values = template_values(s);
     values["run_id"] = std::to_string(*run_id);
     values["created_utc"] = finished;
-    values["point_count"] = std::to_string(points->size());
+    values["point_count"] = std::to_string(points.size());
     values["correction_max_um"] = fixed(correction_max_um, 1);
-    values["table_blocks"] = render_curve_blocks(*points);
+    values["table_blocks"] = render_curve_blocks(points);
     Result<std::string> program = render_nc_template(s.nc_template, s.nc_template_name, values);
     if (!program) return program.error();
     const std::filesystem::path nc_file = s.nc_dir / (s.nc_program + ".SPF");
@@ -196,19 +233,13 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     }
     NcPush push;
     push.nc_file = nc_file.string();
-    push.point_count = static_cast<int>(points->size());
+    push.point_count = static_cast<int>(points.size());
     push.correction_max_um = correction_max_um;
     if (Status m = store->record_push(*run_id, push, *program); !m) return m.error();
 
-    JobReport report;
-    report.run_id = *run_id;
     report.measured = std::move(*measured);
-    report.analysis = *analysis;
-    report.correction_max_um = correction_max_um;
-    report.correction_in_force_run = in_force_run;
-    report.table_points = static_cast<int>(points->size());
+    report.table_points = static_cast<int>(points.size());
     report.nc_file = nc_file;
-    report.db_path = store->path();
     return report;
   }();
 

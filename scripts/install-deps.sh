@@ -21,6 +21,7 @@ packages=(
   mbpoll             # independent Modbus client: tests read the simulator with it
   socat              # pseudo-terminal pairs for Modbus RTU tests
   python3-pymodbus   # an independent Modbus server: tests read a gauge served by it
+  python3-serial python3-serial-asyncio  # pymodbus imports both even for TCP; only Recommended, so named here
   locales            # a decimal-comma locale, to test that output ignores the C locale
   librsvg2-bin       # rsvg-convert: view a `gaugeloop runs plot` SVG as PNG; not needed to build or test
 )

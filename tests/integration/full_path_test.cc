@@ -212,6 +212,76 @@ TEST_F(FullPathTest, NextRunBuildsOnTheTableInForce) {
   }
 }
 
+// A correction that changes by more than max_change_um from the one in force is held: the
+// run and its proposed correction are stored, nothing is pushed, the table in force stays,
+// and the event log says why, naming the run.
+TEST_F(FullPathTest, HeldCorrectionStoresTheRunAndPushesNoTable) {
+  SimulatorSettings ss;
+  ss.time_scale = 4.0;
+  auto sim = GaugeSimulator::start(part_.part, design_, ss);
+  ASSERT_TRUE(sim.ok()) << sim.error().message;
+  ModbusSettings ms;
+  ms.port = (*sim)->port();
+  ModbusGauge gauge(ms);
+  JobSettings js = job_settings();
+  js.compensation.max_change_um = 5.0;  // the simulator's 15 um form error asks for more
+
+  Result<JobReport> report = run_measure_job(gauge, js);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(report->verdict, CompensationVerdict::kHold);
+  EXPECT_NE(report->verdict_reasons.find("5.0"), std::string::npos) << report->verdict_reasons;
+  EXPECT_TRUE(report->nc_file.empty());
+  EXPECT_FALSE(fs::exists(dir_ / "nc" / (part_.nc_program + ".SPF")));
+
+  auto store = RunStore::open(dir_ / "gaugeloop.sqlite");
+  ASSERT_TRUE(store.ok());
+  auto run = store->load_run(report->run_id);
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->summary.status, "measured");
+  EXPECT_TRUE(run->pushes.empty());
+  EXPECT_GT(report->correction_max_um, 10.0) << "the proposed correction is kept for approval";
+  double stored_max_um = 0.0;
+  for (double c : run->correction_um) stored_max_um = std::max(stored_max_um, std::abs(c));
+  EXPECT_NEAR(stored_max_um, report->correction_max_um, 1e-4);
+
+  auto events = store->list_events({});
+  ASSERT_TRUE(events.ok());
+  ASSERT_EQ(events->size(), 1u);
+  EXPECT_EQ((*events)[0].event.kind, EventKind::kRefusal);
+  EXPECT_EQ((*events)[0].event.code, "compensation hold");
+  EXPECT_EQ((*events)[0].event.run_id, report->run_id);
+
+  // Nothing was pushed, so the next run still builds on the design.
+  auto last = store->last_pushed_run(js.machine, part_.part.name, part_.part.lobe);
+  ASSERT_TRUE(last.ok());
+  EXPECT_FALSE(last->has_value());
+}
+
+// Beyond max_correction_um the correction is refused, whatever the change.
+TEST_F(FullPathTest, CorrectionBeyondTheLimitIsRefusedAndNotPushed) {
+  SimulatorSettings ss;
+  ss.time_scale = 4.0;
+  auto sim = GaugeSimulator::start(part_.part, design_, ss);
+  ASSERT_TRUE(sim.ok()) << sim.error().message;
+  ModbusSettings ms;
+  ms.port = (*sim)->port();
+  ModbusGauge gauge(ms);
+  JobSettings js = job_settings();
+  js.compensation.max_correction_um = 8.0;
+
+  Result<JobReport> report = run_measure_job(gauge, js);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(report->verdict, CompensationVerdict::kRefuse);
+  EXPECT_FALSE(fs::exists(dir_ / "nc" / (part_.nc_program + ".SPF")));
+  EXPECT_EQ(stored_runs(), 1);
+  auto store = RunStore::open(dir_ / "gaugeloop.sqlite");
+  ASSERT_TRUE(store.ok());
+  auto events = store->list_events({});
+  ASSERT_TRUE(events.ok());
+  ASSERT_EQ(events->size(), 1u);
+  EXPECT_EQ((*events)[0].event.code, "compensation refuse");
+}
+
 TEST_F(FullPathTest, GaugeThatStopsAnsweringMidRunStoresNothingAndWritesNoTable) {
   SimulatorSettings ss;
   ss.time_scale = 4.0;
