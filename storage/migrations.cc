@@ -190,6 +190,73 @@ CREATE TABLE events (
 CREATE INDEX events_by_time ON events (at_utc);
 )sql";
 
+// Version 3: NC pushes a controls engineer can audit and reverse, and tables awaiting approval.
+// nc_pushes is rebuilt (SQLite cannot add a NOT NULL column or a UNIQUE constraint to a
+// table) keeping every id; pushes from version 2 are numbered 1, 2, 3... per nc_file in id
+// order, which is push order.
+constexpr std::string_view kSchemaV3 = R"sql(
+CREATE TABLE nc_pushes_v3 (
+  id                INTEGER PRIMARY KEY AUTOINCREMENT,  -- push order
+  run_id            INTEGER NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
+  pushed_utc        TEXT    NOT NULL,
+  nc_file           TEXT    NOT NULL,
+  -- 1, 2, 3... per nc_file: the version the program's header carries.
+  table_version     INTEGER NOT NULL CHECK (table_version >= 1),
+  reason            TEXT,     -- "run 12", "approved by anna", "rollback to version 3"; NULL before v3
+  interpolation     TEXT,     -- "G1", "CSPLINE"...; NULL: unknown
+  block_count       INTEGER CHECK (block_count >= 0),
+  command_error_um  REAL    CHECK (command_error_um >= 0),
+  -- NULL: not recorded (pushes made before version 2).
+  point_count       INTEGER,
+  correction_max_um REAL,
+  program_hash      TEXT,     -- 64-bit FNV-1a of the program text, 16 hex digits
+  program_text      TEXT,     -- the whole program as written; NULL: not recorded (before v3)
+  UNIQUE (nc_file, table_version)
+);
+INSERT INTO nc_pushes_v3 (id, run_id, pushed_utc, nc_file, table_version, point_count,
+                          correction_max_um, program_hash)
+  SELECT id, run_id, pushed_utc, nc_file, row_number() OVER (PARTITION BY nc_file ORDER BY id),
+         point_count, correction_max_um, program_hash
+  FROM nc_pushes;
+-- Keep the AUTOINCREMENT high-water mark, so an id of a push deleted by hand is never reused.
+UPDATE sqlite_sequence
+  SET seq = max(seq, coalesce((SELECT seq FROM sqlite_sequence WHERE name = 'nc_pushes'), 0))
+  WHERE name = 'nc_pushes_v3';
+INSERT INTO sqlite_sequence (name, seq)
+  SELECT 'nc_pushes_v3', seq FROM sqlite_sequence WHERE name = 'nc_pushes'
+    AND NOT EXISTS (SELECT 1 FROM sqlite_sequence WHERE name = 'nc_pushes_v3');
+DROP TABLE nc_pushes;
+ALTER TABLE nc_pushes_v3 RENAME TO nc_pushes;
+CREATE INDEX nc_pushes_by_run ON nc_pushes (run_id);
+
+-- Rendered programs that were not written: waiting for a person's approval, or held by
+-- compensation. Only 'pending' rows change; at most one per nc_file is pending.
+CREATE TABLE nc_pending (
+  id                INTEGER PRIMARY KEY AUTOINCREMENT,
+  run_id            INTEGER NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
+  created_utc       TEXT    NOT NULL,
+  nc_file           TEXT    NOT NULL,
+  program_text      TEXT    NOT NULL,
+  verdict           TEXT    NOT NULL CHECK (verdict IN ('apply', 'hold')),
+  reason            TEXT    NOT NULL DEFAULT '',
+  interpolation     TEXT,
+  block_count       INTEGER CHECK (block_count >= 0),
+  command_error_um  REAL    CHECK (command_error_um >= 0),
+  correction_max_um REAL,
+  point_count       INTEGER,
+  status            TEXT    NOT NULL DEFAULT 'pending'
+                            CHECK (status IN ('pending', 'approved', 'rejected', 'superseded')),
+  decided_utc       TEXT,     -- when it left 'pending'
+  decided_by        TEXT,     -- who approved or rejected it
+  note              TEXT,
+  push_id           INTEGER REFERENCES nc_pushes (id) ON DELETE SET NULL,  -- 'approved'
+  superseded_by     INTEGER REFERENCES nc_pending (id) ON DELETE SET NULL, -- 'superseded'
+  CHECK ((status = 'pending') = (decided_utc IS NULL))
+);
+CREATE UNIQUE INDEX nc_pending_one_per_file ON nc_pending (nc_file) WHERE status = 'pending';
+CREATE INDEX nc_pending_by_run ON nc_pending (run_id);
+)sql";
+
 // The signed int32 whose 8 hex digits (hex() of 4 big-endian bytes) are in `h`. Each digit:
 // '0'-'9' are 0x30-0x39 and 'A'-'F' are 0x41-0x46, so (code & 15) + 9 * (code >> 6) is its
 // value; a first digit above '7' makes the number negative.
@@ -367,13 +434,19 @@ Status convert_v1_rows(Connection& conn) {
   return {};
 }
 
-const std::array<Migration, 2>& all_migrations() {
-  static const std::array<Migration, 2> kMigrations{{
+const std::array<Migration, 3>& all_migrations() {
+  static const std::array<Migration, 3> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
        "figures, nc_pushes, events",
        std::string(kSchemaV2Before), convert_v1_rows, schema_v2_after()},
+      {3,
+       "nc_pushes: table versions, reason, interpolation, blocks, command position error, program text; "
+       "nc_pending: tables awaiting approval",
+       std::string(kSchemaV3),
+       nullptr,
+       {}},
   }};
   return kMigrations;
 }

@@ -243,15 +243,32 @@ constexpr std::string_view kLoadRaw = "SELECT amplifier_revolutions, lift FROM r
 constexpr std::string_view kLoadTables =
     "SELECT design_lift, mean_lift, spread, error, correction FROM run_tables WHERE run_id = ?1";
 
-constexpr std::string_view kLoadPushes = R"sql(
-SELECT pushed_utc, nc_file, point_count, correction_max_um, program_hash FROM nc_pushes
-WHERE run_id = ?1 ORDER BY id)sql";
+// Columns 0..11, read by read_push(); program_text, when selected, is column 12.
+constexpr std::string_view kPushColumns =
+    "p.id, p.run_id, p.pushed_utc, p.nc_file, p.table_version, p.reason, p.interpolation, p.block_count, "
+    "p.command_error_um, p.point_count, p.correction_max_um, p.program_hash";
+constexpr int kPushTextColumn = 12;
 
 constexpr std::string_view kRecordNcFile = "UPDATE runs SET status = 'pushed', nc_file = ?2 WHERE id = ?1";
 
+constexpr std::string_view kNextTableVersion =
+    "SELECT coalesce(max(table_version), 0) + 1 FROM nc_pushes WHERE nc_file = ?1";
+
 constexpr std::string_view kInsertPush = R"sql(
-INSERT INTO nc_pushes (run_id, pushed_utc, nc_file, point_count, correction_max_um, program_hash)
-VALUES (?1, ?2, ?3, ?4, ?5, ?6))sql";
+INSERT INTO nc_pushes (run_id, pushed_utc, nc_file, table_version, reason, interpolation, block_count,
+                       command_error_um, point_count, correction_max_um, program_hash, program_text)
+VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12))sql";
+
+// Columns 0..17, read by read_pending(); program_text is column 4 ('' in lists).
+constexpr std::string_view kPendingColumns =
+    "id, run_id, created_utc, nc_file, {text}, verdict, reason, interpolation, block_count, command_error_um, "
+    "correction_max_um, point_count, status, decided_utc, decided_by, note, push_id, superseded_by";
+
+std::string select_pending(bool with_text, std::string_view rest) {
+  std::string columns(kPendingColumns);
+  columns.replace(columns.find("{text}"), 6, with_text ? "program_text" : "''");
+  return "SELECT " + columns + " FROM nc_pending" + std::string(rest);
+}
 
 RunSummary read_summary(const Statement& s) {
   RunSummary r;
@@ -274,6 +291,106 @@ RunSummary read_summary(const Statement& s) {
   r.note = s.column_text(16);
   r.raw_pruned_utc = s.column_text(17);
   return r;
+}
+
+NcPush read_push(const Statement& s, bool with_text) {
+  NcPush p;
+  p.id = s.column_int64(0);
+  p.run_id = s.column_int64(1);
+  p.pushed_utc = s.column_text(2);
+  p.nc_file = s.column_text(3);
+  p.table_version = s.column_int(4);
+  p.reason = s.column_text(5);
+  p.interpolation = s.column_text(6);
+  if (!s.column_is_null(7)) p.block_count = s.column_int(7);
+  if (!s.column_is_null(8)) p.command_error_um = s.column_double(8);
+  if (!s.column_is_null(9)) p.point_count = s.column_int(9);
+  if (!s.column_is_null(10)) p.correction_max_um = s.column_double(10);
+  p.program_hash = s.column_text(11);
+  if (with_text && !s.column_is_null(kPushTextColumn)) p.program_text = s.column_text(kPushTextColumn);
+  return p;
+}
+
+std::optional<PendingStatus> pending_status_from_db(std::string_view name) {
+  for (PendingStatus st :
+       {PendingStatus::kPending, PendingStatus::kApproved, PendingStatus::kRejected, PendingStatus::kSuperseded}) {
+    if (pending_status_name(st) == name) return st;
+  }
+  return std::nullopt;
+}
+
+PendingTable read_pending(const Statement& s) {
+  PendingTable t;
+  t.id = s.column_int64(0);
+  t.run_id = s.column_int64(1);
+  t.created_utc = s.column_text(2);
+  t.nc_file = s.column_text(3);
+  t.program_text = s.column_text(4);
+  t.verdict = s.column_text(5) == "hold" ? PendingVerdict::kHold : PendingVerdict::kApply;
+  t.reason = s.column_text(6);
+  t.interpolation = s.column_text(7);
+  if (!s.column_is_null(8)) t.block_count = s.column_int(8);
+  if (!s.column_is_null(9)) t.command_error_um = s.column_double(9);
+  if (!s.column_is_null(10)) t.correction_max_um = s.column_double(10);
+  if (!s.column_is_null(11)) t.point_count = s.column_int(11);
+  // The schema's CHECK admits only the four names.
+  t.status = pending_status_from_db(s.column_text(12)).value_or(PendingStatus::kPending);
+  t.decided_utc = s.column_text(13);
+  t.decided_by = s.column_text(14);
+  t.note = s.column_text(15);
+  if (!s.column_is_null(16)) t.push_id = s.column_int64(16);
+  if (!s.column_is_null(17)) t.superseded_by = s.column_int64(17);
+  return t;
+}
+
+void bind_optional(Statement& st, int index, const std::optional<int>& v) {
+  if (v) {
+    st.bind(index, *v);
+  } else {
+    st.bind_null(index);
+  }
+}
+
+void bind_optional(Statement& st, int index, const std::optional<double>& v) {
+  if (v) {
+    st.bind(index, *v);
+  } else {
+    st.bind_null(index);
+  }
+}
+
+// NULL for empty text: the columns that say "not recorded" with NULL.
+void bind_text_or_null(Statement& st, int index, std::string_view v) {
+  if (v.empty()) {
+    st.bind_null(index);
+  } else {
+    st.bind(index, v);
+  }
+}
+
+// What a push or a pending table says about its table, checked before anything is written.
+// `what` opens the message: "cannot record NC file /nc/A.SPF for run 3".
+Status check_table_figures(const std::string& what, const std::optional<int>& block_count,
+                           const std::optional<double>& command_error_um, const std::optional<int>& point_count,
+                           const std::optional<double>& correction_max_um) {
+  if (block_count && *block_count < 0) {
+    return make_error(ErrorCode::kInvalidInput,
+                      what + ": block_count " + std::to_string(*block_count) + " is negative");
+  }
+  if (point_count && *point_count < 0) {
+    return make_error(ErrorCode::kInvalidInput,
+                      what + ": point_count " + std::to_string(*point_count) + " is negative");
+  }
+  if (command_error_um && !(std::isfinite(*command_error_um) && *command_error_um >= 0.0)) {
+    return make_error(ErrorCode::kInvalidInput,
+                      what + ": command_error_um is " +
+                          (std::isfinite(*command_error_um) ? std::to_string(*command_error_um) + ", below 0"
+                                                            : describe_non_finite(*command_error_um)));
+  }
+  if (correction_max_um && !std::isfinite(*correction_max_um)) {
+    return make_error(ErrorCode::kInvalidInput, what + ": correction_max_um is not finite");
+  }
+  return {};
 }
 
 Error damaged(const Connection& conn, std::int64_t run_id, const std::string& what) {
@@ -535,6 +652,76 @@ Result<std::int64_t> RunStore::insert_run(const RunRecord& run) {
   return run_id;
 }
 
+namespace {
+
+std::string push_what(std::int64_t run_id, const NcPush& push) {
+  return "cannot record NC file " + push.nc_file + " for run " + std::to_string(run_id);
+}
+
+Status check_push(std::int64_t run_id, const NcPush& push) {
+  if (push.nc_file.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "cannot record an NC file for run " + std::to_string(run_id) + ": the NC file path is empty");
+  }
+  const std::string what = push_what(run_id, push);
+  if (!push.pushed_utc.empty() && !is_utc_timestamp(push.pushed_utc)) {
+    return bad_bound(what + ": pushed_utc", push.pushed_utc);
+  }
+  if (push.table_version < 0) {
+    return make_error(ErrorCode::kInvalidInput, what + ": table version " + std::to_string(push.table_version) +
+                                                    " is negative (0: the next one)");
+  }
+  return check_table_figures(what, push.block_count, push.command_error_um, push.point_count, push.correction_max_um);
+}
+
+// Records one push inside the caller's write transaction, which makes the version check and
+// the insert one step for other writers: marks the run pushed, takes (or checks) the file's
+// next table version and inserts the nc_pushes row. Returns its id. `push` was checked.
+Result<std::int64_t> insert_push(Connection& conn, std::int64_t run_id, const NcPush& push, std::string_view text,
+                                 const std::string& operation) {
+  Result<Statement> upd = Statement::prepare(conn, kRecordNcFile, operation);
+  if (!upd.ok()) return upd.error();
+  upd->bind(1, run_id);
+  upd->bind(2, std::string_view(push.nc_file));
+  if (Status s = upd->run(); !s.ok()) return s.error();
+  if (sqlite3_changes(conn.db) == 0) {
+    return make_error(ErrorCode::kNotFound, "cannot " + operation + ": run " + std::to_string(run_id) +
+                                                " is not in run database " + conn.path.string());
+  }
+  Result<Statement> next = Statement::prepare(conn, kNextTableVersion, operation);
+  if (!next.ok()) return next.error();
+  next->bind(1, std::string_view(push.nc_file));
+  Result<bool> row = next->step();
+  if (!row.ok()) return row.error();
+  const int version = next->column_int(0);
+  if (push.table_version != 0 && push.table_version != version) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "cannot " + operation + ": table version " + std::to_string(push.table_version) +
+                          " is not the next for " + push.nc_file + " (the next is " + std::to_string(version) +
+                          "): another push was recorded since the version was asked; nothing was recorded, "
+                          "render the program again with the next version");
+  }
+  Result<Statement> ins = Statement::prepare(conn, kInsertPush, operation);
+  if (!ins.ok()) return ins.error();
+  ins->bind(1, run_id);
+  ins->bind(2, std::string_view(push.pushed_utc.empty() ? utc_now() : push.pushed_utc));
+  ins->bind(3, std::string_view(push.nc_file));
+  ins->bind(4, version);
+  ins->bind(5, std::string_view(push.reason.empty() ? "run " + std::to_string(run_id) : push.reason));
+  bind_text_or_null(*ins, 6, push.interpolation);
+  bind_optional(*ins, 7, push.block_count);
+  bind_optional(*ins, 8, push.command_error_um);
+  bind_optional(*ins, 9, push.point_count);
+  bind_optional(*ins, 10, push.correction_max_um);
+  const std::string hash = text.empty() ? push.program_hash : settings_hash(text);
+  bind_text_or_null(*ins, 11, hash);
+  bind_text_or_null(*ins, 12, text);
+  if (Status s = ins->run(); !s.ok()) return s.error();
+  return static_cast<std::int64_t>(sqlite3_last_insert_rowid(conn.db));
+}
+
+}  // namespace
+
 Status RunStore::record_nc_file(std::int64_t run_id, const std::string& nc_path) {
   NcPush push;
   push.nc_file = nc_path;
@@ -542,54 +729,342 @@ Status RunStore::record_nc_file(std::int64_t run_id, const std::string& nc_path)
 }
 
 Status RunStore::record_push(std::int64_t run_id, const NcPush& push, std::string_view program_text) {
-  if (push.nc_file.empty()) {
-    return make_error(ErrorCode::kInvalidInput,
-                      "cannot record an NC file for run " + std::to_string(run_id) + ": the NC file path is empty");
-  }
-  if (!push.pushed_utc.empty() && !is_utc_timestamp(push.pushed_utc)) {
-    return bad_bound("cannot record an NC file for run " + std::to_string(run_id) + ": pushed_utc", push.pushed_utc);
-  }
-  if (push.correction_max_um && !std::isfinite(*push.correction_max_um)) {
-    return make_error(ErrorCode::kInvalidInput, "cannot record an NC file for run " + std::to_string(run_id) +
-                                                    ": correction_max_um is not finite");
-  }
+  if (Status s = check_push(run_id, push); !s.ok()) return s;
+  if (program_text.empty() && push.program_text) program_text = *push.program_text;
   Connection& conn = *conn_;
   const std::string operation = "record NC file " + push.nc_file + " for run " + std::to_string(run_id);
   Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
   if (!tx.ok()) return tx.error();
-  Result<Statement> upd = Statement::prepare(conn, kRecordNcFile, operation);
-  if (!upd.ok()) return upd.error();
-  upd->bind(1, run_id);
-  upd->bind(2, std::string_view(push.nc_file));
-  Status s = upd->run();
-  if (!s.ok()) return s;
-  if (sqlite3_changes(conn.db) == 0) {
-    return make_error(ErrorCode::kNotFound, "cannot " + operation + ": run " + std::to_string(run_id) +
+  Result<std::int64_t> id = insert_push(conn, run_id, push, program_text, operation);
+  if (!id.ok()) return id.error();
+  return tx->commit();
+}
+
+Result<int> RunStore::next_table_version(const std::string& nc_file) const {
+  if (nc_file.empty()) {
+    return make_error(ErrorCode::kInvalidInput, "cannot find the next table version: the NC file path is empty");
+  }
+  Connection& conn = *conn_;
+  Result<Statement> q = Statement::prepare(conn, kNextTableVersion, "find the next table version of " + nc_file);
+  if (!q.ok()) return q.error();
+  q->bind(1, std::string_view(nc_file));
+  Result<bool> row = q->step();
+  if (!row.ok()) return row.error();
+  return q->column_int(0);
+}
+
+Result<std::vector<NcPush>> RunStore::list_pushes(const PushQuery& q) const {
+  if (q.limit < 1) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "cannot list NC pushes: the limit must be 1 or more, not " + std::to_string(q.limit));
+  }
+  if (q.lobe < 0) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "cannot list NC pushes: lobe " + std::to_string(q.lobe) + " is negative");
+  }
+  std::string where;
+  std::vector<std::string> text;
+  auto add = [&](const std::string& column_op, const std::string& value) {
+    text.push_back(value);
+    where += (where.empty() ? " WHERE " : " AND ") + column_op + " ?" + std::to_string(text.size() + 1);
+  };
+  if (!q.nc_file.empty()) add("p.nc_file =", q.nc_file);
+  if (!q.machine.empty()) add("r.machine =", q.machine);
+  if (!q.part.empty()) add("r.part =", q.part);
+  if (q.lobe > 0) where += std::string(where.empty() ? " WHERE " : " AND ") + "r.lobe = " + std::to_string(q.lobe);
+  Connection& conn = *conn_;
+  Result<Statement> st = Statement::prepare(conn,
+                                            "SELECT " + std::string(kPushColumns) +
+                                                " FROM nc_pushes AS p JOIN runs AS r ON r.id = p.run_id" + where +
+                                                " ORDER BY p.id DESC LIMIT ?1",
+                                            "list NC pushes");
+  if (!st.ok()) return st.error();
+  st->bind(1, q.limit);
+  for (std::size_t i = 0; i < text.size(); ++i) st->bind(static_cast<int>(i) + 2, std::string_view(text[i]));
+  std::vector<NcPush> out;
+  for (;;) {
+    Result<bool> row = st->step();
+    if (!row.ok()) return row.error();
+    if (!*row) break;
+    out.push_back(read_push(*st, false));
+  }
+  return out;
+}
+
+Result<NcPush> RunStore::load_push(const std::string& nc_file, int table_version) const {
+  Connection& conn = *conn_;
+  const std::string operation = "load table version " + std::to_string(table_version) + " of " + nc_file;
+  Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kRead, operation);
+  if (!tx.ok()) return tx.error();
+  Result<Statement> q = Statement::prepare(conn,
+                                           "SELECT " + std::string(kPushColumns) +
+                                               ", p.program_text FROM nc_pushes AS p"
+                                               " WHERE p.nc_file = ?1 AND p.table_version = ?2",
+                                           operation);
+  if (!q.ok()) return q.error();
+  q->bind(1, std::string_view(nc_file));
+  q->bind(2, table_version);
+  Result<bool> row = q->step();
+  if (!row.ok()) return row.error();
+  if (*row) return read_push(*q, true);
+
+  Result<Statement> have = Statement::prepare(
+      conn, "SELECT count(*), min(table_version), max(table_version) FROM nc_pushes WHERE nc_file = ?1", operation);
+  if (!have.ok()) return have.error();
+  have->bind(1, std::string_view(nc_file));
+  row = have->step();
+  if (!row.ok()) return row.error();
+  const int count = have->column_int(0);
+  std::string versions;
+  if (count == 0) {
+    versions = "nothing was ever pushed to it";
+  } else if (count == 1) {
+    versions = "its only version is " + std::to_string(have->column_int(1));
+  } else {
+    versions = "its versions are " + std::to_string(have->column_int(1)) + " to " + std::to_string(have->column_int(2));
+    if (have->column_int(2) - have->column_int(1) + 1 != count) versions += " (" + std::to_string(count) + " of them)";
+  }
+  return make_error(ErrorCode::kNotFound, "NC file " + nc_file + " has no table version " +
+                                              std::to_string(table_version) + " in run database " + conn.path.string() +
+                                              ": " + versions);
+}
+
+Result<std::optional<NcPush>> RunStore::last_push(const std::string& nc_file) const {
+  Connection& conn = *conn_;
+  Result<Statement> q = Statement::prepare(conn,
+                                           "SELECT " + std::string(kPushColumns) +
+                                               ", p.program_text FROM nc_pushes AS p WHERE p.nc_file = ?1"
+                                               " ORDER BY p.table_version DESC LIMIT 1",
+                                           "load the last push of " + nc_file);
+  if (!q.ok()) return q.error();
+  q->bind(1, std::string_view(nc_file));
+  Result<bool> row = q->step();
+  if (!row.ok()) return row.error();
+  if (!*row) return std::optional<NcPush>();
+  return std::optional<NcPush>(read_push(*q, true));
+}
+
+// ---- Tables awaiting approval ----
+
+namespace {
+
+std::string pending_what(std::int64_t id) { return "pending table " + std::to_string(id); }
+
+// Reads one pending table inside the caller's transaction; kNotFound if absent.
+Result<PendingTable> read_one_pending(Connection& conn, std::int64_t id, bool with_text, const std::string& operation) {
+  Result<Statement> q = Statement::prepare(conn, select_pending(with_text, " WHERE id = ?1"), operation);
+  if (!q.ok()) return q.error();
+  q->bind(1, id);
+  Result<bool> row = q->step();
+  if (!row.ok()) return row.error();
+  if (!*row) {
+    return make_error(ErrorCode::kNotFound, "cannot " + operation + ": " + pending_what(id) +
                                                 " is not in run database " + conn.path.string());
   }
-  Result<Statement> ins = Statement::prepare(conn, kInsertPush, operation);
+  return read_pending(*q);
+}
+
+// kRefused for a table that left kPending, saying how and when.
+Status require_pending(const PendingTable& t, const std::string& operation) {
+  if (t.status == PendingStatus::kPending) return {};
+  std::string how = "it is already " + std::string(pending_status_name(t.status));
+  switch (t.status) {
+    case PendingStatus::kApproved:
+    case PendingStatus::kRejected:
+      how += " (by " + t.decided_by + " at " + t.decided_utc + ")";
+      break;
+    case PendingStatus::kSuperseded:
+      how += " by the newer " + (t.superseded_by ? pending_what(*t.superseded_by) : std::string("pending table")) +
+             " at " + t.decided_utc + "; only the newest measurement can be approved";
+      break;
+    case PendingStatus::kPending:
+      break;
+  }
+  return make_error(ErrorCode::kRefused, "cannot " + operation + ": " + how + "; nothing was changed");
+}
+
+}  // namespace
+
+Result<std::int64_t> RunStore::add_pending(const PendingTable& table) {
+  const std::string what = "cannot keep a pending table for run " + std::to_string(table.run_id);
+  if (table.nc_file.empty()) return make_error(ErrorCode::kInvalidInput, what + ": the NC file path is empty");
+  if (table.program_text.empty()) {
+    return make_error(ErrorCode::kInvalidInput, what + " (" + table.nc_file + "): the program text is empty");
+  }
+  if (!table.created_utc.empty() && !is_utc_timestamp(table.created_utc)) {
+    return bad_bound(what + ": created_utc", table.created_utc);
+  }
+  if (Status s = check_table_figures(what + " (" + table.nc_file + ")", table.block_count, table.command_error_um,
+                                     table.point_count, table.correction_max_um);
+      !s.ok()) {
+    return s.error();
+  }
+  const std::string created = table.created_utc.empty() ? utc_now() : table.created_utc;
+  Connection& conn = *conn_;
+  const std::string operation =
+      "keep the table of run " + std::to_string(table.run_id) + " for " + table.nc_file + " pending";
+  Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
+  if (!tx.ok()) return tx.error();
+
+  Result<Statement> run = Statement::prepare(conn, "SELECT 1 FROM runs WHERE id = ?1", operation);
+  if (!run.ok()) return run.error();
+  run->bind(1, table.run_id);
+  Result<bool> row = run->step();
+  if (!row.ok()) return row.error();
+  if (!*row) {
+    return make_error(ErrorCode::kNotFound, "cannot " + operation + ": run " + std::to_string(table.run_id) +
+                                                " is not in run database " + conn.path.string());
+  }
+  // The older pending table (at most one: nc_pending_one_per_file) steps aside before the new
+  // row goes in, and learns the new id after.
+  std::optional<std::int64_t> older;
+  {
+    Result<Statement> q =
+        Statement::prepare(conn, "SELECT id FROM nc_pending WHERE nc_file = ?1 AND status = 'pending'", operation);
+    if (!q.ok()) return q.error();
+    q->bind(1, std::string_view(table.nc_file));
+    row = q->step();
+    if (!row.ok()) return row.error();
+    if (*row) older = q->column_int64(0);
+  }
+  if (older) {
+    Result<Statement> sup = Statement::prepare(
+        conn, "UPDATE nc_pending SET status = 'superseded', decided_utc = ?2 WHERE id = ?1", operation);
+    if (!sup.ok()) return sup.error();
+    sup->bind(1, *older);
+    sup->bind(2, std::string_view(created));
+    if (Status s = sup->run(); !s.ok()) return s.error();
+  }
+  Result<Statement> ins = Statement::prepare(conn,
+                                             "INSERT INTO nc_pending (run_id, created_utc, nc_file, program_text,"
+                                             " verdict, reason, interpolation, block_count, command_error_um,"
+                                             " correction_max_um, point_count)"
+                                             " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)",
+                                             operation);
   if (!ins.ok()) return ins.error();
-  ins->bind(1, run_id);
-  ins->bind(2, std::string_view(push.pushed_utc.empty() ? utc_now() : push.pushed_utc));
-  ins->bind(3, std::string_view(push.nc_file));
-  if (push.point_count) {
-    ins->bind(4, *push.point_count);
-  } else {
-    ins->bind_null(4);
+  ins->bind(1, table.run_id);
+  ins->bind(2, std::string_view(created));
+  ins->bind(3, std::string_view(table.nc_file));
+  ins->bind(4, std::string_view(table.program_text));
+  ins->bind(5, pending_verdict_name(table.verdict));
+  ins->bind(6, std::string_view(table.reason));
+  bind_text_or_null(*ins, 7, table.interpolation);
+  bind_optional(*ins, 8, table.block_count);
+  bind_optional(*ins, 9, table.command_error_um);
+  bind_optional(*ins, 10, table.correction_max_um);
+  bind_optional(*ins, 11, table.point_count);
+  if (Status s = ins->run(); !s.ok()) return s.error();
+  const std::int64_t id = sqlite3_last_insert_rowid(conn.db);
+  if (older) {
+    Result<Statement> link =
+        Statement::prepare(conn, "UPDATE nc_pending SET superseded_by = ?2 WHERE id = ?1", operation);
+    if (!link.ok()) return link.error();
+    link->bind(1, *older);
+    link->bind(2, id);
+    if (Status s = link->run(); !s.ok()) return s.error();
   }
-  if (push.correction_max_um) {
-    ins->bind(5, *push.correction_max_um);
-  } else {
-    ins->bind_null(5);
+  if (Status s = tx->commit(); !s.ok()) return s.error();
+  return id;
+}
+
+Result<std::vector<PendingTable>> RunStore::list_pending(const PendingQuery& q) const {
+  if (q.limit < 1) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "cannot list pending tables: the limit must be 1 or more, not " + std::to_string(q.limit));
   }
-  std::string program_hash = push.program_hash;
-  if (!program_text.empty()) program_hash = settings_hash(program_text);
-  if (program_hash.empty()) {
-    ins->bind_null(6);
-  } else {
-    ins->bind(6, std::string_view(program_hash));
+  std::string where;
+  std::vector<std::string> text;
+  auto add = [&](const std::string& column_op, const std::string& value) {
+    text.push_back(value);
+    where += (where.empty() ? " WHERE " : " AND ") + column_op + " ?" + std::to_string(text.size() + 1);
+  };
+  if (q.status) add("status =", std::string(pending_status_name(*q.status)));
+  if (!q.nc_file.empty()) add("nc_file =", q.nc_file);
+  Connection& conn = *conn_;
+  Result<Statement> st =
+      Statement::prepare(conn, select_pending(false, where + " ORDER BY id DESC LIMIT ?1"), "list pending tables");
+  if (!st.ok()) return st.error();
+  st->bind(1, q.limit);
+  for (std::size_t i = 0; i < text.size(); ++i) st->bind(static_cast<int>(i) + 2, std::string_view(text[i]));
+  std::vector<PendingTable> out;
+  for (;;) {
+    Result<bool> row = st->step();
+    if (!row.ok()) return row.error();
+    if (!*row) break;
+    out.push_back(read_pending(*st));
   }
-  if (s = ins->run(); !s.ok()) return s;
+  return out;
+}
+
+Result<PendingTable> RunStore::load_pending(std::int64_t id) const {
+  return read_one_pending(*conn_, id, true, "load " + pending_what(id));
+}
+
+Status RunStore::reject_pending(std::int64_t id, const std::string& by, const std::string& note) {
+  const std::string operation = "reject " + pending_what(id);
+  if (by.empty()) {
+    return make_error(ErrorCode::kInvalidInput, "cannot " + operation + ": say who rejects it (the name is empty)");
+  }
+  Connection& conn = *conn_;
+  Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
+  if (!tx.ok()) return tx.error();
+  Result<PendingTable> t = read_one_pending(conn, id, false, operation);
+  if (!t.ok()) return t.error();
+  if (Status s = require_pending(*t, operation + " for " + t->nc_file); !s.ok()) return s;
+  Result<Statement> upd = Statement::prepare(conn,
+                                             "UPDATE nc_pending SET status = 'rejected', decided_utc = ?2,"
+                                             " decided_by = ?3, note = ?4 WHERE id = ?1",
+                                             operation);
+  if (!upd.ok()) return upd.error();
+  upd->bind(1, id);
+  upd->bind(2, std::string_view(utc_now()));
+  upd->bind(3, std::string_view(by));
+  upd->bind(4, std::string_view(note));
+  if (Status s = upd->run(); !s.ok()) return s;
+  return tx->commit();
+}
+
+Status RunStore::record_approved_push(std::int64_t pending_id, const NcPush& push, const std::string& by,
+                                      const std::string& note) {
+  const std::string operation = "record the approved push of " + pending_what(pending_id);
+  if (by.empty()) {
+    return make_error(ErrorCode::kInvalidInput, "cannot " + operation + ": say who approves it (the name is empty)");
+  }
+  Connection& conn = *conn_;
+  Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
+  if (!tx.ok()) return tx.error();
+  Result<PendingTable> t = read_one_pending(conn, pending_id, true, operation);
+  if (!t.ok()) return t.error();
+  if (!push.nc_file.empty() && push.nc_file != t->nc_file) {
+    return make_error(ErrorCode::kInvalidInput, "cannot " + operation + ": it was rendered for " + t->nc_file +
+                                                    ", not for " + push.nc_file + "; nothing was recorded");
+  }
+  if (Status s = require_pending(*t, operation + " for " + t->nc_file); !s.ok()) return s;
+
+  NcPush full = push;
+  full.nc_file = t->nc_file;
+  if (full.reason.empty()) full.reason = "approved by " + by;
+  if (full.interpolation.empty()) full.interpolation = t->interpolation;
+  if (!full.block_count) full.block_count = t->block_count;
+  if (!full.command_error_um) full.command_error_um = t->command_error_um;
+  if (!full.correction_max_um) full.correction_max_um = t->correction_max_um;
+  if (!full.point_count) full.point_count = t->point_count;
+  if (!full.program_text || full.program_text->empty()) full.program_text = t->program_text;
+  if (Status s = check_push(t->run_id, full); !s.ok()) return s;
+
+  Result<std::int64_t> push_id = insert_push(conn, t->run_id, full, *full.program_text, operation);
+  if (!push_id.ok()) return push_id.error();
+  Result<Statement> upd = Statement::prepare(conn,
+                                             "UPDATE nc_pending SET status = 'approved', decided_utc = ?2,"
+                                             " decided_by = ?3, note = ?4, push_id = ?5 WHERE id = ?1",
+                                             operation);
+  if (!upd.ok()) return upd.error();
+  upd->bind(1, pending_id);
+  upd->bind(2, std::string_view(utc_now()));
+  upd->bind(3, std::string_view(by));
+  upd->bind(4, std::string_view(note));
+  upd->bind(5, *push_id);
+  if (Status s = upd->run(); !s.ok()) return s;
   return tx->commit();
 }
 
@@ -712,8 +1187,9 @@ Result<std::optional<std::int64_t>> RunStore::last_pushed_run(const std::string&
                                                               int lobe) const {
   Connection& conn = *conn_;
   Result<Statement> q = Statement::prepare(conn,
-                                           "SELECT id FROM runs WHERE machine = ?1 AND part = ?2 AND lobe = ?3"
-                                           " AND status = 'pushed' ORDER BY started_utc DESC, id DESC LIMIT 1",
+                                           "SELECT p.run_id FROM nc_pushes AS p JOIN runs AS r ON r.id = p.run_id"
+                                           " WHERE r.machine = ?1 AND r.part = ?2 AND r.lobe = ?3"
+                                           " ORDER BY p.id DESC LIMIT 1",
                                            "find the table in force");
   if (!q.ok()) return q.error();
   q->bind(1, std::string_view(machine));
@@ -841,20 +1317,16 @@ Result<StoredRun> RunStore::load_run(std::int64_t run_id) const {
     }
   }
   {
-    Result<Statement> q = Statement::prepare(conn, kLoadPushes, operation);
+    Result<Statement> q = Statement::prepare(
+        conn, "SELECT " + std::string(kPushColumns) + " FROM nc_pushes AS p WHERE p.run_id = ?1 ORDER BY p.id",
+        operation);
     if (!q.ok()) return q.error();
     q->bind(1, run_id);
     for (;;) {
       Result<bool> row = q->step();
       if (!row.ok()) return row.error();
       if (!*row) break;
-      NcPush p;
-      p.pushed_utc = q->column_text(0);
-      p.nc_file = q->column_text(1);
-      if (!q->column_is_null(2)) p.point_count = q->column_int(2);
-      if (!q->column_is_null(3)) p.correction_max_um = q->column_double(3);
-      p.program_hash = q->column_text(4);
-      out.pushes.push_back(std::move(p));
+      out.pushes.push_back(read_push(*q, false));
     }
   }
   Status s = tx->commit();
@@ -896,6 +1368,24 @@ std::string settings_hash(std::string_view text) {
   char buf[17];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
   return buf;
+}
+
+std::string_view pending_verdict_name(PendingVerdict verdict) {
+  return verdict == PendingVerdict::kHold ? "hold" : "apply";
+}
+
+std::string_view pending_status_name(PendingStatus status) {
+  switch (status) {
+    case PendingStatus::kPending:
+      return "pending";
+    case PendingStatus::kApproved:
+      return "approved";
+    case PendingStatus::kRejected:
+      return "rejected";
+    case PendingStatus::kSuperseded:
+      return "superseded";
+  }
+  return "pending";
 }
 
 std::string_view event_kind_name(EventKind kind) { return kind == EventKind::kRefusal ? "refusal" : "fault"; }

@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/part.h"
@@ -74,14 +75,84 @@ struct RunSummary {
   std::string raw_pruned_utc;  // when prune removed the raw samples; empty: still stored
 };
 
-// One NC program written from a run.
+// One NC program written to the control from a run, as nc_pushes keeps it.
 struct NcPush {
-  std::string pushed_utc;  // ISO 8601 UTC; empty when recording: now
-  std::string nc_file;     // not empty
-  // Recorded by record_push; empty for pushes recorded by record_nc_file or before v2.
+  std::int64_t id = 0;      // read back (nc_pushes.id: push order); ignored when recording
+  std::int64_t run_id = 0;  // read back; when recording, the run is an argument
+  std::string pushed_utc;   // ISO 8601 UTC; empty when recording: now
+  std::string nc_file;      // not empty; compared as text, so give every push of a file the same path
+  // 1, 2, 3... per nc_file in push order: the version the program's header carries. When
+  // recording: 0 takes the next one (record_nc_file does); any other value must be
+  // next_table_version(nc_file), so two writers cannot both claim a version.
+  int table_version = 0;
+  // Why it was pushed: "run 12", "approved by anna", "rollback to version 3". When recording,
+  // empty: "run <run id>". Empty for pushes recorded before schema version 3.
+  std::string reason;
+  // Empty: unknown (pushes recorded before schema version 3, or not said).
+  std::string interpolation;               // "G1", "CSPLINE"...
+  std::optional<int> block_count;          // table blocks in the program; >= 0
+  std::optional<double> command_error_um;  // the table's command position error; finite, >= 0
+  // Empty for pushes recorded by record_nc_file or before schema version 2.
   std::optional<int> point_count;
   std::optional<double> correction_max_um;
   std::string program_hash;  // settings_hash() of the program text; empty if unknown
+  // The whole program as written, byte for byte, so a diff or a rollback never depends on the
+  // file on the control. Unset when not recorded (pushes before schema version 3, or without
+  // text), and always unset in list_pushes and load_run results (load_push, last_push read it).
+  std::optional<std::string> program_text;
+};
+
+// Filters for list_pushes; newest first (by push order).
+struct PushQuery {
+  int limit = 50;       // at most this many; >= 1
+  std::string nc_file;  // exact path as recorded; empty = any
+  std::string machine;  // of the run pushed; empty = any
+  std::string part;     // of the run pushed; empty = any
+  int lobe = 0;         // of the run pushed; 0 = any
+};
+
+// Why a rendered table waits instead of being written.
+enum class PendingVerdict {
+  kApply,  // compensation would apply it; it waits only for a person's approval
+  kHold,   // compensation held it (see reason); a person may still approve it
+};
+std::string_view pending_verdict_name(PendingVerdict verdict);  // "apply", "hold"
+
+// Lifecycle of a pending table: kPending -> kApproved (record_approved_push) | kRejected
+// (reject_pending) | kSuperseded (add_pending of a newer table for the same nc_file). Only
+// kPending changes; the other three are final.
+enum class PendingStatus { kPending, kApproved, kRejected, kSuperseded };
+std::string_view pending_status_name(PendingStatus status);  // "pending", "approved", ...
+
+// A rendered NC program that was not written to the control, kept in nc_pending until a person
+// approves or rejects it. At most one table per nc_file is pending: the newest measurement.
+struct PendingTable {
+  std::int64_t id = 0;       // read back; ignored by add_pending
+  std::int64_t run_id = 0;   // the run it was computed from; must be stored
+  std::string created_utc;   // ISO 8601 UTC; empty when adding: now
+  std::string nc_file;       // where it would be written; not empty
+  std::string program_text;  // the program as rendered; not empty. Empty in list_pending results.
+  PendingVerdict verdict = PendingVerdict::kApply;
+  std::string reason;                      // why it waits: "approval required", or the reasons compensation held it
+  std::string interpolation;               // "G1", "CSPLINE"...; empty: unknown
+  std::optional<int> block_count;          // >= 0
+  std::optional<double> command_error_um;  // finite, >= 0
+  std::optional<double> correction_max_um;
+  std::optional<int> point_count;
+  // Read back; ignored by add_pending.
+  PendingStatus status = PendingStatus::kPending;
+  std::string decided_utc;                    // when it left kPending; empty while pending
+  std::string decided_by;                     // who approved or rejected it; empty otherwise
+  std::string note;                           // their note; may be empty
+  std::optional<std::int64_t> push_id;        // kApproved: the nc_pushes row it became
+  std::optional<std::int64_t> superseded_by;  // kSuperseded: the newer pending table
+};
+
+// Filters for list_pending; newest first.
+struct PendingQuery {
+  int limit = 50;                       // >= 1
+  std::optional<PendingStatus> status;  // empty = any
+  std::string nc_file;                  // empty = any
 };
 
 // A run as read back. Per-degree tables (raw lifts, profile, correction) are kept as counts
@@ -105,7 +176,7 @@ struct StoredRun {
   // The frame mapping and geometry the run was measured with; empty if not recorded.
   // Only follower, radii, rotation_sense, c_offset_deg and probe_offset_deg are filled.
   std::optional<Part> geometry;
-  std::vector<NcPush> pushes;  // oldest first
+  std::vector<NcPush> pushes;  // oldest first, without program_text
 };
 
 // Filters for list_runs and trend. Times are ISO 8601 UTC, "YYYY-MM-DDTHH:MM:SSZ".
@@ -160,7 +231,8 @@ struct EventQuery {
 // Movable, not copyable; a moved-from store may only be destroyed or assigned to.
 // Errors: kStorage for anything SQLite refuses (the message names the operation, the file
 // and SQLite's reason), kIo if the directory cannot be created, kInvalidInput for a record
-// or query that breaks the contracts above, kNotFound for an unknown run id.
+// or query that breaks the contracts above, kNotFound for an unknown run id, push or pending
+// table, kRefused for a decision on a pending table that is no longer pending.
 class RunStore {
  public:
   // Opens (creating the parent directories and the file if need be) and brings the schema
@@ -180,13 +252,67 @@ class RunStore {
   Result<std::int64_t> insert_run(const RunRecord& run);
 
   // Marks the run "pushed" and remembers the NC program written from it (replacing any
-  // earlier one as the run's nc_file), and records the push (time: now) in nc_pushes.
+  // earlier one as the run's nc_file), and records the push (time: now, the next table version
+  // of the file, reason "run <id>") in nc_pushes.
   // kNotFound if there is no such run; kInvalidInput if nc_path is empty.
   Status record_nc_file(std::int64_t run_id, const std::string& nc_path);
 
-  // As record_nc_file, with what was pushed: point count, largest correction and the hash of
-  // the program text, so a later look at the control can tell whether its file is this one.
+  // As record_nc_file, with what was pushed (see NcPush): table version, reason, interpolation,
+  // blocks, command position error, point count, largest correction, and the program text
+  // (`program_text`, or push.program_text if that is empty), kept whole with its hash.
+  // One transaction. kInvalidInput if push.table_version is neither 0 nor the file's next
+  // version (another push claimed it since the caller asked next_table_version: nothing is
+  // recorded, and the file the caller wrote carries a version that is not its own), or for a
+  // negative count or non-finite figure. Pending tables are not touched.
   Status record_push(std::int64_t run_id, const NcPush& push, std::string_view program_text = {});
+
+  // The version the next push to `nc_file` gets: 1 + the highest recorded (1 if none). Ask
+  // before rendering, as the program's header carries it. kInvalidInput for an empty path.
+  Result<int> next_table_version(const std::string& nc_file) const;
+
+  // Pushes newest first (by push order), without program_text (load_push has it).
+  // kInvalidInput for a limit below 1 or a negative lobe.
+  Result<std::vector<NcPush>> list_pushes(const PushQuery& q) const;
+
+  // One push of a file, with program_text. kNotFound names the file, the version and the
+  // versions the file has.
+  Result<NcPush> load_push(const std::string& nc_file, int table_version) const;
+
+  // The newest push of a file (the program the control should hold), with program_text;
+  // empty if the file was never pushed.
+  Result<std::optional<NcPush>> last_push(const std::string& nc_file) const;
+
+  // Keeps a rendered table that was not written and returns its id. In the same transaction,
+  // a table still pending for the same nc_file becomes kSuperseded (superseded_by: the new
+  // one, decided_utc: its created_utc): only the newest measurement can be approved.
+  // kNotFound if the run is not stored; kInvalidInput for an empty nc_file or program_text,
+  // a malformed time, a negative count or a non-finite figure.
+  Result<std::int64_t> add_pending(const PendingTable& table);
+
+  // Pending tables newest first, without program_text. kInvalidInput for a limit below 1.
+  Result<std::vector<PendingTable>> list_pending(const PendingQuery& q) const;
+
+  // One pending table with its program_text. kNotFound if absent.
+  Result<PendingTable> load_pending(std::int64_t id) const;
+
+  // kPending -> kRejected, by `by` (not empty) with `note`, now. kRefused, naming its status,
+  // if the table is no longer pending (nothing changes); kNotFound if absent.
+  Status reject_pending(std::int64_t id, const std::string& by, const std::string& note);
+
+  // Approving a table is writing it: the caller checks the table is still pending
+  // (load_pending), writes the program to the control, then calls this, which in one
+  // transaction records the push (as record_push, for the pending table's run) and marks the
+  // table kApproved by `by` (not empty) with `note`, pointing at the push. Fields left unset
+  // in `push` come from the pending table: nc_file, interpolation, block_count,
+  // command_error_um, correction_max_um, point_count and program_text (pass the text actually
+  // written if it differs, e.g. a header carrying the table version); reason defaults to
+  // "approved by <by>". kInvalidInput if push.nc_file names another file, or as record_push.
+  // kRefused, naming its status, if the table stopped being pending since it was checked
+  // (rejected, or superseded by a newer measurement): then nothing is recorded, and the
+  // caller, which already wrote the file, must still record that push with record_push so
+  // the history matches the control.
+  Status record_approved_push(std::int64_t pending_id, const NcPush& push, const std::string& by,
+                              const std::string& note = {});
 
   // Stores a fault or refusal; returns its id. kInvalidInput for an empty message or code, a
   // malformed time; kStorage if run_id names no run.
@@ -209,8 +335,10 @@ class RunStore {
   // by later runs; `VACUUM` in sqlite3 gives them back to the file system.
   Result<std::int64_t> prune_raw_samples(const std::string& cutoff_utc, const std::string& now_utc);
 
-  // The newest run of this machine, part and lobe whose table was pushed: the table in
-  // force, with which the next part is ground. Empty if none was pushed yet.
+  // The run of this machine, part and lobe whose table was pushed last (by push order, not by
+  // when the run was measured): the table in force, with which the next part is ground. After
+  // a rollback re-pushes an older run's table, that older run is the one in force. Empty if
+  // none was pushed yet.
   Result<std::optional<std::int64_t>> last_pushed_run(const std::string& machine, const std::string& part,
                                                       int lobe) const;
 

@@ -171,8 +171,11 @@ void build_history(const fs::path& path) {
   sqlite3_stmt* tables = prepare(db, "INSERT INTO run_tables VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
   sqlite3_stmt* push =
       prepare(db,
-              "INSERT INTO nc_pushes (run_id, pushed_utc, nc_file, point_count, correction_max_um, program_hash)"
-              " VALUES (?1, ?2, ?3, 361, 16.6, 'abcdef0123456789')");
+              "INSERT INTO nc_pushes (run_id, pushed_utc, nc_file, point_count, correction_max_um, program_hash,"
+              " table_version, reason, interpolation, block_count, command_error_um)"
+              " VALUES (?1, ?2, ?3, 361, 16.6, 'abcdef0123456789',"
+              " (SELECT coalesce(max(table_version), 0) + 1 FROM nc_pushes WHERE nc_file = ?3),"
+              " 'run ' || ?1, 'cspline', 55, 0.47)");
   for (int i = 0; i < kRuns; ++i) {
     const std::string started = utc(kFirstRunUnix + static_cast<std::int64_t>(i) * kRunSpacingS);
     const std::string machine = "grinder-" + std::to_string(1 + i % kMachines);

@@ -106,6 +106,7 @@ TEST(MigrationFromV1, KeepsEveryRunAndItsNumbers) {
   ASSERT_EQ(pushed->pushes.size(), 1u) << "the version-1 push is kept as an nc_pushes row";
   EXPECT_EQ(pushed->pushes[0].nc_file, "nc/CAM_INTAKE_L1.SPF");
   EXPECT_EQ(pushed->pushes[0].pushed_utc, "2026-11-21T08:00:05Z");
+  EXPECT_EQ(pushed->pushes[0].table_version, 1) << "and numbered by version 3";
   Result<StoredRun> second = store->load_run(2);
   ASSERT_TRUE(second.ok());
   EXPECT_EQ(second->correction_in_force_run, 1);
@@ -157,10 +158,15 @@ TEST(MigrationFromV1, StepsOneVersionAtATime) {
   RawDb raw(dir.db());
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), 1);
   EXPECT_EQ(raw.query_text("SELECT type FROM sqlite_schema WHERE name = 'run_profile'"), "table");
-  Status s = storage_internal::apply_migrations(conn);
+  Status s = storage_internal::apply_migrations_up_to(conn, 2);
   ASSERT_TRUE(s.ok()) << s.error().message;
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), 2);
   EXPECT_EQ(raw.query_text("SELECT type FROM sqlite_schema WHERE name = 'run_profile'"), "view");
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'nc_pending'"), 0);
+  s = storage_internal::apply_migrations(conn);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 3);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'nc_pending'"), 1);
 }
 
 }  // namespace

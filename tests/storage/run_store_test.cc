@@ -231,7 +231,7 @@ TEST_F(RunStoreTest, RecordNcFileMarksTheRunPushed) {
   EXPECT_EQ((*runs)[1].nc_file, "/nc/CAM_L2.MPF");
 }
 
-TEST_F(RunStoreTest, TableInForceIsTheNewestPushedRunOfThatMachinePartAndLobe) {
+TEST_F(RunStoreTest, TableInForceIsTheLastPushedRunOfThatMachinePartAndLobe) {
   auto none = store().last_pushed_run("grinder-1", "a", 2);
   ASSERT_TRUE(none.ok()) << none.error().message;
   EXPECT_FALSE(none->has_value()) << "nothing pushed yet";
