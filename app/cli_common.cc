@@ -49,4 +49,13 @@ Result<LoadedPart> load_part(const std::string& part_path) {
   return LoadedPart{std::move(*pf), std::move(*design)};
 }
 
+Result<RunStore> open_history(const DataPaths& paths) {
+  if (!std::filesystem::exists(paths.db())) {
+    return make_error(ErrorCode::kNotFound,
+                      "no run database at " + paths.db().string() +
+                          "; run `gaugeloop demo` or `gaugeloop measure` first, or give --data-dir");
+  }
+  return RunStore::open(paths.db());
+}
+
 }  // namespace gaugeloop

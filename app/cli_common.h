@@ -9,6 +9,7 @@
 #include "app/part_file.h"
 #include "core/lift_table.h"
 #include "core/result.h"
+#include "storage/run_store.h"
 
 namespace gaugeloop {
 
@@ -40,6 +41,9 @@ struct DataPaths {
 
 void add_data_dir_option(CLI::App& cmd, DataPaths& paths);
 
+// Opens an existing run database for a query or a decision; a missing one is not created.
+Result<RunStore> open_history(const DataPaths& paths);
+
 // A part and its design table, from a file or (empty path) from the embedded sample.
 struct LoadedPart {
   PartFile file;
@@ -55,5 +59,6 @@ using CommandAction = std::function<int()>;
 void add_measure_commands(CLI::App& app, CommandAction& action);  // demo, sim, measure
 void add_runs_commands(CLI::App& app, CommandAction& action);     // runs ...
 void add_profile_commands(CLI::App& app, CommandAction& action);  // profile
+void add_nc_commands(CLI::App& app, CommandAction& action);       // nc ...
 
 }  // namespace gaugeloop

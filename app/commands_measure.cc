@@ -52,12 +52,20 @@ void print_report(const JobReport& r, const Part& part, const std::string& machi
   } else {
     std::printf("  correction        %.2f um max, from the design\n", r.correction_max_um);
   }
-  if (r.verdict == CompensationVerdict::kApply) {
-    std::printf("  NC file           %s (%d points)\n", r.nc_file.string().c_str(), r.table_points);
+  if (!r.interpolation.empty()) {
+    std::printf("  curve table       %d blocks, %s, command position error %.3f um\n", r.table_blocks,
+                r.table_writer.c_str(), r.command_error_um);
+  }
+  if (r.pushed()) {
+    std::printf("  NC file           %s (table version %d)\n", r.nc_file.string().c_str(), r.table_version);
   } else {
-    std::printf("  NC file           not written: compensation %s; the table in force stays\n",
+    std::printf("  NC file           not written (compensation: %s); the table in force stays\n",
                 std::string(compensation_verdict_name(r.verdict)).c_str());
-    std::printf("  why               %s\n", r.verdict_reasons.c_str());
+    std::printf("  why               %s\n", r.not_pushed_reason.c_str());
+    if (r.pending_id) {
+      std::printf("  pending table     %lld: `gaugeloop nc approve %lld` writes it\n",
+                  static_cast<long long>(*r.pending_id), static_cast<long long>(*r.pending_id));
+    }
   }
   std::printf("  database          %s\n", r.db_path.string().c_str());
 }
@@ -68,6 +76,9 @@ struct MeasureOptions {
   std::string template_path;
   int revolutions = 3;
   double table_step_deg = 1.0;
+  std::string table = "auto";
+  double command_error_um = 0.5;
+  bool require_approval = false;
   std::string machine = "grinder-1";
   std::string note;
   int response_timeout_ms = 200;
@@ -82,7 +93,20 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
   cmd.add_option("--revolutions", o.revolutions, "Complete revolutions to average (at least 3)")
       ->capture_default_str()
       ->check(CLI::Range(3, 100));
-  cmd.add_option("--table-step-deg", o.table_step_deg, "C step of the curve table in degrees")->capture_default_str();
+  cmd.add_option("--table", o.table,
+                 "Curve table: auto (fewest blocks within --command-error-um), linear or spline (at "
+                 "--table-step-deg), adaptive-linear, adaptive-spline; see docs/nc_output.md")
+      ->check(CLI::IsMember({"auto", "linear", "spline", "adaptive-linear", "adaptive-spline"}))
+      ->capture_default_str();
+  cmd.add_option("--table-step-deg", o.table_step_deg, "C step of a linear or spline table, degrees")
+      ->capture_default_str();
+  cmd.add_option("--command-error-um", o.command_error_um,
+                 "Largest command position error (NC interpolation against the exact path) auto and adaptive "
+                 "tables may have")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 100.0));
+  cmd.add_flag("--require-approval", o.require_approval,
+               "Keep each new table as pending until `gaugeloop nc approve ID` writes it");
   cmd.add_option("--machine", o.machine, "Machine name stored with the run")->capture_default_str();
   cmd.add_option("--note", o.note, "Operator note stored with the run");
   cmd.add_option("--response-timeout-ms", o.response_timeout_ms, "Gauge response timeout")
@@ -110,13 +134,20 @@ int run_job(GaugeClient& gauge, const LoadedPart& lp, const MeasureOptions& o, b
   js.nc_template = std::move(*tmpl);
   js.nc_template_name = template_name;
   js.table_step_deg = o.table_step_deg;
+  js.table_kind = o.table == "linear"            ? TableKind::kLinear
+                  : o.table == "spline"          ? TableKind::kSpline
+                  : o.table == "adaptive-linear" ? TableKind::kAdaptiveLinear
+                  : o.table == "adaptive-spline" ? TableKind::kAdaptiveSpline
+                                                 : TableKind::kAuto;
+  js.table_choice.bound_um = o.command_error_um;
+  js.require_approval = o.require_approval;
   js.machine = o.machine;
   js.note = o.note;
   js.build_on_table_in_force = build_on_table_in_force;
   Result<JobReport> report = run_measure_job(gauge, js);
   if (!report) return report_error(report.error());
   print_report(*report, js.part, js.machine);
-  return report->verdict == CompensationVerdict::kApply ? kExitOk : kExitNotPushed;
+  return report->pushed() ? kExitOk : kExitNotPushed;
 }
 
 int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {

@@ -26,16 +26,6 @@ std::string list_hint(const DataPaths& paths) {
   return "`gaugeloop runs list --data-dir " + paths.data_dir + "` shows the ids";
 }
 
-// Opens an existing history; a missing database is not created by a query.
-Result<RunStore> open_history(const DataPaths& paths) {
-  if (!std::filesystem::exists(paths.db())) {
-    return make_error(ErrorCode::kNotFound,
-                      "no run database at " + paths.db().string() +
-                          "; run `gaugeloop demo` or `gaugeloop measure` first, or give --data-dir");
-  }
-  return RunStore::open(paths.db());
-}
-
 Result<StoredRun> load(const RunStore& store, std::int64_t id, const DataPaths& paths) {
   Result<StoredRun> run = store.load_run(id);
   if (!run && run.error().code == ErrorCode::kNotFound) {
@@ -260,6 +250,11 @@ int cmd_show(const RunOptions& o) {
     for (const NcPush& p : r.pushes) {
       pushes.push_back({{"pushed_utc", p.pushed_utc},
                         {"nc_file", p.nc_file},
+                        {"table_version", p.table_version},
+                        {"reason", p.reason},
+                        {"interpolation", p.interpolation},
+                        {"block_count", p.block_count ? json(*p.block_count) : json(nullptr)},
+                        {"command_error_um", opt_json(p.command_error_um)},
                         {"point_count", p.point_count ? json(*p.point_count) : json(nullptr)},
                         {"correction_max_um", opt_json(p.correction_max_um)},
                         {"program_hash", p.program_hash.empty() ? json(nullptr) : json(p.program_hash)}});
@@ -301,8 +296,10 @@ int cmd_show(const RunOptions& o) {
                   : "from the design");
   if (r.pushes.empty()) std::printf("  NC pushes         none\n");
   for (const NcPush& p : r.pushes) {
-    std::string detail;
+    std::string detail = ", version " + std::to_string(p.table_version);
+    if (!p.reason.empty()) detail += " (" + p.reason + ")";
     if (p.point_count) detail += ", " + std::to_string(*p.point_count) + " points";
+    if (p.command_error_um) detail += ", command position error " + fixed(*p.command_error_um, 3) + " um";
     if (p.correction_max_um) detail += ", " + fixed(*p.correction_max_um, 2) + " um max";
     std::printf("  NC push           %s  %s%s\n", p.pushed_utc.c_str(), p.nc_file.c_str(), detail.c_str());
   }

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   add_measure_commands(app, action);
   add_runs_commands(app, action);
   add_profile_commands(app, action);
+  add_nc_commands(app, action);
 
   try {
     app.parse(argc, argv);

@@ -8,12 +8,12 @@
 #include <map>
 #include <system_error>
 
+#include "app/nc_push.h"
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
 #include "compensation/wheel_path.h"
-#include "core/atomic_file.h"
-#include "nc_out/curve_table.h"
-#include "nc_out/nc_template.h"
+#include "nc_out/table_guards.h"
+#include "nc_out/table_program.h"
 #include "storage/run_store.h"
 
 namespace gaugeloop {
@@ -34,16 +34,52 @@ std::string fixed(double v, int decimals) {
   return buf;
 }
 
-// The curve table: the wheel path on the uniform C grid, computed at each C directly
-// (compute_machine_path), closed by the C360 point equal to C0.
-Result<std::vector<CurvePoint>> machine_curve(const PeriodicSpline& lift_mm, const Part& part, double step_deg) {
-  Result<MachinePath> path = compute_machine_path(lift_mm, part, step_deg);
-  if (!path) return path.error();
-  std::vector<CurvePoint> points;
-  points.reserve(path->c_deg.size() + 1);
-  for (size_t k = 0; k < path->c_deg.size(); ++k) points.push_back({path->c_deg[k], path->x_mm[k]});
-  points.push_back({360.0, points.front().x_mm});
-  return points;
+// The exact wheel path the tables are chosen against and checked on: 36,000 rows.
+constexpr double kFinePathStepDeg = 0.01;
+
+Error in_step(const std::string& step, Error e) {
+  e.message = std::string(step) + ": " + e.message;
+  return e;
+}
+
+// A table and the exact path it was chosen against.
+struct BuiltTable {
+  SampledPath fine;
+  CurveTable table;
+};
+
+// The wheel path of `lift_mm` on the fine C grid (compute_machine_path: exact rows), the
+// axis guards on it, the table the settings ask for, and the guards on the table as the NC
+// will interpolate it. Refusals (a wheel that does not fit, a limit broken) are kRefused.
+Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings& s) {
+  Result<MachinePath> path = compute_machine_path(lift_mm, s.part, kFinePathStepDeg);
+  if (!path) return in_step("wheel path", path.error());
+  BuiltTable out;
+  out.fine.c_step_deg = kFinePathStepDeg;
+  out.fine.x_mm = std::move(path->x_mm);
+  out.fine.dx_dc_mm_per_deg = std::move(path->dx_dc_mm_per_deg);
+  out.fine.d2x_dc2_mm_per_deg2 = std::move(path->d2x_dc2_mm_per_deg2);
+  if (Status g = check_path_guards(out.fine, s.axis_limits); !g) return in_step("wheel path", g.error());
+  const AdaptiveSettings adaptive{s.table_choice.bound_um, s.table_choice.max_step_deg};
+  Result<CurveTable> table = [&]() -> Result<CurveTable> {
+    switch (s.table_kind) {
+      case TableKind::kAuto:
+        return write_default_table(out.fine, s.table_choice);
+      case TableKind::kLinear:
+        return write_linear_table(out.fine, s.table_step_deg);
+      case TableKind::kSpline:
+        return write_spline_table(out.fine, s.table_step_deg);
+      case TableKind::kAdaptiveLinear:
+        return write_adaptive_linear_table(out.fine, adaptive);
+      case TableKind::kAdaptiveSpline:
+        return write_adaptive_spline_table(out.fine, adaptive);
+    }
+    return make_error(ErrorCode::kInternal, "unknown table kind");
+  }();
+  if (!table) return in_step("curve table", table.error());
+  if (Status g = check_table_guards(*table, out.fine, s.axis_limits); !g) return in_step("curve table", g.error());
+  out.table = std::move(*table);
+  return out;
 }
 
 std::map<std::string, std::string> template_values(const JobSettings& s) {
@@ -53,11 +89,8 @@ std::map<std::string, std::string> template_values(const JobSettings& s) {
           {"version", GAUGELOOP_VERSION},
           {"run_id", "0"},
           {"created_utc", ""},
-          {"point_count", "0"},
-          {"c_step_deg", fixed(s.table_step_deg, 3)},
           {"correction_max_um", "0"},
-          {"table_number", std::to_string(s.table_number)},
-          {"table_blocks", ""}};
+          {"table_number", std::to_string(s.table_number)}};
 }
 
 // The settings a run was made with, one "key = value" a line in a fixed order, so that
@@ -86,32 +119,44 @@ std::string settings_text(const JobSettings& s) {
   line("compensation.max_phase_deg", num(s.compensation.max_phase_deg));
   line("compensation.builds_on_table_in_force", s.build_on_table_in_force ? "true" : "false");
   line("nc.template", s.nc_template_name);
+  line("nc.table", std::string(table_kind_name(s.table_kind)));
   line("nc.table_step_deg", num(s.table_step_deg));
+  line("nc.command_error_bound_um", num(s.table_choice.bound_um));
+  line("nc.max_segment_deg", num(s.table_choice.max_step_deg));
+  line("nc.allow_spline", s.table_choice.allow_spline ? "true" : "false");
+  line("nc.x_min_mm", num(s.axis_limits.x_min_mm));
+  line("nc.x_max_mm", num(s.axis_limits.x_max_mm));
+  line("nc.x_velocity_max_mm_per_s", num(s.axis_limits.x_velocity_max_mm_per_s));
+  line("nc.x_acceleration_max_mm_per_s2", num(s.axis_limits.x_acceleration_max_mm_per_s2));
+  line("nc.work_speed_rpm", num(s.axis_limits.speed_rpm));
+  line("nc.require_approval", s.require_approval ? "true" : "false");
   line("nc.table_number", std::to_string(s.table_number));
   return out;
-}
-
-Error in_step(const std::string& step, Error e) {
-  e.message = std::string(step) + ": " + e.message;
-  return e;
 }
 
 }  // namespace
 
 Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
-  const double steps = 360.0 / s.table_step_deg;
-  if (!(s.table_step_deg > 0.0) || std::abs(steps - std::round(steps)) > 1e-9 || steps < 36) {
-    return make_error(ErrorCode::kInvalidInput,
-                      "table step " + fixed(s.table_step_deg, 4) + " deg must divide 360 into at least 36 steps");
+  if (s.table_kind == TableKind::kLinear || s.table_kind == TableKind::kSpline) {
+    const double steps = 360.0 / s.table_step_deg;
+    if (!(s.table_step_deg > 0.0) || std::abs(steps - std::round(steps)) > 1e-9 || steps < 36) {
+      return make_error(ErrorCode::kInvalidInput,
+                        "table step " + fixed(s.table_step_deg, 4) + " deg must divide 360 into at least 36 steps");
+    }
   }
-  // Checks that need no gauge, so bad input costs no measurement.
+  if (Status l = check_axis_limits(s.axis_limits); !l) return l.error();
+  // Checks that need no gauge, so bad input costs no measurement: the design must make a
+  // table within the axis limits, and the template must render it.
   Result<PeriodicSpline> design = PeriodicSpline::fit(s.design.angle_deg, s.design.lift_mm);
   if (!design) return in_step("design lift table " + s.design.source, design.error());
-  Result<std::vector<CurvePoint>> design_curve = machine_curve(*design, s.part, s.table_step_deg);
-  if (!design_curve) return in_step("wheel path", design_curve.error());
+  Result<BuiltTable> design_table = build_table(*design, s);
+  if (!design_table) return in_step("the design", design_table.error());
   Result<DesignReading> design_reading = DesignReading::of_lobe(*design, s.part);
   if (!design_reading) return in_step("flat-probe reading", design_reading.error());
-  if (auto r = render_nc_template(s.nc_template, s.nc_template_name, template_values(s)); !r) return r.error();
+  if (auto r = render_table_program(s.nc_template, s.nc_template_name, template_values(s), design_table->table, {});
+      !r) {
+    return r.error();
+  }
   std::error_code ec;
   std::filesystem::create_directories(s.nc_dir, ec);
   if (ec) {
@@ -119,6 +164,9 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
   }
   Result<RunStore> store = RunStore::open(s.db_path);
   if (!store) return store.error();
+  // Absolute, so the push history names one file whatever directory a command runs in.
+  const std::filesystem::path nc_file =
+      std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal();
 
   // From here on a failure is also kept in the database as an event (a fault or a refusal),
   // naming the run when one was stored, so `gaugeloop events` shows why a run is missing.
@@ -152,25 +200,23 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     const DegreeTable& correction = decision->correction_um;
     CompensationVerdict verdict = decision->verdict;
     std::string verdict_reasons = decision->reasons();
-    // The table is computed before the run is stored. A correction the geometry refuses (a
-    // concave flank the wheel no longer fits) is a refusal: the run is stored, nothing pushed.
-    std::vector<CurvePoint> points;
-    if (decision->apply()) {
-      Result<std::vector<CurvePoint>> curve = [&]() -> Result<std::vector<CurvePoint>> {
+    // The table is built before the run is stored, for a held correction too (a person may
+    // approve it). One the geometry or the axis guards refuse (a concave flank the wheel no
+    // longer fits, a limit broken) is a refusal: the run is stored, nothing is pushed.
+    std::optional<BuiltTable> built;
+    if (verdict != CompensationVerdict::kRefuse) {
+      Result<BuiltTable> b = [&]() -> Result<BuiltTable> {
         Result<PeriodicSpline> target = corrected_lift(s.design, correction, s.part);
         if (!target) return in_step("corrected lift", target.error());
-        Result<std::vector<CurvePoint>> c = machine_curve(*target, s.part, s.table_step_deg);
-        if (!c) return in_step("corrected wheel path", c.error());
-        if (Status v = validate_curve_points(*c); !v) return in_step("curve table", v.error());
-        return c;
+        return build_table(*target, s);
       }();
-      if (curve) {
-        points = std::move(*curve);
-      } else if (curve.error().code == ErrorCode::kRefused) {
+      if (b) {
+        built = std::move(*b);
+      } else if (b.error().code == ErrorCode::kRefused) {
         verdict = CompensationVerdict::kRefuse;
-        verdict_reasons = curve.error().message;
+        verdict_reasons = verdict_reasons.empty() ? b.error().message : verdict_reasons + "; " + b.error().message;
       } else {
-        return curve.error();
+        return b.error();
       }
     }
     const double correction_max_um = std::abs(decision->largest_correction_um);
@@ -196,49 +242,86 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
 
     JobReport report;
     report.run_id = *run_id;
+    report.measured = std::move(*measured);
     report.analysis = *analysis;
     report.verdict = verdict;
-    report.verdict_reasons = verdict_reasons;
     report.correction_max_um = correction_max_um;
     report.correction_in_force_run = in_force_run;
     report.db_path = store->path();
-    if (verdict != CompensationVerdict::kApply) {
-      // Stored with its proposed correction, not pushed: the table in force stays.
+    if (built) {
+      report.interpolation = std::string(interpolation_name(built->table.interpolation));
+      report.table_writer = built->table.writer;
+      report.table_blocks = built->table.block_count();
+      report.command_error_um = built->table.error.max_abs_um;
+    }
+
+    auto values = template_values(s);
+    values["run_id"] = std::to_string(*run_id);
+    values["created_utc"] = finished;
+    values["correction_max_um"] = fixed(correction_max_um, 1);
+    auto render = [&](int table_version) {
+      return render_table_program(s.nc_template, s.nc_template_name, values, built->table,
+                                  {*run_id, static_cast<std::int64_t>(table_version)});
+    };
+    PushFacts facts;
+    facts.run_id = *run_id;
+    facts.reason = "run " + std::to_string(*run_id);
+    if (built) {
+      facts.interpolation = report.interpolation;
+      facts.block_count = report.table_blocks;
+      facts.command_error_um = report.command_error_um;
+      facts.point_count = static_cast<int>(built->table.points.size());
+    }
+    facts.correction_max_um = correction_max_um;
+
+    // Not pushed: keep the table for approval when there is one, and say why in the events.
+    auto keep = [&](const std::string& reason, CompensationVerdict why) -> Result<JobReport> {
+      report.not_pushed_reason = reason;
+      if (built) {
+        Result<std::string> program = render(0);
+        if (!program) return program.error();
+        PendingTable pending;
+        pending.run_id = *run_id;
+        pending.nc_file = nc_file.string();
+        pending.program_text = std::move(*program);
+        pending.verdict = why == CompensationVerdict::kHold ? PendingVerdict::kHold : PendingVerdict::kApply;
+        pending.reason = reason;
+        pending.interpolation = facts.interpolation;
+        pending.block_count = facts.block_count;
+        pending.command_error_um = facts.command_error_um;
+        pending.correction_max_um = facts.correction_max_um;
+        pending.point_count = facts.point_count;
+        Result<std::int64_t> id = store->add_pending(pending);
+        if (!id) return id.error();
+        report.pending_id = *id;
+      }
       EventRecord event;
       event.kind = EventKind::kRefusal;
-      event.code = "compensation " + std::string(compensation_verdict_name(verdict));
+      event.code = "table not pushed";
+      if (why != CompensationVerdict::kApply)
+        event.code = "compensation " + std::string(compensation_verdict_name(why));
       event.machine = s.machine;
       event.part = s.part.name;
       event.lobe = s.part.lobe;
       event.run_id = *run_id;
-      event.message =
-          "run " + std::to_string(*run_id) + " is stored, its table was not pushed: " + report.verdict_reasons;
+      event.message = "run " + std::to_string(*run_id) + " is stored, its table was not pushed: " + reason;
+      if (report.pending_id) {
+        event.message += " (waiting as pending table " + std::to_string(*report.pending_id) + ")";
+      }
       if (Result<std::int64_t> e = store->record_event(event); !e) return e.error();
-      report.measured = std::move(*measured);
       return report;
-    }
+    };
 
-    // Render and push the table.
-    auto values = template_values(s);
-    values["run_id"] = std::to_string(*run_id);
-    values["created_utc"] = finished;
-    values["point_count"] = std::to_string(points.size());
-    values["correction_max_um"] = fixed(correction_max_um, 1);
-    values["table_blocks"] = render_curve_blocks(points);
-    Result<std::string> program = render_nc_template(s.nc_template, s.nc_template_name, values);
-    if (!program) return program.error();
-    const std::filesystem::path nc_file = s.nc_dir / (s.nc_program + ".SPF");
-    if (Status w = write_file_atomically(nc_file, *program); !w) {
-      return in_step("run " + std::to_string(*run_id) + " is stored, but its table was not pushed", w.error());
+    if (verdict != CompensationVerdict::kApply) return keep(verdict_reasons, verdict);
+    if (s.require_approval) return keep("approval required", CompensationVerdict::kApply);
+    Result<int> version = push_program(*store, nc_file, facts, render);
+    if (!version) {
+      // A table edited by hand on the control is not overwritten: a person decides.
+      if (version.error().code == ErrorCode::kRefused)
+        return keep(version.error().message, CompensationVerdict::kApply);
+      return version.error();
     }
-    NcPush push;
-    push.nc_file = nc_file.string();
-    push.point_count = static_cast<int>(points.size());
-    push.correction_max_um = correction_max_um;
-    if (Status m = store->record_push(*run_id, push, *program); !m) return m.error();
-
-    report.measured = std::move(*measured);
-    report.table_points = static_cast<int>(points.size());
+    report.table_version = *version;
     report.nc_file = nc_file;
     return report;
   }();
@@ -255,6 +338,22 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     (void)store->record_event(event);  // best effort: the error itself is what the user is told
   }
   return result;
+}
+
+std::string_view table_kind_name(TableKind kind) {
+  switch (kind) {
+    case TableKind::kAuto:
+      return "auto";
+    case TableKind::kLinear:
+      return "linear";
+    case TableKind::kSpline:
+      return "spline";
+    case TableKind::kAdaptiveLinear:
+      return "adaptive-linear";
+    case TableKind::kAdaptiveSpline:
+      return "adaptive-spline";
+  }
+  return "?";
 }
 
 }  // namespace gaugeloop

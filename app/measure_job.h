@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "acquisition/gauge_client.h"
 #include "acquisition/poller.h"
@@ -13,8 +14,20 @@
 #include "core/part.h"
 #include "core/result.h"
 #include "core/run.h"
+#include "nc_out/table_guards.h"
+#include "nc_out/table_writer.h"
 
 namespace gaugeloop {
+
+// Which curve table to write (nc_out/table_writer.h).
+enum class TableKind {
+  kAuto,            // the fewest blocks whose command position error keeps table_choice.bound_um
+  kLinear,          // G1 at table_step_deg
+  kSpline,          // CSPLINE at table_step_deg
+  kAdaptiveLinear,  // G1, dense only where X bends
+  kAdaptiveSpline,  // CSPLINE, dense only where X bends
+};
+std::string_view table_kind_name(TableKind kind);  // "auto", "linear", "spline", "adaptive-linear", ...
 
 struct JobSettings {
   Part part;
@@ -27,8 +40,15 @@ struct JobSettings {
   std::filesystem::path nc_dir;
   std::string nc_template;       // template text
   std::string nc_template_name;  // for messages
-  double table_step_deg = 1.0;   // C step of the curve table
-  int table_number = 1;          // CTABDEF table number
+  TableKind table_kind = TableKind::kAuto;
+  double table_step_deg = 1.0;       // C step of a linear or spline table
+  TableChoiceSettings table_choice;  // command position error bound (0.5 um), widest segment, CSPLINE allowed
+  // What the infeed axis may do: software limits and the slide's velocity and acceleration
+  // at the programmed work speed. Defaults fit the sample lobes at 60 rpm with margin.
+  AxisLimits axis_limits{-0.5, 20.0, 300.0, 20000.0, 60.0};
+  // True: a table compensation applies is kept as pending until `gaugeloop nc approve`.
+  bool require_approval = false;
+  int table_number = 1;  // CTABDEF table number
   std::string machine = "grinder-1";
   std::string note;
   // True (measuring a part the machine ground): the new correction builds on the one in
@@ -38,20 +58,32 @@ struct JobSettings {
   bool build_on_table_in_force = true;
 };
 
-// A stored run. verdict kApply: its table was pushed (nc_file, table_points). kHold or
-// kRefuse: the run and its proposed correction are stored, nothing was pushed, the table in
-// force stays; verdict_reasons says why (also recorded as a refusal event naming the run).
+// A stored run and what became of its table.
+//  - Pushed: nc_file and table_version are set.
+//  - Not pushed: not_pushed_reason says why. verdict kRefuse: compensation or the geometry
+//    refused the correction. kHold: compensation held it. kApply: approval is required, or
+//    the table on the control was edited by hand. The table is kept as pending_id (when one
+//    could be built) for `gaugeloop nc approve`; the reason is also a refusal event naming
+//    the run. The table in force stays.
 struct JobReport {
   std::int64_t run_id = 0;
   MeasuredRun measured;
   LobeAnalysis analysis;
   std::optional<std::int64_t> correction_in_force_run;  // whose correction was built on
   CompensationVerdict verdict = CompensationVerdict::kApply;
-  std::string verdict_reasons;     // empty when applied
-  double correction_max_um = 0.0;  // largest |correction| proposed (applied when kApply)
-  int table_points = 0;            // 0 when not pushed
-  std::filesystem::path nc_file;   // empty when not pushed
+  double correction_max_um = 0.0;  // largest |correction| proposed
+  // The table built (empty interpolation: none, the correction was refused).
+  std::string interpolation;  // "linear" or "cspline"
+  std::string table_writer;   // how its points were chosen, e.g. "adaptive cspline"
+  int table_blocks = 0;
+  double command_error_um = 0.0;  // largest |NC interpolation - exact X|
+  std::filesystem::path nc_file;  // empty when not pushed
+  int table_version = 0;          // 0 when not pushed
+  std::string not_pushed_reason;  // empty when pushed
+  std::optional<std::int64_t> pending_id;
   std::filesystem::path db_path;
+
+  bool pushed() const { return !nc_file.empty(); }
 };
 
 // Runs the job. Everything that can be checked without the gauge (geometry, template,

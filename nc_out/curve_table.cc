@@ -39,17 +39,32 @@ Status validate_curve_points(const std::vector<CurvePoint>& points) {
   return {};
 }
 
+std::string_view interpolation_name(Interpolation interpolation) {
+  return interpolation == Interpolation::kLinear ? "linear" : "cspline";
+}
+
 std::string render_curve_blocks(const std::vector<CurvePoint>& points, const CurveTableFormat& format) {
+  return render_table_blocks(points, Interpolation::kLinear, format);
+}
+
+std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpolation interpolation,
+                                const CurveTableFormat& format) {
   std::string out;
-  out.reserve(points.size() * 24);
+  out.reserve(points.size() * 24 + 32);
   char buf[96];
+  const double q = std::pow(10.0, format.x_decimals);
   for (size_t i = 0; i < points.size(); ++i) {
     // Print -0.0000 as 0.0000: a tiny negative infeed rounds to zero, not to a signed zero.
     double x = points[i].x_mm;
-    const double q = std::pow(10.0, format.x_decimals);
     if (std::round(x * q) == 0.0) x = 0.0;
-    std::snprintf(buf, sizeof buf, "%s%sC%.*f X%.*f", i == 0 ? "" : "\n", i == 0 ? "G1 " : "", format.c_decimals,
-                  points[i].c_deg, format.x_decimals, x);
+    const char* prefix = "";
+    if (i == 0) {
+      prefix = "G1 ";
+    } else if (i == 1 && interpolation == Interpolation::kCubicSpline) {
+      prefix = "BNAT ENAT CSPLINE ";
+    }
+    std::snprintf(buf, sizeof buf, "%s%sC%.*f X%.*f", i == 0 ? "" : "\n", prefix, format.c_decimals, points[i].c_deg,
+                  format.x_decimals, x);
     out += buf;
   }
   return out;

@@ -15,6 +15,7 @@ packages=(
   libtomlplusplus-dev  # part and config files
   nlohmann-json3-dev   # --json output
   libspdlog-dev libfmt-dev  # logging and formatting
+  libmstch-dev       # Mustache rendering of NC program templates (brings libboost-dev headers)
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   sqlite3            # the CLI users query the database with; tests use it too

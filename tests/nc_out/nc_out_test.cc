@@ -61,5 +61,40 @@ TEST(NcTemplate, RefusesAnUnclosedPlaceholder) {
   EXPECT_NE(r.error().message.find("cam.spf:2"), std::string::npos) << r.error().message;
 }
 
+TEST(NcTemplate, RefusesASectionWithItsLine) {
+  auto r = render_nc_template("; a\n{{#runs}}\nX1\n{{/runs}}\n", "cam.spf", {{"runs", "1"}});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("cam.spf:2: {{#runs}} is a Mustache section"), std::string::npos)
+      << r.error().message;
+}
+
+TEST(NcTemplate, RefusesAnUnclosedTripleBrace) {
+  auto r = render_nc_template("X{{{run_id}}\n", "cam.spf", {{"run_id", "7"}});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("cam.spf:1: `{{{` is not closed"), std::string::npos) << r.error().message;
+}
+
+TEST(NcTemplate, InsertsValuesVerbatimInEveryVariableForm) {
+  // Mustache would HTML-escape {{name}}; NC text is not HTML. A value holding braces is
+  // inserted as it is, never rendered again.
+  auto r = render_nc_template("{{a}}|{{{a}}}|{{& a }}|{{b}}\n", "t.spf", {{"a", "<R1> & \"x\""}, {"b", "{{a}}"}});
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(*r, "<R1> & \"x\"|<R1> & \"x\"|<R1> & \"x\"|{{a}}\n");
+}
+
+TEST(NcTemplate, RefusesABadName) {
+  auto r = render_nc_template("{{run id}}", "t.spf", {{"run id", "7"}});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("t.spf:1: `run id` is not a placeholder name"), std::string::npos)
+      << r.error().message;
+}
+
+TEST(NcTemplate, KeepsTextWithoutPlaceholdersByteForByte) {
+  const std::string text = "; no tags } here }}\r\nG1 C0 X0\r\n";
+  auto r = render_nc_template(text, "t.spf", {});
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(*r, text);
+}
+
 }  // namespace
 }  // namespace gaugeloop

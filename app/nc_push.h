@@ -1,0 +1,56 @@
+// Writing a curve-table program to the control: the one way every push goes (a measured run,
+// an approval, a rollback), so each is checked, versioned, written atomically and recorded
+// alike.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "core/result.h"
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+
+// Refuses (kRefused) to overwrite `nc_file` when the program there is not the one last
+// pushed to it: its table was edited by hand (its body no longer matches its checksum, or
+// its points differ from the pushed program's), or it is not a gaugeloop table at all. The
+// message names the file and line, the version last pushed and what to do. A missing file
+// is fine (the control may have been cleaned); so is a file never pushed that is absent.
+Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::path& nc_file);
+
+// What a push records besides the program.
+struct PushFacts {
+  std::int64_t run_id = 0;
+  std::string reason;  // "run 12", "approved by anna", "rollback to version 3"
+  std::string interpolation;
+  std::optional<int> block_count;
+  std::optional<double> command_error_um;
+  std::optional<int> point_count;
+  std::optional<double> correction_max_um;
+};
+
+// Renders a program for a table version (the header carries it).
+using RenderForVersion = std::function<Result<std::string>(int table_version)>;
+
+// check_not_edited_by_hand (skipped when `overwrite_edited`: a person approved overwriting
+// it), then the next table version, render, write atomically
+// (temporary file, fsync, rename: the control sees the old program or the new one, never a
+// mixture), then record the push. `record` replaces store.record_push when given (an
+// approval records the push and its decision in one transaction). Returns the version
+// pushed. Errors: the check's kRefused; render's errors; kIo for the write; storage errors.
+// A failure after the write says the file was written but not recorded.
+using RecordPush = std::function<Status(const NcPush& push)>;
+Result<int> push_program(RunStore& store, const std::filesystem::path& nc_file, const PushFacts& facts,
+                         const RenderForVersion& render, const RecordPush& record = {}, bool overwrite_edited = false);
+
+// `program` with its `; gaugeloop table_version: N` header line set to `table_version`, for
+// a program rendered before its version was known (a pending table) or re-pushed (a
+// rollback). The table body, and so its checksum, is untouched. kInvalidInput if the
+// program has no such line.
+Result<std::string> with_table_version(std::string_view program, int table_version);
+
+}  // namespace gaugeloop

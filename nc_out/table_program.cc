@@ -1,0 +1,336 @@
+// Header, checksum, rendering with read-back, and the parser of a pushed table program.
+#include "nc_out/table_program.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+
+#include "nc_out/nc_template.h"
+
+namespace gaugeloop {
+namespace {
+
+constexpr std::string_view kHeaderPrefix = "; gaugeloop ";
+
+std::string num(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+  return s;
+}
+
+std::string upper(std::string_view s) {
+  std::string out(s);
+  for (char& ch : out) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+  return out;
+}
+
+// Lines without their '\n' or trailing '\r'.
+std::vector<std::string_view> split_lines(std::string_view text) {
+  std::vector<std::string_view> lines;
+  size_t pos = 0;
+  while (pos <= text.size()) {
+    size_t nl = text.find('\n', pos);
+    if (nl == std::string_view::npos) nl = text.size();
+    std::string_view l = text.substr(pos, nl - pos);
+    if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
+    lines.push_back(l);
+    if (nl == text.size()) break;
+    pos = nl + 1;
+  }
+  return lines;
+}
+
+std::optional<double> parse_number(std::string_view s) {
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  double v = 0.0;
+  auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+std::optional<int> parse_int(std::string_view s) {
+  s = trim(s);
+  int v = 0;
+  auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
+  return v;
+}
+
+// The code of a block: before any ';' comment, trimmed.
+std::string_view code_of(std::string_view line) {
+  const size_t semi = line.find(';');
+  return trim(semi == std::string_view::npos ? line : line.substr(0, semi));
+}
+
+// Splits on blanks; a block number N<digits> at the front is dropped.
+std::vector<std::string_view> words_of(std::string_view code) {
+  std::vector<std::string_view> words;
+  size_t pos = 0;
+  while (pos < code.size()) {
+    while (pos < code.size() && (code[pos] == ' ' || code[pos] == '\t')) ++pos;
+    size_t end = pos;
+    while (end < code.size() && code[end] != ' ' && code[end] != '\t') ++end;
+    if (end > pos) words.push_back(code.substr(pos, end - pos));
+    pos = end;
+  }
+  if (!words.empty() && words.front().size() > 1 && (words.front()[0] == 'N' || words.front()[0] == 'n') &&
+      parse_int(words.front().substr(1))) {
+    words.erase(words.begin());
+  }
+  return words;
+}
+
+}  // namespace
+
+std::string table_body_checksum(std::string_view body) {
+  std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64-bit offset basis
+  for (char ch : body) {
+    if (ch == '\r') continue;
+    h ^= static_cast<unsigned char>(ch);
+    h *= 1099511628211ull;  // FNV 64-bit prime
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::string render_table_header(const CurveTable& table, const TableProvenance& provenance, std::string_view body) {
+  std::string out;
+  auto line = [&](std::string_view key, const std::string& value) {
+    if (!out.empty()) out += '\n';
+    out += kHeaderPrefix;
+    out += key;
+    out += ": ";
+    out += value;
+  };
+  line("run_id", std::to_string(provenance.run_id));
+  line("table_version", std::to_string(provenance.table_version));
+  line("interpolation", std::string(interpolation_name(table.interpolation)));
+  line("point_count", std::to_string(table.points.size()));
+  line("block_count", std::to_string(table.block_count()));
+  line("command_error_um", num(table.error.max_abs_um, 3));
+  line("command_error_at_c_deg", num(table.error.at_c_deg, 3));
+  line("writer", table.writer);
+  line("body_checksum_fnv1a64", table_body_checksum(body));
+  return out;
+}
+
+Result<std::string> render_table_program(std::string_view template_text, std::string_view template_name,
+                                         std::map<std::string, std::string> values, const CurveTable& table,
+                                         const TableProvenance& provenance, const CurveTableFormat& format) {
+  if (Status s = validate_curve_points(table.points); !s) return s.error();
+  const std::string body = render_table_blocks(table.points, table.interpolation, format);
+  values["table_blocks"] = body;
+  values["table_header"] = render_table_header(table, provenance, body);
+  values["point_count"] = std::to_string(table.points.size());
+  values["block_count"] = std::to_string(table.block_count());
+  values["interpolation"] = std::string(interpolation_name(table.interpolation));
+  values["command_error_um"] = num(table.error.max_abs_um, 3);
+  Result<std::string> program = render_nc_template(template_text, template_name, values);
+  if (!program) return program.error();
+  // Read back what would be pushed: it must be the table we meant, checksum and all.
+  auto refuse = [&](const std::string& why) {
+    return make_error(ErrorCode::kInvalidInput, std::string(template_name) +
+                                                    ": the rendered program does not read back as the table written (" +
+                                                    why +
+                                                    "); put {{table_header}} before CTABDEF and "
+                                                    "{{table_blocks}} alone between CTABDEF and CTABEND");
+  };
+  Result<ParsedTable> back = parse_table_program(*program, template_name);
+  if (!back) return refuse(back.error().message);
+  if (Status s = verify_table_checksum(*back, template_name); !s) return refuse(s.error().message);
+  if (Status s = compare_table_points(*back, table.points, template_name, format); !s) {
+    return refuse(s.error().message);
+  }
+  if (back->interpolation != table.interpolation) return refuse("interpolation differs");
+  return program;
+}
+
+Result<ParsedTable> parse_table_program(std::string_view text, std::string_view file_name) {
+  const std::vector<std::string_view> lines = split_lines(text);
+  auto fail = [&](size_t index, const std::string& why) {
+    return make_error(ErrorCode::kInvalidInput, std::string(file_name) + ":" + std::to_string(index + 1) + ": " + why);
+  };
+  ParsedTable t;
+  std::optional<size_t> def;
+  std::optional<size_t> end;
+  bool bnat = false;  // modal, as on the control: the last of BAUTO/BNAT/BTAN programmed
+  bool enat = false;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const std::string_view l = trim(lines[i]);
+    if (l.substr(0, kHeaderPrefix.size()) == kHeaderPrefix) {
+      const std::string_view kv = l.substr(kHeaderPrefix.size());
+      const size_t colon = kv.find(':');
+      if (colon != std::string_view::npos) {
+        t.header[std::string(trim(kv.substr(0, colon)))] = std::string(trim(kv.substr(colon + 1)));
+      }
+      continue;
+    }
+    const std::vector<std::string_view> words = words_of(code_of(l));
+    if (words.empty()) continue;
+    const std::string first = upper(words.front());
+    if (first.rfind("CTABDEF", 0) == 0) {
+      if (def) return fail(i, "a second CTABDEF; gaugeloop reads programs with one curve table");
+      // Rejoin: the arguments may contain blanks.
+      const std::string_view code = code_of(l);
+      const size_t open = code.find('(');
+      const size_t close = code.rfind(')');
+      if (open == std::string_view::npos || close == std::string_view::npos || close < open) {
+        return fail(i, "CTABDEF needs (following axis, leading axis, table number, periodicity)");
+      }
+      std::vector<std::string_view> args;
+      std::string_view rest = code.substr(open + 1, close - open - 1);
+      while (true) {
+        const size_t comma = rest.find(',');
+        args.push_back(trim(rest.substr(0, comma)));
+        if (comma == std::string_view::npos) break;
+        rest = rest.substr(comma + 1);
+      }
+      std::optional<int> n = args.size() >= 4 ? parse_int(args[2]) : std::nullopt;
+      std::optional<int> p = args.size() >= 4 ? parse_int(args[3]) : std::nullopt;
+      if (args.size() < 4 || args.size() > 5 || args[0].empty() || args[1].empty() || !n || !p) {
+        return fail(i, "CTABDEF needs (following axis, leading axis, table number, periodicity[, memory])");
+      }
+      t.following_axis = upper(args[0]);
+      t.leading_axis = upper(args[1]);
+      t.table_number = *n;
+      t.periodicity = *p;
+      t.ctabdef_line = static_cast<int>(i + 1);
+      def = i;
+      continue;
+    }
+    if (first == "CTABEND") {
+      if (!def) return fail(i, "CTABEND without CTABDEF");
+      if (end) return fail(i, "a second CTABEND");
+      end = i;
+      t.ctabend_line = static_cast<int>(i + 1);
+      continue;
+    }
+    if (!def || end) continue;  // outside the table: the user's own program
+
+    // A table block.
+    std::optional<double> c;
+    std::optional<double> x;
+    std::optional<Interpolation> mode;
+    for (std::string_view w : words) {
+      const std::string u = upper(w);
+      if (u == "G1" || u == "G01") {
+        mode = Interpolation::kLinear;
+      } else if (u == "CSPLINE") {
+        mode = Interpolation::kCubicSpline;
+      } else if (u == "BNAT" || u == "ENAT" || u == "BAUTO" || u == "EAUTO" || u == "BTAN" || u == "ETAN") {
+        // Only BNAT + ENAT is modelled; the others are read so that natural_ends says no.
+        if (u[0] == 'B') bnat = u == "BNAT";
+        if (u[0] == 'E') enat = u == "ENAT";
+      } else {
+        std::string_view axis;
+        std::string_view value;
+        for (const std::string* a : {&t.leading_axis, &t.following_axis}) {
+          if (u.size() > a->size() && u.compare(0, a->size(), *a) == 0) {
+            axis = w.substr(0, a->size());
+            value = w.substr(a->size());
+            if (!value.empty() && value.front() == '=') value.remove_prefix(1);
+            const std::optional<double> v = parse_number(value);
+            if (!v) return fail(i, "`" + std::string(w) + "`: not a number after " + *a);
+            (*a == t.leading_axis ? c : x) = *v;
+            break;
+          }
+        }
+        if (axis.empty()) {
+          return fail(i, "`" + std::string(w) +
+                             "` in the curve table: gaugeloop reads only G1, CSPLINE, BNAT/ENAT, block numbers, " +
+                             t.leading_axis + " and " + t.following_axis);
+        }
+      }
+    }
+    if (!c && !x && !mode) continue;
+    if (!c) return fail(i, "a table block needs the leading axis " + t.leading_axis);
+    if (!x && t.points.empty()) return fail(i, "the first table block needs " + t.following_axis + " too");
+    const Interpolation block_mode = mode ? *mode : (t.points.empty() ? Interpolation::kLinear : t.interpolation);
+    if (t.points.size() == 1) {
+      t.interpolation = block_mode;
+    } else if (t.points.size() > 1 && block_mode != t.interpolation) {
+      return fail(i, "the table mixes G1 and CSPLINE segments; gaugeloop models one kind per table");
+    }
+    if (!t.points.empty() && !(*c > t.points.back().c_deg)) {
+      return fail(i, t.leading_axis + " " + num(*c, 3) + " does not increase");
+    }
+    t.points.push_back({*c, x ? *x : t.points.back().x_mm});
+    t.point_lines.push_back(static_cast<int>(i + 1));
+  }
+  if (!def)
+    return make_error(ErrorCode::kInvalidInput, std::string(file_name) + ": no CTABDEF: not a curve table program");
+  if (!end) return fail(*def, "CTABDEF is not closed by CTABEND");
+  if (t.points.size() < 2) return fail(*def, "the curve table has fewer than 2 points");
+  t.natural_ends = t.interpolation == Interpolation::kCubicSpline && bnat && enat;
+  std::string body;
+  for (size_t i = *def + 1; i < *end; ++i) {
+    if (i > *def + 1) body += '\n';
+    body += lines[i];
+  }
+  t.body_checksum = table_body_checksum(body);
+  return t;
+}
+
+Status verify_table_checksum(const ParsedTable& table, std::string_view file_name) {
+  auto it = table.header.find("body_checksum_fnv1a64");
+  if (it == table.header.end()) {
+    return make_error(ErrorCode::kInvalidInput, std::string(file_name) +
+                                                    ": no `; gaugeloop body_checksum_fnv1a64:` header line; "
+                                                    "not a table gaugeloop wrote");
+  }
+  const std::string lines =
+      "lines " + std::to_string(table.ctabdef_line + 1) + ".." + std::to_string(table.ctabend_line - 1);
+  if (it->second != table.body_checksum) {
+    return make_error(ErrorCode::kRefused, std::string(file_name) + ": the curve table (" + lines +
+                                               ") was edited by hand: its checksum is " + table.body_checksum +
+                                               ", the header says " + it->second +
+                                               "; compare it with the pushed table (nc diff) before pushing over it");
+  }
+  auto pc = table.header.find("point_count");
+  if (pc != table.header.end() && pc->second != std::to_string(table.points.size())) {
+    return make_error(ErrorCode::kRefused, std::string(file_name) + ": the header says " + pc->second +
+                                               " points, the table (" + lines + ") has " +
+                                               std::to_string(table.points.size()) + "; edited by hand");
+  }
+  return {};
+}
+
+Status compare_table_points(const ParsedTable& table, const std::vector<CurvePoint>& expected,
+                            std::string_view file_name, const CurveTableFormat& format) {
+  const size_t n = std::min(table.points.size(), expected.size());
+  for (size_t i = 0; i < n; ++i) {
+    const CurvePoint& a = table.points[i];
+    const CurvePoint& b = expected[i];
+    // Compare as written: the decimals the table carries.
+    if (num(a.c_deg, format.c_decimals) != num(b.c_deg, format.c_decimals) ||
+        num(a.x_mm, format.x_decimals) != num(b.x_mm + 0.0, format.x_decimals)) {
+      const bool zero = num(a.x_mm, format.x_decimals) == num(0.0, format.x_decimals);
+      if (zero && num(std::abs(b.x_mm), format.x_decimals) == num(0.0, format.x_decimals) &&
+          num(a.c_deg, format.c_decimals) == num(b.c_deg, format.c_decimals)) {
+        continue;  // -0.0000 written as 0.0000
+      }
+      return make_error(ErrorCode::kRefused, std::string(file_name) + ":" + std::to_string(table.point_lines[i]) +
+                                                 ": point " + std::to_string(i) + " reads C" +
+                                                 num(a.c_deg, format.c_decimals) + " X" +
+                                                 num(a.x_mm, format.x_decimals) + ", the pushed table has C" +
+                                                 num(b.c_deg, format.c_decimals) + " X" +
+                                                 num(b.x_mm, format.x_decimals) + "; edited by hand");
+    }
+  }
+  if (table.points.size() != expected.size()) {
+    return make_error(ErrorCode::kRefused, std::string(file_name) + ": the table has " +
+                                               std::to_string(table.points.size()) + " points, the pushed one " +
+                                               std::to_string(expected.size()) + "; edited by hand");
+  }
+  return {};
+}
+
+}  // namespace gaugeloop

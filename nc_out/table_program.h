@@ -1,0 +1,88 @@
+// The rendered table program (.SPF): header comment, checksum, rendering from the user's
+// template, and reading a pushed program back.
+//
+// Frame and units as curve_table.h: C in degrees (leading axis), X in mm (following axis).
+//
+// Header: comment lines `; gaugeloop <key>: <value>` that the template places with
+// {{table_header}}. Keys: run_id, table_version, interpolation (linear | cspline),
+// point_count, block_count, command_error_um, command_error_at_c_deg, writer,
+// body_checksum_fnv1a64.
+//
+// Checksum: 64-bit FNV-1a (offset basis 14695981039346656037, prime 1099511628211) over the
+// bytes of the table body, i.e. the lines strictly between the CTABDEF line and the CTABEND
+// line, joined with "\n" (carriage returns removed, so a CR LF copy still verifies, no
+// newline after the last line); written as 16 lower-case hex digits. Not a protection
+// against intent, only against a hand edit going unnoticed.
+//
+// Errors: kInvalidInput for a program that does not parse (naming the file and 1-based line);
+// kRefused for a table edited by hand (checksum or points), naming the file and line.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/result.h"
+#include "nc_out/curve_table.h"
+#include "nc_out/table_writer.h"
+
+namespace gaugeloop {
+
+// FNV-1a 64 of `body` with every '\r' skipped, 16 lower-case hex digits.
+std::string table_body_checksum(std::string_view body);
+
+// Where a table comes from, for the header.
+struct TableProvenance {
+  std::int64_t run_id = 0;
+  std::int64_t table_version = 0;  // the push's version, counted by storage
+};
+
+// The header comment block for `table` whose rendered body is `body`; lines joined with
+// "\n", none after the last.
+std::string render_table_header(const CurveTable& table, const TableProvenance& provenance, std::string_view body);
+
+// Renders the user's table template with `values` plus the table's own placeholders:
+// table_blocks, table_header, point_count, block_count, interpolation, command_error_um.
+// Then reads the result back (parse_table_program) and refuses (kInvalidInput, naming the
+// template) unless it gives exactly table.points, the interpolation and a matching checksum,
+// so a template that puts text inside the table or leaves {{table_blocks}} out never ships.
+Result<std::string> render_table_program(std::string_view template_text, std::string_view template_name,
+                                         std::map<std::string, std::string> values, const CurveTable& table,
+                                         const TableProvenance& provenance, const CurveTableFormat& format = {});
+
+// A table program read back.
+struct ParsedTable {
+  std::string following_axis;  // CTABDEF's first argument, e.g. "X"
+  std::string leading_axis;    // e.g. "C"
+  int table_number = 0;
+  int periodicity = 0;
+  Interpolation interpolation = Interpolation::kLinear;
+  bool natural_ends = false;  // CSPLINE with BNAT and ENAT: the only spline gaugeloop models
+  std::vector<CurvePoint> points;
+  std::vector<int> point_lines;  // 1-based line of each point's block
+  int ctabdef_line = 0;
+  int ctabend_line = 0;
+  std::map<std::string, std::string> header;  // `; gaugeloop key: value` lines
+  std::string body_checksum;                  // computed over the body as read
+};
+
+// Parses a program holding exactly one CTABDEF .. CTABEND. Inside, blocks may carry a block
+// number (N10), G1, CSPLINE, BNAT/ENAT/BAUTO/EAUTO/BTAN/ETAN, the leading and following axis
+// with a value (C12.5 or C=12.5) and a comment after ';'. X is modal (a block without it
+// keeps the last X); every block needs C. Anything else is refused with its line: gaugeloop
+// cannot say what the control would make of it. Mixed G1 and CSPLINE segments are refused.
+Result<ParsedTable> parse_table_program(std::string_view text, std::string_view file_name);
+
+// Refuses (kRefused) a table whose body does not match the checksum in its header, or whose
+// point count differs from the header's: it was edited by hand since gaugeloop wrote it.
+// kInvalidInput if there is no checksum in the header (not a gaugeloop table).
+Status verify_table_checksum(const ParsedTable& table, std::string_view file_name);
+
+// Refuses (kRefused) a table whose points differ from `expected` (as written with `format`),
+// naming the first line that differs, the value read and the value pushed.
+Status compare_table_points(const ParsedTable& table, const std::vector<CurvePoint>& expected,
+                            std::string_view file_name, const CurveTableFormat& format = {});
+
+}  // namespace gaugeloop

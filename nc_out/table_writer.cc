@@ -1,0 +1,430 @@
+// Table writers and the command position error they report.
+#include "nc_out/table_writer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <optional>
+
+namespace gaugeloop {
+namespace {
+
+constexpr double kUmPerMm = 1000.0;
+
+std::string num(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+// Rounds as the table text does (%.*f rounds half away from zero on glibc's exact decimal
+// expansion; std::round on the scaled value agrees except at ties nobody can see in a table
+// of measured values), never giving a signed zero.
+double round_to(double v, int decimals) {
+  const double q = std::pow(10.0, decimals);
+  const double r = std::round(v * q) / q;
+  return r == 0.0 ? 0.0 : r;
+}
+
+// Grid rows a table step spans, or 0 if the step does not divide 360 or is not a whole
+// multiple of the fine step.
+std::size_t rows_per_step(const SampledPath& path, double c_step_deg) {
+  if (rows_per_turn(c_step_deg) == 0) return 0;
+  const double r = c_step_deg / path.c_step_deg;
+  if (!(r >= 1.0) || std::abs(r - std::round(r)) > 1e-9 * r) return 0;
+  return static_cast<std::size_t>(std::llround(r));
+}
+
+Status check_format(const SampledPath& path, const CurveTableFormat& format) {
+  if (format.c_decimals < 0 || format.c_decimals > 6 || format.x_decimals < 0 || format.x_decimals > 6) {
+    return make_error(ErrorCode::kInvalidInput, "table decimals must be 0..6");
+  }
+  const double q = path.c_step_deg * std::pow(10.0, format.c_decimals);
+  if (std::abs(q - std::round(q)) > 1e-6) {
+    return make_error(ErrorCode::kInvalidInput, "fine path step " + num(path.c_step_deg, 6) +
+                                                    " deg cannot be written with " + std::to_string(format.c_decimals) +
+                                                    " decimals of C; use a step that can or more decimals");
+  }
+  return {};
+}
+
+// Table points at fine-grid rows `rows` (first 0, last n = one turn).
+std::vector<CurvePoint> points_at_rows(const SampledPath& path, const std::vector<std::size_t>& rows,
+                                       const CurveTableFormat& format) {
+  const std::size_t n = path.size();
+  std::vector<CurvePoint> out;
+  out.reserve(rows.size());
+  for (std::size_t k : rows) {
+    out.push_back({round_to(path.c_deg(k), format.c_decimals), round_to(path.x_mm[k % n], format.x_decimals)});
+  }
+  out.back().c_deg = 360.0;
+  return out;
+}
+
+// Signed error (interpolant - X) in mm at every fine row 0..n (row n is C360 against row 0).
+std::vector<double> row_errors_mm(const SampledPath& path, const TableInterpolant& nc) {
+  const std::size_t n = path.size();
+  std::vector<double> e(n + 1);
+  for (std::size_t j = 0; j <= n; ++j) {
+    const double c = j == n ? 360.0 : path.c_deg(j);
+    e[j] = nc.at(c).x_mm - path.x_mm[j % n];
+  }
+  return e;
+}
+
+CommandError summarise(const SampledPath& path, const TableInterpolant& nc, const std::vector<double>& e) {
+  CommandError out;
+  std::size_t worst = 0;
+  for (std::size_t j = 0; j < e.size(); ++j) {
+    if (std::abs(e[j]) > std::abs(e[worst])) worst = j;
+  }
+  out.max_abs_um = std::abs(e[worst]) * kUmPerMm;
+  out.at_c_deg = worst + 1 == e.size() ? 360.0 : path.c_deg(worst);
+  double x2 = 0.0;
+  for (double v : path.d2x_dc2_mm_per_deg2) x2 = std::max(x2, std::abs(v));
+  const double h = path.c_step_deg;
+  out.between_rows_um = h * h / 8.0 * (x2 + nc.max_abs_d2_mm_per_deg2()) * kUmPerMm;
+  return out;
+}
+
+Result<CurveTable> table_at_rows(const SampledPath& path, const std::vector<std::size_t>& rows,
+                                 Interpolation interpolation, const CurveTableFormat& format, std::string writer) {
+  CurveTable t;
+  t.interpolation = interpolation;
+  t.points = points_at_rows(path, rows, format);
+  t.writer = std::move(writer);
+  Result<TableInterpolant> nc = TableInterpolant::of(t.points, interpolation);
+  if (!nc) return nc.error();
+  t.error = summarise(path, *nc, row_errors_mm(path, *nc));
+  return t;
+}
+
+Status check_inputs(const SampledPath& path, const CurveTableFormat& format) {
+  if (Status s = check_sampled_path_shape(path); !s) return s;
+  return check_format(path, format);
+}
+
+Result<CurveTable> write_uniform(const SampledPath& path, double c_step_deg, const CurveTableFormat& format,
+                                 Interpolation interpolation) {
+  if (Status s = check_inputs(path, format); !s) return s.error();
+  const std::size_t r = rows_per_step(path, c_step_deg);
+  if (r == 0) {
+    return make_error(ErrorCode::kInvalidInput, "table step " + num(c_step_deg, 4) +
+                                                    " deg must divide 360 and be a whole multiple of the fine step " +
+                                                    num(path.c_step_deg, 4) + " deg");
+  }
+  std::vector<std::size_t> rows;
+  for (std::size_t k = 0; k <= path.size(); k += r) rows.push_back(k);
+  if (rows.size() < 4) {
+    return make_error(ErrorCode::kInvalidInput, "table step " + num(c_step_deg, 4) + " deg gives fewer than 4 points");
+  }
+  const std::string kind = interpolation == Interpolation::kLinear ? "linear " : "spline ";
+  return table_at_rows(path, rows, interpolation, format, kind + num(c_step_deg, 3) + " deg");
+}
+
+Status check_adaptive(const AdaptiveSettings& s) {
+  if (!(s.bound_um > 0.0) || !std::isfinite(s.bound_um)) {
+    return make_error(ErrorCode::kInvalidInput, "command position error bound must be a positive number of um");
+  }
+  if (!(s.max_step_deg > 0.0) || !(s.max_step_deg <= 90.0)) {
+    return make_error(ErrorCode::kInvalidInput, "widest table step must be in (0, 90] deg");
+  }
+  return {};
+}
+
+std::string refusal_where(const CommandError& e) { return num(e.max_abs_um, 3) + " um at C" + num(e.at_c_deg, 3); }
+
+}  // namespace
+
+Result<TableInterpolant> TableInterpolant::of(const std::vector<CurvePoint>& points, Interpolation interpolation) {
+  const std::size_t m = points.size();
+  if (m < 2 || (interpolation == Interpolation::kCubicSpline && m < 3)) {
+    return make_error(ErrorCode::kInvalidInput, "a table needs at least 2 points (3 for a spline)");
+  }
+  TableInterpolant t;
+  t.interpolation_ = interpolation;
+  for (std::size_t i = 0; i < m; ++i) {
+    if (!std::isfinite(points[i].c_deg) || !std::isfinite(points[i].x_mm) ||
+        (i > 0 && !(points[i].c_deg > points[i - 1].c_deg))) {
+      return make_error(ErrorCode::kInvalidInput, "table point " + std::to_string(i) + " (C" + num(points[i].c_deg, 3) +
+                                                      ") is not finite or C does not increase");
+    }
+    t.c_deg_.push_back(points[i].c_deg);
+    t.x_mm_.push_back(points[i].x_mm);
+  }
+  t.moment_.assign(m, 0.0);
+  if (interpolation == Interpolation::kCubicSpline && m > 2) {
+    // Natural cubic spline in moments M_i = S''(C_i), M_0 = M_{m-1} = 0 (BNAT, ENAT):
+    // h_{i-1} M_{i-1} + 2 (h_{i-1} + h_i) M_i + h_i M_{i+1} = 6 (d_i - d_{i-1}), d the chord
+    // slopes. Diagonally dominant tridiagonal: Thomas algorithm without pivoting is stable.
+    const std::size_t k = m - 2;  // unknowns M_1 .. M_{m-2}
+    std::vector<double> diag(k), upper(k), rhs(k);
+    for (std::size_t j = 0; j < k; ++j) {
+      const std::size_t i = j + 1;
+      const double h0 = t.c_deg_[i] - t.c_deg_[i - 1];
+      const double h1 = t.c_deg_[i + 1] - t.c_deg_[i];
+      diag[j] = 2.0 * (h0 + h1);
+      upper[j] = h1;
+      rhs[j] = 6.0 * ((t.x_mm_[i + 1] - t.x_mm_[i]) / h1 - (t.x_mm_[i] - t.x_mm_[i - 1]) / h0);
+      if (j > 0) {
+        const double lower = h0;  // coefficient of M_{i-1}
+        const double w = lower / diag[j - 1];
+        diag[j] -= w * upper[j - 1];
+        rhs[j] -= w * rhs[j - 1];
+      }
+    }
+    for (std::size_t j = k; j-- > 0;) {
+      const double next = j + 1 < k ? t.moment_[j + 2] : 0.0;
+      t.moment_[j + 1] = (rhs[j] - upper[j] * next) / diag[j];
+    }
+  }
+  return t;
+}
+
+TableInterpolant::Value TableInterpolant::at(double c_deg) const {
+  const std::size_t m = c_deg_.size();
+  const double c = std::clamp(c_deg, c_deg_.front(), c_deg_.back());
+  std::size_t i = static_cast<std::size_t>(std::upper_bound(c_deg_.begin(), c_deg_.end(), c) - c_deg_.begin());
+  i = std::min(i == 0 ? 0 : i - 1, m - 2);
+  const double h = c_deg_[i + 1] - c_deg_[i];
+  const double y0 = x_mm_[i];
+  const double y1 = x_mm_[i + 1];
+  Value v;
+  if (interpolation_ == Interpolation::kLinear) {
+    v.dx_dc_mm_per_deg = (y1 - y0) / h;
+    v.x_mm = y0 + v.dx_dc_mm_per_deg * (c - c_deg_[i]);
+    return v;
+  }
+  const double a = (c_deg_[i + 1] - c) / h;
+  const double b = (c - c_deg_[i]) / h;
+  const double m0 = moment_[i];
+  const double m1 = moment_[i + 1];
+  v.x_mm = a * y0 + b * y1 + ((a * a * a - a) * m0 + (b * b * b - b) * m1) * h * h / 6.0;
+  v.dx_dc_mm_per_deg = (y1 - y0) / h + ((1.0 - 3.0 * a * a) * m0 + (3.0 * b * b - 1.0) * m1) * h / 6.0;
+  v.d2x_dc2_mm_per_deg2 = a * m0 + b * m1;
+  return v;
+}
+
+double TableInterpolant::max_abs_d2_mm_per_deg2() const {
+  double m = 0.0;
+  for (double v : moment_) m = std::max(m, std::abs(v));
+  return m;
+}
+
+Result<CommandError> command_position_error(const SampledPath& path, const std::vector<CurvePoint>& points,
+                                            Interpolation interpolation) {
+  if (Status s = check_sampled_path_shape(path); !s) return s.error();
+  if (Status s = validate_curve_points(points); !s) return make_error(ErrorCode::kInvalidInput, s.error().message);
+  Result<TableInterpolant> nc = TableInterpolant::of(points, interpolation);
+  if (!nc) return nc.error();
+  return summarise(path, *nc, row_errors_mm(path, *nc));
+}
+
+Result<CurveTable> write_linear_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format) {
+  return write_uniform(path, c_step_deg, format, Interpolation::kLinear);
+}
+
+Result<CurveTable> write_spline_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format) {
+  return write_uniform(path, c_step_deg, format, Interpolation::kCubicSpline);
+}
+
+Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const AdaptiveSettings& settings,
+                                               const CurveTableFormat& format) {
+  if (Status s = check_inputs(path, format); !s) return s.error();
+  if (Status s = check_adaptive(settings); !s) return s.error();
+  const std::size_t n = path.size();
+  const double bound_mm = settings.bound_um / kUmPerMm;
+  const std::size_t max_rows =
+      std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(settings.max_step_deg / path.c_step_deg + 1e-9)));
+  auto x_written = [&](std::size_t k) { return round_to(path.x_mm[k % n], format.x_decimals); };
+  // The chord from row a to row b as written keeps the bound at every row in between.
+  auto keeps_bound = [&](std::size_t a, std::size_t b) {
+    const double ya = x_written(a);
+    const double slope = (x_written(b) - ya) / static_cast<double>(b - a);
+    for (std::size_t j = a; j <= b; ++j) {
+      if (std::abs(ya + slope * static_cast<double>(j - a) - path.x_mm[j % n]) > bound_mm) return false;
+    }
+    return true;
+  };
+  std::vector<std::size_t> rows{0};
+  std::size_t a = 0;
+  while (a < n) {
+    const std::size_t reach = std::min(max_rows, n - a);
+    if (!keeps_bound(a, a + 1)) {
+      return make_error(ErrorCode::kRefused, "adaptive G1 table: even one fine step at C" + num(path.c_deg(a), 3) +
+                                                 " breaks the " + num(settings.bound_um, 3) +
+                                                 " um bound (rounding to " + std::to_string(format.x_decimals) +
+                                                 " decimals?); write X with more decimals or raise the bound");
+    }
+    // Furthest row that keeps the bound: grow the chord by doubling, then bisect between the
+    // last length that kept it and the first that did not. A chord of X that bends one way
+    // keeps the bound on every shorter chord too, so this finds the furthest row there.
+    std::size_t good = 1;
+    std::size_t bad = 0;
+    while (good < reach) {
+      const std::size_t next = std::min(good * 2, reach);
+      if (keeps_bound(a, a + next)) {
+        good = next;
+      } else {
+        bad = next;
+        break;
+      }
+    }
+    while (bad != 0 && bad - good > 1) {
+      const std::size_t mid = good + (bad - good) / 2;
+      if (keeps_bound(a, a + mid)) {
+        good = mid;
+      } else {
+        bad = mid;
+      }
+    }
+    a += good;
+    rows.push_back(a);
+  }
+  return table_at_rows(path, rows, Interpolation::kLinear, format,
+                       "adaptive linear, bound " + num(settings.bound_um, 3) + " um");
+}
+
+Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const AdaptiveSettings& settings,
+                                               const CurveTableFormat& format) {
+  if (Status s = check_inputs(path, format); !s) return s.error();
+  if (Status s = check_adaptive(settings); !s) return s.error();
+  const std::size_t n = path.size();
+  const double bound_mm = settings.bound_um / kUmPerMm;
+  std::optional<CurveTable> best;
+  CommandError closest;
+  closest.max_abs_um = std::numeric_limits<double>::infinity();
+  const std::size_t max_rows =
+      std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(settings.max_step_deg / path.c_step_deg + 1e-9)));
+  for (double start_deg : {settings.max_step_deg, 2.0, 1.0}) {
+    if (start_deg > settings.max_step_deg) continue;
+    const std::size_t r = rows_per_step(path, start_deg);
+    if (r == 0 || n / r < 3) continue;
+    std::vector<std::size_t> rows;
+    for (std::size_t k = 0; k <= n; k += r) rows.push_back(k);
+    // Halve each segment that breaks the bound; 40 rounds halve a segment far below a row.
+    for (int round = 0; round < 40; ++round) {
+      const std::vector<CurvePoint> pts = points_at_rows(path, rows, format);
+      Result<TableInterpolant> nc = TableInterpolant::of(pts, Interpolation::kCubicSpline);
+      if (!nc) return nc.error();
+      const std::vector<double> e = row_errors_mm(path, *nc);
+      std::vector<std::size_t> next{rows.front()};
+      bool split = false;
+      bool stuck = false;
+      for (std::size_t i = 0; i + 1 < rows.size(); ++i) {
+        double worst = 0.0;
+        for (std::size_t j = rows[i]; j <= rows[i + 1]; ++j) worst = std::max(worst, std::abs(e[j]));
+        if (worst > bound_mm) {
+          if (rows[i + 1] - rows[i] >= 2) {
+            next.push_back(rows[i] + (rows[i + 1] - rows[i]) / 2);
+            split = true;
+          } else {
+            stuck = true;
+          }
+        }
+        next.push_back(rows[i + 1]);
+      }
+      if (!split) {
+        if (!stuck) {
+          // Halving overshoots: drop every point whose removal still keeps the bound and the
+          // widest step (one pass; C0 and C360 stay). A trial is judged on the rows within 8
+          // points either side: the influence of one point on a cubic spline decays by
+          // 2 - sqrt(3) = 0.27 a point, so beyond that the change is below 1e-4 of the local
+          // one. The pruned table is then evaluated in full, and kept only if it holds.
+          std::vector<std::size_t> pruned = rows;
+          for (std::size_t i = 1; i + 1 < pruned.size();) {
+            if (pruned[i + 1] - pruned[i - 1] > max_rows || pruned.size() <= 4) {
+              ++i;
+              continue;
+            }
+            std::vector<std::size_t> fewer = pruned;
+            fewer.erase(fewer.begin() + static_cast<std::ptrdiff_t>(i));
+            Result<TableInterpolant> trial =
+                TableInterpolant::of(points_at_rows(path, fewer, format), Interpolation::kCubicSpline);
+            if (!trial) return trial.error();
+            const std::size_t lo = fewer[i >= 9 ? i - 9 : 0];
+            const std::size_t hi = fewer[std::min(i + 8, fewer.size() - 1)];
+            bool keeps = true;
+            for (std::size_t j = lo; j <= hi && keeps; ++j) {
+              const double c = j == n ? 360.0 : path.c_deg(j);
+              keeps = std::abs(trial->at(c).x_mm - path.x_mm[j % n]) <= bound_mm;
+            }
+            if (keeps) {
+              pruned = std::move(fewer);
+            } else {
+              ++i;
+            }
+          }
+          Result<TableInterpolant> full =
+              TableInterpolant::of(points_at_rows(path, pruned, format), Interpolation::kCubicSpline);
+          if (!full) return full.error();
+          const std::vector<double> fe = row_errors_mm(path, *full);
+          if (std::all_of(fe.begin(), fe.end(), [&](double v) { return std::abs(v) <= bound_mm; })) {
+            rows = std::move(pruned);
+          }
+          Result<CurveTable> t = table_at_rows(
+              path, rows, Interpolation::kCubicSpline, format,
+              "adaptive spline from " + num(start_deg, 3) + " deg, bound " + num(settings.bound_um, 3) + " um");
+          if (!t) return t.error();
+          if (!best || t->block_count() < best->block_count()) best = std::move(*t);
+        } else {
+          CommandError ce = summarise(path, *nc, e);
+          if (ce.max_abs_um < closest.max_abs_um) closest = ce;
+        }
+        break;
+      }
+      rows = std::move(next);
+    }
+  }
+  if (!best) {
+    return make_error(ErrorCode::kRefused, "adaptive CSPLINE table: no knot choice keeps the " +
+                                               num(settings.bound_um, 3) + " um bound; closest " +
+                                               refusal_where(closest) + "; use a G1 table or raise the bound");
+  }
+  return std::move(*best);
+}
+
+Result<CurveTable> write_default_table(const SampledPath& path, const TableChoiceSettings& settings,
+                                       const CurveTableFormat& format) {
+  const AdaptiveSettings adaptive{settings.bound_um, settings.max_step_deg};
+  if (Status s = check_inputs(path, format); !s) return s.error();
+  if (Status s = check_adaptive(adaptive); !s) return s.error();
+  std::vector<Result<CurveTable>> candidates;
+  for (double step : {1.0, 0.5, 0.25, 0.2, 0.1}) {
+    if (rows_per_step(path, step) != 0) candidates.push_back(write_linear_table(path, step, format));
+  }
+  candidates.push_back(write_adaptive_linear_table(path, adaptive, format));
+  if (settings.allow_spline) {
+    for (double step : {5.0, 4.0, 3.0, 2.0, 1.0, 0.5}) {
+      if (step <= settings.max_step_deg && rows_per_step(path, step) != 0) {
+        candidates.push_back(write_spline_table(path, step, format));
+      }
+    }
+    candidates.push_back(write_adaptive_spline_table(path, adaptive, format));
+  }
+  std::optional<CurveTable> best;
+  CommandError closest;
+  closest.max_abs_um = std::numeric_limits<double>::infinity();
+  for (Result<CurveTable>& c : candidates) {
+    if (!c) {
+      if (c.error().code != ErrorCode::kRefused) return c.error();
+      continue;
+    }
+    if (c->error.max_abs_um < closest.max_abs_um) closest = c->error;
+    if (c->error.max_abs_um > settings.bound_um) continue;
+    const bool fewer = !best || c->block_count() < best->block_count() ||
+                       (c->block_count() == best->block_count() && c->interpolation == Interpolation::kLinear &&
+                        best->interpolation != Interpolation::kLinear);
+    if (fewer) best = std::move(*c);
+  }
+  if (!best) {
+    return make_error(ErrorCode::kRefused, "no curve table keeps the command position error at or below " +
+                                               num(settings.bound_um, 3) + " um; the closest reached " +
+                                               refusal_where(closest) +
+                                               "; raise the bound or allow CSPLINE tables; nothing was written");
+  }
+  return std::move(*best);
+}
+
+}  // namespace gaugeloop

@@ -1,0 +1,120 @@
+// Curve-table writers: choose the table points for a wheel path and say how exactly the NC
+// will follow it.
+//
+// Frame: machine frame. C (work spindle, leading axis) in degrees, X (wheel infeed,
+// following axis) in mm, 0 on the base circle. A table runs from C0 to C360; its last point
+// repeats the first X (periodic table, CTABDEF periodicity 1).
+//
+// The command position error of a table is the largest |what the NC interpolates between
+// table points - exact X| over the rows of the fine path (SampledPath), with the C where it
+// occurs. It is computed from the points as written (rounded to the format's decimals),
+// because that is what the control interpolates. What the control interpolates:
+//  - kLinear (G1): straight segments between points.
+//  - kCubicSpline (CSPLINE with BNAT ENAT): the interpolating cubic spline through all points
+//    over C, curvature continuous at inner points, zero curvature at C0 and C360 (natural
+//    ends). See docs/nc_output.md for where this comes from and what it assumes.
+//
+// Errors: kInvalidInput for a step or setting out of range (named); kRefused when no table of
+// the kind asked for keeps the bound (the message gives the best error reached and where).
+// Writers do not check values against axis limits: see table_guards.h.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/result.h"
+#include "nc_out/curve_table.h"
+#include "nc_out/sampled_path.h"
+
+namespace gaugeloop {
+
+struct CommandError {
+  double max_abs_um = 0.0;  // largest |interpolated - exact X| over the fine rows, um
+  double at_c_deg = 0.0;    // C of that row
+  // Upper bound of how much the error can exceed max_abs_um between fine rows:
+  // h^2 / 8 * max|e''| (h the fine step, e = interpolant - X, e'' <= |S''| + |X''|), um.
+  double between_rows_um = 0.0;
+};
+
+// A table as it will be written: `points` are rounded to the format's decimals, from C0 to
+// C360, the last X equal to the first. One block per point (the first block only sets the
+// start), so block_count() == points.size().
+struct CurveTable {
+  Interpolation interpolation = Interpolation::kLinear;
+  std::vector<CurvePoint> points;
+  std::string writer;  // how the points were chosen, e.g. "linear 0.5 deg", for reports
+  CommandError error;
+
+  int block_count() const { return static_cast<int>(points.size()); }
+};
+
+// What the NC makes of a table: value, dX/dC and d2X/dC2 at any C in [0, 360].
+// For kLinear the derivatives are those of the segment (d2 is 0; at a point, the segment
+// that starts there). Built from points in increasing C, at least 2 (linear) or 3 (spline).
+class TableInterpolant {
+ public:
+  static Result<TableInterpolant> of(const std::vector<CurvePoint>& points, Interpolation interpolation);
+
+  struct Value {
+    double x_mm = 0.0;
+    double dx_dc_mm_per_deg = 0.0;
+    double d2x_dc2_mm_per_deg2 = 0.0;
+  };
+  Value at(double c_deg) const;
+
+  // Largest |d2X/dC2| of the interpolant (0 for linear): for the between-rows bound.
+  double max_abs_d2_mm_per_deg2() const;
+
+ private:
+  Interpolation interpolation_ = Interpolation::kLinear;
+  std::vector<double> c_deg_;
+  std::vector<double> x_mm_;
+  std::vector<double> moment_;  // spline: S'' at each point (natural ends: 0 at both ends)
+};
+
+// The command position error of `points` against `path`. Points need not lie on the fine
+// grid. kInvalidInput if the path's shape is wrong or the points do not form a table.
+Result<CommandError> command_position_error(const SampledPath& path, const std::vector<CurvePoint>& points,
+                                            Interpolation interpolation);
+
+// G1 table at a uniform step: c_step_deg must divide 360 and be a whole multiple of the
+// path's step; points are the path's rows at those C.
+Result<CurveTable> write_linear_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format = {});
+
+// CSPLINE table at a uniform step (same rules as write_linear_table).
+Result<CurveTable> write_spline_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format = {});
+
+struct AdaptiveSettings {
+  double bound_um = 0.5;       // largest command position error allowed
+  double max_step_deg = 10.0;  // no table segment wider than this
+};
+
+// G1 table with points chosen from the fine rows: from C0 on, each segment reaches as far as
+// the bound allows (at most max_step_deg), so points are dense only where X bends.
+// kRefused if even one fine step breaks the bound (only rounding could do that).
+Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const AdaptiveSettings& settings,
+                                               const CurveTableFormat& format = {});
+
+// CSPLINE table with points chosen from the fine rows: starts from a uniform step and halves
+// every segment whose error breaks the bound until none does (the spline is global: each
+// round re-solves it), then drops, in one pass from C0 on, every point whose removal keeps
+// the bound and the widest step. Starts from max_step_deg, 2 and 1 deg; keeps the fewest
+// points. kRefused if no start converges.
+Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const AdaptiveSettings& settings,
+                                               const CurveTableFormat& format = {});
+
+struct TableChoiceSettings {
+  double bound_um = 0.5;       // the default keeps the command position error at or below this
+  double max_step_deg = 10.0;  // widest segment
+  bool allow_spline = true;    // false: G1 tables only (a control without CSPLINE in tables)
+};
+
+// The default: of the candidates (G1 at 1, 0.5, 0.25, 0.2, 0.1 deg; adaptive G1; CSPLINE at
+// 5, 4, 3, 2, 1, 0.5 deg; adaptive CSPLINE), the one with the fewest blocks whose command
+// position error is at or below the bound; on a tie, G1 (it needs no spline model). kRefused
+// naming the smallest error reached if none keeps the bound.
+Result<CurveTable> write_default_table(const SampledPath& path, const TableChoiceSettings& settings,
+                                       const CurveTableFormat& format = {});
+
+}  // namespace gaugeloop

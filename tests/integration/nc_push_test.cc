@@ -1,0 +1,303 @@
+// Pushing curve tables to the control: versions, hand edits, approval, rollback and diff,
+// through run_measure_job and the `gaugeloop nc` commands, on real files and SQLite; and a
+// push killed at any moment leaving the old program or the new one.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "acquisition/modbus_gauge.h"
+#include "app/embedded_defaults.h"
+#include "app/measure_job.h"
+#include "app/nc_push.h"
+#include "app/part_file.h"
+#include "core/atomic_file.h"
+#include "nc_out/table_program.h"
+#include "simulator/gauge_simulator.h"
+#include "storage/run_store.h"
+#include "tests/support/cli.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+using testing::CommandResult;
+using testing::run_command;
+using testing::slurp;
+
+class NcPushTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("gaugeloop-nc-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    auto pf = read_part_file(fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml");
+    ASSERT_TRUE(pf.ok()) << pf.error().message;
+    part_ = *pf;
+    auto design = read_lift_table_csv(part_.part.lift_table);
+    ASSERT_TRUE(design.ok()) << design.error().message;
+    design_ = *design;
+    SimulatorSettings ss;
+    ss.time_scale = 4.0;
+    auto sim = GaugeSimulator::start(part_.part, design_, ss);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    sim_ = std::move(*sim);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  JobSettings job_settings() const {
+    JobSettings js;
+    js.part = part_.part;
+    js.design = design_;
+    js.nc_program = part_.nc_program;
+    js.db_path = dir_ / "gaugeloop.sqlite";
+    js.nc_dir = dir_ / "nc";
+    js.nc_template = std::string(embedded::kNcTemplate);
+    js.nc_template_name = "cam_table.spf";
+    return js;
+  }
+
+  Result<JobReport> measure(const JobSettings& js) {
+    ModbusSettings ms;
+    ms.port = sim_->port();
+    ModbusGauge gauge(ms);
+    return run_measure_job(gauge, js);
+  }
+  Result<JobReport> measure() { return measure(job_settings()); }
+
+  fs::path nc_file() const { return dir_ / "nc" / (part_.nc_program + ".SPF"); }
+  std::string data() const { return "--data-dir " + dir_.string() + " "; }
+
+  RunStore store() const {
+    auto s = RunStore::open(dir_ / "gaugeloop.sqlite");
+    EXPECT_TRUE(s.ok());
+    return std::move(*s);
+  }
+
+  fs::path dir_;
+  PartFile part_;
+  LiftTable design_;
+  std::unique_ptr<GaugeSimulator> sim_;
+};
+
+// The version in the header, the history, a diff that shows the change and a rollback that
+// restores an earlier table as a new version, making its run the one the next builds on.
+TEST_F(NcPushTest, VersionsHistoryDiffAndRollback) {
+  auto first = measure();
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  ASSERT_TRUE(first->pushed());
+  const std::string v1 = slurp(nc_file());
+  auto second = measure();  // builds on the first: its correction is about twice the first's
+  ASSERT_TRUE(second.ok()) << second.error().message;
+  EXPECT_EQ(second->table_version, 2);
+  const std::string v2 = slurp(nc_file());
+  EXPECT_NE(v2.find("; gaugeloop table_version: 2\n"), std::string::npos);
+
+  CommandResult history = run_command("nc history --json " + data());
+  ASSERT_EQ(history.exit_code, 0) << history.output;
+  json h = json::parse(history.output);
+  ASSERT_EQ(h.size(), 2u);
+  EXPECT_EQ(h[0]["table_version"], 2);
+  EXPECT_EQ(h[0]["run_id"], second->run_id);
+  EXPECT_EQ(h[1]["reason"], "run " + std::to_string(first->run_id));
+
+  // The second correction adds about the first's again (the simulator does not grind), so the
+  // tables differ by about the first correction, 15 um or more somewhere.
+  CommandResult diff = run_command("nc diff 1 2 --json " + data());
+  ASSERT_EQ(diff.exit_code, 0) << diff.output;
+  json d = json::parse(diff.output);
+  EXPECT_GT(std::abs(d["largest_dx_um"].get<double>()), 10.0);
+  EXPECT_FALSE(d["degrees"].empty());
+  CommandResult same = run_command("nc diff 2 2 --json " + data());
+  ASSERT_EQ(same.exit_code, 0) << same.output;
+  EXPECT_EQ(json::parse(same.output)["largest_dx_um"].get<double>(), 0.0);
+
+  CommandResult rollback = run_command("nc rollback 1 --by anna " + data());
+  ASSERT_EQ(rollback.exit_code, 0) << rollback.output;
+  const std::string v3 = slurp(nc_file());
+  auto p1 = parse_table_program(v1, "v1");
+  auto p3 = parse_table_program(v3, "v3");
+  ASSERT_TRUE(p1.ok() && p3.ok());
+  EXPECT_EQ(p3->body_checksum, p1->body_checksum) << "the table of version 1, block for block";
+  EXPECT_EQ(p3->header.at("table_version"), "3");
+  EXPECT_TRUE(verify_table_checksum(*p3, "v3").ok());
+  auto s = store();
+  auto in_force = s.last_pushed_run(job_settings().machine, part_.part.name, part_.part.lobe);
+  ASSERT_TRUE(in_force.ok() && in_force->has_value());
+  EXPECT_EQ(**in_force, first->run_id);
+  auto last = s.last_push(nc_file().string());
+  ASSERT_TRUE(last.ok() && last->has_value());
+  EXPECT_EQ((**last).reason, "rollback to version 1 by anna");
+
+  // `runs show` of the first run lists both pushes of its table: version 1 and the rollback.
+  CommandResult show = run_command("runs show " + std::to_string(first->run_id) + " --json " + data());
+  ASSERT_EQ(show.exit_code, 0) << show.output;
+  json pushes = json::parse(show.output)["nc_pushes"];
+  ASSERT_EQ(pushes.size(), 2u);
+  EXPECT_EQ(pushes[0]["table_version"], 1);
+  EXPECT_EQ(pushes[1]["table_version"], 3);
+  EXPECT_EQ(pushes[1]["reason"], "rollback to version 1 by anna");
+
+  CommandResult missing = run_command("nc rollback 9 " + data());
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("version 9"), std::string::npos) << missing.output;
+  EXPECT_EQ(slurp(nc_file()), v3);
+}
+
+// A table edited on the control is reported, never overwritten silently: the next run is
+// stored and its table waits; approving it needs --overwrite-edited.
+TEST_F(NcPushTest, TableEditedByHandIsReportedAndKept) {
+  auto first = measure();
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  std::string text = slurp(nc_file());
+  const auto x_at = text.find(" X", text.find("CTABDEF"));
+  ASSERT_NE(x_at, std::string::npos);
+  text.insert(x_at + 2, "1");  // X8.49... becomes X18.49...: someone changed a point
+  ASSERT_TRUE(write_file_atomically(nc_file(), text).ok());
+
+  CommandResult check = run_command("nc check " + data());
+  EXPECT_EQ(check.exit_code, 2) << check.output;
+  EXPECT_NE(check.output.find("edited by hand"), std::string::npos) << check.output;
+
+  auto second = measure();
+  ASSERT_TRUE(second.ok()) << second.error().message;
+  EXPECT_FALSE(second->pushed());
+  EXPECT_NE(second->not_pushed_reason.find("edited by hand"), std::string::npos) << second->not_pushed_reason;
+  ASSERT_TRUE(second->pending_id.has_value());
+  EXPECT_EQ(slurp(nc_file()), text) << "the edited program is untouched";
+
+  const std::string id = std::to_string(*second->pending_id);
+  CommandResult refused = run_command("nc approve " + id + " " + data());
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_EQ(slurp(nc_file()), text);
+  CommandResult approved = run_command("nc approve " + id + " --overwrite-edited --by ben " + data());
+  ASSERT_EQ(approved.exit_code, 0) << approved.output;
+  auto parsed = parse_table_program(slurp(nc_file()), "approved");
+  ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+  EXPECT_TRUE(verify_table_checksum(*parsed, "approved").ok());
+  EXPECT_EQ(parsed->header.at("table_version"), "2");
+  EXPECT_EQ(parsed->header.at("run_id"), std::to_string(second->run_id));
+  auto pending = store().load_pending(*second->pending_id);
+  ASSERT_TRUE(pending.ok());
+  EXPECT_EQ(pending->status, PendingStatus::kApproved);
+  EXPECT_EQ(pending->decided_by, "ben");
+}
+
+// With approval required nothing reaches the control until a person approves; a table
+// approved once cannot be approved again, and a rejected one never reaches the control.
+TEST_F(NcPushTest, ApprovalRequiredHoldsTheTableUntilApproved) {
+  JobSettings js = job_settings();
+  js.require_approval = true;
+  auto report = measure(js);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_FALSE(report->pushed());
+  EXPECT_EQ(report->verdict, CompensationVerdict::kApply);
+  ASSERT_TRUE(report->pending_id.has_value());
+  EXPECT_FALSE(fs::exists(nc_file()));
+
+  CommandResult pending = run_command("nc pending --json " + data());
+  ASSERT_EQ(pending.exit_code, 0) << pending.output;
+  json p = json::parse(pending.output);
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_EQ(p[0]["reason"], "approval required");
+  EXPECT_EQ(p[0]["run_id"], report->run_id);
+
+  const std::string id = std::to_string(*report->pending_id);
+  CommandResult approved = run_command("nc approve " + id + " --by anna " + data());
+  ASSERT_EQ(approved.exit_code, 0) << approved.output;
+  auto parsed = parse_table_program(slurp(nc_file()), "approved");
+  ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+  EXPECT_EQ(parsed->header.at("table_version"), "1");
+  auto s = store();
+  auto last = s.last_push(nc_file().string());
+  ASSERT_TRUE(last.ok() && last->has_value());
+  EXPECT_EQ((**last).reason, "approved by anna");
+  EXPECT_EQ((**last).run_id, report->run_id);
+  CommandResult again = run_command("nc approve " + id + " " + data());
+  EXPECT_EQ(again.exit_code, 2) << again.output;
+  EXPECT_NE(again.output.find("approved"), std::string::npos) << again.output;
+
+  auto next = measure(js);
+  ASSERT_TRUE(next.ok()) << next.error().message;
+  ASSERT_TRUE(next->pending_id.has_value());
+  const std::string before = slurp(nc_file());
+  CommandResult rejected = run_command("nc reject " + std::to_string(*next->pending_id) + " --note noisy " + data());
+  ASSERT_EQ(rejected.exit_code, 0) << rejected.output;
+  EXPECT_EQ(slurp(nc_file()), before);
+  CommandResult late = run_command("nc approve " + std::to_string(*next->pending_id) + " " + data());
+  EXPECT_EQ(late.exit_code, 2) << late.output;
+  EXPECT_EQ(slurp(nc_file()), before);
+}
+
+// Axis guards are checked on the design before any measurement: a slide limit the design
+// already breaks costs no run and names the C degree.
+TEST_F(NcPushTest, DesignBeyondTheSlideLimitIsRefusedBeforeMeasuring) {
+  JobSettings js = job_settings();
+  js.axis_limits.x_velocity_max_mm_per_s = 10.0;  // the intake lobe asks for about 63 mm/s at 60 rpm
+  auto report = measure(js);
+  ASSERT_FALSE(report.ok());
+  EXPECT_EQ(report.error().code, ErrorCode::kRefused);
+  EXPECT_NE(report.error().message.find("velocity"), std::string::npos) << report.error().message;
+  EXPECT_NE(report.error().message.find("C"), std::string::npos) << report.error().message;
+  EXPECT_EQ(sim_->requests_served(), 0) << "no gauge request was made";
+  EXPECT_FALSE(fs::exists(nc_file()));
+}
+
+// A push killed at any moment leaves the old program or the new one, whole: a child pushes
+// two programs in turn; the parent kills it right after it reports starting a write, 40
+// times, and each time the file must be exactly one of the two.
+TEST(NcPushKill, KilledPushLeavesTheOldProgramOrTheNewOne) {
+  const fs::path dir = fs::temp_directory_path() / ("gaugeloop-nc-kill-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path file = dir / "CAM.SPF";
+  // Large programs, so a kill lands inside a write more often than between writes.
+  std::string a = "; program A\n";
+  std::string b = "; program B\n";
+  for (int i = 0; i < 20000; ++i) {
+    a += "C" + std::to_string(i) + " X1.0000\n";
+    b += "C" + std::to_string(i) + " X2.0000\n";
+  }
+  ASSERT_TRUE(write_file_atomically(file, a).ok());
+  int old_or_new = 0;
+  for (int k = 0; k < 40; ++k) {
+    int ready[2];
+    ASSERT_EQ(::pipe(ready), 0);
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      ::close(ready[0]);
+      for (int i = 0;; ++i) {
+        const char c = 'w';
+        if (::write(ready[1], &c, 1) != 1) ::_exit(3);
+        if (!write_file_atomically(file, (i % 2 == 0) ? b : a).ok()) ::_exit(2);
+      }
+    }
+    ::close(ready[1]);
+    // Let the child start 1 + k % 5 writes, then kill it during the last one.
+    char c = 0;
+    for (int i = 0; i <= k % 5; ++i) ASSERT_EQ(::read(ready[0], &c, 1), 1);
+    ::kill(pid, SIGKILL);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ::close(ready[0]);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "the child must have been killed, not have failed";
+    const std::string now = slurp(file);
+    ASSERT_TRUE(now == a || now == b) << "kill " << k << ": the program is a mixture (" << now.size() << " bytes)";
+    ++old_or_new;
+  }
+  EXPECT_EQ(old_or_new, 40);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace gaugeloop

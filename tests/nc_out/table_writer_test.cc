@@ -1,0 +1,136 @@
+// Table writers on a path with known answers.
+#include "nc_out/table_writer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "nc_out/table_program.h"
+#include "tests/nc_out/analytic_path.h"
+#include "tests/nc_out/nc_reference.h"
+
+namespace gaugeloop {
+namespace {
+
+using testing::analytic_path;
+using testing::kRadPerDeg;
+
+constexpr CurveTableFormat kSixDecimals{3, 6};  // X to 1e-6 mm: rounding far below the checks
+
+std::string program_of(const CurveTable& t, const CurveTableFormat& format = kSixDecimals) {
+  Result<std::string> p = render_table_program("{{table_header}}\nCTABDEF(X,C,1,1)\n{{table_blocks}}\nCTABEND\nM17\n",
+                                               "t.spf", {}, t, {1, 1}, format);
+  EXPECT_TRUE(p.ok()) << p.error().message;
+  return p.ok() ? *p : "";
+}
+
+// Chords of a cos C: the chord over [c - h/2, c + h/2] misses by a cos(c) (1 - cos(h/2)) at
+// its middle, largest for the segment next to C0: a cos(h/2) (1 - cos(h/2)). Tolerance
+// 1e-3 um: X is written to 1e-6 mm, so each point is off by up to 5e-4 um.
+TEST(TableWriter, LinearErrorIsTheChordErrorOfACosine) {
+  const double a = 5.0;
+  const SampledPath p = analytic_path(a, 0.0);
+  for (double h : {1.0, 0.5, 2.0}) {
+    Result<CurveTable> t = write_linear_table(p, h, kSixDecimals);
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    const double half = h / 2.0 * kRadPerDeg;
+    EXPECT_NEAR(t->error.max_abs_um, a * std::cos(half) * (1.0 - std::cos(half)) * 1000.0, 1e-3) << h;
+    EXPECT_EQ(t->block_count(), static_cast<int>(std::lround(360.0 / h)) + 1);
+    EXPECT_EQ(t->points.back().c_deg, 360.0);
+    EXPECT_EQ(t->points.back().x_mm, t->points.front().x_mm);
+  }
+}
+
+// The writer's figure against the test's own regex reading of the program and its own
+// spline (slopes, sparse LU). Tolerance 1e-4 um: same points, two exact solves.
+TEST(TableWriter, EveryWriterAgreesWithAnIndependentEvaluation) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  const AdaptiveSettings adaptive{0.5, 10.0};
+  for (Result<CurveTable> t : {write_linear_table(p, 1.0), write_spline_table(p, 2.0), write_spline_table(p, 5.0),
+                               write_adaptive_linear_table(p, adaptive), write_adaptive_spline_table(p, adaptive)}) {
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    EXPECT_NEAR(t->error.max_abs_um, testing::ref_error_um(program_of(*t, {}), p), 1e-4) << t->writer;
+  }
+}
+
+TEST(TableWriter, AdaptiveKeepsTheBoundWithFewerBlocksThanUniform) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  for (double bound : {0.5, 2.0}) {
+    Result<CurveTable> lin = write_adaptive_linear_table(p, {bound, 10.0});
+    Result<CurveTable> spl = write_adaptive_spline_table(p, {bound, 10.0});
+    ASSERT_TRUE(lin.ok() && spl.ok());
+    EXPECT_LE(lin->error.max_abs_um, bound);
+    EXPECT_LE(spl->error.max_abs_um, bound);
+    // The uniform G1 table that keeps the bound needs more blocks.
+    for (double h : {1.0, 0.5, 0.25, 0.2, 0.1}) {
+      Result<CurveTable> u = write_linear_table(p, h);
+      ASSERT_TRUE(u.ok());
+      if (u->error.max_abs_um <= bound) {
+        EXPECT_LT(lin->block_count(), u->block_count()) << h;
+        break;
+      }
+    }
+    EXPECT_LT(spl->block_count(), lin->block_count());
+  }
+}
+
+TEST(TableWriter, NoSegmentIsWiderThanTheWidestStep) {
+  const SampledPath p = analytic_path(4.0, 0.0);  // nearly straight near C90 and C270
+  for (Result<CurveTable> t :
+       {write_adaptive_linear_table(p, {5.0, 3.0}), write_adaptive_spline_table(p, {5.0, 3.0})}) {
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    for (size_t i = 1; i < t->points.size(); ++i) {
+      EXPECT_LE(t->points[i].c_deg - t->points[i - 1].c_deg, 3.0 + 1e-9) << t->writer << " at C" << t->points[i].c_deg;
+    }
+  }
+}
+
+TEST(TableWriter, RefusesAStepThatDoesNotFitTheGrid) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  for (double h : {0.7, 0.005, 0.0, -1.0}) {
+    Result<CurveTable> t = write_linear_table(p, h);
+    ASSERT_FALSE(t.ok()) << h;
+    EXPECT_EQ(t.error().code, ErrorCode::kInvalidInput);
+  }
+}
+
+TEST(TableWriter, RefusesAPathOfTheWrongShape) {
+  SampledPath p = analytic_path(4.0, 0.7);
+  p.dx_dc_mm_per_deg.pop_back();
+  Result<CurveTable> t = write_linear_table(p, 1.0);
+  ASSERT_FALSE(t.ok());
+  EXPECT_EQ(t.error().code, ErrorCode::kInvalidInput);
+  EXPECT_NE(t.error().message.find("36000 rows"), std::string::npos) << t.error().message;
+}
+
+TEST(DefaultTable, PicksTheFewestBlocksThatKeepTheBound) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  Result<CurveTable> d = write_default_table(p, {});
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_LE(d->error.max_abs_um, 0.5);
+  Result<CurveTable> spl = write_adaptive_spline_table(p, {0.5, 10.0});
+  Result<CurveTable> lin = write_adaptive_linear_table(p, {0.5, 10.0});
+  ASSERT_TRUE(spl.ok() && lin.ok());
+  EXPECT_EQ(d->block_count(), std::min(spl->block_count(), lin->block_count()));
+  EXPECT_EQ(d->interpolation, Interpolation::kCubicSpline);
+}
+
+TEST(DefaultTable, WithoutSplinesPicksALinearTable) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  Result<CurveTable> d = write_default_table(p, {0.5, 10.0, false});
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->interpolation, Interpolation::kLinear);
+  EXPECT_LE(d->error.max_abs_um, 0.5);
+}
+
+TEST(DefaultTable, RefusesWhenNothingKeepsTheBound) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  // X written to 0.1 um cannot keep 0.01 um.
+  Result<CurveTable> d = write_default_table(p, {0.01, 10.0, true});
+  ASSERT_FALSE(d.ok());
+  EXPECT_EQ(d.error().code, ErrorCode::kRefused);
+  EXPECT_NE(d.error().message.find("0.010 um"), std::string::npos) << d.error().message;
+}
+
+}  // namespace
+}  // namespace gaugeloop
