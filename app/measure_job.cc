@@ -206,7 +206,7 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     std::optional<BuiltTable> built;
     if (verdict != CompensationVerdict::kRefuse) {
       Result<BuiltTable> b = [&]() -> Result<BuiltTable> {
-        Result<PeriodicSpline> target = corrected_lift(s.design, correction, s.part);
+        Result<PeriodicSpline> target = corrected_lift(s.design, *design_reading, correction, s.part);
         if (!target) return in_step("corrected lift", target.error());
         return build_table(*target, s);
       }();

@@ -208,13 +208,70 @@ Result<DegreeTable> next_correction(const LobeAnalysis& analysis, const DegreeTa
   return decision->correction_um;
 }
 
-Result<PeriodicSpline> corrected_lift(const LiftTable& design, const DegreeTable& correction_um, const Part& part) {
+namespace {
+
+// The lift correction (um) at each knot of `design` of a roller or knife-edge lobe: the
+// reading at probe angle theta is the support of the pitch curve there, less rr; it touches
+// the pitch curve at polar angle beta (the follower angle), whose normal is theta = beta -
+// alpha. So the correction at whole degree theta moves the follower at that contact by
+// c(theta) / cos(alpha). Each whole degree is carried to its own contact (contacts[theta])
+// and the lift corrections are interpolated in beta: where the probe bridges a concave
+// flank, the bridge's two ends share one normal but take the correction from their own side
+// of it (the correction may step there, as the reading's slope does), and the flank between
+// them, which no probe touches, is interpolated.
+Result<std::vector<double>> roller_lift_correction_um(const LiftTable& design, const DegreeTable& correction_um,
+                                                      const std::vector<DesignReading::Contact>& contacts,
+                                                      const Part& part) {
+  std::vector<std::pair<double, double>> contact;  // (beta, lift correction um)
+  contact.reserve(kDegrees);
+  for (size_t d = 0; d < kDegrees; ++d) {
+    contact.emplace_back(contacts[d].beta_deg, correction_um[d] / contacts[d].cos_pressure_angle);
+  }
+  std::sort(contact.begin(), contact.end());
+  std::vector<double> beta_deg;
+  std::vector<double> value_um;
+  beta_deg.reserve(kDegrees);
+  value_um.reserve(kDegrees);
+  for (const auto& [beta, value] : contact) {
+    // Two probe angles resting on one point (a corner of the pitch curve's hull sampled
+    // twice) add nothing: keep the first.
+    if (!beta_deg.empty() && beta - beta_deg.back() < kSameContactDeg) continue;
+    beta_deg.push_back(beta);
+    value_um.push_back(value);
+  }
+  Result<PeriodicSpline> spread = PeriodicSpline::fit(beta_deg, value_um);
+  if (!spread.ok()) {
+    return make_error(ErrorCode::kRefused, "corrected lift: too few points of the lobe of part '" + part.name +
+                                               "' touch a flat probe to carry a correction");
+  }
+  const size_t n = design.angle_deg.size();
+  std::vector<double> lift_correction_um(n);
+  for (size_t i = 0; i < n; ++i) lift_correction_um[i] = spread->value(design.angle_deg[i]);
+  return lift_correction_um;
+}
+
+Status check_finite(const DegreeTable& correction_um) {
   for (size_t d = 0; d < kDegrees; ++d) {
     if (!std::isfinite(correction_um[d])) {
       return make_error(ErrorCode::kInvalidInput,
                         "corrected lift: the correction at cam degree " + std::to_string(d) + " is NaN or infinite");
     }
   }
+  return {};
+}
+
+// design - lift correction / 1000 at the design's knots, as a spline through them.
+Result<PeriodicSpline> target_lift(const LiftTable& design, const std::vector<double>& lift_correction_um) {
+  const size_t n = design.angle_deg.size();
+  std::vector<double> target(n);
+  for (size_t i = 0; i < n; ++i) target[i] = design.lift_mm[i] - lift_correction_um[i] / 1000.0;
+  return PeriodicSpline::fit(design.angle_deg, target);
+}
+
+}  // namespace
+
+Result<PeriodicSpline> corrected_lift(const LiftTable& design, const DegreeTable& correction_um, const Part& part) {
+  if (Status finite = check_finite(correction_um); !finite.ok()) return finite.error();
   Result<PeriodicSpline> lift = PeriodicSpline::fit(design.angle_deg, design.lift_mm);
   if (!lift.ok()) {
     return make_error(lift.error().code, "design lift table '" + design.source + "': " + lift.error().message);
@@ -223,66 +280,77 @@ Result<PeriodicSpline> corrected_lift(const LiftTable& design, const DegreeTable
   if (!geometry.ok()) return geometry.error();
   const FollowerGeometry& g = geometry.value();
 
-  const PeriodicSpline correction = PeriodicSpline::fit(correction_um);
   const size_t n = design.angle_deg.size();
-  std::vector<double> lift_correction_um(n, 0.0);
   if (g.kind == FollowerKind::kFlat) {
+    const PeriodicSpline correction = PeriodicSpline::fit(correction_um);
+    std::vector<double> lift_correction_um(n);
     for (size_t i = 0; i < n; ++i) lift_correction_um[i] = correction.value(design.angle_deg[i]);
-  } else {
-    const double rb = g.base_circle_radius_mm;
-    const double rr = g.roller_radius_mm;
-    // The support function needs the lobe round the axis, rb + H > 0 (exact, piece by piece;
-    // the sampled check says where). Undercut and a wheel too large are the wheel path's to
-    // refuse, on the corrected lift, which is what will be ground.
-    if (!(flat_lobe_minima(*lift, rb).support_mm > 0.0)) {
-      if (Status shape = check_lobe_shape(*lift, g); !shape.ok()) return shape.error();
-      return make_error(ErrorCode::kRefused, "corrected lift: the design lift of part '" + part.name +
-                                                 "' reaches below minus the base circle radius between the "
-                                                 "check's samples; check the lift table and base_circle_radius_mm");
-    }
-    // The reading at probe angle theta is the support of the pitch curve there, less rr; it
-    // touches the pitch curve at polar angle beta (the follower angle), whose normal is
-    // theta = beta - alpha. So the correction at whole degree theta moves the follower at that
-    // contact by c(theta) / cos(alpha). Each whole degree is carried to its own contact and the
-    // lift corrections are interpolated in beta: where the probe bridges a concave flank, the
-    // bridge's two ends share one normal but take the correction from their own side of it
-    // (the correction may step there, as the reading's slope does), and the flank between
-    // them, which no probe touches, is interpolated.
-    const PolarSupport pitch(*lift, rb + rr);
-    std::vector<std::pair<double, double>> contact;  // (beta, lift correction um)
-    contact.reserve(kDegrees);
-    for (size_t d = 0; d < kDegrees; ++d) {
-      const double beta = pitch.at(static_cast<double>(d)).phi_deg;
-      const double alpha = std::atan(lift->d1(beta) / (rb + rr + lift->value(beta)));
-      contact.emplace_back(beta, correction_um[d] / std::cos(alpha));
-    }
-    std::sort(contact.begin(), contact.end());
-    std::vector<double> beta_deg;
-    std::vector<double> value_um;
-    for (const auto& [beta, value] : contact) {
-      // Two probe angles resting on one point (a corner of the pitch curve's hull sampled
-      // twice) add nothing: keep the first.
-      if (!beta_deg.empty() && beta - beta_deg.back() < kSameContactDeg) continue;
-      beta_deg.push_back(beta);
-      value_um.push_back(value);
-    }
-    Result<PeriodicSpline> spread = PeriodicSpline::fit(beta_deg, value_um);
-    if (!spread.ok()) {
-      return make_error(ErrorCode::kRefused, "corrected lift: too few points of the lobe of part '" + part.name +
-                                                 "' touch a flat probe to carry a correction");
-    }
-    for (size_t i = 0; i < n; ++i) lift_correction_um[i] = spread->value(design.angle_deg[i]);
+    return target_lift(design, lift_correction_um);
   }
-  std::vector<double> target(n);
-  for (size_t i = 0; i < n; ++i) target[i] = design.lift_mm[i] - lift_correction_um[i] / 1000.0;
-  return PeriodicSpline::fit(design.angle_deg, target);
+  const double rb = g.base_circle_radius_mm;
+  const double rr = g.roller_radius_mm;
+  // The support function needs the lobe round the axis, rb + H > 0 (exact, piece by piece;
+  // the sampled check says where). Undercut and a wheel too large are the wheel path's to
+  // refuse, on the corrected lift, which is what will be ground.
+  if (!(flat_lobe_minima(*lift, rb).support_mm > 0.0)) {
+    if (Status shape = check_lobe_shape(*lift, g); !shape.ok()) return shape.error();
+    return make_error(ErrorCode::kRefused, "corrected lift: the design lift of part '" + part.name +
+                                               "' reaches below minus the base circle radius between the "
+                                               "check's samples; check the lift table and base_circle_radius_mm");
+  }
+  // Where the probe at each whole degree rests (DesignReading::of_lobe keeps the same).
+  const PolarSupport pitch(*lift, rb + rr);
+  std::vector<DesignReading::Contact> contacts(kDegrees);
+  for (size_t d = 0; d < kDegrees; ++d) {
+    const double beta = pitch.at(static_cast<double>(d)).phi_deg;
+    contacts[d] = {beta, std::cos(std::atan(lift->d1(beta) / (rb + rr + lift->value(beta))))};
+  }
+  Result<std::vector<double>> lift_correction_um = roller_lift_correction_um(design, correction_um, contacts, part);
+  if (!lift_correction_um.ok()) return lift_correction_um.error();
+  return target_lift(design, *lift_correction_um);
+}
+
+Result<PeriodicSpline> corrected_lift(const LiftTable& design, const DesignReading& reading,
+                                      const DegreeTable& correction_um, const Part& part) {
+  const PeriodicSpline* lift = reading.lift();
+  Result<FollowerGeometry> geometry = follower_geometry(part);
+  // Without the lobe model, or for a flat follower (nothing to reuse), or a lobe whose
+  // contacts were not kept: as without it, which also gives its errors.
+  if (lift == nullptr || !geometry.ok() || geometry->kind == FollowerKind::kFlat || reading.contacts().empty()) {
+    return corrected_lift(design, correction_um, part);
+  }
+  const FollowerGeometry& g = reading.geometry();
+  const size_t n = design.angle_deg.size();
+  bool same = geometry->kind == g.kind && geometry->base_circle_radius_mm == g.base_circle_radius_mm &&
+              geometry->roller_radius_mm == g.roller_radius_mm && static_cast<Eigen::Index>(n) == lift->size();
+  for (size_t i = 0; i < n && same; ++i) {
+    const Eigen::Index k = static_cast<Eigen::Index>(i);
+    same = design.angle_deg[i] == lift->knots_deg()(k) && design.lift_mm[i] == lift->knot_values()(k);
+  }
+  if (!same) {
+    return make_error(ErrorCode::kInvalidInput, "corrected lift: the design reading of part '" + part.name +
+                                                    "' was not made from design lift table '" + design.source +
+                                                    "' and this follower; pass DesignReading::of_lobe of them");
+  }
+  if (Status finite = check_finite(correction_um); !finite.ok()) return finite.error();
+  Result<std::vector<double>> lift_correction_um =
+      roller_lift_correction_um(design, correction_um, reading.contacts(), part);
+  if (!lift_correction_um.ok()) return lift_correction_um.error();
+  return target_lift(design, *lift_correction_um);
 }
 
 Result<WheelPath> corrected_wheel_path(const LiftTable& design, const DegreeTable& correction_um, const Part& part,
                                        double step_deg) {
-  Result<PeriodicSpline> target_lift = corrected_lift(design, correction_um, part);
-  if (!target_lift.ok()) return target_lift.error();
-  return compute_wheel_path(*target_lift, part, step_deg);
+  Result<PeriodicSpline> target = corrected_lift(design, correction_um, part);
+  if (!target.ok()) return target.error();
+  return compute_wheel_path(*target, part, step_deg);
+}
+
+Result<WheelPath> corrected_wheel_path(const LiftTable& design, const DesignReading& reading,
+                                       const DegreeTable& correction_um, const Part& part, double step_deg) {
+  Result<PeriodicSpline> target = corrected_lift(design, reading, correction_um, part);
+  if (!target.ok()) return target.error();
+  return compute_wheel_path(*target, part, step_deg);
 }
 
 }  // namespace gaugeloop

@@ -126,8 +126,19 @@ Result<DegreeTable> next_correction(const LobeAnalysis& analysis, const DegreeTa
 // non-finite correction. The corrected lobe's shape is checked by compute_wheel_path.
 Result<PeriodicSpline> corrected_lift(const LiftTable& design, const DegreeTable& correction_um, const Part& part);
 
+// The same, bit for bit, taking the contacts from `reading` (DesignReading::of_lobe of this
+// design and part, made once per part) instead of finding them again: for a roller lobe
+// that is 360 support-function solves a correction saved. A reading without the lobe model
+// (interpolating) or of a flat follower gives the overload above.
+// Errors: as above; kInvalidInput when `reading` was made from another lift table or
+// follower geometry.
+Result<PeriodicSpline> corrected_lift(const LiftTable& design, const DesignReading& reading,
+                                      const DegreeTable& correction_um, const Part& part);
+
 // compute_wheel_path of corrected_lift. Errors: as those two.
 Result<WheelPath> corrected_wheel_path(const LiftTable& design, const DegreeTable& correction_um, const Part& part,
                                        double step_deg);
+Result<WheelPath> corrected_wheel_path(const LiftTable& design, const DesignReading& reading,
+                                       const DegreeTable& correction_um, const Part& part, double step_deg);
 
 }  // namespace gaugeloop

@@ -28,7 +28,27 @@ Result<DesignReading> DesignReading::of_lobe(const PeriodicSpline& lift_mm, cons
                               ? DesignReading(lift_mm)
                               : DesignReading(PolarSupport(lift_mm, g.base_circle_radius_mm + g.roller_radius_mm),
                                               g.roller_radius_mm + g.base_circle_radius_mm);
-  for (int d = 0; d < kDegreesPerRevolution; ++d) reading.table_[static_cast<size_t>(d)] = reading.at(d);
+  reading.lift_ = lift_mm;
+  reading.geometry_ = g;
+  if (g.kind == FollowerKind::kFlat) {
+    for (int d = 0; d < kDegreesPerRevolution; ++d) reading.table_[static_cast<size_t>(d)] = reading.at(d);
+    return reading;
+  }
+  // One support solve per degree gives the reading (bit for bit what at(d) returns) and the
+  // contact; the contacts are corrected_lift's only where the support function can be taken
+  // (rb + H > 0 exactly, piece by piece), as it checks itself.
+  const double pitch_offset_mm = g.base_circle_radius_mm + g.roller_radius_mm;
+  const bool round_axis = flat_lobe_minima(lift_mm, g.base_circle_radius_mm).support_mm > 0.0;
+  if (round_axis) reading.contacts_.resize(static_cast<size_t>(kDegreesPerRevolution));
+  for (int d = 0; d < kDegreesPerRevolution; ++d) {
+    const size_t i = static_cast<size_t>(d);
+    const PolarSupport::Point p = reading.support_->at(d);
+    reading.table_[i] = p.support_mm - reading.reading_offset_mm_;
+    if (round_axis) {
+      const double alpha = std::atan(lift_mm.d1(p.phi_deg) / (pitch_offset_mm + lift_mm.value(p.phi_deg)));
+      reading.contacts_[i] = {p.phi_deg, std::cos(alpha)};
+    }
+  }
   return reading;
 }
 

@@ -3,7 +3,9 @@
 
 #include <optional>
 #include <utility>
+#include <vector>
 
+#include "compensation/cam_geometry.h"
 #include "compensation/periodic_spline.h"
 #include "compensation/polar_support.h"
 #include "compensation/wheel_path.h"
@@ -44,6 +46,22 @@ class DesignReading {
   Sample sample(double theta_deg) const;
   const DegreeTable& table() const { return table_; }
 
+  // Once-per-part data of_lobe keeps for corrected_lift, which would otherwise find it again
+  // for every correction. Where the probe at each whole degree theta rests on a roller or
+  // knife-edge lobe: the follower angle beta of that contact on the pitch curve (cam frame,
+  // degrees in [0, 360)) and the cosine of the pressure angle there. Empty for a flat
+  // follower, for `interpolating`, and for a lobe whose lift reaches below -rb between the
+  // shape check's samples (corrected_lift refuses it).
+  struct Contact {
+    double beta_deg = 0.0;
+    double cos_pressure_angle = 1.0;
+  };
+  const std::vector<Contact>& contacts() const { return contacts_; }
+  // The lift and follower of_lobe was given, so a caller can check it is handed the same
+  // design; null for `interpolating`.
+  const PeriodicSpline* lift() const { return lift_ ? &*lift_ : nullptr; }
+  const FollowerGeometry& geometry() const { return geometry_; }
+
  private:
   explicit DesignReading(PeriodicSpline spline) : spline_(std::move(spline)) {}
   DesignReading(PolarSupport support, double reading_offset_mm)
@@ -55,6 +73,9 @@ class DesignReading {
   std::optional<PolarSupport> support_;
   double reading_offset_mm_ = 0.0;
   DegreeTable table_{};
+  std::optional<PeriodicSpline> lift_;  // of_lobe only
+  FollowerGeometry geometry_{};         // of_lobe only
+  std::vector<Contact> contacts_;       // of_lobe, roller and knife edge: one per whole degree
 };
 
 // The reading of a flat probe at each whole cam degree theta on the design lobe, in mm,

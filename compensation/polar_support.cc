@@ -14,10 +14,20 @@ namespace {
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 constexpr double kContactToleranceDeg = 1e-10;
+// Newton steps the fast path of refine takes before handing over to the safeguarded search.
+constexpr int kFastNewtonSteps = 6;
 
 // z component of (b - a) x (c - b): > 0 for a left (counter-clockwise) turn at b.
 double turn(double ax, double ay, double bx, double by, double cx, double cy) {
   return (bx - ax) * (cy - by) - (by - ay) * (cx - bx);
+}
+
+// An angle in degrees wrapped into [0, 360).
+double wrap_turn(double deg) {
+  double w = std::fmod(deg, PeriodicSpline::kPeriodDeg);
+  if (w < 0.0) w += PeriodicSpline::kPeriodDeg;
+  if (w >= PeriodicSpline::kPeriodDeg) w -= PeriodicSpline::kPeriodDeg;  // -1e-17 + 360 rounds to 360
+  return w;
 }
 
 }  // namespace
@@ -66,9 +76,41 @@ PolarSupport::PolarSupport(PeriodicSpline radius_mm, double radius_offset_mm, do
   }
 }
 
-PolarSupport::Point PolarSupport::refine(double theta_deg, double lo_deg, double hi_deg) const {
+PolarSupport::Point PolarSupport::refine(double theta_deg, double lo_deg, double hi_deg, double start_deg) const {
   // f(phi) = r cos(d), d = phi - theta; per radian: f' = r' cos d - r sin d,
   // f'' = r'' cos d - 2 r' sin d - r cos d. Maximum where f' falls through 0.
+  // Fast path: plain Newton from `start_deg`, which the caller puts within ~1e-3 deg of the
+  // contact, so two or three steps converge. A maximum it converges to strictly inside the
+  // bracket is the one maximum the bracket holds (see the class comment), the same point the
+  // safeguarded search below finds, without its two evaluations at the bracket's ends. If it
+  // leaves the bracket, meets f'' >= 0 or has not converged in a few steps, the safeguarded
+  // search decides.
+  {
+    double phi = start_deg;
+    for (int iter = 0; iter < kFastNewtonSteps && phi > lo_deg && phi < hi_deg; ++iter) {
+      const double d = (phi - theta_deg) * kRadPerDeg;
+      const PeriodicSpline::Point rp = radius_mm_.evaluate(phi);
+      const double r = offset_mm_ + rp.value;
+      const double cd = std::cos(d);
+      const double sd = std::sin(d);
+      const double f1 = rp.d1 * cd - r * sd;
+      const double f2 = rp.d2 * cd - 2.0 * rp.d1 * sd - r * cd;
+      if (!(f2 < 0.0)) break;
+      const double newton = phi - f1 / f2 * kDegPerRad;
+      if (std::abs(newton - phi) < kContactToleranceDeg) {
+        if (!(newton > lo_deg && newton < hi_deg)) break;
+        // The point at phi carried to the root: f'(phi) ~ 0 there, so the support moves by
+        // O(f'' step^2), below 1e-20 mm; the tangential part to first order.
+        const double step = (newton - phi) * kRadPerDeg;
+        Point p;
+        p.support_mm = r * cd + f1 * step;
+        p.tangential_mm = r * sd + (rp.d1 * sd + r * cd) * step;
+        p.phi_deg = wrap_turn(newton);
+        return p;
+      }
+      phi = newton;
+    }
+  }
   auto value = [&](double phi) { return radius(phi) * std::cos((phi - theta_deg) * kRadPerDeg); };
   auto slope = [&](double phi) {
     const double d = (phi - theta_deg) * kRadPerDeg;
@@ -112,15 +154,16 @@ PolarSupport::Point PolarSupport::refine(double theta_deg, double lo_deg, double
   } else {
     best_phi = (f_lo > 0.0) ? hi_deg : lo_deg;  // monotone: the end it rises to
   }
+  return contact_point(theta_deg, best_phi);
+}
+
+PolarSupport::Point PolarSupport::contact_point(double theta_deg, double phi_deg) const {
   Point p;
-  const double r = radius(best_phi);
-  const double d = (best_phi - theta_deg) * kRadPerDeg;
+  const double r = radius(phi_deg);
+  const double d = (phi_deg - theta_deg) * kRadPerDeg;
   p.support_mm = r * std::cos(d);
   p.tangential_mm = r * std::sin(d);
-  double w = std::fmod(best_phi, PeriodicSpline::kPeriodDeg);
-  if (w < 0.0) w += PeriodicSpline::kPeriodDeg;
-  if (w >= PeriodicSpline::kPeriodDeg) w -= PeriodicSpline::kPeriodDeg;  // -1e-17 + 360 rounds to 360
-  p.phi_deg = w;
+  p.phi_deg = wrap_turn(phi_deg);
   return p;
 }
 
@@ -146,7 +189,23 @@ PolarSupport::Point PolarSupport::at(double theta_deg) const {
     // Bracket [phi(g - 1), phi(g + 1)], unwrapped around phi(g).
     const double lo = (g == 0) ? phi_deg_[n - 1] - PeriodicSpline::kPeriodDeg : phi_deg_[g - 1];
     const double hi = (g + 1 == n) ? phi_deg_[0] + PeriodicSpline::kPeriodDeg : phi_deg_[g + 1];
-    const Point p = refine(theta_deg, lo, hi);
+    double start = phi_deg_[g];
+    if (k == vertex) {
+      // The vertex carries the normals from edge j - 1's to edge j's. An edge between
+      // neighbouring samples has, to second order, the normal of the curve at its middle, so
+      // the contact runs from the middle of one edge to the middle of the other as theta
+      // crosses the vertex's normals; across a bridge it stays at the vertex.
+      const double normal_before = (j == 0) ? normal_deg_[m - 1] - 360.0 : normal_deg_[j - 1];
+      const double normal_after = (j == m) ? normal_deg_[0] + 360.0 : normal_deg_[j];
+      const size_t before = hull_[(vertex + m - 1) % m];
+      const size_t after = hull_[(vertex + 1) % m];
+      const double from = (g == (before + 1) % n) ? 0.5 * (lo + phi_deg_[g]) : phi_deg_[g];
+      const double to = (after == (g + 1) % n) ? 0.5 * (phi_deg_[g] + hi) : phi_deg_[g];
+      const double span = normal_after - normal_before;
+      const double u = span > 0.0 ? std::clamp((t - normal_before) / span, 0.0, 1.0) : 0.5;
+      start = from + u * (to - from);
+    }
+    const Point p = refine(theta_deg, lo, hi, start);
     if (!have || p.support_mm > best.support_mm) {
       best = p;
       have = true;

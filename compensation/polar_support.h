@@ -17,14 +17,14 @@ namespace gaugeloop {
 // Method: the curve is sampled (spacing `max_spacing_deg`, at least 2 samples per knot
 // interval) and the convex hull of the samples is kept, with the outward normal angle of each
 // hull edge. A query finds, by binary search on those angles, the hull vertex the probe rests
-// on, then refines the contact on the curve itself by safeguarded Newton within one sample
-// either side of it, and likewise for a hull neighbour that is not the next sample (the other
-// end of a bridge, a near-tie). The samples only bracket: the accuracy comes from the Newton
-// refinement on the curve, h to below 1e-9 mm and the contact angle to 1e-10 deg, provided
-// r(phi) cos(phi - theta) has one maximum within a sample either side of the best sample
-// (true of a cam curve at 0.25 deg; tests/compensation/polar_support_test.cc checks it
-// against a brute-force maximum). A query costs O(log n); construction O(n). Immutable;
-// safe to share between threads.
+// on, then refines the contact on the curve itself by Newton within one sample either side
+// of it, started where the hull's edge normals place the contact (safeguarded by bisection
+// when plain Newton does not settle inside that bracket), and likewise for a hull neighbour that is not the next sample
+// (the other end of a bridge, a near-tie). The samples only bracket: the accuracy comes from the Newton refinement on
+// the curve, h to below 1e-9 mm and the contact angle to 1e-10 deg, provided r(phi) cos(phi - theta) has one maximum
+// within a sample either side of the best sample (true of a cam curve at 0.25 deg;
+// tests/compensation/polar_support_test.cc checks it against a brute-force maximum). A query costs O(log n);
+// construction O(n). Immutable; safe to share between threads.
 class PolarSupport {
  public:
   PolarSupport(PeriodicSpline radius_mm, double radius_offset_mm, double max_spacing_deg = 0.25);
@@ -42,8 +42,11 @@ class PolarSupport {
  private:
   double radius(double phi_deg) const { return offset_mm_ + radius_mm_.value(phi_deg); }
 
-  // The maximum of r(phi) cos(phi - theta) for phi in [lo, hi] (degrees, unwrapped).
-  Point refine(double theta_deg, double lo_deg, double hi_deg) const;
+  // The maximum of r(phi) cos(phi - theta) for phi in [lo, hi] (degrees, unwrapped), Newton
+  // starting from start_deg in (lo, hi).
+  Point refine(double theta_deg, double lo_deg, double hi_deg, double start_deg) const;
+  // The Point for a contact at phi_deg (unwrapped).
+  Point contact_point(double theta_deg, double phi_deg) const;
 
   PeriodicSpline radius_mm_;
   double offset_mm_;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -114,6 +115,37 @@ class Kinematics {
     c.undercut = num > 0.0 && (rr * num) * (rr * num) >= q3;
     c.moves = dn >= 0.0 || dn * dn < q3;
     return c;
+  }
+
+  // Whether roller_check passes, and rb + H > 0, everywhere on a spline piece, from bounds of
+  // H, H' and H'' over it (false: it may not; sample it). With rho >= rho_lo > 0,
+  // q^(3/2) >= rho_lo^3, so no undercut if rr num < rho_lo^3 throughout, and the wheel moves on
+  // if |d| num < rho_lo^3 where d num < 0; num = rho^2 + 2 H'^2 - rho H'' is bounded from the
+  // ranges of rho and H'' (bilinear: at their corners). A margin of 1e-9 keeps rounding on
+  // the safe side.
+  bool roller_piece_is_clear(const PeriodicSpline::Piece& p) const {
+    constexpr double k1 = kDegPerRad;
+    constexpr double k2 = kDegPerRad * kDegPerRad;
+    const double w = p.width_deg;
+    const double rr = g_.roller_radius_mm;
+    const double rb = g_.base_circle_radius_mm;
+    const double spread_h = (std::abs(p.b) + (std::abs(p.c) + std::abs(p.d) * w) * w) * w;
+    if (!(rb + p.a - spread_h > 0.0)) return false;
+    const double rho_lo = rb + rr + p.a - spread_h;
+    const double rho_hi = rb + rr + p.a + spread_h;
+    const double h1_max = (std::abs(p.b) + (2.0 * std::abs(p.c) + 3.0 * std::abs(p.d) * w) * w) * k1;
+    const double h2_a = 2.0 * p.c * k2;
+    const double h2_b = (2.0 * p.c + 6.0 * p.d * w) * k2;
+    const double corners[] = {-rho_lo * h2_a, -rho_lo * h2_b, -rho_hi * h2_a, -rho_hi * h2_b};
+    const double cross_lo = *std::min_element(std::begin(corners), std::end(corners));
+    const double cross_hi = *std::max_element(std::begin(corners), std::end(corners));
+    const double num_lo = rho_lo * rho_lo + cross_lo;
+    const double num_hi = rho_hi * rho_hi + 2.0 * h1_max * h1_max + cross_hi;
+    const double limit = rho_lo * rho_lo * rho_lo * (1.0 - 1e-9);
+    if (!(rr * num_hi < limit)) return false;
+    const double d = rw_ - rr;
+    const double against = d >= 0.0 ? -num_lo : num_hi;  // num of the sign that stalls
+    return std::abs(d) * against < limit;
   }
 
  private:
@@ -303,18 +335,33 @@ Result<PathSampler> PathSampler::make(const PeriodicSpline& lift_mm, const Part&
     // Sampled, in one pass: the roller's conditions involve the pitch curve's curvature, not a
     // polynomial. The lobe shape first (check_lobe_shape's conditions, which it words), then
     // the wheel.
-    const std::vector<double> grid = dense_angle_grid_deg(lift_mm, kShapeCheckSpacingDeg);
-    std::vector<PeriodicSpline::Point> lift;
-    lift.reserve(grid.size());
+    // The pass runs piece by piece over the points of dense_angle_grid_deg(lift_mm,
+    // kShapeCheckSpacingDeg), evaluating each piece's cubic as PeriodicSpline::evaluate does
+    // but without locating the piece 7200 times, and skips a piece whose bounds
+    // (roller_piece_is_clear) show no sample of it can fault; only a lobe it faults is
+    // sampled again through the grid, for the messages.
     const double rb = g.base_circle_radius_mm;
     bool bad_shape = false;
     bool any_stall = false;
-    for (double beta : grid) {
-      lift.push_back(lift_mm.evaluate(beta));
-      const Kinematics::RollerCheck c = kin.roller_check(lift.back());
-      if (!(rb + lift.back().value > 0.0) || c.undercut) bad_shape = true;
-      if (!c.moves) any_stall = true;
+    for (Eigen::Index i = 0; i < lift_mm.size(); ++i) {
+      const PeriodicSpline::Piece piece = lift_mm.piece(i);
+      if (kin.roller_piece_is_clear(piece)) continue;
+      const int pieces = std::max(2, static_cast<int>(std::ceil(piece.width_deg / kShapeCheckSpacingDeg)));
+      for (int k = 0; k < pieces; ++k) {
+        const double t = (piece.knot_deg + piece.width_deg * k / pieces) - piece.knot_deg;
+        PeriodicSpline::Point lift;
+        lift.value = piece.a + t * (piece.b + t * (piece.c + t * piece.d));
+        lift.d1 = (piece.b + t * (2.0 * piece.c + 3.0 * t * piece.d)) * kDegPerRad;
+        lift.d2 = (2.0 * piece.c + 6.0 * t * piece.d) * kDegPerRad * kDegPerRad;
+        const Kinematics::RollerCheck c = kin.roller_check(lift);
+        if (!(rb + lift.value > 0.0) || c.undercut) bad_shape = true;
+        if (!c.moves) any_stall = true;
+      }
     }
+    const std::vector<double> grid =
+        (bad_shape || any_stall) ? dense_angle_grid_deg(lift_mm, kShapeCheckSpacingDeg) : std::vector<double>{};
+    std::vector<PeriodicSpline::Point> lift(grid.size());
+    for (size_t i = 0; i < grid.size(); ++i) lift[i] = lift_mm.evaluate(grid[i]);
     if (bad_shape) {
       if (Status shape = check_lobe_shape(grid, lift, g); !shape.ok()) return shape.error();
     }

@@ -424,6 +424,51 @@ TEST(CorrectedWheelPath, LowersTheGroundRollerLobeReadingByTheCorrection) {
   expect_ground_reading_lowered_by_correction("exhaust_roller.csv", testing::exhaust_roller_part(45.0), 1e-4);
 }
 
+TEST(CorrectedLift, WithTheDesignModelIsBitForBitTheLiftWithout) {
+  // The model keeps the contacts corrected_lift would otherwise find again: same spline.
+  struct Case {
+    const char* file;
+    Part part;
+  };
+  for (const Case& c : {Case{"intake_flat.csv", testing::intake_flat_part()},
+                        Case{"exhaust_roller.csv", testing::exhaust_roller_part(45.0)}}) {
+    const LiftTable design = testing::example_table(c.file);
+    Result<DesignReading> reading = DesignReading::of_lobe(testing::spline_of(design), c.part);
+    ASSERT_TRUE(reading.ok()) << reading.error().message;
+    const DegreeTable correction_um = testing::harmonic_error_um(10.0);
+    Result<PeriodicSpline> with_model = corrected_lift(design, *reading, correction_um, c.part);
+    Result<PeriodicSpline> without = corrected_lift(design, correction_um, c.part);
+    ASSERT_TRUE(with_model.ok()) << with_model.error().message;
+    ASSERT_TRUE(without.ok());
+    EXPECT_EQ(with_model->knots_deg(), without->knots_deg()) << c.file;
+    EXPECT_EQ(with_model->knot_values(), without->knot_values()) << c.file;
+    for (double deg = 0.0; deg < 360.0; deg += 0.37) {
+      EXPECT_EQ(with_model->d2(deg), without->d2(deg)) << c.file << " " << deg;
+    }
+  }
+}
+
+TEST(CorrectedLift, RefusesADesignModelOfAnotherLobeOrFollower) {
+  const LiftTable design = testing::example_table("exhaust_roller.csv");
+  const Part part = testing::exhaust_roller_part(45.0);
+  LiftTable other = design;
+  other.lift_mm[100] += 1e-6;
+  Result<DesignReading> other_reading = DesignReading::of_lobe(testing::spline_of(other), part);
+  ASSERT_TRUE(other_reading.ok());
+  Result<PeriodicSpline> lift = corrected_lift(design, *other_reading, DegreeTable{}, part);
+  ASSERT_FALSE(lift.ok());
+  EXPECT_EQ(lift.error().code, ErrorCode::kInvalidInput);
+  EXPECT_THAT(lift.error().message, HasSubstr("was not made from"));
+
+  Part bigger_roller = part;
+  bigger_roller.follower_radius_mm = 12.0;
+  Result<DesignReading> reading = DesignReading::of_lobe(testing::spline_of(design), part);
+  ASSERT_TRUE(reading.ok());
+  lift = corrected_lift(design, *reading, DegreeTable{}, bigger_roller);
+  ASSERT_FALSE(lift.ok());
+  EXPECT_EQ(lift.error().code, ErrorCode::kInvalidInput);
+}
+
 TEST(CorrectedWheelPath, RejectsANonFiniteCorrection) {
   DegreeTable correction{};
   correction[12] = std::nan("");
