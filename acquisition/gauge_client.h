@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,13 +42,21 @@ struct LatchState {
   std::uint32_t write_count = 0;
   int ring_size = 0;
   int entries_per_read = 31;  // most entries one request can carry (125 registers)
+  // Compact entries (register_map.h, LatchSpec): latch number n is machine degree n mod 360,
+  // counted from the encoder's index pulse; entries carry no degree.
+  bool degree_implied = false;
+  // The amplifier's fault mark counter, when it has one: marks latched since start with a
+  // status that was not ready or had a fault bit, wrapping at 2^32; and the status
+  // (GaugeStatusBit flags) of the latest such mark, when it reports that.
+  std::optional<std::uint32_t> fault_count;
+  std::optional<std::uint16_t> fault_status;
 };
 
 // One latched entry: the reading at a whole machine degree of C.
 struct LatchedSample {
   double reading_mm = 0.0;
-  int degree = 0;            // machine degree 0..359 at which it latched
-  std::uint16_t status = 0;  // GaugeStatusBit flags at that moment
+  int degree = 0;            // machine degree 0..359 at which it latched; -1: implied by the latch number
+  std::uint16_t status = 0;  // GaugeStatusBit flags at that moment (kGaugeReady when the entry has none)
 };
 
 // A link to one gauge amplifier. Not thread-safe: one per thread.

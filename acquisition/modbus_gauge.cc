@@ -12,6 +12,8 @@ namespace gaugeloop {
 ModbusGauge::ModbusGauge(ModbusSettings settings)
     : settings_(std::move(settings)), blocks_(snapshot_blocks(settings_.map)) {
   for (const ReadBlock& b : blocks_) words_.emplace_back(static_cast<size_t>(b.count));
+  if (settings_.map.latch.present) latch_blocks_ = latch_state_blocks(settings_.map);
+  for (const ReadBlock& b : latch_blocks_) latch_words_.emplace_back(static_cast<size_t>(b.count));
 }
 
 ModbusGauge::~ModbusGauge() { disconnect(); }
@@ -107,26 +109,11 @@ Result<LatchState> ModbusGauge::read_latch_state() {
     return make_error(ErrorCode::kInvalidInput, "the register map of the gauge at " + address() +
                                                     " has no latch buffer; use live mode (--mode live)");
   }
-  std::uint16_t regs[3];
-  const int words = l.ring_size > 0 ? 2 : l.ring_size_address - l.count_address + 1;
-  if (l.ring_size == 0 && (words < 3 || words > 125)) {
-    // Not adjacent to the count: two requests.
-    if (Status s = read_registers(l.table, l.count_address, 2, regs); !s) return s.error();
-    if (Status s = read_registers(l.table, l.ring_size_address, 1, regs + 2); !s) return s.error();
-  } else if (l.ring_size == 0) {
-    std::vector<std::uint16_t> block(static_cast<size_t>(words));
-    if (Status s = read_registers(l.table, l.count_address, words, block.data()); !s) return s.error();
-    regs[0] = block[0];
-    regs[1] = block[1];
-    regs[2] = block.back();
-  } else {
-    if (Status s = read_registers(l.table, l.count_address, 2, regs); !s) return s.error();
-    regs[2] = static_cast<std::uint16_t>(l.ring_size);
+  for (size_t b = 0; b < latch_blocks_.size(); ++b) {
+    const ReadBlock& blk = latch_blocks_[b];
+    if (Status s = read_registers(blk.table, blk.start, blk.count, latch_words_[b].data()); !s) return s.error();
   }
-  LatchState st;
-  st.write_count = decode_u32(regs[0], regs[1], l.order);
-  st.ring_size = regs[2];
-  st.entries_per_read = latched_entries_per_read(settings_.map);
+  const LatchState st = decode_latch_state(settings_.map, latch_blocks_, latch_words_);
   if (st.ring_size < 2) {
     return make_error(ErrorCode::kGaugeProtocol, "gauge at " + address() + " reports a latch ring of " +
                                                      std::to_string(st.ring_size) +

@@ -60,6 +60,8 @@ class ModbusGauge final : public GaugeClient {
   ModbusSettings settings_;
   std::vector<ReadBlock> blocks_;  // the requests of one snapshot
   std::vector<std::vector<std::uint16_t>> words_;
+  std::vector<ReadBlock> latch_blocks_;  // the requests of one latch state read
+  std::vector<std::vector<std::uint16_t>> latch_words_;
   modbus_t* ctx_ = nullptr;
   std::uint64_t polls_ = 0;
   // Revolution count inferred from the angle wrapping, for maps without a revolution field.

@@ -332,14 +332,29 @@ Result<MeasuredRun> Poller::measure_latched() {
   const auto deadline = Clock::now() + settings_.run_timeout;
 
   bool have_next = false;
-  std::uint32_t next = 0;       // latch index of the next entry to read
-  std::int64_t read_total = 0;  // entries consumed, unwrapped: revolution numbers come from it
+  std::uint32_t next = 0;       // latch number of the next entry to read
+  std::int64_t read_total = 0;  // entries consumed, unwrapped: labelled revolutions are numbered from it
   int expected_degree = -1;     // -1: waiting for degree 0 to start a revolution
   std::int64_t started = 0;     // revolutions begun
   RevolutionInProgress rev;
   std::int64_t rev_number = 0;
   std::string last_discard;
   auto last_progress = Clock::now();
+  // Entries read but not yet taken: the count read after them must show the ring had not
+  // overwritten them while they were read (count at the read <= first + ring size).
+  std::vector<LatchedSample> pending;
+  std::uint32_t pending_first = 0;
+  // Latch numbers [from, to) among which the amplifier's fault mark counter says a mark was
+  // latched with a bad status; every revolution holding one of them is discarded.
+  struct FaultWindow {
+    std::uint32_t from = 0;
+    std::uint32_t to = 0;
+    std::optional<std::uint16_t> status;
+  };
+  std::vector<FaultWindow> fault_windows;
+  std::optional<std::pair<std::uint32_t, std::uint32_t>> last_faults;  // (count, fault count) at the last state read
+  // Compact entries: whether the latch count has been checked against the encoder angle.
+  bool frame_checked = false;
   // Latch rate, from the first state read to the latest: paces the drain.
   std::optional<std::pair<Clock::time_point, std::uint32_t>> rate_origin;
   double entries_per_s = 0.0;
@@ -359,6 +374,100 @@ Result<MeasuredRun> Poller::measure_latched() {
     }
     expected_degree = -1;
   };
+  // After a link fault or an overrun: drop what is in hand and resume from the newest entry.
+  auto restart_drain = [&](const std::string& why) {
+    discard(why);
+    pending.clear();
+    have_next = false;
+  };
+  auto note_faults = [&](const LatchState& st) {
+    if (!st.fault_count) return;
+    if (last_faults && *st.fault_count != last_faults->second) {
+      fault_windows.push_back({last_faults->first, st.write_count, st.fault_status});
+    }
+    last_faults = {st.write_count, *st.fault_count};
+  };
+
+  // Takes one confirmed entry, latch number `index`. Returns true when the run is complete.
+  auto take = [&](const LatchedSample& e, std::uint32_t index, bool implied) {
+    ++read_total;
+    const int degree = implied ? static_cast<int>(index % kDegreesPerRevolution) : e.degree;
+    if (expected_degree >= 0 && degree != expected_degree) {
+      // Labelled entries: also catches an entry overwritten during the read (the ring, not a
+      // multiple of 360 entries, then holds a different degree in that slot). Compact ones:
+      // the count passed 2^32, where n mod 360 restarts at 0 off the index.
+      discard("encoder degree jumped from " + std::to_string((expected_degree + 359) % 360) + " to " +
+              std::to_string(degree));
+      if (implied) frame_checked = false;
+    }
+    if (expected_degree < 0) {
+      if (degree != 0) return false;  // wait for the start of a revolution
+      rev = RevolutionInProgress{};
+      rev_number =
+          implied ? static_cast<std::int64_t>(index / kDegreesPerRevolution) : read_total / kDegreesPerRevolution;
+      ++started;
+    }
+    if (!gauge_status_ok(e.status) && rev.broken.empty()) {
+      rev.broken = "gauge status " + describe_gauge_status(e.status) + " at degree " + std::to_string(degree);
+    }
+    for (const FaultWindow& w : fault_windows) {
+      if (rev.broken.empty() && index - w.from < w.to - w.from) {
+        const std::string what = w.status ? describe_gauge_status(*w.status) : std::string("a fault");
+        rev.broken =
+            "the gauge counted a mark latched with status " + what +
+            (implied ? " between degrees " + std::to_string(w.from % kDegreesPerRevolution) + " and " +
+                           std::to_string((w.to - 1) % kDegreesPerRevolution)
+                     : " between latch numbers " + std::to_string(w.from) + " and " + std::to_string(w.to - 1));
+      }
+    }
+    rev.lift_mm[degree] = e.reading_mm;
+    rev.filled.set(static_cast<size_t>(degree));
+    expected_degree = (degree + 1) % kDegreesPerRevolution;
+    if (degree == kDegreesPerRevolution - 1) {
+      expected_degree = -1;  // next entry (degree 0) starts the next revolution
+      if (rev.broken.empty() && rev.filled.all()) {
+        run.revolutions.push_back(RevolutionSamples{rev_number, rev.lift_mm});
+        if (on_revolution_) on_revolution_(static_cast<int>(run.revolutions.size()));
+        if (static_cast<int>(run.revolutions.size()) == wanted) return true;
+      } else {
+        ++run.discarded_revolutions;
+        last_discard = "revolution " + std::to_string(rev_number) + ": " + rev.broken;
+      }
+    }
+    return false;
+  };
+
+  // Compact entries: the count must be zeroed at the index. Reads count c1, the snapshot
+  // angle a, count c2: the latest mark before the snapshot is one of c1-1 .. c2-1, so a lies
+  // in [(c1-1) mod 360, (c2-1) mod 360 + 1), give or take 1 degree of encoder resolution.
+  // Returns the later state when the frame agrees or cannot be judged yet (frame_checked
+  // tells which), an Error for a link fault (code other than kInvalidInput) or a mismatch.
+  auto check_frame = [&](const LatchState& first) -> Result<LatchState> {
+    Result<GaugeSnapshot> snap = gauge_.read_snapshot();
+    ++run.polls;
+    if (!snap) return snap.error();
+    Result<LatchState> second = gauge_.read_latch_state();
+    ++run.polls;
+    if (!second) return second.error();
+    const std::uint32_t c1 = first.write_count;
+    const std::uint32_t c2 = second->write_count;
+    const std::uint32_t span = c2 - c1 + 1;
+    if (c2 == 0 || span >= 300) return second;  // nothing latched yet, or the spindle outran the reads
+    const double lo = static_cast<double>((static_cast<std::uint64_t>(c1) + 359) % 360);
+    const double off = std::fmod(snap->angle_deg - lo + 720.0, 360.0);
+    constexpr double kToleranceDeg = 1.0;
+    if (off < span + kToleranceDeg || off > 360.0 - kToleranceDeg) {
+      frame_checked = true;
+      return second;
+    }
+    return make_error(ErrorCode::kInvalidInput,
+                      "compact latch entries: the latch count " + std::to_string(c1) + " says machine degree " +
+                          std::to_string((c1 + 359ULL) % 360) + " but the encoder angle reads " +
+                          fmt1(snap->angle_deg) +
+                          " deg. The count must be zeroed at the encoder's index pulse (mark 0 = degree 0) and "
+                          "must not have passed 2^32; reset the amplifier's latch count, or use an entry layout "
+                          "with a degree word (docs/gauge.md)");
+  };
 
   while (static_cast<int>(run.revolutions.size()) < wanted) {
     if (Clock::now() > deadline) {
@@ -377,10 +486,38 @@ Result<MeasuredRun> Poller::measure_latched() {
     Result<LatchState> state = gauge_.read_latch_state();
     ++run.polls;
     if (!state) {
-      discard("link fault: " + state.error().message);
-      have_next = false;  // after a fault, resume from the newest entry
+      restart_drain("link fault: " + state.error().message);
       if (Status s = link.failed(state.error(), where_now()); !s) return s.error();
       continue;
+    }
+    note_faults(*state);
+    if (state->degree_implied && !frame_checked) {
+      Result<LatchState> later = check_frame(*state);
+      if (!later) {
+        if (later.error().code == ErrorCode::kInvalidInput) return later.error();
+        restart_drain("link fault: " + later.error().message);
+        if (Status s = link.failed(later.error(), where_now()); !s) return s.error();
+        continue;
+      }
+      note_faults(*later);
+      state = std::move(later);
+      if (!frame_checked) restart_drain("the latch count moved too far to be checked against the angle");
+    }
+    if (!pending.empty()) {
+      const std::uint32_t behind = state->write_count - pending_first;  // modulo 2^32
+      if (behind > static_cast<std::uint32_t>(state->ring_size)) {
+        restart_drain("latch buffer overrun: the ring may have overwritten entries while they were read");
+      } else {
+        bool done = false;
+        // A compact entry past the count's 2^32 wrap clears frame_checked: take no more.
+        for (size_t i = 0; i < pending.size() && !done && (frame_checked || !state->degree_implied); ++i) {
+          done = take(pending[i], pending_first + static_cast<std::uint32_t>(i), state->degree_implied);
+        }
+        pending.clear();
+        // Windows wholly behind the entries taken can no longer matter.
+        std::erase_if(fault_windows, [&](const FaultWindow& w) { return static_cast<std::int32_t>(next - w.to) >= 0; });
+        if (done) break;
+      }
     }
     const auto now = Clock::now();
     if (!rate_origin) {
@@ -399,6 +536,7 @@ Result<MeasuredRun> Poller::measure_latched() {
               std::to_string(available - static_cast<std::uint32_t>(state->ring_size)) +
               " entries behind the ring; missing degrees follow");
       next = state->write_count;
+      if (state->degree_implied) frame_checked = false;  // or the count restarted
       continue;
     }
     if (available == 0) {
@@ -406,7 +544,7 @@ Result<MeasuredRun> Poller::measure_latched() {
         const Error frozen = make_error(ErrorCode::kGaugeTimeout, "the latch buffer did not advance for " +
                                                                       std::to_string(settings_.stale_after.count()) +
                                                                       " ms (frozen amplifier or stopped spindle)");
-        discard(frozen.message);
+        restart_drain(frozen.message);
         last_progress = Clock::now();
         if (Status s = link.failed(frozen, where_now()); !s) return s.error();
         continue;
@@ -416,51 +554,21 @@ Result<MeasuredRun> Poller::measure_latched() {
     }
     link.succeeded();
     last_progress = Clock::now();
+    if (state->degree_implied && !frame_checked) continue;  // judge the frame before reading entries
     const int slot = static_cast<int>(next % static_cast<std::uint32_t>(state->ring_size));
     const int count = std::min({static_cast<int>(available), state->entries_per_read, state->ring_size - slot});
     Result<std::vector<LatchedSample>> entries = gauge_.read_latched(slot, count);
     ++run.polls;
     if (!entries) {
-      discard("link fault: " + entries.error().message);
-      have_next = false;
+      restart_drain("link fault: " + entries.error().message);
       if (Status s = link.failed(entries.error(), where_now()); !s) return s.error();
       continue;
     }
-    next += static_cast<std::uint32_t>(entries->size());
+    pending = std::move(*entries);
+    pending_first = next;
+    next += static_cast<std::uint32_t>(pending.size());
     if (static_cast<std::uint32_t>(count) == available) {
       std::this_thread::sleep_for(drain_pause(*state));  // pacing: drained, let a block gather
-    }
-    for (const LatchedSample& e : *entries) {
-      ++read_total;
-      if (expected_degree >= 0 && e.degree != expected_degree) {
-        // Also catches an entry overwritten during the read: the ring (not a multiple of
-        // 360 entries) then holds a different degree in that slot.
-        discard("encoder degree jumped from " + std::to_string((expected_degree + 359) % 360) + " to " +
-                std::to_string(e.degree));
-      }
-      if (expected_degree < 0) {
-        if (e.degree != 0) continue;  // wait for the start of a revolution
-        rev = RevolutionInProgress{};
-        rev_number = read_total / kDegreesPerRevolution;
-        ++started;
-      }
-      if (!gauge_status_ok(e.status) && rev.broken.empty()) {
-        rev.broken = "gauge status " + describe_gauge_status(e.status) + " at degree " + std::to_string(e.degree);
-      }
-      rev.lift_mm[e.degree] = e.reading_mm;
-      rev.filled.set(static_cast<size_t>(e.degree));
-      expected_degree = (e.degree + 1) % kDegreesPerRevolution;
-      if (e.degree == kDegreesPerRevolution - 1) {
-        if (rev.broken.empty() && rev.filled.all()) {
-          run.revolutions.push_back(RevolutionSamples{rev_number, rev.lift_mm});
-          if (on_revolution_) on_revolution_(static_cast<int>(run.revolutions.size()));
-          if (static_cast<int>(run.revolutions.size()) == wanted) break;
-        } else {
-          ++run.discarded_revolutions;
-          last_discard = "revolution " + std::to_string(rev_number) + ": " + rev.broken;
-        }
-        expected_degree = -1;  // next entry (degree 0) starts the next revolution
-      }
     }
   }
   run.reconnects = link.reconnects();

@@ -59,7 +59,12 @@ Status validate(const PollerSettings& settings);
 //   but needs the link to keep up with the spindle (docs/acquisition.md).
 // - Latched mode reads the amplifier's latch buffer: the reading taken at each encoder
 //   degree. Entries must arrive in unbroken degree order; a buffer overrun (the poller fell
-//   more than a ring behind) or a jump in degree discards the revolution in progress.
+//   more than a ring behind) or a jump in degree discards the revolution in progress. A
+//   block of entries is taken only once the count read after it shows the ring had not
+//   overwritten it. Compact entries (register_map.h, LatchSpec) get their degree from the
+//   latch number; before taking any, the count is checked against the encoder angle
+//   (kInvalidInput when they disagree), and the amplifier's fault mark counter, when
+//   present, discards every revolution holding a mark latched while it rose.
 //
 // Guarantees, both modes:
 // - Only complete revolutions are returned: all 360 degrees sampled, every poll involved

@@ -24,17 +24,49 @@ std::vector<NamedField> live_fields(const RegisterMap& map) {
           {"sequence", &map.sequence}};
 }
 
-// The block and offset holding a field, found by address.
-std::span<const std::uint16_t> field_words(const FieldSpec& f, const std::vector<ReadBlock>& blocks,
-                                           const std::vector<std::vector<std::uint16_t>>& words) {
+// The registers from `address` on, in the block that holds all `count` of them.
+std::span<const std::uint16_t> words_at(RegisterTable table, int address, int count,
+                                        const std::vector<ReadBlock>& blocks,
+                                        const std::vector<std::vector<std::uint16_t>>& words) {
   for (size_t b = 0; b < blocks.size(); ++b) {
     const ReadBlock& blk = blocks[b];
-    if (blk.table == f.table && f.address >= blk.start && f.address + register_count(f.type) <= blk.start + blk.count) {
-      return std::span<const std::uint16_t>(words[b]).subspan(static_cast<size_t>(f.address - blk.start));
+    if (blk.table == table && address >= blk.start && address + count <= blk.start + blk.count) {
+      return std::span<const std::uint16_t>(words[b]).subspan(static_cast<size_t>(address - blk.start));
     }
   }
-  assert(false && "field outside every block: snapshot_blocks and decode_snapshot disagree");
+  assert(false && "registers outside every block: the block plan and the decoder disagree");
   return {};
+}
+
+std::span<const std::uint16_t> field_words(const FieldSpec& f, const std::vector<ReadBlock>& blocks,
+                                           const std::vector<std::vector<std::uint16_t>>& words) {
+  return words_at(f.table, f.address, register_count(f.type), blocks, words);
+}
+
+// A run of registers to read, before grouping into requests.
+struct Span {
+  RegisterTable table;
+  int address;
+  int count;
+};
+
+// Groups spans of one table lying within kMaxBlockGap of each other into requests of at
+// most 125 registers.
+std::vector<ReadBlock> group_blocks(std::vector<Span> spans) {
+  std::sort(spans.begin(), spans.end(), [](const Span& a, const Span& b) {
+    return a.table != b.table ? a.table < b.table : a.address < b.address;
+  });
+  std::vector<ReadBlock> blocks;
+  for (const Span& f : spans) {
+    const int end = f.address + f.count;
+    if (!blocks.empty() && blocks.back().table == f.table &&
+        f.address <= blocks.back().start + blocks.back().count + kMaxBlockGap && end - blocks.back().start <= 125) {
+      blocks.back().count = std::max(blocks.back().count, end - blocks.back().start);
+    } else {
+      blocks.push_back({f.table, f.address, end - f.address});
+    }
+  }
+  return blocks;
 }
 
 }  // namespace
@@ -167,35 +199,59 @@ Status validate(const RegisterMap& map) {
     const LatchSpec& l = map.latch;
     const int reading_words = register_count(map.reading.type);
     if (l.entry_words < 1 || l.entry_words > 125) return bad("latch `entry_words` must be 1..125");
-    if (l.reading_offset < 0 || l.reading_offset + reading_words > l.entry_words || l.degree_offset < 0 ||
-        l.degree_offset >= l.entry_words || l.status_offset >= l.entry_words) {
+    auto inside = [&l](int offset, int words) { return offset >= 0 && offset + words <= l.entry_words; };
+    if (!inside(l.reading_offset, reading_words) || (!l.degree_implied() && !inside(l.degree_offset, 1)) ||
+        (l.status_offset != -1 && !inside(l.status_offset, 1))) {
       return bad("latch entry layout: reading, degree and status offsets must lie inside the " +
-                 std::to_string(l.entry_words) + "-register entry");
+                 std::to_string(l.entry_words) +
+                 "-register entry (degree_offset -1: implied by the latch count; status_offset -1: none)");
+    }
+    struct Part {
+      const char* name;
+      int offset;
+      int words;
+    };
+    std::vector<Part> parts = {{"reading", l.reading_offset, reading_words}};
+    if (!l.degree_implied()) parts.push_back({"degree", l.degree_offset, 1});
+    if (l.status_offset >= 0) parts.push_back({"status", l.status_offset, 1});
+    for (size_t i = 0; i < parts.size(); ++i) {
+      for (size_t j = i + 1; j < parts.size(); ++j) {
+        if (parts[i].offset < parts[j].offset + parts[j].words && parts[j].offset < parts[i].offset + parts[i].words) {
+          return bad(std::string("latch entry layout: the ") + parts[i].name + " and the " + parts[j].name +
+                     " overlap at offset " + std::to_string(std::max(parts[i].offset, parts[j].offset)));
+        }
+      }
     }
     if (l.ring_size < 0 || l.ring_size > 65535) return bad("latch `ring_size` must be 0 (read it) to 65535");
+    if (l.fault_count_address < -1 || l.fault_count_address > 65534 || l.fault_status_address < -1 ||
+        l.fault_status_address > 65535) {
+      return bad("latch `fault_count_address` and `fault_status_address` must be -1 (none) or a register address");
+    }
+    if (l.fault_status_address >= 0 && l.fault_count_address < 0) {
+      return bad("latch `fault_status_address` needs `fault_count_address`: the status is read when the count rises");
+    }
+    if (l.fault_count_address >= 0 && l.fault_count_address < l.count_address + 2 &&
+        l.count_address < l.fault_count_address + 2) {
+      return bad("latch `fault_count_address` overlaps the latch count at register " +
+                 std::to_string(std::max(l.count_address, l.fault_count_address)));
+    }
+    if (l.degree_implied() && l.status_offset < 0 && l.fault_count_address < 0 && map.status.present) {
+      return bad(
+          "latch: compact entries (degree_offset = -1) without a status word would let an over-range or a "
+          "missing probe become a run; give `status_offset` (a status word in each entry) or "
+          "`fault_count_address` (the amplifier's count of marks latched with a bad status)");
+    }
   }
   return {};
 }
 
 std::vector<ReadBlock> snapshot_blocks(const RegisterMap& map) {
-  std::vector<const FieldSpec*> present;
+  std::vector<Span> spans;
   for (const NamedField& nf : live_fields(map)) {
-    if (nf.field->present) present.push_back(nf.field);
+    const FieldSpec& f = *nf.field;
+    if (f.present) spans.push_back({f.table, f.address, register_count(f.type)});
   }
-  std::sort(present.begin(), present.end(), [](const FieldSpec* a, const FieldSpec* b) {
-    return a->table != b->table ? a->table < b->table : a->address < b->address;
-  });
-  std::vector<ReadBlock> blocks;
-  for (const FieldSpec* f : present) {
-    const int end = f->address + register_count(f->type);
-    if (!blocks.empty() && blocks.back().table == f->table &&
-        f->address <= blocks.back().start + blocks.back().count + kMaxBlockGap && end - blocks.back().start <= 125) {
-      blocks.back().count = std::max(blocks.back().count, end - blocks.back().start);
-    } else {
-      blocks.push_back({f->table, f->address, end - f->address});
-    }
-  }
-  return blocks;
+  return group_blocks(std::move(spans));
 }
 
 GaugeSnapshot decode_snapshot(const RegisterMap& map, const std::vector<ReadBlock>& blocks,
@@ -220,6 +276,34 @@ GaugeSnapshot decode_snapshot(const RegisterMap& map, const std::vector<ReadBloc
 
 int latched_entries_per_read(const RegisterMap& map) { return 125 / map.latch.entry_words; }
 
+std::vector<ReadBlock> latch_state_blocks(const RegisterMap& map) {
+  const LatchSpec& l = map.latch;
+  std::vector<Span> spans = {{l.table, l.count_address, 2}};
+  if (l.ring_size == 0) spans.push_back({l.table, l.ring_size_address, 1});
+  if (l.fault_count_address >= 0) spans.push_back({l.table, l.fault_count_address, 2});
+  if (l.fault_status_address >= 0) spans.push_back({l.table, l.fault_status_address, 1});
+  return group_blocks(std::move(spans));
+}
+
+LatchState decode_latch_state(const RegisterMap& map, const std::vector<ReadBlock>& blocks,
+                              const std::vector<std::vector<std::uint16_t>>& words) {
+  const LatchSpec& l = map.latch;
+  auto u32_at = [&](int address) {
+    const auto w = words_at(l.table, address, 2, blocks, words);
+    return decode_u32(w[0], w[1], l.order);
+  };
+  LatchState st;
+  st.write_count = u32_at(l.count_address);
+  st.ring_size = l.ring_size > 0 ? l.ring_size : words_at(l.table, l.ring_size_address, 1, blocks, words)[0];
+  st.entries_per_read = latched_entries_per_read(map);
+  st.degree_implied = l.degree_implied();
+  if (l.fault_count_address >= 0) st.fault_count = u32_at(l.fault_count_address);
+  if (l.fault_status_address >= 0) {
+    st.fault_status = translate_status(words_at(l.table, l.fault_status_address, 1, blocks, words)[0], map.masks);
+  }
+  return st;
+}
+
 std::vector<LatchedSample> decode_latched(const RegisterMap& map, std::span<const std::uint16_t> regs) {
   const LatchSpec& l = map.latch;
   std::vector<LatchedSample> out;
@@ -230,7 +314,7 @@ std::vector<LatchedSample> decode_latched(const RegisterMap& map, std::span<cons
     LatchedSample e;
     e.reading_mm = decode_raw(map.reading, entry.subspan(static_cast<size_t>(l.reading_offset))) * map.reading.scale +
                    map.reading.offset;
-    e.degree = entry[static_cast<size_t>(l.degree_offset)];
+    e.degree = l.degree_implied() ? kDegreeImpliedByCount : entry[static_cast<size_t>(l.degree_offset)];
     e.status = l.status_offset >= 0 ? translate_status(entry[static_cast<size_t>(l.status_offset)], map.masks)
                                     : static_cast<std::uint16_t>(kGaugeReady);
     out.push_back(e);

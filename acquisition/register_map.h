@@ -63,7 +63,28 @@ struct StatusMasks {
 std::uint16_t translate_status(std::uint16_t raw, const StatusMasks& masks);
 
 // The latch buffer for latched mode: a count of latched degree marks (uint32, the map's word
-// order), the ring size (fixed, or read from a register), and the ring of entries.
+// order), the ring size (fixed, or read from a register), and the ring of entries. Latch
+// number n (the count's value before it was latched) lives in ring slot n mod ring size.
+//
+// Two entry layouts:
+// - Labelled (degree_offset >= 0): each entry carries the machine degree its amplifier
+//   latched it at. An entry overwritten while it is read shows a different degree.
+// - Compact (degree_offset == kDegreeImpliedByCount): the entry is the reading alone (plus
+//   a status word if status_offset >= 0). Latch number n is machine degree n mod 360 of
+//   revolution n / 360: the amplifier zeroes its count at an encoder index pulse and latches
+//   every degree mark after it, so mark 0 is machine degree 0. The poller checks that
+//   frame against the angle field before it takes any entry (a count not zeroed at the
+//   index, or wrapped past 2^32, which is not a multiple of 360, is refused), and confirms
+//   each block against the count read after it (an overwritten entry cannot show itself).
+//
+// Status of entries without a status word (status_offset == -1): when the amplifier keeps
+// a fault mark counter (fault_count_address >= 0: uint32, the map's word order, marks
+// latched since start whose status was not ready or had a fault bit; optionally at
+// fault_status_address the uint16 status word of the latest such mark), every revolution
+// holding a latch number between two count reads across which the counter rose is
+// discarded. A compact layout on a map with a status field must have one of the two.
+inline constexpr int kDegreeImpliedByCount = -1;
+
 struct LatchSpec {
   bool present = true;
   RegisterTable table = RegisterTable::kInput;
@@ -73,9 +94,13 @@ struct LatchSpec {
   int ring_address = 1000;
   int entry_words = 4;
   int reading_offset = 0;              // within an entry; decoded like the reading field (type, order, scale)
-  int degree_offset = 2;               // uint16 whole machine degree
+  int degree_offset = 2;               // uint16 whole machine degree; kDegreeImpliedByCount: compact
   int status_offset = 3;               // uint16 status word; -1: none
-  WordOrder order = WordOrder::kABCD;  // of the count
+  int fault_count_address = -1;        // uint32 fault mark counter (same table as the count); -1: none
+  int fault_status_address = -1;       // uint16 status of the latest fault mark; -1: none
+  WordOrder order = WordOrder::kABCD;  // of the count and the fault counter
+
+  bool degree_implied() const { return degree_offset == kDegreeImpliedByCount; }
 };
 
 // Where the gauge keeps what the poller needs. Defaults are the simulator's map
@@ -119,7 +144,17 @@ GaugeSnapshot decode_snapshot(const RegisterMap& map, const std::vector<ReadBloc
 // Entries per request: a Modbus read returns at most 125 registers.
 int latched_entries_per_read(const RegisterMap& map);
 
-// Decodes consecutive ring entries.
+// The requests that read the latch state: the count, the ring size register (when the size
+// is not fixed) and the fault registers, grouped like snapshot_blocks.
+std::vector<ReadBlock> latch_state_blocks(const RegisterMap& map);
+
+// Decodes the latch state from the registers of latch_state_blocks (one span per block).
+// ring_size is not checked here.
+LatchState decode_latch_state(const RegisterMap& map, const std::vector<ReadBlock>& blocks,
+                              const std::vector<std::vector<std::uint16_t>>& words);
+
+// Decodes consecutive ring entries. In the compact layout each entry's degree is
+// kDegreeImpliedByCount: the poller knows it from the latch number.
 std::vector<LatchedSample> decode_latched(const RegisterMap& map, std::span<const std::uint16_t> regs);
 
 }  // namespace gaugeloop

@@ -125,7 +125,8 @@ Result<ModbusSettings> parse_gauge_toml(std::string_view text, std::string_view 
     if (const toml::table* latch = subtable(*map, "latch", mr)) {
       TomlReader lr(*latch, source_name, "map.latch.");
       lr.allow_only({"register", "count_address", "ring_size", "ring_size_address", "ring_address", "entry_words",
-                     "reading_offset", "degree_offset", "status_offset"});
+                     "reading_offset", "degree_offset", "status_offset", "fault_count_address",
+                     "fault_status_address"});
       LatchSpec& l = m.latch;
       l.present = true;
       l.table = register_table(lr.choice("register", "input", {"holding", "input"}));
@@ -139,8 +140,11 @@ Result<ModbusSettings> parse_gauge_toml(std::string_view text, std::string_view 
       l.ring_address = static_cast<int>(lr.integer("ring_address", std::nullopt, 0, 65535));
       l.entry_words = static_cast<int>(lr.integer("entry_words", std::nullopt, 1, 125));
       l.reading_offset = static_cast<int>(lr.integer("reading_offset", 0, 0, 124));
-      l.degree_offset = static_cast<int>(lr.integer("degree_offset", std::nullopt, 0, 124));
+      // -1: compact entries, latch number n being machine degree n mod 360 (register_map.h).
+      l.degree_offset = static_cast<int>(lr.integer("degree_offset", std::nullopt, -1, 124));
       l.status_offset = static_cast<int>(lr.integer("status_offset", -1, -1, 124));
+      l.fault_count_address = static_cast<int>(lr.integer("fault_count_address", -1, -1, 65534));
+      l.fault_status_address = static_cast<int>(lr.integer("fault_status_address", -1, -1, 65535));
       l.order = order;
       if (lr.error) mr.fail(lr.error->message);
     }

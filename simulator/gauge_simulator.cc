@@ -299,17 +299,30 @@ void GaugeSimulator::update_registers(std::int64_t now_ns, const FaultState& fau
   const auto jump = static_cast<std::int64_t>(std::lround(faults.angle_offset_deg));
   if (was_frozen_) {
     // Back from a freeze: the marks passed meanwhile were never latched. The count jumps
-    // ahead over ring entries that still hold old readings.
+    // ahead over ring entries that still hold old readings; the fault mark counter counts
+    // them as lost (status 0: not ready), so a compact reader, which cannot tell an old
+    // reading from a new one, knows.
+    if (marks - 1 > latched_marks_) {
+      fault_marks_ += marks - 1 - latched_marks_;
+      fault_mark_status_ = 0;
+    }
     latched_marks_ = std::max(latched_marks_, marks - 1);
     was_frozen_ = false;
   }
-  for (std::int64_t i = std::max(latched_marks_, marks - sim_registers::kLatchRingEntries); i < marks; ++i) {
+  if (faults.status != 0 && marks > latched_marks_) {
+    fault_marks_ += marks - latched_marks_;  // every mark latched now carries the fault bits
+    fault_mark_status_ = status;
+  }
+  for (std::int64_t i = std::max(latched_marks_, marks - sim_registers::kCompactRingEntries); i < marks; ++i) {
     const double mark_beta = cam_angle_at_probe_deg(part_, static_cast<double>(i % 360));
     const double mark_mm =
         true_lift_mm(mark_beta) + settings_.gauge_offset_mm +
         settings_.noise_rms_um * 1e-3 * gaussian(settings_.seed ^ 0x6c61746368ULL, static_cast<std::uint64_t>(i));
+    const auto counts = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(mark_mm * 10000.0)));
+    put_u32(regs, sim_registers::kCompactRing + 2 * static_cast<int>(i % sim_registers::kCompactRingEntries), counts);
+    if (i < marks - sim_registers::kLatchRingEntries) continue;  // overwritten in the 4-register ring anyway
     const int at = sim_registers::kLatchRing + 4 * static_cast<int>(i % sim_registers::kLatchRingEntries);
-    put_u32(regs, at, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(mark_mm * 10000.0))));
+    put_u32(regs, at, counts);
     regs[at + 2] = static_cast<std::uint16_t>(((i + jump) % 360 + 360) % 360);
     regs[at + 3] = status;
   }
@@ -317,6 +330,9 @@ void GaugeSimulator::update_registers(std::int64_t now_ns, const FaultState& fau
   put_u32(regs, sim_registers::kLatchCount, static_cast<std::uint32_t>(latched_marks_ & 0xffffffff));
   regs[sim_registers::kLatchRingSize] = sim_registers::kLatchRingEntries;
   regs[sim_registers::kLatchEntryWords] = 4;
+  regs[sim_registers::kCompactRingSize] = sim_registers::kCompactRingEntries;
+  put_u32(regs, sim_registers::kFaultMarkCount, static_cast<std::uint32_t>(fault_marks_ & 0xffffffff));
+  regs[sim_registers::kFaultMarkStatus] = fault_mark_status_;
 }
 
 void GaugeSimulator::serve_rtu() {

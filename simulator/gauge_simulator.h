@@ -35,7 +35,14 @@ inline constexpr int kLatchRingSize = 102;     // uint16: entries in the ring
 inline constexpr int kLatchEntryWords = 103;   // uint16: registers per entry (4)
 inline constexpr int kLatchRing = 1000;        // entry k at 1000 + 4k: reading int32 ABCD, degree, status
 inline constexpr int kLatchRingEntries = 512;  // 1.4 revolutions: not a multiple of 360 on purpose
-inline constexpr int kCount = kLatchRing + 4 * kLatchRingEntries;
+// Compact latch ring: the same marks (same count), the reading alone; latch number n is
+// machine degree n mod 360, the count having started at degree 0.
+inline constexpr int kCompactRingSize = 104;      // uint16: entries in the compact ring
+inline constexpr int kFaultMarkCount = 105;       // uint32, ABCD: marks latched with a fault bit, or lost
+inline constexpr int kFaultMarkStatus = 107;      // uint16: status of the latest such mark (0: lost, not ready)
+inline constexpr int kCompactRing = 4000;         // entry k at 4000 + 2k: reading int32 ABCD
+inline constexpr int kCompactRingEntries = 1024;  // the 4-register ring's memory, twice the entries: 2.8 revolutions
+inline constexpr int kCount = kCompactRing + 2 * kCompactRingEntries;
 }  // namespace sim_registers
 
 struct SimulatorSettings {
@@ -129,9 +136,11 @@ class GaugeSimulator {
   std::atomic<std::int64_t> requests_{0};
   std::atomic<bool> silent_{false};
   std::int64_t start_ns_ = 0;
-  std::int64_t first_request_ns_ = -1;  // serve thread only: zero of the fault schedule
-  std::int64_t latched_marks_ = 0;      // serve thread only
-  bool was_frozen_ = false;             // serve thread only
+  std::int64_t first_request_ns_ = -1;   // serve thread only: zero of the fault schedule
+  std::int64_t latched_marks_ = 0;       // serve thread only
+  std::int64_t fault_marks_ = 0;         // serve thread only: marks latched with a fault bit, or lost
+  std::uint16_t fault_mark_status_ = 0;  // serve thread only
+  bool was_frozen_ = false;              // serve thread only
 
   std::mutex faults_mutex_;
   std::vector<FaultSpec> faults_;

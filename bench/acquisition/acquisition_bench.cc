@@ -1,4 +1,4 @@
-// Acquisition benchmarks against the in-process simulator over loopback TCP:
+// Acquisition benchmarks against the in-process simulator over loopback TCP (and RTU on a pty):
 //  - request throughput of the gauge client against a bare libmodbus read loop, same run;
 //  - the highest spindle speed at which a 3-revolution run misses no degree, per mode;
 //  - CPU time of the poller's thread during a run.
@@ -79,7 +79,10 @@ BENCHMARK(BM_SnapshotReadsVersusBareLibmodbus)->Unit(benchmark::kMillisecond)->M
 
 // One 3-revolution run with no spare revolution: true if every degree of every revolution
 // was sampled. Also reports the poller thread's CPU time over the run's wall time.
-bool clean_run(SamplingMode mode, double rpm, double* cpu_fraction, int spares = 0, bool rtu = false) {
+// `compact`: read the simulator's compact latch ring (2 registers an entry, the degree implied
+// by the latch count) instead of its 4-register entries.
+bool clean_run(SamplingMode mode, double rpm, double* cpu_fraction, int spares = 0, bool rtu = false,
+               bool compact = false, int revolutions = 3) {
   testing::PtyPair pty;  // only used for RTU
   auto sim = start_sim(rpm, rtu ? pty.simulator_end() : std::string());
   ModbusSettings ms;
@@ -89,10 +92,12 @@ bool clean_run(SamplingMode mode, double rpm, double* cpu_fraction, int spares =
     ms.device = pty.gauge_end();
     ms.baud = 115200;
   }
+  if (compact) ms.map = testing::compact_simulator_map();
   ModbusGauge gauge(ms);
   PollerSettings ps;
   ps.mode = mode;
   ps.spare_revolutions = spares;
+  ps.revolutions = revolutions;
   ps.run_timeout = std::chrono::milliseconds(40000);
   Poller poller(gauge, ps);
   const double cpu0 = thread_cpu_s();
@@ -106,16 +111,23 @@ bool clean_run(SamplingMode mode, double rpm, double* cpu_fraction, int spares =
 
 // The highest speed of the ladder at which two runs in a row complete: with `spares` 0, no
 // revolution may miss a degree; with the product's default 3, up to 3 may be replaced.
-void max_clean_rpm(benchmark::State& state, SamplingMode mode, int spares = 0, bool rtu = false) {
+void max_clean_rpm(benchmark::State& state, SamplingMode mode, int spares = 0, bool rtu = false, bool compact = false,
+                   int revolutions = 3) {
   // Up to the simulator's limit of 10000 rpm; RTU from 20 rpm, as its bus is slow.
   const std::vector<double> tcp_ladder = {30,   60,   120,  240,  480,  600,  900,  1200,
                                           1800, 2400, 3000, 4500, 6000, 9000, 10000};
-  const std::vector<double> rtu_ladder = {20, 30, 45, 60, 90, 120, 150, 180, 210, 240, 300};
+  const std::vector<double> rtu_ladder = {20,  30,  45,  60,  90,  120, 150, 180, 210, 240,
+                                          270, 300, 330, 360, 390, 420, 480, 540, 600};
+  // Long runs: what the bus sustains once the ring can no longer hide a deficit. From 180 rpm.
+  const std::vector<double> long_ladder = {180, 210, 240, 270, 300, 330, 360, 390, 420, 480, 540, 600};
   double best = 0.0;
   for (auto _ : state) {
     best = 0.0;
-    for (double rpm : rtu ? rtu_ladder : tcp_ladder) {
-      if (!clean_run(mode, rpm, nullptr, spares, rtu) || !clean_run(mode, rpm, nullptr, spares, rtu)) break;
+    for (double rpm : !rtu ? tcp_ladder : revolutions > 3 ? long_ladder : rtu_ladder) {
+      if (!clean_run(mode, rpm, nullptr, spares, rtu, compact, revolutions) ||
+          !clean_run(mode, rpm, nullptr, spares, rtu, compact, revolutions)) {
+        break;
+      }
       best = rpm;
     }
   }
@@ -126,9 +138,22 @@ void BM_MaxCleanRpmLatchedTcp(benchmark::State& state) { max_clean_rpm(state, Sa
 void BM_MaxCleanRpmLiveTcp(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLive); }
 void BM_MaxCompleteRpmLiveTcp(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLive, 3); }
 void BM_MaxCleanRpmLatchedRtu(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLatched, 0, true); }
+void BM_MaxCleanRpmLatchedCompactRtu(benchmark::State& state) {
+  max_clean_rpm(state, SamplingMode::kLatched, 0, true, true);
+}
+// 20-revolution runs: a 3-revolution run can outrun the bus while the ring absorbs the lag.
+void BM_MaxCleanRpmLatched20RevRtu(benchmark::State& state) {
+  max_clean_rpm(state, SamplingMode::kLatched, 0, true, false, 20);
+}
+void BM_MaxCleanRpmLatchedCompact20RevRtu(benchmark::State& state) {
+  max_clean_rpm(state, SamplingMode::kLatched, 0, true, true, 20);
+}
 void BM_MaxCleanRpmLiveRtu(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLive, 0, true); }
 BENCHMARK(BM_MaxCleanRpmLatchedTcp)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCleanRpmLatchedRtu)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_MaxCleanRpmLatchedCompactRtu)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_MaxCleanRpmLatched20RevRtu)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_MaxCleanRpmLatchedCompact20RevRtu)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCleanRpmLiveRtu)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCleanRpmLiveTcp)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCompleteRpmLiveTcp)->Iterations(1)->Unit(benchmark::kSecond);

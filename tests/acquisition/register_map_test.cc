@@ -119,6 +119,74 @@ TEST(LatchedDecode, FollowsTheEntryLayoutAndTheReadingField) {
   EXPECT_EQ(e[1].status, kGaugeReady);
 }
 
+// Compact entries: the reading alone; the degree comes from the latch number (poller).
+TEST(LatchedDecode, CompactEntriesCarryNoDegree) {
+  RegisterMap m;
+  m.latch.entry_words = 2;
+  m.latch.degree_offset = kDegreeImpliedByCount;
+  m.latch.status_offset = -1;
+  m.latch.fault_count_address = 105;
+  ASSERT_TRUE(validate(m).ok()) << validate(m).error().message;
+  const std::uint32_t minus = static_cast<std::uint32_t>(-25);  // -2.5 um
+  const std::vector<std::uint16_t> regs = {0x0001, 0x86A0,      // 100000 counts = 10 mm
+                                           static_cast<std::uint16_t>(minus >> 16),
+                                           static_cast<std::uint16_t>(minus & 0xffff)};
+  const auto e = decode_latched(m, regs);
+  ASSERT_EQ(e.size(), 2u);
+  EXPECT_DOUBLE_EQ(e[0].reading_mm, 10.0);
+  EXPECT_DOUBLE_EQ(e[1].reading_mm, -0.0025);
+  EXPECT_EQ(e[0].degree, kDegreeImpliedByCount);
+  EXPECT_EQ(e[1].status, kGaugeReady) << "no status word in the entry: the fault counter speaks for it";
+  EXPECT_EQ(latched_entries_per_read(m), 62);
+}
+
+TEST(LatchedDecode, CompactEntryWithAFloatReadingAndAStatusWord) {
+  RegisterMap m;
+  m.reading = {true, RegisterTable::kHolding, 0, ValueType::kFloat32, WordOrder::kCDAB, 1.0, 0.0};
+  m.latch.entry_words = 3;
+  m.latch.degree_offset = kDegreeImpliedByCount;
+  m.latch.reading_offset = 0;
+  m.latch.status_offset = 2;
+  ASSERT_TRUE(validate(m).ok()) << validate(m).error().message;
+  const std::vector<std::uint16_t> regs = {0x0000, 0x3FC0, 0x0003};
+  const auto e = decode_latched(m, regs);
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_DOUBLE_EQ(e[0].reading_mm, 1.5);
+  EXPECT_EQ(e[0].status, kGaugeReady | kGaugeOverRange);
+}
+
+// The simulator's compact header: count 100-101, ring size 104, fault marks 105-106, the
+// latest fault mark's status 107: one request of 8 registers.
+TEST(LatchState, TheCountRingSizeAndFaultCounterAreOneRequest) {
+  RegisterMap m;
+  m.latch.ring_size_address = 104;
+  m.latch.entry_words = 2;
+  m.latch.degree_offset = kDegreeImpliedByCount;
+  m.latch.status_offset = -1;
+  m.latch.fault_count_address = 105;
+  m.latch.fault_status_address = 107;
+  const auto blocks = latch_state_blocks(m);
+  ASSERT_EQ(blocks.size(), 1u);
+  EXPECT_EQ(blocks[0].start, 100);
+  EXPECT_EQ(blocks[0].count, 8);
+  const std::vector<std::vector<std::uint16_t>> words = {{0x0001, 0x0002, 512, 4, 1024, 0, 7, 0x0009}};
+  const LatchState st = decode_latch_state(m, blocks, words);
+  EXPECT_EQ(st.write_count, 0x00010002u);
+  EXPECT_EQ(st.ring_size, 1024);
+  EXPECT_TRUE(st.degree_implied);
+  ASSERT_TRUE(st.fault_count.has_value());
+  EXPECT_EQ(*st.fault_count, 7u);
+  ASSERT_TRUE(st.fault_status.has_value());
+  EXPECT_EQ(*st.fault_status, kGaugeReady | kGaugeProbeMissing);
+  EXPECT_EQ(st.entries_per_read, 62);
+  // The labelled default: count and ring size, no fault counter.
+  const RegisterMap def;
+  const auto def_blocks = latch_state_blocks(def);
+  ASSERT_EQ(def_blocks.size(), 1u);
+  EXPECT_EQ(def_blocks[0].count, 3);
+  EXPECT_FALSE(decode_latch_state(def, def_blocks, {{0, 5, 512}}).fault_count.has_value());
+}
+
 struct BadMap {
   const char* expected;
   void (*spoil)(RegisterMap&);
@@ -133,6 +201,17 @@ TEST(RegisterMapValidation, RefusesBrokenMapsNamingTheField) {
        [](RegisterMap& m) { m.revolution.type = ValueType::kFloat32; }},
       {"`angle` needs a finite, non-zero scale", [](RegisterMap& m) { m.angle.scale = 0.0; }},
       {"latch entry layout", [](RegisterMap& m) { m.latch.degree_offset = 4; }},
+      {"latch entry layout: the reading and the degree overlap at offset 1",
+       [](RegisterMap& m) { m.latch.degree_offset = 1; }},
+      {"latch: compact entries (degree_offset = -1) without a status word",
+       [](RegisterMap& m) {
+         m.latch.entry_words = 2;
+         m.latch.degree_offset = kDegreeImpliedByCount;
+         m.latch.status_offset = -1;
+       }},
+      {"`fault_status_address` needs `fault_count_address`",
+       [](RegisterMap& m) { m.latch.fault_status_address = 107; }},
+      {"`fault_count_address` overlaps the latch count", [](RegisterMap& m) { m.latch.fault_count_address = 101; }},
   };
   EXPECT_TRUE(validate(RegisterMap{}).ok());
   for (const BadMap& c : cases) {

@@ -60,6 +60,25 @@ TEST(RtuLink, LatchedRunOverAPtyPair) {
   }
 }
 
+// Compact latch entries over the bus: 2 registers a degree instead of 4.
+TEST(RtuLink, CompactLatchedRunOverAPtyPair) {
+  PtyPair pty;
+  ASSERT_TRUE(pty.ok()) << "socat did not make a pty pair (socat: scripts/install-deps.sh)";
+  auto sim = start_rtu_sim(pty.simulator_end(), 60.0);
+  ASSERT_NE(sim, nullptr);
+  ModbusSettings ms = rtu_settings(pty.gauge_end(), 7);
+  ms.map = testing::compact_simulator_map();
+  ModbusGauge gauge(ms);
+  Poller poller(gauge, PollerSettings{});
+  Result<MeasuredRun> run = poller.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  ASSERT_EQ(run->revolutions.size(), 3u);
+  EXPECT_EQ(run->discarded_revolutions, 0);
+  for (const auto& rev : run->revolutions) {
+    for (int d = 0; d < 360; ++d) ASSERT_NEAR(rev.lift_mm[d], sim->true_lift_mm(d) + 0.25, 0.002) << "degree " << d;
+  }
+}
+
 TEST(RtuLink, WrongUnitIdTimesOut) {
   PtyPair pty;
   ASSERT_TRUE(pty.ok()) << "socat did not make a pty pair";

@@ -84,7 +84,10 @@ class ScriptedGauge final : public GaugeClient {
       if (it->second == Fault::kOverRange) status |= kGaugeOverRange;
     }
     latch(n, jump, status);
-    return LatchState{latch_count, ring_size};
+    LatchState st;
+    st.write_count = latch_count;
+    st.ring_size = ring_size;
+    return st;
   }
 
   Result<std::vector<LatchedSample>> read_latched(int first_slot, int count) override {

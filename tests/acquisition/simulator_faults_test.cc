@@ -19,7 +19,8 @@ class SimulatorFaultTest : public ::testing::Test {
  protected:
   // Starts a simulator with `fault` and measures one latched run through it.
   Result<MeasuredRun> measure_with(const char* fault_text,
-                                   std::chrono::milliseconds response_timeout = std::chrono::milliseconds(100)) {
+                                   std::chrono::milliseconds response_timeout = std::chrono::milliseconds(100),
+                                   const RegisterMap& map = RegisterMap{}) {
     SimulatorSettings ss;
     ss.time_scale = 4.0;
     Result<FaultSpec> fault = parse_fault_spec(fault_text);
@@ -31,6 +32,7 @@ class SimulatorFaultTest : public ::testing::Test {
     ModbusSettings ms;
     ms.port = sim_->port();
     ms.response_timeout = response_timeout;
+    ms.map = map;
     ModbusGauge gauge(ms);
     PollerSettings ps;
     ps.backoff_initial = std::chrono::milliseconds(10);
@@ -151,6 +153,77 @@ TEST_F(SimulatorFaultTest, SpeedDriftLeavesLatchedRunsWhole) {
   ASSERT_TRUE(run.ok()) << run.error().message;
   EXPECT_EQ(run->discarded_revolutions, 0);
   expect_lobe(*run);
+}
+
+// Compact latch entries (the reading alone, the degree implied by the latch count): the
+// same faults, caught without a degree or status word in the entries.
+class CompactLatchFaultTest : public SimulatorFaultTest {
+ protected:
+  Result<MeasuredRun> measure_compact(const char* fault_text) {
+    return measure_with(fault_text, std::chrono::milliseconds(100), testing::compact_simulator_map());
+  }
+};
+
+// No fault at all: each degree holds the lobe at that degree, so the degrees implied by the
+// count are the machine's (a shift of one degree would be off by up to 0.1 mm on the flanks).
+TEST_F(CompactLatchFaultTest, CleanRunReadsEachDegreeWhereItIs) {
+  Result<MeasuredRun> run = measure_compact("drift@100");  // a fault that never comes
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 0);
+  expect_lobe(*run);
+  for (const auto& rev : run->revolutions) {
+    for (int d = 0; d < 360; ++d) {
+      ASSERT_NEAR(rev.lift_mm[d], sim_->true_lift_mm(d) + 0.25, 0.002) << "degree " << d;
+    }
+  }
+}
+
+TEST_F(CompactLatchFaultTest, OverRangeIsCaughtByTheFaultMarkCounter) {
+  Result<MeasuredRun> run = measure_compact("over-range@1.5+0.2");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_GE(run->discarded_revolutions, 1);
+  EXPECT_EQ(run->reconnects, 0);
+  expect_lobe(*run);
+}
+
+TEST_F(CompactLatchFaultTest, ProbeMissingForGoodFailsTheRunNamingIt) {
+  Result<MeasuredRun> run = measure_compact("probe-missing@0.5");
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kIncompleteRun);
+  EXPECT_NE(run.error().message.find("probe missing between degrees"), std::string::npos) << run.error().message;
+}
+
+// 100 ms: shorter than stale_after, so the poller does not reconnect; on recovery the count
+// jumps over ring slots still holding readings of 2.8 revolutions ago. Nothing in a compact
+// entry shows that; the fault mark counter counts them as lost.
+TEST_F(CompactLatchFaultTest, ABriefFreezeLeavesNoOldReadingInARun) {
+  Result<MeasuredRun> run = measure_compact("frozen@1.5+0.4");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_GE(run->discarded_revolutions, 1);
+  expect_lobe(*run);
+  for (const auto& rev : run->revolutions) {
+    for (int d = 0; d < 360; ++d) {
+      ASSERT_NEAR(rev.lift_mm[d], sim_->true_lift_mm(d) + 0.25, 0.002)
+          << "revolution " << rev.revolution << " degree " << d;
+    }
+  }
+}
+
+TEST_F(CompactLatchFaultTest, ConnectionDroppedMidRunReconnects) {
+  Result<MeasuredRun> run = measure_compact("drop@1.5");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->reconnects, 1);
+  EXPECT_GE(run->discarded_revolutions, 1);
+  expect_lobe(*run);
+}
+
+// The encoder has jumped before the run: the count (marks from the index) and the angle
+// disagree by 30 degrees, so the count cannot be trusted to give the degree. Refused.
+TEST_F(CompactLatchFaultTest, ACountOutOfStepWithTheEncoderIsRefused) {
+  Result<MeasuredRun> run = measure_compact("jump@0:30");
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kInvalidInput);
+  EXPECT_NE(run.error().message.find("zeroed at the encoder's index pulse"), std::string::npos) << run.error().message;
 }
 
 TEST(FaultSpec, ParsesTheTextForm) {

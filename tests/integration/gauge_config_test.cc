@@ -74,6 +74,54 @@ struct BadConfig {
   const char* expected;
 };
 
+// The simulator's compact latch ring (docs/gauge.md): the reading alone, the degree implied by
+// the latch count, the status from the fault mark counter.
+TEST(GaugeConfig, ReadsACompactLatchLayout) {
+  const char* text = R"([map]
+[map.reading]
+address = 0
+type = "INT32"
+scale = 0.0001
+[map.status]
+address = 2
+over_range_mask = 0x0002
+[map.angle]
+address = 3
+type = "UINT32"
+scale = 0.001
+[map.latch]
+count_address = 100
+ring_size_address = 104
+ring_address = 4000
+entry_words = 2
+reading_offset = 0
+degree_offset = -1
+fault_count_address = 105
+fault_status_address = 107
+)";
+  auto cfg = parse_gauge_toml(text, "compact.toml");
+  ASSERT_TRUE(cfg.ok()) << cfg.error().message;
+  const LatchSpec& l = cfg->map.latch;
+  EXPECT_TRUE(l.degree_implied());
+  EXPECT_EQ(l.entry_words, 2);
+  EXPECT_EQ(l.status_offset, -1);
+  EXPECT_EQ(l.fault_count_address, 105);
+  EXPECT_EQ(l.fault_status_address, 107);
+  EXPECT_EQ(latched_entries_per_read(cfg->map), 62);
+  // Without the fault counter nothing would see an over-range: refused.
+  std::string without(text);
+  without.erase(without.find("fault_count_address"));
+  auto refused = parse_gauge_toml(without, "compact.toml");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("compact.toml: register map: latch: compact entries"), std::string::npos)
+      << refused.error().message;
+  // Defaults: a labelled layout has no fault counter.
+  auto def = read_gauge_file(example("simulator.toml"));
+  ASSERT_TRUE(def.ok()) << def.error().message;
+  EXPECT_FALSE(def->map.latch.degree_implied());
+  EXPECT_EQ(def->map.latch.fault_count_address, -1);
+}
+
 TEST(GaugeConfig, RefusesMistakesNamingFileLineAndKey) {
   const BadConfig cases[] = {
       {"[link]\nprot = 502\n", "gauge.toml:2: key `link.prot`: unknown key"},

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "acquisition/register_map.h"
 #include "core/lift_table.h"
 #include "core/part.h"
 #include "simulator/gauge_simulator.h"
@@ -30,6 +31,22 @@ inline Result<std::unique_ptr<GaugeSimulator>> start_intake_simulator(const Simu
   Result<LiftTable> table = intake_table();
   if (!table) return table.error();
   return GaugeSimulator::start(intake_part(), *table, settings);
+}
+
+// The simulator's register map read through its compact latch ring (docs/simulator.md): the
+// reading alone, 2 registers an entry, the degree implied by the latch count, the status from
+// the fault mark counter.
+inline RegisterMap compact_simulator_map() {
+  RegisterMap m;
+  m.latch.ring_size_address = sim_registers::kCompactRingSize;
+  m.latch.ring_address = sim_registers::kCompactRing;
+  m.latch.entry_words = 2;
+  m.latch.reading_offset = 0;
+  m.latch.degree_offset = kDegreeImpliedByCount;
+  m.latch.status_offset = -1;
+  m.latch.fault_count_address = sim_registers::kFaultMarkCount;
+  m.latch.fault_status_address = sim_registers::kFaultMarkStatus;
+  return m;
 }
 
 }  // namespace gaugeloop::testing
