@@ -60,5 +60,6 @@ void add_measure_commands(CLI::App& app, CommandAction& action);  // demo, sim, 
 void add_runs_commands(CLI::App& app, CommandAction& action);     // runs ...
 void add_profile_commands(CLI::App& app, CommandAction& action);  // profile
 void add_nc_commands(CLI::App& app, CommandAction& action);       // nc ...
+void add_serve_commands(CLI::App& app, CommandAction& action);    // serve
 
 }  // namespace gaugeloop

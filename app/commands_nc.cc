@@ -11,6 +11,7 @@
 
 #include "app/cli_common.h"
 #include "app/nc_push.h"
+#include "app/run_json.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
 
@@ -44,11 +45,6 @@ std::string fixed(double v, int decimals) {
   return buf;
 }
 
-template <typename T>
-json opt_json(const std::optional<T>& v) {
-  return v ? json(*v) : json(nullptr);
-}
-
 // The NC file the command is about, as measure records it: an absolute path.
 Result<std::string> resolve_program(const RunStore& store, const NcOptions& o) {
   if (!o.program.empty()) {
@@ -72,19 +68,6 @@ Result<std::string> resolve_program(const RunStore& store, const NcOptions& o) {
                                                   "): name one with --program, and --nc-dir if it is not the default");
 }
 
-json push_json(const NcPush& p) {
-  return json{{"table_version", p.table_version},
-              {"pushed_utc", p.pushed_utc},
-              {"run_id", p.run_id},
-              {"reason", p.reason},
-              {"nc_file", p.nc_file},
-              {"interpolation", p.interpolation},
-              {"block_count", opt_json(p.block_count)},
-              {"command_error_um", opt_json(p.command_error_um)},
-              {"correction_max_um", opt_json(p.correction_max_um)},
-              {"program_hash", p.program_hash}};
-}
-
 // ---- nc history ----
 
 struct HistoryOptions : NcOptions {
@@ -105,7 +88,7 @@ int cmd_history(const HistoryOptions& o) {
   if (!pushes) return report_error(pushes.error());
   if (o.json_out) {
     json out = json::array();
-    for (const NcPush& p : *pushes) out.push_back(push_json(p));
+    for (const NcPush& p : *pushes) out.push_back(nc_push_json(p));
     std::cout << out.dump(2) << "\n";
     return kExitOk;
   }
@@ -181,8 +164,8 @@ int cmd_diff(const DiffOptions& o) {
     json rows = json::array();
     for (const auto& [d, um] : degrees) rows.push_back({{"c_deg", d}, {"dx_um", um}});
     json out{{"nc_file", *file},
-             {"a", push_json(pa)},
-             {"b", push_json(pb)},
+             {"a", nc_push_json(pa)},
+             {"b", nc_push_json(pb)},
              {"largest_dx_um", worst_um},
              {"largest_at_c_deg", worst_c},
              {"rms_dx_um", rms_um},
@@ -221,23 +204,10 @@ int cmd_rollback(const RollbackOptions& o) {
   if (!store) return report_error(store.error());
   Result<std::string> file = resolve_program(*store, o);
   if (!file) return report_error(file.error());
-  NcPush old;
-  Result<ParsedTable> table = pushed_table(*store, *file, o.version, old);
-  if (!table) return report_error(table.error());
-  PushFacts facts;
-  facts.run_id = old.run_id;
-  facts.reason = "rollback to version " + std::to_string(o.version) + " by " + person(o.by);
-  facts.interpolation = old.interpolation;
-  facts.block_count = old.block_count;
-  facts.command_error_um = old.command_error_um;
-  facts.point_count = old.point_count;
-  facts.correction_max_um = old.correction_max_um;
-  const std::string text = *old.program_text;
-  Result<int> pushed =
-      push_program(*store, *file, facts, [&text](int version) { return with_table_version(text, version); });
+  Result<PushOutcome> pushed = rollback_to_version(*store, *file, o.version, person(o.by));
   if (!pushed) return report_error(pushed.error());
   std::printf("%s: table version %d written, the table of version %d (run %lld); it is now the table in force\n",
-              file->c_str(), *pushed, o.version, static_cast<long long>(old.run_id));
+              file->c_str(), pushed->table_version, o.version, static_cast<long long>(pushed->run_id));
   return kExitOk;
 }
 
@@ -284,20 +254,7 @@ int cmd_pending(const PendingOptions& o) {
   if (o.json_out) {
     json out = json::array();
     for (const PendingTable& t : *tables) {
-      out.push_back({{"id", t.id},
-                     {"run_id", t.run_id},
-                     {"created_utc", t.created_utc},
-                     {"nc_file", t.nc_file},
-                     {"verdict", pending_verdict_name(t.verdict)},
-                     {"status", pending_status_name(t.status)},
-                     {"reason", t.reason},
-                     {"interpolation", t.interpolation},
-                     {"block_count", opt_json(t.block_count)},
-                     {"command_error_um", opt_json(t.command_error_um)},
-                     {"correction_max_um", opt_json(t.correction_max_um)},
-                     {"decided_by", t.decided_by},
-                     {"decided_utc", t.decided_utc},
-                     {"note", t.note}});
+      out.push_back(pending_table_json(t));
     }
     std::cout << out.dump(2) << "\n";
     return kExitOk;
@@ -323,48 +280,16 @@ struct DecideOptions {
   bool overwrite_edited = false;
 };
 
-Result<PendingTable> still_pending(const RunStore& store, std::int64_t id) {
-  Result<PendingTable> t = store.load_pending(id);
-  if (!t) return t.error();
-  if (t->status != PendingStatus::kPending) {
-    return make_error(ErrorCode::kRefused, "pending table " + std::to_string(id) + " is " +
-                                               std::string(pending_status_name(t->status)) +
-                                               ", not pending; `gaugeloop nc pending` lists those waiting");
-  }
-  return t;
-}
-
 int cmd_approve(const DecideOptions& o) {
   Result<RunStore> store = open_history(o.paths);
   if (!store) return report_error(store.error());
-  Result<PendingTable> t = still_pending(*store, o.id);
-  if (!t) return report_error(t.error());
   const std::string by = person(o.by);
-  PushFacts facts;
-  facts.run_id = t->run_id;
-  facts.reason = "approved by " + by;
-  facts.interpolation = t->interpolation;
-  facts.block_count = t->block_count;
-  facts.command_error_um = t->command_error_um;
-  facts.point_count = t->point_count;
-  facts.correction_max_um = t->correction_max_um;
-  bool decision_recorded = true;
-  const std::string text = t->program_text;
-  Result<int> pushed = push_program(
-      *store, t->nc_file, facts, [&text](int version) { return with_table_version(text, version); },
-      [&](const NcPush& push) -> Status {
-        Status s = store->record_approved_push(o.id, push, by, o.note);
-        if (s || s.error().code != ErrorCode::kRefused) return s;
-        // Superseded or rejected between the check and the write: the file is written, so
-        // the history must still say so.
-        decision_recorded = false;
-        return store->record_push(t->run_id, push);
-      },
-      o.overwrite_edited);
+  Result<PushOutcome> pushed = approve_pending(*store, o.id, by, o.note, o.overwrite_edited);
   if (!pushed) return report_error(pushed.error());
-  std::printf("%s: table version %d written from run %lld (pending table %lld, approved by %s)%s\n", t->nc_file.c_str(),
-              *pushed, static_cast<long long>(t->run_id), static_cast<long long>(o.id), by.c_str(),
-              decision_recorded ? "" : "; it had stopped pending meanwhile, the push is recorded alone");
+  std::printf("%s: table version %d written from run %lld (pending table %lld, approved by %s)%s\n",
+              pushed->nc_file.c_str(), pushed->table_version, static_cast<long long>(pushed->run_id),
+              static_cast<long long>(o.id), by.c_str(),
+              pushed->decision_recorded ? "" : "; it had stopped pending meanwhile, the push is recorded alone");
   return kExitOk;
 }
 

@@ -9,16 +9,6 @@
 namespace gaugeloop {
 namespace {
 
-const toml::table* subtable(const toml::table& t, std::string_view key, TomlReader& r) {
-  const toml::node* n = t.get(key);
-  if (n == nullptr) return nullptr;
-  if (!n->is_table()) {
-    r.fail(r.where(key) + ": expected a table ([" + std::string(key) + "])");
-    return nullptr;
-  }
-  return n->as_table();
-}
-
 WordOrder word_order(const std::string& s) {
   return s == "CDAB"   ? WordOrder::kCDAB
          : s == "BADC" ? WordOrder::kBADC
@@ -39,9 +29,9 @@ ValueType value_type(const std::string& s) {
 }
 
 // Reads [map.<name>] into `f`; absent table = absent field. Returns the reader's error state.
-void read_field(const toml::table& map, std::string_view name, std::string_view source, WordOrder default_order,
-                FieldSpec& f, TomlReader& parent, bool is_status, StatusMasks* masks) {
-  const toml::table* t = subtable(map, name, parent);
+void read_field(std::string_view name, std::string_view source, WordOrder default_order, FieldSpec& f,
+                TomlReader& parent, bool is_status, StatusMasks* masks) {
+  const toml::table* t = parent.subtable(name);
   if (t == nullptr) {
     f.present = false;
     return;
@@ -83,7 +73,7 @@ Result<ModbusSettings> parse_gauge_toml(std::string_view text, std::string_view 
   r.allow_only({"link", "map"});
   ModbusSettings out = defaults;
 
-  if (const toml::table* link = subtable(top, "link", r)) {
+  if (const toml::table* link = r.subtable("link")) {
     TomlReader lr(*link, source_name, "link.");
     lr.allow_only({"transport", "host", "port", "device", "baud", "parity", "data_bits", "stop_bits", "unit_id",
                    "response_timeout_ms"});
@@ -111,18 +101,18 @@ Result<ModbusSettings> parse_gauge_toml(std::string_view text, std::string_view 
     if (lr.error) r.fail(lr.error->message);
   }
 
-  if (const toml::table* map = subtable(top, "map", r)) {
+  if (const toml::table* map = r.subtable("map")) {
     TomlReader mr(*map, source_name, "map.");
     mr.allow_only({"byte_order", "reading", "angle", "revolution", "sequence", "status", "latch"});
     const WordOrder order = word_order(mr.choice("byte_order", "ABCD", {"ABCD", "CDAB", "BADC", "DCBA"}));
     RegisterMap m;
-    read_field(*map, "reading", source_name, order, m.reading, mr, false, nullptr);
-    read_field(*map, "angle", source_name, order, m.angle, mr, false, nullptr);
-    read_field(*map, "revolution", source_name, order, m.revolution, mr, false, nullptr);
-    read_field(*map, "sequence", source_name, order, m.sequence, mr, false, nullptr);
-    read_field(*map, "status", source_name, order, m.status, mr, true, &m.masks);
+    read_field("reading", source_name, order, m.reading, mr, false, nullptr);
+    read_field("angle", source_name, order, m.angle, mr, false, nullptr);
+    read_field("revolution", source_name, order, m.revolution, mr, false, nullptr);
+    read_field("sequence", source_name, order, m.sequence, mr, false, nullptr);
+    read_field("status", source_name, order, m.status, mr, true, &m.masks);
     m.latch.present = false;
-    if (const toml::table* latch = subtable(*map, "latch", mr)) {
+    if (const toml::table* latch = mr.subtable("latch")) {
       TomlReader lr(*latch, source_name, "map.latch.");
       lr.allow_only({"register", "count_address", "ring_size", "ring_size_address", "ring_address", "entry_words",
                      "reading_offset", "degree_offset", "status_offset", "fault_count_address",

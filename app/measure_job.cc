@@ -134,9 +134,15 @@ std::string settings_text(const JobSettings& s) {
   return out;
 }
 
-}  // namespace
+// What the checks before the gauge produce and the job goes on with.
+struct Prepared {
+  PeriodicSpline design;
+  DesignReading reading;
+};
 
-Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
+// Checks that need no gauge, so bad input costs no measurement: the design must make a
+// table within the axis limits, and the template must render it.
+Result<Prepared> prepare(const JobSettings& s) {
   if (s.table_kind == TableKind::kLinear || s.table_kind == TableKind::kSpline) {
     const double steps = 360.0 / s.table_step_deg;
     if (!(s.table_step_deg > 0.0) || std::abs(steps - std::round(steps)) > 1e-9 || steps < 36) {
@@ -145,8 +151,6 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     }
   }
   if (Status l = check_axis_limits(s.axis_limits); !l) return l.error();
-  // Checks that need no gauge, so bad input costs no measurement: the design must make a
-  // table within the axis limits, and the template must render it.
   Result<PeriodicSpline> design = PeriodicSpline::fit(s.design.angle_deg, s.design.lift_mm);
   if (!design) return in_step("design lift table " + s.design.source, design.error());
   Result<BuiltTable> design_table = build_table(*design, s);
@@ -157,6 +161,21 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
       !r) {
     return r.error();
   }
+  return Prepared{std::move(*design), std::move(*design_reading)};
+}
+
+}  // namespace
+
+Status check_job_settings(const JobSettings& settings) {
+  Result<Prepared> p = prepare(settings);
+  if (!p) return p.error();
+  return {};
+}
+
+Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
+  Result<Prepared> prepared = prepare(s);
+  if (!prepared) return prepared.error();
+  const DesignReading* design_reading = &prepared->reading;
   std::error_code ec;
   std::filesystem::create_directories(s.nc_dir, ec);
   if (ec) {

@@ -95,4 +95,8 @@ struct JobReport {
 // Errors keep the code of the step that failed; their messages name the step.
 Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& settings);
 
+// The checks run_measure_job makes before the first poll, alone: for a service validating
+// its configuration before it takes it into use.
+Status check_job_settings(const JobSettings& settings);
+
 }  // namespace gaugeloop

@@ -108,4 +108,65 @@ Result<int> push_program(RunStore& store, const std::filesystem::path& nc_file, 
   return *version;
 }
 
+Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, const std::string& by,
+                                    const std::string& note, bool overwrite_edited) {
+  Result<PendingTable> t = store.load_pending(pending_id);
+  if (!t) return t.error();
+  if (t->status != PendingStatus::kPending) {
+    return make_error(ErrorCode::kRefused, "pending table " + std::to_string(pending_id) + " is " +
+                                               std::string(pending_status_name(t->status)) +
+                                               ", not pending; `gaugeloop nc pending` lists those waiting");
+  }
+  PushFacts facts;
+  facts.run_id = t->run_id;
+  facts.reason = "approved by " + by;
+  facts.interpolation = t->interpolation;
+  facts.block_count = t->block_count;
+  facts.command_error_um = t->command_error_um;
+  facts.point_count = t->point_count;
+  facts.correction_max_um = t->correction_max_um;
+  PushOutcome out;
+  out.nc_file = t->nc_file;
+  out.run_id = t->run_id;
+  const std::string& text = t->program_text;
+  Result<int> pushed = push_program(
+      store, t->nc_file, facts, [&text](int version) { return with_table_version(text, version); },
+      [&](const NcPush& push) -> Status {
+        Status s = store.record_approved_push(pending_id, push, by, note);
+        if (s || s.error().code != ErrorCode::kRefused) return s;
+        // Superseded or rejected between the check and the write: the file is written, so
+        // the history must still say so.
+        out.decision_recorded = false;
+        return store.record_push(t->run_id, push);
+      },
+      overwrite_edited);
+  if (!pushed) return pushed.error();
+  out.table_version = *pushed;
+  return out;
+}
+
+Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_file, int table_version,
+                                        const std::string& by) {
+  Result<NcPush> old = store.load_push(nc_file, table_version);
+  if (!old) return old.error();
+  if (!old->program_text) {
+    return make_error(ErrorCode::kNotFound, "table version " + std::to_string(table_version) + " of " + nc_file +
+                                                " was pushed before gaugeloop kept program texts; it cannot be "
+                                                "rolled back to");
+  }
+  PushFacts facts;
+  facts.run_id = old->run_id;
+  facts.reason = "rollback to version " + std::to_string(table_version) + " by " + by;
+  facts.interpolation = old->interpolation;
+  facts.block_count = old->block_count;
+  facts.command_error_um = old->command_error_um;
+  facts.point_count = old->point_count;
+  facts.correction_max_um = old->correction_max_um;
+  const std::string& text = *old->program_text;
+  Result<int> pushed =
+      push_program(store, nc_file, facts, [&text](int version) { return with_table_version(text, version); });
+  if (!pushed) return pushed.error();
+  return PushOutcome{nc_file, *pushed, old->run_id, true};
+}
+
 }  // namespace gaugeloop

@@ -47,6 +47,28 @@ using RecordPush = std::function<Status(const NcPush& push)>;
 Result<int> push_program(RunStore& store, const std::filesystem::path& nc_file, const PushFacts& facts,
                          const RenderForVersion& render, const RecordPush& record = {}, bool overwrite_edited = false);
 
+// What an approval or a rollback pushed.
+struct PushOutcome {
+  std::string nc_file;
+  int table_version = 0;
+  std::int64_t run_id = 0;  // whose table it is
+  // Approval only: false if the table stopped pending between the check and the write (a
+  // newer measurement superseded it); the push is then recorded alone.
+  bool decision_recorded = true;
+};
+
+// `gaugeloop nc approve` and POST /api/nc/approve: pushes pending table `pending_id` (still
+// pending: else kRefused naming its status) and records the push and the approval by `by`
+// in one transaction. A hand-edited program is overwritten only with `overwrite_edited`.
+Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, const std::string& by,
+                                    const std::string& note, bool overwrite_edited);
+
+// `gaugeloop nc rollback` and POST /api/nc/rollback: pushes the program of `table_version`
+// of `nc_file` again, as a new version (header updated, body untouched); its run becomes the
+// one in force. kNotFound for a version never pushed or pushed without its text.
+Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_file, int table_version,
+                                        const std::string& by);
+
 // `program` with its `; gaugeloop table_version: N` header line set to `table_version`, for
 // a program rendered before its version was known (a pending table) or re-pushed (a
 // rollback). The table body, and so its checksum, is untouched. kInvalidInput if the

@@ -55,6 +55,24 @@ std::string TomlReader::text(std::string_view key, std::optional<std::string> fa
   return {};
 }
 
+const toml::table* TomlReader::subtable(std::string_view key) {
+  const toml::node* n = table_.get(key);
+  if (n == nullptr) return nullptr;
+  if (!n->is_table()) {
+    fail(where(key) + ": expected a table ([" + prefix_ + std::string(key) + "])");
+    return nullptr;
+  }
+  return n->as_table();
+}
+
+bool TomlReader::flag(std::string_view key, bool fallback) {
+  const toml::node* n = table_.get(key);
+  if (n == nullptr) return fallback;
+  if (auto v = n->value<bool>(); v && n->is_boolean()) return *v;
+  fail(where(key) + ": expected true or false (no quotes)");
+  return fallback;
+}
+
 double TomlReader::number(std::string_view key, std::optional<double> fallback, double min, double max, bool open_min) {
   const toml::node* n = table_.get(key);
   if (n == nullptr) {

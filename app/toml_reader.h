@@ -30,6 +30,10 @@ class TomlReader {
   void allow_only(std::initializer_list<std::string_view> known);
 
   std::string text(std::string_view key, std::optional<std::string> fallback);
+  // The table under `key` ([key]); nullptr if absent, or (failing) if not a table.
+  const toml::table* subtable(std::string_view key);
+  // A TOML boolean, true or false.
+  bool flag(std::string_view key, bool fallback);
   // A number in [min, max] ((min, max] when open_min); integers convert.
   double number(std::string_view key, std::optional<double> fallback, double min, double max, bool open_min = false);
   // A whole number in [min, max].

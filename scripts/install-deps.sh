@@ -16,6 +16,7 @@ packages=(
   nlohmann-json3-dev   # --json output
   libspdlog-dev libfmt-dev  # logging and formatting
   libmstch-dev       # Mustache rendering of NC program templates (brings libboost-dev headers)
+  libcpp-httplib-dev # the HTTP API of `gaugeloop serve`
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   sqlite3            # the CLI users query the database with; tests use it too

@@ -1,0 +1,75 @@
+// The service's HTTP API: the run history, the tables on the control and Prometheus metrics
+// for anyone on the network it is bound to; measurement triggers, approvals and rollbacks for
+// those holding the token. Endpoints, parameters and errors: docs/http_api.md.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/result.h"
+
+namespace gaugeloop {
+
+struct HttpSettings {
+  std::string host = "127.0.0.1";  // bound to loopback unless configured
+  int port = 8080;                 // 0: a free port (tests); read it back with HttpApi::port()
+  // Empty: the API is read-only, and every write is refused with 403. Otherwise a write needs
+  // the header `Authorization: Bearer <token>` (401 without it or with another token).
+  std::string token;
+};
+
+// Writes the service provides. Each returns the JSON body of a 200 answer, or an Error whose
+// code chooses the status (docs/http_api.md, "Errors"): kInvalidInput 400, kNotFound 404,
+// kRefused 409 (e.g. a measurement already running, a table no longer pending), kStorage and
+// kIo 503, a gauge error 502, anything else 500. An empty hook answers 501.
+// Thread: called on the API's worker threads, possibly several at once; only after the token
+// was checked and the body parsed (part, program and by not empty; lobe and version >= 1).
+struct HttpWrites {
+  std::function<Result<nlohmann::json>(const std::string& part, int lobe, const std::string& note)> trigger_measure;
+  std::function<Result<nlohmann::json>(std::int64_t pending_id, const std::string& by, const std::string& note)>
+      approve;
+  // `program` as the client gave it: a program name (CAM_INTAKE_L1) or an NC file path.
+  std::function<Result<nlohmann::json>(const std::string& program, int table_version, const std::string& by)> rollback;
+};
+
+// What the service adds to /api/health and /metrics. Same threads as HttpWrites.
+struct HttpStatus {
+  // An object merged into /api/health, e.g. {"state": "idle", "config": "/etc/gaugeloop.toml"}.
+  std::function<nlohmann::json()> health;
+  // Prometheus text lines (with their # HELP and # TYPE) appended to /metrics, e.g. the
+  // counters the service keeps.
+  std::function<std::string()> extra_metrics;
+};
+
+// cpp-httplib's server on a thread of its own (and its worker threads). Every request reads the
+// run database at db_path through a RunStore of its own (connections are pooled), so the API
+// never blocks the service writing runs; a missing database answers 503.
+// Lifetime: the hooks are called until stop() returns; stop them after, not before.
+// Thread: start, port and stop from one thread.
+class HttpApi {
+ public:
+  // Binds host:port and starts serving before it returns. kIo naming the address when it
+  // cannot bind (in use, or not an address of this machine).
+  static Result<std::unique_ptr<HttpApi>> start(const HttpSettings& settings, std::filesystem::path db_path,
+                                                HttpWrites writes, HttpStatus status);
+
+  HttpApi(const HttpApi&) = delete;
+  HttpApi& operator=(const HttpApi&) = delete;
+  ~HttpApi();  // stop()
+
+  int port() const;  // the port bound, also when settings.port was 0
+
+  // Stops accepting, lets requests in progress finish, and joins the threads. Idempotent.
+  void stop();
+
+ private:
+  struct Impl;
+  explicit HttpApi(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace gaugeloop

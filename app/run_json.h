@@ -1,0 +1,51 @@
+// The run history as data: the JSON and CSV the `runs`, `events` and `nc` commands print and
+// the HTTP API serves, built once here so both say the same thing, and the UTC time bounds both
+// accept.
+#pragma once
+
+#include <ctime>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/result.h"
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+
+// One row of `runs list --json` and `runs trend --json`. Figures a run did not record (phase,
+// runout, settings hash, prune time) are null.
+nlohmann::json run_summary_json(const RunSummary& run);
+
+// `runs show --json`: the summary plus the rest of the record, the worst degrees (cam frame),
+// the frame mapping (null if not recorded) and every push of the run (nc_push_json, oldest first).
+nlohmann::json run_detail_json(const StoredRun& run);
+
+// One NC push as `nc history --json` and `runs show --json` list it, without the program text.
+// Figures not recorded (pushes made by older versions) are null.
+nlohmann::json nc_push_json(const NcPush& push);
+
+// One pending table as `nc pending --json` lists it, without the program text.
+nlohmann::json pending_table_json(const PendingTable& table);
+
+// One row of `events --json`; lobe and run_id are null when the event is not about one.
+nlohmann::json event_json(const StoredEvent& event);
+
+// `runs export`: one row per cam degree (design, each raw revolution, mean, spread, error,
+// correction), with '#' comment lines saying the frame and units. Raw revolutions are put in
+// the cam frame when the run recorded its frame mapping, else kept in the machine frame and the
+// columns say so; a pruned run has no revolution columns.
+std::string run_csv(const StoredRun& run);
+
+// `t` as "YYYY-MM-DDTHH:MM:SSZ".
+std::string format_utc(std::time_t t);
+
+// A time bound given by a person, UTC: "2026-11-22", "2026-11-22T08:30" or
+// "2026-11-22T08:30:00Z" (a space for the T is fine). A bound covers its whole unit, so an
+// `until` bound (exclusive in RunQuery and EventQuery) moves past it: until 2026-11-22 includes
+// that day, until 2026-11-22T08:30 that minute. Empty text is no bound (empty result).
+// kInvalidInput naming `name` (e.g. "--since") and saying what to write.
+Result<std::string> time_bound(const std::string& text, bool until, std::string_view name);
+
+}  // namespace gaugeloop

@@ -1,0 +1,563 @@
+// The HTTP API as a client sees it: a real server on a loopback port over a database filled
+// through RunStore, read with httplib's client; the token, the hooks and every kind of bad request.
+#include "app/http_api.h"
+
+#include <gtest/gtest.h>
+#include <httplib.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+
+RunRecord record(const std::string& part, int lobe, const std::string& machine, const std::string& started,
+                 double max_um) {
+  RunRecord r;
+  r.started_utc = started;
+  r.finished_utc = started;
+  r.machine = machine;
+  r.part = part;
+  r.lobe = lobe;
+  r.gauge = "tcp:127.0.0.1:1502";
+  for (int i = 0; i < 3; ++i) {
+    RevolutionSamples rev;
+    rev.revolution = 10 + i;
+    for (int c = 0; c < 360; ++c) rev.lift_mm[static_cast<std::size_t>(c)] = 1.0 + 0.001 * c + 0.0001 * i;
+    r.measured.revolutions.push_back(rev);
+  }
+  for (std::size_t d = 0; d < 360; ++d) {
+    r.analysis.design_lift_mm[d] = 0.5;
+    r.analysis.error_um[d] = max_um * std::sin(static_cast<double>(d) * 0.0174533);
+    r.analysis.mean_lift_mm[d] = 0.5 + r.analysis.error_um[d] / 1000.0;
+    r.analysis.spread_um[d] = 0.2;
+    r.correction_um[d] = 0.9 * r.analysis.error_um[d];
+  }
+  r.analysis.max_abs_error_um = max_um;
+  r.analysis.rms_error_um = max_um / std::sqrt(2.0);
+  r.analysis.peak_to_valley_um = 2 * max_um;
+  r.analysis.repeatability_um = 0.2;
+  r.analysis.phase_error_deg = 0.25;
+  r.analysis.base_circle_runout_um = 1.5;
+  Part g;
+  g.c_offset_deg = 10.0;
+  r.geometry = g;
+  return r;
+}
+
+const char* const kProgramV1 = "; CAM_INTAKE_L1 version 1\r\nCTABDEF(1,1)\r\nC0 X0\r\nCTABEND\r\n";
+const char* const kProgramV2 = "; CAM_INTAKE_L1 version 2\r\nCTABDEF(1,1)\r\nC0 X0.0010\r\nCTABEND\r\n";
+
+// What the fake hooks were called with, and what they answer.
+struct HookLog {
+  std::mutex mutex;
+  std::vector<std::string> calls;
+  void add(std::string call) {
+    std::lock_guard lock(mutex);
+    calls.push_back(std::move(call));
+  }
+  std::vector<std::string> all() {
+    std::lock_guard lock(mutex);
+    return calls;
+  }
+};
+
+class HttpApiTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("gaugeloop-http-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+  }
+  void TearDown() override {
+    api_.reset();
+    fs::remove_all(dir_);
+  }
+
+  fs::path db() const { return dir_ / "gaugeloop.sqlite"; }
+
+  // Runs 1, 2: intake lobe 1 on g1 over two days (1 pushed twice: versions 1 and 2); 3: lobe 2;
+  // 4: lobe 1 on g2. One refusal, one fault, one pending table.
+  void fill() {
+    Result<RunStore> store = RunStore::open(db());
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    ids_.push_back(*store->insert_run(record("intake", 1, "g1", "2020-11-20T08:00:00Z", 12.0)));
+    ids_.push_back(*store->insert_run(record("intake", 1, "g1", "2020-11-21T08:00:00Z", 4.0)));
+    ids_.push_back(*store->insert_run(record("intake", 2, "g1", "2020-11-21T09:00:00Z", 30.0)));
+    ids_.push_back(*store->insert_run(record("intake", 1, "g2", "2020-11-22T08:00:00Z", 6.0)));
+    NcPush push;
+    push.nc_file = "/nc/CAM_INTAKE_L1.SPF";
+    push.interpolation = "CSPLINE";
+    push.block_count = 47;
+    push.command_error_um = 0.497;
+    ASSERT_TRUE(store->record_push(ids_[0], push, kProgramV1).ok());
+    push.reason = "rollback to version 1 by anna";
+    ASSERT_TRUE(store->record_push(ids_[0], push, kProgramV2).ok());
+    PendingTable pending;
+    pending.run_id = ids_[1];
+    pending.nc_file = "/nc/CAM_INTAKE_L1.SPF";
+    pending.program_text = "; pending";
+    pending.verdict = PendingVerdict::kHold;
+    pending.reason = "correction changes by 60 um";
+    Result<std::int64_t> p = store->add_pending(pending);
+    ASSERT_TRUE(p.ok()) << p.error().message;
+    pending_id_ = *p;
+    EventRecord e;
+    e.at_utc = "2020-11-21T07:00:00Z";
+    e.kind = EventKind::kRefusal;
+    e.code = "refused";
+    e.machine = "g1";
+    e.part = "intake";
+    e.lobe = 1;
+    e.message = "correction 120.0 um at cam degree 95 exceeds the 100 um guard";
+    ASSERT_TRUE(store->record_event(e).ok());
+    e.at_utc = "2020-11-22T07:00:00Z";
+    e.kind = EventKind::kFault;
+    e.code = "gauge timeout";
+    e.message = "gauge 127.0.0.1:1502 stopped answering";
+    ASSERT_TRUE(store->record_event(e).ok());
+  }
+
+  void start(const std::string& token = "", HttpWrites writes = {}, HttpStatus status = {}) {
+    HttpSettings settings;
+    settings.port = 0;
+    settings.token = token;
+    Result<std::unique_ptr<HttpApi>> api = HttpApi::start(settings, db(), std::move(writes), std::move(status));
+    ASSERT_TRUE(api.ok()) << api.error().message;
+    api_ = std::move(*api);
+    ASSERT_GT(api_->port(), 0);
+    client_ = std::make_unique<httplib::Client>("127.0.0.1", api_->port());
+  }
+
+  // Hooks that log their arguments and answer {"ok": true}.
+  HttpWrites logging_writes() {
+    HttpWrites w;
+    w.trigger_measure = [this](const std::string& part, int lobe, const std::string& note) -> Result<json> {
+      log_.add("measure " + part + " " + std::to_string(lobe) + " " + note);
+      return json{{"queued", true}};
+    };
+    w.approve = [this](std::int64_t id, const std::string& by, const std::string& note) -> Result<json> {
+      log_.add("approve " + std::to_string(id) + " " + by + " " + note);
+      return json{{"approved", id}};
+    };
+    w.rollback = [this](const std::string& program, int version, const std::string& by) -> Result<json> {
+      log_.add("rollback " + program + " " + std::to_string(version) + " " + by);
+      return json{{"version", version + 1}};
+    };
+    return w;
+  }
+
+  struct Answer {
+    int status = -1;
+    std::string body;
+    std::string content_type;
+    json j;  // discarded if the body is not JSON
+  };
+
+  static Answer answer_of(const httplib::Result& r) {
+    Answer a;
+    if (!r) return a;
+    a.status = r->status;
+    a.body = r->body;
+    a.content_type = r->get_header_value("Content-Type");
+    a.j = json::parse(r->body, nullptr, false);
+    return a;
+  }
+
+  Answer get(const std::string& path) { return answer_of(client_->Get(path)); }
+
+  Answer post(const std::string& path, const std::string& body, const std::string& token = "") {
+    httplib::Headers headers;
+    if (!token.empty()) headers.emplace("Authorization", "Bearer " + token);
+    return answer_of(client_->Post(path, headers, body, "application/json"));
+  }
+
+  std::vector<std::int64_t> listed(const std::string& query) {
+    Answer a = get("/api/runs" + query);
+    EXPECT_EQ(a.status, 200) << a.body;
+    std::vector<std::int64_t> out;
+    for (const json& run : a.j) out.push_back(run["id"].get<std::int64_t>());
+    return out;
+  }
+
+  // The error message of a JSON error answer, after checking its status.
+  static std::string error_of(const Answer& a, int status) {
+    EXPECT_EQ(a.status, status) << a.body;
+    EXPECT_EQ(a.content_type, "application/json") << a.body;
+    EXPECT_TRUE(a.j.is_object() && a.j.contains("error") && a.j["error"].is_string()) << a.body;
+    return a.j.is_object() ? a.j.value("error", std::string()) : std::string();
+  }
+
+  fs::path dir_;
+  std::vector<std::int64_t> ids_;
+  std::int64_t pending_id_ = 0;
+  HookLog log_;
+  std::unique_ptr<HttpApi> api_;
+  std::unique_ptr<httplib::Client> client_;
+};
+
+using Ids = std::vector<std::int64_t>;
+
+TEST_F(HttpApiTest, HealthMergesTheServiceStateAndSaysWhetherTheDatabaseIsThere) {
+  fill();
+  HttpStatus status;
+  status.health = [] { return json{{"state", "idle"}, {"config", "/etc/gaugeloop.toml"}}; };
+  start("", {}, status);
+  Answer a = get("/api/health");
+  ASSERT_EQ(a.status, 200) << a.body;
+  EXPECT_EQ(a.j["state"], "idle");
+  EXPECT_EQ(a.j["config"], "/etc/gaugeloop.toml");
+  EXPECT_EQ(a.j["database"]["available"], true);
+  EXPECT_EQ(a.j["database"]["path"], db().string());
+  EXPECT_TRUE(has(a.j["writes"].get<std::string>(), "disabled")) << a.body;
+}
+
+TEST_F(HttpApiTest, RunsFilterByPartLobeMachineTimeAndStatusLikeTheCli) {
+  fill();
+  start();
+  EXPECT_EQ(listed(""), (Ids{ids_[3], ids_[2], ids_[1], ids_[0]}));
+  EXPECT_EQ(listed("?part=intake&lobe=1"), (Ids{ids_[3], ids_[1], ids_[0]}));
+  EXPECT_EQ(listed("?machine=g2"), (Ids{ids_[3]}));
+  EXPECT_EQ(listed("?status=pushed"), (Ids{ids_[0]}));
+  EXPECT_EQ(listed("?since=2020-11-21&until=2020-11-21"), (Ids{ids_[2], ids_[1]}));
+  EXPECT_EQ(listed("?since=2020-11-21T08:30"), (Ids{ids_[3], ids_[2]}));
+  EXPECT_EQ(listed("?limit=1"), (Ids{ids_[3]}));
+  EXPECT_EQ(listed("?part=exhaust"), Ids{});
+  Answer a = get("/api/runs?lobe=2");
+  ASSERT_EQ(a.j.size(), 1u) << a.body;
+  EXPECT_EQ(a.j[0]["max_abs_error_um"], 30.0);
+  EXPECT_EQ(a.j[0]["phase_error_deg"], 0.25);
+  EXPECT_TRUE(a.j[0]["settings_hash"].is_null());
+}
+
+TEST_F(HttpApiTest, ShowIsTheRunAsRunsShowJsonAndAnUnknownRunIs404) {
+  fill();
+  start();
+  Answer a = get("/api/runs/" + std::to_string(ids_[0]));
+  ASSERT_EQ(a.status, 200) << a.body;
+  EXPECT_EQ(a.j["id"], ids_[0]);
+  EXPECT_EQ(a.j["gauge"], "tcp:127.0.0.1:1502");
+  EXPECT_EQ(a.j["frame"]["c_offset_deg"], 10.0);
+  ASSERT_EQ(a.j["nc_pushes"].size(), 2u) << a.body;
+  EXPECT_EQ(a.j["nc_pushes"][1]["table_version"], 2);
+  EXPECT_EQ(a.j["nc_pushes"][1]["reason"], "rollback to version 1 by anna");
+
+  EXPECT_TRUE(has(error_of(get("/api/runs/999"), 404), "run 999 is not in run database")) << "names the run";
+  EXPECT_TRUE(has(error_of(get("/api/runs/999"), 404), "GET /api/runs lists the ids"));
+  EXPECT_TRUE(has(error_of(get("/api/runs/abc"), 400), "run id 'abc' is not a number"));
+  EXPECT_TRUE(has(error_of(get("/api/runs/-3"), 400), "run id '-3'"));
+}
+
+TEST_F(HttpApiTest, ExportIsTheCsvOfRunsExport) {
+  fill();
+  start();
+  Answer a = get("/api/runs/" + std::to_string(ids_[1]) + "/export");
+  ASSERT_EQ(a.status, 200) << a.body;
+  EXPECT_TRUE(has(a.content_type, "text/csv")) << a.content_type;
+  EXPECT_TRUE(has(a.body, "# gaugeloop run " + std::to_string(ids_[1]) + ": intake lobe 1 on g1")) << a.body;
+  EXPECT_TRUE(has(a.body,
+                  "\ncam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,"
+                  "error_um,correction_um\n"))
+      << a.body.substr(0, 800);
+  EXPECT_TRUE(has(a.body, "\n359,")) << "one row per cam degree";
+  EXPECT_EQ(get("/api/runs/999/export").status, 404);
+}
+
+TEST_F(HttpApiTest, TrendIsOneLobeOldestFirst) {
+  fill();
+  start();
+  Answer a = get("/api/trend?part=intake&lobe=1&machine=g1");
+  ASSERT_EQ(a.status, 200) << a.body;
+  ASSERT_EQ(a.j.size(), 2u) << a.body;
+  EXPECT_EQ(a.j[0]["id"], ids_[0]);
+  EXPECT_EQ(a.j[1]["id"], ids_[1]);
+  EXPECT_EQ(a.j[1]["max_abs_error_um"], 4.0);
+  EXPECT_TRUE(has(error_of(get("/api/trend?part=intake"), 400), "give both `part` and `lobe`"));
+}
+
+TEST_F(HttpApiTest, EventsFilterByKindAndTime) {
+  fill();
+  start();
+  Answer all = get("/api/events");
+  ASSERT_EQ(all.status, 200) << all.body;
+  ASSERT_EQ(all.j.size(), 2u) << all.body;
+  EXPECT_EQ(all.j[0]["code"], "gauge timeout") << "newest first";
+  Answer refusals = get("/api/events?kind=refusal");
+  ASSERT_EQ(refusals.j.size(), 1u) << refusals.body;
+  EXPECT_EQ(refusals.j[0]["message"], "correction 120.0 um at cam degree 95 exceeds the 100 um guard");
+  EXPECT_EQ(refusals.j[0]["lobe"], 1);
+  EXPECT_EQ(get("/api/events?until=2020-11-21").j.size(), 1u);
+  EXPECT_TRUE(has(error_of(get("/api/events?kind=warning"), 400), "`kind` must be fault or refusal"));
+}
+
+TEST_F(HttpApiTest, NcTableIsTheLastPushWithItsProgramText) {
+  fill();
+  start();
+  for (const char* query : {"", "?program=CAM_INTAKE_L1", "?program=CAM_INTAKE_L1.SPF"}) {
+    Answer a = get(std::string("/api/nc/table") + query);
+    ASSERT_EQ(a.status, 200) << query << ": " << a.body;
+    EXPECT_EQ(a.j["program"], "CAM_INTAKE_L1");
+    EXPECT_EQ(a.j["table_version"], 2);
+    EXPECT_EQ(a.j["run_id"], ids_[0]);
+    EXPECT_EQ(a.j["reason"], "rollback to version 1 by anna");
+    EXPECT_EQ(a.j["interpolation"], "CSPLINE");
+    EXPECT_EQ(a.j["block_count"], 47);
+    EXPECT_EQ(a.j["command_error_um"], 0.497);
+    EXPECT_EQ(a.j["program_text"], kProgramV2) << "byte for byte, CR LF kept";
+  }
+  const std::string missing = error_of(get("/api/nc/table?program=CAM_EXHAUST_L1"), 404);
+  EXPECT_TRUE(has(missing, "no table of program 'CAM_EXHAUST_L1'")) << missing;
+  EXPECT_TRUE(has(missing, "the programs are CAM_INTAKE_L1")) << missing;
+
+  Answer history = get("/api/nc/history?program=CAM_INTAKE_L1");
+  ASSERT_EQ(history.status, 200) << history.body;
+  ASSERT_EQ(history.j.size(), 2u) << history.body;
+  EXPECT_EQ(history.j[0]["table_version"], 2) << "newest first";
+  EXPECT_FALSE(history.j[0].contains("program_text"));
+
+  Answer pending = get("/api/nc/pending");
+  ASSERT_EQ(pending.status, 200) << pending.body;
+  ASSERT_EQ(pending.j.size(), 1u) << pending.body;
+  EXPECT_EQ(pending.j[0]["id"], pending_id_);
+  EXPECT_EQ(pending.j[0]["verdict"], "hold");
+  EXPECT_EQ(pending.j[0]["reason"], "correction changes by 60 um");
+}
+
+TEST_F(HttpApiTest, NcTableBeforeAnyPushIs404SayingSo) {
+  ASSERT_TRUE(RunStore::open(db()).ok());
+  start();
+  EXPECT_TRUE(has(error_of(get("/api/nc/table"), 404), "no table was pushed yet"));
+  EXPECT_EQ(get("/api/nc/history").j, json::array());
+}
+
+TEST_F(HttpApiTest, MetricsCountRunsEventsPendingAndTheLastErrorOfEachLobe) {
+  fill();
+  HttpStatus status;
+  status.extra_metrics = [] {
+    return "# TYPE gaugeloop_measurements_triggered_total counter\ngaugeloop_measurements_triggered_total 3";
+  };
+  start("", {}, status);
+  Answer a = get("/metrics");
+  ASSERT_EQ(a.status, 200) << a.body;
+  EXPECT_TRUE(has(a.content_type, "text/plain; version=0.0.4")) << a.content_type;
+  for (const std::string& line : std::vector<std::string>{
+           "gaugeloop_runs_stored{status=\"measured\"} 3\n",
+           "gaugeloop_runs_stored{status=\"pushed\"} 1\n",
+           "gaugeloop_events_stored{kind=\"fault\"} 1\n",
+           "gaugeloop_events_stored{kind=\"refusal\"} 1\n",
+           "gaugeloop_pending_tables 1\n",
+           "# TYPE gaugeloop_last_run_max_abs_error_um gauge\n",
+           "gaugeloop_last_run_max_abs_error_um{machine=\"g1\",part=\"intake\",lobe=\"1\"} 4.0\n",
+           "gaugeloop_last_run_max_abs_error_um{machine=\"g1\",part=\"intake\",lobe=\"2\"} 30.0\n",
+           "gaugeloop_last_run_max_abs_error_um{machine=\"g2\",part=\"intake\",lobe=\"1\"} 6.0\n",
+           "gaugeloop_last_run_id{machine=\"g1\",part=\"intake\",lobe=\"1\"} " + std::to_string(ids_[1]) + "\n",
+           "gaugeloop_last_run_started_timestamp_seconds{machine=\"g2\",part=\"intake\",lobe=\"1\"} 1606032000\n",
+           "gaugeloop_database_up 1\n",
+           "gaugeloop_measurements_triggered_total 3\n",
+       }) {
+    EXPECT_TRUE(has(a.body, line)) << "missing: " << line << "in:\n" << a.body;
+  }
+}
+
+TEST_F(HttpApiTest, WithoutADatabaseReadsAre503AndHealthAndMetricsStillAnswer) {
+  start();
+  const std::string message = error_of(get("/api/runs"), 503);
+  EXPECT_TRUE(has(message, "no run database at " + db().string())) << message;
+  EXPECT_TRUE(has(message, "created by the first measurement")) << message;
+  EXPECT_FALSE(fs::exists(db())) << "the API never creates the database";
+  Answer health = get("/api/health");
+  ASSERT_EQ(health.status, 200) << health.body;
+  EXPECT_EQ(health.j["database"]["available"], false);
+  Answer metrics = get("/metrics");
+  ASSERT_EQ(metrics.status, 200) << metrics.body;
+  EXPECT_TRUE(has(metrics.body, "gaugeloop_database_up 0\n")) << metrics.body;
+  fill();  // the first run arrives: the same server reads it
+  EXPECT_EQ(listed("?limit=1"), (Ids{ids_[3]}));
+}
+
+TEST_F(HttpApiTest, WritesAreRefusedWhenNoTokenIsConfigured) {
+  fill();
+  start("", logging_writes());
+  EXPECT_TRUE(has(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1})"), 403), "read-only"));
+  EXPECT_EQ(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1})", "anything"), 403).empty(), false);
+  EXPECT_EQ(post("/api/nc/approve/1", R"({"by": "anna"})").status, 403);
+  EXPECT_EQ(post("/api/nc/rollback", R"({"program": "P", "version": 1, "by": "anna"})").status, 403);
+  EXPECT_TRUE(log_.all().empty());
+}
+
+TEST_F(HttpApiTest, WritesNeedTheConfiguredTokenAndPassTheirArgumentsToTheHooks) {
+  fill();
+  start("s3cret-token", logging_writes());
+  const std::string body = R"({"part": "intake", "lobe": 2, "note": "after dressing"})";
+  EXPECT_TRUE(has(error_of(post("/api/measure", body), 401), "Authorization: Bearer <token>"));
+  EXPECT_TRUE(has(error_of(post("/api/measure", body, "s3cret-tokeN"), 401), "not the one configured"));
+  EXPECT_EQ(post("/api/measure", body, "s3cret").status, 401) << "a prefix is not the token";
+  EXPECT_EQ(post("/api/measure", body, "s3cret-token-and-more").status, 401);
+  httplib::Headers basic{{"Authorization", "Basic czNjcmV0LXRva2Vu"}};
+  EXPECT_EQ(answer_of(client_->Post("/api/measure", basic, body, "application/json")).status, 401);
+  EXPECT_TRUE(log_.all().empty()) << "no hook runs without the token";
+
+  Answer measured = post("/api/measure", body, "s3cret-token");
+  ASSERT_EQ(measured.status, 200) << measured.body;
+  EXPECT_EQ(measured.j["queued"], true);
+  Answer approved =
+      post("/api/nc/approve/" + std::to_string(pending_id_), R"({"by": "anna", "note": "ok"})", "s3cret-token");
+  ASSERT_EQ(approved.status, 200) << approved.body;
+  EXPECT_EQ(approved.j["approved"], pending_id_);
+  Answer rolled =
+      post("/api/nc/rollback", R"({"program": "CAM_INTAKE_L1", "version": 1, "by": "bert"})", "s3cret-token");
+  ASSERT_EQ(rolled.status, 200) << rolled.body;
+  EXPECT_EQ(rolled.j["version"], 2);
+  EXPECT_EQ(log_.all(), (std::vector<std::string>{"measure intake 2 after dressing",
+                                                  "approve " + std::to_string(pending_id_) + " anna ok",
+                                                  "rollback CAM_INTAKE_L1 1 bert"}));
+}
+
+TEST_F(HttpApiTest, HookErrorsChooseTheStatusAndKeepTheirMessage) {
+  HttpWrites w;
+  w.trigger_measure = [](const std::string&, int, const std::string&) -> Result<json> {
+    return make_error(ErrorCode::kRefused, "a measurement of intake lobe 1 is running; try again when it is done");
+  };
+  w.approve = [](std::int64_t, const std::string&, const std::string&) -> Result<json> {
+    return make_error(ErrorCode::kNotFound, "no pending table 7");
+  };
+  w.rollback = [](const std::string&, int, const std::string&) -> Result<json> {
+    return make_error(ErrorCode::kGaugeTimeout, "gauge stopped answering");
+  };
+  start("t", w);
+  EXPECT_EQ(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1})", "t"), 409),
+            "a measurement of intake lobe 1 is running; try again when it is done");
+  EXPECT_EQ(error_of(post("/api/nc/approve/7", R"({"by": "anna"})", "t"), 404), "no pending table 7");
+  EXPECT_EQ(error_of(post("/api/nc/rollback", R"({"program": "P", "version": 1, "by": "a"})", "t"), 502),
+            "gauge stopped answering");
+}
+
+TEST_F(HttpApiTest, AWriteTheServiceDoesNotProvideIs501) {
+  start("t");
+  EXPECT_TRUE(has(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1})", "t"), 501), "measurement"));
+  EXPECT_EQ(post("/api/nc/approve/1", R"({"by": "anna"})", "t").status, 501);
+  EXPECT_EQ(post("/api/nc/rollback", R"({"program": "P", "version": 1, "by": "a"})", "t").status, 501);
+}
+
+TEST_F(HttpApiTest, MalformedBodiesAre400SayingWhatIsWrong) {
+  start("t", logging_writes());
+  EXPECT_TRUE(has(error_of(post("/api/measure", R"({"part": "intake", "lobe": )", "t"), 400),
+                  "the request body is not JSON: parse error at line 1"));
+  EXPECT_TRUE(has(error_of(post("/api/measure", "", "t"), 400), "the request body is empty; send a JSON object"));
+  EXPECT_TRUE(has(error_of(post("/api/measure", "[1, 2]", "t"), 400), "must be a JSON object, not array"));
+  EXPECT_TRUE(has(error_of(post("/api/measure", R"({"lobe": 1})", "t"), 400), "needs `part`"));
+  EXPECT_TRUE(has(error_of(post("/api/measure", R"({"part": 7, "lobe": 1})", "t"), 400),
+                  "`part` must be a string, not number"));
+  EXPECT_TRUE(has(error_of(post("/api/measure", R"({"part": "intake", "lobe": "one"})", "t"), 400),
+                  "`lobe` must be a whole number from 1 to 1000, not \"one\""));
+  EXPECT_TRUE(has(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1.5})", "t"), 400), "`lobe`"));
+  EXPECT_TRUE(has(error_of(post("/api/measure", R"({"part": "intake", "lobe": 0})", "t"), 400), "`lobe`"));
+  EXPECT_TRUE(has(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1e300})", "t"), 400), "`lobe`"));
+  EXPECT_TRUE(
+      has(error_of(post("/api/measure", R"({"part": "intake", "lobes": 1})", "t"), 400), "unknown field `lobes`"));
+  EXPECT_TRUE(has(error_of(post("/api/nc/approve/x1", R"({"by": "anna"})", "t"), 400), "pending table id 'x1'"));
+  EXPECT_TRUE(has(error_of(post("/api/nc/approve/1", R"({"note": "no name"})", "t"), 400), "needs `by`"));
+  EXPECT_TRUE(
+      has(error_of(post("/api/nc/rollback", R"({"program": "P", "version": -1, "by": "a"})", "t"), 400), "`version`"));
+  EXPECT_TRUE(has(error_of(post("/api/measure", "\xff\xfe{}", "t"), 400), "not JSON")) << "not UTF-8";
+  EXPECT_TRUE(has(error_of(post("/api/measure", std::string(20000, '['), "t"), 400), "not JSON"));
+  EXPECT_EQ(post("/api/measure", std::string(100 * 1024, ' '), "t").status, 413);
+  EXPECT_TRUE(log_.all().empty());
+  EXPECT_EQ(get("/api/health").status, 200) << "still serving";
+}
+
+TEST_F(HttpApiTest, UnknownPathsAre404AndWrongMethods405InJson) {
+  start();
+  EXPECT_TRUE(has(error_of(get("/api/nothing"), 404), "no such endpoint: GET /api/nothing"));
+  EXPECT_EQ(error_of(get("/"), 404).empty(), false);
+  EXPECT_EQ(error_of(get("/api/runs/1/export/more"), 404).empty(), false);
+  EXPECT_TRUE(has(error_of(get("/api/measure"), 405), "use POST"));
+  EXPECT_TRUE(has(error_of(post("/api/runs", "{}"), 405), "use GET"));
+}
+
+TEST_F(HttpApiTest, BadQueryValuesAre400NamingTheParameter) {
+  fill();
+  start();
+  EXPECT_TRUE(has(error_of(get("/api/runs?lobe=abc"), 400),
+                  "query parameter `lobe` must be a whole number from 1 to 1000, not 'abc'"));
+  EXPECT_TRUE(has(error_of(get("/api/runs?lobe=1x"), 400), "`lobe`"));
+  EXPECT_TRUE(has(error_of(get("/api/runs?limit=0"), 400), "`limit`"));
+  EXPECT_TRUE(has(error_of(get("/api/runs?limit=99999999999999999999"), 400), "`limit`"));
+  EXPECT_TRUE(has(error_of(get("/api/runs?since=22.11.2026"), 400),
+                  "query parameter `since`: '22.11.2026' is not a UTC date or time; write 2026-11-22"));
+  EXPECT_TRUE(has(error_of(get("/api/runs?until=2026-02-30"), 400), "not a real date"));
+  EXPECT_TRUE(has(error_of(get("/api/runs?status=done"), 400), "`status` must be measured or pushed"));
+  EXPECT_TRUE(has(error_of(get("/api/runs?parts=intake"), 400), "unknown query parameter `parts`"));
+  EXPECT_TRUE(has(error_of(get("/api/runs?lobe=1&lobe=2"), 400), "`lobe` is given twice"));
+  EXPECT_TRUE(has(error_of(get("/api/nc/pending?all=maybe"), 400), "`all` must be true or false"));
+  EXPECT_TRUE(has(error_of(get("/api/runs?lobe=%FF"), 400), "`lobe`")) << "not UTF-8, still JSON";
+  Answer odd = get("/api/runs?part=%FF%FE");
+  EXPECT_EQ(odd.status, 200) << odd.body;
+  EXPECT_EQ(odd.j, json::array());
+}
+
+TEST_F(HttpApiTest, AnExceptionInAHandlerIs500AndTheServerKeepsServing) {
+  fill();
+  HttpStatus status;
+  status.health = []() -> json { throw std::runtime_error("health hook broke"); };
+  start("", {}, status);
+  const std::string message = error_of(get("/api/health"), 500);
+  EXPECT_TRUE(has(message, "health hook broke")) << message;
+  EXPECT_TRUE(has(message, "please report it")) << message;
+  EXPECT_EQ(listed("?limit=1"), (Ids{ids_[3]}));
+}
+
+TEST_F(HttpApiTest, ConcurrentReadersEachGetWholeAnswers) {
+  fill();
+  start();
+  std::vector<std::thread> readers;
+  std::vector<int> ok(6, 0);
+  for (std::size_t t = 0; t < ok.size(); ++t) {
+    readers.emplace_back([this, t, &ok] {
+      httplib::Client c("127.0.0.1", api_->port());
+      for (int i = 0; i < 10; ++i) {
+        httplib::Result r = c.Get(t % 2 == 0 ? "/api/runs" : "/metrics");
+        if (r && r->status == 200) ++ok[t];
+      }
+    });
+  }
+  for (std::thread& r : readers) r.join();
+  EXPECT_EQ(ok, std::vector<int>(6, 10));
+}
+
+TEST_F(HttpApiTest, StopClosesThePortAndIsIdempotent) {
+  start();
+  const int port = api_->port();
+  EXPECT_EQ(get("/api/health").status, 200);
+  api_->stop();
+  api_->stop();
+  httplib::Client c("127.0.0.1", port);
+  EXPECT_FALSE(c.Get("/api/health")) << "nothing listens after stop";
+}
+
+TEST_F(HttpApiTest, ABusyPortIsAnErrorNamingTheAddress) {
+  start();
+  HttpSettings taken;
+  taken.port = api_->port();
+  Result<std::unique_ptr<HttpApi>> second = HttpApi::start(taken, db(), {}, {});
+  ASSERT_FALSE(second.ok());
+  EXPECT_EQ(second.error().code, ErrorCode::kIo);
+  EXPECT_TRUE(has(second.error().message, "127.0.0.1:" + std::to_string(taken.port))) << second.error().message;
+}
+
+}  // namespace
+}  // namespace gaugeloop
