@@ -2,6 +2,7 @@
 // requested over HTTP ends in a stored run and an NC file; the HTTP API answers; a broken
 // config on SIGHUP keeps the old one running; SIGTERM mid-run stores the whole run, leaves
 // a whole table and exits 0.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -36,16 +37,20 @@ constexpr const char* kToken = "0123456789abcdef0123456789abcdef";
 class ServiceProcess {
  public:
   ServiceProcess(const fs::path& config, const fs::path& log) {
+    // Everything the child needs, made before the fork.
+    const std::string bin = std::string(GAUGELOOP_BINARY_DIR) + "/bin/gaugeloop";
+    const std::string config_path = config.string();
+    const std::string log_path = log.string();
     int out[2];
     if (::pipe(out) != 0) return;
     pid_ = ::fork();
     if (pid_ == 0) {
+      // Only async-signal-safe calls between fork and exec: the parent has other threads.
       ::dup2(out[1], STDOUT_FILENO);
-      std::FILE* err = std::fopen(log.c_str(), "w");
-      if (err != nullptr) ::dup2(::fileno(err), STDERR_FILENO);
+      const int err = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      if (err >= 0) ::dup2(err, STDERR_FILENO);
       ::close(out[0]);
-      const std::string bin = std::string(GAUGELOOP_BINARY_DIR) + "/bin/gaugeloop";
-      ::execl(bin.c_str(), bin.c_str(), "serve", "--config", config.c_str(), static_cast<char*>(nullptr));
+      ::execl(bin.c_str(), bin.c_str(), "serve", "--config", config_path.c_str(), static_cast<char*>(nullptr));
       ::_exit(127);
     }
     ::close(out[1]);
