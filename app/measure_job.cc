@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "app/nc_push.h"
+#include "app/run_json.h"
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
 #include "compensation/wheel_path.h"
@@ -18,15 +19,6 @@
 
 namespace gaugeloop {
 namespace {
-
-std::string utc_now() {
-  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
 
 std::string fixed(double v, int decimals) {
   char buf[64];
@@ -205,11 +197,11 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     }
 
     // Acquire.
-    const std::string started = utc_now();
+    const std::string started = format_utc(std::time(nullptr));
     Poller poller(gauge, s.poller);
     Result<MeasuredRun> measured = poller.measure();
     if (!measured) return measured.error();
-    const std::string finished = utc_now();
+    const std::string finished = format_utc(std::time(nullptr));
 
     // Analyse and correct.
     Result<LobeAnalysis> analysis = analyse_lobe(*measured, *design_reading, s.part, s.analysis);
