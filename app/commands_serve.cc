@@ -294,7 +294,7 @@ void add_serve_commands(CLI::App& app, CommandAction& action) {
       app.add_subcommand("serve",
                          "Run as the service beside the grinder: measure on request (HTTP), store, compensate, push. "
                          "SIGHUP reloads the config; SIGTERM finishes the run in progress and exits. docs/service.md");
-  serve->add_option("--config", o->config_path, "Service configuration (TOML), see examples/gaugeloop.toml")
+  serve->add_option("--config", o->config_path, "Service configuration (TOML), see examples/service/gaugeloop.toml")
       ->required();
   serve->add_flag("--check", o->check_only, "Check the configuration (every part, template, limit) and exit");
   serve->callback([&action, o] { action = [o] { return cmd_serve(*o); }; });

@@ -1,6 +1,6 @@
 // The service's one configuration file (TOML): gauge link and register map, parts, analysis,
 // compensation, NC output, database and HTTP. Documented key by key in docs/service.md, with
-// a commented example in examples/gaugeloop.toml.
+// a commented example in examples/service/gaugeloop.toml.
 #pragma once
 
 #include <filesystem>

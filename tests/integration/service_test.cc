@@ -256,7 +256,8 @@ TEST_F(ServiceTest, SigtermMidRunStoresTheWholeRunAndLeavesAWholeTable) {
 
 TEST(ServiceConfigFile, ExampleConfigChecksAndABadOneNamesFileLineAndKey) {
   const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
-  testing::CommandResult ok = testing::run_command("serve --check --config " + (examples / "gaugeloop.toml").string());
+  testing::CommandResult ok =
+      testing::run_command("serve --check --config " + (examples / "service" / "gaugeloop.toml").string());
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_NE(ok.output.find("intake_flat lobe 1, exhaust_roller lobe 2"), std::string::npos) << ok.output;
 
