@@ -140,6 +140,7 @@ TEST_F(ServiceTest, RequestRunNcFileAndTheHttpApi) {
   const int port = service.port();
   ASSERT_GT(port, 0) << log();
   httplib::Client cli("127.0.0.1", port);
+  cli.set_read_timeout(120, 0);  // a run answers when it is done: seconds, more under sanitizers
 
   auto health = cli.Get("/api/health");
   ASSERT_TRUE(health) << log();
@@ -204,6 +205,7 @@ TEST_F(ServiceTest, BrokenConfigOnReloadKeepsTheOldOneRunning) {
   const int port = service.port();
   ASSERT_GT(port, 0) << log();
   httplib::Client cli("127.0.0.1", port);
+  cli.set_read_timeout(120, 0);  // a run answers when it is done: seconds, more under sanitizers
 
   std::ofstream(dir_ / "gaugeloop.toml") << config_text_ << "[compensation]\ngain = 3.0\n";
   service.signal(SIGHUP);
@@ -226,11 +228,11 @@ TEST_F(ServiceTest, SigtermMidRunStoresTheWholeRunAndLeavesAWholeTable) {
   const int port = service.port();
   ASSERT_GT(port, 0) << log();
   httplib::Client cli("127.0.0.1", port);
-  cli.set_read_timeout(60, 0);
+  cli.set_read_timeout(120, 0);
 
   std::thread request([port] {
     httplib::Client c("127.0.0.1", port);
-    c.set_read_timeout(60, 0);
+    c.set_read_timeout(120, 0);
     (void)c.Post("/api/measure", bearer(kToken), R"({"part": "intake_flat", "lobe": 1})", "application/json");
   });
   const bool measuring = wait_for_health(cli, [](const json& h) { return h["state"] == "measuring"; });
