@@ -20,7 +20,7 @@ build-asan: deps
 	cmake --build $(ASAN_DIR) -j $(JOBS)
 
 demo: build
-	$(BUILD_DIR)/bin/gaugeloop demo
+	$(BUILD_DIR)/bin/gaugeloop demo --iterations 3
 
 test-normal: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)

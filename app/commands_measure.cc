@@ -2,6 +2,7 @@
 #include <signal.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -12,7 +13,10 @@
 #include "app/cli_common.h"
 #include "app/embedded_defaults.h"
 #include "app/gauge_config.h"
+#include "app/grinding_loop.h"
 #include "app/measure_job.h"
+#include "app/svg_plot.h"
+#include "core/atomic_file.h"
 #include "simulator/gauge_simulator.h"
 
 namespace gaugeloop {
@@ -119,10 +123,11 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
       ->capture_default_str();
 }
 
-int run_job(GaugeClient& gauge, const LoadedPart& lp, const MeasureOptions& o, bool build_on_table_in_force) {
+// The job settings of the options, for `lp`.
+Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions& o, bool build_on_table_in_force) {
   std::string template_name;
   Result<std::string> tmpl = load_template(o.template_path, template_name);
-  if (!tmpl) return report_error(tmpl.error());
+  if (!tmpl) return tmpl.error();
   JobSettings js;
   js.part = lp.file.part;
   js.design = lp.design;
@@ -144,6 +149,13 @@ int run_job(GaugeClient& gauge, const LoadedPart& lp, const MeasureOptions& o, b
   js.machine = o.machine;
   js.note = o.note;
   js.build_on_table_in_force = build_on_table_in_force;
+  return js;
+}
+
+int run_job(GaugeClient& gauge, const LoadedPart& lp, const MeasureOptions& o, bool build_on_table_in_force) {
+  Result<JobSettings> settings = job_settings_for(lp, o, build_on_table_in_force);
+  if (!settings) return report_error(settings.error());
+  const JobSettings& js = *settings;
   Result<JobReport> report = run_measure_job(gauge, js);
   if (!report) return report_error(report.error());
   print_report(*report, js.part, js.machine);
@@ -166,6 +178,91 @@ int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {
   ms.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
   ModbusGauge gauge(ms);
   return run_job(gauge, *lp, o, /*build_on_table_in_force=*/false);
+}
+
+// demo --iterations: the loop on the virtual grinder (docs/virtual_grinder.md).
+struct LoopOptions {
+  int iterations = 0;     // 0: one run on the simulator's built-in form error
+  std::string plot_path;  // empty: <data-dir>/loop.svg
+  MachineErrorModel machine;
+};
+
+int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings, const LoopOptions& lo) {
+  Result<LoadedPart> lp = load_part(o.part_path);
+  if (!lp) return report_error(lp.error());
+  Result<JobSettings> job = job_settings_for(*lp, o, /*build_on_table_in_force=*/false);
+  if (!job) return report_error(job.error());
+  LoopSettings ls;
+  ls.job = std::move(*job);
+  ls.machine = lo.machine;
+  ls.gauge = sim_settings;
+  ls.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
+  ls.iterations = lo.iterations;
+  const MachineErrorModel& m = lo.machine;
+  std::printf(
+      "virtual grinder: %s lobe %d at %.0f rpm; servo %.0f Hz (damping %.2f, feed-forward %.3f), geometric "
+      "%.1f + %.1f um, drift %.2f um/part, vibration %.2f um RMS (harmonics %d..%d), seed %llu\n",
+      lp->file.part.name.c_str(), lp->file.part.lobe, m.work_speed_rpm, m.servo_bandwidth_hz, m.servo_damping,
+      m.velocity_feed_forward, m.geometric_once_um, m.geometric_twice_um, m.drift_um_per_part, m.vibration_rms_um,
+      m.vibration_min_harmonic, m.vibration_max_harmonic, static_cast<unsigned long long>(m.seed));
+  std::printf("gauge: simulator at %.0f rpm x %.0f, noise %.1f um RMS, %d revolutions %s; database %s\n\n",
+              sim_settings.speed_rpm, sim_settings.time_scale, sim_settings.noise_rms_um, o.revolutions, o.mode.c_str(),
+              ls.job.db_path.string().c_str());
+  std::printf("part  ground from              run  max um  RMS um  phase deg  runout um | true max  floor  table\n");
+  std::fflush(stdout);
+  Result<std::vector<LoopIteration>> loop = run_grinding_loop(ls, [](const LoopIteration& it) {
+    const LobeAnalysis& a = it.job.analysis;
+    const std::string table =
+        it.job.pushed()
+            ? "v" + std::to_string(it.job.table_version) + ", " + std::to_string(it.job.table_blocks) + " blocks"
+            : "not pushed (" + std::string(compensation_verdict_name(it.job.verdict)) +
+                  "): " + it.job.not_pushed_reason;
+    std::printf("%4d  %-22s %5lld  %6.2f  %6.2f  %+9.4f  %9.2f | %8.2f  %5.2f  %s\n", it.iteration,
+                it.ground_from.c_str(), static_cast<long long>(it.job.run_id), a.max_abs_error_um, a.rms_error_um,
+                a.phase_error_deg, a.base_circle_runout_um, it.part.max_abs_um, it.floor.max_abs_um, table.c_str());
+    std::fflush(stdout);
+  });
+  if (!loop) return report_error(loop.error());
+  const LoopIteration& first = loop->front();
+  const LoopIteration& last = loop->back();
+  std::printf("\nmax lift error %.2f um before compensation", first.job.analysis.max_abs_error_um);
+  if (loop->size() > 1)
+    std::printf(", %.2f um after 1 iteration (seed 000: 2.6 um)", (*loop)[1].job.analysis.max_abs_error_um);
+  std::printf(
+      ", %.2f um after %d; the part as ground: %.2f um, floor %.2f um (a perfect table under the same "
+      "vibration)\n",
+      last.job.analysis.max_abs_error_um, last.iteration, last.part.max_abs_um, last.floor.max_abs_um);
+
+  LoopPlot plot;
+  plot.title = "Grinding loop \u00b7 " + lp->file.part.name + " lobe " + std::to_string(lp->file.part.lobe) +
+               " \u00b7 virtual grinder";
+  plot.subtitle = std::to_string(loop->size()) + " parts, measured through the gauge simulator; runs " +
+                  std::to_string(first.job.run_id) + " to " + std::to_string(last.job.run_id) + " in " +
+                  ls.job.db_path.string();
+  for (const LoopIteration& it : *loop) {
+    LoopPlotPart part;
+    part.label = "part " + std::to_string(it.iteration);
+    part.error_um = it.job.analysis.error_um;
+    part.measured_max_um = it.job.analysis.max_abs_error_um;
+    part.true_max_um = it.part.max_abs_um;
+    part.floor_max_um = it.floor.max_abs_um;
+    plot.parts.push_back(std::move(part));
+  }
+  char footer[256];
+  std::snprintf(
+      footer, sizeof footer,
+      "servo %.0f Hz, feed-forward %.3f, geometric %.1f + %.1f um, drift %.2f um/part, vibration %.2f um RMS, "
+      "seed %llu \u00b7 gaugeloop %s",
+      m.servo_bandwidth_hz, m.velocity_feed_forward, m.geometric_once_um, m.geometric_twice_um, m.drift_um_per_part,
+      m.vibration_rms_um, static_cast<unsigned long long>(m.seed), GAUGELOOP_VERSION);
+  plot.footer = footer;
+  const std::filesystem::path svg_path =
+      lo.plot_path.empty() ? std::filesystem::path(o.paths.data_dir) / "loop.svg" : std::filesystem::path(lo.plot_path);
+  if (Status w = write_file_atomically(svg_path, render_loop_plot_svg(plot)); !w) return report_error(w.error());
+  std::printf("plot: %s\n", svg_path.string().c_str());
+  return std::all_of(loop->begin(), loop->end(), [](const LoopIteration& it) { return it.job.pushed(); })
+             ? kExitOk
+             : kExitNotPushed;
 }
 
 int cmd_measure(const MeasureOptions& o, const std::string& gauge_address) {
@@ -257,8 +354,35 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
   add_measure_options(*demo, *demo_opts);
   demo->add_option("--part", demo_opts->part_path, "Part file to simulate and measure [built-in intake_flat]");
   add_simulator_options(*demo, *demo_sim);
-  demo->callback([&action, demo, demo_opts, demo_sim] {
+  demo->add_option("--time-scale", demo_sim->time_scale, "Simulated seconds per real second")->capture_default_str();
+  auto loop = std::make_shared<LoopOptions>();
+  MachineErrorModel& m = loop->machine;
+  demo->add_option("--iterations", loop->iterations,
+                   "Close the loop on the virtual grinder N times: grind -> measure -> compensate -> push -> grind; "
+                   "prints every part and writes an SVG (docs/virtual_grinder.md). 0: one run, no grinding")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100));
+  demo->add_option("--plot", loop->plot_path, "SVG of every part's error, with --iterations [<data-dir>/loop.svg]");
+  demo->add_option("--work-speed-rpm", m.work_speed_rpm, "Grinding: work spindle speed")->capture_default_str();
+  demo->add_option("--servo-hz", m.servo_bandwidth_hz, "Grinding: infeed servo bandwidth; lower lags more, 0 none")
+      ->capture_default_str();
+  demo->add_option("--feed-forward", m.velocity_feed_forward, "Grinding: infeed velocity feed-forward, 0..1")
+      ->capture_default_str();
+  demo->add_option("--geometric-um", m.geometric_once_um, "Grinding: once-per-turn geometric error of X")
+      ->capture_default_str();
+  demo->add_option("--geometric-twice-um", m.geometric_twice_um, "Grinding: twice-per-turn geometric error of X")
+      ->capture_default_str();
+  demo->add_option("--drift-um", m.drift_um_per_part, "Grinding: drift per part at full lift (wear, heat)")
+      ->capture_default_str();
+  demo->add_option("--vibration-um", m.vibration_rms_um, "Grinding: random vibration, RMS on the ground lift")
+      ->capture_default_str();
+  demo->add_option("--machine-seed", m.seed, "Grinding: seed of the vibration")->capture_default_str();
+  demo->callback([&action, demo, demo_opts, demo_sim, loop] {
     seed_from_clock_unless_given(*demo, *demo_sim);
+    if (loop->iterations > 0) {
+      action = [demo_opts, demo_sim, loop] { return cmd_demo_loop(*demo_opts, *demo_sim, *loop); };
+      return;
+    }
     action = [demo_opts, demo_sim] { return cmd_demo(*demo_opts, *demo_sim); };
   });
 

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <numbers>
 #include <vector>
 
@@ -306,6 +307,151 @@ std::string render_error_plot_svg(const ErrorPlot& p) {
     legend("<rect x=\"" + num(lx) + "\" y=\"" + num(ly2 - 6) + "\" width=\"24\" height=\"12\" fill=\"" +
                kToleranceColour + "\" stroke=\"#9fcfa4\"/>\n",
            "tolerance \u00b1" + num(*p.tolerance_um, 1) + " \u00b5m");
+  }
+  add_text(svg, {40, kHeight - 10.0, p.footer, 11, "start", kMutedColour});
+  svg += "</svg>\n";
+  return svg;
+}
+
+}  // namespace gaugeloop
+
+namespace gaugeloop {
+namespace {
+
+// From the first part (light orange) to the last (dark blue): the eye follows the loop.
+std::string ramp_colour(std::size_t i, std::size_t n) {
+  const double t = n > 1 ? static_cast<double>(i) / static_cast<double>(n - 1) : 1.0;
+  const auto mixc = [t](int a, int b) { return static_cast<int>(std::lround(a + (b - a) * t)); };
+  char buf[8];
+  std::snprintf(buf, sizeof buf, "#%02x%02x%02x", mixc(0xf0, 0x1f), mixc(0xa2, 0x4e), mixc(0x4c, 0x9c));
+  return buf;
+}
+
+}  // namespace
+
+std::string render_loop_plot_svg(const LoopPlot& p) {
+  constexpr double kLeft = 80.0;
+  constexpr double kRight = 760.0;
+  constexpr double kTop = 120.0;
+  constexpr double kBottom = 540.0;
+  constexpr double kConvLeft = 860.0;
+  constexpr double kConvRight = 1160.0;
+  const std::size_t n = p.parts.size();
+
+  double extent = 0.0;
+  double largest_max = 0.0;
+  for (const LoopPlotPart& part : p.parts) {
+    for (double v : part.error_um) extent = std::max(extent, std::abs(v));
+    largest_max = std::max({largest_max, part.measured_max_um, part.true_max_um, part.floor_max_um});
+  }
+  const double step = nice_step(2.0 * extent);
+  const double scale = std::max(step, std::ceil(extent / step) * step);
+
+  std::string svg;
+  svg.reserve(64 * 1024);
+  svg += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  svg += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(kWidth) + "\" height=\"" +
+         std::to_string(kHeight) + "\" viewBox=\"0 0 " + std::to_string(kWidth) + " " + std::to_string(kHeight) +
+         "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">\n";
+  svg += "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n";
+  add_text(svg, {40, 46, p.title, 22, "start", kTextColour, "bold"});
+  add_text(svg, {40, 72, p.subtitle, 14, "start", kMutedColour});
+
+  // ---- Error profiles ----
+  const double y0 = (kTop + kBottom) / 2.0;
+  const double ky = (kBottom - kTop) / (2.0 * scale);
+  const auto x_of = [&](double deg) { return kLeft + (kRight - kLeft) * deg / 360.0; };
+  const auto y_of = [&](double um) { return y0 - um * ky; };
+  add_text(svg, {(kLeft + kRight) / 2, 104, "Measured lift error of every part, per cam degree", 14, "middle",
+                 kTextColour, "bold"});
+  for (double e = -scale; e <= scale + 1e-9; e += step) {
+    const bool zero = std::abs(e) < 1e-9;
+    add_line(svg, kLeft, y_of(e), kRight, y_of(e), zero ? "#8a949e" : kGridColour, zero ? 1.2 : 0.8);
+    add_text(svg, {kLeft - 8, y_of(e) + 4, (e > 0 ? "+" : "") + num(e, step < 1 ? 1 : 0), 11, "end", kMutedColour});
+  }
+  for (int deg = 0; deg <= 360; deg += 30) {
+    add_line(svg, x_of(deg), kTop, x_of(deg), kBottom, kGridColour, 0.8);
+    add_text(svg, {x_of(deg), kBottom + 18, std::to_string(deg), 11, "middle", kMutedColour});
+  }
+  svg += "<rect x=\"" + num(kLeft) + "\" y=\"" + num(kTop) + "\" width=\"" + num(kRight - kLeft) + "\" height=\"" +
+         num(kBottom - kTop) + "\" fill=\"none\" stroke=\"#8a949e\" stroke-width=\"1\"/>\n";
+  add_text(svg, {(kLeft + kRight) / 2, kBottom + 40, "cam angle (deg, 0 = nose)", 12, "middle", kMutedColour});
+  svg += "<text x=\"" + num(kLeft - 46) + "\" y=\"" + num(y0) + "\" font-size=\"12\" text-anchor=\"middle\" fill=\"" +
+         kMutedColour + "\" transform=\"rotate(-90 " + num(kLeft - 46) + " " + num(y0) +
+         ")\">lift error (\u00b5m)</text>\n";
+  for (std::size_t i = 0; i < n; ++i) {
+    std::string pts;
+    for (int deg = 0; deg <= kDegreesPerRevolution; ++deg) {
+      const double v = p.parts[i].error_um[static_cast<std::size_t>(deg % kDegreesPerRevolution)];
+      pts += num(x_of(deg), 2) + "," + num(y_of(v), 2) + " ";
+    }
+    svg += "<polyline points=\"" + pts + "\" fill=\"none\" stroke=\"" + ramp_colour(i, n) + "\" stroke-width=\"" +
+           (i + 1 == n ? "2.2" : "1.4") + "\" stroke-linejoin=\"round\"/>\n";
+  }
+
+  // ---- Convergence ----
+  const double top = nice_step(largest_max) * std::ceil(largest_max / nice_step(largest_max));
+  const double cy = (kBottom - kTop) / std::max(top, 1e-9);
+  const auto cx_of = [&](std::size_t i) {
+    return n > 1 ? kConvLeft + (kConvRight - kConvLeft) * static_cast<double>(i) / static_cast<double>(n - 1)
+                 : (kConvLeft + kConvRight) / 2;
+  };
+  const auto cy_of = [&](double um) { return kBottom - um * cy; };
+  add_text(svg, {(kConvLeft + kConvRight) / 2, 104, "Largest lift error per part", 14, "middle", kTextColour, "bold"});
+  const double cstep = nice_step(top);
+  for (double e = 0.0; e <= top + 1e-9; e += cstep) {
+    add_line(svg, kConvLeft, cy_of(e), kConvRight, cy_of(e), kGridColour, 0.8);
+    add_text(svg, {kConvLeft - 8, cy_of(e) + 4, num(e, cstep < 1 ? 1 : 0), 11, "end", kMutedColour});
+  }
+  svg += "<rect x=\"" + num(kConvLeft) + "\" y=\"" + num(kTop) + "\" width=\"" + num(kConvRight - kConvLeft) +
+         "\" height=\"" + num(kBottom - kTop) + "\" fill=\"none\" stroke=\"#8a949e\" stroke-width=\"1\"/>\n";
+  const auto series = [&](double LoopPlotPart::*field, const char* colour, const char* dash, bool dots) {
+    std::string pts;
+    for (std::size_t i = 0; i < n; ++i) pts += num(cx_of(i), 2) + "," + num(cy_of(p.parts[i].*field), 2) + " ";
+    svg += "<polyline points=\"" + pts + "\" fill=\"none\" stroke=\"" + colour + "\" stroke-width=\"1.6\"" +
+           (dash != nullptr ? std::string(" stroke-dasharray=\"") + dash + "\"" : std::string()) + "/>\n";
+    if (!dots) return;
+    for (std::size_t i = 0; i < n; ++i) {
+      svg += "<circle cx=\"" + num(cx_of(i), 2) + "\" cy=\"" + num(cy_of(p.parts[i].*field), 2) +
+             "\" r=\"3.5\" fill=\"" + ramp_colour(i, n) + "\" stroke=\"" + colour + "\"/>\n";
+    }
+  };
+  series(&LoopPlotPart::floor_max_um, kMutedColour, "5,3", false);
+  series(&LoopPlotPart::true_max_um, kCorrectionColour, "2,2", false);
+  series(&LoopPlotPart::measured_max_um, kErrorColour, nullptr, true);
+  for (std::size_t i = 0; i < n; ++i) {
+    add_text(svg, {cx_of(i), kBottom + 18, std::to_string(i), 11, "middle", kMutedColour});
+  }
+  add_text(svg, {(kConvLeft + kConvRight) / 2, kBottom + 40, "part (0: ground before compensation)", 12, "middle",
+                 kMutedColour});
+  const double last_measured = p.parts.back().measured_max_um;
+  add_text(svg, {kWidth - 40.0, 46,
+                 "max |error| " + num(p.parts.front().measured_max_um, 2) + " \u2192 " + num(last_measured, 2) +
+                     " \u00b5m \u00b7 floor " + num(p.parts.back().floor_max_um, 2) + " \u00b5m",
+                 16, "end", kTextColour, "bold"});
+  add_text(svg, {kWidth - 40.0, 72, "lift error = measured \u2212 design, cam frame, 0\u00b0 at the nose", 13, "end",
+                 kMutedColour});
+
+  // ---- Legend and footer ----
+  double lx = kConvLeft - 40;
+  const double ly = 606;
+  const auto legend = [&](const char* colour, const char* dash, const std::string& label) {
+    svg += "<line x1=\"" + num(lx) + "\" y1=\"" + num(ly) + "\" x2=\"" + num(lx + 24) + "\" y2=\"" + num(ly) +
+           "\" stroke=\"" + colour + "\" stroke-width=\"2\"" +
+           (dash != nullptr ? std::string(" stroke-dasharray=\"") + dash + "\"" : std::string()) + "/>\n";
+    add_text(svg, {lx + 30, ly + 4, label, 12, "start", kTextColour});
+    lx += 30 + 6.5 * static_cast<double>(label.size()) + 14;
+  };
+  legend(kErrorColour, nullptr, "measured");
+  legend(kCorrectionColour, "2,2", "true");
+  legend(kMutedColour, "5,3", "floor");
+  double px = kLeft;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (px > kRight - 60) break;  // more parts than room: the ramp tells the order
+    svg += "<line x1=\"" + num(px) + "\" y1=\"" + num(ly) + "\" x2=\"" + num(px + 18) + "\" y2=\"" + num(ly) +
+           "\" stroke=\"" + ramp_colour(i, n) + "\" stroke-width=\"3\"/>\n";
+    add_text(svg, {px + 22, ly + 4, p.parts[i].label, 11, "start", kTextColour});
+    px += 22 + 6.0 * static_cast<double>(p.parts[i].label.size()) + 14;
   }
   add_text(svg, {40, kHeight - 10.0, p.footer, 11, "start", kMutedColour});
   svg += "</svg>\n";

@@ -3,6 +3,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/run.h"
 
@@ -26,5 +27,28 @@ struct ErrorPlot {
 // that prints on A4 landscape. Numbers use '.' whatever the C locale. Pure: no I/O.
 // Precondition: every value is finite.
 std::string render_error_plot_svg(const ErrorPlot& plot);
+
+// Every part of a grinding loop on one sheet (gaugeloop demo --iterations): the lift error
+// profile of each part over the cam degrees, first to last from light to dark, and the
+// convergence beside it: measured and true largest error per part, and the floor (what a
+// perfect table leaves under the same vibration).
+struct LoopPlotPart {
+  std::string label;       // e.g. "part 2 · v7"
+  DegreeTable error_um{};  // measured lift error, cam frame
+  double measured_max_um = 0.0;
+  double true_max_um = 0.0;
+  double floor_max_um = 0.0;
+};
+
+struct LoopPlot {
+  std::string title;
+  std::string subtitle;
+  std::vector<LoopPlotPart> parts;  // in the order ground; at least one
+  std::string footer;
+};
+
+// A self-contained SVG 1.1 document, 1200 x 640 px, like render_error_plot_svg. Pure.
+// Precondition: every value is finite.
+std::string render_loop_plot_svg(const LoopPlot& plot);
 
 }  // namespace gaugeloop

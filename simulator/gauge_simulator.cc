@@ -68,6 +68,15 @@ Status validate(const SimulatorSettings& s) {
     return make_error(ErrorCode::kInvalidInput,
                       "simulator lobe error must be in [0, 1000] um and noise in [0, 100] um");
   }
+  if (s.ground_reading_mm) {
+    for (int d = 0; d < kDegreesPerRevolution; ++d) {
+      const double v = (*s.ground_reading_mm)[static_cast<size_t>(d)];
+      if (!std::isfinite(v) || std::abs(v) > 1000.0) {
+        return make_error(ErrorCode::kInvalidInput, "simulator ground lobe: the reading at cam degree " +
+                                                        std::to_string(d) + " is not a lift in [-1000, 1000] mm");
+      }
+    }
+  }
   if (s.port < 0 || s.port > 65535) {
     return make_error(ErrorCode::kInvalidInput, "simulator port must be in [0, 65535]");
   }
@@ -76,6 +85,10 @@ Status validate(const SimulatorSettings& s) {
 
 GaugeSimulator::GaugeSimulator(const Part& part, const SimulatorSettings& settings, PeriodicSpline lift)
     : part_(part), settings_(settings), lift_(std::move(lift)) {
+  if (settings_.ground_reading_mm) {
+    ground_ = PeriodicSpline::fit(*settings_.ground_reading_mm);
+    return;
+  }
   // The form error imitates a ground lobe: servo lag (follows the lift velocity), a nose
   // error (follows the curvature) and a small geometric second harmonic, scaled to the peak.
   for (int i = 0; i < 3600; ++i) {
@@ -90,6 +103,7 @@ GaugeSimulator::GaugeSimulator(const Part& part, const SimulatorSettings& settin
 }
 
 double GaugeSimulator::lobe_error_um(double cam_angle_deg) const {
+  if (ground_) return (ground_->value(cam_angle_deg) - lift_.value(cam_angle_deg)) * 1000.0;
   const double b = cam_angle_deg * std::numbers::pi / 180.0;
   const double shape =
       0.7 * lift_.d1(cam_angle_deg) / max_d1_ - 0.5 * lift_.d2(cam_angle_deg) / max_d2_ + 0.2 * std::cos(2.0 * b + 0.4);
@@ -97,6 +111,7 @@ double GaugeSimulator::lobe_error_um(double cam_angle_deg) const {
 }
 
 double GaugeSimulator::true_lift_mm(double cam_angle_deg) const {
+  if (ground_) return ground_->value(cam_angle_deg);
   return lift_.value(cam_angle_deg) + lobe_error_um(cam_angle_deg) / 1000.0;
 }
 

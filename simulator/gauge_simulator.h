@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -62,7 +63,11 @@ struct SimulatorSettings {
   double noise_rms_um = 0.3;         // gauge noise, Gaussian, per amplifier sample
   double gauge_offset_mm = 0.25;     // reading on the base circle: the gauge is not zeroed
   std::uint64_t seed = 1;            // noise is a pure function of (seed, sample number)
-  std::vector<FaultSpec> faults;     // scheduled from the first request (simulator/faults.h)
+  // The lobe on the machine, when it was ground (simulator/virtual_grinder.h): what the flat
+  // probe reads at each whole cam degree, mm, 0 on the base circle; served instead of the
+  // design with the form error above (lobe_error_peak_um is then ignored).
+  std::optional<DegreeTable> ground_reading_mm;
+  std::vector<FaultSpec> faults;  // scheduled from the first request (simulator/faults.h)
 };
 
 // Checks settings; the message names the setting.
@@ -88,7 +93,8 @@ class GaugeSimulator {
   const SimulatorSettings& settings() const { return settings_; }
   std::int64_t requests_served() const { return requests_.load(); }
 
-  // The repeatable form error built into the simulated lobe at a cam angle (deg), in um.
+  // The repeatable form error of the simulated lobe (built in, or that of the ground lobe
+  // given) against the design, at a cam angle (deg), in um.
   double lobe_error_um(double cam_angle_deg) const;
   // What the gauge would read at a cam angle without noise or gauge offset, in mm.
   double true_lift_mm(double cam_angle_deg) const;
@@ -123,7 +129,8 @@ class GaugeSimulator {
 
   Part part_;
   SimulatorSettings settings_;
-  PeriodicSpline lift_;  // flat-probe reading of the design lobe, cam frame
+  PeriodicSpline lift_;                   // flat-probe reading of the design lobe, cam frame
+  std::optional<PeriodicSpline> ground_;  // flat-probe reading of the ground lobe, when given
   double max_d1_ = 1.0;
   double max_d2_ = 1.0;
   double error_scale_ = 0.0;
