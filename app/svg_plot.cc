@@ -123,6 +123,59 @@ std::string circle_path(double r) {
          num(2 * r, 2) + ",0a" + num(r, 2) + "," + num(r, 2) + " 0 1,0 " + num(-2 * r, 2) + ",0Z";
 }
 
+// The document, its white page, title and subtitle.
+std::string start_document(const std::string& title, const std::string& subtitle) {
+  std::string svg;
+  svg.reserve(64 * 1024);
+  svg += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  svg += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(kWidth) + "\" height=\"" +
+         std::to_string(kHeight) + "\" viewBox=\"0 0 " + std::to_string(kWidth) + " " + std::to_string(kHeight) +
+         "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">\n";
+  svg += "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n";
+  add_text(svg, {40, 46, title, 22, "start", kTextColour, "bold"});
+  add_text(svg, {40, 72, subtitle, 14, "start", kMutedColour});
+  return svg;
+}
+
+// A panel of lift error (-scale..+scale um, grid every `step`) over cam degrees 0..360.
+struct DegreePanel {
+  double left, right, top, bottom;
+  double scale, step;
+
+  double x_of(double deg) const { return left + (right - left) * deg / 360.0; }
+  double y_of(double um) const { return (top + bottom) / 2.0 - um * (bottom - top) / (2.0 * scale); }
+
+  // Grid, scale labels, frame and axis titles.
+  void draw_axes(std::string& svg) const {
+    for (double e = -scale; e <= scale + 1e-9; e += step) {
+      const bool zero = std::abs(e) < 1e-9;
+      add_line(svg, left, y_of(e), right, y_of(e), zero ? "#8a949e" : kGridColour, zero ? 1.2 : 0.8);
+      add_text(svg, {left - 8, y_of(e) + 4, (e > 0 ? "+" : "") + num(e, step < 1 ? 1 : 0), 11, "end", kMutedColour});
+    }
+    for (int deg = 0; deg <= 360; deg += 30) {
+      add_line(svg, x_of(deg), top, x_of(deg), bottom, kGridColour, 0.8);
+      add_text(svg, {x_of(deg), bottom + 18, std::to_string(deg), 11, "middle", kMutedColour});
+    }
+    svg += "<rect x=\"" + num(left) + "\" y=\"" + num(top) + "\" width=\"" + num(right - left) + "\" height=\"" +
+           num(bottom - top) + "\" fill=\"none\" stroke=\"#8a949e\" stroke-width=\"1\"/>\n";
+    add_text(svg, {(left + right) / 2, bottom + 40, "cam angle (deg, 0 = nose)", 12, "middle", kMutedColour});
+    const double y0 = (top + bottom) / 2.0;
+    svg += "<text x=\"" + num(left - 46) + "\" y=\"" + num(y0) + "\" font-size=\"12\" text-anchor=\"middle\" fill=\"" +
+           kMutedColour + "\" transform=\"rotate(-90 " + num(left - 46) + " " + num(y0) +
+           ")\">lift error (\u00b5m)</text>\n";
+  }
+
+  // Polyline points of a table; the last point repeats the first at 360 deg (periodic).
+  std::string points(const DegreeTable& t) const {
+    std::string pts;
+    for (int deg = 0; deg <= kDegreesPerRevolution; ++deg) {
+      const double v = t[static_cast<std::size_t>(deg % kDegreesPerRevolution)];
+      pts += num(x_of(deg), 2) + "," + num(y_of(v), 2) + " ";
+    }
+    return pts;
+  }
+};
+
 }  // namespace
 
 std::string render_error_plot_svg(const ErrorPlot& p) {
@@ -145,15 +198,7 @@ std::string render_error_plot_svg(const ErrorPlot& p) {
   int outside = 0;
   for (std::size_t d = 0; d < p.error_um.size(); ++d) outside += out_of_tolerance(d) ? 1 : 0;
 
-  std::string svg;
-  svg.reserve(64 * 1024);
-  svg += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  svg += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(kWidth) + "\" height=\"" +
-         std::to_string(kHeight) + "\" viewBox=\"0 0 " + std::to_string(kWidth) + " " + std::to_string(kHeight) +
-         "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">\n";
-  svg += "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n";
-  add_text(svg, {40, 46, p.title, 22, "start", kTextColour, "bold"});
-  add_text(svg, {40, 72, p.subtitle, 14, "start", kMutedColour});
+  std::string svg = start_document(p.title, p.subtitle);
   std::string verdict =
       "max |error| " + num(std::abs(p.error_um[worst]), 2) + " \u00b5m at cam " + std::to_string(worst) + "\u00b0";
   if (p.tolerance_um) {
@@ -212,42 +257,17 @@ std::string render_error_plot_svg(const ErrorPlot& p) {
             12, "middle", kMutedColour});
 
   // ---- Linear panel ----
-  const double y0 = (kPlotTop + kPlotBottom) / 2.0;
-  const double ky = (kPlotBottom - kPlotTop) / (2.0 * scale);
-  const auto x_of = [](double deg) { return kPlotLeft + (kPlotRight - kPlotLeft) * deg / 360.0; };
-  const auto y_of = [&](double um) { return y0 - um * ky; };
+  const DegreePanel panel{kPlotLeft, kPlotRight, kPlotTop, kPlotBottom, scale, step};
+  const auto x_of = [&](double deg) { return panel.x_of(deg); };
+  const auto y_of = [&](double um) { return panel.y_of(um); };
   add_text(svg, {(kPlotLeft + kPlotRight) / 2, 104, "Linear: error per cam degree", 14, "middle", kTextColour, "bold"});
   if (p.tolerance_um) {
     svg += "<rect x=\"" + num(kPlotLeft) + "\" y=\"" + num(y_of(*p.tolerance_um)) + "\" width=\"" +
-           num(kPlotRight - kPlotLeft) + "\" height=\"" + num(2 * *p.tolerance_um * ky) + "\" fill=\"" +
-           kToleranceColour + "\"/>\n";
+           num(kPlotRight - kPlotLeft) + "\" height=\"" + num(y_of(-*p.tolerance_um) - y_of(*p.tolerance_um)) +
+           "\" fill=\"" + kToleranceColour + "\"/>\n";
   }
-  for (double e = -scale; e <= scale + 1e-9; e += step) {
-    const bool zero = std::abs(e) < 1e-9;
-    add_line(svg, kPlotLeft, y_of(e), kPlotRight, y_of(e), zero ? "#8a949e" : kGridColour, zero ? 1.2 : 0.8);
-    add_text(svg, {kPlotLeft - 8, y_of(e) + 4, (e > 0 ? "+" : "") + num(e, step < 1 ? 1 : 0), 11, "end", kMutedColour});
-  }
-  for (int deg = 0; deg <= 360; deg += 30) {
-    add_line(svg, x_of(deg), kPlotTop, x_of(deg), kPlotBottom, kGridColour, 0.8);
-    add_text(svg, {x_of(deg), kPlotBottom + 18, std::to_string(deg), 11, "middle", kMutedColour});
-  }
-  svg += "<rect x=\"" + num(kPlotLeft) + "\" y=\"" + num(kPlotTop) + "\" width=\"" + num(kPlotRight - kPlotLeft) +
-         "\" height=\"" + num(kPlotBottom - kPlotTop) + "\" fill=\"none\" stroke=\"#8a949e\" stroke-width=\"1\"/>\n";
-  add_text(svg,
-           {(kPlotLeft + kPlotRight) / 2, kPlotBottom + 40, "cam angle (deg, 0 = nose)", 12, "middle", kMutedColour});
-  svg += "<text x=\"" + num(kPlotLeft - 46) + "\" y=\"" + num(y0) +
-         "\" font-size=\"12\" text-anchor=\"middle\" fill=\"" + kMutedColour + "\" transform=\"rotate(-90 " +
-         num(kPlotLeft - 46) + " " + num(y0) + ")\">lift error (\u00b5m)</text>\n";
-
-  // The last point repeats the first at 360 deg: the profile is periodic.
-  const auto polyline = [&](const DegreeTable& t) {
-    std::string pts;
-    for (int deg = 0; deg <= kDegreesPerRevolution; ++deg) {
-      const double v = t[static_cast<std::size_t>(deg % kDegreesPerRevolution)];
-      pts += num(x_of(deg), 2) + "," + num(y_of(v), 2) + " ";
-    }
-    return pts;
-  };
+  panel.draw_axes(svg);
+  const auto polyline = [&](const DegreeTable& t) { return panel.points(t); };
   if (p.spread_um) {
     std::string band;
     for (int deg = 0; deg <= kDegreesPerRevolution; ++deg) {
@@ -347,46 +367,16 @@ std::string render_loop_plot_svg(const LoopPlot& p) {
   const double step = nice_step(2.0 * extent);
   const double scale = std::max(step, std::ceil(extent / step) * step);
 
-  std::string svg;
-  svg.reserve(64 * 1024);
-  svg += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  svg += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(kWidth) + "\" height=\"" +
-         std::to_string(kHeight) + "\" viewBox=\"0 0 " + std::to_string(kWidth) + " " + std::to_string(kHeight) +
-         "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">\n";
-  svg += "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n";
-  add_text(svg, {40, 46, p.title, 22, "start", kTextColour, "bold"});
-  add_text(svg, {40, 72, p.subtitle, 14, "start", kMutedColour});
+  std::string svg = start_document(p.title, p.subtitle);
 
   // ---- Error profiles ----
-  const double y0 = (kTop + kBottom) / 2.0;
-  const double ky = (kBottom - kTop) / (2.0 * scale);
-  const auto x_of = [&](double deg) { return kLeft + (kRight - kLeft) * deg / 360.0; };
-  const auto y_of = [&](double um) { return y0 - um * ky; };
+  const DegreePanel panel{kLeft, kRight, kTop, kBottom, scale, step};
   add_text(svg, {(kLeft + kRight) / 2, 104, "Measured lift error of every part, per cam degree", 14, "middle",
                  kTextColour, "bold"});
-  for (double e = -scale; e <= scale + 1e-9; e += step) {
-    const bool zero = std::abs(e) < 1e-9;
-    add_line(svg, kLeft, y_of(e), kRight, y_of(e), zero ? "#8a949e" : kGridColour, zero ? 1.2 : 0.8);
-    add_text(svg, {kLeft - 8, y_of(e) + 4, (e > 0 ? "+" : "") + num(e, step < 1 ? 1 : 0), 11, "end", kMutedColour});
-  }
-  for (int deg = 0; deg <= 360; deg += 30) {
-    add_line(svg, x_of(deg), kTop, x_of(deg), kBottom, kGridColour, 0.8);
-    add_text(svg, {x_of(deg), kBottom + 18, std::to_string(deg), 11, "middle", kMutedColour});
-  }
-  svg += "<rect x=\"" + num(kLeft) + "\" y=\"" + num(kTop) + "\" width=\"" + num(kRight - kLeft) + "\" height=\"" +
-         num(kBottom - kTop) + "\" fill=\"none\" stroke=\"#8a949e\" stroke-width=\"1\"/>\n";
-  add_text(svg, {(kLeft + kRight) / 2, kBottom + 40, "cam angle (deg, 0 = nose)", 12, "middle", kMutedColour});
-  svg += "<text x=\"" + num(kLeft - 46) + "\" y=\"" + num(y0) + "\" font-size=\"12\" text-anchor=\"middle\" fill=\"" +
-         kMutedColour + "\" transform=\"rotate(-90 " + num(kLeft - 46) + " " + num(y0) +
-         ")\">lift error (\u00b5m)</text>\n";
+  panel.draw_axes(svg);
   for (std::size_t i = 0; i < n; ++i) {
-    std::string pts;
-    for (int deg = 0; deg <= kDegreesPerRevolution; ++deg) {
-      const double v = p.parts[i].error_um[static_cast<std::size_t>(deg % kDegreesPerRevolution)];
-      pts += num(x_of(deg), 2) + "," + num(y_of(v), 2) + " ";
-    }
-    svg += "<polyline points=\"" + pts + "\" fill=\"none\" stroke=\"" + ramp_colour(i, n) + "\" stroke-width=\"" +
-           (i + 1 == n ? "2.2" : "1.4") + "\" stroke-linejoin=\"round\"/>\n";
+    svg += "<polyline points=\"" + panel.points(p.parts[i].error_um) + "\" fill=\"none\" stroke=\"" +
+           ramp_colour(i, n) + "\" stroke-width=\"" + (i + 1 == n ? "2.2" : "1.4") + "\" stroke-linejoin=\"round\"/>\n";
   }
 
   // ---- Convergence ----

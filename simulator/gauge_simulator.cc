@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "compensation/flat_probe.h"
+#include "simulator/seeded_random.h"
 
 namespace gaugeloop {
 namespace {
@@ -29,15 +30,8 @@ std::int64_t now_ns() {
       .count();
 }
 
-// splitmix64: a well-mixed 64-bit hash, so noise is a pure function of the sample number.
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-double unit_uniform(std::uint64_t h) { return (static_cast<double>(h >> 11) + 0.5) * (1.0 / 9007199254740992.0); }
+using seeded::mix;
+using seeded::unit_uniform;
 
 // Standard normal deviate for sample n (Box-Muller on two hashed uniforms).
 double gaussian(std::uint64_t seed, std::uint64_t n) {

@@ -14,6 +14,7 @@
 #include "compensation/wheel_path.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
+#include "simulator/seeded_random.h"
 
 namespace gaugeloop {
 namespace {
@@ -21,15 +22,8 @@ namespace {
 constexpr double kGridStepDeg = 0.1;
 constexpr int kGridRows = 3600;
 
-// splitmix64, as the gauge simulator's noise: the vibration is a pure function of the seed.
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-double unit_uniform(std::uint64_t h) { return (static_cast<double>(h >> 11) + 0.5) * (1.0 / 9007199254740992.0); }
+using seeded::mix;
+using seeded::unit_uniform;
 
 double deg_to_rad(double deg) { return deg * std::numbers::pi / 180.0; }
 
