@@ -23,6 +23,7 @@
 #include "storage/run_store.h"
 #include "tests/nc_out/nc_reference.h"
 #include "tests/support/cli.h"
+#include "tests/support/intake_job.h"
 
 namespace gaugeloop {
 namespace {
@@ -33,34 +34,8 @@ using testing::CommandResult;
 using testing::run_command;
 using testing::slurp;
 
-class FullPathTest : public ::testing::Test {
+class FullPathTest : public testing::IntakeJobTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("gaugeloop-it-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    auto pf = read_part_file(fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml");
-    ASSERT_TRUE(pf.ok()) << pf.error().message;
-    part_ = *pf;
-    auto design = read_lift_table_csv(part_.part.lift_table);
-    ASSERT_TRUE(design.ok()) << design.error().message;
-    design_ = *design;
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  JobSettings job_settings() const {
-    JobSettings js;
-    js.part = part_.part;
-    js.design = design_;
-    js.nc_program = part_.nc_program;
-    js.db_path = dir_ / "gaugeloop.sqlite";
-    js.nc_dir = dir_ / "nc";
-    js.nc_template = std::string(embedded::kNcTemplate);
-    js.nc_template_name = "cam_table.spf";
-    return js;
-  }
-
   int stored_runs() const {
     auto store = RunStore::open(dir_ / "gaugeloop.sqlite");
     EXPECT_TRUE(store.ok());
@@ -68,10 +43,6 @@ class FullPathTest : public ::testing::Test {
     EXPECT_TRUE(runs.ok());
     return static_cast<int>(runs->size());
   }
-
-  fs::path dir_;
-  PartFile part_;
-  LiftTable design_;
 };
 
 TEST_F(FullPathTest, RecoversTheInjectedErrorAndWritesTheCorrectedTable) {

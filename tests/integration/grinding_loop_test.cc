@@ -14,30 +14,19 @@
 #include "app/embedded_defaults.h"
 #include "app/part_file.h"
 #include "tests/support/cli.h"
+#include "tests/support/intake_job.h"
 
 namespace gaugeloop {
 namespace {
 
 namespace fs = std::filesystem;
 
-class GrindingLoopTest : public ::testing::Test {
+class GrindingLoopTest : public testing::IntakeJobTest {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("gaugeloop-loop-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    auto pf = read_part_file(fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml");
-    ASSERT_TRUE(pf.ok()) << pf.error().message;
-    auto design = read_lift_table_csv(pf->part.lift_table);
-    ASSERT_TRUE(design.ok()) << design.error().message;
-    settings_.job.part = pf->part;
-    settings_.job.design = *design;
-    settings_.job.nc_program = pf->nc_program;
-    settings_.job.db_path = dir_ / "gaugeloop.sqlite";
-    settings_.job.nc_dir = dir_ / "nc";
-    settings_.job.nc_template = std::string(embedded::kNcTemplate);
-    settings_.job.nc_template_name = "cam_table.spf";
+    IntakeJobTest::SetUp();
+    if (HasFatalFailure()) return;
+    settings_.job = job_settings();
     settings_.job.machine = "virtual-grinder";
     // The gauge turns the part at 60 rpm, ten times faster than the wall clock: the latched
     // poller keeps up at 3000 rpm (docs/PERFORMANCE.md), so 600 leaves room under sanitizers.
@@ -46,8 +35,6 @@ class GrindingLoopTest : public ::testing::Test {
     settings_.machine.seed = 11;
     settings_.response_timeout = std::chrono::milliseconds(1000);
   }
-  void TearDown() override { fs::remove_all(dir_); }
-
   std::vector<LoopIteration> run(int iterations) {
     settings_.iterations = iterations;
     Result<std::vector<LoopIteration>> loop = run_grinding_loop(settings_, {});
@@ -70,7 +57,6 @@ class GrindingLoopTest : public ::testing::Test {
     return largest;
   }
 
-  fs::path dir_;
   LoopSettings settings_;
 };
 

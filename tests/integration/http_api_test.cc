@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "storage/run_store.h"
+#include "tests/support/sample_runs.h"
 
 namespace gaugeloop {
 namespace {
@@ -27,35 +28,8 @@ bool has(const std::string& text, const std::string& fragment) { return text.fin
 
 RunRecord record(const std::string& part, int lobe, const std::string& machine, const std::string& started,
                  double max_um) {
-  RunRecord r;
-  r.started_utc = started;
-  r.finished_utc = started;
-  r.machine = machine;
-  r.part = part;
-  r.lobe = lobe;
-  r.gauge = "tcp:127.0.0.1:1502";
-  for (int i = 0; i < 3; ++i) {
-    RevolutionSamples rev;
-    rev.revolution = 10 + i;
-    for (int c = 0; c < 360; ++c) rev.lift_mm[static_cast<std::size_t>(c)] = 1.0 + 0.001 * c + 0.0001 * i;
-    r.measured.revolutions.push_back(rev);
-  }
-  for (std::size_t d = 0; d < 360; ++d) {
-    r.analysis.design_lift_mm[d] = 0.5;
-    r.analysis.error_um[d] = max_um * std::sin(static_cast<double>(d) * 0.0174533);
-    r.analysis.mean_lift_mm[d] = 0.5 + r.analysis.error_um[d] / 1000.0;
-    r.analysis.spread_um[d] = 0.2;
-    r.correction_um[d] = 0.9 * r.analysis.error_um[d];
-  }
-  r.analysis.max_abs_error_um = max_um;
-  r.analysis.rms_error_um = max_um / std::sqrt(2.0);
-  r.analysis.peak_to_valley_um = 2 * max_um;
-  r.analysis.repeatability_um = 0.2;
-  r.analysis.phase_error_deg = 0.25;
-  r.analysis.base_circle_runout_um = 1.5;
-  Part g;
-  g.c_offset_deg = 10.0;
-  r.geometry = g;
+  RunRecord r = testing::sample_run(part, lobe, machine, started, max_um);
+  r.settings.clear();  // a run stored without its settings: the API shows a null hash
   return r;
 }
 

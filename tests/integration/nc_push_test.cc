@@ -22,6 +22,7 @@
 #include "simulator/gauge_simulator.h"
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
+#include "tests/support/intake_job.h"
 
 namespace gaugeloop {
 namespace {
@@ -33,37 +34,16 @@ using testing::CommandResult;
 using testing::run_command;
 using testing::slurp;
 
-class NcPushTest : public ::testing::Test {
+class NcPushTest : public testing::IntakeJobTest {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("gaugeloop-nc-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    auto pf = read_part_file(fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml");
-    ASSERT_TRUE(pf.ok()) << pf.error().message;
-    part_ = *pf;
-    auto design = read_lift_table_csv(part_.part.lift_table);
-    ASSERT_TRUE(design.ok()) << design.error().message;
-    design_ = *design;
+    IntakeJobTest::SetUp();
+    if (HasFatalFailure()) return;
     SimulatorSettings ss;
     ss.time_scale = 4.0;
     auto sim = GaugeSimulator::start(part_.part, design_, ss);
     ASSERT_TRUE(sim.ok()) << sim.error().message;
     sim_ = std::move(*sim);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  JobSettings job_settings() const {
-    JobSettings js;
-    js.part = part_.part;
-    js.design = design_;
-    js.nc_program = part_.nc_program;
-    js.db_path = dir_ / "gaugeloop.sqlite";
-    js.nc_dir = dir_ / "nc";
-    js.nc_template = std::string(embedded::kNcTemplate);
-    js.nc_template_name = "cam_table.spf";
-    return js;
   }
 
   Result<JobReport> measure(const JobSettings& js) {
@@ -83,9 +63,6 @@ class NcPushTest : public ::testing::Test {
     return std::move(*s);
   }
 
-  fs::path dir_;
-  PartFile part_;
-  LiftTable design_;
   std::unique_ptr<GaugeSimulator> sim_;
 };
 

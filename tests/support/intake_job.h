@@ -1,0 +1,54 @@
+// A fixture for tests that run the measurement job on the sample intake part: a fresh
+// directory per test (database, NC directory) and the part, its design and the job settings.
+// Needs GAUGELOOP_SOURCE_DIR (set by tests/ CMake).
+#pragma once
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+#include "app/embedded_defaults.h"
+#include "app/measure_job.h"
+#include "app/part_file.h"
+#include "core/lift_table.h"
+
+namespace gaugeloop::testing {
+
+class IntakeJobTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = std::filesystem::temp_directory_path() / ("gaugeloop-" + std::string(test->test_suite_name()) + "-" +
+                                                     std::to_string(::getpid()) + "-" + test->name());
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+    Result<PartFile> pf = read_part_file(std::filesystem::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml");
+    ASSERT_TRUE(pf.ok()) << pf.error().message;
+    part_ = *pf;
+    Result<LiftTable> design = read_lift_table_csv(part_.part.lift_table);
+    ASSERT_TRUE(design.ok()) << design.error().message;
+    design_ = *design;
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  // The job on dir_: database dir_/gaugeloop.sqlite, NC files in dir_/nc, the built-in template.
+  JobSettings job_settings() const {
+    JobSettings js;
+    js.part = part_.part;
+    js.design = design_;
+    js.nc_program = part_.nc_program;
+    js.db_path = dir_ / "gaugeloop.sqlite";
+    js.nc_dir = dir_ / "nc";
+    js.nc_template = std::string(embedded::kNcTemplate);
+    js.nc_template_name = "cam_table.spf";
+    return js;
+  }
+
+  std::filesystem::path dir_;
+  PartFile part_;
+  LiftTable design_;
+};
+
+}  // namespace gaugeloop::testing
