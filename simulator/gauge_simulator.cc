@@ -47,6 +47,21 @@ void put_u32(std::uint16_t* regs, int at, std::uint32_t v) {
 
 }  // namespace
 
+namespace {
+
+Status validate_ground_reading(const DegreeTable& reading_mm) {
+  for (int d = 0; d < kDegreesPerRevolution; ++d) {
+    const double v = reading_mm[static_cast<size_t>(d)];
+    if (!std::isfinite(v) || std::abs(v) > 1000.0) {
+      return make_error(ErrorCode::kInvalidInput, "simulator ground lobe: the reading at cam degree " +
+                                                      std::to_string(d) + " is not a lift in [-1000, 1000] mm");
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
 Status validate(const SimulatorSettings& s) {
   if (!(s.speed_rpm > 0.0 && s.speed_rpm <= 10000.0)) {
     return make_error(ErrorCode::kInvalidInput, "simulator speed_rpm must be in (0, 10000]");
@@ -63,13 +78,7 @@ Status validate(const SimulatorSettings& s) {
                       "simulator lobe error must be in [0, 1000] um and noise in [0, 100] um");
   }
   if (s.ground_reading_mm) {
-    for (int d = 0; d < kDegreesPerRevolution; ++d) {
-      const double v = (*s.ground_reading_mm)[static_cast<size_t>(d)];
-      if (!std::isfinite(v) || std::abs(v) > 1000.0) {
-        return make_error(ErrorCode::kInvalidInput, "simulator ground lobe: the reading at cam degree " +
-                                                        std::to_string(d) + " is not a lift in [-1000, 1000] mm");
-      }
-    }
+    if (Status g = validate_ground_reading(*s.ground_reading_mm); !g) return g;
   }
   if (s.port < 0 || s.port > 65535) {
     return make_error(ErrorCode::kInvalidInput, "simulator port must be in [0, 65535]");
@@ -80,7 +89,7 @@ Status validate(const SimulatorSettings& s) {
 GaugeSimulator::GaugeSimulator(const Part& part, const SimulatorSettings& settings, PeriodicSpline lift)
     : part_(part), settings_(settings), lift_(std::move(lift)) {
   if (settings_.ground_reading_mm) {
-    ground_ = PeriodicSpline::fit(*settings_.ground_reading_mm);
+    ground_ = std::make_shared<const PeriodicSpline>(PeriodicSpline::fit(*settings_.ground_reading_mm));
     return;
   }
   // The form error imitates a ground lobe: servo lag (follows the lift velocity), a nose
@@ -96,16 +105,31 @@ GaugeSimulator::GaugeSimulator(const Part& part, const SimulatorSettings& settin
   error_scale_ = peak > 0.0 ? settings_.lobe_error_peak_um / peak : 0.0;
 }
 
+std::shared_ptr<const PeriodicSpline> GaugeSimulator::ground() const {
+  std::lock_guard<std::mutex> lock(ground_mutex_);
+  return ground_;
+}
+
+Status GaugeSimulator::load_ground_part(const DegreeTable& reading_mm) {
+  if (Status s = validate_ground_reading(reading_mm); !s) return s;
+  auto next = std::make_shared<const PeriodicSpline>(PeriodicSpline::fit(reading_mm));
+  std::lock_guard<std::mutex> lock(ground_mutex_);
+  ground_ = std::move(next);
+  return {};
+}
+
 double GaugeSimulator::lobe_error_um(double cam_angle_deg) const {
-  if (ground_) return (ground_->value(cam_angle_deg) - lift_.value(cam_angle_deg)) * 1000.0;
+  if (const auto g = ground()) return (g->value(cam_angle_deg) - lift_.value(cam_angle_deg)) * 1000.0;
   const double b = cam_angle_deg * std::numbers::pi / 180.0;
   const double shape =
       0.7 * lift_.d1(cam_angle_deg) / max_d1_ - 0.5 * lift_.d2(cam_angle_deg) / max_d2_ + 0.2 * std::cos(2.0 * b + 0.4);
   return error_scale_ * shape;
 }
 
-double GaugeSimulator::true_lift_mm(double cam_angle_deg) const {
-  if (ground_) return ground_->value(cam_angle_deg);
+double GaugeSimulator::true_lift_mm(double cam_angle_deg) const { return true_lift_mm(ground().get(), cam_angle_deg); }
+
+double GaugeSimulator::true_lift_mm(const PeriodicSpline* ground, double cam_angle_deg) const {
+  if (ground != nullptr) return ground->value(cam_angle_deg);
   return lift_.value(cam_angle_deg) + lobe_error_um(cam_angle_deg) / 1000.0;
 }
 
@@ -275,6 +299,7 @@ void GaugeSimulator::update_registers(std::int64_t now_ns, const FaultState& fau
     was_frozen_ = true;  // the amplifier stands still: same sample, same latch count
     return;
   }
+  const std::shared_ptr<const PeriodicSpline> ground = this->ground();  // one part for the whole request
   const double t_s = static_cast<double>(now_ns - start_ns_) * 1e-9 * settings_.time_scale;
   const auto n = static_cast<std::uint64_t>(t_s * settings_.sample_rate_hz);
   const double sample_t_s = static_cast<double>(n) / settings_.sample_rate_hz;  // amplifier holds its last sample
@@ -282,8 +307,8 @@ void GaugeSimulator::update_registers(std::int64_t now_ns, const FaultState& fau
   const auto whole_turns = static_cast<std::int64_t>(std::floor(turns));
   const double c_deg = (turns - static_cast<double>(whole_turns)) * 360.0;
   const double beta = cam_angle_at_probe_deg(part_, c_deg);
-  const double reading_mm =
-      true_lift_mm(beta) + settings_.gauge_offset_mm + settings_.noise_rms_um * 1e-3 * gaussian(settings_.seed, n);
+  const double reading_mm = true_lift_mm(ground.get(), beta) + settings_.gauge_offset_mm +
+                            settings_.noise_rms_um * 1e-3 * gaussian(settings_.seed, n);
   const std::uint16_t status = static_cast<std::uint16_t>(1u | faults.status);  // ready, plus any fault bits
   // The encoder reports the true angle plus any jump it has suffered.
   double reported_deg = std::fmod(c_deg + faults.angle_offset_deg, 360.0);
@@ -325,7 +350,7 @@ void GaugeSimulator::update_registers(std::int64_t now_ns, const FaultState& fau
   for (std::int64_t i = std::max(latched_marks_, marks - sim_registers::kCompactRingEntries); i < marks; ++i) {
     const double mark_beta = cam_angle_at_probe_deg(part_, static_cast<double>(i % 360));
     const double mark_mm =
-        true_lift_mm(mark_beta) + settings_.gauge_offset_mm +
+        true_lift_mm(ground.get(), mark_beta) + settings_.gauge_offset_mm +
         settings_.noise_rms_um * 1e-3 * gaussian(settings_.seed ^ 0x6c61746368ULL, static_cast<std::uint64_t>(i));
     const auto counts = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(mark_mm * 10000.0)));
     put_u32(regs, sim_registers::kCompactRing + 2 * static_cast<int>(i % sim_registers::kCompactRingEntries), counts);

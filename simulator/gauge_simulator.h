@@ -99,6 +99,11 @@ class GaugeSimulator {
   // What the gauge would read at a cam angle without noise or gauge offset, in mm.
   double true_lift_mm(double cam_angle_deg) const;
 
+  // The next part is on the machine: from the next request on the gauge reads this ground
+  // lobe (as SimulatorSettings::ground_reading_mm). The latch ring keeps what it latched on
+  // the part before, as an amplifier's would. Errors: kInvalidInput naming the cam degree.
+  Status load_ground_part(const DegreeTable& reading_mm);
+
   // Stops (or resumes) answering at once, whatever the schedule says.
   void set_silent(bool silent) { silent_.store(silent); }
   // Adds a fault to the schedule; its start counts from the first request, like the others.
@@ -129,8 +134,12 @@ class GaugeSimulator {
 
   Part part_;
   SimulatorSettings settings_;
-  PeriodicSpline lift_;                   // flat-probe reading of the design lobe, cam frame
-  std::optional<PeriodicSpline> ground_;  // flat-probe reading of the ground lobe, when given
+  PeriodicSpline lift_;  // flat-probe reading of the design lobe, cam frame
+  // Flat-probe reading of the ground lobe, when given; swapped whole by load_ground_part.
+  std::shared_ptr<const PeriodicSpline> ground() const;
+  double true_lift_mm(const PeriodicSpline* ground, double cam_angle_deg) const;
+  mutable std::mutex ground_mutex_;
+  std::shared_ptr<const PeriodicSpline> ground_;
   double max_d1_ = 1.0;
   double max_d2_ = 1.0;
   double error_scale_ = 0.0;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
@@ -189,6 +190,19 @@ TEST_F(VirtualGrinderTest, GaugeSimulatorServesTheGroundLobe) {
     EXPECT_NEAR((*sim)->lobe_error_um(d), (last_.reading_mm[i] - design_reading_[i]) * 1000.0, 1e-9) << d;
   }
   EXPECT_GT(std::abs((*sim)->lobe_error_um(180)), 1.0);  // the runout shows on the base circle
+  // The next part on the machine: the gauge reads it from now on.
+  const DegreeTable first = last_.reading_mm;
+  m.geometric_once_um = 0.0;
+  grind(m);
+  ASSERT_TRUE((*sim)->load_ground_part(last_.reading_mm).ok());
+  EXPECT_NEAR((*sim)->lobe_error_um(180), 0.0, 0.01);
+  EXPECT_NE((*sim)->true_lift_mm(180), first[180]);
+  DegreeTable bad_part = last_.reading_mm;
+  bad_part[42] = std::numeric_limits<double>::infinity();
+  const Status refused = (*sim)->load_ground_part(bad_part);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("cam degree 42"), std::string::npos) << refused.error().message;
+  EXPECT_NEAR((*sim)->lobe_error_um(180), 0.0, 0.01);  // the part on the machine stays
   (*sim)->stop();
 
   (*s.ground_reading_mm)[17] = std::nan("");
