@@ -437,6 +437,7 @@ int cmd_events(const EventOptions& o) {
   EventQuery q = o.query;
   if (o.kind == "fault") q.kind = EventKind::kFault;
   if (o.kind == "refusal") q.kind = EventKind::kRefusal;
+  if (o.kind == "info") q.kind = EventKind::kInfo;
   Result<std::string> since = time_bound(o.since, false, "--since");
   if (!since) return report_error(since.error());
   Result<std::string> until = time_bound(o.until, true, "--until");
@@ -556,9 +557,9 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   prune_cmd->callback([&action, prune] { action = [prune] { return cmd_prune(*prune); }; });
 
   auto events = std::make_shared<EventOptions>();
-  CLI::App* events_cmd = app.add_subcommand("events", "Faults and refusals, newest first.");
+  CLI::App* events_cmd = app.add_subcommand("events", "Faults, refusals and the service's steps (info), newest first.");
   add_data_dir_option(*events_cmd, events->paths);
-  events_cmd->add_option("--kind", events->kind, "Only this kind")->check(CLI::IsMember({"fault", "refusal"}));
+  events_cmd->add_option("--kind", events->kind, "Only this kind")->check(CLI::IsMember({"fault", "refusal", "info"}));
   events_cmd->add_option("--machine", events->query.machine, "Only events on this machine");
   events_cmd->add_option("--part", events->query.part, "Only events about this part");
   add_time_options(*events_cmd, events->since, events->until);

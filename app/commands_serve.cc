@@ -1,21 +1,27 @@
-// serve: the background service beside the grinder. One run at a time, triggered over HTTP
-// (and by hand with `gaugeloop measure`); SIGHUP reloads the configuration, SIGTERM lets the
-// run in progress finish, stores it, and exits 0. docs/service.md.
+// serve: the background service beside the grinder. One run at a time, triggered by the PLC
+// (Modbus handshake), over HTTP, or by hand with `gaugeloop measure`; SIGHUP reloads the
+// configuration, SIGTERM lets the run in progress finish, stores it, completes the PLC
+// handshake, and exits 0. docs/service.md.
 #include <signal.h>
 #include <spdlog/spdlog.h>
 
 #include <atomic>
+#include <condition_variable>
 #include <cstdio>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "acquisition/modbus_gauge.h"
+#include "acquisition/plc_link.h"
 #include "app/cli_common.h"
 #include "app/http_api.h"
 #include "app/measure_job.h"
 #include "app/nc_push.h"
+#include "app/plc_handshake.h"
 #include "app/service_config.h"
+#include "storage/run_store.h"
 
 namespace gaugeloop {
 namespace {
@@ -61,14 +67,41 @@ class Service {
     config_ = std::make_shared<const ServiceConfig>(std::move(config));
   }
 
-  // One measurement run, end to end. Refused (kRefused) while another runs or the service
-  // stops: the PLC or the caller asks again.
-  Result<json> measure(const std::string& part_name, int lobe, const std::string& note) {
-    std::unique_lock<std::mutex> run_lock(run_mutex_, std::try_to_lock);
-    if (!run_lock.owns_lock()) {
+  // The one run (or push) at a time: reserved, then released by whichever thread ends it.
+  // Refused (kRefused) while another runs or the service stops: the PLC or the caller asks
+  // again. Reserving before a run's thread starts lets the PLC trigger answer "not now" at
+  // once, and makes a run it acknowledged certain to run, even if SIGTERM comes meanwhile.
+  Status reserve_run() {
+    std::lock_guard<std::mutex> lock(slot_mutex_);
+    if (stopping_) return make_error(ErrorCode::kRefused, "the service is stopping; no new run is started");
+    if (slot_taken_) {
       return make_error(ErrorCode::kRefused, "a run is in progress; ask again when it is done (GET /api/health)");
     }
-    if (stopping_) return make_error(ErrorCode::kRefused, "the service is stopping; no new run is started");
+    slot_taken_ = true;
+    return {};
+  }
+  void release_run() {
+    {
+      std::lock_guard<std::mutex> lock(slot_mutex_);
+      slot_taken_ = false;
+    }
+    slot_free_.notify_all();
+  }
+
+  // One measurement run over HTTP: run()'s report as JSON.
+  Result<json> measure(const std::string& part_name, int lobe, const std::string& note) {
+    if (Status s = reserve_run(); !s) return s.error();
+    Result<JobReport> report = run_reserved(part_name, lobe, note);
+    if (!report) return report.error();
+    return report_json(*report);
+  }
+
+  // One measurement run, end to end, on a reservation (reserve_run) it releases.
+  Result<JobReport> run_reserved(const std::string& part_name, int lobe, const std::string& note) {
+    struct Release {
+      Service* s;
+      ~Release() { s->release_run(); }
+    } release{this};
     const std::shared_ptr<const ServiceConfig> c = config();
     Result<const ServicePart*> part = find_part(*c, part_name, lobe);
     if (!part) return part.error();
@@ -86,20 +119,60 @@ class Service {
     }
     if (report->pushed()) {
       ++runs_pushed_;
-      spdlog::info("run {} stored: max lift error {:.2f} um; table version {} pushed to {} ({} blocks, {:.3f} um)",
-                   report->run_id, report->analysis.max_abs_error_um, report->table_version, report->nc_file.string(),
-                   report->table_blocks, report->command_error_um);
+      const std::string line =
+          fmt::format("run {} stored: max lift error {:.2f} um; table version {} pushed to {} ({} blocks, {:.3f} um)",
+                      report->run_id, report->analysis.max_abs_error_um, report->table_version,
+                      report->nc_file.string(), report->table_blocks, report->command_error_um);
+      spdlog::info("{}", line);
+      // Faults and refusals are recorded by the job; a pushed table is recorded here.
+      record_event(EventKind::kInfo, "table pushed", part_name, lobe, report->run_id, line);
     } else {
       ++runs_not_pushed_;
       spdlog::warn("run {} stored, table not pushed: {}", report->run_id, report->not_pushed_reason);
     }
-    return report_json(*report);
+    return report;
+  }
+
+  // Keeps a step of the service in the database (`gaugeloop events`); a database that refuses
+  // is logged, never fatal: the step itself was logged already.
+  void record_event(EventKind kind, const std::string& code, const std::string& part, int lobe,
+                    std::optional<std::int64_t> run_id, const std::string& message) const {
+    const std::shared_ptr<const ServiceConfig> c = config();
+    EventRecord e;
+    e.kind = kind;
+    e.code = code;
+    e.machine = c->machine;
+    e.part = part;
+    e.lobe = lobe;
+    e.run_id = run_id;
+    e.message = message;
+    Result<RunStore> store = RunStore::open(c->job.db_path);
+    Result<std::int64_t> id = store ? store->record_event(e) : Result<std::int64_t>(store.error());
+    if (!id) spdlog::error("event '{}' not recorded in the database: {}", code, id.error().message);
+  }
+
+  // No new run is reserved from now on.
+  void set_stopping() {
+    std::lock_guard<std::mutex> lock(slot_mutex_);
+    stopping_ = true;
+  }
+
+  // Waits for the run (or push) in progress, then takes the slot; for approvals and rollbacks,
+  // which are short and wait rather than fail.
+  void wait_and_reserve() {
+    std::unique_lock<std::mutex> lock(slot_mutex_);
+    slot_free_.wait(lock, [this] { return !slot_taken_; });
+    slot_taken_ = true;
   }
 
   // A pending table approved over HTTP; the same as `gaugeloop nc approve` (no overwriting
   // of a hand-edited program over HTTP: that needs the command and its flag).
   Result<json> approve(std::int64_t pending_id, const std::string& by, const std::string& note) {
-    std::lock_guard<std::mutex> one_push_at_a_time(run_mutex_);
+    wait_and_reserve();  // one push at a time
+    struct Release {
+      Service* s;
+      ~Release() { s->release_run(); }
+    } release{this};
     Result<RunStore> store = RunStore::open(config()->job.db_path);
     if (!store) return store.error();
     Result<PushOutcome> pushed = approve_pending(*store, pending_id, by, note, /*overwrite_edited=*/false);
@@ -115,7 +188,11 @@ class Service {
   // `program`: a program name (CAM_INTAKE_L1, with or without .SPF) in the configured NC
   // directory, or the NC file's path.
   Result<json> rollback(const std::string& program, int table_version, const std::string& by) {
-    std::lock_guard<std::mutex> one_push_at_a_time(run_mutex_);
+    wait_and_reserve();  // one push at a time
+    struct Release {
+      Service* s;
+      ~Release() { s->release_run(); }
+    } release{this};
     const std::shared_ptr<const ServiceConfig> c = config();
     std::filesystem::path file(program);
     if (!file.has_parent_path()) {
@@ -135,9 +212,13 @@ class Service {
 
   // Waits for a run in progress to end; no new run starts after this.
   void stop() {
+    std::unique_lock<std::mutex> lock(slot_mutex_);
     stopping_ = true;
-    std::lock_guard<std::mutex> wait_for_run(run_mutex_);
+    slot_free_.wait(lock, [this] { return !slot_taken_; });
   }
+
+  // What the PLC trigger adds to /api/health; null when there is no [plc].
+  void set_plc_status(std::function<json()> status) { plc_status_ = std::move(status); }
 
   json health() const {
     const std::shared_ptr<const ServiceConfig> c = config();
@@ -152,7 +233,8 @@ class Service {
         {"database", c->job.db_path.string()},
         {"parts", parts},
         {"config_reloads", reloads_.load()},
-        {"config_reload_failures", reload_failures_.load()}};
+        {"config_reload_failures", reload_failures_.load()},
+        {"plc", plc_status_ ? plc_status_() : json(nullptr)}};
   }
 
   std::string metrics() const {
@@ -177,7 +259,9 @@ class Service {
  private:
   mutable std::mutex config_mutex_;
   std::shared_ptr<const ServiceConfig> config_;
-  std::mutex run_mutex_;  // held for the length of a run
+  std::mutex slot_mutex_;
+  std::condition_variable slot_free_;
+  bool slot_taken_ = false;  // guarded by slot_mutex_: for the length of a run or a push
   std::atomic<bool> measuring_{false};
   std::atomic<bool> stopping_{false};
   std::atomic<long long> runs_pushed_{0};
@@ -185,6 +269,251 @@ class Service {
   std::atomic<long long> runs_failed_{0};
   std::atomic<long long> reloads_{0};
   std::atomic<long long> reload_failures_{0};
+  std::function<json()> plc_status_;  // set before any thread starts
+};
+
+// The outcome the PLC is told for a run (or a refusal to start one).
+PlcCycleOutcome plc_outcome(const Result<JobReport>& r) {
+  PlcCycleOutcome o;
+  if (!r) {
+    o.message = r.error().message;
+    switch (r.error().code) {
+      case ErrorCode::kGaugeUnreachable:
+      case ErrorCode::kGaugeTimeout:
+      case ErrorCode::kGaugeProtocol:
+      case ErrorCode::kIncompleteRun:
+        o.code = PlcResultCode::kGaugeFault;
+        break;
+      case ErrorCode::kStorage:
+        o.code = PlcResultCode::kStorageFault;
+        break;
+      case ErrorCode::kIo:
+        o.code = PlcResultCode::kNcFault;
+        break;
+      case ErrorCode::kNotFound:  // the part left the configuration on a reload meanwhile
+        o.code = PlcResultCode::kUnknownPart;
+        break;
+      default:
+        o.code = PlcResultCode::kOtherFault;
+        break;
+    }
+    return o;
+  }
+  // Run ids beyond 32 bits are not expected in a machine's lifetime; the PLC would see them cut.
+  o.run_id = static_cast<std::uint32_t>(r->run_id);
+  if (r->pushed()) {
+    o.code = PlcResultCode::kTablePushed;
+    o.table_version = static_cast<std::uint16_t>(r->table_version);
+    o.message = "table version " + std::to_string(r->table_version) + " pushed to " + r->nc_file.string();
+  } else {
+    o.code = r->pending_id ? PlcResultCode::kTableHeld : PlcResultCode::kTableRefused;
+    o.message = "table not pushed: " + r->not_pushed_reason;
+  }
+  return o;
+}
+
+// Runs a PLC request's cycle on a thread of its own, so the handshake keeps polling (and the
+// heartbeat counting) while the lobe is measured. Used by the PLC trigger's thread only.
+class ServiceCycleRunner final : public PlcCycleRunner {
+ public:
+  explicit ServiceCycleRunner(Service& service) : service_(service) {}
+  ~ServiceCycleRunner() override {
+    if (worker_.joinable()) worker_.join();
+  }
+
+  std::optional<PlcCycleOutcome> start(std::uint16_t part_number, std::uint16_t lobe) override {
+    const std::shared_ptr<const ServiceConfig> c = service_.config();
+    Result<const ServicePart*> part = find_plc_part(*c, part_number, lobe);
+    if (!part) return PlcCycleOutcome{PlcResultCode::kUnknownPart, 0, 0, part.error().message};
+    if (Status s = service_.reserve_run(); !s) return PlcCycleOutcome{PlcResultCode::kNotNow, 0, 0, s.error().message};
+    if (worker_.joinable()) worker_.join();
+    finished_ = false;
+    const std::string name = (*part)->file.part.name;
+    const std::string note = "PLC request: part number " + std::to_string(part_number);
+    worker_ = std::thread([this, name, lobe, note] {
+      PlcCycleOutcome o = plc_outcome(service_.run_reserved(name, lobe, note));
+      std::lock_guard<std::mutex> lock(mutex_);
+      outcome_ = std::move(o);
+      finished_ = true;
+    });
+    return std::nullopt;
+  }
+
+  std::optional<PlcCycleOutcome> poll() override {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!finished_) return std::nullopt;
+    finished_ = false;
+    std::optional<PlcCycleOutcome> o = std::move(outcome_);
+    outcome_.reset();
+    lock.unlock();
+    worker_.join();
+    return o;
+  }
+
+ private:
+  Service& service_;
+  std::thread worker_;
+  std::mutex mutex_;
+  bool finished_ = false;                   // guarded by mutex_
+  std::optional<PlcCycleOutcome> outcome_;  // guarded by mutex_
+};
+
+// The PLC trigger: polls the handshake block every poll interval on a thread of its own, logs
+// each step once and keeps it as an event. stop() returns once no cycle is in progress and
+// its outcome is in the PLC's registers (or the link is down and cannot carry it).
+class PlcTrigger {
+ public:
+  PlcTrigger(Service& service, PlcSettings settings)
+      : service_(service),
+        settings_(std::move(settings)),
+        link_(settings_.link),
+        runner_(service_),
+        handshake_(link_, runner_) {}
+  ~PlcTrigger() { stop(); }
+
+  void start() {
+    thread_ = std::thread([this] { loop(); });
+  }
+
+  void stop() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+
+  std::string address() const { return link_.address(); }
+
+  json status() const {
+    return {{"address", address()},
+            {"connected", connected_.load()},
+            {"state", std::string(plc_state_name(static_cast<PlcState>(state_.load())))},
+            {"requests", requests_.load()}};
+  }
+
+  std::string metrics() const {
+    std::string m;
+    m += "# HELP gaugeloop_plc_connected 1 while the link to the PLC's handshake registers is up.\n";
+    m += "# TYPE gaugeloop_plc_connected gauge\n";
+    m += "gaugeloop_plc_connected " + std::string(connected_ ? "1" : "0") + "\n";
+    m += "# HELP gaugeloop_plc_requests_total PLC requests taken (runs started or refused).\n";
+    m += "# TYPE gaugeloop_plc_requests_total counter\n";
+    m += "gaugeloop_plc_requests_total " + std::to_string(requests_.load()) + "\n";
+    return m;
+  }
+
+ private:
+  void loop() {
+    for (;;) {
+      const std::vector<PlcEvent> events = handshake_.step();
+      for (PlcEvent e : events) report(e);
+      connected_ = handshake_.connected();
+      state_ = static_cast<int>(handshake_.state());
+      std::unique_lock<std::mutex> lock(mutex_);
+      if (stop_ && handshake_.state() != PlcState::kBusy) {
+        if (handshake_.outcome_delivered()) break;
+        if (!handshake_.connected()) {
+          spdlog::error("PLC at {}: stopping with the outcome of the last request undelivered (link down): {}",
+                        address(), handshake_.last_link_error());
+          break;
+        }
+      }
+      wake_.wait_for(lock, settings_.poll_interval);
+    }
+  }
+
+  std::string request_text() const {
+    const PlcRequestWords& r = handshake_.request();
+    return "PLC request part number " + std::to_string(r.part_number) + " lobe " + std::to_string(r.lobe);
+  }
+
+  // The configured part the request names, for the events; empty when none.
+  std::string part_name() const {
+    const PlcRequestWords& r = handshake_.request();
+    Result<const ServicePart*> p = find_plc_part(*service_.config(), r.part_number, r.lobe);
+    return p ? (*p)->file.part.name : std::string();
+  }
+
+  void report(PlcEvent e) {
+    const int lobe = handshake_.request().lobe;
+    switch (e) {
+      case PlcEvent::kConnected:
+        spdlog::info("PLC link up at {}{}", address(), link_down_ ? " again" : "");
+        if (link_down_)
+          service_.record_event(EventKind::kInfo, "plc link up", "", 0, std::nullopt,
+                                "PLC link at " + address() + " up again");
+        link_down_ = false;
+        break;
+      case PlcEvent::kConnectFailed:
+        if (!link_down_) {  // once per loss, not once per attempt
+          spdlog::warn("PLC link down: {}; retrying with backoff", handshake_.last_link_error());
+          service_.record_event(EventKind::kFault, "plc link down", "", 0, std::nullopt, handshake_.last_link_error());
+        }
+        link_down_ = true;
+        break;
+      case PlcEvent::kLinkLost:
+        if (!link_down_) {
+          spdlog::warn("PLC link lost: {}; reconnecting with backoff", handshake_.last_link_error());
+          service_.record_event(EventKind::kFault, "plc link down", "", 0, std::nullopt, handshake_.last_link_error());
+        }
+        link_down_ = true;
+        break;
+      case PlcEvent::kRequestAccepted: {
+        ++requests_;
+        const std::string part = part_name();
+        spdlog::info("{} ({} lobe {}): acknowledged, measuring", request_text(), part, lobe);
+        service_.record_event(EventKind::kInfo, "plc request", part, lobe, std::nullopt,
+                              request_text() + ": acknowledged, measuring");
+        break;
+      }
+      case PlcEvent::kRequestRefused:
+        ++requests_;
+        spdlog::warn("{}: refused: {}", request_text(), handshake_.outcome()->message);
+        service_.record_event(EventKind::kInfo, "plc request", part_name(), lobe, std::nullopt,
+                              request_text() + ": refused: " + handshake_.outcome()->message);
+        break;
+      case PlcEvent::kCycleEnded:
+        break;  // the run logged its own outcome; the PLC is told at kOutcomeWritten
+      case PlcEvent::kOutcomeWritten: {
+        const PlcCycleOutcome& o = *handshake_.outcome();
+        const bool done = plc_result_is_done(o.code);
+        const std::string line =
+            request_text() + ": " + (done ? "done" : "fault") + ", result code " +
+            std::to_string(static_cast<int>(o.code)) + " (" + std::string(plc_result_name(o.code)) + ")" +
+            (o.run_id != 0 ? ", run " + std::to_string(o.run_id) : std::string()) + ": " + o.message;
+        if (done) {
+          spdlog::info("{}", line);
+        } else {
+          spdlog::warn("{}", line);
+        }
+        service_.record_event(EventKind::kInfo, done ? "plc done" : "plc fault", part_name(), lobe,
+                              o.run_id != 0 ? std::optional<std::int64_t>(o.run_id) : std::nullopt, line);
+        break;
+      }
+      case PlcEvent::kCleared:
+        spdlog::info("{}: cleared by the PLC; ready", request_text());
+        break;
+      case PlcEvent::kClearedEarly:
+        spdlog::warn("{}: the PLC cleared the request while busy; the run goes on and is stored", request_text());
+        break;
+    }
+  }
+
+  Service& service_;
+  const PlcSettings settings_;
+  ModbusPlcLink link_;  // the trigger thread's only
+  ServiceCycleRunner runner_;
+  PlcHandshake handshake_;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false;       // guarded by mutex_
+  bool link_down_ = false;  // trigger thread only
+  std::atomic<bool> connected_{false};
+  std::atomic<int> state_{0};
+  std::atomic<long long> requests_{0};
 };
 
 std::string describe(const ServiceConfig& c) {
@@ -192,8 +521,28 @@ std::string describe(const ServiceConfig& c) {
   for (const ServicePart& p : c.parts) {
     parts += (parts.empty() ? "" : ", ") + p.file.part.name + " lobe " + std::to_string(p.file.part.lobe);
   }
+  std::string plc = "none";
+  if (c.plc) {
+    std::string numbers;
+    for (const ServicePart& p : c.parts) {
+      if (!p.plc_part_number) continue;
+      numbers += (numbers.empty() ? "" : ", ") + std::to_string(*p.plc_part_number) + " lobe " +
+                 std::to_string(p.file.part.lobe) + " = " + p.file.part.name;
+    }
+    plc = ModbusPlcLink(c.plc->link).address() + " base " + std::to_string(c.plc->link.base_address) +
+          " (part numbers " + numbers + ")";
+  }
   return c.source.string() + ": machine " + c.machine + ", parts " + parts + ", database " + c.job.db_path.string() +
-         ", NC directory " + c.job.nc_dir.string();
+         ", NC directory " + c.job.nc_dir.string() + ", PLC " + plc;
+}
+
+// The [plc] settings that need a restart, as one text to compare; empty without [plc].
+std::string plc_text(const std::optional<PlcSettings>& p) {
+  if (!p) return "";
+  const ModbusSettings& l = p->link.link;
+  return ModbusPlcLink(p->link).address() + " unit " + std::to_string(l.unit_id) + " base " +
+         std::to_string(p->link.base_address) + " poll " + std::to_string(p->poll_interval.count()) + " timeout " +
+         std::to_string(l.response_timeout.count());
 }
 
 struct ServeOptions {
@@ -220,9 +569,17 @@ int cmd_serve(const ServeOptions& o) {
     return kExitOk;
   }
   const std::optional<HttpSettings> http_settings = config->http;
+  const std::optional<PlcSettings> plc_settings = config->plc;
   const std::filesystem::path db_path = config->job.db_path;
   Service service(std::move(*config));
   spdlog::info("starting: {}", describe(*service.config()));
+
+  // Before the HTTP API, which reports its status; started after it.
+  std::unique_ptr<PlcTrigger> plc;
+  if (plc_settings) {
+    plc = std::make_unique<PlcTrigger>(service, *plc_settings);
+    service.set_plc_status([p = plc.get()] { return p->status(); });
+  }
 
   std::unique_ptr<HttpApi> http;
   if (http_settings) {
@@ -238,7 +595,7 @@ int cmd_serve(const ServeOptions& o) {
     };
     HttpStatus status;
     status.health = [&service] { return service.health(); };
-    status.extra_metrics = [&service] { return service.metrics(); };
+    status.extra_metrics = [&service, p = plc.get()] { return service.metrics() + (p ? p->metrics() : ""); };
     Result<std::unique_ptr<HttpApi>> started = HttpApi::start(*http_settings, db_path, writes, status);
     if (!started) {
       spdlog::error("HTTP API not started, not starting: {}", started.error().message);
@@ -250,9 +607,13 @@ int cmd_serve(const ServeOptions& o) {
     std::fflush(stdout);
     spdlog::info("HTTP API on http://{}:{} ({})", http_settings->host, http->port(),
                  http_settings->token.empty() ? "read-only: no token configured" : "writes need the token");
-  } else {
-    spdlog::warn("no [http] table: nothing can trigger a run but `gaugeloop measure`");
   }
+  if (plc) {
+    spdlog::info("PLC trigger: handshake block at holding register {} of {}, polled every {} ms",
+                 plc_settings->link.base_address, plc->address(), plc_settings->poll_interval.count());
+    plc->start();
+  }
+  if (!http && !plc) spdlog::warn("no [http] and no [plc] table: nothing can trigger a run but `gaugeloop measure`");
 
   for (;;) {
     int sig = 0;
@@ -262,7 +623,12 @@ int cmd_serve(const ServeOptions& o) {
       if (!fresh) {
         service.count_reload(false);
         spdlog::error("reload refused, keeping the configuration in use: {}", fresh.error().message);
+        service.record_event(EventKind::kFault, "config reload refused", "", 0, std::nullopt,
+                             "reload refused, keeping the configuration in use: " + fresh.error().message);
         continue;
+      }
+      if (plc_text(fresh->plc) != plc_text(plc_settings)) {
+        spdlog::warn("reload: [plc] changes take effect when the service restarts");
       }
       if (fresh->http.has_value() != http_settings.has_value() ||
           (fresh->http && (fresh->http->host != http_settings->host || fresh->http->port != http_settings->port ||
@@ -274,11 +640,15 @@ int cmd_serve(const ServeOptions& o) {
         fresh->job.db_path = db_path;
       }
       service.count_reload(true);
-      spdlog::info("reloaded: {}", describe(*fresh));
+      const std::string line = "reloaded: " + describe(*fresh);
+      spdlog::info("{}", line);
       service.replace_config(std::move(*fresh));
+      service.record_event(EventKind::kInfo, "config reload", "", 0, std::nullopt, line);
       continue;
     }
     spdlog::info("{} received: letting the run in progress finish", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    service.set_stopping();
+    if (plc) plc->stop();  // after the run in progress, done or fault is written to the PLC
     service.stop();
     if (http) http->stop();
     spdlog::info("stopped");
@@ -292,11 +662,13 @@ void add_serve_commands(CLI::App& app, CommandAction& action) {
   auto o = std::make_shared<ServeOptions>();
   CLI::App* serve =
       app.add_subcommand("serve",
-                         "Run as the service beside the grinder: measure on request (HTTP), store, compensate, push. "
-                         "SIGHUP reloads the config; SIGTERM finishes the run in progress and exits. docs/service.md");
+                         "Run as the service beside the grinder: measure on request (PLC handshake over Modbus, HTTP), "
+                         "store, compensate, push. SIGHUP reloads the config; SIGTERM finishes the run in progress, "
+                         "answers the PLC and exits. docs/service.md");
   serve->add_option("--config", o->config_path, "Service configuration (TOML), see examples/service/gaugeloop.toml")
       ->required();
-  serve->add_flag("--check", o->check_only, "Check the configuration (every part, template, limit) and exit");
+  serve->add_flag("--check", o->check_only,
+                  "Check the configuration (every part, template, limit, PLC part number) and exit");
   serve->callback([&action, o] { action = [o] { return cmd_serve(*o); }; });
 }
 

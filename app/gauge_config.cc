@@ -64,6 +64,30 @@ void read_field(std::string_view name, std::string_view source, WordOrder defaul
 
 }  // namespace
 
+void read_modbus_link(TomlReader& lr, const ModbusSettings& defaults, ModbusSettings& out) {
+  const bool rtu = lr.choice("transport", "tcp", {"tcp", "rtu"}) == "rtu";
+  out.transport = rtu ? ModbusTransport::kRtu : ModbusTransport::kTcp;
+  if (rtu) {
+    for (const char* tcp_key : {"host", "port"}) {
+      if (lr.has(tcp_key)) lr.fail(lr.where(tcp_key) + ": a TCP setting in an RTU link; remove it");
+    }
+    out.device = lr.text("device", std::nullopt);
+    out.baud = static_cast<int>(lr.integer("baud", defaults.baud, 300, 4000000));
+    out.parity = lr.choice("parity", std::string(1, defaults.parity), {"N", "E", "O"})[0];
+    out.data_bits = static_cast<int>(lr.integer("data_bits", defaults.data_bits, 7, 8));
+    out.stop_bits = static_cast<int>(lr.integer("stop_bits", defaults.stop_bits, 1, 2));
+  } else {
+    for (const char* rtu_key : {"device", "baud", "parity", "data_bits", "stop_bits"}) {
+      if (lr.has(rtu_key)) lr.fail(lr.where(rtu_key) + ": a serial setting in a TCP link; set transport = \"rtu\"");
+    }
+    out.host = lr.text("host", defaults.host);
+    out.port = static_cast<int>(lr.integer("port", defaults.port, 1, 65535));
+  }
+  out.unit_id = static_cast<int>(lr.integer("unit_id", defaults.unit_id, 0, 247));
+  out.response_timeout =
+      std::chrono::milliseconds(lr.integer("response_timeout_ms", defaults.response_timeout.count(), 10, 10000));
+}
+
 Result<ModbusSettings> parse_gauge_toml(std::string_view text, std::string_view source_name,
                                         const ModbusSettings& defaults) {
   Result<toml::table> parsed = parse_toml(text, source_name);
@@ -77,27 +101,7 @@ Result<ModbusSettings> parse_gauge_toml(std::string_view text, std::string_view 
     TomlReader lr(*link, source_name, "link.");
     lr.allow_only({"transport", "host", "port", "device", "baud", "parity", "data_bits", "stop_bits", "unit_id",
                    "response_timeout_ms"});
-    const bool rtu = lr.choice("transport", "tcp", {"tcp", "rtu"}) == "rtu";
-    out.transport = rtu ? ModbusTransport::kRtu : ModbusTransport::kTcp;
-    if (rtu) {
-      for (const char* tcp_key : {"host", "port"}) {
-        if (lr.has(tcp_key)) lr.fail(lr.where(tcp_key) + ": a TCP setting in an RTU link; remove it");
-      }
-      out.device = lr.text("device", std::nullopt);
-      out.baud = static_cast<int>(lr.integer("baud", defaults.baud, 300, 4000000));
-      out.parity = lr.choice("parity", std::string(1, defaults.parity), {"N", "E", "O"})[0];
-      out.data_bits = static_cast<int>(lr.integer("data_bits", defaults.data_bits, 7, 8));
-      out.stop_bits = static_cast<int>(lr.integer("stop_bits", defaults.stop_bits, 1, 2));
-    } else {
-      for (const char* rtu_key : {"device", "baud", "parity", "data_bits", "stop_bits"}) {
-        if (lr.has(rtu_key)) lr.fail(lr.where(rtu_key) + ": a serial setting in a TCP link; set transport = \"rtu\"");
-      }
-      out.host = lr.text("host", defaults.host);
-      out.port = static_cast<int>(lr.integer("port", defaults.port, 1, 65535));
-    }
-    out.unit_id = static_cast<int>(lr.integer("unit_id", defaults.unit_id, 0, 247));
-    out.response_timeout =
-        std::chrono::milliseconds(lr.integer("response_timeout_ms", defaults.response_timeout.count(), 10, 10000));
+    read_modbus_link(lr, defaults, out);
     if (lr.error) r.fail(lr.error->message);
   }
 

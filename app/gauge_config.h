@@ -9,6 +9,14 @@
 
 namespace gaugeloop {
 
+class TomlReader;
+
+// Reads the Modbus link keys of one table onto `out`: transport ("tcp" or "rtu"), host and
+// port (TCP), device, baud, parity, data_bits and stop_bits (RTU), unit_id,
+// response_timeout_ms; keys it leaves out keep `defaults`' values. A TCP key in an RTU link or
+// the other way round fails `lr`. The caller lists these keys in its allow_only.
+void read_modbus_link(TomlReader& lr, const ModbusSettings& defaults, ModbusSettings& out);
+
 // Parses a gauge config. A missing [link] keeps `defaults`' link settings; a missing [map]
 // keeps the simulator's register map; a [map] describes the whole map (fields it leaves out
 // are absent, and reading and angle are required). Errors name the file, line and key.

@@ -554,10 +554,11 @@ struct HttpApi::Impl {
     Result<Query> q = Query::of(req, {"kind", "machine", "part", "since", "until", "limit"});
     if (!q) return send_error(res, q.error());
     EventQuery eq;
-    Result<std::string> kind = q->choice("kind", {"fault", "refusal"});
+    Result<std::string> kind = q->choice("kind", {"fault", "refusal", "info"});
     if (!kind) return send_error(res, kind.error());
     if (*kind == "fault") eq.kind = EventKind::kFault;
     if (*kind == "refusal") eq.kind = EventKind::kRefusal;
+    if (*kind == "info") eq.kind = EventKind::kInfo;
     eq.machine = q->text("machine");
     eq.part = q->text("part");
     Result<int> limit = q->integer("limit", 50, 1, kMaxLimit);
@@ -686,7 +687,7 @@ struct HttpApi::Impl {
       ++by_status[r.status];
       last.emplace(std::make_tuple(r.machine, r.part, r.lobe), &r);
     }
-    std::map<std::string, std::int64_t> by_kind{{"fault", 0}, {"refusal", 0}};
+    std::map<std::string, std::int64_t> by_kind{{"fault", 0}, {"refusal", 0}, {"info", 0}};
     for (const StoredEvent& e : *events) ++by_kind[std::string(event_kind_name(e.event.kind))];
 
     std::string s;
@@ -694,7 +695,7 @@ struct HttpApi::Impl {
     for (const auto& [st, n] : by_status) {
       s += "gaugeloop_runs_stored{status=\"" + label_value(st) + "\"} " + std::to_string(n) + "\n";
     }
-    s += "# HELP gaugeloop_events_stored Faults and refusals in the database, by kind.\n"
+    s += "# HELP gaugeloop_events_stored Faults, refusals and service steps (info) in the database, by kind.\n"
          "# TYPE gaugeloop_events_stored gauge\n";
     for (const auto& [kind, n] : by_kind) {
       s += "gaugeloop_events_stored{kind=\"" + label_value(kind) + "\"} " + std::to_string(n) + "\n";

@@ -2,6 +2,7 @@
 #include "app/service_config.h"
 
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -47,7 +48,7 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   if (!parsed) return parsed.error();
   const toml::table& top = *parsed;
   TomlReader r(top, source);
-  r.allow_only({"machine", "gauge", "part", "analysis", "compensation", "nc", "database", "http"});
+  r.allow_only({"machine", "gauge", "part", "analysis", "compensation", "nc", "database", "http", "plc"});
 
   ServiceConfig c;
   c.source = path;
@@ -188,6 +189,22 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
     c.http = hs;
   }
 
+  // [plc]: the link settings of a gauge config's [link], plus where the block is and how often
+  // it is polled.
+  if (const toml::table* p = r.subtable("plc")) {
+    TomlReader plr(*p, source, "plc.");
+    plr.allow_only({"transport", "host", "port", "device", "baud", "parity", "data_bits", "stop_bits", "unit_id",
+                    "response_timeout_ms", "base_address", "poll_interval_ms"});
+    PlcSettings ps;
+    ModbusSettings defaults;
+    defaults.port = 502;
+    read_modbus_link(plr, defaults, ps.link.link);
+    ps.link.base_address = static_cast<int>(plr.integer("base_address", 0, 0, 65536 - plc_registers::kBlockWords));
+    ps.poll_interval = std::chrono::milliseconds(plr.integer("poll_interval_ms", 100, 10, 10000));
+    if (plr.error) return *plr.error;
+    c.plc = ps;
+  }
+
   // [[part]]: each a part file; checked now, so a bad part never waits for the PLC to ask.
   const toml::node* parts = top.get("part");
   if (parts == nullptr || !parts->is_array_of_tables() || parts->as_array()->empty()) {
@@ -195,11 +212,15 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   }
   if (r.error) return *r.error;
   std::set<std::pair<std::string, int>> seen;
+  std::map<int, std::string> plc_number_part;  // plc_part_number -> part name
+  std::set<std::pair<int, int>> plc_seen;      // (plc_part_number, lobe)
   for (const toml::node& node : *parts->as_array()) {
     const toml::table& pt = *node.as_table();
     TomlReader pr(pt, source, "part.");
-    pr.allow_only({"file"});
+    pr.allow_only({"file", "plc_part_number"});
     const std::string file = pr.text("file", std::nullopt);
+    std::optional<int> plc_number;
+    if (pr.has("plc_part_number")) plc_number = static_cast<int>(pr.integer("plc_part_number", std::nullopt, 1, 65535));
     if (pr.error) return *pr.error;
     Result<PartFile> pf = read_part_file(relative_to(base, file));
     if (!pf) return at_key(pr, "file", pf.error());
@@ -209,10 +230,43 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
       return make_error(ErrorCode::kInvalidInput, pr.where("file") + ": part " + pf->part.name + " lobe " +
                                                       std::to_string(pf->part.lobe) + " is configured twice");
     }
-    c.parts.push_back({std::move(*pf), std::move(*design)});
+    if (plc_number) {
+      const std::string& name = pf->part.name;
+      auto [it, fresh] = plc_number_part.emplace(*plc_number, name);
+      if (!fresh && it->second != name) {
+        return make_error(ErrorCode::kInvalidInput, pr.where("plc_part_number") + ": " + std::to_string(*plc_number) +
+                                                        " already names part " + it->second + ", not " + name +
+                                                        "; give each part its own number");
+      }
+      if (!plc_seen.insert({*plc_number, pf->part.lobe}).second) {
+        return make_error(ErrorCode::kInvalidInput, pr.where("plc_part_number") + ": part number " +
+                                                        std::to_string(*plc_number) + " lobe " +
+                                                        std::to_string(pf->part.lobe) + " is configured twice");
+      }
+    }
+    c.parts.push_back({std::move(*pf), std::move(*design), plc_number});
     if (Status ok = check_job_settings(job_for(c, c.parts.back())); !ok) return at_key(pr, "file", ok.error());
   }
+  if (c.plc && plc_number_part.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      source +
+                          ": [plc] is set but no [[part]] has a plc_part_number, so the PLC could ask for "
+                          "nothing; give each part the PLC measures `plc_part_number = N`");
+  }
   return c;
+}
+
+Result<const ServicePart*> find_plc_part(const ServiceConfig& config, int plc_part_number, int lobe) {
+  std::string known;
+  for (const ServicePart& p : config.parts) {
+    if (!p.plc_part_number) continue;
+    if (*p.plc_part_number == plc_part_number && p.file.part.lobe == lobe) return &p;
+    known += (known.empty() ? "" : ", ") + std::to_string(*p.plc_part_number) + " lobe " +
+             std::to_string(p.file.part.lobe) + " (" + p.file.part.name + ")";
+  }
+  return make_error(ErrorCode::kNotFound, "PLC part number " + std::to_string(plc_part_number) + " lobe " +
+                                              std::to_string(lobe) + " is not in " + config.source.string() +
+                                              "; configured: " + (known.empty() ? "none" : known));
 }
 
 Result<const ServicePart*> find_part(const ServiceConfig& config, const std::string& name, int lobe) {

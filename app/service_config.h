@@ -3,12 +3,14 @@
 // a commented example in examples/service/gaugeloop.toml.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "acquisition/modbus_gauge.h"
+#include "acquisition/plc_link.h"
 #include "app/http_api.h"
 #include "app/measure_job.h"
 #include "app/part_file.h"
@@ -21,6 +23,15 @@ namespace gaugeloop {
 struct ServicePart {
   PartFile file;
   LiftTable design;
+  // The number the PLC names this part by (with the part file's lobe); absent: the PLC
+  // cannot ask for it. One number is one part name; (number, lobe) is unique.
+  std::optional<int> plc_part_number;
+};
+
+// The PLC trigger: the PLC's Modbus server and the handshake block on it (docs/service.md).
+struct PlcSettings {
+  PlcLinkSettings link;
+  std::chrono::milliseconds poll_interval{100};  // one read and one write per interval
 };
 
 struct ServiceConfig {
@@ -32,6 +43,7 @@ struct ServiceConfig {
   // database (JobSettings' part, design and nc_program are filled per part by job_for).
   JobSettings job;
   std::optional<HttpSettings> http;  // absent: no HTTP API
+  std::optional<PlcSettings> plc;    // absent: no PLC trigger
 };
 
 // Reads and checks the whole file before anything uses it: every part file and lift table
@@ -43,6 +55,9 @@ Result<ServiceConfig> read_service_config(const std::filesystem::path& path);
 
 // The part (name and lobe) among the configured ones; kNotFound listing them.
 Result<const ServicePart*> find_part(const ServiceConfig& config, const std::string& name, int lobe);
+
+// The part the PLC names by `plc_part_number` and `lobe`; kNotFound listing the numbered ones.
+Result<const ServicePart*> find_plc_part(const ServiceConfig& config, int plc_part_number, int lobe);
 
 // The job settings for measuring `part` under `config`.
 JobSettings job_for(const ServiceConfig& config, const ServicePart& part);

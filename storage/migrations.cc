@@ -434,8 +434,32 @@ Status convert_v1_rows(Connection& conn) {
   return {};
 }
 
-const std::array<Migration, 3>& all_migrations() {
-  static const std::array<Migration, 3> kMigrations{{
+// Version 4: events of kind 'info' (a PLC request, a cycle's outcome, a config reload). SQLite
+// cannot change a CHECK constraint, so events is rebuilt keeping every id.
+constexpr std::string_view kSchemaV4 = R"sql(
+CREATE TABLE events_v4 (
+  id      INTEGER PRIMARY KEY AUTOINCREMENT,
+  at_utc  TEXT    NOT NULL,
+  kind    TEXT    NOT NULL CHECK (kind IN ('fault', 'refusal', 'info')),
+  code    TEXT    NOT NULL,  -- e.g. 'gauge timeout', 'refused', 'plc request'
+  machine TEXT    NOT NULL DEFAULT '',
+  part    TEXT    NOT NULL DEFAULT '',
+  lobe    INTEGER,           -- NULL: not about one lobe
+  run_id  INTEGER REFERENCES runs (id) ON DELETE SET NULL,
+  message TEXT    NOT NULL
+);
+INSERT INTO events_v4 (id, at_utc, kind, code, machine, part, lobe, run_id, message)
+  SELECT id, at_utc, kind, code, machine, part, lobe, run_id, message FROM events ORDER BY id;
+-- An event id, once shown, never names another: the counter carries over, deleted rows too.
+DELETE FROM sqlite_sequence WHERE name = 'events_v4';
+INSERT INTO sqlite_sequence (name, seq) SELECT 'events_v4', seq FROM sqlite_sequence WHERE name = 'events';
+DROP TABLE events;
+ALTER TABLE events_v4 RENAME TO events;
+CREATE INDEX events_by_time ON events (at_utc);
+)sql";
+
+const std::array<Migration, 4>& all_migrations() {
+  static const std::array<Migration, 4> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -445,6 +469,11 @@ const std::array<Migration, 3>& all_migrations() {
        "nc_pushes: table versions, reason, interpolation, blocks, command position error, program text; "
        "nc_pending: tables awaiting approval",
        std::string(kSchemaV3),
+       nullptr,
+       {}},
+      {4,
+       "events: kind 'info' for the service's steps (PLC requests, cycle outcomes, config reloads)",
+       std::string(kSchemaV4),
        nullptr,
        {}},
   }};

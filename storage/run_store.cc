@@ -1141,7 +1141,8 @@ Result<std::vector<StoredEvent>> RunStore::list_events(const EventQuery& q) cons
     StoredEvent e;
     e.id = st->column_int64(0);
     e.event.at_utc = st->column_text(1);
-    e.event.kind = st->column_text(2) == "refusal" ? EventKind::kRefusal : EventKind::kFault;
+    const std::string kind = st->column_text(2);
+    e.event.kind = kind == "refusal" ? EventKind::kRefusal : kind == "info" ? EventKind::kInfo : EventKind::kFault;
     e.event.code = st->column_text(3);
     e.event.machine = st->column_text(4);
     e.event.part = st->column_text(5);
@@ -1388,7 +1389,17 @@ std::string_view pending_status_name(PendingStatus status) {
   return "pending";
 }
 
-std::string_view event_kind_name(EventKind kind) { return kind == EventKind::kRefusal ? "refusal" : "fault"; }
+std::string_view event_kind_name(EventKind kind) {
+  switch (kind) {
+    case EventKind::kFault:
+      return "fault";
+    case EventKind::kRefusal:
+      return "refusal";
+    case EventKind::kInfo:
+      return "info";
+  }
+  return "fault";
+}
 
 EventKind event_kind_for(ErrorCode code) {
   return code == ErrorCode::kRefused ? EventKind::kRefusal : EventKind::kFault;

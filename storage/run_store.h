@@ -193,12 +193,14 @@ struct RunQuery {
 enum class EventKind {
   kFault,    // something failed: the gauge, the database, the NC directory...
   kRefusal,  // a guard or the geometry refused: a correction too large, a lobe not grindable
+  kInfo,     // a step worth keeping: a PLC request, a cycle's outcome, a config reload (schema 4)
 };
-std::string_view event_kind_name(EventKind kind);  // "fault", "refusal"
+std::string_view event_kind_name(EventKind kind);  // "fault", "refusal", "info"
 // kRefused is a refusal; every other code a fault.
 EventKind event_kind_for(ErrorCode code);
 
-// A fault or refusal worth keeping, usually one that stopped a run (so no run row holds it).
+// A fault or refusal worth keeping, usually one that stopped a run (so no run row holds it),
+// or a step of the service (kInfo) that someone may ask about later.
 struct EventRecord {
   std::string at_utc;  // ISO 8601 UTC; empty when recording: now
   EventKind kind = EventKind::kFault;

@@ -275,7 +275,7 @@ TEST_F(HttpApiTest, EventsFilterByKindAndTime) {
   EXPECT_EQ(refusals.j[0]["message"], "correction 120.0 um at cam degree 95 exceeds the 100 um guard");
   EXPECT_EQ(refusals.j[0]["lobe"], 1);
   EXPECT_EQ(get("/api/events?until=2020-11-21").j.size(), 1u);
-  EXPECT_TRUE(has(error_of(get("/api/events?kind=warning"), 400), "`kind` must be fault or refusal"));
+  EXPECT_TRUE(has(error_of(get("/api/events?kind=warning"), 400), "`kind` must be fault or refusal or info"));
 }
 
 TEST_F(HttpApiTest, NcTableIsTheLastPushWithItsProgramText) {
@@ -333,6 +333,7 @@ TEST_F(HttpApiTest, MetricsCountRunsEventsPendingAndTheLastErrorOfEachLobe) {
            "gaugeloop_runs_stored{status=\"pushed\"} 1\n",
            "gaugeloop_events_stored{kind=\"fault\"} 1\n",
            "gaugeloop_events_stored{kind=\"refusal\"} 1\n",
+           "gaugeloop_events_stored{kind=\"info\"} 0\n",
            "gaugeloop_pending_tables 1\n",
            "# TYPE gaugeloop_last_run_max_abs_error_um gauge\n",
            "gaugeloop_last_run_max_abs_error_um{machine=\"g1\",part=\"intake\",lobe=\"1\"} 4.0\n",

@@ -1,7 +1,7 @@
-// The real service process (`gaugeloop serve`) against the simulator over loopback: a run
-// requested over HTTP ends in a stored run and an NC file; the HTTP API answers; a broken
-// config on SIGHUP keeps the old one running; SIGTERM mid-run stores the whole run, leaves
-// a whole table and exits 0.
+// The real service process (`gaugeloop serve`) against the simulators over loopback: a run
+// requested over HTTP, or by the PLC through the Modbus handshake, ends in a stored run and an
+// NC file; the HTTP API answers; a broken config on SIGHUP keeps the old one running; SIGTERM
+// mid-run stores the whole run, leaves a whole table, completes the handshake and exits 0.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -18,6 +18,7 @@
 #include "app/part_file.h"
 #include "nc_out/table_program.h"
 #include "simulator/gauge_simulator.h"
+#include "simulator/plc_simulator.h"
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
 
@@ -256,6 +257,183 @@ TEST_F(ServiceTest, SigtermMidRunStoresTheWholeRunAndLeavesAWholeTable) {
   EXPECT_TRUE(verify_table_checksum(*parsed, "after SIGTERM").ok());
 }
 
+// The same service with [plc] pointed at an in-process PLC simulator; the intake lobe is PLC
+// part number 7.
+class PlcServiceTest : public ServiceTest {
+ protected:
+  void SetUp() override {
+    ServiceTest::SetUp();
+    if (HasFatalFailure()) return;
+    PlcSimulatorSettings ps;
+    ps.base_address = 100;
+    auto plc = PlcSimulator::start(ps);
+    ASSERT_TRUE(plc.ok()) << plc.error().message;
+    plc_ = std::move(*plc);
+    const std::string part_line = "intake_flat.toml\"\n";
+    const size_t at = config_text_.find(part_line);
+    ASSERT_NE(at, std::string::npos);
+    config_text_.insert(at + part_line.size(), "plc_part_number = 7\n");
+    config_text_ += "[plc]\nhost = \"127.0.0.1\"\nport = " + std::to_string(plc_->port()) +
+                    "\nbase_address = 100\npoll_interval_ms = 20\nresponse_timeout_ms = 2000\n";
+    std::ofstream(dir_ / "gaugeloop.toml") << config_text_;
+  }
+
+  // Once the service has polled with the request low, a request raised is a rising edge.
+  void wait_until_polled() {
+    ASSERT_TRUE(plc_->wait_until([](const PlcServiceWords& w) { return w.heartbeat >= 1; }, kGenerous))
+        << "the service never wrote its heartbeat: " << log();
+  }
+
+  std::vector<StoredEvent> events(EventKind kind) {
+    auto store = RunStore::open(dir_ / "runs.sqlite");
+    EXPECT_TRUE(store.ok());
+    if (!store.ok()) return {};
+    EventQuery q;
+    q.kind = kind;
+    auto list = store->list_events(q);
+    EXPECT_TRUE(list.ok());
+    return list.ok() ? *list : std::vector<StoredEvent>{};
+  }
+
+  static constexpr std::chrono::milliseconds kGenerous{120000};  // a run under sanitizers, with margin
+  std::unique_ptr<PlcSimulator> plc_;
+};
+
+bool has_code(const std::vector<StoredEvent>& events, const std::string& code) {
+  for (const StoredEvent& e : events) {
+    if (e.event.code == code) return true;
+  }
+  return false;
+}
+
+TEST_F(PlcServiceTest, PlcRequestRunNcFileDoneWithTheRunIdThenCleared) {
+  ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
+  const int port = service.port();
+  ASSERT_GT(port, 0) << log();
+  wait_until_polled();
+
+  plc_->request(7, 1);
+  auto acked = plc_->wait_until([](const PlcServiceWords& w) { return w.ack; }, kGenerous);
+  ASSERT_TRUE(acked.has_value()) << log();
+  auto out = plc_->wait_for_outcome(kGenerous);
+  ASSERT_TRUE(out.has_value()) << log();
+  EXPECT_TRUE(out->done) << log();
+  EXPECT_FALSE(out->fault);
+  EXPECT_FALSE(out->busy);
+  EXPECT_TRUE(out->ack);
+  EXPECT_EQ(out->result_code, PlcResultCode::kTablePushed) << log();
+  EXPECT_EQ(out->table_version, 1);
+
+  // The run id the PLC reads is the stored run's, and the one the NC file carries.
+  auto store = RunStore::open(dir_ / "runs.sqlite");
+  ASSERT_TRUE(store.ok());
+  auto runs = store->list_runs({});
+  ASSERT_TRUE(runs.ok());
+  ASSERT_EQ(runs->size(), 1u) << log();
+  EXPECT_EQ((*runs)[0].id, static_cast<std::int64_t>(out->run_id));
+  EXPECT_EQ((*runs)[0].status, "pushed");
+  auto parsed = parse_table_program(slurp(dir_ / "nc" / "CAM_INTAKE_L1.SPF"), "pushed for the PLC");
+  ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+  EXPECT_TRUE(verify_table_checksum(*parsed, "pushed for the PLC").ok());
+  EXPECT_EQ(parsed->header.at("run_id"), std::to_string(out->run_id));
+
+  // The request held high after done is not a new one: polls go on, no second run.
+  const std::uint16_t heartbeat = out->heartbeat;
+  auto later = plc_->wait_until(
+      [heartbeat](const PlcServiceWords& w) { return static_cast<std::uint16_t>(w.heartbeat - heartbeat) >= 5; },
+      kGenerous);
+  ASSERT_TRUE(later.has_value()) << log();
+  EXPECT_TRUE(later->done);
+  runs = store->list_runs({});
+  ASSERT_TRUE(runs.ok());
+  EXPECT_EQ(runs->size(), 1u);
+
+  plc_->clear_request();
+  auto cleared =
+      plc_->wait_until([](const PlcServiceWords& w) { return !w.ack && !w.done && !w.fault && !w.busy; }, kGenerous);
+  ASSERT_TRUE(cleared.has_value()) << log();
+
+  httplib::Client cli("127.0.0.1", port);
+  auto health = cli.Get("/api/health");
+  ASSERT_TRUE(health);
+  json h = json::parse(health->body);
+  EXPECT_EQ(h["plc"]["connected"], true) << health->body;
+  EXPECT_EQ(h["plc"]["requests"], 1) << health->body;
+
+  const std::vector<StoredEvent> info = events(EventKind::kInfo);
+  EXPECT_TRUE(has_code(info, "plc request")) << log();
+  EXPECT_TRUE(has_code(info, "table pushed")) << log();
+  EXPECT_TRUE(has_code(info, "plc done")) << log();
+  auto api_events = cli.Get("/api/events?kind=info");
+  ASSERT_TRUE(api_events);
+  EXPECT_NE(api_events->body.find("plc done"), std::string::npos) << api_events->body;
+
+  service.signal(SIGTERM);
+  EXPECT_EQ(service.wait(), 0) << log();
+}
+
+TEST_F(PlcServiceTest, UnknownPartNumberIsAFaultAndNoRunAndALostLinkComesBack) {
+  ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
+  ASSERT_GT(service.port(), 0) << log();
+  wait_until_polled();
+
+  // The PLC drops the link: the service logs it once and reconnects.
+  const std::uint16_t before = plc_->service_words().heartbeat;
+  plc_->drop_connections();
+  ASSERT_TRUE(
+      plc_->wait_until(
+              [before](const PlcServiceWords& w) { return static_cast<std::uint16_t>(w.heartbeat - before) >= 5; },
+              kGenerous)
+          .has_value())
+      << log();
+  EXPECT_NE(log().find("PLC link up at"), std::string::npos) << log();
+
+  plc_->request(99, 1);
+  auto out = plc_->wait_for_outcome(kGenerous);
+  ASSERT_TRUE(out.has_value()) << log();
+  EXPECT_TRUE(out->fault);
+  EXPECT_FALSE(out->done);
+  EXPECT_EQ(out->result_code, PlcResultCode::kUnknownPart);
+  EXPECT_EQ(out->run_id, 0u);
+  plc_->clear_request();
+  ASSERT_TRUE(plc_->wait_until([](const PlcServiceWords& w) { return !w.ack && !w.fault; }, kGenerous).has_value());
+
+  plc_->request(7, 2);  // part 7 has no lobe 2 here
+  out = plc_->wait_for_outcome(kGenerous);
+  ASSERT_TRUE(out.has_value()) << log();
+  EXPECT_EQ(out->result_code, PlcResultCode::kUnknownPart);
+
+  auto store = RunStore::open(dir_ / "runs.sqlite");
+  ASSERT_TRUE(store.ok());
+  auto runs = store->list_runs({});
+  ASSERT_TRUE(runs.ok());
+  EXPECT_TRUE(runs->empty()) << "an unknown part number never starts a run";
+  EXPECT_TRUE(has_code(events(EventKind::kInfo), "plc fault")) << log();
+  service.signal(SIGTERM);
+  EXPECT_EQ(service.wait(), 0) << log();
+}
+
+TEST_F(PlcServiceTest, SigtermMidCycleStoresTheRunAndAnswersThePlcBeforeExiting) {
+  ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
+  ASSERT_GT(service.port(), 0) << log();
+  wait_until_polled();
+  plc_->request(7, 1);
+  ASSERT_TRUE(plc_->wait_until([](const PlcServiceWords& w) { return w.busy; }, kGenerous).has_value()) << log();
+  service.signal(SIGTERM);
+  EXPECT_EQ(service.wait(), 0) << log();
+
+  const PlcServiceWords last = plc_->service_words();
+  EXPECT_TRUE(last.done) << log();
+  EXPECT_FALSE(last.busy);
+  EXPECT_EQ(last.result_code, PlcResultCode::kTablePushed);
+  auto store = RunStore::open(dir_ / "runs.sqlite");
+  ASSERT_TRUE(store.ok());
+  auto runs = store->list_runs({});
+  ASSERT_TRUE(runs.ok());
+  ASSERT_EQ(runs->size(), 1u) << log();
+  EXPECT_EQ((*runs)[0].id, static_cast<std::int64_t>(last.run_id));
+}
+
 TEST(ServiceConfigFile, ExampleConfigChecksAndABadOneNamesFileLineAndKey) {
   const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
   testing::CommandResult ok =
@@ -275,6 +453,46 @@ TEST(ServiceConfigFile, ExampleConfigChecksAndABadOneNamesFileLineAndKey) {
   testing::CommandResult typo = testing::run_command("serve --config " + (dir / "typo.toml").string());
   EXPECT_EQ(typo.exit_code, 2) << typo.output;
   EXPECT_NE(typo.output.find("templat"), std::string::npos) << typo.output;
+  fs::remove_all(dir);
+}
+
+TEST(ServiceConfigFile, PlcSettingsAndPartNumbersAreCheckedAtLoad) {
+  const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
+  const fs::path dir = fs::temp_directory_path() / ("gaugeloop-plccfg-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string intake = "[[part]]\nfile = \"" + (examples / "intake_flat.toml").string() + "\"\n";
+  const std::string exhaust = "[[part]]\nfile = \"" + (examples / "exhaust_roller.toml").string() + "\"\n";
+  const std::string nc = "[nc]\ntemplate = \"" + (examples / "sinumerik" / "cam_table.spf").string() + "\"\n";
+  auto check = [&dir](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return testing::run_command("serve --check --config " + (dir / name).string());
+  };
+
+  testing::CommandResult ok =
+      check("ok.toml", "[gauge]\n" + intake + "plc_part_number = 7\n" + exhaust + "plc_part_number = 8\n" + nc +
+                           "[plc]\nhost = \"10.0.0.5\"\nbase_address = 200\n");
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_NE(ok.output.find("PLC tcp:10.0.0.5:502 base 200"), std::string::npos) << ok.output;
+  EXPECT_NE(ok.output.find("7 lobe 1 = intake_flat"), std::string::npos) << ok.output;
+
+  testing::CommandResult twice = check("twice.toml", "[gauge]\n" + intake + "plc_part_number = 7\n" + exhaust +
+                                                         "plc_part_number = 7\n" + nc + "[plc]\n");
+  EXPECT_EQ(twice.exit_code, 2) << twice.output;
+  EXPECT_NE(twice.output.find("twice.toml:7: key `part.plc_part_number`"), std::string::npos) << twice.output;
+  EXPECT_NE(twice.output.find("already names part intake_flat"), std::string::npos) << twice.output;
+
+  testing::CommandResult typo =
+      check("typo.toml", "[gauge]\n" + intake + "plc_part_number = 7\n" + nc + "[plc]\npoll_ms = 50\n");
+  EXPECT_EQ(typo.exit_code, 2) << typo.output;
+  EXPECT_NE(typo.output.find("poll_ms"), std::string::npos) << typo.output;
+
+  testing::CommandResult range = check("range.toml", "[gauge]\n" + intake + "plc_part_number = 0\n" + nc + "[plc]\n");
+  EXPECT_EQ(range.exit_code, 2) << range.output;
+  EXPECT_NE(range.output.find("plc_part_number"), std::string::npos) << range.output;
+
+  testing::CommandResult unnumbered = check("unnumbered.toml", "[gauge]\n" + intake + nc + "[plc]\n");
+  EXPECT_EQ(unnumbered.exit_code, 2) << unnumbered.output;
+  EXPECT_NE(unnumbered.output.find("no [[part]] has a plc_part_number"), std::string::npos) << unnumbered.output;
   fs::remove_all(dir);
 }
 

@@ -163,10 +163,26 @@ TEST(MigrationFromV1, StepsOneVersionAtATime) {
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), 2);
   EXPECT_EQ(raw.query_text("SELECT type FROM sqlite_schema WHERE name = 'run_profile'"), "view");
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'nc_pending'"), 0);
-  s = storage_internal::apply_migrations(conn);
+  s = storage_internal::apply_migrations_up_to(conn, 3);
   ASSERT_TRUE(s.ok()) << s.error().message;
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), 3);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'nc_pending'"), 1);
+  ASSERT_EQ(raw.exec("INSERT INTO events (id, at_utc, kind, code, message) VALUES "
+                     "(7, '2026-11-22T02:00:00Z', 'fault', 'gauge timeout', 'no reply')"),
+            SQLITE_OK);
+  EXPECT_NE(raw.exec("INSERT INTO events (at_utc, kind, code, message) VALUES "
+                     "('2026-11-22T02:00:01Z', 'info', 'plc request', 'part 1 lobe 1')"),
+            SQLITE_OK)
+      << "version 3 knows no info events";
+  s = storage_internal::apply_migrations(conn);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 4);
+  EXPECT_EQ(raw.query_text("SELECT code FROM events WHERE id = 7"), "gauge timeout") << "events keep their ids";
+  EXPECT_EQ(raw.exec("INSERT INTO events (at_utc, kind, code, message) VALUES "
+                     "('2026-11-22T02:00:01Z', 'info', 'plc request', 'part 1 lobe 1')"),
+            SQLITE_OK);
+  EXPECT_EQ(raw.query_int("SELECT id FROM events WHERE kind = 'info'"), 8) << "AUTOINCREMENT goes on after 7";
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'events_by_time'"), 1);
 }
 
 }  // namespace

@@ -495,7 +495,7 @@ TEST(MigrationFromV2, KeepsEveryPushAndNumbersThemPerFileInPushOrder) {
   ASSERT_TRUE(store.ok()) << store.error().message;
 
   RawDb raw(dir.db());
-  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 3);
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
   EXPECT_EQ(raw.query_text("PRAGMA integrity_check"), "ok");
   EXPECT_EQ(raw.query_int("PRAGMA foreign_key_check"), 0);
   EXPECT_EQ(raw.query_text("SELECT group_concat(id || ':' || nc_file || ':' || table_version, ' ') FROM"
@@ -537,7 +537,7 @@ TEST(MigrationFromV2, AnEmptyVersion2DatabaseUpgrades) {
   }
   Result<RunStore> store = RunStore::open(dir.db());
   ASSERT_TRUE(store.ok()) << store.error().message;
-  EXPECT_EQ(RawDb(dir.db()).query_int("PRAGMA user_version"), 3);
+  EXPECT_EQ(RawDb(dir.db()).query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
   EXPECT_EQ(*store->next_table_version("/nc/A.SPF"), 1);
 }
 

@@ -216,6 +216,35 @@ TEST_F(QueryTest, EventsAreKeptAndListedNewestFirstByKind) {
   EXPECT_FALSE(store().record_event(EventRecord{}).ok()) << "an event needs a message";
 }
 
+TEST_F(QueryTest, InfoEventsOfTheServiceAreKeptAndListedApart) {
+  const auto run = add("a", 1, "g1", "2026-11-20T10:00:00Z");
+  EventRecord info;
+  info.at_utc = "2026-11-20T10:02:00Z";
+  info.kind = EventKind::kInfo;
+  info.code = "plc done";
+  info.machine = "g1";
+  info.part = "a";
+  info.lobe = 1;
+  info.run_id = run;
+  info.message = "PLC request part number 7 lobe 1: done, result 0 (table pushed), run " + std::to_string(run);
+  ASSERT_TRUE(store().record_event(info).ok());
+  EventRecord fault = info;
+  fault.kind = EventKind::kFault;
+  fault.code = "gauge timeout";
+  ASSERT_TRUE(store().record_event(fault).ok());
+  Result<std::vector<StoredEvent>> infos = store().list_events([&] {
+    EventQuery q;
+    q.kind = EventKind::kInfo;
+    return q;
+  }());
+  ASSERT_TRUE(infos.ok()) << infos.error().message;
+  ASSERT_EQ(infos->size(), 1u);
+  EXPECT_EQ((*infos)[0].event.kind, EventKind::kInfo);
+  EXPECT_EQ((*infos)[0].event.code, "plc done");
+  EXPECT_EQ((*infos)[0].event.run_id, run);
+  EXPECT_EQ(event_kind_name(EventKind::kInfo), "info");
+}
+
 TEST_F(QueryTest, PruneRemovesOldRawSamplesAndKeepsEverythingElse) {
   const auto old_run = add("a", 1, "g1", "2026-10-01T10:00:00Z");
   const auto new_run = add("a", 1, "g1", "2026-11-20T10:00:00Z");

@@ -1,0 +1,79 @@
+// The PLC handshake's block of holding registers and its result codes (docs/service.md, "The
+// PLC handshake"): the one layout the service (app/), its link (acquisition/) and the PLC
+// simulator (simulator/) share.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string_view>
+
+namespace gaugeloop {
+
+// Offsets from the configured base address, in the PLC's holding registers (function 03 to
+// read, 16 to write). Words 0-2 are the PLC's; 3-11 the service's, written in one request.
+namespace plc_registers {
+inline constexpr int kRequest = 0;        // PLC: bit 0 = measure; a rising edge is one request
+inline constexpr int kPartNumber = 1;     // PLC: uint16, the [[part]] plc_part_number
+inline constexpr int kLobe = 2;           // PLC: uint16, lobe number (1, 2, ...)
+inline constexpr int kHeartbeat = 3;      // service: +1 every poll, wraps at 65535
+inline constexpr int kAck = 4;            // service: 1 from request seen until the PLC clears it
+inline constexpr int kBusy = 5;           // service: 1 while the run is measured and pushed
+inline constexpr int kDone = 6;           // service: 1 when the cycle ended with a stored run
+inline constexpr int kFault = 7;          // service: 1 when it ended without one (result code says why)
+inline constexpr int kResultCode = 8;     // service: PlcResultCode, valid while done or fault is 1
+inline constexpr int kRunIdHigh = 9;      // service: run id, uint32, high word first (ABCD)
+inline constexpr int kRunIdLow = 10;      //   0 when no run was stored
+inline constexpr int kTableVersion = 11;  // service: table version pushed, 0 when none
+inline constexpr int kPlcWords = 3;       // words 0..2
+inline constexpr int kServiceFirst = kHeartbeat;
+inline constexpr int kServiceWords = 9;  // words 3..11
+inline constexpr int kBlockWords = 12;
+inline constexpr std::uint16_t kMeasureBit = 0x0001;
+}  // namespace plc_registers
+
+// What became of one PLC request. 0-2: done (a run was stored); 3 and up: fault (no run, or
+// one stored whose table could not be written).
+enum class PlcResultCode : std::uint16_t {
+  kTablePushed = 0,   // run stored, its curve table pushed
+  kTableHeld = 1,     // run stored, table kept for approval (`gaugeloop nc approve`)
+  kTableRefused = 2,  // run stored, the correction refused: the table in force stays
+  kUnknownPart = 3,   // part number or lobe not in the configuration; nothing measured
+  kGaugeFault = 4,    // the gauge did not answer or the run was incomplete; nothing stored
+  kStorageFault = 5,  // the run database refused the run
+  kNcFault = 6,       // the NC program could not be written
+  kNotNow = 7,        // another run in progress (HTTP, by hand) or the service stopping
+  kOtherFault = 8,    // anything else: the service log and `gaugeloop events` say what
+};
+
+// The PLC's words (0-2), as read.
+struct PlcRequestWords {
+  std::uint16_t request = 0;
+  std::uint16_t part_number = 0;
+  std::uint16_t lobe = 0;
+  bool measure() const { return (request & plc_registers::kMeasureBit) != 0; }
+};
+
+// The service's words (3-11), as written.
+struct PlcServiceWords {
+  std::uint16_t heartbeat = 0;
+  bool ack = false;
+  bool busy = false;
+  bool done = false;
+  bool fault = false;
+  PlcResultCode result_code = PlcResultCode::kTablePushed;
+  std::uint32_t run_id = 0;
+  std::uint16_t table_version = 0;
+  bool operator==(const PlcServiceWords&) const = default;
+};
+
+// Words 3..11 in register order (run id high word first); decode is the inverse.
+std::array<std::uint16_t, plc_registers::kServiceWords> encode_service_words(const PlcServiceWords& w);
+PlcServiceWords decode_service_words(const std::array<std::uint16_t, plc_registers::kServiceWords>& regs);
+
+// "table pushed", "unknown part", ...
+std::string_view plc_result_name(PlcResultCode code);
+
+// True for the codes answered with done (a run stored), false for those answered with fault.
+inline bool plc_result_is_done(PlcResultCode code) { return static_cast<std::uint16_t>(code) <= 2; }
+
+}  // namespace gaugeloop

@@ -1,0 +1,246 @@
+// The virtual PLC's libmodbus server loop and its handshake API.
+#include "simulator/plc_simulator.h"
+
+#include <arpa/inet.h>
+#include <modbus/modbus.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <vector>
+
+namespace gaugeloop {
+
+namespace r = plc_registers;
+
+PlcSimulator::PlcSimulator(PlcSimulatorSettings settings) : settings_(std::move(settings)) {}
+
+Result<std::unique_ptr<PlcSimulator>> PlcSimulator::start(const PlcSimulatorSettings& settings) {
+  if (settings.base_address < 0 || settings.base_address > 65536 - r::kBlockWords) {
+    return make_error(ErrorCode::kInvalidInput, "PLC simulator base_address " + std::to_string(settings.base_address) +
+                                                    " leaves no room for the 12-word block; use 0 to 65524");
+  }
+  std::unique_ptr<PlcSimulator> sim(new PlcSimulator(settings));
+  sim->ctx_ = modbus_new_tcp(settings.host.c_str(), settings.port);
+  if (sim->ctx_ == nullptr) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "PLC simulator address " + settings.host + " is not usable: " + modbus_strerror(errno));
+  }
+  sim->mapping_ = modbus_mapping_new_start_address(0, 0, 0, 0, static_cast<unsigned int>(settings.base_address),
+                                                   r::kBlockWords, 0, 0);
+  if (sim->mapping_ == nullptr)
+    return make_error(ErrorCode::kInternal, "cannot allocate the PLC simulator's registers");
+  sim->wake_fd_ = ::eventfd(0, EFD_CLOEXEC);
+  if (sim->wake_fd_ < 0) return make_error(ErrorCode::kIo, std::string("eventfd: ") + std::strerror(errno));
+  if (Status s = sim->listen(); !s) return s.error();
+  sim->thread_ = std::thread([raw = sim.get()] { raw->serve(); });
+  return sim;
+}
+
+Status PlcSimulator::listen() {
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(port_ != 0 ? port_ : settings_.port));
+  if (::inet_pton(AF_INET, settings_.host.c_str(), &addr.sin_addr) != 1) {
+    return make_error(ErrorCode::kInvalidInput, "PLC simulator address " + settings_.host + " is not an IPv4 address");
+  }
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  const int yes = 1;
+  if (fd >= 0) ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::listen(fd, 16) != 0) {
+    const int err = errno;
+    if (fd >= 0) ::close(fd);
+    return make_error(ErrorCode::kIo, "PLC simulator cannot listen on " + settings_.host + ":" +
+                                          std::to_string(ntohs(addr.sin_port)) + ": " + std::strerror(err) +
+                                          "; choose another port or 0 for any free one");
+  }
+  socklen_t len = sizeof addr;
+  if (::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
+    const int err = errno;
+    ::close(fd);
+    return make_error(ErrorCode::kIo, std::string("PLC simulator cannot read its port back: ") + std::strerror(err));
+  }
+  port_ = ntohs(addr.sin_port);
+  listen_fd_ = fd;
+  return {};
+}
+
+void PlcSimulator::wake() const {
+  const std::uint64_t one = 1;
+  [[maybe_unused]] auto w = ::write(wake_fd_, &one, sizeof one);
+}
+
+void PlcSimulator::serve() {
+  std::vector<int> clients;
+  std::vector<std::uint8_t> query(MODBUS_TCP_MAX_ADU_LENGTH);
+  auto close_clients = [&clients] {
+    for (int c : clients) ::close(c);
+    clients.clear();
+  };
+  while (!stopping_.load()) {
+    // Read before carrying out: a change asked for after this is seen by the next round.
+    const std::int64_t asked = link_requests_.load();
+    if (drop_.exchange(false)) close_clients();
+    if (refusing_.load() && listen_fd_ >= 0) {
+      ::close(listen_fd_);  // connection refused from now on
+      listen_fd_ = -1;
+      close_clients();
+    } else if (!refusing_.load() && listen_fd_ < 0) {
+      if (!listen()) break;  // the port was taken meanwhile: nothing sensible left to do
+    }
+    {
+      std::lock_guard lock(mutex_);
+      link_changes_ = asked;
+    }
+    written_.notify_all();
+    std::vector<pollfd> fds;
+    fds.push_back({wake_fd_, POLLIN, 0});
+    if (listen_fd_ >= 0) fds.push_back({listen_fd_, POLLIN, 0});
+    const size_t first_client = fds.size();
+    for (int c : clients) fds.push_back({c, POLLIN, 0});
+    if (::poll(fds.data(), fds.size(), -1) < 0) {
+      if (errno == EINTR) continue;
+      break;
+    }
+    if (fds[0].revents != 0) {
+      std::uint64_t n = 0;
+      [[maybe_unused]] auto rd = ::read(wake_fd_, &n, sizeof n);
+      continue;  // stop, drop or refuse: seen at the top of the loop
+    }
+    if (listen_fd_ >= 0 && (fds[1].revents & POLLIN)) {
+      const int c = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
+      if (c >= 0) clients.push_back(c);
+    }
+    std::vector<int> closed;
+    for (size_t i = first_client; i < fds.size(); ++i) {
+      if (fds[i].revents == 0) continue;
+      const int fd = fds[i].fd;
+      modbus_set_socket(ctx_, fd);
+      const int rc = modbus_receive(ctx_, query.data());
+      if (rc <= 0) {
+        if (rc < 0) closed.push_back(fd);  // client went away or sent garbage
+        continue;
+      }
+      const int function = query[static_cast<size_t>(modbus_get_header_length(ctx_))];
+      {
+        std::lock_guard lock(mutex_);
+        modbus_reply(ctx_, query.data(), rc, mapping_);
+        if (function == MODBUS_FC_WRITE_MULTIPLE_REGISTERS || function == MODBUS_FC_WRITE_SINGLE_REGISTER) ++writes_;
+      }
+      written_.notify_all();
+    }
+    for (int fd : closed) {
+      ::close(fd);
+      clients.erase(std::remove(clients.begin(), clients.end(), fd), clients.end());
+    }
+  }
+  close_clients();
+}
+
+void PlcSimulator::request(std::uint16_t part_number, std::uint16_t lobe) {
+  std::lock_guard lock(mutex_);
+  mapping_->tab_registers[r::kPartNumber] = part_number;
+  mapping_->tab_registers[r::kLobe] = lobe;
+  mapping_->tab_registers[r::kRequest] |= r::kMeasureBit;
+}
+
+void PlcSimulator::clear_request() {
+  std::lock_guard lock(mutex_);
+  mapping_->tab_registers[r::kRequest] &= static_cast<std::uint16_t>(~r::kMeasureBit);
+}
+
+PlcRequestWords PlcSimulator::plc_words() const {
+  std::lock_guard lock(mutex_);
+  PlcRequestWords w;
+  w.request = mapping_->tab_registers[r::kRequest];
+  w.part_number = mapping_->tab_registers[r::kPartNumber];
+  w.lobe = mapping_->tab_registers[r::kLobe];
+  return w;
+}
+
+namespace {
+
+PlcServiceWords read_service(const modbus_mapping_t* m) {
+  std::array<std::uint16_t, r::kServiceWords> regs{};
+  std::copy_n(m->tab_registers + r::kServiceFirst, r::kServiceWords, regs.begin());
+  return decode_service_words(regs);
+}
+
+}  // namespace
+
+PlcServiceWords PlcSimulator::service_words() const {
+  std::lock_guard lock(mutex_);
+  return read_service(mapping_);
+}
+
+std::int64_t PlcSimulator::service_writes() const {
+  std::lock_guard lock(mutex_);
+  return writes_;
+}
+
+std::optional<PlcServiceWords> PlcSimulator::wait_until(const std::function<bool(const PlcServiceWords&)>& done,
+                                                        std::chrono::milliseconds timeout) const {
+  std::unique_lock lock(mutex_);
+  std::optional<PlcServiceWords> seen;
+  const bool ok = written_.wait_for(lock, timeout, [&] {
+    seen = read_service(mapping_);
+    return done(*seen);
+  });
+  if (!ok) return std::nullopt;
+  return seen;
+}
+
+std::optional<PlcServiceWords> PlcSimulator::wait_for_outcome(std::chrono::milliseconds timeout) const {
+  return wait_until([](const PlcServiceWords& w) { return w.done || w.fault; }, timeout);
+}
+
+void PlcSimulator::change_link(const std::function<void()>& apply) {
+  std::unique_lock lock(mutex_);
+  apply();
+  const std::int64_t mine = ++link_requests_;
+  wake();
+  written_.wait(lock, [&] { return link_changes_ >= mine || stopping_.load(); });
+}
+
+void PlcSimulator::drop_connections() {
+  change_link([this] { drop_.store(true); });
+}
+
+void PlcSimulator::set_refusing(bool refusing) {
+  change_link([this, refusing] { refusing_.store(refusing); });
+}
+
+void PlcSimulator::stop() {
+  if (thread_.joinable()) {
+    stopping_.store(true);
+    wake();
+    thread_.join();
+  }
+  if (listen_fd_ >= 0) {
+    ::close(listen_fd_);
+    listen_fd_ = -1;
+  }
+  if (wake_fd_ >= 0) {
+    ::close(wake_fd_);
+    wake_fd_ = -1;
+  }
+  if (ctx_ != nullptr) {
+    modbus_set_socket(ctx_, -1);  // the sockets are closed already; keep modbus_free from closing one again
+    modbus_free(ctx_);
+    ctx_ = nullptr;
+  }
+  if (mapping_ != nullptr) {
+    modbus_mapping_free(mapping_);
+    mapping_ = nullptr;
+  }
+}
+
+PlcSimulator::~PlcSimulator() { stop(); }
+
+}  // namespace gaugeloop
