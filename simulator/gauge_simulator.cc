@@ -1,5 +1,6 @@
 // The simulated amplifier: lobe model, clock-driven registers and the libmodbus server loop.
 #include "simulator/gauge_simulator.h"
+#include "simulator/tcp_listener.h"
 
 #include <arpa/inet.h>
 #include <modbus/modbus.h>
@@ -198,30 +199,10 @@ Status GaugeSimulator::listen() {
     wake_fd_ = ::eventfd(0, EFD_CLOEXEC);
     if (wake_fd_ < 0) return make_error(ErrorCode::kIo, std::string("eventfd: ") + std::strerror(errno));
   }
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(static_cast<std::uint16_t>(port_ != 0 ? port_ : settings_.port));
-  if (::inet_pton(AF_INET, settings_.host.c_str(), &addr.sin_addr) != 1) {
-    return make_error(ErrorCode::kInvalidInput, "simulator address " + settings_.host + " is not an IPv4 address");
-  }
-  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  const int yes = 1;
-  ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
-  if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::listen(fd, 16) != 0) {
-    const int err = errno;
-    if (fd >= 0) ::close(fd);
-    return make_error(ErrorCode::kIo, "simulator cannot listen on " + settings_.host + ":" +
-                                          std::to_string(ntohs(addr.sin_port)) + ": " + std::strerror(err) +
-                                          "; choose another port or 0 for any free one");
-  }
-  socklen_t len = sizeof addr;
-  if (::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
-    const int err = errno;
-    ::close(fd);
-    return make_error(ErrorCode::kIo, std::string("simulator cannot read its port back: ") + std::strerror(err));
-  }
-  port_ = ntohs(addr.sin_port);
-  listen_fd_ = fd;
+  Result<TcpListener> listener = listen_tcp(settings_.host, port_ != 0 ? port_ : settings_.port, "simulator");
+  if (!listener) return listener.error();
+  port_ = listener->port;
+  listen_fd_ = listener->fd;
   return {};
 }
 

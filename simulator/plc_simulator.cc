@@ -1,5 +1,6 @@
 // The virtual PLC's libmodbus server loop and its handshake API.
 #include "simulator/plc_simulator.h"
+#include "simulator/tcp_listener.h"
 
 #include <arpa/inet.h>
 #include <modbus/modbus.h>
@@ -44,30 +45,10 @@ Result<std::unique_ptr<PlcSimulator>> PlcSimulator::start(const PlcSimulatorSett
 }
 
 Status PlcSimulator::listen() {
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(static_cast<std::uint16_t>(port_ != 0 ? port_ : settings_.port));
-  if (::inet_pton(AF_INET, settings_.host.c_str(), &addr.sin_addr) != 1) {
-    return make_error(ErrorCode::kInvalidInput, "PLC simulator address " + settings_.host + " is not an IPv4 address");
-  }
-  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  const int yes = 1;
-  if (fd >= 0) ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
-  if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::listen(fd, 16) != 0) {
-    const int err = errno;
-    if (fd >= 0) ::close(fd);
-    return make_error(ErrorCode::kIo, "PLC simulator cannot listen on " + settings_.host + ":" +
-                                          std::to_string(ntohs(addr.sin_port)) + ": " + std::strerror(err) +
-                                          "; choose another port or 0 for any free one");
-  }
-  socklen_t len = sizeof addr;
-  if (::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
-    const int err = errno;
-    ::close(fd);
-    return make_error(ErrorCode::kIo, std::string("PLC simulator cannot read its port back: ") + std::strerror(err));
-  }
-  port_ = ntohs(addr.sin_port);
-  listen_fd_ = fd;
+  Result<TcpListener> listener = listen_tcp(settings_.host, port_ != 0 ? port_ : settings_.port, "PLC simulator");
+  if (!listener) return listener.error();
+  port_ = listener->port;
+  listen_fd_ = listener->fd;
   return {};
 }
 
