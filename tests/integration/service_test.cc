@@ -16,6 +16,8 @@
 
 #include "acquisition/modbus_gauge.h"
 #include "app/part_file.h"
+#include "compensation/flat_probe.h"
+#include "compensation/periodic_spline.h"
 #include "nc_out/table_program.h"
 #include "simulator/gauge_simulator.h"
 #include "simulator/plc_simulator.h"
@@ -421,9 +423,18 @@ TEST_F(PlcServiceTest, TheNextPartGroundFromThePushedTableComesOutUnder26Um) {
   auto runs = store->list_runs({});
   ASSERT_TRUE(runs.ok());
   ASSERT_EQ(runs->size(), 2u) << log();
-  // Newest first: the second part, then the first.
+  // Newest first: the second part, then the first. The part is judged by its true lift error
+  // (the flat probe on the ground lobe against the design, no gauge); the stored run is the
+  // gauge's view of it: 0.3 um RMS noise per sample, averaged over 3 revolutions is 0.17 um
+  // per degree, and 4 sigma of that (0.7 um) bounds the difference of the two maxima.
+  auto design_lift = PeriodicSpline::fit(design->angle_deg, design->lift_mm);
+  ASSERT_TRUE(design_lift.ok());
+  auto design_reading = flat_probe_reading(*design_lift, pf->part);
+  ASSERT_TRUE(design_reading.ok());
+  const TrueLiftError second_true = true_lift_error(second->reading_mm, *design_reading);
   EXPECT_GT((*runs)[1].max_abs_error_um, 13.0);
-  EXPECT_LE((*runs)[0].max_abs_error_um, 2.6) << "first part " << (*runs)[1].max_abs_error_um << " um";
+  EXPECT_LE(second_true.max_abs_um, 2.6) << "first part " << (*runs)[1].max_abs_error_um << " um";
+  EXPECT_NEAR((*runs)[0].max_abs_error_um, second_true.max_abs_um, 0.7);
 
   service.signal(SIGTERM);
   EXPECT_EQ(service.wait(), 0) << log();
