@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <bitset>
 #include <cmath>
+#include <deque>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -107,10 +108,12 @@ Result<MeasuredRun> Poller::measure_live() {
   std::map<std::int64_t, RevolutionInProgress> in_progress;
   Poll prev;  // the last new sample, valid when have_prev
   bool have_prev = false;
-  // The last polls (up to 4) that form an unbroken chain: good status, moving forward, each
-  // within max_interpolation_gap_deg of the one before. The degrees between chain[n-3] and
-  // chain[n-2] are filled when chain[n-1] arrives, from the cubic through all four.
-  std::vector<Poll> chain;
+  // The polls that form an unbroken chain: good status, moving forward, each within
+  // max_interpolation_gap_deg of the one before. Segment chain[pending] -> chain[pending+1] is
+  // the first whose degrees are not filled yet; it waits for a neighbour on its right (see
+  // fill_ready). Polls more than 3 gaps behind it can no longer be a neighbour and are dropped.
+  std::deque<Poll> chain;
+  size_t pending = 0;
   double filled_to_u = 0.0;  // degrees up to here have had their chance to be filled (set by the first poll)
   std::optional<std::int64_t> start_rev;  // first revolution index we collect
   std::int64_t next_rev = 0;              // next revolution to keep or discard
@@ -138,22 +141,21 @@ Result<MeasuredRun> Poller::measure_live() {
   };
 
   // Fills the whole degrees t with a.u < t <= b.u. The cubic through `left`, a, b and `right`
-  // is used when both neighbours lie between h/3 and 3h from the segment (h = its length):
-  // then its error is about h^4/24 |H''''|, under 0.001 um at h = 1 deg on the sample lobes,
-  // its weights stay under about 1.5, so noise is not amplified (clustered nodes would turn
-  // 0.3 um of noise into microns).
+  // is used when both neighbours are given (fill_ready finds them between h/3 and 3h from the
+  // segment, h = its length): then its error is about h^4/24 |H''''|, under 0.001 um at
+  // h = 1 deg on the sample lobes, and its weights stay under about 1.5, so noise is not
+  // amplified (clustered nodes would turn 0.3 um of noise into microns).
   // Otherwise a segment up to kLinearGapDeg is filled linearly (error h^2/8 |H''|: 0.2 um at
   // 0.5 deg on the intake nose), and a longer one stays missing.
   auto fill_segment = [&](const Poll* left, const Poll& a, const Poll& b, const Poll* right) {
     const double h = b.u_deg - a.u_deg;
-    auto spaced = [h](double d) { return d >= h / 3.0 && d <= 3.0 * h; };
     std::vector<const Poll*> support;
-    if (left != nullptr && right != nullptr && spaced(a.u_deg - left->u_deg) && spaced(right->u_deg - b.u_deg)) {
+    if (left != nullptr && right != nullptr) {
       support = {left, &a, &b, right};
     } else if (h <= kLinearGapDeg) {
       support = {&a, &b};
     } else {
-      return;  // left missing: no well-spaced support for a segment this long
+      return;  // no well-spaced support for a segment this long
     }
     for (auto t = static_cast<std::int64_t>(std::floor(a.u_deg)) + 1;
          t <= static_cast<std::int64_t>(std::floor(b.u_deg)); ++t) {
@@ -174,21 +176,40 @@ Result<MeasuredRun> Poller::measure_live() {
     }
   };
 
-  // Fills what the chain allows now. `closing`: the chain ends here, so its last segment is
-  // filled with the support it has instead of waiting for one more poll.
-  auto fill_chain = [&](bool closing) {
-    const size_t n = chain.size();
-    if (!closing && n >= 3) {
-      // Segment chain[n-3] -> chain[n-2], with a neighbour on either side.
-      fill_segment(n >= 4 ? &chain[n - 4] : nullptr, chain[n - 3], chain[n - 2], &chain[n - 1]);
-      filled_to_u = chain[n - 2].u_deg;
+  // Fills the pending segments in order. A segment a -> b of length h takes as neighbours
+  // the nearest polls at least h/3 beyond either end, if they lie within 3h: a long segment
+  // left by a stalled poll among dense polls reaches past its immediate neighbours for
+  // well-spaced ones. It waits until a poll h/3 beyond b has arrived, unless `closing`: the
+  // chain ends here, and its last segments are filled with the support they have.
+  auto fill_ready = [&](bool closing) {
+    while (pending + 1 < chain.size()) {
+      const Poll& a = chain[pending];
+      const Poll& b = chain[pending + 1];
+      const double h = b.u_deg - a.u_deg;
+      size_t j = pending + 2;
+      while (j < chain.size() && chain[j].u_deg < b.u_deg + h / 3.0) ++j;
+      if (j == chain.size() && !closing) break;  // the right neighbour is still to come
+      const Poll* right = j < chain.size() && chain[j].u_deg <= b.u_deg + 3.0 * h ? &chain[j] : nullptr;
+      const Poll* left = nullptr;
+      for (size_t i = pending; i-- > 0;) {
+        if (chain[i].u_deg <= a.u_deg - h / 3.0) {
+          if (chain[i].u_deg >= a.u_deg - 3.0 * h) left = &chain[i];
+          break;
+        }
+      }
+      fill_segment(left, a, b, right);
+      filled_to_u = b.u_deg;
+      ++pending;
     }
-    if (closing && n >= 2) {
-      fill_segment(n >= 3 ? &chain[n - 3] : nullptr, chain[n - 2], chain[n - 1], nullptr);
-      filled_to_u = chain[n - 1].u_deg;
+    if (closing) {
+      chain.clear();
+      pending = 0;
+      return;
     }
-    if (closing) chain.clear();
-    if (chain.size() > 4) chain.erase(chain.begin());
+    while (pending > 0 && chain.front().u_deg < chain[pending].u_deg - 3.0 * settings_.max_interpolation_gap_deg) {
+      chain.pop_front();
+      --pending;
+    }
   };
 
   // Takes a new poll: extends the chain, or closes it and starts a new one.
@@ -200,7 +221,7 @@ Result<MeasuredRun> Poller::measure_live() {
       const bool backwards = cur.u_deg < last.u_deg;
       const bool too_far = cur.u_deg - last.u_deg > settings_.max_interpolation_gap_deg;
       if (!ok || backwards || too_far) {
-        fill_chain(/*closing=*/true);
+        fill_ready(/*closing=*/true);
         if (!ok) {
           break_span(last.u_deg, cur.u_deg,
                      "gauge status " + describe_gauge_status(cur.status) + " near degree " +
@@ -218,7 +239,7 @@ Result<MeasuredRun> Poller::measure_live() {
     }
     chain.push_back(cur);
     if (chain.size() == 1) filled_to_u = std::max(filled_to_u, cur.u_deg);
-    fill_chain(/*closing=*/false);
+    fill_ready(/*closing=*/false);
   };
 
   // Moves revolutions that lie wholly behind `u` out of `in_progress`: kept or discarded.
@@ -273,7 +294,7 @@ Result<MeasuredRun> Poller::measure_live() {
     if (!r) {
       if (have_prev) break_span(prev.u_deg, prev.u_deg, "link fault: " + r.error().message);
       have_prev = false;  // never interpolate across a failed read
-      fill_chain(/*closing=*/true);
+      fill_ready(/*closing=*/true);
       if (Status s = link.failed(r.error(), where_now()); !s) return s.error();
       continue;
     }
@@ -287,7 +308,7 @@ Result<MeasuredRun> Poller::measure_live() {
                            std::to_string(settings_.stale_after.count()) + " ms (frozen amplifier)");
         break_span(prev.u_deg, prev.u_deg, frozen.message);
         have_prev = false;
-        fill_chain(/*closing=*/true);
+        fill_ready(/*closing=*/true);
         if (Status s = link.failed(frozen, where_now()); !s) return s.error();
       }
       continue;

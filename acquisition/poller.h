@@ -26,7 +26,8 @@ struct PollerSettings {
   // Live mode: a degree takes the reading interpolated between the two polls that straddle
   // it, and only if those polls are at most this far apart. Farther apart, nobody sampled
   // near the degree and it stays missing: a degree is never invented. Between 0.5 deg and
-  // this limit a degree is filled only by the cubic through well-spaced neighbours (error
+  // this limit a degree is filled only by the cubic through well-spaced neighbours, the
+  // nearest polls a third of the gap or more beyond either end, within three gaps (error
   // about h^4/24 |H''''|: under 0.001 um at 1 deg on the sample lobes); up to 0.5 deg a
   // straight line will do (h^2/8 |H''|: 0.2 um at 0.5 deg on the intake nose).
   double max_interpolation_gap_deg = 1.0;

@@ -7,6 +7,7 @@
 #include <modbus/modbus.h>
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -77,6 +78,42 @@ void BM_SnapshotReadsVersusBareLibmodbus(benchmark::State& state) {
 }
 BENCHMARK(BM_SnapshotReadsVersusBareLibmodbus)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
+// What the platform allows live polling: a bare libmodbus loop reading the snapshot block
+// back to back for 4 s, and the time between consecutive replies. Live mode loses a degree
+// whenever that time exceeds the gap limit (1 deg: 278 us at 600 rpm, 2.8 ms at 60 rpm).
+// No gaugeloop code runs here but the simulator: these stalls are the machine's.
+void BM_ReplyGapsBareLibmodbus(benchmark::State& state) {
+  auto sim = start_sim(600.0);
+  modbus_t* bare = modbus_new_tcp("127.0.0.1", sim->port());
+  modbus_connect(bare);
+  std::uint16_t regs[16];
+  std::vector<double> gaps_us;
+  double seconds = 0.0;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    auto last = t0;
+    while (last - t0 < std::chrono::seconds(4)) {
+      benchmark::DoNotOptimize(modbus_read_input_registers(bare, 0, 7, regs));
+      const auto now = Clock::now();
+      gaps_us.push_back(std::chrono::duration<double, std::micro>(now - last).count());
+      last = now;
+    }
+    seconds += std::chrono::duration<double>(last - t0).count();
+  }
+  const auto over = [&](double us) {
+    return static_cast<double>(std::count_if(gaps_us.begin(), gaps_us.end(), [us](double g) { return g > us; }));
+  };
+  state.counters["over_278us_per_s"] = over(278.0) / seconds;
+  state.counters["over_1ms_per_s"] = over(1000.0) / seconds;
+  state.counters["over_2800us_per_s"] = over(2800.0) / seconds;
+  std::sort(gaps_us.begin(), gaps_us.end());
+  state.counters["median_us"] = gaps_us[gaps_us.size() / 2];
+  state.counters["max_us"] = gaps_us.back();
+  modbus_close(bare);
+  modbus_free(bare);
+}
+BENCHMARK(BM_ReplyGapsBareLibmodbus)->Iterations(1)->Unit(benchmark::kSecond);
+
 // One 3-revolution run with no spare revolution: true if every degree of every revolution
 // was sampled. Also reports the poller thread's CPU time over the run's wall time.
 // `compact`: read the simulator's compact latch ring (2 registers an entry, the degree implied
@@ -102,10 +139,12 @@ bool clean_run(SamplingMode mode, double rpm, double* cpu_fraction, int spares =
   Poller poller(gauge, ps);
   const double cpu0 = thread_cpu_s();
   const auto t0 = Clock::now();
-  const bool ok = poller.measure().ok();
+  const auto measured = poller.measure();
+  const bool ok = measured.ok();
   if (cpu_fraction != nullptr) {
     *cpu_fraction = (thread_cpu_s() - cpu0) / std::chrono::duration<double>(Clock::now() - t0).count();
   }
+  if (!ok) std::fprintf(stderr, "  %.0f rpm: %s\n", rpm, measured.error().message.c_str());  // why the ladder stops
   return ok;
 }
 
@@ -149,14 +188,33 @@ void BM_MaxCleanRpmLatchedCompact20RevRtu(benchmark::State& state) {
   max_clean_rpm(state, SamplingMode::kLatched, 0, true, true, 20);
 }
 void BM_MaxCleanRpmLiveRtu(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLive, 0, true); }
+void BM_MaxCompleteRpmLiveRtu(benchmark::State& state) { max_clean_rpm(state, SamplingMode::kLive, 3, true); }
 BENCHMARK(BM_MaxCleanRpmLatchedTcp)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCleanRpmLatchedRtu)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCleanRpmLatchedCompactRtu)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCleanRpmLatched20RevRtu)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCleanRpmLatchedCompact20RevRtu)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCleanRpmLiveRtu)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_MaxCompleteRpmLiveRtu)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCleanRpmLiveTcp)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_MaxCompleteRpmLiveTcp)->Iterations(1)->Unit(benchmark::kSecond);
+
+// Live mode over TCP at each speed on its own, not a ladder: of 5 runs with the product's
+// default 3 spare revolutions, how many complete. A stall of the machine costs the revolution
+// it falls in; stalls come at a rate per second (BM_ReplyGapsBareLibmodbus), so a short
+// revolution is hit less often than a long one, and a faster spindle can fare better than a
+// slower one until the polls themselves come more than 1 degree apart.
+void BM_LiveTcpCompleteRunsBySpeed(benchmark::State& state) {
+  const std::vector<double> speeds = {60, 120, 240, 600, 1200, 2400, 3000, 4500};
+  for (auto _ : state) {
+    for (double rpm : speeds) {
+      int complete = 0;
+      for (int i = 0; i < 5; ++i) complete += clean_run(SamplingMode::kLive, rpm, nullptr, 3) ? 1 : 0;
+      state.counters["complete_of_5_at_" + std::to_string(static_cast<int>(rpm))] = complete;
+    }
+  }
+}
+BENCHMARK(BM_LiveTcpCompleteRunsBySpeed)->Iterations(1)->Unit(benchmark::kSecond);
 
 // CPU of the poller's thread during a 60 rpm run: how much of one core measuring costs.
 void poller_cpu(benchmark::State& state, SamplingMode mode) {
