@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <string>
+#include <utility>
 
 namespace gaugeloop {
 namespace {
@@ -90,6 +92,15 @@ bool has(const std::vector<PlcEvent>& events, PlcEvent e) {
   return std::find(events.begin(), events.end(), e) != events.end();
 }
 
+// The handshake bits the service wrote, in a word: "ack busy done fault" or a part of it.
+std::string bits(const PlcServiceWords& w) {
+  std::string out;
+  for (const auto& [on, name] : {std::pair{w.ack, "ack"}, {w.busy, "busy"}, {w.done, "done"}, {w.fault, "fault"}}) {
+    if (on) out += out.empty() ? name : std::string(" ") + name;
+  }
+  return out;
+}
+
 class PlcHandshakeTest : public ::testing::Test {
  protected:
   PlcHandshakeTest() : hs_(plc_, cycle_, settings(), [this] { return now_; }) {}
@@ -134,10 +145,7 @@ TEST_F(PlcHandshakeTest, RequestAckBusyDoneClearAndReadyAgain) {
   EXPECT_EQ(hs_.state(), PlcState::kBusy);
   ASSERT_EQ(cycle_.starts.size(), 1u);
   EXPECT_EQ(cycle_.starts[0], std::make_pair(7, 1));
-  EXPECT_TRUE(plc_.written.ack);
-  EXPECT_TRUE(plc_.written.busy);
-  EXPECT_FALSE(plc_.written.done);
-  EXPECT_FALSE(plc_.written.fault);
+  EXPECT_EQ(bits(plc_.written), "ack busy");
 
   e = hs_.step();  // still measuring
   EXPECT_TRUE(e.empty());
@@ -149,10 +157,7 @@ TEST_F(PlcHandshakeTest, RequestAckBusyDoneClearAndReadyAgain) {
   EXPECT_TRUE(has(e, PlcEvent::kCycleEnded));
   EXPECT_TRUE(has(e, PlcEvent::kOutcomeWritten));
   EXPECT_EQ(hs_.state(), PlcState::kDone);
-  EXPECT_TRUE(plc_.written.ack);
-  EXPECT_FALSE(plc_.written.busy);
-  EXPECT_TRUE(plc_.written.done);
-  EXPECT_FALSE(plc_.written.fault);
+  EXPECT_EQ(bits(plc_.written), "ack done");
   EXPECT_EQ(plc_.written.result_code, PlcResultCode::kTablePushed);
   EXPECT_EQ(plc_.written.run_id, 12u);
   EXPECT_EQ(plc_.written.table_version, 3);
@@ -161,9 +166,7 @@ TEST_F(PlcHandshakeTest, RequestAckBusyDoneClearAndReadyAgain) {
   e = hs_.step();
   EXPECT_TRUE(has(e, PlcEvent::kCleared));
   EXPECT_EQ(hs_.state(), PlcState::kIdle);
-  EXPECT_FALSE(plc_.written.ack);
-  EXPECT_FALSE(plc_.written.done);
-  EXPECT_FALSE(plc_.written.fault);
+  EXPECT_EQ(bits(plc_.written), "");
   EXPECT_EQ(plc_.written.run_id, 12u) << "the last result stays readable until the next request";
 
   plc_.request(7, 1);
@@ -182,10 +185,7 @@ TEST_F(PlcHandshakeTest, UnknownPartIsAFaultWithItsCodeAndNoRun) {
   EXPECT_FALSE(has(e, PlcEvent::kRequestAccepted));
   EXPECT_EQ(hs_.state(), PlcState::kDone);
   EXPECT_FALSE(cycle_.running);
-  EXPECT_TRUE(plc_.written.ack);
-  EXPECT_FALSE(plc_.written.busy);
-  EXPECT_FALSE(plc_.written.done);
-  EXPECT_TRUE(plc_.written.fault);
+  EXPECT_EQ(bits(plc_.written), "ack fault");
   EXPECT_EQ(plc_.written.result_code, PlcResultCode::kUnknownPart);
   EXPECT_EQ(plc_.written.run_id, 0u);
 

@@ -90,14 +90,7 @@ class HttpApiTest : public ::testing::Test {
     Result<std::int64_t> p = store->add_pending(pending);
     ASSERT_TRUE(p.ok()) << p.error().message;
     pending_id_ = *p;
-    EventRecord e;
-    e.at_utc = "2020-11-21T07:00:00Z";
-    e.kind = EventKind::kRefusal;
-    e.code = "refused";
-    e.machine = "g1";
-    e.part = "intake";
-    e.lobe = 1;
-    e.message = "correction 120.0 um at cam degree 95 exceeds the 100 um guard";
+    EventRecord e = testing::sample_refusal_event();
     ASSERT_TRUE(store->record_event(e).ok());
     e.at_utc = "2020-11-22T07:00:00Z";
     e.kind = EventKind::kFault;

@@ -54,14 +54,7 @@ class RunsCommandsTest : public ::testing::Test {
     bare.settings.clear();
     ids_.push_back(*store->insert_run(bare));
     ASSERT_TRUE(store->record_nc_file(ids_[0], "nc/CAM_INTAKE_L1.SPF").ok());
-    EventRecord e;
-    e.at_utc = "2020-11-21T07:00:00Z";
-    e.kind = EventKind::kRefusal;
-    e.code = "refused";
-    e.machine = "g1";
-    e.part = "intake";
-    e.lobe = 1;
-    e.message = "correction 120.0 um at cam degree 95 exceeds the 100 um guard";
+    EventRecord e = testing::sample_refusal_event();
     ASSERT_TRUE(store->record_event(e).ok());
     data_ = " --data-dir " + dir_.string();
   }

@@ -50,4 +50,17 @@ inline RunRecord sample_run(const std::string& part, int lobe, const std::string
   return r;
 }
 
+// The guard's refusal of a correction for intake lobe 1 on g1, a day before sample_run's runs.
+inline EventRecord sample_refusal_event() {
+  EventRecord e;
+  e.at_utc = "2020-11-21T07:00:00Z";
+  e.kind = EventKind::kRefusal;
+  e.code = "refused";
+  e.machine = "g1";
+  e.part = "intake";
+  e.lobe = 1;
+  e.message = "correction 120.0 um at cam degree 95 exceeds the 100 um guard";
+  return e;
+}
+
 }  // namespace gaugeloop::testing
