@@ -27,6 +27,17 @@ PollerSettings fast_settings(SamplingMode mode = SamplingMode::kLive) {
 // would err by up to A * (h in rad)^2 / 8 = 1.7e-6 mm, so this bound also checks the cubic.
 constexpr double kInterpolationTolMm = 1e-9;
 
+// Every degree of every revolution is the gauge's lift at that angle of that revolution (so
+// values come from their own revolution), to the cubic's tolerance.
+void expect_true_lift(const MeasuredRun& run, const ScriptedGauge& g) {
+  for (const auto& rev : run.revolutions) {
+    for (int d = 0; d < 360; ++d) {
+      ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm)
+          << "revolution " << rev.revolution << " degree " << d;
+    }
+  }
+}
+
 TEST(Poller, CollectsCompleteRevolutionsFromTheNextBoundary) {
   ScriptedGauge g;
   Poller p(g, fast_settings());
@@ -62,12 +73,7 @@ TEST(Poller, RevolutionWithAGapIsDiscardedWholeAndReplaced) {
   EXPECT_EQ(run->discarded_revolutions, 1);
   ASSERT_EQ(run->revolutions.size(), 3u);
   EXPECT_EQ(run->revolutions[0].revolution, 2) << "revolution 1 had the gap";
-  for (const auto& rev : run->revolutions) {
-    for (int d = 0; d < 360; ++d) {
-      ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm)
-          << "revolution " << rev.revolution << " degree " << d << ": values must come from that revolution";
-    }
-  }
+  expect_true_lift(*run, g);
 }
 
 TEST(Poller, OverRangeDiscardsTheRevolution) {
@@ -97,8 +103,7 @@ TEST(Poller, RepeatedSampleIsNotTakenAsNew) {
   Result<MeasuredRun> run = p.measure();
   ASSERT_TRUE(run.ok()) << run.error().message;
   EXPECT_EQ(run->discarded_revolutions, 0);
-  const auto& rev = run->revolutions[0];
-  for (int d = 0; d < 360; ++d) ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm);
+  expect_true_lift(*run, g);
 }
 
 TEST(Poller, ANewSampleAtAnUnchangedAngleIsHarmless) {
@@ -108,11 +113,17 @@ TEST(Poller, ANewSampleAtAnUnchangedAngleIsHarmless) {
   Result<MeasuredRun> run = p.measure();
   ASSERT_TRUE(run.ok()) << run.error().message;
   EXPECT_EQ(run->discarded_revolutions, 0);
-  for (const auto& rev : run->revolutions) {
-    for (int d = 0; d < 360; ++d) {
-      ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm) << "degree " << d;
-    }
-  }
+  expect_true_lift(*run, g);
+}
+
+// Polls 0.05 deg apart and, 500 deg in (revolution 1), one gap of `gap_deg` between two polls.
+ScriptedGauge crowded_with_one_gap(double gap_deg) {
+  ScriptedGauge g;
+  g.step_deg = 0.05;
+  g.skip_deg = gap_deg - g.step_deg;
+  g.u_deg = 0.01;
+  g.faults[10000] = Fault::kSkip;
+  return g;
 }
 
 // Polls 0.05 deg apart, then one 0.8 deg gap (a poll stalled): too long for a straight line
@@ -121,31 +132,19 @@ TEST(Poller, ANewSampleAtAnUnchangedAngleIsHarmless) {
 // end (0.3 deg here), so the degree in the gap is filled, to the cubic's tolerance, and no
 // revolution is lost. (Live TCP on this project's VM: a 4 ms stall at 30 rpm is 0.72 deg.)
 TEST(Poller, ALongGapBetweenCrowdedPollsTakesWellSpacedNeighbours) {
-  ScriptedGauge g;
-  g.step_deg = 0.05;
-  g.skip_deg = 0.75;
-  g.u_deg = 0.01;
-  g.faults[10000] = Fault::kSkip;  // 500 deg in: revolution 1
+  ScriptedGauge g = crowded_with_one_gap(0.8);
   Poller p(g, fast_settings());
   Result<MeasuredRun> run = p.measure();
   ASSERT_TRUE(run.ok()) << run.error().message;
   EXPECT_EQ(run->discarded_revolutions, 0);
   ASSERT_EQ(run->revolutions[0].revolution, 1);
-  for (const auto& rev : run->revolutions) {
-    for (int d = 0; d < 360; ++d) {
-      ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm) << "degree " << d;
-    }
-  }
+  expect_true_lift(*run, g);
 }
 
 // The same gap just over the limit (1.05 deg against max_interpolation_gap_deg 1): nobody
 // sampled near the degree in it, so it stays missing and its revolution is replaced.
 TEST(Poller, AGapOverTheLimitIsLeftMissing) {
-  ScriptedGauge g;
-  g.step_deg = 0.05;
-  g.skip_deg = 1.0;
-  g.u_deg = 0.01;
-  g.faults[10000] = Fault::kSkip;
+  ScriptedGauge g = crowded_with_one_gap(1.05);
   Poller p(g, fast_settings());
   Result<MeasuredRun> run = p.measure();
   ASSERT_TRUE(run.ok()) << run.error().message;
