@@ -216,9 +216,11 @@ TEST(PymodbusPeer, LatchedRunDecodesItsMap) {
 }
 
 // Live mode: snapshots with no revolution counter (counted from the angle wrapping) and the
-// angle in 0.01 deg. Interpolating the peer's lobe (|H''| <= 1.5+1.8 mm/rad^2) between polls
-// at most 0.5 deg apart errs by at most 3.3 * (0.5 * pi / 180)^2 / 8 = 3.1e-5 mm; the angle's
-// 0.01 deg steps add |H'| * 0.01 deg = 1.5 * 1.75e-4 = 2.6e-4 mm. Tolerance 5e-4 mm.
+// angle in 0.01 deg. Interpolating the peer's lobe (|H''| <= 1.5+1.8 mm/rad^2) linearly between
+// polls at most 0.5 deg apart errs by at most 3.3 * (0.5 * pi / 180)^2 / 8 = 3.1e-5 mm, by the
+// cubic up to 1 deg far less; the angle's 0.01 deg steps add |H'| * 0.01 deg = 1.5 * 1.75e-4 =
+// 2.6e-4 mm, which the cubic's weights (at most about 1.5) could raise to 3.9e-4 mm.
+// Tolerance 5e-4 mm.
 TEST(PymodbusPeer, LiveRunCountsRevolutionsFromTheAngle) {
   PymodbusPeer peer(12.0);  // 12 rpm: 14 ms per degree for a Python server to answer in
   ASSERT_GT(peer.port(), 0) << "the pymodbus peer did not start (python3-pymodbus: scripts/install-deps.sh)";
