@@ -178,6 +178,13 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
   // Absolute, so the push history names one file whatever directory a command runs in.
   const std::filesystem::path nc_file =
       std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal();
+  // Something other than a file where the program goes (a directory, a device) would fail
+  // the push after the run is stored: say so before measuring.
+  if (std::filesystem::exists(nc_file, ec) && !std::filesystem::is_regular_file(nc_file, ec)) {
+    return make_error(ErrorCode::kIo, "NC program " + nc_file.string() +
+                                          " exists but is not a file (a directory?); gaugeloop writes the curve "
+                                          "table there: move it away, then measure");
+  }
 
   // From here on a failure is also kept in the database as an event (a fault or a refusal),
   // naming the run when one was stored, so `gaugeloop events` shows why a run is missing.

@@ -229,6 +229,21 @@ TEST_F(NcPushTest, DesignBeyondTheSlideLimitIsRefusedBeforeMeasuring) {
   EXPECT_FALSE(fs::exists(nc_file()));
 }
 
+// A directory where the NC program goes would fail the push after the run is stored (the
+// control's share set up wrongly): refused before any measurement, naming the path.
+TEST_F(NcPushTest, DirectoryInThePlaceOfTheProgramIsRefusedBeforeMeasuring) {
+  fs::create_directories(nc_file());
+  auto report = measure();
+  ASSERT_FALSE(report.ok());
+  EXPECT_EQ(report.error().code, ErrorCode::kIo);
+  EXPECT_NE(report.error().message.find(nc_file().filename().string()), std::string::npos) << report.error().message;
+  EXPECT_NE(report.error().message.find("not a file"), std::string::npos) << report.error().message;
+  EXPECT_EQ(sim_->requests_served(), 0) << "no gauge request was made";
+  auto runs = store().list_runs({});
+  ASSERT_TRUE(runs.ok());
+  EXPECT_TRUE(runs->empty());
+}
+
 // A push killed at any moment leaves the old program or the new one, whole: a child pushes
 // two programs in turn; the parent kills it right after it reports starting a write, 40
 // times, and each time the file must be exactly one of the two.
