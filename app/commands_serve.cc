@@ -96,8 +96,11 @@ class Service {
     return report_json(*report);
   }
 
-  // One measurement run, end to end, on a reservation (reserve_run) it releases.
-  Result<JobReport> run_reserved(const std::string& part_name, int lobe, const std::string& note) {
+  // One measurement run, end to end, on a reservation (reserve_run) it releases. `stored_run`,
+  // when given, receives the run's id as soon as it is stored, so a push that fails after
+  // that can still name the run.
+  Result<JobReport> run_reserved(const std::string& part_name, int lobe, const std::string& note,
+                                 std::optional<std::int64_t>* stored_run = nullptr) {
     struct Release {
       Service* s;
       ~Release() { s->release_run(); }
@@ -107,6 +110,7 @@ class Service {
     if (!part) return part.error();
     JobSettings js = job_for(*c, **part);
     js.note = note;
+    if (stored_run != nullptr) js.on_run_stored = [stored_run](std::int64_t id) { *stored_run = id; };
     measuring_ = true;
     spdlog::info("run requested: part {} lobe {} on {}", part_name, lobe, c->machine);
     ModbusGauge gauge(c->gauge);
@@ -272,11 +276,16 @@ class Service {
   std::function<json()> plc_status_;  // set before any thread starts
 };
 
-// The outcome the PLC is told for a run (or a refusal to start one).
-PlcCycleOutcome plc_outcome(const Result<JobReport>& r) {
+// The outcome the PLC is told for a run (or a refusal to start one). `stored_run`: the run's
+// id if it was stored, which a failure after that (the push) still reports.
+PlcCycleOutcome plc_outcome(const Result<JobReport>& r, std::optional<std::int64_t> stored_run) {
   PlcCycleOutcome o;
   if (!r) {
     o.message = r.error().message;
+    if (stored_run) {
+      o.run_id = static_cast<std::uint32_t>(*stored_run);
+      o.message = "run " + std::to_string(*stored_run) + " is stored; " + o.message;
+    }
     switch (r.error().code) {
       case ErrorCode::kGaugeUnreachable:
       case ErrorCode::kGaugeTimeout:
@@ -331,7 +340,9 @@ class ServiceCycleRunner final : public PlcCycleRunner {
     const std::string name = (*part)->file.part.name;
     const std::string note = "PLC request: part number " + std::to_string(part_number);
     worker_ = std::thread([this, name, lobe, note] {
-      PlcCycleOutcome o = plc_outcome(service_.run_reserved(name, lobe, note));
+      std::optional<std::int64_t> stored_run;
+      Result<JobReport> report = service_.run_reserved(name, lobe, note, &stored_run);
+      PlcCycleOutcome o = plc_outcome(report, stored_run);
       std::lock_guard<std::mutex> lock(mutex_);
       outcome_ = std::move(o);
       finished_ = true;

@@ -257,6 +257,7 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     Result<std::int64_t> run_id = store->insert_run(record);
     if (!run_id) return run_id.error();
     stored_run = *run_id;
+    if (s.on_run_stored) s.on_run_stored(*run_id);
 
     JobReport report;
     report.run_id = *run_id;

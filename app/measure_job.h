@@ -1,7 +1,9 @@
 // One measurement run, end to end: acquire -> analyse -> correct -> store -> push the table.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -56,6 +58,9 @@ struct JobSettings {
   // False: correct from the design, as the demo does: its simulator does not grind with
   // the pushed table, so its parts never carry an earlier correction.
   bool build_on_table_in_force = true;
+  // Called with the run's id once it is stored, before its table is pushed: a caller that
+  // must name the run even when the push then fails (the PLC's result words) learns it here.
+  std::function<void(std::int64_t run_id)> on_run_stored;
 };
 
 // A stored run and what became of its table.

@@ -244,6 +244,34 @@ TEST_F(NcPushTest, DirectoryInThePlaceOfTheProgramIsRefusedBeforeMeasuring) {
   EXPECT_TRUE(runs->empty());
 }
 
+// The control's share goes away while the lobe is measured: the run is stored, the push fails,
+// and the caller learns the run's id before the push (what the PLC's result words report),
+// the run stays unpushed and the fault names it.
+TEST_F(NcPushTest, APushFailingAfterTheRunIsStoredKeepsTheRunAndNamesIt) {
+  JobSettings js = job_settings();
+  std::optional<std::int64_t> stored;
+  js.on_run_stored = [&](std::int64_t id) {
+    stored = id;
+    fs::remove_all(dir_ / "nc");
+    std::ofstream(dir_ / "nc") << "a file where the NC directory was\n";
+  };
+  auto report = measure(js);
+  ASSERT_FALSE(report.ok());
+  EXPECT_EQ(report.error().code, ErrorCode::kIo) << report.error().message;
+  ASSERT_TRUE(stored.has_value());
+  auto runs = store().list_runs({});
+  ASSERT_TRUE(runs.ok());
+  ASSERT_EQ(runs->size(), 1u);
+  EXPECT_EQ((*runs)[0].id, *stored);
+  EXPECT_EQ((*runs)[0].status, "measured");
+  EventQuery q;
+  q.kind = EventKind::kFault;
+  auto faults = store().list_events(q);
+  ASSERT_TRUE(faults.ok());
+  ASSERT_EQ(faults->size(), 1u);
+  EXPECT_EQ((*faults)[0].event.run_id, stored);
+}
+
 // A push killed at any moment leaves the old program or the new one, whole: a child pushes
 // two programs in turn; the parent kills it right after it reports starting a write, 40
 // times, and each time the file must be exactly one of the two.
