@@ -43,8 +43,8 @@ struct LobeAnalysis {
   double peak_to_valley_um = 0.0;
   double repeatability_um = 0.0;  // largest per-degree spread
   // Inspection figures (BRIEF sections 1 and 4).
-  double phase_error_deg = 0.0;   // lobe rotation that best explains the error, least squares
-  double base_circle_runout_um = 0.0;  // total indicator reading of the base circle
+  double phase_error_deg = 0.0;                    // lobe rotation that best explains the error, least squares
+  double base_circle_runout_um = 0.0;              // total indicator reading of the base circle
   std::array<double, 31> harmonic_amplitude_um{};  // |error| harmonics 0..30 (Eigen FFT)
 };
 
