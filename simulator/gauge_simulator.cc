@@ -389,71 +389,38 @@ void GaugeSimulator::serve() {
     serve_rtu();
     return;
   }
-  std::vector<int> clients;
-  std::vector<std::uint8_t> query(MODBUS_TCP_MAX_ADU_LENGTH);
-  auto close_clients = [&clients] {
-    for (int c : clients) ::close(c);
-    clients.clear();
-  };
+  ModbusTcpClients clients;
   while (true) {
     const FaultState now_state = fault_state(now_ns(), /*deliver=*/false);
     if (now_state.refuse && listen_fd_ >= 0) {
       close_listener();  // connection refused from now on
-      close_clients();
+      clients.close_all();
     } else if (!now_state.refuse && listen_fd_ < 0) {
       if (!listen()) break;  // the port was taken meanwhile: nothing sensible left to do
     }
-    std::vector<pollfd> fds;
-    fds.push_back({wake_fd_, POLLIN, 0});
-    if (listen_fd_ >= 0) fds.push_back({listen_fd_, POLLIN, 0});
-    const size_t first_client = fds.size();
-    for (int c : clients) fds.push_back({c, POLLIN, 0});
     // While refusing, wake now and then to notice the end of the fault.
-    if (::poll(fds.data(), fds.size(), listen_fd_ < 0 ? 5 : -1) < 0) {
-      if (errno == EINTR) continue;
-      break;
-    }
-    if (fds[0].revents != 0) break;  // stop() was called
-    if (listen_fd_ >= 0 && (fds[1].revents & POLLIN)) {
-      const int c = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
-      if (c >= 0) clients.push_back(c);
-    }
-    std::vector<int> closed;
-    for (size_t i = first_client; i < fds.size(); ++i) {
-      if (fds[i].revents == 0) continue;
-      const int fd = fds[i].fd;
-      modbus_set_socket(ctx_, fd);
-      const int rc = modbus_receive(ctx_, query.data());
-      if (rc <= 0) {
-        if (rc < 0) closed.push_back(fd);  // client went away or sent garbage
-        continue;
-      }
-      ++requests_;
-      const std::int64_t t = now_ns();
-      if (first_request_ns_ < 0) first_request_ns_ = t;
-      const FaultState faults = fault_state(t, /*deliver=*/true);
-      update_registers(t, faults);
-      if (faults.drop) {
-        closed.push_back(fd);  // the connection drops mid-run: no reply
-        continue;
-      }
-      if (silent_.load() || faults.silent) continue;
-      if (faults.late_ms > 0) {
-        // A late reply: the client has given up by then and must not take it for the next.
-        std::this_thread::sleep_for(std::chrono::milliseconds(faults.late_ms));
-      }
-      if (faults.exception != 0) {
-        modbus_reply_exception(ctx_, query.data(), static_cast<unsigned int>(faults.exception));
-      } else {
-        modbus_reply(ctx_, query.data(), rc, mapping_);
-      }
-    }
-    for (int fd : closed) {
-      ::close(fd);
-      clients.erase(std::remove(clients.begin(), clients.end(), fd), clients.end());
-    }
+    const auto round = clients.serve_round(
+        ctx_, wake_fd_, listen_fd_, listen_fd_ < 0 ? 5 : -1, [this](const std::uint8_t* query, int length) {
+          ++requests_;
+          const std::int64_t t = now_ns();
+          if (first_request_ns_ < 0) first_request_ns_ = t;
+          const FaultState faults = fault_state(t, /*deliver=*/true);
+          update_registers(t, faults);
+          if (faults.drop) return false;  // the connection drops mid-run: no reply
+          if (silent_.load() || faults.silent) return true;
+          if (faults.late_ms > 0) {
+            // A late reply: the client has given up by then and must not take it for the next.
+            std::this_thread::sleep_for(std::chrono::milliseconds(faults.late_ms));
+          }
+          if (faults.exception != 0) {
+            modbus_reply_exception(ctx_, query, static_cast<unsigned int>(faults.exception));
+          } else {
+            modbus_reply(ctx_, query, length, mapping_);
+          }
+          return true;
+        });
+    if (round != ModbusTcpClients::Round::kServed) break;  // stop() was called, or poll failed
   }
-  close_clients();
 }
 
 void GaugeSimulator::stop() {

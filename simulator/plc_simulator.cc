@@ -58,20 +58,15 @@ void PlcSimulator::wake() const {
 }
 
 void PlcSimulator::serve() {
-  std::vector<int> clients;
-  std::vector<std::uint8_t> query(MODBUS_TCP_MAX_ADU_LENGTH);
-  auto close_clients = [&clients] {
-    for (int c : clients) ::close(c);
-    clients.clear();
-  };
+  ModbusTcpClients clients;
   while (!stopping_.load()) {
     // Read before carrying out: a change asked for after this is seen by the next round.
     const std::int64_t asked = link_requests_.load();
-    if (drop_.exchange(false)) close_clients();
+    if (drop_.exchange(false)) clients.close_all();
     if (refusing_.load() && listen_fd_ >= 0) {
       ::close(listen_fd_);  // connection refused from now on
       listen_fd_ = -1;
-      close_clients();
+      clients.close_all();
     } else if (!refusing_.load() && listen_fd_ < 0) {
       if (!listen()) break;  // the port was taken meanwhile: nothing sensible left to do
     }
@@ -80,48 +75,24 @@ void PlcSimulator::serve() {
       link_changes_ = asked;
     }
     written_.notify_all();
-    std::vector<pollfd> fds;
-    fds.push_back({wake_fd_, POLLIN, 0});
-    if (listen_fd_ >= 0) fds.push_back({listen_fd_, POLLIN, 0});
-    const size_t first_client = fds.size();
-    for (int c : clients) fds.push_back({c, POLLIN, 0});
-    if (::poll(fds.data(), fds.size(), -1) < 0) {
-      if (errno == EINTR) continue;
-      break;
-    }
-    if (fds[0].revents != 0) {
+    const auto round =
+        clients.serve_round(ctx_, wake_fd_, listen_fd_, -1, [this](const std::uint8_t* query, int length) {
+          const int function = query[static_cast<size_t>(modbus_get_header_length(ctx_))];
+          {
+            std::lock_guard lock(mutex_);
+            modbus_reply(ctx_, query, length, mapping_);
+            if (function == MODBUS_FC_WRITE_MULTIPLE_REGISTERS || function == MODBUS_FC_WRITE_SINGLE_REGISTER)
+              ++writes_;
+          }
+          written_.notify_all();
+          return true;
+        });
+    if (round == ModbusTcpClients::Round::kFailed) break;
+    if (round == ModbusTcpClients::Round::kWoken) {
       std::uint64_t n = 0;
-      [[maybe_unused]] auto rd = ::read(wake_fd_, &n, sizeof n);
-      continue;  // stop, drop or refuse: seen at the top of the loop
-    }
-    if (listen_fd_ >= 0 && (fds[1].revents & POLLIN)) {
-      const int c = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
-      if (c >= 0) clients.push_back(c);
-    }
-    std::vector<int> closed;
-    for (size_t i = first_client; i < fds.size(); ++i) {
-      if (fds[i].revents == 0) continue;
-      const int fd = fds[i].fd;
-      modbus_set_socket(ctx_, fd);
-      const int rc = modbus_receive(ctx_, query.data());
-      if (rc <= 0) {
-        if (rc < 0) closed.push_back(fd);  // client went away or sent garbage
-        continue;
-      }
-      const int function = query[static_cast<size_t>(modbus_get_header_length(ctx_))];
-      {
-        std::lock_guard lock(mutex_);
-        modbus_reply(ctx_, query.data(), rc, mapping_);
-        if (function == MODBUS_FC_WRITE_MULTIPLE_REGISTERS || function == MODBUS_FC_WRITE_SINGLE_REGISTER) ++writes_;
-      }
-      written_.notify_all();
-    }
-    for (int fd : closed) {
-      ::close(fd);
-      clients.erase(std::remove(clients.begin(), clients.end(), fd), clients.end());
+      [[maybe_unused]] auto rd = ::read(wake_fd_, &n, sizeof n);  // stop, drop or refuse: seen at the top
     }
   }
-  close_clients();
 }
 
 void PlcSimulator::request(std::uint16_t part_number, std::uint16_t lobe) {

@@ -1,7 +1,13 @@
-// The listening TCP socket both simulators serve from (the gauge amplifier, the PLC).
+// The listening TCP socket both simulators serve from (the gauge amplifier, the PLC), and the
+// clients they serve on it.
 #pragma once
 
+#include <modbus/modbus.h>
+
+#include <cstdint>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "core/result.h"
 
@@ -16,5 +22,32 @@ struct TcpListener {
 // `who` names the server in messages ("simulator", "PLC simulator"). Errors: kInvalidInput
 // for a host that is not an IPv4 address, kIo when the port cannot be bound or read back.
 Result<TcpListener> listen_tcp(const std::string& host, int port, const std::string& who);
+
+// The Modbus TCP clients of one server thread, served a poll round at a time. Owns their
+// sockets (closed on destruction).
+class ModbusTcpClients {
+ public:
+  ModbusTcpClients() = default;
+  ~ModbusTcpClients() { close_all(); }
+  ModbusTcpClients(const ModbusTcpClients&) = delete;
+  ModbusTcpClients& operator=(const ModbusTcpClients&) = delete;
+
+  void close_all();
+
+  enum class Round { kServed, kWoken, kFailed };
+  // A request received on `ctx` (its socket set to the client's): the query and its length.
+  // Returns false to drop that client's connection (the request is then left unanswered).
+  using OnRequest = std::function<bool(const std::uint8_t* query, int length)>;
+
+  // Waits up to timeout_ms (-1: no limit) for `wake_fd`, a new client on `listen_fd` (< 0: not
+  // listening) or a request; accepts the new client and hands each request to `on_request`.
+  // A client that goes away or sends garbage is closed. kWoken: wake_fd is readable (left
+  // unread) and nothing else was done; kFailed: poll failed.
+  Round serve_round(modbus_t* ctx, int wake_fd, int listen_fd, int timeout_ms, const OnRequest& on_request);
+
+ private:
+  std::vector<int> clients_;
+  std::vector<std::uint8_t> query_ = std::vector<std::uint8_t>(MODBUS_TCP_MAX_ADU_LENGTH);
+};
 
 }  // namespace gaugeloop

@@ -191,23 +191,20 @@ TEST_F(PlcHandshakeTest, UnknownPartIsAFaultWithItsCodeAndNoRun) {
 
   plc_.clear();
   EXPECT_TRUE(has(hs_.step(), PlcEvent::kCleared));
-  EXPECT_FALSE(plc_.written.fault);
-  EXPECT_FALSE(plc_.written.ack);
+  EXPECT_EQ(bits(plc_.written), "");
 }
 
 TEST_F(PlcHandshakeTest, ARunThatFailsIsAFaultWithTheStepsCode) {
   ready();
   run_cycle({PlcResultCode::kGaugeFault, 0, 0, "gauge timeout"});
-  EXPECT_TRUE(plc_.written.fault);
-  EXPECT_FALSE(plc_.written.done);
+  EXPECT_EQ(bits(plc_.written), "ack fault");
   EXPECT_EQ(plc_.written.result_code, PlcResultCode::kGaugeFault);
 }
 
 TEST_F(PlcHandshakeTest, AHeldTableIsDoneWithItsCodeAndTheRun) {
   ready();
   run_cycle({PlcResultCode::kTableHeld, 41, 0, "approval required"});
-  EXPECT_TRUE(plc_.written.done);
-  EXPECT_FALSE(plc_.written.fault);
+  EXPECT_EQ(bits(plc_.written), "ack done");
   EXPECT_EQ(plc_.written.result_code, PlcResultCode::kTableHeld);
   EXPECT_EQ(plc_.written.run_id, 41u);
   EXPECT_EQ(plc_.written.table_version, 0);
