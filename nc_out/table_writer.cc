@@ -11,6 +11,9 @@ namespace gaugeloop {
 namespace {
 
 constexpr double kUmPerMm = 1000.0;
+// How many more blocks than the fewest the points of the table in force may grow to before
+// the default choice starts afresh (write_default_table).
+constexpr double kKeptBlocksOverFewest = 1.25;
 
 std::string num(double v, int decimals) {
   char buf[64];
@@ -385,8 +388,74 @@ Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const Ad
   return std::move(*best);
 }
 
+Result<CurveTable> write_table_at_points(const SampledPath& path, const TablePointsInForce& in_force,
+                                         const CurveTableFormat& format) {
+  if (Status s = check_inputs(path, format); !s) return s.error();
+  const std::vector<double>& c = in_force.c_deg;
+  const std::size_t n = path.size();
+  if (c.size() < 4 || c.front() != 0.0 || c.back() != 360.0) {
+    return make_error(ErrorCode::kInvalidInput, "the table in force must have at least 4 points from C0 to C360");
+  }
+  std::vector<std::size_t> rows;
+  for (double at : c) {
+    const double r = at / path.c_step_deg;
+    const long long k = std::llround(r);
+    if (std::abs(r - static_cast<double>(k)) > 1e-6 || k < 0 || static_cast<std::size_t>(k) > n ||
+        (!rows.empty() && static_cast<std::size_t>(k) <= rows.back())) {
+      return make_error(ErrorCode::kInvalidInput, "point C" + num(at, 6) +
+                                                      " of the table in force is not a row of the " +
+                                                      num(path.c_step_deg, 4) + " deg path or not in order");
+    }
+    rows.push_back(static_cast<std::size_t>(k));
+  }
+  return table_at_rows(path, rows, in_force.interpolation, format, "points of the table in force");
+}
+
+namespace {
+
+// `in_force`'s points with X from `path`, plus, in every segment that breaks the bound, the
+// row where it breaks it most (in one wider than the widest step, its middle), until none
+// does or 40 rounds have passed (the caller checks the bound).
+Result<CurveTable> refine_points_in_force(const SampledPath& path, const TablePointsInForce& in_force,
+                                          const AdaptiveSettings& settings, const CurveTableFormat& format) {
+  Result<CurveTable> kept = write_table_at_points(path, in_force, format);
+  if (!kept) return kept;
+  const double bound_mm = settings.bound_um / kUmPerMm;
+  const std::size_t max_rows =
+      std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(settings.max_step_deg / path.c_step_deg + 1e-9)));
+  std::vector<std::size_t> rows;
+  for (double c : in_force.c_deg) rows.push_back(static_cast<std::size_t>(std::llround(c / path.c_step_deg)));
+  for (int round = 0; round < 40; ++round) {
+    Result<TableInterpolant> nc = TableInterpolant::of(points_at_rows(path, rows, format), in_force.interpolation);
+    if (!nc) return nc.error();
+    const std::vector<double> e = row_errors_mm(path, *nc);
+    std::vector<std::size_t> next{rows.front()};
+    bool split = false;
+    for (std::size_t i = 0; i + 1 < rows.size(); ++i) {
+      std::size_t worst = rows[i];
+      for (std::size_t j = rows[i]; j <= rows[i + 1]; ++j) {
+        if (std::abs(e[j]) > std::abs(e[worst])) worst = j;
+      }
+      const bool too_wide = rows[i + 1] - rows[i] > max_rows;
+      if (std::abs(e[worst]) > bound_mm || too_wide) {
+        if (too_wide || worst == rows[i] || worst == rows[i + 1]) worst = rows[i] + (rows[i + 1] - rows[i]) / 2;
+        if (worst != rows[i]) {
+          next.push_back(worst);
+          split = true;
+        }
+      }
+      next.push_back(rows[i + 1]);
+    }
+    if (!split) break;
+    rows = std::move(next);
+  }
+  return table_at_rows(path, rows, in_force.interpolation, format, "points of the table in force, refined");
+}
+
+}  // namespace
+
 Result<CurveTable> write_default_table(const SampledPath& path, const TableChoiceSettings& settings,
-                                       const CurveTableFormat& format) {
+                                       const CurveTableFormat& format, const TablePointsInForce* in_force) {
   const AdaptiveSettings adaptive{settings.bound_um, settings.max_step_deg};
   if (Status s = check_inputs(path, format); !s) return s.error();
   if (Status s = check_adaptive(adaptive); !s) return s.error();
@@ -423,6 +492,13 @@ Result<CurveTable> write_default_table(const SampledPath& path, const TableChoic
                                                num(settings.bound_um, 3) + " um; the closest reached " +
                                                refusal_where(closest) +
                                                "; raise the bound or allow CSPLINE tables; nothing was written");
+  }
+  if (in_force && (in_force->interpolation == Interpolation::kLinear || settings.allow_spline)) {
+    Result<CurveTable> kept = refine_points_in_force(path, *in_force, adaptive, format);
+    if (kept && kept->error.max_abs_um <= settings.bound_um &&
+        kept->block_count() <= kKeptBlocksOverFewest * best->block_count()) {
+      return kept;
+    }
   }
   return std::move(*best);
 }

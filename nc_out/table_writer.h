@@ -110,11 +110,29 @@ struct TableChoiceSettings {
   bool allow_spline = true;    // false: G1 tables only (a control without CSPLINE in tables)
 };
 
+// Where the points of the table in force for this lobe lie, and how the NC interpolates
+// between them: what the next table of the lobe may keep.
+struct TablePointsInForce {
+  Interpolation interpolation = Interpolation::kLinear;
+  std::vector<double> c_deg;  // from 0 to 360, increasing
+};
+
+// A table of `in_force`'s kind at its C positions, X from `path`. kInvalidInput if a C is not
+// a row of the path (a table written on another grid) or the positions do not run 0..360.
+Result<CurveTable> write_table_at_points(const SampledPath& path, const TablePointsInForce& in_force,
+                                         const CurveTableFormat& format = {});
+
 // The default: of the candidates (G1 at 1, 0.5, 0.25, 0.2, 0.1 deg; adaptive G1; CSPLINE at
 // 5, 4, 3, 2, 1, 0.5 deg; adaptive CSPLINE), the one with the fewest blocks whose command
 // position error is at or below the bound; on a tie, G1 (it needs no spline model). kRefused
 // naming the smallest error reached if none keeps the bound.
+//
+// With `in_force` (the table in force for the lobe): its points are kept, X moved to the new
+// path, while they keep the bound. A closed loop then meets the same interpolation error part
+// after part and cancels it, instead of chasing a new pattern in every table; and one version
+// compares with the next point by point. A fresh choice is made when they do not keep it.
 Result<CurveTable> write_default_table(const SampledPath& path, const TableChoiceSettings& settings,
-                                       const CurveTableFormat& format = {});
+                                       const CurveTableFormat& format = {},
+                                       const TablePointsInForce* in_force = nullptr);
 
 }  // namespace gaugeloop

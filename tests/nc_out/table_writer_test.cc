@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "nc_out/table_program.h"
@@ -130,6 +131,80 @@ TEST(DefaultTable, RefusesWhenNothingKeepsTheBound) {
   ASSERT_FALSE(d.ok());
   EXPECT_EQ(d.error().code, ErrorCode::kRefused);
   EXPECT_NE(d.error().message.find("0.010 um"), std::string::npos) << d.error().message;
+}
+
+// The path plus a local correction: a bump of `height_um` at C180, `width_deg` wide (the
+// width of a Gaussian's 1/e point), with its exact derivatives.
+SampledPath with_bump(SampledPath p, double height_um, double width_deg) {
+  for (size_t i = 0; i < p.x_mm.size(); ++i) {
+    const double u = (static_cast<double>(i) * p.c_step_deg - 180.0) / width_deg;
+    const double g = height_um / 1000.0 * std::exp(-u * u);
+    p.x_mm[i] += g;
+    p.dx_dc_mm_per_deg[i] += g * (-2.0 * u / width_deg);
+    p.d2x_dc2_mm_per_deg2[i] += g * (4.0 * u * u - 2.0) / (width_deg * width_deg);
+  }
+  return p;
+}
+
+TablePointsInForce points_of(const CurveTable& t) {
+  TablePointsInForce in_force{t.interpolation, {}};
+  for (const CurvePoint& p : t.points) in_force.c_deg.push_back(p.c_deg);
+  return in_force;
+}
+
+bool has_point_at(const CurveTable& t, double c_deg) {
+  return std::any_of(t.points.begin(), t.points.end(), [&](const CurvePoint& p) { return p.c_deg == c_deg; });
+}
+
+// The next table of a lobe keeps the points of the one in force (adding some where the
+// corrected path breaks the bound between them), so a closed loop meets the same
+// interpolation error again instead of a new one (docs/nc_output.md).
+TEST(DefaultTable, KeepsThePointsOfTheTableInForceAndAddsWhereTheBoundBreaks) {
+  for (bool allow_spline : {true, false}) {
+    const TableChoiceSettings settings{0.5, 10.0, allow_spline};
+    Result<CurveTable> first = write_default_table(analytic_path(4.0, 0.7), settings);
+    ASSERT_TRUE(first.ok()) << first.error().message;
+    const SampledPath corrected = with_bump(analytic_path(4.0, 0.7), 3.0, 4.0);
+    Result<CurveTable> fresh = write_default_table(corrected, settings);
+    ASSERT_TRUE(fresh.ok()) << fresh.error().message;
+    const TablePointsInForce in_force = points_of(*first);
+    Result<CurveTable> next = write_default_table(corrected, settings, {}, &in_force);
+    ASSERT_TRUE(next.ok()) << next.error().message;
+    EXPECT_EQ(next->interpolation, first->interpolation);
+    for (const CurvePoint& p : first->points) EXPECT_TRUE(has_point_at(*next, p.c_deg)) << "C" << p.c_deg;
+    EXPECT_GT(next->block_count(), first->block_count()) << "the bump breaks the bound between the old points";
+    EXPECT_LE(next->error.max_abs_um, 0.5);
+    EXPECT_LE(next->block_count(), 1.25 * fresh->block_count())
+        << "first " << first->block_count() << " blocks, fresh " << fresh->block_count();
+    EXPECT_NE(next->writer.find("table in force"), std::string::npos) << next->writer;
+    // The points were chosen for the old path; X is the new path's.
+    EXPECT_NEAR(next->error.max_abs_um, testing::ref_error_um(program_of(*next, {}), corrected), 1e-4);
+  }
+}
+
+// Points grown to more than 1.25 times the fewest blocks (or never fit for this path) give
+// way to a fresh choice: the fewest blocks again.
+TEST(DefaultTable, StartsAfreshWhenThePointsInForceNeedTooManyBlocks) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  Result<CurveTable> fewest = write_default_table(p, {});
+  Result<CurveTable> dense = write_linear_table(p, 0.5);
+  ASSERT_TRUE(fewest.ok() && dense.ok());
+  const TablePointsInForce too_many = points_of(*dense);
+  Result<CurveTable> d = write_default_table(p, {}, {}, &too_many);
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->block_count(), fewest->block_count());
+  EXPECT_EQ(d->writer, fewest->writer);
+
+  // A table in force on another grid (C0.005) or not closing at C360 cannot be kept.
+  for (const TablePointsInForce& bad : {TablePointsInForce{Interpolation::kLinear, {0.0, 0.005, 90.0, 180.0, 360.0}},
+                                        TablePointsInForce{Interpolation::kLinear, {0.0, 90.0, 180.0, 270.0}}}) {
+    Result<CurveTable> kept = write_table_at_points(p, bad);
+    ASSERT_FALSE(kept.ok());
+    EXPECT_EQ(kept.error().code, ErrorCode::kInvalidInput);
+    Result<CurveTable> again = write_default_table(p, {}, {}, &bad);
+    ASSERT_TRUE(again.ok()) << again.error().message;
+    EXPECT_EQ(again->block_count(), fewest->block_count());
+  }
 }
 
 }  // namespace
