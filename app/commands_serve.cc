@@ -107,10 +107,19 @@ class Service {
     } release{this};
     const std::shared_ptr<const ServiceConfig> c = config();
     Result<const ServicePart*> part = find_part(*c, part_name, lobe);
-    if (!part) return part.error();
+    if (!part) {
+      spdlog::warn("run not started: {}", part.error().message);
+      record_event(EventKind::kRefusal, "run not started", part_name, lobe, std::nullopt, part.error().message);
+      return part.error();
+    }
     JobSettings js = job_for(*c, **part);
     js.note = note;
     if (stored_run != nullptr) js.on_run_stored = [stored_run](std::int64_t id) { *stored_run = id; };
+    // Every step of the cycle: a log line and an event (docs/service.md, "The cycle").
+    js.on_step = [this, &part_name, lobe](const JobStep& step) {
+      spdlog::info("part {} lobe {}: {}: {}", part_name, lobe, step.code, step.message);
+      record_event(EventKind::kInfo, step.code, part_name, lobe, step.run_id, step.message);
+    };
     measuring_ = true;
     spdlog::info("run requested: part {} lobe {} on {}", part_name, lobe, c->machine);
     ModbusGauge gauge(c->gauge);

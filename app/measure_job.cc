@@ -222,16 +222,30 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
       }
     }
 
+    auto step = [&s](std::string code, std::string message, std::optional<std::int64_t> run_id = std::nullopt) {
+      if (s.on_step) s.on_step(JobStep{std::move(code), std::move(message), run_id});
+    };
+
     // Acquire.
     const std::string started = format_utc(std::time(nullptr));
+    const auto acquire_start = std::chrono::steady_clock::now();
     Poller poller(gauge, s.poller);
     Result<MeasuredRun> measured = poller.measure();
     if (!measured) return measured.error();
     const std::string finished = format_utc(std::time(nullptr));
+    step("acquired",
+         std::to_string(measured->revolutions.size()) + " revolutions from " + gauge.address() + " in " +
+             fixed(std::chrono::duration<double>(std::chrono::steady_clock::now() - acquire_start).count(), 1) +
+             " s (" + std::to_string(measured->discarded_revolutions) + " discarded, " +
+             std::to_string(measured->reconnects) + " reconnects, " + std::to_string(measured->polls) + " polls)");
 
     // Analyse and correct.
     Result<LobeAnalysis> analysis = analyse_lobe(*measured, *design_reading, s.part, s.analysis);
     if (!analysis) return in_step("analysis", analysis.error());
+    step("analysed", "max lift error " + fixed(analysis->max_abs_error_um, 2) + " um, RMS " +
+                         fixed(analysis->rms_error_um, 2) + " um, phase " + fixed(analysis->phase_error_deg, 4) +
+                         " deg, runout " + fixed(analysis->base_circle_runout_um, 2) + " um, repeatability " +
+                         fixed(analysis->repeatability_um, 2) + " um");
     Result<CompensationDecision> decision = decide_correction(*analysis, *design_reading, in_force, s.compensation);
     if (!decision) return in_step("compensation", decision.error());
     const DegreeTable& correction = decision->correction_um;
@@ -257,6 +271,18 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
       }
     }
     const double correction_max_um = std::abs(decision->largest_correction_um);
+    {
+      std::string what = std::string(compensation_verdict_name(verdict)) + ": largest correction " +
+                         fixed(decision->largest_correction_um, 2) + " um at " +
+                         std::to_string(decision->largest_correction_deg) + " deg";
+      if (in_force_run) what += ", built on run " + std::to_string(*in_force_run) + "'s";
+      if (built) {
+        what += "; table " + std::to_string(built->table.block_count()) + " blocks (" + built->table.writer +
+                "), command position error " + fixed(built->table.error.max_abs_um, 3) + " um";
+      }
+      if (!verdict_reasons.empty()) what += "; " + verdict_reasons;
+      step("compensated", what);
+    }
 
     // Store the run: one transaction, all or nothing.
     RunRecord record;
@@ -277,6 +303,7 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     if (!run_id) return run_id.error();
     stored_run = *run_id;
     if (s.on_run_stored) s.on_run_stored(*run_id);
+    step("stored", "run " + std::to_string(*run_id) + " stored in " + store->path().string(), *run_id);
 
     JobReport report;
     report.run_id = *run_id;

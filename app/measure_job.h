@@ -31,6 +31,19 @@ enum class TableKind {
 };
 std::string_view table_kind_name(TableKind kind);  // "auto", "linear", "spline", "adaptive-linear", ...
 
+// A step of the measuring cycle that went through, in the order they come:
+//  - "acquired": the revolutions measured, how long it took, polls, reconnects;
+//  - "analysed": largest and RMS lift error, phase, runout, repeatability;
+//  - "compensated": the verdict (apply, hold, refuse), the largest correction, the table
+//    built (blocks, command position error) or why none;
+//  - "stored": the run is in the database (run_id set from here on).
+// What becomes of the table (pushed, held, refused) is the job's report, and its event.
+struct JobStep {
+  std::string code;
+  std::string message;  // one line
+  std::optional<std::int64_t> run_id;
+};
+
 struct JobSettings {
   Part part;
   LiftTable design;        // the part's design lift table, already read
@@ -61,6 +74,9 @@ struct JobSettings {
   // Called with the run's id once it is stored, before its table is pushed: a caller that
   // must name the run even when the push then fails (the PLC's result words) learns it here.
   std::function<void(std::int64_t run_id)> on_run_stored;
+  // Called as each step of the cycle goes through (JobStep), for a caller that logs and
+  // records every step (the service). Failures are not steps: they are the job's error.
+  std::function<void(const JobStep& step)> on_step;
 };
 
 // A stored run and what became of its table.

@@ -2,6 +2,7 @@
 // RunStore, text and --json, and the messages for what cannot be answered.
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <cmath>
@@ -120,6 +121,25 @@ TEST_F(RunsCommandsTest, NoDatabaseIsBadInputAndCreatesNone) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_TRUE(has(r.output, "no run database at " + (empty / "gaugeloop.sqlite").string())) << r.output;
   EXPECT_FALSE(fs::exists(empty));
+}
+
+// Under systemd, stderr is the journal's stream (JOURNAL_STREAM names its device and inode):
+// each line then starts with its syslog priority, so `journalctl -p` filters by level.
+// Anywhere else, the plain level.
+TEST_F(RunsCommandsTest, UnderSystemdEachLogLineStartsWithItsSyslogPriority) {
+  const fs::path empty = dir_ / "empty";
+  const fs::path journal = dir_ / "journal.log";
+  std::ofstream(journal).put('\n');
+  struct stat st {};
+  ASSERT_EQ(::stat(journal.c_str(), &st), 0);
+  const std::string stream = std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
+  const std::string bin = std::string(GAUGELOOP_BINARY_DIR) + "/bin/gaugeloop";
+  const std::string args = " runs list --data-dir " + empty.string() + " 2>" + journal.string();
+  ASSERT_EQ(WEXITSTATUS(std::system(("JOURNAL_STREAM=" + stream + " " + bin + args).c_str())), 2);
+  EXPECT_EQ(testing::slurp(journal).rfind("<3>error: no run database at ", 0), 0u) << testing::slurp(journal);
+  // Another stream (stderr redirected away from the journal): no prefix.
+  ASSERT_EQ(WEXITSTATUS(std::system(("JOURNAL_STREAM=1:1 " + bin + args).c_str())), 2);
+  EXPECT_EQ(testing::slurp(journal).rfind("error: no run database at ", 0), 0u) << testing::slurp(journal);
 }
 
 TEST_F(RunsCommandsTest, ShowGivesSummaryAnalysisCorrectionAndPushes) {

@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -92,6 +93,13 @@ class ServiceProcess {
   bool exited_ = false;
 };
 
+bool has_code(const std::vector<StoredEvent>& events, const std::string& code) {
+  for (const StoredEvent& e : events) {
+    if (e.event.code == code) return true;
+  }
+  return false;
+}
+
 class ServiceTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -119,6 +127,17 @@ class ServiceTest : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
 
   std::string log() const { return slurp(dir_ / "serve.log"); }
+
+  std::vector<StoredEvent> events(EventKind kind) {
+    auto store = RunStore::open(dir_ / "runs.sqlite");
+    EXPECT_TRUE(store.ok());
+    if (!store.ok()) return {};
+    EventQuery q;
+    q.kind = kind;
+    auto list = store->list_events(q);
+    EXPECT_TRUE(list.ok());
+    return list.ok() ? *list : std::vector<StoredEvent>{};
+  }
 
   fs::path dir_;
   std::string config_text_;
@@ -188,6 +207,8 @@ TEST_F(ServiceTest, RequestRunNcFileAndTheHttpApi) {
   EXPECT_EQ(unknown->status / 100, 4) << unknown->body;
   EXPECT_NE(json::parse(unknown->body)["error"].get<std::string>().find("intake_flat lobe 1"), std::string::npos)
       << "the message lists the configured parts: " << unknown->body;
+  EXPECT_TRUE(has_code(events(EventKind::kRefusal), "run not started")) << log();
+  EXPECT_NE(log().find("run not started: "), std::string::npos) << log();
 
   auto runs = cli.Get("/api/runs?part=intake_flat");
   ASSERT_TRUE(runs);
@@ -215,6 +236,9 @@ TEST_F(ServiceTest, BrokenConfigOnReloadKeepsTheOldOneRunning) {
   service.signal(SIGHUP);
   ASSERT_TRUE(wait_for_health(cli, [](const json& h) { return h["config_reload_failures"] == 1; })) << log();
   EXPECT_NE(log().find("gain"), std::string::npos) << "the log names the key: " << log();
+  const std::vector<StoredEvent> faults = events(EventKind::kFault);
+  ASSERT_TRUE(has_code(faults, "config reload refused")) << log();
+  EXPECT_NE(faults.front().event.message.find("gain"), std::string::npos) << faults.front().event.message;
 
   auto run = cli.Post("/api/measure", bearer(kToken), R"({"part": "intake_flat", "lobe": 1})", "application/json");
   ASSERT_TRUE(run);
@@ -287,27 +311,9 @@ class PlcServiceTest : public ServiceTest {
         << "the service never wrote its heartbeat: " << log();
   }
 
-  std::vector<StoredEvent> events(EventKind kind) {
-    auto store = RunStore::open(dir_ / "runs.sqlite");
-    EXPECT_TRUE(store.ok());
-    if (!store.ok()) return {};
-    EventQuery q;
-    q.kind = kind;
-    auto list = store->list_events(q);
-    EXPECT_TRUE(list.ok());
-    return list.ok() ? *list : std::vector<StoredEvent>{};
-  }
-
   static constexpr std::chrono::milliseconds kGenerous{120000};  // a run under sanitizers, with margin
   std::unique_ptr<PlcSimulator> plc_;
 };
-
-bool has_code(const std::vector<StoredEvent>& events, const std::string& code) {
-  for (const StoredEvent& e : events) {
-    if (e.event.code == code) return true;
-  }
-  return false;
-}
 
 TEST_F(PlcServiceTest, PlcRequestRunNcFileDoneWithTheRunIdThenCleared) {
   ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
@@ -363,10 +369,25 @@ TEST_F(PlcServiceTest, PlcRequestRunNcFileDoneWithTheRunIdThenCleared) {
   EXPECT_EQ(h["plc"]["connected"], true) << health->body;
   EXPECT_EQ(h["plc"]["requests"], 1) << health->body;
 
-  const std::vector<StoredEvent> info = events(EventKind::kInfo);
-  EXPECT_TRUE(has_code(info, "plc request")) << log();
-  EXPECT_TRUE(has_code(info, "table pushed")) << log();
-  EXPECT_TRUE(has_code(info, "plc done")) << log();
+  // Every step of the cycle, in order, in the database and in the log, the run named from
+  // the moment it is stored.
+  std::vector<StoredEvent> info = events(EventKind::kInfo);
+  std::sort(info.begin(), info.end(), [](const StoredEvent& a, const StoredEvent& b) { return a.id < b.id; });
+  std::vector<std::string> cycle;
+  for (const StoredEvent& e : info) {
+    if (e.event.code.rfind("plc link", 0) == 0) continue;
+    cycle.push_back(e.event.code);
+    if (e.event.code == "stored" || e.event.code == "table pushed" || e.event.code == "plc done") {
+      EXPECT_EQ(e.event.run_id, std::optional<std::int64_t>(out->run_id)) << e.event.code;
+    }
+  }
+  EXPECT_EQ(cycle, (std::vector<std::string>{"plc request", "acquired", "analysed", "compensated", "stored",
+                                             "table pushed", "plc done"}))
+      << log();
+  for (const char* line : {"part intake_flat lobe 1: acquired: 3 revolutions", "compensated: apply: largest correction",
+                           "stored: run 1 stored in"}) {
+    EXPECT_NE(log().find(line), std::string::npos) << line << "\n" << log();
+  }
   auto api_events = cli.Get("/api/events?kind=info");
   ASSERT_TRUE(api_events);
   EXPECT_NE(api_events->body.find("plc done"), std::string::npos) << api_events->body;
