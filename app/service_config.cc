@@ -1,6 +1,10 @@
 // toml++ reading of the service configuration, every message with file, line and key.
 #include "app/service_config.h"
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <set>
@@ -31,6 +35,27 @@ Error at_key(const TomlReader& r, std::string_view key, const Error& e) {
   Error out = e;
   out.message = r.where(key) + ": " + e.message;
   return out;
+}
+
+// The service creates and writes files in `dir` (the database, NC programs): the directory, or
+// the nearest one above it that exists (the rest is created), must be a directory this user
+// may write. Caught at load, not at the first run: under the systemd unit /etc is read-only
+// (ProtectSystem=full), so a path left relative to a config in /etc/gaugeloop fails there.
+Status check_writable_dir(const fs::path& dir, const std::string& what) {
+  fs::path at = dir;
+  std::error_code ec;
+  while (!at.empty() && at != at.root_path() && !fs::exists(at, ec)) at = at.parent_path();
+  if (at.empty()) at = ".";
+  const std::string advice = "; give a directory this user can write, e.g. under /var/lib/gaugeloop";
+  if (!fs::is_directory(at, ec)) {
+    return make_error(ErrorCode::kInvalidInput,
+                      what + " " + dir.string() + ": " + at.string() + " is not a directory" + advice);
+  }
+  if (::access(at.c_str(), W_OK | X_OK) != 0) {
+    return make_error(ErrorCode::kInvalidInput, what + " " + dir.string() + ": " + at.string() + " is not writable (" +
+                                                    std::strerror(errno) + ")" + advice);
+  }
+  return {};
 }
 
 }  // namespace
@@ -134,6 +159,7 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
     if (!(l.x_min_mm < l.x_max_mm)) {
       return make_error(ErrorCode::kInvalidInput, nr.where("x_max_mm") + ": must be above x_min_mm");
     }
+    if (Status w = check_writable_dir(job.nc_dir, "NC directory"); !w) return at_key(nr, "dir", w.error());
     if (!template_path.empty()) {
       Result<std::string> t = read_text(relative_to(base, template_path), "NC template");
       if (!t) return at_key(nr, "template", t.error());
@@ -155,6 +181,12 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
     dr.allow_only({"path"});
     job.db_path = relative_to(base, dr.text("path", "gaugeloop.sqlite"));
     if (dr.error) return *dr.error;
+    if (Status w = check_writable_dir(job.db_path.parent_path(), "database directory"); !w) {
+      return at_key(dr, "path", w.error());
+    }
+  } else if (Status w = check_writable_dir(job.db_path.parent_path(), "database directory"); !w) {
+    return make_error(ErrorCode::kInvalidInput,
+                      source + ": [database] path (default " + job.db_path.string() + "): " + w.error().message);
   }
 
   // [http]

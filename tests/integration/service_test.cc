@@ -2,9 +2,12 @@
 // requested over HTTP, or by the PLC through the Modbus handshake, ends in a stored run and an
 // NC file; the HTTP API answers; a broken config on SIGHUP keeps the old one running; SIGTERM
 // mid-run stores the whole run, leaves a whole table, completes the handshake and exits 0.
+#include <arpa/inet.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -146,6 +149,35 @@ class ServiceTest : public ::testing::Test {
 
 httplib::Headers bearer(const std::string& token) { return {{"Authorization", "Bearer " + token}}; }
 
+// Sends `bytes` as they are to 127.0.0.1:`port` and returns the answer: its head and a body
+// of Content-Length bytes (the service keeps the connection open for the next request). For
+// requests no HTTP client library would send.
+std::string raw_http(int port, const std::string& bytes) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) return "";
+  const timeval guard{60, 0};  // a service that never answers fails the test instead of hanging it
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &guard, sizeof guard);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  std::string answer;
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0 &&
+      ::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(bytes.size())) {
+    char buf[4096];
+    for (ssize_t n; (n = ::recv(fd, buf, sizeof buf, 0)) > 0;) {
+      answer.append(buf, static_cast<size_t>(n));
+      const size_t head_end = answer.find("\r\n\r\n");
+      if (head_end == std::string::npos) continue;
+      const size_t length_at = answer.find("Content-Length: ");
+      const size_t length = length_at < head_end ? std::stoul(answer.substr(length_at + 16)) : 0;
+      if (answer.size() >= head_end + 4 + length) break;
+    }
+  }
+  ::close(fd);
+  return answer;
+}
+
 // Polls health until `done` holds for its JSON (or the service is gone): state, not time.
 template <typename Pred>
 bool wait_for_health(httplib::Client& cli, Pred done) {
@@ -210,6 +242,20 @@ TEST_F(ServiceTest, RequestRunNcFileAndTheHttpApi) {
   EXPECT_TRUE(has_code(events(EventKind::kRefusal), "run not started")) << log();
   EXPECT_NE(log().find("run not started: "), std::string::npos) << log();
 
+  // Requests no client library would send: a 4xx each, and the service serves on.
+  for (const std::string& garbage :
+       {std::string("BREW /api/health HTCPCP/1.0\r\n\r\n"),
+        std::string("\x16\x03\x01\x00\xa5\x01\x00\x00\xa1\x03\x03\r\n\r\n", 15),  // TLS to a plain port
+        std::string("POST /api/measure HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer ") + kToken +
+            "\r\nContent-Type: application/json\r\nContent-Length: 7\r\n\r\n{\"part\"",
+        std::string("GET /api/runs?lobe=abc HTTP/1.1\r\nHost: x\r\n\r\n")}) {
+    const std::string answer = raw_http(port, garbage);
+    ASSERT_EQ(answer.rfind("HTTP/1.1 4", 0), 0u) << garbage << " -> " << answer;
+    EXPECT_NE(answer.find("\"error\": \""), std::string::npos) << "a JSON message: " << answer;
+  }
+  auto still = cli.Get("/api/health");
+  ASSERT_TRUE(still) << log();
+  EXPECT_EQ(still->status, 200) << log();
   auto runs = cli.Get("/api/runs?part=intake_flat");
   ASSERT_TRUE(runs);
   ASSERT_EQ(runs->status, 200) << runs->body;
@@ -264,6 +310,12 @@ TEST_F(ServiceTest, SigtermMidRunStoresTheWholeRunAndLeavesAWholeTable) {
     (void)c.Post("/api/measure", bearer(kToken), R"({"part": "intake_flat", "lobe": 1})", "application/json");
   });
   const bool measuring = wait_for_health(cli, [](const json& h) { return h["state"] == "measuring"; });
+  // One run at a time: a second request while the first measures (a run lasts about a second
+  // of gauge time; this answer takes milliseconds) is refused with a reason, not queued.
+  auto second = cli.Post("/api/measure", bearer(kToken), R"({"part": "intake_flat", "lobe": 1})", "application/json");
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->status, 409) << second->body;
+  EXPECT_NE(second->body.find("a run is in progress"), std::string::npos) << second->body;
   service.signal(SIGTERM);
   const int status = service.wait();
   request.join();
@@ -542,6 +594,23 @@ TEST(ServiceConfigFile, ExampleConfigChecksAndABadOneNamesFileLineAndKey) {
   testing::CommandResult typo = testing::run_command("serve --config " + (dir / "typo.toml").string());
   EXPECT_EQ(typo.exit_code, 2) << typo.output;
   EXPECT_NE(typo.output.find("templat"), std::string::npos) << typo.output;
+
+  // A database or NC directory the service could not write is refused at --check, naming the
+  // key and the directory in the way (here a file where a directory should be).
+  std::ofstream(dir / "afile") << "not a directory\n";
+  const std::string nc = "[nc]\ntemplate = \"" + (examples / "sinumerik" / "cam_table.spf").string() + "\"\n";
+  const std::string part = "[gauge]\n[[part]]\nfile = \"" + (examples / "intake_flat.toml").string() + "\"\n";
+  std::ofstream(dir / "db.toml") << part << nc << "[database]\npath = \"afile/runs.sqlite\"\n";
+  testing::CommandResult db = testing::run_command("serve --check --config " + (dir / "db.toml").string());
+  EXPECT_EQ(db.exit_code, 2) << db.output;
+  EXPECT_NE(db.output.find("db.toml:7"), std::string::npos) << db.output;
+  EXPECT_NE(db.output.find((dir / "afile").string() + " is not a directory"), std::string::npos) << db.output;
+  std::ofstream(dir / "ncdir.toml") << part << "[nc]\ndir = \"afile/nc\"\ntemplate = \""
+                                    << (examples / "sinumerik" / "cam_table.spf").string() << "\"\n";
+  testing::CommandResult ncdir = testing::run_command("serve --check --config " + (dir / "ncdir.toml").string());
+  EXPECT_EQ(ncdir.exit_code, 2) << ncdir.output;
+  EXPECT_NE(ncdir.output.find("ncdir.toml:5"), std::string::npos) << ncdir.output;
+  EXPECT_NE(ncdir.output.find("NC directory"), std::string::npos) << ncdir.output;
   fs::remove_all(dir);
 }
 
