@@ -15,6 +15,7 @@
 #include "app/gauge_config.h"
 #include "app/grinding_loop.h"
 #include "app/measure_job.h"
+#include "app/service_config.h"
 #include "app/svg_plot.h"
 #include "core/atomic_file.h"
 #include "simulator/gauge_simulator.h"
@@ -97,9 +98,11 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
   cmd.add_option("--revolutions", o.revolutions, "Complete revolutions to average (at least 3)")
       ->capture_default_str()
       ->check(CLI::Range(3, 100));
-  cmd.add_option("--table", o.table,
-                 "Curve table: auto (fewest blocks within --command-error-um), linear or spline (at "
-                 "--table-step-deg), adaptive-linear, adaptive-spline; see docs/nc_output.md")
+  cmd.add_option(
+         "--table", o.table,
+         "Curve table: auto (fewest blocks within --command-error-um; the next keeps the points of the table in "
+         "force), linear or spline (at "
+         "--table-step-deg), adaptive-linear, adaptive-spline; see docs/nc_output.md")
       ->check(CLI::IsMember({"auto", "linear", "spline", "adaptive-linear", "adaptive-spline"}))
       ->capture_default_str();
   cmd.add_option("--table-step-deg", o.table_step_deg, "C step of a linear or spline table, degrees")
@@ -296,6 +299,36 @@ int cmd_measure(const MeasureOptions& o, const std::string& gauge_address) {
   return run_job(gauge, *lp, o, /*build_on_table_in_force=*/true);
 }
 
+// measure --config: a run by hand as the service makes one, with its gauge, settings,
+// database and NC directory, beside it or instead of it.
+struct ServiceMeasureOptions {
+  std::string config_path;
+  std::string part_name;
+  int lobe = 0;
+};
+
+int cmd_measure_as_service(const ServiceMeasureOptions& so, const std::string& note) {
+  Result<ServiceConfig> config = read_service_config(so.config_path);
+  if (!config) return report_error(config.error());
+  if (so.part_name.empty() || so.lobe == 0) {
+    std::string parts;
+    for (const ServicePart& p : config->parts) {
+      parts += (parts.empty() ? "" : ", ") + p.file.part.name + " lobe " + std::to_string(p.file.part.lobe);
+    }
+    return report_error(make_error(ErrorCode::kInvalidInput,
+                                   "--config needs --part-name and --lobe: which of " + parts + " to measure"));
+  }
+  Result<const ServicePart*> part = find_part(*config, so.part_name, so.lobe);
+  if (!part) return report_error(part.error());
+  JobSettings js = job_for(*config, **part);
+  js.note = note;
+  ModbusGauge gauge(config->gauge);
+  Result<JobReport> report = run_measure_job(gauge, js);
+  if (!report) return report_error(report.error());
+  print_report(*report, js.part, js.machine);
+  return report->pushed() ? kExitOk : kExitNotPushed;
+}
+
 int cmd_sim(const std::string& part_path, const SimulatorSettings& settings) {
   Result<LoadedPart> lp = load_part(part_path);
   if (!lp) return report_error(lp.error());
@@ -425,9 +458,40 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
                       "Gauge amplifier, HOST:PORT (Modbus TCP); overrides the config's [link]");
   measure->add_option("--gauge-config", measure_opts->gauge_config,
                       "Gauge config (TOML): link and register map, see docs/gauge.md [the simulator's map]");
-  measure->add_option("--part", measure_opts->part_path, "Part file (TOML), see examples/")->required();
+  measure->add_option("--part", measure_opts->part_path, "Part file (TOML), see examples/");
   add_measure_options(*measure, *measure_opts);
-  measure->callback([&action, measure_opts, gauge_address] {
+  auto as_service = std::make_shared<ServiceMeasureOptions>();
+  CLI::Option* config = measure->add_option(
+      "--config", as_service->config_path,
+      "The service's config (TOML, docs/service.md): measure as `gaugeloop serve` does, with its gauge, settings, "
+      "database and NC directory; with --part-name and --lobe, and --note only");
+  measure->add_option("--part-name", as_service->part_name, "With --config: the part's name")->needs(config);
+  measure->add_option("--lobe", as_service->lobe, "With --config: the lobe number")->needs(config);
+  measure->callback([&action, measure, measure_opts, gauge_address, as_service] {
+    if (!as_service->config_path.empty()) {
+      // The config sets everything else: an option beside it would be silently ignored.
+      for (const CLI::Option* o : measure->get_options()) {
+        const std::string name = o->get_name();
+        if (o->count() == 0 || name == "--config" || name == "--part-name" || name == "--lobe" || name == "--note")
+          continue;
+        action = [name] {
+          return report_error(
+              make_error(ErrorCode::kInvalidInput, name + " does not go with --config: the service's config sets it; "
+                                                          "change it there, or measure without --config"));
+        };
+        return;
+      }
+      action = [as_service, measure_opts] { return cmd_measure_as_service(*as_service, measure_opts->note); };
+      return;
+    }
+    if (measure_opts->part_path.empty()) {
+      action = [] {
+        return report_error(make_error(ErrorCode::kInvalidInput,
+                                       "no part: give --part FILE (and --gauge or --gauge-config), or --config FILE "
+                                       "--part-name NAME --lobe N to measure as the service does"));
+      };
+      return;
+    }
     action = [measure_opts, gauge_address] { return cmd_measure(*measure_opts, *gauge_address); };
   });
 }

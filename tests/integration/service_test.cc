@@ -271,6 +271,38 @@ TEST_F(ServiceTest, RequestRunNcFileAndTheHttpApi) {
   EXPECT_EQ(service.wait(), 0) << log();
 }
 
+// `gaugeloop measure` by hand with the service's config: the same gauge, settings, database
+// and NC directory as a run the service makes; options the config sets are refused beside it.
+TEST_F(ServiceTest, MeasureByHandWithTheServiceConfig) {
+  const std::string config = " --config " + (dir_ / "gaugeloop.toml").string();
+  testing::CommandResult r = testing::run_command("measure" + config + " --part-name intake_flat --lobe 1 --note hand");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("run 1: intake_flat lobe 1 on grinder-7"), std::string::npos) << r.output;
+  auto store = RunStore::open(dir_ / "runs.sqlite");
+  ASSERT_TRUE(store.ok());
+  auto runs = store->list_runs({});
+  ASSERT_TRUE(runs.ok());
+  ASSERT_EQ(runs->size(), 1u);
+  EXPECT_EQ((*runs)[0].machine, "grinder-7");
+  EXPECT_EQ((*runs)[0].note, "hand");
+  EXPECT_TRUE(fs::exists(dir_ / "nc" / "CAM_INTAKE_L1.SPF"));
+
+  r = testing::run_command("measure" + config + " --part-name intake_flat --lobe 1 --data-dir " + dir_.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--data-dir does not go with --config"), std::string::npos) << r.output;
+  r = testing::run_command("measure" + config + " --part-name crank --lobe 1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("intake_flat lobe 1"), std::string::npos) << "names the parts it has: " << r.output;
+  r = testing::run_command("measure" + config);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--config needs --part-name and --lobe"), std::string::npos) << r.output;
+  r = testing::run_command("measure --lobe 1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  runs = store->list_runs({});
+  ASSERT_TRUE(runs.ok());
+  EXPECT_EQ(runs->size(), 1u) << "no refused command measured";
+}
+
 TEST_F(ServiceTest, BrokenConfigOnReloadKeepsTheOldOneRunning) {
   ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
   const int port = service.port();
