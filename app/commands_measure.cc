@@ -311,12 +311,8 @@ int cmd_measure_as_service(const ServiceMeasureOptions& so, const std::string& n
   Result<ServiceConfig> config = read_service_config(so.config_path);
   if (!config) return report_error(config.error());
   if (so.part_name.empty() || so.lobe == 0) {
-    std::string parts;
-    for (const ServicePart& p : config->parts) {
-      parts += (parts.empty() ? "" : ", ") + p.file.part.name + " lobe " + std::to_string(p.file.part.lobe);
-    }
-    return report_error(make_error(ErrorCode::kInvalidInput,
-                                   "--config needs --part-name and --lobe: which of " + parts + " to measure"));
+    return report_error(make_error(ErrorCode::kInvalidInput, "--config needs --part-name and --lobe: which of " +
+                                                                 configured_parts(*config) + " to measure"));
   }
   Result<const ServicePart*> part = find_part(*config, so.part_name, so.lobe);
   if (!part) return report_error(part.error());

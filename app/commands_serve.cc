@@ -116,9 +116,9 @@ class Service {
     js.note = note;
     if (stored_run != nullptr) js.on_run_stored = [stored_run](std::int64_t id) { *stored_run = id; };
     // Every step of the cycle: a log line and an event (docs/service.md, "The cycle").
-    js.on_step = [this, &part_name, lobe](const JobStep& step) {
+    js.on_step = [this, c, part_name, lobe](const JobStep& step) {
       spdlog::info("part {} lobe {}: {}: {}", part_name, lobe, step.code, step.message);
-      record_event(EventKind::kInfo, step.code, part_name, lobe, step.run_id, step.message);
+      record_event(*c, EventKind::kInfo, step.code, part_name, lobe, step.run_id, step.message);
     };
     measuring_ = true;
     spdlog::info("run requested: part {} lobe {} on {}", part_name, lobe, c->machine);
@@ -150,16 +150,20 @@ class Service {
   // is logged, never fatal: the step itself was logged already.
   void record_event(EventKind kind, const std::string& code, const std::string& part, int lobe,
                     std::optional<std::int64_t> run_id, const std::string& message) const {
-    const std::shared_ptr<const ServiceConfig> c = config();
+    record_event(*config(), kind, code, part, lobe, run_id, message);
+  }
+  // With the configuration a run was started with (a reload meanwhile changes nothing of it).
+  void record_event(const ServiceConfig& c, EventKind kind, const std::string& code, const std::string& part, int lobe,
+                    std::optional<std::int64_t> run_id, const std::string& message) const {
     EventRecord e;
     e.kind = kind;
     e.code = code;
-    e.machine = c->machine;
+    e.machine = c.machine;
     e.part = part;
     e.lobe = lobe;
     e.run_id = run_id;
     e.message = message;
-    Result<RunStore> store = RunStore::open(c->job.db_path);
+    Result<RunStore> store = RunStore::open(c.job.db_path);
     Result<std::int64_t> id = store ? store->record_event(e) : Result<std::int64_t>(store.error());
     if (!id) spdlog::error("event '{}' not recorded in the database: {}", code, id.error().message);
   }

@@ -127,6 +127,26 @@ std::string settings_text(const JobSettings& s) {
   return out;
 }
 
+// Where the points of the table in force lie, from the program as last pushed to `nc_file`:
+// the automatic choice keeps them, refined, while that costs at most 25 % more blocks than the
+// fewest (write_default_table). Only for a part ground with that table (a run that builds
+// on it); none when nothing was pushed, or the text was not kept (pushes before schema 3).
+Result<std::optional<TablePointsInForce>> points_in_force(const RunStore& store, const std::filesystem::path& nc_file,
+                                                          const JobSettings& s) {
+  if (s.table_kind != TableKind::kAuto || !s.build_on_table_in_force) return std::optional<TablePointsInForce>{};
+  Result<std::optional<NcPush>> last = store.last_push(nc_file.string());
+  if (!last) return last.error();
+  if (!*last || !(**last).program_text) return std::optional<TablePointsInForce>{};
+  // It parsed when it was pushed; should a later gaugeloop read it otherwise, the table is
+  // chosen afresh rather than the run refused: keeping points is a refinement, not a need.
+  Result<ParsedTable> pushed = parse_table_program(*(**last).program_text, nc_file.string() + " as pushed");
+  if (!pushed) return std::optional<TablePointsInForce>{};
+  TablePointsInForce points;
+  points.interpolation = pushed->interpolation;
+  for (const CurvePoint& p : pushed->points) points.c_deg.push_back(p.c_deg);
+  return std::optional<TablePointsInForce>{std::move(points)};
+}
+
 // What the checks before the gauge produce and the job goes on with.
 struct Prepared {
   PeriodicSpline design;
@@ -204,23 +224,8 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
       }
     }
 
-    // Where the points of the table in force lie, from the program as last pushed: the
-    // automatic choice keeps them, refined, while that costs at most 25 % more blocks than
-    // the fewest (write_default_table).
-    std::optional<TablePointsInForce> in_force_points;
-    if (s.table_kind == TableKind::kAuto) {
-      Result<std::optional<NcPush>> last = store->last_push(nc_file.string());
-      if (!last) return last.error();
-      if (*last && (**last).program_text) {
-        Result<ParsedTable> pushed = parse_table_program(*(**last).program_text, nc_file.string() + " as pushed");
-        if (pushed) {
-          TablePointsInForce points;
-          points.interpolation = pushed->interpolation;
-          for (const CurvePoint& p : pushed->points) points.c_deg.push_back(p.c_deg);
-          in_force_points = std::move(points);
-        }
-      }
-    }
+    Result<std::optional<TablePointsInForce>> in_force_points = points_in_force(*store, nc_file, s);
+    if (!in_force_points) return in_force_points.error();
 
     auto step = [&s](std::string code, std::string message, std::optional<std::int64_t> run_id = std::nullopt) {
       if (s.on_step) s.on_step(JobStep{std::move(code), std::move(message), run_id});
@@ -259,7 +264,7 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
       Result<BuiltTable> b = [&]() -> Result<BuiltTable> {
         Result<PeriodicSpline> target = corrected_lift(s.design, *design_reading, correction, s.part);
         if (!target) return in_step("corrected lift", target.error());
-        return build_table(*target, s, in_force_points ? &*in_force_points : nullptr);
+        return build_table(*target, s, *in_force_points ? &**in_force_points : nullptr);
       }();
       if (b) {
         built = std::move(*b);

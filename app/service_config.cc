@@ -52,8 +52,21 @@ Status check_writable_dir(const fs::path& dir, const std::string& what) {
                       what + " " + dir.string() + ": " + at.string() + " is not a directory" + advice);
   }
   if (::access(at.c_str(), W_OK | X_OK) != 0) {
-    return make_error(ErrorCode::kInvalidInput, what + " " + dir.string() + ": " + at.string() + " is not writable (" +
-                                                    std::strerror(errno) + ")" + advice);
+    const std::string why = std::strerror(errno);
+    return make_error(ErrorCode::kInvalidInput,
+                      what + " " + dir.string() + ": " + at.string() + " is not writable (" + why + ")" + advice);
+  }
+  return {};
+}
+
+// The database: its directory as above, and the file itself writable if it exists.
+Status check_writable_database(const fs::path& db_path) {
+  if (Status d = check_writable_dir(db_path.parent_path(), "database directory"); !d) return d;
+  std::error_code ec;
+  if (fs::exists(db_path, ec) && ::access(db_path.c_str(), W_OK) != 0) {
+    const std::string why = std::strerror(errno);
+    return make_error(ErrorCode::kInvalidInput, "database " + db_path.string() + " is not writable (" + why +
+                                                    "); the service's user must own it (chown it to them)");
   }
   return {};
 }
@@ -181,10 +194,8 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
     dr.allow_only({"path"});
     job.db_path = relative_to(base, dr.text("path", "gaugeloop.sqlite"));
     if (dr.error) return *dr.error;
-    if (Status w = check_writable_dir(job.db_path.parent_path(), "database directory"); !w) {
-      return at_key(dr, "path", w.error());
-    }
-  } else if (Status w = check_writable_dir(job.db_path.parent_path(), "database directory"); !w) {
+    if (Status w = check_writable_database(job.db_path); !w) return at_key(dr, "path", w.error());
+  } else if (Status w = check_writable_database(job.db_path); !w) {
     return make_error(ErrorCode::kInvalidInput,
                       source + ": [database] path (default " + job.db_path.string() + "): " + w.error().message);
   }
@@ -301,14 +312,20 @@ Result<const ServicePart*> find_plc_part(const ServiceConfig& config, int plc_pa
                                               "; configured: " + (known.empty() ? "none" : known));
 }
 
-Result<const ServicePart*> find_part(const ServiceConfig& config, const std::string& name, int lobe) {
+std::string configured_parts(const ServiceConfig& config) {
   std::string known;
   for (const ServicePart& p : config.parts) {
-    if (p.file.part.name == name && p.file.part.lobe == lobe) return &p;
     known += (known.empty() ? "" : ", ") + p.file.part.name + " lobe " + std::to_string(p.file.part.lobe);
   }
+  return known;
+}
+
+Result<const ServicePart*> find_part(const ServiceConfig& config, const std::string& name, int lobe) {
+  for (const ServicePart& p : config.parts) {
+    if (p.file.part.name == name && p.file.part.lobe == lobe) return &p;
+  }
   return make_error(ErrorCode::kNotFound, "part " + name + " lobe " + std::to_string(lobe) + " is not in " +
-                                              config.source.string() + "; configured: " + known);
+                                              config.source.string() + "; configured: " + configured_parts(config));
 }
 
 JobSettings job_for(const ServiceConfig& config, const ServicePart& part) {

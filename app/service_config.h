@@ -56,6 +56,9 @@ Result<ServiceConfig> read_service_config(const std::filesystem::path& path);
 // The part (name and lobe) among the configured ones; kNotFound listing them.
 Result<const ServicePart*> find_part(const ServiceConfig& config, const std::string& name, int lobe);
 
+// "intake_flat lobe 1, exhaust_roller lobe 2": the parts a config has, for messages.
+std::string configured_parts(const ServiceConfig& config);
+
 // The part the PLC names by `plc_part_number` and `lobe`; kNotFound listing the numbered ones.
 Result<const ServicePart*> find_plc_part(const ServiceConfig& config, int plc_part_number, int lobe);
 

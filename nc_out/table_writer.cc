@@ -138,6 +138,33 @@ Status check_adaptive(const AdaptiveSettings& s) {
 
 std::string refusal_where(const CommandError& e) { return num(e.max_abs_um, 3) + " um at C" + num(e.at_c_deg, 3); }
 
+// Fine rows in the widest table segment settings allow (at least 1).
+std::size_t widest_rows(const SampledPath& path, const AdaptiveSettings& settings) {
+  return std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(settings.max_step_deg / path.c_step_deg + 1e-9)));
+}
+
+// The fine rows of the table in force's points: kInvalidInput unless they run from C0 to
+// C360, increasing, each on a row of `path` (a table written on another grid cannot be kept).
+Result<std::vector<std::size_t>> rows_of_points(const SampledPath& path, const TablePointsInForce& in_force) {
+  const std::vector<double>& c = in_force.c_deg;
+  if (c.size() < 4 || c.front() != 0.0 || c.back() != 360.0) {
+    return make_error(ErrorCode::kInvalidInput, "the table in force must have at least 4 points from C0 to C360");
+  }
+  std::vector<std::size_t> rows;
+  for (double at : c) {
+    const double r = at / path.c_step_deg;
+    const long long k = std::llround(r);
+    if (std::abs(r - static_cast<double>(k)) > 1e-6 || k < 0 || static_cast<std::size_t>(k) > path.size() ||
+        (!rows.empty() && static_cast<std::size_t>(k) <= rows.back())) {
+      return make_error(ErrorCode::kInvalidInput, "point C" + num(at, 6) +
+                                                      " of the table in force is not a row of the " +
+                                                      num(path.c_step_deg, 4) + " deg path or not in order");
+    }
+    rows.push_back(static_cast<std::size_t>(k));
+  }
+  return rows;
+}
+
 }  // namespace
 
 Result<TableInterpolant> TableInterpolant::of(const std::vector<CurvePoint>& points, Interpolation interpolation) {
@@ -238,8 +265,7 @@ Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const Ad
   if (Status s = check_adaptive(settings); !s) return s.error();
   const std::size_t n = path.size();
   const double bound_mm = settings.bound_um / kUmPerMm;
-  const std::size_t max_rows =
-      std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(settings.max_step_deg / path.c_step_deg + 1e-9)));
+  const std::size_t max_rows = widest_rows(path, settings);
   auto x_written = [&](std::size_t k) { return round_to(path.x_mm[k % n], format.x_decimals); };
   // The chord from row a to row b as written keeps the bound at every row in between.
   auto keeps_bound = [&](std::size_t a, std::size_t b) {
@@ -298,8 +324,7 @@ Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const Ad
   std::optional<CurveTable> best;
   CommandError closest;
   closest.max_abs_um = std::numeric_limits<double>::infinity();
-  const std::size_t max_rows =
-      std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(settings.max_step_deg / path.c_step_deg + 1e-9)));
+  const std::size_t max_rows = widest_rows(path, settings);
   for (double start_deg : {settings.max_step_deg, 2.0, 1.0}) {
     if (start_deg > settings.max_step_deg) continue;
     const std::size_t r = rows_per_step(path, start_deg);
@@ -391,24 +416,9 @@ Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const Ad
 Result<CurveTable> write_table_at_points(const SampledPath& path, const TablePointsInForce& in_force,
                                          const CurveTableFormat& format) {
   if (Status s = check_inputs(path, format); !s) return s.error();
-  const std::vector<double>& c = in_force.c_deg;
-  const std::size_t n = path.size();
-  if (c.size() < 4 || c.front() != 0.0 || c.back() != 360.0) {
-    return make_error(ErrorCode::kInvalidInput, "the table in force must have at least 4 points from C0 to C360");
-  }
-  std::vector<std::size_t> rows;
-  for (double at : c) {
-    const double r = at / path.c_step_deg;
-    const long long k = std::llround(r);
-    if (std::abs(r - static_cast<double>(k)) > 1e-6 || k < 0 || static_cast<std::size_t>(k) > n ||
-        (!rows.empty() && static_cast<std::size_t>(k) <= rows.back())) {
-      return make_error(ErrorCode::kInvalidInput, "point C" + num(at, 6) +
-                                                      " of the table in force is not a row of the " +
-                                                      num(path.c_step_deg, 4) + " deg path or not in order");
-    }
-    rows.push_back(static_cast<std::size_t>(k));
-  }
-  return table_at_rows(path, rows, in_force.interpolation, format, "points of the table in force");
+  Result<std::vector<std::size_t>> rows = rows_of_points(path, in_force);
+  if (!rows) return rows.error();
+  return table_at_rows(path, *rows, in_force.interpolation, format, "points of the table in force");
 }
 
 namespace {
@@ -418,13 +428,12 @@ namespace {
 // does or 40 rounds have passed (the caller checks the bound).
 Result<CurveTable> refine_points_in_force(const SampledPath& path, const TablePointsInForce& in_force,
                                           const AdaptiveSettings& settings, const CurveTableFormat& format) {
-  Result<CurveTable> kept = write_table_at_points(path, in_force, format);
-  if (!kept) return kept;
+  Result<std::vector<std::size_t>> kept = rows_of_points(path, in_force);
+  if (!kept) return kept.error();
+  std::vector<std::size_t> rows = std::move(*kept);
+  const std::size_t points_in_force = rows.size();
   const double bound_mm = settings.bound_um / kUmPerMm;
-  const std::size_t max_rows =
-      std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(settings.max_step_deg / path.c_step_deg + 1e-9)));
-  std::vector<std::size_t> rows;
-  for (double c : in_force.c_deg) rows.push_back(static_cast<std::size_t>(std::llround(c / path.c_step_deg)));
+  const std::size_t max_rows = widest_rows(path, settings);
   for (int round = 0; round < 40; ++round) {
     Result<TableInterpolant> nc = TableInterpolant::of(points_at_rows(path, rows, format), in_force.interpolation);
     if (!nc) return nc.error();
@@ -449,7 +458,10 @@ Result<CurveTable> refine_points_in_force(const SampledPath& path, const TablePo
     if (!split) break;
     rows = std::move(next);
   }
-  return table_at_rows(path, rows, in_force.interpolation, format, "points of the table in force, refined");
+  const std::size_t added = rows.size() - points_in_force;
+  return table_at_rows(path, rows, in_force.interpolation, format,
+                       added == 0 ? "points of the table in force"
+                                  : "points of the table in force, " + std::to_string(added) + " added");
 }
 
 }  // namespace

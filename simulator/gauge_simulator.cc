@@ -328,11 +328,17 @@ void GaugeSimulator::update_registers(std::int64_t now_ns, const FaultState& fau
     fault_marks_ += marks - latched_marks_;  // every mark latched now carries the fault bits
     fault_mark_status_ = status;
   }
+  // The latched noise is keyed by the mark counted from the start of the revolution of the
+  // first request, not from the spindle's start: a client that measures the revolutions after
+  // its first request meets the same noise however long it took to ask (a slower build, a
+  // busier machine), so a seeded run repeats.
+  if (noise_origin_mark_ < 0) noise_origin_mark_ = (marks - 1) / 360 * 360;
   for (std::int64_t i = std::max(latched_marks_, marks - sim_registers::kCompactRingEntries); i < marks; ++i) {
     const double mark_beta = cam_angle_at_probe_deg(part_, static_cast<double>(i % 360));
     const double mark_mm =
         true_lift_mm(ground.get(), mark_beta) + settings_.gauge_offset_mm +
-        settings_.noise_rms_um * 1e-3 * gaussian(settings_.seed ^ 0x6c61746368ULL, static_cast<std::uint64_t>(i));
+        settings_.noise_rms_um * 1e-3 *
+            gaussian(settings_.seed ^ 0x6c61746368ULL, static_cast<std::uint64_t>(i - noise_origin_mark_));
     const auto counts = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(mark_mm * 10000.0)));
     put_u32(regs, sim_registers::kCompactRing + 2 * static_cast<int>(i % sim_registers::kCompactRingEntries), counts);
     if (i < marks - sim_registers::kLatchRingEntries) continue;  // overwritten in the 4-register ring anyway

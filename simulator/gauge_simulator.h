@@ -157,6 +157,7 @@ class GaugeSimulator {
   std::int64_t fault_marks_ = 0;         // serve thread only: marks latched with a fault bit, or lost
   std::uint16_t fault_mark_status_ = 0;  // serve thread only
   bool was_frozen_ = false;              // serve thread only
+  std::int64_t noise_origin_mark_ = -1;  // serve thread only: mark 0 of the latched noise
 
   std::mutex faults_mutex_;
   std::vector<FaultSpec> faults_;

@@ -257,6 +257,9 @@ TEST_F(FullPathTest, DemoTwiceLeavesTwoRunsThatRunsListShows) {
     EXPECT_NE(demo.output.find("run " + std::to_string(i) + ":"), std::string::npos) << demo.output;
     EXPECT_NE(demo.output.find("degrees captured  1080 of 1080"), std::string::npos) << demo.output;
     EXPECT_NE(demo.output.find("CAM_INTAKE_L1.SPF"), std::string::npos) << demo.output;
+    // Its simulated lobe was not ground with the table in force: the second table is chosen
+    // afresh, not on the first one's points (docs/nc_output.md).
+    EXPECT_EQ(demo.output.find("points of the table in force"), std::string::npos) << demo.output;
   }
   CommandResult list = run_command("runs list --json " + data);
   ASSERT_EQ(list.exit_code, 0) << list.output;

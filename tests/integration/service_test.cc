@@ -342,9 +342,11 @@ TEST_F(ServiceTest, SigtermMidRunStoresTheWholeRunAndLeavesAWholeTable) {
     (void)c.Post("/api/measure", bearer(kToken), R"({"part": "intake_flat", "lobe": 1})", "application/json");
   });
   const bool measuring = wait_for_health(cli, [](const json& h) { return h["state"] == "measuring"; });
-  // One run at a time: a second request while the first measures (a run lasts about a second
-  // of gauge time; this answer takes milliseconds) is refused with a reason, not queued.
+  // One run at a time: a second request while the first measures is refused with a reason,
+  // not queued. The gauge holds its answers meanwhile, so the first run cannot have ended.
+  sim_->set_silent(true);
   auto second = cli.Post("/api/measure", bearer(kToken), R"({"part": "intake_flat", "lobe": 1})", "application/json");
+  sim_->set_silent(false);
   ASSERT_TRUE(second);
   EXPECT_EQ(second->status, 409) << second->body;
   EXPECT_NE(second->body.find("a run is in progress"), std::string::npos) << second->body;

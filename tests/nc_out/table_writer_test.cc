@@ -182,6 +182,34 @@ TEST(DefaultTable, KeepsThePointsOfTheTableInForceAndAddsWhereTheBoundBreaks) {
   }
 }
 
+// As measure_job keeps them: C read back from the pushed program's text (3 decimals). A
+// narrower widest segment since then splits the wide segments; a control that no longer
+// takes CSPLINE gets a fresh G1 table instead of the spline's points.
+TEST(DefaultTable, KeepsPointsReadBackFromTheProgramAndHonoursChangedSettings) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  Result<CurveTable> first = write_default_table(p, {});
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  ASSERT_EQ(first->interpolation, Interpolation::kCubicSpline);
+  Result<ParsedTable> read = parse_table_program(program_of(*first, {}), "pushed.spf");
+  ASSERT_TRUE(read.ok()) << read.error().message;
+  TablePointsInForce in_force{read->interpolation, {}};
+  for (const CurvePoint& pt : read->points) in_force.c_deg.push_back(pt.c_deg);
+
+  Result<CurveTable> narrower = write_default_table(p, {0.5, 5.0, true}, {}, &in_force);
+  ASSERT_TRUE(narrower.ok()) << narrower.error().message;
+  EXPECT_NE(narrower->writer.find("table in force"), std::string::npos) << narrower->writer;
+  for (const CurvePoint& pt : first->points) EXPECT_TRUE(has_point_at(*narrower, pt.c_deg)) << "C" << pt.c_deg;
+  for (size_t i = 1; i < narrower->points.size(); ++i) {
+    EXPECT_LE(narrower->points[i].c_deg - narrower->points[i - 1].c_deg, 5.0 + 1e-9)
+        << "C" << narrower->points[i].c_deg;
+  }
+
+  Result<CurveTable> g1_only = write_default_table(p, {0.5, 10.0, false}, {}, &in_force);
+  ASSERT_TRUE(g1_only.ok()) << g1_only.error().message;
+  EXPECT_EQ(g1_only->interpolation, Interpolation::kLinear);
+  EXPECT_EQ(g1_only->writer.find("table in force"), std::string::npos) << g1_only->writer;
+}
+
 // Points grown to more than 1.25 times the fewest blocks (or never fit for this path) give
 // way to a fresh choice: the fewest blocks again.
 TEST(DefaultTable, StartsAfreshWhenThePointsInForceNeedTooManyBlocks) {
