@@ -101,8 +101,7 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
   cmd.add_option(
          "--table", o.table,
          "Curve table: auto (fewest blocks within --command-error-um; the next keeps the points of the table in "
-         "force), linear or spline (at "
-         "--table-step-deg), adaptive-linear, adaptive-spline; see docs/nc_output.md")
+         "force), linear or spline (at --table-step-deg), adaptive-linear, adaptive-spline; see docs/nc_output.md")
       ->check(CLI::IsMember({"auto", "linear", "spline", "adaptive-linear", "adaptive-spline"}))
       ->capture_default_str();
   cmd.add_option("--table-step-deg", o.table_step_deg, "C step of a linear or spline table, degrees")

@@ -114,9 +114,9 @@ class Service {
     }
     JobSettings js = job_for(*c, **part);
     js.note = note;
-    if (stored_run != nullptr) js.on_run_stored = [stored_run](std::int64_t id) { *stored_run = id; };
     // Every step of the cycle: a log line and an event (docs/service.md, "The cycle").
-    js.on_step = [this, c, part_name, lobe](const JobStep& step) {
+    js.on_step = [this, c, part_name, lobe, stored_run](const JobStep& step) {
+      if (stored_run != nullptr && step.run_id) *stored_run = step.run_id;
       spdlog::info("part {} lobe {}: {}: {}", part_name, lobe, step.code, step.message);
       record_event(*c, EventKind::kInfo, step.code, part_name, lobe, step.run_id, step.message);
     };

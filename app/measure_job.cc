@@ -307,7 +307,6 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     Result<std::int64_t> run_id = store->insert_run(record);
     if (!run_id) return run_id.error();
     stored_run = *run_id;
-    if (s.on_run_stored) s.on_run_stored(*run_id);
     step("stored", "run " + std::to_string(*run_id) + " stored in " + store->path().string(), *run_id);
 
     JobReport report;

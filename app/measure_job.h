@@ -71,11 +71,10 @@ struct JobSettings {
   // False: correct from the design, as the demo does: its simulator does not grind with
   // the pushed table, so its parts never carry an earlier correction.
   bool build_on_table_in_force = true;
-  // Called with the run's id once it is stored, before its table is pushed: a caller that
-  // must name the run even when the push then fails (the PLC's result words) learns it here.
-  std::function<void(std::int64_t run_id)> on_run_stored;
   // Called as each step of the cycle goes through (JobStep), for a caller that logs and
   // records every step (the service). Failures are not steps: they are the job's error.
+  // "stored" comes before the table is pushed: a caller that must name the run even when the
+  // push then fails (the PLC's result words) learns its id there.
   std::function<void(const JobStep& step)> on_step;
 };
 

@@ -128,9 +128,11 @@ Result<CurveTable> write_table_at_points(const SampledPath& path, const TablePoi
 // naming the smallest error reached if none keeps the bound.
 //
 // With `in_force` (the table in force for the lobe): its points are kept, X moved to the new
-// path, while they keep the bound. A closed loop then meets the same interpolation error part
-// after part and cancels it, instead of chasing a new pattern in every table; and one version
-// compares with the next point by point. A fresh choice is made when they do not keep it.
+// path, with a point added in every segment that breaks the bound (or is wider than
+// max_step_deg), while that needs at most 1.25 times the blocks of the fewest choice. A closed
+// loop then meets the same interpolation error part after part and cancels it, instead of
+// chasing a new pattern in every table; and one version compares with the next point by
+// point. Beyond 1.25 times, or for points not on the path's grid, the fewest choice.
 Result<CurveTable> write_default_table(const SampledPath& path, const TableChoiceSettings& settings,
                                        const CurveTableFormat& format = {},
                                        const TablePointsInForce* in_force = nullptr);

@@ -250,8 +250,9 @@ TEST_F(NcPushTest, DirectoryInThePlaceOfTheProgramIsRefusedBeforeMeasuring) {
 TEST_F(NcPushTest, APushFailingAfterTheRunIsStoredKeepsTheRunAndNamesIt) {
   JobSettings js = job_settings();
   std::optional<std::int64_t> stored;
-  js.on_run_stored = [&](std::int64_t id) {
-    stored = id;
+  js.on_step = [&](const JobStep& step) {
+    if (step.code != "stored") return;
+    stored = step.run_id;
     fs::remove_all(dir_ / "nc");
     std::ofstream(dir_ / "nc") << "a file where the NC directory was\n";
   };
