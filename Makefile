@@ -12,11 +12,11 @@ deps:
 	@scripts/install-deps.sh
 
 build: deps
-	cmake -S . -B $(BUILD_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo
+	cmake -S . -B $(BUILD_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGAUGELOOP_WERROR=ON
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
 build-asan: deps
-	cmake -S . -B $(ASAN_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DGAUGELOOP_SANITIZE=ON -DGAUGELOOP_BENCH=OFF
+	cmake -S . -B $(ASAN_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DGAUGELOOP_SANITIZE=ON -DGAUGELOOP_BENCH=OFF -DGAUGELOOP_WERROR=ON
 	cmake --build $(ASAN_DIR) -j $(JOBS)
 
 demo: build

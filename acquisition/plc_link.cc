@@ -72,16 +72,18 @@ Error ModbusPlcLink::failed(int n, const std::string& what) {
 
 Result<PlcRequestWords> ModbusPlcLink::read_request() {
   if (ctx_ == nullptr) return make_error(ErrorCode::kIo, "PLC at " + address() + " is not connected");
-  std::array<std::uint16_t, plc_registers::kPlcWords> regs{};
-  const int n = modbus_read_registers(ctx_, settings_.base_address, plc_registers::kPlcWords, regs.data());
-  if (n != plc_registers::kPlcWords) {
+  // The whole block in one request: the PLC's words are 0-2 and 12.
+  std::array<std::uint16_t, plc_registers::kBlockWords> regs{};
+  const int n = modbus_read_registers(ctx_, settings_.base_address, plc_registers::kBlockWords, regs.data());
+  if (n != plc_registers::kBlockWords) {
     return failed(n, "reading holding registers " + std::to_string(settings_.base_address) + ".." +
-                         std::to_string(settings_.base_address + plc_registers::kPlcWords - 1));
+                         std::to_string(settings_.base_address + plc_registers::kBlockWords - 1));
   }
   PlcRequestWords w;
   w.request = regs[plc_registers::kRequest];
   w.part_number = regs[plc_registers::kPartNumber];
   w.lobe = regs[plc_registers::kLobe];
+  w.ground_with = regs[plc_registers::kGroundWith];
   return w;
 }
 

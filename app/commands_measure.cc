@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "acquisition/modbus_gauge.h"
@@ -18,7 +19,9 @@
 #include "app/service_config.h"
 #include "app/svg_plot.h"
 #include "core/atomic_file.h"
+#include "core/text_file.h"
 #include "simulator/gauge_simulator.h"
+#include "simulator/virtual_grinder.h"
 
 namespace gaugeloop {
 namespace {
@@ -28,12 +31,14 @@ Result<std::string> load_template(const std::string& path, std::string& name) {
     name = "embedded:cam_table.spf";
     return std::string(embedded::kNcTemplate);
   }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return make_error(ErrorCode::kNotFound, "NC template " + path + ": cannot be opened; check --template");
-  std::ostringstream buf;
-  buf << in.rdbuf();
+  Result<std::string> text = read_regular_file(path, "NC template");
+  if (!text) {
+    Error e = text.error();
+    e.message += " (--template)";
+    return e;
+  }
   name = path;
-  return buf.str();
+  return std::string(without_utf8_bom(*text));
 }
 
 void print_report(const JobReport& r, const Part& part, const std::string& machine) {
@@ -51,9 +56,21 @@ void print_report(const JobReport& r, const Part& part, const std::string& machi
   std::printf("  repeatability     %.2f um (largest per-degree standard deviation)\n", a.repeatability_um);
   std::printf("  phase             %+.3f deg (timing; corrected through the lift)\n", a.phase_error_deg);
   std::printf("  runout            %.2f um (base circle, total indicator reading)\n", a.base_circle_runout_um);
-  if (r.correction_in_force_run) {
-    std::printf("  correction        %.2f um max, built on run %lld's (the table in force)\n", r.correction_max_um,
-                static_cast<long long>(*r.correction_in_force_run));
+  if (!r.ground_with_source.empty()) {
+    const std::string table =
+        r.ground_with_version ? "table version " + std::to_string(*r.ground_with_version) : "the design (no table)";
+    const std::string who = r.ground_with_source == "plc"      ? "said by the PLC"
+                            : r.ground_with_source == "option" ? "said by --ground-with"
+                            : r.ground_with_version            ? "assumed: the table in force"
+                                                               : "assumed: no table pushed yet";
+    std::printf("  ground with       %s (%s)\n", table.c_str(), who.c_str());
+    if (!r.ground_with_evidence.empty()) std::printf("                    %s\n", r.ground_with_evidence.c_str());
+  }
+  if (r.inspection) {
+    std::printf("  correction        inspection only: the correction in force stands\n");
+  } else if (r.correction_in_force_run) {
+    std::printf("  correction        %.2f um max, built on run %lld's (the table that ground the part)\n",
+                r.correction_max_um, static_cast<long long>(*r.correction_in_force_run));
   } else {
     std::printf("  correction        %.2f um max, from the design\n", r.correction_max_um);
   }
@@ -63,6 +80,8 @@ void print_report(const JobReport& r, const Part& part, const std::string& machi
   }
   if (r.pushed()) {
     std::printf("  NC file           %s (table version %d)\n", r.nc_file.string().c_str(), r.table_version);
+  } else if (r.inspection) {
+    std::printf("  NC file           untouched (inspection)\n");
   } else {
     std::printf("  NC file           not written (compensation: %s); the table in force stays\n",
                 std::string(compensation_verdict_name(r.verdict)).c_str());
@@ -87,8 +106,10 @@ struct MeasureOptions {
   std::string machine = "grinder-1";
   std::string note;
   int response_timeout_ms = 200;
-  std::string mode = "latched";  // latched | live
-  std::string gauge_config;      // measure only
+  std::string mode = "latched";    // latched | live
+  std::string gauge_config;        // measure only
+  std::optional<int> ground_with;  // measure only: the table version that ground the part
+  bool inspect = false;            // measure only
 };
 
 void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
@@ -151,6 +172,9 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
   js.machine = o.machine;
   js.note = o.note;
   js.build_on_table_in_force = build_on_table_in_force;
+  js.ground_with_version = o.ground_with;
+  js.ground_with_source = "option";
+  js.inspect = o.inspect;
   return js;
 }
 
@@ -306,7 +330,7 @@ struct ServiceMeasureOptions {
   int lobe = 0;
 };
 
-int cmd_measure_as_service(const ServiceMeasureOptions& so, const std::string& note) {
+int cmd_measure_as_service(const ServiceMeasureOptions& so, const MeasureOptions& by_hand) {
   Result<ServiceConfig> config = read_service_config(so.config_path);
   if (!config) return report_error(config.error());
   if (so.part_name.empty() || so.lobe == 0) {
@@ -316,7 +340,10 @@ int cmd_measure_as_service(const ServiceMeasureOptions& so, const std::string& n
   Result<const ServicePart*> part = find_part(*config, so.part_name, so.lobe);
   if (!part) return report_error(part.error());
   JobSettings js = job_for(*config, **part);
-  js.note = note;
+  js.note = by_hand.note;
+  js.ground_with_version = by_hand.ground_with;
+  js.ground_with_source = "option";
+  js.inspect = by_hand.inspect;
   ModbusGauge gauge(config->gauge);
   Result<JobReport> report = run_measure_job(gauge, js);
   if (!report) return report_error(report.error());
@@ -324,9 +351,63 @@ int cmd_measure_as_service(const ServiceMeasureOptions& so, const std::string& n
   return report->pushed() ? kExitOk : kExitNotPushed;
 }
 
-int cmd_sim(const std::string& part_path, const SimulatorSettings& settings) {
+// sim --grind: the machine beside the gauge. Whenever the program in the NC directory
+// changes (a new table pushed), the next part is ground from it on the virtual grinder and put
+// on the gauge; at the start, from the program found there, or from the design.
+struct SimGrind {
+  bool enabled = false;
+  DataPaths paths;
+  MachineErrorModel machine;
+};
+
+class SimGrinder {
+ public:
+  SimGrinder(const LoadedPart& lp, const SimGrind& g, GaugeSimulator& sim)
+      : lp_(lp), g_(g), sim_(sim), nc_file_(g.paths.nc() / (lp.file.nc_program + ".SPF")) {}
+
+  // Grinds the next part when the program changed since the last one; returns false on an
+  // error (said on stderr; the gauge keeps the part it has).
+  bool grind_if_changed() {
+    std::string program;
+    if (std::filesystem::exists(nc_file_)) {
+      Result<std::string> text = read_regular_file(nc_file_, "NC program");
+      if (!text) return complain(text.error());
+      program = std::move(*text);
+    }
+    if (parts_ > 0 && program == last_program_) return true;
+    Result<CommandedPath> path =
+        program.empty() ? commanded_path_from_design(lp_.file.part, lp_.design) : commanded_path_from_program(nc_file_);
+    if (!path) return complain(path.error());
+    Result<GroundPart> part = grind_part(lp_.file.part, *path, g_.machine, parts_);
+    if (!part) return complain(part.error());
+    if (Status s = sim_.load_ground_part(part->reading_mm); !s) return complain(s.error());
+    last_program_ = std::move(program);
+    std::printf("grinder: part %d ground from %s\n", parts_, path->source.c_str());
+    std::fflush(stdout);
+    ++parts_;
+    return true;
+  }
+
+ private:
+  bool complain(const Error& e) {
+    spdlog::error("grinder: {}", e.message);
+    return false;
+  }
+
+  const LoadedPart& lp_;
+  const SimGrind& g_;
+  GaugeSimulator& sim_;
+  std::filesystem::path nc_file_;
+  std::string last_program_;
+  int parts_ = 0;
+};
+
+int cmd_sim(const std::string& part_path, const SimulatorSettings& settings, const SimGrind& grind) {
   Result<LoadedPart> lp = load_part(part_path);
   if (!lp) return report_error(lp.error());
+  if (grind.enabled) {
+    if (Status v = validate(grind.machine); !v) return report_error(v.error());
+  }
   // Block the stop signals before the server thread starts, so only sigwait below sees them.
   sigset_t stop_signals;
   sigemptyset(&stop_signals);
@@ -335,6 +416,11 @@ int cmd_sim(const std::string& part_path, const SimulatorSettings& settings) {
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
   auto sim = GaugeSimulator::start(lp->file.part, lp->design, settings);
   if (!sim) return report_error(sim.error());
+  std::optional<SimGrinder> grinder;
+  if (grind.enabled) {
+    grinder.emplace(*lp, grind, **sim);
+    if (!grinder->grind_if_changed()) return kExitBadInput;
+  }
   if (settings.rtu_device.empty()) {
     std::printf("gaugeloop sim: %s lobe %d at %.0f rpm, Modbus TCP on %s:%d (registers: docs/simulator.md)\n",
                 lp->file.part.name.c_str(), lp->file.part.lobe, settings.speed_rpm, settings.host.c_str(),
@@ -349,7 +435,13 @@ int cmd_sim(const std::string& part_path, const SimulatorSettings& settings) {
   }
   std::fflush(stdout);
   int sig = 0;
-  sigwait(&stop_signals, &sig);
+  if (grinder) {
+    // Look at the NC directory five times a second until a stop signal comes.
+    const timespec look_again{0, 200'000'000};
+    while ((sig = sigtimedwait(&stop_signals, nullptr, &look_again)) < 0) (void)grinder->grind_if_changed();
+  } else {
+    sigwait(&stop_signals, &sig);
+  }
   (*sim)->stop();
   spdlog::info("simulator stopped after {} requests", (*sim)->requests_served());
   return kExitOk;
@@ -434,14 +526,24 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
                   "Fault KIND@START[+DURATION][:PARAM], START and DURATION in revolutions after the first request; "
                   "repeatable. Kinds: refuse, drop, silent, exception, late, frozen, over-range, under-range, "
                   "probe-missing, jump, drift (docs/simulator.md)");
-  sim->callback([&action, sim, sim_settings, sim_part, fault_specs] {
+  auto sim_grind = std::make_shared<SimGrind>();
+  sim->add_flag("--grind", sim_grind->enabled,
+                "Grind each next part on the virtual grinder from the program in the NC directory whenever it "
+                "changes (from the design at first), so measuring the simulator closes the loop "
+                "(docs/virtual_grinder.md)");
+  sim->add_option("--data-dir", sim_grind->paths.data_dir, "With --grind: where the NC directory is [gaugeloop-data]")
+      ->capture_default_str();
+  sim->add_option("--nc-dir", sim_grind->paths.nc_dir, "With --grind: the NC directory [<data-dir>/nc]");
+  sim->add_option("--machine-seed", sim_grind->machine.seed, "With --grind: seed of the grinder's vibration")
+      ->capture_default_str();
+  sim->callback([&action, sim, sim_settings, sim_part, fault_specs, sim_grind] {
     seed_from_clock_unless_given(*sim, *sim_settings);
     for (const std::string& text : *fault_specs) {
       Result<FaultSpec> f = parse_fault_spec(text);
       if (!f) throw CLI::ValidationError("--fault", f.error().message);
       sim_settings->faults.push_back(*f);
     }
-    action = [sim_settings, sim_part] { return cmd_sim(*sim_part, *sim_settings); };
+    action = [sim_settings, sim_part, sim_grind] { return cmd_sim(*sim_part, *sim_settings, *sim_grind); };
   });
 
   auto measure_opts = std::make_shared<MeasureOptions>();
@@ -455,11 +557,19 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
                       "Gauge config (TOML): link and register map, see docs/gauge.md [the simulator's map]");
   measure->add_option("--part", measure_opts->part_path, "Part file (TOML), see examples/");
   add_measure_options(*measure, *measure_opts);
+  measure
+      ->add_option("--ground-with", measure_opts->ground_with,
+                   "Table version of the NC program that ground the measured part (0: the design). Without it "
+                   "the table in force is assumed, and a part that does not show it is not corrected from "
+                   "(docs/nc_output.md)")
+      ->check(CLI::Range(0, 65534));
+  measure->add_flag("--inspect", measure_opts->inspect,
+                    "Measure, analyse and store only: the correction in force and the NC program are untouched");
   auto as_service = std::make_shared<ServiceMeasureOptions>();
   CLI::Option* config = measure->add_option(
       "--config", as_service->config_path,
       "The service's config (TOML, docs/service.md): measure as `gaugeloop serve` does, with its gauge, settings, "
-      "database and NC directory; with --part-name and --lobe, and --note only");
+      "database and NC directory; with --part-name and --lobe, and only --note, --ground-with, --inspect");
   measure->add_option("--part-name", as_service->part_name, "With --config: the part's name")->needs(config);
   measure->add_option("--lobe", as_service->lobe, "With --config: the lobe number")->needs(config);
   measure->callback([&action, measure, measure_opts, gauge_address, as_service] {
@@ -467,7 +577,8 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
       // The config sets everything else: an option beside it would be silently ignored.
       for (const CLI::Option* o : measure->get_options()) {
         const std::string name = o->get_name();
-        if (o->count() == 0 || name == "--config" || name == "--part-name" || name == "--lobe" || name == "--note")
+        if (o->count() == 0 || name == "--config" || name == "--part-name" || name == "--lobe" || name == "--note" ||
+            name == "--ground-with" || name == "--inspect")
           continue;
         action = [name] {
           return report_error(
@@ -476,7 +587,7 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
         };
         return;
       }
-      action = [as_service, measure_opts] { return cmd_measure_as_service(*as_service, measure_opts->note); };
+      action = [as_service, measure_opts] { return cmd_measure_as_service(*as_service, *measure_opts); };
       return;
     }
     if (measure_opts->part_path.empty()) {

@@ -12,6 +12,7 @@
 #include "app/cli_common.h"
 #include "app/nc_push.h"
 #include "app/run_json.h"
+#include "core/text_file.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
 
@@ -226,8 +227,35 @@ int cmd_check(const NcOptions& o) {
                 *last ? (" (version " + std::to_string((**last).table_version) + " was pushed)").c_str() : "");
     return kExitNcOutput;
   }
+  // Written by a push whose record was interrupted: that push's table, recorded at the next
+  // push or by `nc reconcile`.
+  Result<std::vector<PushIntent>> open = store->open_push_intents(*file);
+  if (!open) return report_error(open.error());
+  Result<std::string> on_disk = read_regular_file(*file, "NC program");
+  if (!on_disk) return report_error(on_disk.error());
+  for (const PushIntent& i : *open) {
+    if (i.push.program_text != *on_disk) continue;
+    std::printf(
+        "%s: table version %d as written for run %lld (%s); its push was interrupted before it was "
+        "recorded: `gaugeloop nc reconcile` or the next push records it\n",
+        file->c_str(), i.push.table_version, static_cast<long long>(i.run_id), i.created_utc.c_str());
+    return kExitOk;
+  }
   std::printf("%s: table version %d as pushed (run %lld, %s)\n", file->c_str(), *last ? (**last).table_version : 0,
               *last ? static_cast<long long>((**last).run_id) : 0LL, *last ? (**last).pushed_utc.c_str() : "-");
+  return kExitOk;
+}
+
+// ---- nc reconcile ----
+
+int cmd_reconcile(const NcOptions& o) {
+  Result<RunStore> store = RunStore::open(o.paths.db());
+  if (!store) return report_error(store.error());
+  Result<ReconcileReport> r = reconcile_all_pushes(*store);
+  if (!r) return report_error(r.error());
+  for (const std::string& m : r->messages) std::printf("%s\n", m.c_str());
+  std::printf("%d interrupted push(es) recorded, %d abandoned, %d temporary file(s) removed\n", r->completed,
+              r->abandoned, r->leftovers_removed);
   return kExitOk;
 }
 
@@ -348,6 +376,15 @@ void add_nc_commands(CLI::App& app, CommandAction& action) {
       "check", "Is the program on disk the table last pushed? Reports a table edited by hand (exit status 2).");
   add_nc_options(*check_cmd, *check);
   check_cmd->callback([&action, check] { action = [check] { return cmd_check(*check); }; });
+
+  auto reconcile = std::make_shared<NcOptions>();
+  CLI::App* reconcile_cmd = nc->add_subcommand(
+      "reconcile",
+      "Finish pushes that were interrupted (kill, power cut, full disk, locked database): a program the control "
+      "holds is recorded as pushed, one it never got is abandoned, leftover temporary files are removed. Every "
+      "push and measurement does this for its own program first.");
+  add_data_dir_option(*reconcile_cmd, reconcile->paths);
+  reconcile_cmd->callback([&action, reconcile] { action = [reconcile] { return cmd_reconcile(*reconcile); }; });
 
   auto pending = std::make_shared<PendingOptions>();
   CLI::App* pending_cmd =

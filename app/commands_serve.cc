@@ -99,8 +99,11 @@ class Service {
   // One measurement run, end to end, on a reservation (reserve_run) it releases. `stored_run`,
   // when given, receives the run's id as soon as it is stored, so a push that fails after
   // that can still name the run.
+  // `ground_with`: the table version that ground the part, as the PLC said it (0: the design);
+  // empty: not said.
   Result<JobReport> run_reserved(const std::string& part_name, int lobe, const std::string& note,
-                                 std::optional<std::int64_t>* stored_run = nullptr) {
+                                 std::optional<std::int64_t>* stored_run = nullptr,
+                                 std::optional<int> ground_with = std::nullopt) {
     struct Release {
       Service* s;
       ~Release() { s->release_run(); }
@@ -114,6 +117,8 @@ class Service {
     }
     JobSettings js = job_for(*c, **part);
     js.note = note;
+    js.ground_with_version = ground_with;
+    js.ground_with_source = "plc";
     // Every step of the cycle: a log line and an event (docs/service.md, "The cycle").
     js.on_step = [this, c, part_name, lobe, stored_run](const JobStep& step) {
       if (stored_run != nullptr && step.run_id) *stored_run = step.run_id;
@@ -343,7 +348,10 @@ class ServiceCycleRunner final : public PlcCycleRunner {
     if (worker_.joinable()) worker_.join();
   }
 
-  std::optional<PlcCycleOutcome> start(std::uint16_t part_number, std::uint16_t lobe) override {
+  std::optional<PlcCycleOutcome> start(const PlcRequestWords& request) override {
+    const std::uint16_t part_number = request.part_number;
+    const std::uint16_t lobe = request.lobe;
+    const std::optional<int> ground_with = request.ground_with_version();
     const std::shared_ptr<const ServiceConfig> c = service_.config();
     Result<const ServicePart*> part = find_plc_part(*c, part_number, lobe);
     if (!part) return PlcCycleOutcome{PlcResultCode::kUnknownPart, 0, 0, part.error().message};
@@ -352,9 +360,9 @@ class ServiceCycleRunner final : public PlcCycleRunner {
     finished_ = false;
     const std::string name = (*part)->file.part.name;
     const std::string note = "PLC request: part number " + std::to_string(part_number);
-    worker_ = std::thread([this, name, lobe, note] {
+    worker_ = std::thread([this, name, lobe, note, ground_with] {
       std::optional<std::int64_t> stored_run;
-      Result<JobReport> report = service_.run_reserved(name, lobe, note, &stored_run);
+      Result<JobReport> report = service_.run_reserved(name, lobe, note, &stored_run, ground_with);
       PlcCycleOutcome o = plc_outcome(report, stored_run);
       std::lock_guard<std::mutex> lock(mutex_);
       outcome_ = std::move(o);
@@ -595,6 +603,20 @@ int cmd_serve(const ServeOptions& o) {
   const std::optional<HttpSettings> http_settings = config->http;
   const std::optional<PlcSettings> plc_settings = config->plc;
   const std::filesystem::path db_path = config->job.db_path;
+  // Pushes a power cut interrupted are finished before anything else reads the tables.
+  {
+    Result<RunStore> store = RunStore::open(db_path);
+    if (!store) {
+      spdlog::error("run database refused, not starting: {}", store.error().message);
+      return exit_code_for(store.error().code);
+    }
+    Result<ReconcileReport> reconciled = reconcile_all_pushes(*store);
+    if (!reconciled) {
+      spdlog::error("interrupted pushes could not be reconciled, not starting: {}", reconciled.error().message);
+      return exit_code_for(reconciled.error().code);
+    }
+    for (const std::string& line : reconciled->messages) spdlog::warn("reconciled: {}", line);
+  }
   Service service(std::move(*config));
   spdlog::info("starting: {}", describe(*service.config()));
 

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "app/toml_reader.h"
+#include "core/text_file.h"
 
 namespace gaugeloop {
 namespace {
@@ -153,14 +154,9 @@ Result<ModbusSettings> parse_gauge_toml(std::string_view text, std::string_view 
 }
 
 Result<ModbusSettings> read_gauge_file(const std::filesystem::path& path, const ModbusSettings& defaults) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    return make_error(ErrorCode::kNotFound,
-                      "gauge config " + path.string() + ": cannot be opened; check the --gauge-config path");
-  }
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  return parse_gauge_toml(buf.str(), path.string(), defaults);
+  Result<std::string> text = read_regular_file(path, "gauge config");
+  if (!text) return text.error();
+  return parse_gauge_toml(without_utf8_bom(*text), path.string(), defaults);
 }
 
 }  // namespace gaugeloop

@@ -1,18 +1,28 @@
 // The measurement pipeline, wiring acquisition, compensation, storage and nc_out.
 #include "app/measure_job.h"
 
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <system_error>
 
 #include "app/nc_push.h"
 #include "app/run_json.h"
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
+#include "compensation/table_evidence.h"
 #include "compensation/wheel_path.h"
+#include "core/atomic_file.h"
 #include "nc_out/table_guards.h"
 #include "nc_out/table_program.h"
 #include "storage/run_store.h"
@@ -177,52 +187,244 @@ Result<Prepared> prepare(const JobSettings& s) {
   return Prepared{std::move(*design), std::move(*design_reading)};
 }
 
+// Room a run and a program need, checked before measuring: a run of 3 revolutions is about
+// 20 KB in the database, its WAL pages and the push journal's copy of the program some more,
+// a program well under 64 KB. The margins cover a hundred revolutions and the largest tables.
+constexpr std::uintmax_t kRoomForRunBytes = 2u * 1024u * 1024u;
+constexpr std::uintmax_t kRoomForProgramBytes = 512u * 1024u;
+
+Status check_room(const std::filesystem::path& dir, std::uintmax_t need, const std::string& what) {
+  std::error_code ec;
+  const std::filesystem::space_info room = std::filesystem::space(dir, ec);
+  if (ec)
+    return make_error(ErrorCode::kIo, what + " " + dir.string() + ": cannot tell the free space: " + ec.message());
+  if (room.available < need) {
+    return make_error(ErrorCode::kIo, what + " " + dir.string() + " has " + std::to_string(room.available / 1024) +
+                                          " KB free, less than the " + std::to_string(need / 1024) +
+                                          " KB a run needs; free space there, then measure");
+  }
+  return {};
+}
+
+// The NC directory exists (made if need be) and takes a file: a probe named like our
+// temporary files (so a leftover is cleaned up with them) is made and removed.
+Status check_nc_directory(const std::filesystem::path& nc_dir, const std::filesystem::path& nc_file) {
+  std::error_code ec;
+  std::filesystem::create_directories(nc_dir, ec);
+  if (ec) return make_error(ErrorCode::kIo, "NC output directory " + nc_dir.string() + ": " + ec.message());
+  // Something other than a file where the program goes (a directory, a device) would fail
+  // the push after the run is stored.
+  if (std::filesystem::exists(nc_file, ec) && !std::filesystem::is_regular_file(nc_file, ec)) {
+    return make_error(ErrorCode::kIo, "NC program " + nc_file.string() +
+                                          " exists but is not a file (a directory?); gaugeloop writes the curve "
+                                          "table there: move it away, then measure");
+  }
+  std::string probe = (nc_dir / (atomic_temporary_prefix(nc_file) + "XXXXXX")).string();
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0) {
+    return make_error(ErrorCode::kIo, "NC output directory " + nc_dir.string() + " is not writable by this user (" +
+                                          std::strerror(errno) + "); fix its permissions or set another --nc-dir");
+  }
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return check_room(nc_dir, kRoomForProgramBytes, "NC output directory");
+}
+
+// Which table ground the part, and the correction it carries (what a new one builds on).
+struct GroundWith {
+  std::optional<int> version;          // of the NC file; empty: the design
+  std::string source;                  // "plc", "option", "assumed"; empty: not building on a table
+  std::optional<std::int64_t> run_id;  // whose correction that table carries; empty: the design
+  DegreeTable correction_um{};
+  // The table in force: the newest push of this machine, part and lobe.
+  std::optional<std::int64_t> run_in_force;
+  std::optional<int> version_in_force;
+};
+
+Result<DegreeTable> correction_of(const RunStore& store, std::optional<std::int64_t> run_id) {
+  if (!run_id) return DegreeTable{};
+  Result<StoredRun> run = store.load_run(*run_id);
+  if (!run) return in_step("correction in force (run " + std::to_string(*run_id) + ")", run.error());
+  return run->correction_um;
+}
+
+// Before the gauge: the table that ground the part, as told or assumed.
+Result<GroundWith> resolve_ground_with(const RunStore& store, const std::filesystem::path& nc_file,
+                                       const JobSettings& s) {
+  GroundWith g;
+  if (!s.build_on_table_in_force) return g;
+  Result<std::optional<std::int64_t>> last = store.last_pushed_run(s.machine, s.part.name, s.part.lobe);
+  if (!last) return last.error();
+  g.run_in_force = *last;
+  Result<std::optional<NcPush>> last_push = store.last_push(nc_file.string());
+  if (!last_push) return last_push.error();
+  if (*last_push && g.run_in_force && (**last_push).run_id == *g.run_in_force) {
+    g.version_in_force = (**last_push).table_version;
+  }
+  if (!s.ground_with_version) {
+    g.source = "assumed";
+    g.version = g.version_in_force;
+    g.run_id = g.run_in_force;
+  } else {
+    g.source = s.ground_with_source;
+    if (*s.ground_with_version > 0) {
+      Result<NcPush> push = store.load_push(nc_file.string(), *s.ground_with_version);
+      if (!push) {
+        Error e = push.error();
+        e.message = "the part was ground with table version " + std::to_string(*s.ground_with_version) + " (" +
+                    g.source + "), but " + e.message + "; give the version the part was ground with (0: the design)";
+        return e;
+      }
+      g.version = *s.ground_with_version;
+      g.run_id = push->run_id;
+    }
+  }
+  Result<DegreeTable> c = correction_of(store, g.run_id);
+  if (!c) return c.error();
+  g.correction_um = *c;
+  return g;
+}
+
+std::string version_text(std::optional<int> version) {
+  return version ? "table version " + std::to_string(*version) : std::string("the design (no table)");
+}
+
+// After the analysis: may a correction built on `g` be pushed? Empty: yes. Otherwise why not.
+// A table is corrected from a part it ground, once: a part ground with an older table (or
+// measured again after its table was replaced) would repeat the change already made.
+Result<std::string> why_not_built_on(const RunStore& store, const GroundWith& g, const LobeAnalysis& now,
+                                     int revolutions, const JobSettings& s, std::string& evidence) {
+  if (g.source.empty()) return std::string();
+  if (g.source != "assumed") {
+    if (g.version == g.version_in_force) return std::string();
+    return "the part was ground with " + version_text(g.version) + " (said by " +
+           (g.source == "plc" ? std::string("the PLC") : std::string("--ground-with")) + "), but " +
+           version_text(g.version_in_force) + " is in force" +
+           (g.run_in_force ? " (run " + std::to_string(*g.run_in_force) + ")" : std::string()) +
+           ": a correction built on the older table would repeat what the newer one changed; the run is kept "
+           "for inspection. Measure a part ground with the table in force";
+  }
+  if (!g.run_in_force) return std::string();  // ground from the design: nothing to repeat
+  Result<StoredRun> before = store.load_run(*g.run_in_force);
+  if (!before) return in_step("the run the table in force was built on", before.error());
+  Result<DegreeTable> base = correction_of(store, before->correction_in_force_run);
+  if (!base) return base.error();
+  DegreeTable change{};
+  for (std::size_t d = 0; d < change.size(); ++d) change[d] = before->correction_um[d] - (*base)[d];
+  const MeasuredError now_error{&now.error_um, &now.spread_um, revolutions};
+  const MeasuredError before_error{&before->analysis.error_um, &before->analysis.spread_um,
+                                   std::max(1, before->summary.revolutions)};
+  const TableEvidence e = judge_table_evidence(now_error, before_error, change, s.compensation.max_harmonic);
+  switch (e.verdict) {
+    case TableEvidenceVerdict::kGround:
+      evidence = "the part shows the table in force: " + e.describe();
+      return std::string();
+    case TableEvidenceVerdict::kCannotTell:
+      evidence = "assumed ground with the table in force; the part cannot tell: " + e.describe();
+      return std::string();
+    case TableEvidenceVerdict::kNotGround:
+      evidence = "the part does not show the table in force: " + e.describe();
+      return "the part does not show the table in force (" + version_text(g.version) + ", built on run " +
+             std::to_string(*g.run_in_force) + "): " + e.describe() +
+             ". It was measured again, or ground before that table; a correction built on it would repeat the "
+             "table's change. The run is kept for inspection; measure a part ground with the table in force, or "
+             "say which table ground it with --ground-with";
+  }
+  return std::string();
+}
+
+// The measurement of a run the database did not take, as JSON, so it is not lost. Tried
+// beside the database, then in the NC directory, then in the temporary directory. Returns
+// the file written, or empty if none could be.
+std::filesystem::path keep_unstored_measurement(const RunRecord& r, const JobSettings& s) {
+  nlohmann::json j;
+  j["kind"] = "gaugeloop unstored run";
+  j["machine"] = r.machine;
+  j["part"] = r.part;
+  j["lobe"] = r.lobe;
+  j["gauge"] = r.gauge;
+  j["started_utc"] = r.started_utc;
+  j["finished_utc"] = r.finished_utc;
+  j["note"] = r.note;
+  j["frame"] = "machine degrees of C, lift in mm";
+  nlohmann::json revs = nlohmann::json::array();
+  for (const RevolutionSamples& rev : r.measured.revolutions) {
+    revs.push_back({{"amplifier_revolution", rev.revolution}, {"lift_mm", rev.lift_mm}});
+  }
+  j["revolutions"] = std::move(revs);
+  std::string name = r.started_utc + "-" + r.part + "-lobe" + std::to_string(r.lobe) + ".json";
+  std::replace(name.begin(), name.end(), ':', '-');
+  const std::filesystem::path db_dir =
+      s.db_path.has_parent_path() ? s.db_path.parent_path() : std::filesystem::path(".");
+  for (const std::filesystem::path& dir :
+       {db_dir / "unstored-runs", s.nc_dir / "unstored-runs", std::filesystem::temp_directory_path()}) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) continue;
+    if (write_file_atomically(dir / name, j.dump(1) + "\n")) return dir / name;
+  }
+  return {};
+}
+
 }  // namespace
 
+Status check_name(std::string_view name, std::string_view what) {
+  if (name.empty() || name.size() > 64) {
+    return make_error(ErrorCode::kInvalidInput, std::string(what) + " has " + std::to_string(name.size()) +
+                                                    " characters; give 1 to 64 letters, digits, '_' or '-'");
+  }
+  for (std::size_t i = 0; i < name.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(name[i]);
+    if (std::isalnum(c) != 0 && c < 0x80) continue;
+    if (c == '_' || c == '-') continue;
+    char shown[16];
+    std::snprintf(shown, sizeof shown, c >= 0x20 && c < 0x7f ? "'%c'" : "byte 0x%02X", c);
+    return make_error(ErrorCode::kInvalidInput, std::string(what) + " '" +
+                                                    std::string(name.substr(0, std::min<std::size_t>(i, 64))) +
+                                                    "...' has " + shown + " at position " + std::to_string(i + 1) +
+                                                    "; use only letters, digits, '_' or '-'");
+  }
+  return {};
+}
+
 Status check_job_settings(const JobSettings& settings) {
+  if (Status n = check_name(settings.part.name, "part name"); !n) return n;
+  if (Status n = check_name(settings.nc_program, "NC program name"); !n) return n;
+  if (Status n = check_name(settings.machine, "machine name"); !n) return n;
   Result<Prepared> p = prepare(settings);
   if (!p) return p.error();
   return {};
 }
 
 Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
+  if (Status c = check_job_settings(s); !c) return c.error();
   Result<Prepared> prepared = prepare(s);
   if (!prepared) return prepared.error();
   const DesignReading* design_reading = &prepared->reading;
-  std::error_code ec;
-  std::filesystem::create_directories(s.nc_dir, ec);
-  if (ec) {
-    return make_error(ErrorCode::kIo, "NC output directory " + s.nc_dir.string() + ": " + ec.message());
-  }
-  Result<RunStore> store = RunStore::open(s.db_path);
-  if (!store) return store.error();
   // Absolute, so the push history names one file whatever directory a command runs in.
   const std::filesystem::path nc_file =
       std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal();
-  // Something other than a file where the program goes (a directory, a device) would fail
-  // the push after the run is stored: say so before measuring.
-  if (std::filesystem::exists(nc_file, ec) && !std::filesystem::is_regular_file(nc_file, ec)) {
-    return make_error(ErrorCode::kIo, "NC program " + nc_file.string() +
-                                          " exists but is not a file (a directory?); gaugeloop writes the curve "
-                                          "table there: move it away, then measure");
+  if (Status d = check_nc_directory(s.nc_dir, nc_file); !d) return d.error();
+  if (s.db_path != ":memory:") {
+    const std::filesystem::path db_dir = std::filesystem::absolute(s.db_path).parent_path();
+    std::error_code ec;
+    std::filesystem::create_directories(db_dir, ec);  // RunStore::open would; the room is checked first
+    if (Status r = check_room(db_dir, kRoomForRunBytes, "database directory"); !r) return r.error();
   }
+  Result<RunStore> store = RunStore::open(s.db_path);
+  if (!store) return store.error();
+  if (Status w = store->check_writable(); !w) return w.error();
+  // A push interrupted earlier is recorded or abandoned before the table in force is read.
+  if (Result<ReconcileReport> r = reconcile_pushes(*store, nc_file); !r) return r.error();
 
   // From here on a failure is also kept in the database as an event (a fault or a refusal),
   // naming the run when one was stored, so `gaugeloop events` shows why a run is missing.
   std::optional<std::int64_t> stored_run;
   Result<JobReport> result = [&]() -> Result<JobReport> {
-    DegreeTable in_force{};
-    std::optional<std::int64_t> in_force_run;
-    if (s.build_on_table_in_force) {
-      Result<std::optional<std::int64_t>> last = store->last_pushed_run(s.machine, s.part.name, s.part.lobe);
-      if (!last) return last.error();
-      if (*last) {
-        Result<StoredRun> previous = store->load_run(**last);
-        if (!previous) return in_step("correction in force (run " + std::to_string(**last) + ")", previous.error());
-        in_force = previous->correction_um;
-        in_force_run = *last;
-      }
-    }
+    Result<GroundWith> ground = resolve_ground_with(*store, nc_file, s);
+    if (!ground) return ground.error();
+    const DegreeTable& in_force = ground->correction_um;
+    const std::optional<std::int64_t> in_force_run = ground->run_id;
 
     Result<std::optional<TablePointsInForce>> in_force_points = points_in_force(*store, nc_file, s);
     if (!in_force_points) return in_force_points.error();
@@ -244,23 +446,60 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
              " s (" + std::to_string(measured->discarded_revolutions) + " discarded, " +
              std::to_string(measured->reconnects) + " reconnects, " + std::to_string(measured->polls) + " polls)");
 
+    // The record as far as the measurement goes: kept whatever happens next.
+    RunRecord record;
+    record.started_utc = started;
+    record.finished_utc = finished;
+    record.machine = s.machine;
+    record.part = s.part.name;
+    record.lobe = s.part.lobe;
+    record.gauge = gauge.address();
+    record.note = s.note;
+    record.measured = *measured;
+    record.correction_in_force_run = in_force_run;
+    record.geometry = s.part;
+    record.settings = settings_text(s);
+    record.inspection = s.inspect;
+    if (!ground->source.empty() && ground->version) {
+      record.ground_with_version = ground->version;
+      record.ground_with_source = ground->source;
+    }
+    auto lost = [&](Error e) {
+      record.correction_um = in_force;
+      const std::filesystem::path kept = keep_unstored_measurement(record, s);
+      e.message += kept.empty() ? "; the measurement could not be kept anywhere either"
+                                : "; the measurement is kept in " + kept.string();
+      return e;
+    };
+
     // Analyse and correct.
     Result<LobeAnalysis> analysis = analyse_lobe(*measured, *design_reading, s.part, s.analysis);
-    if (!analysis) return in_step("analysis", analysis.error());
+    if (!analysis) return lost(in_step("analysis", analysis.error()));
+    record.analysis = *analysis;
     step("analysed", "max lift error " + fixed(analysis->max_abs_error_um, 2) + " um, RMS " +
                          fixed(analysis->rms_error_um, 2) + " um, phase " + fixed(analysis->phase_error_deg, 4) +
                          " deg, runout " + fixed(analysis->base_circle_runout_um, 2) + " um, repeatability " +
                          fixed(analysis->repeatability_um, 2) + " um");
+    std::string evidence;
+    std::string not_built_on;
+    if (!s.inspect) {
+      Result<std::string> why =
+          why_not_built_on(*store, *ground, *analysis, static_cast<int>(measured->revolutions.size()), s, evidence);
+      if (!why) return lost(why.error());
+      not_built_on = std::move(*why);
+    }
     Result<CompensationDecision> decision = decide_correction(*analysis, *design_reading, in_force, s.compensation);
-    if (!decision) return in_step("compensation", decision.error());
-    const DegreeTable& correction = decision->correction_um;
+    if (!decision) return lost(in_step("compensation", decision.error()));
+    // An inspection, or a part the table did not grind, leaves the correction in force as it is.
+    const bool correction_stands = s.inspect || !not_built_on.empty();
+    const DegreeTable& correction = correction_stands ? in_force : decision->correction_um;
     CompensationVerdict verdict = decision->verdict;
     std::string verdict_reasons = decision->reasons();
     // The table is built before the run is stored, for a held correction too (a person may
     // approve it). One the geometry or the axis guards refuse (a concave flank the wheel no
     // longer fits, a limit broken) is a refusal: the run is stored, nothing is pushed.
     std::optional<BuiltTable> built;
-    if (verdict != CompensationVerdict::kRefuse) {
+    if (verdict != CompensationVerdict::kRefuse && !correction_stands) {
       Result<BuiltTable> b = [&]() -> Result<BuiltTable> {
         Result<PeriodicSpline> target = corrected_lift(s.design, *design_reading, correction, s.part);
         if (!target) return in_step("corrected lift", target.error());
@@ -272,40 +511,29 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
         verdict = CompensationVerdict::kRefuse;
         verdict_reasons = verdict_reasons.empty() ? b.error().message : verdict_reasons + "; " + b.error().message;
       } else {
-        return b.error();
+        return lost(b.error());
       }
     }
     const double correction_max_um = std::abs(decision->largest_correction_um);
     {
-      std::string what = std::string(compensation_verdict_name(verdict)) + ": largest correction " +
-                         fixed(decision->largest_correction_um, 2) + " um at " +
-                         std::to_string(decision->largest_correction_deg) + " deg";
+      std::string what = s.inspect ? std::string("inspection: the correction in force stands")
+                                   : std::string(compensation_verdict_name(verdict)) + ": largest correction " +
+                                         fixed(decision->largest_correction_um, 2) + " um at " +
+                                         std::to_string(decision->largest_correction_deg) + " deg";
       if (in_force_run) what += ", built on run " + std::to_string(*in_force_run) + "'s";
       if (built) {
         what += "; table " + std::to_string(built->table.block_count()) + " blocks (" + built->table.writer +
                 "), command position error " + fixed(built->table.error.max_abs_um, 3) + " um";
       }
       if (!verdict_reasons.empty()) what += "; " + verdict_reasons;
+      if (!evidence.empty()) what += "; " + evidence;
       step("compensated", what);
     }
 
     // Store the run: one transaction, all or nothing.
-    RunRecord record;
-    record.started_utc = started;
-    record.finished_utc = finished;
-    record.machine = s.machine;
-    record.part = s.part.name;
-    record.lobe = s.part.lobe;
-    record.gauge = gauge.address();
-    record.note = s.note;
-    record.measured = *measured;
-    record.analysis = *analysis;
     record.correction_um = correction;
-    record.correction_in_force_run = in_force_run;
-    record.geometry = s.part;
-    record.settings = settings_text(s);
     Result<std::int64_t> run_id = store->insert_run(record);
-    if (!run_id) return run_id.error();
+    if (!run_id) return lost(run_id.error());
     stored_run = *run_id;
     step("stored", "run " + std::to_string(*run_id) + " stored in " + store->path().string(), *run_id);
 
@@ -316,12 +544,20 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     report.verdict = verdict;
     report.correction_max_um = correction_max_um;
     report.correction_in_force_run = in_force_run;
+    report.ground_with_version = ground->version;
+    report.ground_with_source = ground->source;
+    report.ground_with_evidence = evidence;
+    report.inspection = s.inspect;
     report.db_path = store->path();
     if (built) {
       report.interpolation = std::string(interpolation_name(built->table.interpolation));
       report.table_writer = built->table.writer;
       report.table_blocks = built->table.block_count();
       report.command_error_um = built->table.error.max_abs_um;
+    }
+    if (s.inspect) {
+      report.not_pushed_reason = "inspection: the correction in force and the NC program are untouched";
+      return report;
     }
 
     auto values = template_values(s);
@@ -344,7 +580,7 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     facts.correction_max_um = correction_max_um;
 
     // Not pushed: keep the table for approval when there is one, and say why in the events.
-    auto keep = [&](const std::string& reason, CompensationVerdict why) -> Result<JobReport> {
+    auto keep = [&](const std::string& reason, CompensationVerdict why, const std::string& code) -> Result<JobReport> {
       report.not_pushed_reason = reason;
       if (built) {
         Result<std::string> program = render(0);
@@ -366,9 +602,7 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
       }
       EventRecord event;
       event.kind = EventKind::kRefusal;
-      event.code = "table not pushed";
-      if (why != CompensationVerdict::kApply)
-        event.code = "compensation " + std::string(compensation_verdict_name(why));
+      event.code = code;
       event.machine = s.machine;
       event.part = s.part.name;
       event.lobe = s.part.lobe;
@@ -381,16 +615,26 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
       return report;
     };
 
-    if (verdict != CompensationVerdict::kApply) return keep(verdict_reasons, verdict);
-    if (s.require_approval) return keep("approval required", CompensationVerdict::kApply);
-    Result<int> version = push_program(*store, nc_file, facts, render);
+    if (!not_built_on.empty()) {
+      // Nothing to approve: the correction would repeat a change already made.
+      report.verdict = CompensationVerdict::kRefuse;
+      built.reset();
+      return keep(not_built_on, CompensationVerdict::kRefuse, "part not ground with the table in force");
+    }
+    if (verdict != CompensationVerdict::kApply) {
+      return keep(verdict_reasons, verdict, "compensation " + std::string(compensation_verdict_name(verdict)));
+    }
+    if (s.require_approval) return keep("approval required", CompensationVerdict::kApply, "table not pushed");
+    Result<PushCompletion> version = push_program(*store, nc_file, facts, render);
     if (!version) {
       // A table edited by hand on the control is not overwritten: a person decides.
       if (version.error().code == ErrorCode::kRefused)
-        return keep(version.error().message, CompensationVerdict::kApply);
-      return version.error();
+        return keep(version.error().message, CompensationVerdict::kApply, "table not pushed");
+      Error e = version.error();
+      e.message = "run " + std::to_string(*run_id) + " is stored; " + e.message;
+      return e;
     }
-    report.table_version = *version;
+    report.table_version = version->table_version;
     report.nc_file = nc_file;
     return report;
   }();

@@ -66,11 +66,22 @@ struct JobSettings {
   int table_number = 1;  // CTABDEF table number
   std::string machine = "grinder-1";
   std::string note;
-  // True (measuring a part the machine ground): the new correction builds on the one in
-  // force, that of the last run of this machine, part and lobe whose table was pushed.
+  // True (measuring a part the machine ground): the new correction builds on the correction
+  // of the table that ground the part (ground_with), by default the table in force, that of
+  // the last run of this machine, part and lobe whose table was pushed.
   // False: correct from the design, as the demo does: its simulator does not grind with
   // the pushed table, so its parts never carry an earlier correction.
   bool build_on_table_in_force = true;
+  // Which table version of the NC file ground the measured part, when someone knows: the PLC
+  // (source "plc") or the person measuring (`measure --ground-with`, source "option"); 0 is
+  // the design (no table). Empty: the table in force is assumed, and the part's own lift
+  // error is asked whether it shows that table (docs/nc_output.md, "The part knows its
+  // table"). A version never pushed is refused before the gauge is read.
+  std::optional<int> ground_with_version;
+  std::string ground_with_source = "option";
+  // Measure, analyse and store only: the correction in force and the NC program are untouched
+  // (`measure --inspect`).
+  bool inspect = false;
   // Called as each step of the cycle goes through (JobStep), for a caller that logs and
   // records every step (the service). Failures are not steps: they are the job's error.
   // "stored" comes before the table is pushed: a caller that must name the run even when the
@@ -90,6 +101,12 @@ struct JobReport {
   MeasuredRun measured;
   LobeAnalysis analysis;
   std::optional<std::int64_t> correction_in_force_run;  // whose correction was built on
+  // The table that ground the part: its version (empty: the design), who said so ("plc",
+  // "option", "assumed") and, when assumed, what the part's error said about it.
+  std::optional<int> ground_with_version;
+  std::string ground_with_source;
+  std::string ground_with_evidence;
+  bool inspection = false;
   CompensationVerdict verdict = CompensationVerdict::kApply;
   double correction_max_um = 0.0;  // largest |correction| proposed
   // The table built (empty interpolation: none, the correction was refused).
@@ -106,17 +123,27 @@ struct JobReport {
   bool pushed() const { return !nc_file.empty(); }
 };
 
-// Runs the job. Everything that can be checked without the gauge (geometry, template,
-// database, output directory) is checked before the first poll, so bad input costs no
-// measurement. Nothing is stored unless a complete run was measured and analysed; the NC
-// file is written atomically after the run is stored, and only then marked as pushed. A
-// correction that compensation holds or refuses (decide_correction), or that the geometry
-// refuses, is not an error: the run is stored and the report says why nothing was pushed.
+// Runs the job. Everything that can be checked without the gauge is checked before the first
+// poll, so bad input costs no measurement: the geometry, the template, the names (part and
+// program: 1 to 64 letters, digits, '_' or '-'), the NC directory (writable: a probe file is
+// made and removed), the database (writable, not locked), room on both file systems for a run
+// and a program, and the table version the part was ground with. Interrupted pushes of the NC
+// file are reconciled first (reconcile_pushes). Nothing is stored unless a complete run was
+// measured and analysed; the NC file is pushed (push_program) after the run is stored. A
+// correction that compensation holds or refuses (decide_correction), that the geometry
+// refuses, or that would be built on a table that did not grind the part, is not an error:
+// the run is stored and the report says why nothing was pushed.
+// A run measured but not stored (the database failed) is written as JSON beside the database
+// (or in the NC directory, or the temporary directory) and the error names the file.
 // Errors keep the code of the step that failed; their messages name the step.
 Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& settings);
 
-// The checks run_measure_job makes before the first poll, alone: for a service validating
-// its configuration before it takes it into use.
+// The checks run_measure_job makes before the first poll that need neither the database nor
+// the NC directory: for a service validating its configuration before it takes it into use.
 Status check_job_settings(const JobSettings& settings);
+
+// A part, machine or program name: 1 to 64 ASCII letters, digits, '_' or '-'. kInvalidInput
+// naming `what` and the offending character's position otherwise.
+Status check_name(std::string_view name, std::string_view what);
 
 }  // namespace gaugeloop

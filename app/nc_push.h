@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/result.h"
 #include "storage/run_store.h"
@@ -17,9 +18,12 @@ namespace gaugeloop {
 
 // Refuses (kRefused) to overwrite `nc_file` when the program there is not the one last
 // pushed to it: its table was edited by hand (its body no longer matches its checksum, or
-// its points differ from the pushed program's), or it is not a gaugeloop table at all. The
-// message names the file and line, the version last pushed and what to do. A missing file
-// is fine (the control may have been cleaned); so is a file never pushed that is absent.
+// its points differ from the pushed program's), its header names another run, table version
+// or checksum than the push recorded last, or it is not a gaugeloop table at all. The message
+// names the file and line, the version last pushed and what to do. A missing file is fine
+// (the control may have been cleaned); so is a file never pushed that is absent. A file that
+// holds the program of a push still open in the journal (written, its record interrupted) is
+// that push's, not a hand edit.
 Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::path& nc_file);
 
 // What a push records besides the program.
@@ -31,21 +35,62 @@ struct PushFacts {
   std::optional<double> command_error_um;
   std::optional<int> point_count;
   std::optional<double> correction_max_um;
+  // An approval: the pending table pushed, who approved it and their note; the push and the
+  // decision are recorded in one transaction.
+  std::optional<std::int64_t> pending_id;
+  std::string approved_by;
+  std::string note;
 };
 
 // Renders a program for a table version (the header carries it).
 using RenderForVersion = std::function<Result<std::string>(int table_version)>;
 
-// check_not_edited_by_hand (skipped when `overwrite_edited`: a person approved overwriting
-// it), then the next table version, render, write atomically
-// (temporary file, fsync, rename: the control sees the old program or the new one, never a
-// mixture), then record the push. `record` replaces store.record_push when given (an
-// approval records the push and its decision in one transaction). Returns the version
-// pushed. Errors: the check's kRefused; render's errors; kIo for the write; storage errors.
-// A failure after the write says the file was written but not recorded.
-using RecordPush = std::function<Status(const NcPush& push)>;
-Result<int> push_program(RunStore& store, const std::filesystem::path& nc_file, const PushFacts& facts,
-                         const RenderForVersion& render, const RecordPush& record = {}, bool overwrite_edited = false);
+// The steps of a push, in order; a test seam to interrupt one between any two.
+enum class PushStep {
+  kIntentRecorded,    // the journal holds the intent and the program; the control is untouched
+  kTemporaryWritten,  // the temporary file beside the program is written, not flushed
+  kFlushed,           // ... flushed to disk, not renamed
+  kRenamed,           // the control holds the new program; the push is not yet recorded
+  kRecorded,          // the push is recorded and the intent completed
+};
+std::string_view push_step_name(PushStep step);
+
+struct PushOptions {
+  bool overwrite_edited = false;  // a person approved overwriting a program edited by hand
+  std::function<void(PushStep step)> observer;
+};
+
+// The push as one recoverable step. Under the NC directory's lock (DirectoryLock, so one
+// push at a time): reconcile_pushes for the file, check_not_edited_by_hand (skipped with
+// overwrite_edited), take the next table version and render; record the intent with the
+// program in the journal (RunStore::begin_push); write the file atomically (temporary file,
+// fsync, rename: the control sees the old program or the new one, never a mixture); then
+// complete the intent, recording the push (and an approval's decision) in one transaction.
+// Interrupted anywhere (kill, power cut, disk full, database locked), the next push or
+// reconcile_pushes finds the intent and the file and records or abandons it: the history
+// never misses a program the control holds. Errors: the check's kRefused; render's errors;
+// kStorage or kIo before the rename ("not pushed": the program in force stays); kStorage after
+// it ("written, its record is completed by the next push or `gaugeloop nc reconcile`").
+Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path& nc_file, const PushFacts& facts,
+                                    const RenderForVersion& render, const PushOptions& options = {});
+
+// What reconcile_pushes did.
+struct ReconcileReport {
+  int completed = 0;                  // intents whose program the control holds: recorded as pushed
+  int abandoned = 0;                  // intents whose program never reached the control
+  int leftovers_removed = 0;          // temporary files of interrupted writes
+  std::vector<std::string> messages;  // one line per intent resolved or file removed
+};
+
+// Brings the journal and the control into agreement for `nc_file`, under the directory's
+// lock: an open intent whose program the file holds byte for byte is completed (recorded as
+// pushed, "found on the control"), any other open intent is abandoned, and leftover temporary
+// files of ours are removed. Nothing is ever called edited by hand here.
+Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file);
+
+// reconcile_pushes for every file that has an open intent (the service at start, `gaugeloop
+// nc reconcile`).
+Result<ReconcileReport> reconcile_all_pushes(RunStore& store);
 
 // What an approval or a rollback pushed.
 struct PushOutcome {

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "app/toml_reader.h"
+#include "core/text_file.h"
 
 namespace gaugeloop {
 namespace {
@@ -62,13 +63,9 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
 }
 
 Result<PartFile> read_part_file(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    return make_error(ErrorCode::kNotFound, "part file " + path.string() + ": cannot be opened; check the --part path");
-  }
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  return parse_part_toml(buf.str(), path.string(), path.parent_path());
+  Result<std::string> text = read_regular_file(path, "part file");
+  if (!text) return text.error();
+  return parse_part_toml(without_utf8_bom(*text), path.string(), path.parent_path());
 }
 
 }  // namespace gaugeloop

@@ -93,7 +93,7 @@ std::vector<PlcEvent> PlcHandshake::step() {
         armed_ = false;
         cleared_early_ = false;
         request_ = *req;
-        if (std::optional<PlcCycleOutcome> at_once = runner_.start(req->part_number, req->lobe)) {
+        if (std::optional<PlcCycleOutcome> at_once = runner_.start(*req)) {
           outcome_ = std::move(*at_once);
           state_ = PlcState::kDone;
           delivered_ = false;

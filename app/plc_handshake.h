@@ -30,10 +30,10 @@ struct PlcCycleOutcome {
 class PlcCycleRunner {
  public:
   virtual ~PlcCycleRunner() = default;
-  // Starts a cycle for the PLC's part and lobe numbers and returns at once: nullopt when it
-  // runs, or the outcome at once when no run is started (unknown part or lobe, another run
-  // in progress, the service stopping).
-  virtual std::optional<PlcCycleOutcome> start(std::uint16_t part_number, std::uint16_t lobe) = 0;
+  // Starts a cycle for the PLC's words (part and lobe numbers, the table that ground the part)
+  // and returns at once: nullopt when it runs, or the outcome at once when no run is started
+  // (unknown part or lobe, another run in progress, the service stopping).
+  virtual std::optional<PlcCycleOutcome> start(const PlcRequestWords& request) = 0;
   // The outcome once the cycle started last has ended; nullopt while it runs. Called until it
   // returns a value, once per poll.
   virtual std::optional<PlcCycleOutcome> poll() = 0;

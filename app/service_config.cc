@@ -12,6 +12,7 @@
 
 #include "app/gauge_config.h"
 #include "app/toml_reader.h"
+#include "core/text_file.h"
 
 namespace gaugeloop {
 namespace {
@@ -24,11 +25,9 @@ fs::path relative_to(const fs::path& base_dir, const std::string& p) {
 }
 
 Result<std::string> read_text(const fs::path& path, const std::string& what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return make_error(ErrorCode::kNotFound, what + " " + path.string() + ": cannot be opened");
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  return buf.str();
+  Result<std::string> text = read_regular_file(path, what);
+  if (!text) return text.error();
+  return std::string(without_utf8_bom(*text));
 }
 
 Error at_key(const TomlReader& r, std::string_view key, const Error& e) {

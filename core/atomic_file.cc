@@ -2,6 +2,7 @@
 #include "core/atomic_file.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -9,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <thread>
 
 namespace gaugeloop {
 namespace {
@@ -17,11 +19,23 @@ Error io_error(const std::string& what, const std::filesystem::path& path, int e
   return make_error(ErrorCode::kIo, what + " " + path.string() + ": " + std::strerror(err));
 }
 
+std::filesystem::path directory_of(const std::filesystem::path& path) {
+  return path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+}
+
 }  // namespace
 
-Status write_file_atomically(const std::filesystem::path& path, std::string_view contents) {
-  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
-  std::string tmpl = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
+std::string atomic_temporary_prefix(const std::filesystem::path& path) {
+  return "." + path.filename().string() + ".tmp-";
+}
+
+Status write_file_atomically(const std::filesystem::path& path, std::string_view contents,
+                             const AtomicWriteObserver& observer) {
+  auto reached = [&observer](AtomicWriteStep step) {
+    if (observer) observer(step);
+  };
+  const std::filesystem::path dir = directory_of(path);
+  std::string tmpl = (dir / (atomic_temporary_prefix(path) + "XXXXXX")).string();
   int fd = ::mkstemp(tmpl.data());
   if (fd < 0) return io_error("cannot create a temporary file in", dir, errno);
   const std::filesystem::path tmp = tmpl;
@@ -41,12 +55,14 @@ Status write_file_atomically(const std::filesystem::path& path, std::string_view
     done += static_cast<size_t>(n);
   }
   if (::fchmod(fd, 0644) != 0) return fail("cannot set permissions of", errno);
+  reached(AtomicWriteStep::kTemporaryWritten);
   if (::fsync(fd) != 0) return fail("cannot flush", errno);
   if (::close(fd) != 0) {
     int err = errno;
     ::unlink(tmp.c_str());
     return io_error("cannot close", path, err);
   }
+  reached(AtomicWriteStep::kFlushed);
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     int err = errno;
     ::unlink(tmp.c_str());
@@ -57,7 +73,66 @@ Status write_file_atomically(const std::filesystem::path& path, std::string_view
     ::fsync(dfd);  // best effort: some filesystems refuse fsync on directories
     ::close(dfd);
   }
+  reached(AtomicWriteStep::kRenamed);
   return {};
+}
+
+Result<int> remove_atomic_leftovers(const std::filesystem::path& path) {
+  const std::filesystem::path dir = directory_of(path);
+  const std::string prefix = atomic_temporary_prefix(path);
+  std::error_code ec;
+  std::filesystem::directory_iterator it(dir, ec);
+  if (ec) return io_error("cannot list", dir, ec.value());
+  int removed = 0;
+  for (; it != std::filesystem::directory_iterator(); it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    // mkstemp's six characters after the prefix, nothing else: a file of ours, not the user's.
+    if (name.size() != prefix.size() + 6 || name.compare(0, prefix.size(), prefix) != 0) continue;
+    if (!std::filesystem::is_regular_file(it->symlink_status(ec))) continue;
+    if (::unlink(it->path().c_str()) != 0)
+      return io_error("cannot remove the leftover temporary file", it->path(), errno);
+    ++removed;
+  }
+  if (ec) return io_error("cannot list", dir, ec.value());
+  return removed;
+}
+
+Result<DirectoryLock> DirectoryLock::acquire(const std::filesystem::path& dir, std::chrono::milliseconds patience) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return io_error("cannot open the directory", dir, errno);
+  const auto give_up = std::chrono::steady_clock::now() + patience;
+  for (;;) {
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return DirectoryLock(fd);
+    const int err = errno;
+    if (err != EWOULDBLOCK && err != EINTR) {
+      ::close(fd);
+      return io_error("cannot lock the directory", dir, err);
+    }
+    if (std::chrono::steady_clock::now() >= give_up) {
+      ::close(fd);
+      return make_error(ErrorCode::kIo, "directory " + dir.string() + " stayed locked by another gaugeloop for " +
+                                            std::to_string(patience.count()) +
+                                            " ms (a push in progress, or a process stopped while pushing); "
+                                            "try again, or find the process with `fuser -v " +
+                                            dir.string() + "`");
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+}
+
+DirectoryLock::DirectoryLock(DirectoryLock&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+
+DirectoryLock& DirectoryLock::operator=(DirectoryLock&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = other.fd_;
+    other.fd_ = -1;
+  }
+  return *this;
+}
+
+DirectoryLock::~DirectoryLock() {
+  if (fd_ >= 0) ::close(fd_);  // closing the last descriptor releases the flock
 }
 
 }  // namespace gaugeloop

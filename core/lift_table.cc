@@ -7,6 +7,8 @@
 #include <sstream>
 #include <system_error>
 
+#include "core/text_file.h"
+
 namespace gaugeloop {
 namespace {
 
@@ -38,6 +40,7 @@ std::string fmt_deg(double v) {
 
 Result<LiftTable> parse_lift_table_csv(std::string_view text, std::string_view source_name,
                                        const LiftTableLimits& limits) {
+  text = without_utf8_bom(text);  // spreadsheet programs write one
   LiftTable table;
   table.source = std::string(source_name);
   std::vector<int> lines;  // source line of each point, for messages
@@ -124,17 +127,13 @@ Result<LiftTable> parse_lift_table_csv(std::string_view text, std::string_view s
 }
 
 Result<LiftTable> read_lift_table_csv(const std::filesystem::path& path, const LiftTableLimits& limits) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    std::error_code ec;
-    const bool exists = std::filesystem::exists(path, ec);
-    return make_error(exists ? ErrorCode::kIo : ErrorCode::kNotFound,
-                      "lift table " + path.string() + (exists ? ": cannot be read" : ": no such file") +
-                          "; check the `lift_table` path in the part file");
+  Result<std::string> text = read_regular_file(path, "lift table");
+  if (!text) {
+    Error e = text.error();
+    e.message += " (the `lift_table` path in the part file)";
+    return e;
   }
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  return parse_lift_table_csv(buf.str(), path.string(), limits);
+  return parse_lift_table_csv(*text, path.string(), limits);
 }
 
 }  // namespace gaugeloop

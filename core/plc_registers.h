@@ -5,12 +5,14 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string_view>
 
 namespace gaugeloop {
 
 // Offsets from the configured base address, in the PLC's holding registers (function 03 to
-// read, 16 to write). Words 0-2 are the PLC's; 3-11 the service's, written in one request.
+// read, 16 to write). Words 0-2 and 12 are the PLC's; 3-11 the service's, written in one
+// request. The service reads words 0-12 in one request.
 namespace plc_registers {
 inline constexpr int kRequest = 0;        // PLC: bit 0 = measure; a rising edge is one request
 inline constexpr int kPartNumber = 1;     // PLC: uint16, the [[part]] plc_part_number
@@ -24,10 +26,15 @@ inline constexpr int kResultCode = 8;     // service: PlcResultCode, valid while
 inline constexpr int kRunIdHigh = 9;      // service: run id, uint32, high word first (ABCD)
 inline constexpr int kRunIdLow = 10;      //   0 when no run was stored
 inline constexpr int kTableVersion = 11;  // service: table version pushed, 0 when none
-inline constexpr int kPlcWords = 3;       // words 0..2
+// PLC: the table version of the part's NC program that ground the part to measure, set with
+// the part and lobe numbers: 0 = not said (the table in force is assumed and the part's error
+// asked), 1..65534 = that version, 65535 = ground from the design (no table).
+inline constexpr int kGroundWith = 12;
+inline constexpr std::uint16_t kGroundWithDesign = 0xFFFF;
+inline constexpr int kPlcWords = 3;  // words 0..2
 inline constexpr int kServiceFirst = kHeartbeat;
 inline constexpr int kServiceWords = 9;  // words 3..11
-inline constexpr int kBlockWords = 12;
+inline constexpr int kBlockWords = 13;
 inline constexpr std::uint16_t kMeasureBit = 0x0001;
 }  // namespace plc_registers
 
@@ -50,7 +57,14 @@ struct PlcRequestWords {
   std::uint16_t request = 0;
   std::uint16_t part_number = 0;
   std::uint16_t lobe = 0;
+  std::uint16_t ground_with = 0;  // word 12, as read
   bool measure() const { return (request & plc_registers::kMeasureBit) != 0; }
+  // The table version that ground the part: empty when not said (0), 0 for the design.
+  std::optional<int> ground_with_version() const {
+    if (ground_with == 0) return std::nullopt;
+    if (ground_with == plc_registers::kGroundWithDesign) return 0;
+    return ground_with;
+  }
 };
 
 // The service's words (3-11), as written.

@@ -95,10 +95,11 @@ void PlcSimulator::serve() {
   }
 }
 
-void PlcSimulator::request(std::uint16_t part_number, std::uint16_t lobe) {
+void PlcSimulator::request(std::uint16_t part_number, std::uint16_t lobe, std::uint16_t ground_with) {
   std::lock_guard lock(mutex_);
   mapping_->tab_registers[r::kPartNumber] = part_number;
   mapping_->tab_registers[r::kLobe] = lobe;
+  mapping_->tab_registers[r::kGroundWith] = ground_with;
   mapping_->tab_registers[r::kRequest] |= r::kMeasureBit;
 }
 
@@ -113,6 +114,7 @@ PlcRequestWords PlcSimulator::plc_words() const {
   w.request = mapping_->tab_registers[r::kRequest];
   w.part_number = mapping_->tab_registers[r::kPartNumber];
   w.lobe = mapping_->tab_registers[r::kLobe];
+  w.ground_with = mapping_->tab_registers[r::kGroundWith];
   return w;
 }
 

@@ -45,7 +45,8 @@ class PlcSimulator {
 
   // The PLC's side: part and lobe number first, then the request bit (one write each, as a
   // PLC program sets them in order).
-  void request(std::uint16_t part_number, std::uint16_t lobe);
+  // `ground_with`: word 12, the table version that ground the part (plc_registers.h).
+  void request(std::uint16_t part_number, std::uint16_t lobe, std::uint16_t ground_with = 0);
   void clear_request();
   PlcRequestWords plc_words() const;
   // The service's words as last written.

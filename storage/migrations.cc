@@ -458,8 +458,49 @@ ALTER TABLE events_v4 RENAME TO events;
 CREATE INDEX events_by_time ON events (at_utc);
 )sql";
 
-const std::array<Migration, 4>& all_migrations() {
-  static const std::array<Migration, 4> kMigrations{{
+// Version 5: the push journal and the table that ground each part.
+//  - nc_push_intents: a push is recorded as an intent (with the program text) before its file
+//    is renamed into place, and completed (its nc_pushes row) after; an intent still open
+//    when a command next opens the store is reconciled with the file on the control.
+//  - runs.ground_with_version: the table version of the run's NC file that ground the
+//    measured part (NULL: the design, or not known); ground_with_source says who said so:
+//    'plc', 'option' (measure --ground-with) or 'assumed' (the table in force).
+//  - runs.inspection: 1 for a run measured only to inspect (measure --inspect): its
+//    correction is the one in force, unchanged, and nothing was pushed from it.
+constexpr std::string_view kSchemaV5 = R"sql(
+CREATE TABLE nc_push_intents (
+  id                INTEGER PRIMARY KEY AUTOINCREMENT,
+  created_utc       TEXT    NOT NULL,
+  run_id            INTEGER NOT NULL REFERENCES runs (id),
+  nc_file           TEXT    NOT NULL,
+  table_version     INTEGER NOT NULL CHECK (table_version >= 1),
+  reason            TEXT    NOT NULL,
+  interpolation     TEXT,
+  block_count       INTEGER,
+  command_error_um  REAL,
+  point_count       INTEGER,
+  correction_max_um REAL,
+  program_hash      TEXT    NOT NULL,
+  program_text      TEXT    NOT NULL,  -- emptied once the intent is resolved
+  pending_id        INTEGER REFERENCES nc_pending (id),  -- an approval: the table it writes
+  approved_by       TEXT,
+  note              TEXT,
+  state             TEXT    NOT NULL DEFAULT 'open'
+                            CHECK (state IN ('open', 'completed', 'abandoned')),
+  resolved_utc      TEXT,
+  resolution        TEXT,   -- how it was resolved, in words
+  push_id           INTEGER REFERENCES nc_pushes (id)
+);
+-- One push at a time per file.
+CREATE UNIQUE INDEX nc_push_intents_one_open ON nc_push_intents (nc_file) WHERE state = 'open';
+ALTER TABLE runs ADD COLUMN ground_with_version INTEGER CHECK (ground_with_version >= 1);
+ALTER TABLE runs ADD COLUMN ground_with_source TEXT
+  CHECK (ground_with_source IN ('plc', 'option', 'assumed'));
+ALTER TABLE runs ADD COLUMN inspection INTEGER NOT NULL DEFAULT 0 CHECK (inspection IN (0, 1));
+)sql";
+
+const std::array<Migration, 5>& all_migrations() {
+  static const std::array<Migration, 5> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -474,6 +515,11 @@ const std::array<Migration, 4>& all_migrations() {
       {4,
        "events: kind 'info' for the service's steps (PLC requests, cycle outcomes, config reloads)",
        std::string(kSchemaV4),
+       nullptr,
+       {}},
+      {5,
+       "nc_push_intents: the push journal; runs: the table version that ground the part, inspection runs",
+       std::string(kSchemaV5),
        nullptr,
        {}},
   }};

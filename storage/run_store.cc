@@ -132,6 +132,16 @@ Status validate(const RunRecord& run) {
     Status ok = check_figure(a.harmonic_amplitude_um[h], "runs.harmonic_amplitude_um harmonic " + std::to_string(h));
     if (!ok.ok()) return ok;
   }
+  if (run.ground_with_version && *run.ground_with_version < 1) {
+    return refused("ground_with_version " + std::to_string(*run.ground_with_version) + " is not 1 or more");
+  }
+  if (!run.ground_with_source.empty() && run.ground_with_source != "plc" && run.ground_with_source != "option" &&
+      run.ground_with_source != "assumed") {
+    return refused("ground_with_source '" + run.ground_with_source + "' is not plc, option or assumed");
+  }
+  if (run.ground_with_version && run.ground_with_source.empty()) {
+    return refused("ground_with_version is set but not who said so (ground_with_source)");
+  }
   if (run.geometry) {
     const Part& g = *run.geometry;
     if (g.rotation_sense != 1 && g.rotation_sense != -1) {
@@ -195,9 +205,10 @@ INSERT INTO runs (started_utc, finished_utc, machine, part, lobe, gauge, note, s
                   zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um,
                   repeatability_um, nc_file, correction_in_force_run, settings_hash,
                   phase_error_deg, base_circle_runout_um, harmonic_amplitude_um,
-                  rotation_sense, c_offset_deg, probe_offset_deg)
+                  rotation_sense, c_offset_deg, probe_offset_deg, ground_with_version,
+                  ground_with_source, inspection)
 VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, 'measured', ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17,
-        NULL, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25))sql";
+        NULL, ?18, ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, ?27, ?28))sql";
 
 constexpr std::string_view kInsertRaw = R"sql(
 INSERT INTO run_raw (run_id, amplifier_revolutions, lift) VALUES (?1, ?2, ?3))sql";
@@ -232,7 +243,8 @@ std::string select_summaries(std::string_view rest) {
 constexpr std::string_view kLoadDetails = R"sql(
 SELECT r.finished_utc, r.gauge, r.polls, r.reconnects, r.discarded_revolutions,
        r.correction_in_force_run, s.text, r.harmonic_amplitude_um, r.rotation_sense, r.c_offset_deg,
-       r.probe_offset_deg, p.follower, p.follower_radius_mm, p.base_circle_radius_mm, p.wheel_radius_mm
+       r.probe_offset_deg, p.follower, p.follower_radius_mm, p.base_circle_radius_mm, p.wheel_radius_mm,
+       r.ground_with_version, r.ground_with_source, r.inspection
 FROM runs AS r
 LEFT JOIN settings AS s ON s.hash = r.settings_hash
 LEFT JOIN parts AS p ON p.name = r.part
@@ -514,6 +526,13 @@ Result<RunStore> RunStore::open(const std::filesystem::path& db_path) {
 
 const std::filesystem::path& RunStore::path() const { return conn_->path; }
 
+Status RunStore::check_writable() {
+  Result<Transaction> tx =
+      Transaction::begin(*conn_, Transaction::Mode::kWrite, "take the write lock before measuring");
+  if (!tx.ok()) return tx.error();
+  return {};  // the transaction rolls back: nothing was written
+}
+
 Result<std::int64_t> RunStore::insert_run(const RunRecord& run) {
   Status valid = validate(run);
   if (!valid.ok()) return valid.error();
@@ -610,6 +629,9 @@ Result<std::int64_t> RunStore::insert_run(const RunRecord& run) {
     ins->bind_null(24);
     ins->bind_null(25);
   }
+  bind_optional(*ins, 26, run.ground_with_version);
+  bind_text_or_null(*ins, 27, run.ground_with_source);
+  ins->bind(28, run.inspection ? 1 : 0);
   Status s = ins->run();
   if (!s.ok()) return s.error();
   const std::int64_t run_id = sqlite3_last_insert_rowid(conn.db);
@@ -1024,22 +1046,24 @@ Status RunStore::reject_pending(std::int64_t id, const std::string& by, const st
   return tx->commit();
 }
 
-Status RunStore::record_approved_push(std::int64_t pending_id, const NcPush& push, const std::string& by,
-                                      const std::string& note) {
-  const std::string operation = "record the approved push of " + pending_what(pending_id);
+namespace {
+
+// Inside the caller's write transaction: records `push` as the approved push of pending table
+// `pending_id` and marks the table approved, as record_approved_push describes. Returns the
+// push's id.
+Result<std::int64_t> approve_in_transaction(Connection& conn, std::int64_t pending_id, const NcPush& push,
+                                            const std::string& by, const std::string& note,
+                                            const std::string& operation) {
   if (by.empty()) {
     return make_error(ErrorCode::kInvalidInput, "cannot " + operation + ": say who approves it (the name is empty)");
   }
-  Connection& conn = *conn_;
-  Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
-  if (!tx.ok()) return tx.error();
   Result<PendingTable> t = read_one_pending(conn, pending_id, true, operation);
   if (!t.ok()) return t.error();
   if (!push.nc_file.empty() && push.nc_file != t->nc_file) {
     return make_error(ErrorCode::kInvalidInput, "cannot " + operation + ": it was rendered for " + t->nc_file +
                                                     ", not for " + push.nc_file + "; nothing was recorded");
   }
-  if (Status s = require_pending(*t, operation + " for " + t->nc_file); !s.ok()) return s;
+  if (Status s = require_pending(*t, operation + " for " + t->nc_file); !s.ok()) return s.error();
 
   NcPush full = push;
   full.nc_file = t->nc_file;
@@ -1050,7 +1074,7 @@ Status RunStore::record_approved_push(std::int64_t pending_id, const NcPush& pus
   if (!full.correction_max_um) full.correction_max_um = t->correction_max_um;
   if (!full.point_count) full.point_count = t->point_count;
   if (!full.program_text || full.program_text->empty()) full.program_text = t->program_text;
-  if (Status s = check_push(t->run_id, full); !s.ok()) return s;
+  if (Status s = check_push(t->run_id, full); !s.ok()) return s.error();
 
   Result<std::int64_t> push_id = insert_push(conn, t->run_id, full, *full.program_text, operation);
   if (!push_id.ok()) return push_id.error();
@@ -1064,8 +1088,233 @@ Status RunStore::record_approved_push(std::int64_t pending_id, const NcPush& pus
   upd->bind(3, std::string_view(by));
   upd->bind(4, std::string_view(note));
   upd->bind(5, *push_id);
-  if (Status s = upd->run(); !s.ok()) return s;
+  if (Status s = upd->run(); !s.ok()) return s.error();
+  return push_id;
+}
+
+}  // namespace
+
+Status RunStore::record_approved_push(std::int64_t pending_id, const NcPush& push, const std::string& by,
+                                      const std::string& note) {
+  const std::string operation = "record the approved push of " + pending_what(pending_id);
+  Connection& conn = *conn_;
+  Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
+  if (!tx.ok()) return tx.error();
+  Result<std::int64_t> push_id = approve_in_transaction(conn, pending_id, push, by, note, operation);
+  if (!push_id.ok()) return push_id.error();
   return tx->commit();
+}
+
+// ---- push journal ----
+
+namespace {
+
+constexpr std::string_view kIntentColumns =
+    "id, created_utc, run_id, nc_file, table_version, reason, interpolation, block_count, command_error_um, "
+    "point_count, correction_max_um, program_hash, program_text, pending_id, approved_by, note";
+
+PushIntent read_intent(const Statement& s) {
+  PushIntent i;
+  i.id = s.column_int64(0);
+  i.created_utc = s.column_text(1);
+  i.run_id = s.column_int64(2);
+  i.push.run_id = i.run_id;
+  i.push.nc_file = s.column_text(3);
+  i.push.table_version = s.column_int(4);
+  i.push.reason = s.column_text(5);
+  i.push.interpolation = s.column_text(6);
+  if (!s.column_is_null(7)) i.push.block_count = s.column_int(7);
+  if (!s.column_is_null(8)) i.push.command_error_um = s.column_double(8);
+  if (!s.column_is_null(9)) i.push.point_count = s.column_int(9);
+  if (!s.column_is_null(10)) i.push.correction_max_um = s.column_double(10);
+  i.push.program_hash = s.column_text(11);
+  i.push.program_text = s.column_text(12);
+  if (!s.column_is_null(13)) i.pending_id = s.column_int64(13);
+  i.approved_by = s.column_text(14);
+  i.note = s.column_text(15);
+  return i;
+}
+
+Result<std::optional<PushIntent>> read_open_intent(Connection& conn, std::int64_t id, const std::string& operation) {
+  Result<Statement> q = Statement::prepare(
+      conn, "SELECT " + std::string(kIntentColumns) + " FROM nc_push_intents WHERE id = ?1 AND state = 'open'",
+      operation);
+  if (!q.ok()) return q.error();
+  q->bind(1, id);
+  Result<bool> row = q->step();
+  if (!row.ok()) return row.error();
+  if (!*row) return std::optional<PushIntent>();
+  return std::optional<PushIntent>(read_intent(*q));
+}
+
+Status resolve_intent(Connection& conn, std::int64_t id, std::string_view state, const std::string& resolution,
+                      std::optional<std::int64_t> push_id, const std::string& operation) {
+  Result<Statement> upd =
+      Statement::prepare(conn,
+                         "UPDATE nc_push_intents SET state = ?2, resolved_utc = ?3, resolution = ?4,"
+                         " push_id = ?5, program_text = '' WHERE id = ?1 AND state = 'open'",
+                         operation);
+  if (!upd.ok()) return upd.error();
+  upd->bind(1, id);
+  upd->bind(2, state);
+  upd->bind(3, std::string_view(utc_now()));
+  upd->bind(4, std::string_view(resolution));
+  if (push_id) {
+    upd->bind(5, *push_id);
+  } else {
+    upd->bind_null(5);
+  }
+  if (Status s = upd->run(); !s.ok()) return s;
+  if (sqlite3_changes(conn.db) == 0) {
+    return make_error(ErrorCode::kRefused, "cannot " + operation + ": push intent " + std::to_string(id) +
+                                               " is not open (already resolved by another command)");
+  }
+  return {};
+}
+
+}  // namespace
+
+Result<std::int64_t> RunStore::begin_push(const PushIntent& intent) {
+  const NcPush& p = intent.push;
+  if (Status s = check_push(intent.run_id, p); !s.ok()) return s.error();
+  const std::string operation = "record the intent to push table version " + std::to_string(p.table_version) + " of " +
+                                p.nc_file + " for run " + std::to_string(intent.run_id);
+  if (!p.program_text || p.program_text->empty()) {
+    return make_error(ErrorCode::kInvalidInput, "cannot " + operation + ": the program text is empty");
+  }
+  Connection& conn = *conn_;
+  Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
+  if (!tx.ok()) return tx.error();
+  {
+    Result<Statement> open = Statement::prepare(
+        conn, "SELECT id, created_utc, run_id FROM nc_push_intents WHERE nc_file = ?1 AND state = 'open'", operation);
+    if (!open.ok()) return open.error();
+    open->bind(1, std::string_view(p.nc_file));
+    Result<bool> row = open->step();
+    if (!row.ok()) return row.error();
+    if (*row) {
+      return make_error(ErrorCode::kRefused,
+                        "cannot " + operation + ": push intent " + std::to_string(open->column_int64(0)) + " (run " +
+                            std::to_string(open->column_int64(2)) + ", " + open->column_text(1) +
+                            ") is still open for this file: another push is under way, or one was interrupted and "
+                            "must be reconciled first");
+    }
+  }
+  {
+    Result<Statement> run = Statement::prepare(conn, "SELECT 1 FROM runs WHERE id = ?1", operation);
+    if (!run.ok()) return run.error();
+    run->bind(1, intent.run_id);
+    Result<bool> row = run->step();
+    if (!row.ok()) return row.error();
+    if (!*row) {
+      return make_error(ErrorCode::kNotFound, "cannot " + operation + ": run " + std::to_string(intent.run_id) +
+                                                  " is not in run database " + conn.path.string());
+    }
+  }
+  {
+    Result<Statement> next = Statement::prepare(conn, kNextTableVersion, operation);
+    if (!next.ok()) return next.error();
+    next->bind(1, std::string_view(p.nc_file));
+    Result<bool> row = next->step();
+    if (!row.ok()) return row.error();
+    if (next->column_int(0) != p.table_version) {
+      return make_error(ErrorCode::kInvalidInput, "cannot " + operation + ": the next version of the file is " +
+                                                      std::to_string(next->column_int(0)) +
+                                                      "; render the program again with it");
+    }
+  }
+  Result<Statement> ins = Statement::prepare(
+      conn,
+      "INSERT INTO nc_push_intents (created_utc, run_id, nc_file, table_version, reason, interpolation, block_count,"
+      " command_error_um, point_count, correction_max_um, program_hash, program_text, pending_id, approved_by, note)"
+      " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15)",
+      operation);
+  if (!ins.ok()) return ins.error();
+  ins->bind(1, std::string_view(utc_now()));
+  ins->bind(2, intent.run_id);
+  ins->bind(3, std::string_view(p.nc_file));
+  ins->bind(4, p.table_version);
+  ins->bind(5, std::string_view(p.reason.empty() ? "run " + std::to_string(intent.run_id) : p.reason));
+  bind_text_or_null(*ins, 6, p.interpolation);
+  bind_optional(*ins, 7, p.block_count);
+  bind_optional(*ins, 8, p.command_error_um);
+  bind_optional(*ins, 9, p.point_count);
+  bind_optional(*ins, 10, p.correction_max_um);
+  ins->bind(11, std::string_view(settings_hash(*p.program_text)));
+  ins->bind(12, std::string_view(*p.program_text));
+  if (intent.pending_id) {
+    ins->bind(13, *intent.pending_id);
+  } else {
+    ins->bind_null(13);
+  }
+  bind_text_or_null(*ins, 14, intent.approved_by);
+  bind_text_or_null(*ins, 15, intent.note);
+  if (Status s = ins->run(); !s.ok()) return s.error();
+  const std::int64_t id = sqlite3_last_insert_rowid(conn.db);
+  if (Status c = tx->commit(); !c.ok()) return c.error();
+  return id;
+}
+
+Result<PushCompletion> RunStore::complete_push(std::int64_t intent_id, const std::string& resolution) {
+  const std::string operation = "complete push intent " + std::to_string(intent_id);
+  Connection& conn = *conn_;
+  Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
+  if (!tx.ok()) return tx.error();
+  Result<std::optional<PushIntent>> intent = read_open_intent(conn, intent_id, operation);
+  if (!intent.ok()) return intent.error();
+  if (!*intent) {
+    return make_error(ErrorCode::kRefused, "cannot " + operation + ": it is not open (resolved by another command)");
+  }
+  const PushIntent& i = **intent;
+  PushCompletion out;
+  out.table_version = i.push.table_version;
+  Result<std::int64_t> push_id = make_error(ErrorCode::kInternal, "no push");
+  if (i.pending_id) {
+    push_id = approve_in_transaction(conn, *i.pending_id, i.push, i.approved_by, i.note, operation);
+    // Rejected or superseded since it was checked: the file is written, so the history must
+    // still say so, as a plain push.
+    if (!push_id.ok() && push_id.error().code == ErrorCode::kRefused) {
+      out.decision_recorded = false;
+      push_id = insert_push(conn, i.run_id, i.push, *i.push.program_text, operation);
+    }
+  } else {
+    push_id = insert_push(conn, i.run_id, i.push, *i.push.program_text, operation);
+  }
+  if (!push_id.ok()) return push_id.error();
+  out.push_id = *push_id;
+  if (Status s = resolve_intent(conn, intent_id, "completed", resolution, *push_id, operation); !s.ok()) {
+    return s.error();
+  }
+  if (Status c = tx->commit(); !c.ok()) return c.error();
+  return out;
+}
+
+Status RunStore::abandon_push(std::int64_t intent_id, const std::string& resolution) {
+  const std::string operation = "abandon push intent " + std::to_string(intent_id);
+  Connection& conn = *conn_;
+  Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
+  if (!tx.ok()) return tx.error();
+  if (Status s = resolve_intent(conn, intent_id, "abandoned", resolution, std::nullopt, operation); !s.ok()) return s;
+  return tx->commit();
+}
+
+Result<std::vector<PushIntent>> RunStore::open_push_intents(const std::string& nc_file) const {
+  Connection& conn = *conn_;
+  Result<Statement> q =
+      Statement::prepare(conn,
+                         "SELECT " + std::string(kIntentColumns) +
+                             " FROM nc_push_intents WHERE state = 'open' AND (?1 = '' OR nc_file = ?1) ORDER BY id",
+                         "list the open push intents");
+  if (!q.ok()) return q.error();
+  q->bind(1, std::string_view(nc_file));
+  std::vector<PushIntent> out;
+  for (;;) {
+    Result<bool> row = q->step();
+    if (!row.ok()) return row.error();
+    if (!*row) break;
+    out.push_back(read_intent(*q));
+  }
+  return out;
 }
 
 Result<std::int64_t> RunStore::record_event(const EventRecord& event) {
@@ -1265,6 +1514,9 @@ Result<StoredRun> RunStore::load_run(std::int64_t run_id) const {
       g.wheel_radius_mm = q->column_double(14);
       out.geometry = g;
     }
+    if (!q->column_is_null(15)) out.ground_with_version = q->column_int(15);
+    out.ground_with_source = q->column_text(16);
+    out.inspection = q->column_int(17) != 0;
   }
   {
     Result<Statement> q = Statement::prepare(conn, kLoadRaw, operation);

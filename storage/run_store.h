@@ -37,6 +37,15 @@ struct RunRecord {
   // The run whose correction was in force when the measured part was ground (it must be in
   // the database); empty: the part was ground from the design.
   std::optional<std::int64_t> correction_in_force_run;
+  // The table version of the run's NC file that ground the measured part (>= 1; empty: the
+  // design, or not known) and who said so: "plc", "option" (measure --ground-with) or
+  // "assumed" (the table in force when the run started). Empty source with a version is
+  // refused.
+  std::optional<int> ground_with_version;
+  std::string ground_with_source;
+  // Measured only to inspect the part: correction_um is the correction in force, unchanged,
+  // and nothing is pushed from the run.
+  bool inspection = false;
   // The settings the run was made with, as canonical "key = value" lines (part geometry,
   // analysis, compensation, poller, table step...): stored once per distinct text and named
   // by settings_hash(text), so two runs made alike show the same hash. Empty: not recorded.
@@ -100,6 +109,30 @@ struct NcPush {
   // file on the control. Unset when not recorded (pushes before schema version 3, or without
   // text), and always unset in list_pushes and load_run results (load_push, last_push read it).
   std::optional<std::string> program_text;
+};
+
+// A push in the journal: recorded (begin_push) before its program is renamed into place on
+// the control, and resolved after: completed (complete_push: the nc_pushes row) or abandoned
+// (abandon_push: the control never got it). One intent at most is open per file.
+struct PushIntent {
+  std::int64_t id = 0;      // read back; ignored by begin_push
+  std::string created_utc;  // read back; begin_push: now
+  std::int64_t run_id = 0;  // the run whose table it is; must be stored
+  // What the push records once completed. nc_file, table_version (the file's next version)
+  // and program_text are required; reason empty: "run <run_id>".
+  NcPush push;
+  // An approval: the pending table it writes, who approved it and their note. Completing
+  // it marks that table approved when it is still pending (else only the push is recorded).
+  std::optional<std::int64_t> pending_id;
+  std::string approved_by;
+  std::string note;
+};
+
+// What completing an intent recorded.
+struct PushCompletion {
+  std::int64_t push_id = 0;
+  int table_version = 0;
+  bool decision_recorded = true;  // approval: false if the table had stopped being pending
 };
 
 // Filters for list_pushes; newest first (by push order).
@@ -172,6 +205,9 @@ struct StoredRun {
   std::int64_t reconnects = 0;
   std::int64_t discarded_revolutions = 0;
   std::optional<std::int64_t> correction_in_force_run;
+  std::optional<int> ground_with_version;  // as RunRecord; empty before schema version 5
+  std::string ground_with_source;
+  bool inspection = false;
   std::string settings;  // the text settings_hash names; empty if not recorded
   // The frame mapping and geometry the run was measured with; empty if not recorded.
   // Only follower, radii, rotation_sense, c_offset_deg and probe_offset_deg are filled.
@@ -316,6 +352,20 @@ class RunStore {
   Status record_approved_push(std::int64_t pending_id, const NcPush& push, const std::string& by,
                               const std::string& note = {});
 
+  // The push journal (see PushIntent). begin_push records the intent durably, in one
+  // transaction, and returns its id: kRefused if another intent is open for the file (a push
+  // under way or interrupted: reconcile it first), kInvalidInput if push.table_version is not
+  // the file's next version or the text is empty, kNotFound if the run is not stored.
+  Result<std::int64_t> begin_push(const PushIntent& intent);
+  // In one transaction: records the push (as record_push, or record_approved_push for an
+  // approval), and marks the intent completed with `resolution` (e.g. "written"). kRefused if
+  // the intent is not open.
+  Result<PushCompletion> complete_push(std::int64_t intent_id, const std::string& resolution);
+  // Marks an open intent abandoned (the control does not hold its program), saying why.
+  Status abandon_push(std::int64_t intent_id, const std::string& resolution);
+  // Open intents, oldest first, with program_text; of one file, or of every file if empty.
+  Result<std::vector<PushIntent>> open_push_intents(const std::string& nc_file = {}) const;
+
   // Stores a fault or refusal; returns its id. kInvalidInput for an empty message or code, a
   // malformed time; kStorage if run_id names no run.
   Result<std::int64_t> record_event(const EventRecord& event);
@@ -346,6 +396,11 @@ class RunStore {
 
   // One run, read in a single snapshot. kNotFound if absent.
   Result<StoredRun> load_run(std::int64_t run_id) const;
+
+  // Takes the write lock and lets it go again, writing nothing: before a measurement, so that
+  // a database another program keeps locked (waiting up to 5 s, as every write does) is found
+  // before the gauge is read rather than after. kStorage naming the file and what to do.
+  Status check_writable();
 
   // The file this store was opened on, as given to open().
   const std::filesystem::path& path() const;

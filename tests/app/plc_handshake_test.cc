@@ -64,7 +64,9 @@ class ScriptedPlc final : public PlcRegisters {
 // A cycle that ends when the test says so, or is refused at once.
 class ScriptedCycle final : public PlcCycleRunner {
  public:
-  std::optional<PlcCycleOutcome> start(std::uint16_t part_number, std::uint16_t lobe) override {
+  std::optional<PlcCycleOutcome> start(const PlcRequestWords& request) override {
+    const std::uint16_t part_number = request.part_number;
+    const std::uint16_t lobe = request.lobe;
     starts.push_back({part_number, lobe});
     if (refuse) return *refuse;
     running = true;

@@ -52,7 +52,17 @@ class NcPushTest : public testing::IntakeJobTest {
     ModbusGauge gauge(ms);
     return run_measure_job(gauge, js);
   }
-  Result<JobReport> measure() { return measure(job_settings()); }
+  // The simulator serves one part; each measurement says it was ground with the table in
+  // force (the version last pushed, 0: the design), so each builds on it and pushes.
+  Result<JobReport> measure() { return measure(ground_with_table_in_force(job_settings())); }
+  JobSettings ground_with_table_in_force(JobSettings js) const {
+    js.ground_with_version = 0;
+    if (auto s = RunStore::open(dir_ / "gaugeloop.sqlite"); s.ok()) {
+      if (auto last = s->last_push(nc_file().string()); last.ok() && *last)
+        js.ground_with_version = (**last).table_version;
+    }
+    return js;
+  }
 
   fs::path nc_file() const { return dir_ / "nc" / (part_.nc_program + ".SPF"); }
   std::string data() const { return "--data-dir " + dir_.string() + " "; }
@@ -203,7 +213,7 @@ TEST_F(NcPushTest, ApprovalRequiredHoldsTheTableUntilApproved) {
   EXPECT_EQ(again.exit_code, 2) << again.output;
   EXPECT_NE(again.output.find("approved"), std::string::npos) << again.output;
 
-  auto next = measure(js);
+  auto next = measure(ground_with_table_in_force(js));
   ASSERT_TRUE(next.ok()) << next.error().message;
   ASSERT_TRUE(next->pending_id.has_value());
   const std::string before = slurp(nc_file());

@@ -401,6 +401,47 @@ class PlcServiceTest : public ServiceTest {
   std::unique_ptr<PlcSimulator> plc_;
 };
 
+// Word 12 says which table ground the part: the design while version 1 is in force is an
+// older part (stored, nothing pushed, result code 2); version 1 builds on it and pushes.
+TEST_F(PlcServiceTest, TheGroundWithWordNamesTheTableThatGroundThePart) {
+  ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
+  ASSERT_GT(service.port(), 0) << log();
+  wait_until_polled();
+  auto cycle = [this](std::uint16_t ground_with) -> std::optional<PlcServiceWords> {
+    plc_->request(7, 1, ground_with);
+    auto out = plc_->wait_for_outcome(kGenerous);
+    plc_->clear_request();
+    if (!plc_->wait_until([](const PlcServiceWords& w) { return !w.ack && !w.done && !w.fault; }, kGenerous)) {
+      return std::nullopt;
+    }
+    return out;
+  };
+  auto first = cycle(0);  // not said: nothing in force yet, from the design
+  ASSERT_TRUE(first.has_value()) << log();
+  EXPECT_EQ(first->result_code, PlcResultCode::kTablePushed) << log();
+  EXPECT_EQ(first->table_version, 1);
+
+  auto older = cycle(plc_registers::kGroundWithDesign);
+  ASSERT_TRUE(older.has_value()) << log();
+  EXPECT_TRUE(older->done);
+  EXPECT_EQ(older->result_code, PlcResultCode::kTableRefused) << log();
+  EXPECT_EQ(older->table_version, 0);
+  EXPECT_NE(older->run_id, 0u);
+
+  auto with_v1 = cycle(1);
+  ASSERT_TRUE(with_v1.has_value()) << log();
+  EXPECT_EQ(with_v1->result_code, PlcResultCode::kTablePushed) << log();
+  EXPECT_EQ(with_v1->table_version, 2);
+
+  auto store = RunStore::open(dir_ / "runs.sqlite");
+  ASSERT_TRUE(store.ok());
+  auto run = store->load_run(with_v1->run_id);
+  ASSERT_TRUE(run.ok());
+  EXPECT_EQ(run->ground_with_source, "plc");
+  EXPECT_EQ(run->ground_with_version, std::optional<int>(1));
+  EXPECT_EQ(run->correction_in_force_run, std::optional<std::int64_t>(first->run_id));
+}
+
 TEST_F(PlcServiceTest, PlcRequestRunNcFileDoneWithTheRunIdThenCleared) {
   ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
   const int port = service.port();

@@ -174,7 +174,7 @@ TEST(MigrationFromV1, StepsOneVersionAtATime) {
                      "('2026-11-22T02:00:01Z', 'info', 'plc request', 'part 1 lobe 1')"),
             SQLITE_OK)
       << "version 3 knows no info events";
-  s = storage_internal::apply_migrations(conn);
+  s = storage_internal::apply_migrations_up_to(conn, 4);
   ASSERT_TRUE(s.ok()) << s.error().message;
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), 4);
   EXPECT_EQ(raw.query_text("SELECT code FROM events WHERE id = 7"), "gauge timeout") << "events keep their ids";
@@ -183,6 +183,14 @@ TEST(MigrationFromV1, StepsOneVersionAtATime) {
             SQLITE_OK);
   EXPECT_EQ(raw.query_int("SELECT id FROM events WHERE kind = 'info'"), 8) << "AUTOINCREMENT goes on after 7";
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'events_by_time'"), 1);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'nc_push_intents'"), 0);
+  s = storage_internal::apply_migrations(conn);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 5);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'nc_push_intents'"), 1);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM pragma_table_info('runs') WHERE name IN "
+                          "('ground_with_version', 'ground_with_source', 'inspection')"),
+            3);
 }
 
 }  // namespace
