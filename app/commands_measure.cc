@@ -185,7 +185,7 @@ int run_job(GaugeClient& gauge, const LoadedPart& lp, const MeasureOptions& o, b
   Result<JobReport> report = run_measure_job(gauge, js);
   if (!report) return report_error(report.error());
   print_report(*report, js.part, js.machine);
-  return report->pushed() ? kExitOk : kExitNotPushed;
+  return report->pushed() || report->inspection ? kExitOk : kExitNotPushed;
 }
 
 int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {
@@ -348,7 +348,7 @@ int cmd_measure_as_service(const ServiceMeasureOptions& so, const MeasureOptions
   Result<JobReport> report = run_measure_job(gauge, js);
   if (!report) return report_error(report.error());
   print_report(*report, js.part, js.machine);
-  return report->pushed() ? kExitOk : kExitNotPushed;
+  return report->pushed() || report->inspection ? kExitOk : kExitNotPushed;
 }
 
 // sim --grind: the machine beside the gauge. Whenever the program in the NC directory

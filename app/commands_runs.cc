@@ -183,9 +183,17 @@ int cmd_show(const RunOptions& o) {
   }
   std::printf("correction (cam frame)\n");
   std::printf("  largest           %.2f um at cam %zu deg, %s\n", std::abs(r.correction_um[worst_corr]), worst_corr,
-              r.correction_in_force_run
-                  ? ("built on run " + std::to_string(*r.correction_in_force_run) + "'s (the table in force)").c_str()
-                  : "from the design");
+              r.correction_in_force_run ? ("built on run " + std::to_string(*r.correction_in_force_run) +
+                                           "'s (the table that ground the part)")
+                                              .c_str()
+                                        : "from the design");
+  if (!r.ground_with_source.empty()) {
+    std::printf("  ground with       table version %d (%s)\n", r.ground_with_version.value_or(0),
+                r.ground_with_source == "plc"      ? "said by the PLC"
+                : r.ground_with_source == "option" ? "said by --ground-with"
+                                                   : "assumed: the table in force");
+  }
+  if (r.inspection) std::printf("  inspection        measured to inspect: the correction in force, unchanged\n");
   if (r.pushes.empty()) std::printf("  NC pushes         none\n");
   for (const NcPush& p : r.pushes) {
     std::string detail = ", version " + std::to_string(p.table_version);

@@ -82,6 +82,9 @@ json run_detail_json(const StoredRun& r) {
   j["max_abs_error_at_cam_deg"] = argmax_abs(a.error_um);
   j["correction_max_um"] = std::abs(r.correction_um[argmax_abs(r.correction_um)]);
   j["correction_in_force_run"] = opt_json(r.correction_in_force_run);
+  j["ground_with_version"] = opt_json(r.ground_with_version);
+  j["ground_with_source"] = text_or_null(r.ground_with_source);
+  j["inspection"] = r.inspection;
   j["harmonic_amplitude_um"] =
       has_inspection ? json(std::vector<double>(a.harmonic_amplitude_um.begin(), a.harmonic_amplitude_um.end()))
                      : json(nullptr);

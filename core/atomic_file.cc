@@ -104,6 +104,9 @@ Result<DirectoryLock> DirectoryLock::acquire(const std::filesystem::path& dir, s
   for (;;) {
     if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return DirectoryLock(fd);
     const int err = errno;
+    // Some network file systems (a share to the control) know no flock: writers there are not
+    // serialised by it, as before, rather than refused.
+    if (err == ENOLCK || err == EOPNOTSUPP || err == EINVAL) return DirectoryLock(fd);
     if (err != EWOULDBLOCK && err != EINTR) {
       ::close(fd);
       return io_error("cannot lock the directory", dir, err);

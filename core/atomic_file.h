@@ -41,7 +41,8 @@ Result<int> remove_atomic_leftovers(const std::filesystem::path& path);
 // An exclusive advisory lock (flock) on a directory, between processes and threads alike:
 // writers of files in one directory take it so that one of them at a time writes, and a
 // writer may clean up what an interrupted one left. Released when destroyed, and by the
-// kernel when the process dies. Movable, not copyable.
+// kernel when the process dies. On a file system that knows no flock (some network shares)
+// the lock is granted without locking anything. Movable, not copyable.
 class DirectoryLock {
  public:
   // Waits up to `patience` for the lock. kIo if the directory cannot be opened, or if another

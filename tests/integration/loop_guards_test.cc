@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "acquisition/modbus_gauge.h"
@@ -29,26 +30,8 @@ namespace {
 namespace fs = std::filesystem;
 using testing::slurp;
 
-class LoopGuardsTest : public testing::IntakeJobTest {
+class LoopGuardsTest : public testing::IntakeSimulatorJobTest {
  protected:
-  void SetUp() override {
-    IntakeJobTest::SetUp();
-    if (HasFatalFailure()) return;
-    SimulatorSettings ss;
-    ss.time_scale = 4.0;
-    ss.seed = 11;
-    auto sim = GaugeSimulator::start(part_.part, design_, ss);
-    ASSERT_TRUE(sim.ok()) << sim.error().message;
-    sim_ = std::move(*sim);
-  }
-
-  Result<JobReport> measure(const JobSettings& js) {
-    ModbusSettings ms;
-    ms.port = sim_->port();
-    ModbusGauge gauge(ms);
-    return run_measure_job(gauge, js);
-  }
-
   StoredRun load(std::int64_t run_id) {
     Result<RunStore> store = RunStore::open(dir_ / "gaugeloop.sqlite");
     EXPECT_TRUE(store.ok());
@@ -57,14 +40,10 @@ class LoopGuardsTest : public testing::IntakeJobTest {
     return *run;
   }
 
-  fs::path nc_file() const { return dir_ / "nc" / (part_.nc_program + ".SPF"); }
-
   // The gauge was not read: the simulator served no request.
   void expect_gauge_untouched(std::int64_t requests_before) {
     EXPECT_EQ(sim_->requests_served(), requests_before) << "the gauge was read before the check failed";
   }
-
-  std::unique_ptr<GaugeSimulator> sim_;
 };
 
 double largest_difference_um(const DegreeTable& a, const DegreeTable& b) {
@@ -160,6 +139,13 @@ TEST_F(LoopGuardsTest, AnInspectionTouchesNeitherTheCorrectionNorTheProgram) {
   EXPECT_TRUE(stored.inspection);
   EXPECT_LT(largest_difference_um(stored.correction_um, load(first->run_id).correction_um), 1e-4);
   EXPECT_EQ(slurp(nc_file()), program);
+  const auto shown =
+      testing::run_command("runs show --json " + std::to_string(r->run_id) + " --data-dir " + dir_.string());
+  ASSERT_EQ(shown.exit_code, 0) << shown.output;
+  const nlohmann::json j = nlohmann::json::parse(shown.output);
+  EXPECT_EQ(j["inspection"], true);
+  EXPECT_EQ(j["ground_with_source"], "assumed");
+  EXPECT_EQ(j["ground_with_version"], 1);
 }
 
 // Bad names are refused before the gauge is read: empty, too long, a NUL byte, a slash.

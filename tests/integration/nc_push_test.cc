@@ -34,24 +34,9 @@ using testing::CommandResult;
 using testing::run_command;
 using testing::slurp;
 
-class NcPushTest : public testing::IntakeJobTest {
+class NcPushTest : public testing::IntakeSimulatorJobTest {
  protected:
-  void SetUp() override {
-    IntakeJobTest::SetUp();
-    if (HasFatalFailure()) return;
-    SimulatorSettings ss;
-    ss.time_scale = 4.0;
-    auto sim = GaugeSimulator::start(part_.part, design_, ss);
-    ASSERT_TRUE(sim.ok()) << sim.error().message;
-    sim_ = std::move(*sim);
-  }
-
-  Result<JobReport> measure(const JobSettings& js) {
-    ModbusSettings ms;
-    ms.port = sim_->port();
-    ModbusGauge gauge(ms);
-    return run_measure_job(gauge, js);
-  }
+  using IntakeSimulatorJobTest::measure;
   // The simulator serves one part; each measurement says it was ground with the table in
   // force (the version last pushed, 0: the design), so each builds on it and pushes.
   Result<JobReport> measure() { return measure(ground_with_table_in_force(job_settings())); }
@@ -64,7 +49,6 @@ class NcPushTest : public testing::IntakeJobTest {
     return js;
   }
 
-  fs::path nc_file() const { return dir_ / "nc" / (part_.nc_program + ".SPF"); }
   std::string data() const { return "--data-dir " + dir_.string() + " "; }
 
   RunStore store() const {
@@ -72,8 +56,6 @@ class NcPushTest : public testing::IntakeJobTest {
     EXPECT_TRUE(s.ok());
     return std::move(*s);
   }
-
-  std::unique_ptr<GaugeSimulator> sim_;
 };
 
 // The version in the header, the history, a diff that shows the change and a rollback that

@@ -7,12 +7,15 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <memory>
 #include <string>
 
+#include "acquisition/modbus_gauge.h"
 #include "app/embedded_defaults.h"
 #include "app/measure_job.h"
 #include "app/part_file.h"
 #include "core/lift_table.h"
+#include "simulator/gauge_simulator.h"
 
 namespace gaugeloop::testing {
 
@@ -49,6 +52,33 @@ class IntakeJobTest : public ::testing::Test {
   std::filesystem::path dir_;
   PartFile part_;
   LiftTable design_;
+};
+
+// The same, with the gauge simulator turning the intake lobe (four times real time, one part:
+// it does not grind) and the job measuring it over Modbus TCP on loopback.
+class IntakeSimulatorJobTest : public IntakeJobTest {
+ protected:
+  void SetUp() override {
+    IntakeJobTest::SetUp();
+    if (HasFatalFailure()) return;
+    SimulatorSettings ss;
+    ss.time_scale = 4.0;
+    ss.seed = 11;
+    auto sim = GaugeSimulator::start(part_.part, design_, ss);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    sim_ = std::move(*sim);
+  }
+
+  Result<JobReport> measure(const JobSettings& js) {
+    ModbusSettings ms;
+    ms.port = sim_->port();
+    ModbusGauge gauge(ms);
+    return run_measure_job(gauge, js);
+  }
+
+  std::filesystem::path nc_file() const { return dir_ / "nc" / (part_.nc_program + ".SPF"); }
+
+  std::unique_ptr<GaugeSimulator> sim_;
 };
 
 }  // namespace gaugeloop::testing
