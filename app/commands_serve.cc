@@ -645,10 +645,10 @@ int cmd_serve(const ServeOptions& o) {
     if (sig == SIGHUP) {
       Result<ServiceConfig> fresh = read_service_config(o.config_path);
       if (!fresh) {
-        service.count_reload(false);
         spdlog::error("reload refused, keeping the configuration in use: {}", fresh.error().message);
         service.record_event(EventKind::kFault, "config reload refused", "", 0, std::nullopt,
                              "reload refused, keeping the configuration in use: " + fresh.error().message);
+        service.count_reload(false);  // after the event: once /api/health counts it, it is stored
         continue;
       }
       if (plc_text(fresh->plc) != plc_text(plc_settings)) {
@@ -663,11 +663,11 @@ int cmd_serve(const ServeOptions& o) {
         spdlog::warn("reload: [database] path changes take effect when the service restarts");
         fresh->job.db_path = db_path;
       }
-      service.count_reload(true);
       const std::string line = "reloaded: " + describe(*fresh);
       spdlog::info("{}", line);
       service.replace_config(std::move(*fresh));
       service.record_event(EventKind::kInfo, "config reload", "", 0, std::nullopt, line);
+      service.count_reload(true);  // last: once /api/health counts it, it is in force and stored
       continue;
     }
     spdlog::info("{} received: letting the run in progress finish", sig == SIGTERM ? "SIGTERM" : "SIGINT");
