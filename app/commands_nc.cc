@@ -75,7 +75,7 @@ struct HistoryOptions : NcOptions {
 };
 
 int cmd_history(const HistoryOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   PushQuery q;
   q.limit = o.limit;
@@ -126,7 +126,7 @@ Result<ParsedTable> pushed_table(const RunStore& store, const std::string& file,
 }
 
 int cmd_diff(const DiffOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<std::string> file = resolve_program(*store, o);
   if (!file) return report_error(file.error());
@@ -214,7 +214,7 @@ int cmd_rollback(const RollbackOptions& o) {
 // ---- nc check ----
 
 int cmd_check(const NcOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<std::string> file = resolve_program(*store, o);
   if (!file) return report_error(file.error());
@@ -239,7 +239,7 @@ struct PendingOptions : NcOptions {
 };
 
 int cmd_pending(const PendingOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   PendingQuery q;
   q.limit = o.limit;

@@ -592,6 +592,10 @@ int cmd_serve(const ServeOptions& o) {
     std::printf("configuration ok: %s\n", describe(*config).c_str());
     return kExitOk;
   }
+  if (Result<RunStore> db = open_checked_for_writing(config->job.db_path); !db) {
+    spdlog::error("database refused, not starting: {}", db.error().message);
+    return kExitBadInput;
+  }
   const std::optional<HttpSettings> http_settings = config->http;
   const std::optional<PlcSettings> plc_settings = config->plc;
   const std::filesystem::path db_path = config->job.db_path;
