@@ -98,7 +98,7 @@ void add_db_commands(CLI::App& app, CommandAction& action) {
   CLI::App* check_cmd = db->add_subcommand(
       "check",
       "Is the database sound? Reads every page (integrity_check) and every reference; exit status 4 if "
-      "it is damaged. Read-only: safe while gaugeloop runs.");
+      "it is damaged. Never writes the file: safe while gaugeloop runs.");
   add_db_options(*check_cmd, *check);
   check_cmd->callback([&action, check] { action = [check] { return cmd_check(*check); }; });
 
