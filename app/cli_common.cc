@@ -49,13 +49,25 @@ Result<LoadedPart> load_part(const std::string& part_path) {
   return LoadedPart{std::move(*pf), std::move(*design)};
 }
 
+Status require_database(const std::filesystem::path& db, std::string_view advice) {
+  if (std::filesystem::exists(db)) return {};
+  return make_error(ErrorCode::kNotFound, "no run database at " + db.string() + "; " + std::string(advice));
+}
+
+namespace {
+
+constexpr std::string_view kMakeOne = "run `gaugeloop demo` or `gaugeloop measure` first, or give --data-dir";
+
+}  // namespace
+
 Result<RunStore> open_history(const DataPaths& paths) {
-  if (!std::filesystem::exists(paths.db())) {
-    return make_error(ErrorCode::kNotFound,
-                      "no run database at " + paths.db().string() +
-                          "; run `gaugeloop demo` or `gaugeloop measure` first, or give --data-dir");
-  }
+  if (Status s = require_database(paths.db(), kMakeOne); !s) return s.error();
   return RunStore::open(paths.db());
+}
+
+Result<RunStore> open_history_read_only(const DataPaths& paths) {
+  if (Status s = require_database(paths.db(), kMakeOne); !s) return s.error();
+  return RunStore::open_read_only(paths.db());
 }
 
 }  // namespace gaugeloop

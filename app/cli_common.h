@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <string_view>
 
 #include "app/part_file.h"
 #include "core/lift_table.h"
@@ -41,8 +42,21 @@ struct DataPaths {
 
 void add_data_dir_option(CLI::App& cmd, DataPaths& paths);
 
-// Opens an existing run database for a query or a decision; a missing one is not created.
+// kNotFound "no run database at <db>; <advice>" unless the file exists.
+Status require_database(const std::filesystem::path& db, std::string_view advice);
+
+// Opens an existing run database for a decision (it writes); a missing one is not created.
 Result<RunStore> open_history(const DataPaths& paths);
+
+// Opens an existing run database for a query: read-only, never created, upgraded or written
+// (RunStore::open_read_only), so it works on a read-only file or mount.
+Result<RunStore> open_history_read_only(const DataPaths& paths);
+
+// What the service does at start and `db upgrade` does: an existing file is checked whole
+// (integrity_check; a damaged one is refused and nothing is upgraded), then opened for
+// writing, which creates a new file and upgrades an older schema after backing it up; the
+// upgrade and its backup are logged.
+Result<RunStore> open_checked_for_writing(const std::filesystem::path& db);
 
 // A part and its design table, from a file or (empty path) from the embedded sample.
 struct LoadedPart {
@@ -61,5 +75,6 @@ void add_runs_commands(CLI::App& app, CommandAction& action);     // runs ...
 void add_profile_commands(CLI::App& app, CommandAction& action);  // profile
 void add_nc_commands(CLI::App& app, CommandAction& action);       // nc ...
 void add_serve_commands(CLI::App& app, CommandAction& action);    // serve
+void add_db_commands(CLI::App& app, CommandAction& action);       // db ...
 
 }  // namespace gaugeloop

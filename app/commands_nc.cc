@@ -76,7 +76,7 @@ struct HistoryOptions : NcOptions {
 };
 
 int cmd_history(const HistoryOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   PushQuery q;
   q.limit = o.limit;
@@ -127,7 +127,7 @@ Result<ParsedTable> pushed_table(const RunStore& store, const std::string& file,
 }
 
 int cmd_diff(const DiffOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<std::string> file = resolve_program(*store, o);
   if (!file) return report_error(file.error());
@@ -215,7 +215,7 @@ int cmd_rollback(const RollbackOptions& o) {
 // ---- nc check ----
 
 int cmd_check(const NcOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<std::string> file = resolve_program(*store, o);
   if (!file) return report_error(file.error());
@@ -267,7 +267,7 @@ struct PendingOptions : NcOptions {
 };
 
 int cmd_pending(const PendingOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   PendingQuery q;
   q.limit = o.limit;

@@ -91,7 +91,7 @@ Result<RunQuery> resolved(const ListOptions& o) {
 int cmd_list(const ListOptions& o) {
   Result<RunQuery> q = resolved(o);
   if (!q) return report_error(q.error());
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<std::vector<RunSummary>> runs = store->list_runs(*q);
   if (!runs) return report_error(runs.error());
@@ -139,7 +139,7 @@ std::vector<std::pair<int, double>> top_harmonics(const LobeAnalysis& a, std::si
 }
 
 int cmd_show(const RunOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<StoredRun> run = load(*store, o.id, o.paths);
   if (!run) return report_error(run.error());
@@ -215,7 +215,7 @@ struct ExportOptions {
 };
 
 int cmd_export(const ExportOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<StoredRun> run = load(*store, o.id, o.paths);
   if (!run) return report_error(run.error());
@@ -245,7 +245,7 @@ std::vector<std::string> lines_of(const std::string& text) {
 }
 
 int cmd_compare(const CompareOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<StoredRun> ra = load(*store, o.a, o.paths);
   if (!ra) return report_error(ra.error());
@@ -345,7 +345,7 @@ int cmd_compare(const CompareOptions& o) {
 int cmd_trend(const ListOptions& o) {
   Result<RunQuery> q = resolved(o);
   if (!q) return report_error(q.error());
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<std::vector<RunSummary>> runs = store->trend(*q);
   if (!runs) return report_error(runs.error());
@@ -388,7 +388,7 @@ struct PlotOptions {
 };
 
 int cmd_plot(const PlotOptions& o) {
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<StoredRun> run = load(*store, o.id, o.paths);
   if (!run) return report_error(run.error());
@@ -452,7 +452,7 @@ int cmd_events(const EventOptions& o) {
   if (!until) return report_error(until.error());
   q.since_utc = *since;
   q.until_utc = *until;
-  Result<RunStore> store = open_history(o.paths);
+  Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<std::vector<StoredEvent>> events = store->list_events(q);
   if (!events) return report_error(events.error());

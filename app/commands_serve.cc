@@ -119,6 +119,7 @@ class Service {
     js.note = note;
     js.ground_with_version = ground_with;
     js.ground_with_source = "plc";
+    js.check_integrity = false;  // checked whole at start
     // Every step of the cycle: a log line and an event (docs/service.md, "The cycle").
     js.on_step = [this, c, part_name, lobe, stored_run](const JobStep& step) {
       if (stored_run != nullptr && step.run_id) *stored_run = step.run_id;
@@ -603,13 +604,13 @@ int cmd_serve(const ServeOptions& o) {
   const std::optional<HttpSettings> http_settings = config->http;
   const std::optional<PlcSettings> plc_settings = config->plc;
   const std::filesystem::path db_path = config->job.db_path;
-  // Pushes a power cut interrupted are finished before anything else reads the tables.
   {
-    Result<RunStore> store = RunStore::open(db_path);
+    Result<RunStore> store = open_checked_for_writing(db_path);
     if (!store) {
-      spdlog::error("run database refused, not starting: {}", store.error().message);
-      return exit_code_for(store.error().code);
+      spdlog::error("database refused, not starting: {}", store.error().message);
+      return kExitBadInput;
     }
+    // Pushes a power cut interrupted are finished before anything else reads the tables.
     Result<ReconcileReport> reconciled = reconcile_all_pushes(*store);
     if (!reconciled) {
       spdlog::error("interrupted pushes could not be reconciled, not starting: {}", reconciled.error().message);
@@ -667,10 +668,10 @@ int cmd_serve(const ServeOptions& o) {
     if (sig == SIGHUP) {
       Result<ServiceConfig> fresh = read_service_config(o.config_path);
       if (!fresh) {
-        service.count_reload(false);
         spdlog::error("reload refused, keeping the configuration in use: {}", fresh.error().message);
         service.record_event(EventKind::kFault, "config reload refused", "", 0, std::nullopt,
                              "reload refused, keeping the configuration in use: " + fresh.error().message);
+        service.count_reload(false);  // after the event: once /api/health counts it, it is stored
         continue;
       }
       if (plc_text(fresh->plc) != plc_text(plc_settings)) {
@@ -685,11 +686,11 @@ int cmd_serve(const ServeOptions& o) {
         spdlog::warn("reload: [database] path changes take effect when the service restarts");
         fresh->job.db_path = db_path;
       }
-      service.count_reload(true);
       const std::string line = "reloaded: " + describe(*fresh);
       spdlog::info("{}", line);
       service.replace_config(std::move(*fresh));
       service.record_event(EventKind::kInfo, "config reload", "", 0, std::nullopt, line);
+      service.count_reload(true);  // last: once /api/health counts it, it is in force and stored
       continue;
     }
     spdlog::info("{} received: letting the run in progress finish", sig == SIGTERM ? "SIGTERM" : "SIGINT");

@@ -413,6 +413,11 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
   }
   Result<RunStore> store = RunStore::open(s.db_path);
   if (!store) return store.error();
+  // A damaged file is refused before the gauge is read: a correction read from it could be
+  // anything, and a run stored into it could be lost.
+  if (s.check_integrity) {
+    if (Status sound = store->check_integrity(); !sound) return sound.error();
+  }
   if (Status w = store->check_writable(); !w) return w.error();
   // A push interrupted earlier is recorded or abandoned before the table in force is read.
   if (Result<ReconcileReport> r = reconcile_pushes(*store, nc_file); !r) return r.error();

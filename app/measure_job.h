@@ -82,6 +82,10 @@ struct JobSettings {
   // Measure, analyse and store only: the correction in force and the NC program are untouched
   // (`measure --inspect`).
   bool inspect = false;
+  // Read the whole database (PRAGMA quick_check) before measuring, refusing a damaged one.
+  // The service checks once at start (integrity_check) and sets this false: the quick check
+  // reads every page, a second or more on a database of years.
+  bool check_integrity = true;
   // Called as each step of the cycle goes through (JobStep), for a caller that logs and
   // records every step (the service). Failures are not steps: they are the job's error.
   // "stored" comes before the table is pushed: a caller that must name the run even when the
@@ -126,7 +130,7 @@ struct JobReport {
 // Runs the job. Everything that can be checked without the gauge is checked before the first
 // poll, so bad input costs no measurement: the geometry, the template, the names (part and
 // program: 1 to 64 letters, digits, '_' or '-'), the NC directory (writable: a probe file is
-// made and removed), the database (writable, not locked), room on both file systems for a run
+// made and removed), the database (sound, writable, not locked), room on both file systems for a run
 // and a program, and the table version the part was ground with. Interrupted pushes of the NC
 // file are reconciled first (reconcile_pushes). Nothing is stored unless a complete run was
 // measured and analysed; the NC file is pushed (push_program) after the run is stored. A

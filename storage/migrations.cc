@@ -583,4 +583,10 @@ Status apply_migrations_up_to(Connection& conn, int target) {
   return {};
 }
 
+Result<int> schema_version_not_newer(Connection& conn) {
+  Result<int> version = read_user_version(conn);
+  if (version.ok() && *version > latest_schema_version()) return too_new(conn, *version);
+  return version;
+}
+
 }  // namespace gaugeloop::storage_internal

@@ -41,4 +41,8 @@ Status apply_migrations(Connection& conn);
 // Applies migrations up to and including `version` only (tests of the upgrade path).
 Status apply_migrations_up_to(Connection& conn, int version);
 
+// The database's user_version (0: no schema yet); a version newer than
+// latest_schema_version() is refused (kStorage) as apply_migrations refuses it.
+Result<int> schema_version_not_newer(Connection& conn);
+
 }  // namespace gaugeloop::storage_internal

@@ -15,6 +15,7 @@
 
 #include "storage/degree_blob.h"
 #include "storage/degree_json.h"
+#include "storage/maintenance_internal.h"
 #include "storage/migrations.h"
 #include "storage/sqlite_db.h"
 
@@ -479,8 +480,9 @@ Result<std::unique_ptr<Connection>> connect(const std::filesystem::path& db_path
                       "cannot open run database " + shown + ": " + reason + "; check the --data-dir is writable");
   }
   // SQLite silently falls back to read-only when the file exists but is not writable; we
-  // would only find out at the first insert, after a whole measurement.
-  if (sqlite3_db_readonly(conn->db, "main") == 1) {
+  // would only find out at the first insert, after a whole measurement. A file without write
+  // bits is refused for root too: readers open it immutable (RunStore::open_read_only).
+  if (sqlite3_db_readonly(conn->db, "main") == 1 || storage_internal::has_no_write_bits(db_path)) {
     return make_error(ErrorCode::kStorage, "cannot open run database " + shown +
                                                " for writing: the file is read-only; check the file and the "
                                                "--data-dir are writable by this user");
@@ -519,6 +521,8 @@ Result<RunStore> RunStore::open(const std::filesystem::path& db_path) {
   }
   Result<std::unique_ptr<Connection>> conn = connect(db_path);
   if (!conn.ok()) return conn.error();
+  Status backed_up = storage_internal::back_up_before_upgrade(**conn);
+  if (!backed_up.ok()) return backed_up.error();
   Status migrated = storage_internal::apply_migrations(**conn);
   if (!migrated.ok()) return migrated.error();
   return RunStore(std::move(*conn));

@@ -262,6 +262,19 @@ struct EventQuery {
   std::string until_utc;  // exclusive
 };
 
+// How thoroughly RunStore::check_integrity reads the file. Both read every page.
+enum class IntegrityCheck {
+  kQuick,  // PRAGMA quick_check: b-tree pages, records, NOT NULL; O(pages). Before a run.
+  kFull,   // PRAGMA integrity_check: also that every index matches its table and UNIQUE holds;
+           // O(rows log rows). `gaugeloop db check`, the service's start, every backup.
+};
+
+// What RunStore::open did to a file written by an older gaugeloop.
+struct SchemaUpgrade {
+  int from_version = 0;          // the file's schema version before (>= 1)
+  std::filesystem::path backup;  // the copy of the file as it was, written before migrating
+};
+
 // The run database on one file. Owns one SQLite connection.
 // Thread: use one RunStore per thread; any number of stores (threads or processes) may open
 // the same file. The database runs in WAL mode, so readers are never blocked by a writer;
@@ -276,7 +289,35 @@ class RunStore {
   // Opens (creating the parent directories and the file if need be) and brings the schema
   // up to date. ":memory:" opens a private in-memory database. A database written by a
   // newer gaugeloop (higher schema version) is refused.
+  // A file with no write permission bits at all (0444) is refused for root too: such a file
+  // is treated as frozen (see open_read_only).
+  // A file at an older schema version (1 or more) holding a run or an event is first copied with SQLite's online backup
+  // API to "<db_path>.schema<N>-backup-<YYYYMMDDTHHMMSSZ>" (a "-2", "-3"... suffix if that
+  // name is taken), the copy checked with integrity_check, and only then upgraded; if the
+  // copy fails, nothing is upgraded and the error says why. schema_upgrade() names the copy.
   static Result<RunStore> open(const std::filesystem::path& db_path);
+
+  // Opens an existing database for reading only: never creates, migrates or writes the file,
+  // so it works on a file without write permission and in a read-only directory or mount.
+  // With no write-ahead log beside it (no "-wal" with content, no "-shm") and either no write
+  // permission bits on the file or a directory this process cannot write, the file is opened
+  // immutable (no lock, no -shm or -wal created): nothing can be writing it, since a writer
+  // needs the -wal, and open() refuses a file without write permission bits.
+  // Errors: kNotFound if there is no file; kStorage for a file SQLite cannot read, a file
+  // without a gaugeloop schema, an older schema (the message names `gaugeloop db upgrade`)
+  // or a newer one. Writing through the store fails with kStorage.
+  static Result<RunStore> open_read_only(const std::filesystem::path& db_path);
+
+  // Reads the whole file (see IntegrityCheck), then PRAGMA foreign_key_check. A damaged file
+  // is kStorage: "database <file> is damaged: <the first problems>; ..." saying to restore the
+  // last sound backup. Call before measuring, so that no run is built on, or stored into, a
+  // damaged file. kQuick takes about as long as reading the file once. On a store opened
+  // read-only the CHECK constraints are not verified (SQLite does not load them there).
+  Status check_integrity(IntegrityCheck depth = IntegrityCheck::kQuick) const;
+
+  // After open(): what it upgraded, and the copy it made first; empty if the schema was
+  // already the latest or the file was new.
+  std::optional<SchemaUpgrade> schema_upgrade() const;
 
   RunStore(RunStore&& other) noexcept;
   RunStore& operator=(RunStore&& other) noexcept;

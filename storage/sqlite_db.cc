@@ -31,6 +31,19 @@ std::string_view hint_for(int rc) {
   }
 }
 
+// The same for a connection opened read-only (see connect_read_only).
+std::string_view read_only_hint_for(int rc) {
+  switch (rc & 0xff) {
+    case SQLITE_READONLY:
+      return "the database was opened for reading only";
+    case SQLITE_CANTOPEN:
+    case SQLITE_PERM:
+      return "check the file and its directory are readable by this user";
+    default:
+      return hint_for(rc);
+  }
+}
+
 }  // namespace
 
 Connection::~Connection() {
@@ -45,7 +58,7 @@ Error sqlite_error(const Connection& conn, std::string_view operation, int rc) {
   // sqlite3_errmsg describes the most recent failure on the connection, which is the one
   // that produced rc as long as callers build the error straight after the failed call.
   message += conn.db != nullptr ? sqlite3_errmsg(conn.db) : sqlite3_errstr(rc);
-  const std::string_view hint = hint_for(rc);
+  const std::string_view hint = conn.read_only ? read_only_hint_for(rc) : hint_for(rc);
   if (!hint.empty()) {
     message += "; ";
     message += hint;

@@ -21,6 +21,10 @@ inline constexpr int kBusyTimeoutMs = 5000;
 struct Connection {
   sqlite3* db = nullptr;
   std::filesystem::path path;
+  bool read_only = false;  // opened by connect_read_only (storage/maintenance_internal.h)
+  // Set by back_up_before_upgrade: the version the file had and where it was copied first.
+  int upgraded_from_version = 0;  // 0: the schema was not upgraded by this connection
+  std::filesystem::path upgrade_backup;
 
   Connection() = default;
   Connection(const Connection&) = delete;

@@ -21,6 +21,7 @@
 #include "simulator/gauge_simulator.h"
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
+#include "tests/support/damaged_database.h"
 #include "tests/support/intake_job.h"
 #include "tests/support/tmpfs_mount.h"
 
@@ -182,6 +183,20 @@ TEST_F(LoopGuardsTest, ADatabaseLockedForTheWholeRunIsFoundBeforeTheGauge) {
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, ErrorCode::kStorage);
   EXPECT_NE(r.error().message.find("before measuring"), std::string::npos) << r.error().message;
+  expect_gauge_untouched(requests);
+}
+
+// A damaged database is refused before the gauge is read, naming the damage, and nothing is
+// stored into it.
+TEST_F(LoopGuardsTest, ADamagedDatabaseIsRefusedBeforeTheGauge) {
+  Result<JobReport> first = measure(job_settings());
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  ASSERT_TRUE(testing::damage_runs_table(dir_ / "gaugeloop.sqlite"));
+  const std::int64_t requests = sim_->requests_served();
+  Result<JobReport> r = measure(job_settings());
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::kStorage);
+  EXPECT_NE(r.error().message.find("is damaged"), std::string::npos) << r.error().message;
   expect_gauge_untouched(requests);
 }
 

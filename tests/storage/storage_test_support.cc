@@ -1,4 +1,6 @@
 // Helpers for storage tests: a temporary directory, sample runs, and a raw SQLite handle.
+#include <sched.h>
+#include <sys/mount.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -7,7 +9,9 @@
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -28,20 +32,18 @@ void TempDir::share() const {
                                           std::filesystem::perms::others_exec);
 }
 
-std::string run_unprivileged(const std::function<std::string()>& check) {
-  if (::geteuid() != 0) return check();
+namespace {
+
+// Runs `body` in a forked child and returns what it returned ("" on success); the child's
+// changes to its own process (user, mount namespace) end with it.
+std::string run_in_child(const std::function<std::string()>& body) {
   int fds[2];
   if (::pipe(fds) != 0) return "pipe failed";
   const pid_t pid = ::fork();
   if (pid < 0) return "fork failed";
   if (pid == 0) {
     ::close(fds[0]);
-    std::string result;
-    if (::setgid(65534) != 0 || ::setuid(65534) != 0) {
-      result = "cannot switch to user nobody";
-    } else {
-      result = check();
-    }
+    const std::string result = body();
     [[maybe_unused]] auto n = ::write(fds[1], result.data(), result.size());
     ::close(fds[1]);
     ::_exit(result.empty() ? 0 : 1);
@@ -54,9 +56,42 @@ std::string run_unprivileged(const std::function<std::string()>& check) {
   ::close(fds[0]);
   int status = 0;
   ::waitpid(pid, &status, 0);
-  if (!WIFEXITED(status)) return "unprivileged check crashed";
-  if (WEXITSTATUS(status) != 0 && out.empty()) return "unprivileged check failed";
+  if (!WIFEXITED(status)) return "the check in a child process crashed";
+  if (WEXITSTATUS(status) != 0 && out.empty()) return "the check in a child process failed";
   return out;
+}
+
+std::string errno_text(const std::string& what) { return what + ": " + std::strerror(errno); }
+
+}  // namespace
+
+std::string run_unprivileged(const std::function<std::string()>& check) {
+  if (::geteuid() != 0) return check();
+  return run_in_child([&check]() -> std::string {
+    if (::setgid(65534) != 0 || ::setuid(65534) != 0) return "cannot switch to user nobody";
+    return check();
+  });
+}
+
+std::string run_on_read_only_mount(const std::filesystem::path& dir,
+                                   const std::function<std::string(const std::filesystem::path&)>& check) {
+  const std::filesystem::path mount_point = dir.parent_path() / (dir.filename().string() + "-read-only");
+  std::error_code ec;
+  std::filesystem::create_directory(mount_point, ec);
+  if (ec) return "cannot create the mount point " + mount_point.string() + ": " + ec.message();
+  return run_in_child([&]() -> std::string {
+    if (::unshare(CLONE_NEWNS) != 0) return std::string(kSkipped) + errno_text("unshare(CLONE_NEWNS)");
+    if (::mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0) {
+      return std::string(kSkipped) + errno_text("making / private");
+    }
+    if (::mount(dir.c_str(), mount_point.c_str(), nullptr, MS_BIND, nullptr) != 0) {
+      return std::string(kSkipped) + errno_text("bind mount");
+    }
+    if (::mount(nullptr, mount_point.c_str(), nullptr, MS_REMOUNT | MS_BIND | MS_RDONLY, nullptr) != 0) {
+      return std::string(kSkipped) + errno_text("remount read-only");
+    }
+    return check(mount_point);
+  });
 }
 
 TempDir::~TempDir() {

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <string_view>
 
 #include "storage/run_store.h"
 
@@ -34,6 +35,16 @@ class TempDir {
 // `check` there; otherwise it runs `check` in place. `check` returns "" on success or what
 // went wrong. Files `check` touches must be reachable by nobody (see TempDir::share).
 std::string run_unprivileged(const std::function<std::string()>& check);
+
+// What run_on_read_only_mount's result starts with when this machine cannot mount.
+inline constexpr std::string_view kSkipped = "skipped: ";
+
+// Runs `check` in a child process that sees `dir` bind-mounted read-only at a sibling
+// directory "<dir>-read-only" (created here), in a mount namespace of its own: no other process
+// sees the mount and nothing stays mounted. `check` gets the read-only path and returns "" on
+// success. Needs root with CAP_SYS_ADMIN; otherwise the result is kSkipped and the reason.
+std::string run_on_read_only_mount(const std::filesystem::path& dir,
+                                   const std::function<std::string(const std::filesystem::path&)>& check);
 
 // The raw lift the sample run holds at (revolution index, machine degree): deliberately not
 // a multiple of 1e-6 mm, so the 6-decimal JSON rounding shows.

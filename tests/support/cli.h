@@ -16,11 +16,13 @@ struct CommandResult {
   std::string output;  // stdout and stderr
 };
 
-// `gaugeloop ARGS` from the build tree, through the shell; -1 if it did not exit normally.
-inline CommandResult run_command(const std::string& args) {
-  const std::string cmd = std::string(GAUGELOOP_BINARY_DIR) + "/bin/gaugeloop " + args + " 2>&1";
+// The gaugeloop binary of the build tree.
+inline std::string gaugeloop_binary() { return std::string(GAUGELOOP_BINARY_DIR) + "/bin/gaugeloop"; }
+
+// A shell command line, stderr with stdout; -1 if it did not exit normally.
+inline CommandResult run_shell(const std::string& script) {
   CommandResult r;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
+  FILE* pipe = ::popen((script + " 2>&1").c_str(), "r");
   if (pipe == nullptr) return r;
   char buf[4096];
   while (std::fgets(buf, sizeof buf, pipe) != nullptr) r.output += buf;
@@ -28,6 +30,9 @@ inline CommandResult run_command(const std::string& args) {
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
+
+// `gaugeloop ARGS` from the build tree, through the shell; -1 if it did not exit normally.
+inline CommandResult run_command(const std::string& args) { return run_shell(gaugeloop_binary() + " " + args); }
 
 // The whole file, bytes as they are; empty if it cannot be read.
 inline std::string slurp(const std::filesystem::path& p) {

@@ -1,0 +1,312 @@
+// Keeping the run database file sound: integrity checks and online backups.
+#include "storage/db_maintenance.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <ctime>
+#include <utility>
+
+#include "storage/maintenance_internal.h"
+#include "storage/migrations.h"
+#include "storage/sqlite_db.h"
+
+namespace gaugeloop {
+namespace storage_internal {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::size_t kProblemsShown = 3;
+
+bool is_damage(int rc) { return (rc & 0xff) == SQLITE_CORRUPT || (rc & 0xff) == SQLITE_NOTADB; }
+
+// Runs `sql` and adds a problem for each row `describe` words (empty: not a problem). A file
+// SQLite finds malformed or not a database while doing so is a problem, not an error.
+template <typename Describe>
+Status add_problems(Connection& conn, const char* sql, std::string_view operation, Describe describe,
+                    std::vector<std::string>& problems) {
+  auto damage_or_error = [&](const Error& e) -> Status {
+    if (!is_damage(sqlite3_extended_errcode(conn.db))) return e;
+    problems.emplace_back(sqlite3_errmsg(conn.db));
+    return {};
+  };
+  Result<Statement> st = Statement::prepare(conn, sql, operation);
+  if (!st.ok()) return damage_or_error(st.error());
+  for (;;) {
+    Result<bool> row = st->step();
+    if (!row.ok()) return damage_or_error(row.error());
+    if (!*row) return {};
+    std::string problem = describe(*st);
+    if (!problem.empty()) problems.push_back(std::move(problem));
+  }
+}
+
+std::string page_problem(const Statement& st) {
+  std::string text = st.column_text(0);
+  return text == "ok" ? std::string() : text;
+}
+
+// foreign_key_check rows: table, rowid (NULL for a table without rowid), parent, fk index.
+std::string foreign_key_problem(const Statement& st) {
+  const std::string row = st.column_is_null(1) ? "a row" : "row " + std::to_string(st.column_int64(1));
+  return st.column_text(0) + " " + row + ": refers to a missing " + st.column_text(2) + " row";
+}
+
+Error io_error(const std::string& what, int err) {
+  return make_error(ErrorCode::kIo, what + ": " + std::strerror(err));
+}
+
+Status check_destination(const Connection& conn, const fs::path& dest, bool overwrite) {
+  std::error_code ec;
+  const std::string shown = dest.string();
+  if (fs::is_directory(dest, ec)) {
+    return make_error(ErrorCode::kInvalidInput, "backup " + shown + " is a directory; name the backup file");
+  }
+  if (fs::exists(dest, ec) && fs::equivalent(conn.path, dest, ec)) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "backup " + shown + " is the database itself; name another file for the backup");
+  }
+  if (fs::exists(dest, ec) && !overwrite) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "backup " + shown + " exists already; name another file, or pass --force to replace it");
+  }
+  if (!fs::is_directory(directory_of(dest), ec)) {
+    return make_error(ErrorCode::kIo, "backup " + shown + ": directory " + directory_of(dest).string() +
+                                          " does not exist; create it first");
+  }
+  return {};
+}
+
+// An empty file beside `dest`, with the database file's permission bits plus owner write.
+Result<fs::path> make_temporary_beside(const Connection& conn, const fs::path& dest) {
+  std::string pattern = dest.string() + ".tmp-XXXXXX";
+  const int fd = ::mkstemp(pattern.data());
+  if (fd < 0) {
+    return io_error("backup " + dest.string() + ": cannot create a file in " + directory_of(dest).string() +
+                        " (check it is writable)",
+                    errno);
+  }
+  struct stat st {};
+  if (::stat(conn.path.c_str(), &st) == 0) ::fchmod(fd, (st.st_mode & 07777) | S_IWUSR);
+  ::close(fd);
+  return fs::path(pattern);
+}
+
+Status copy_and_verify(Connection& source, const fs::path& tmp, const fs::path& dest) {
+  Connection copy;  // closed at return: before the file is moved into place
+  copy.path = dest;
+  const int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_NOMUTEX | SQLITE_OPEN_EXRESCODE;
+  int rc = sqlite3_open_v2(tmp.c_str(), &copy.db, flags, nullptr);
+  if (rc != SQLITE_OK) return sqlite_error(copy, "create the backup", rc);
+  const std::string operation = "copy " + source.path.string() + " into it";
+  sqlite3_backup* backup = sqlite3_backup_init(copy.db, "main", source.db, "main");
+  if (backup == nullptr) return sqlite_error(copy, operation, sqlite3_extended_errcode(copy.db));
+  // One step copies every page under one read lock: one consistent snapshot, and in WAL mode
+  // a writer is never blocked by it.
+  rc = sqlite3_backup_step(backup, -1);
+  sqlite3_backup_finish(backup);
+  if (rc != SQLITE_DONE) return sqlite_error(copy, operation, rc);
+  Result<std::vector<std::string>> problems = find_problems(copy, IntegrityCheck::kFull);
+  if (!problems.ok()) return problems.error();
+  if (problems->empty()) return {};
+  Error damaged = damaged_database(source.path, *problems);
+  damaged.message = "backup " + dest.string() + " not written, the copy is not sound: " + damaged.message;
+  return damaged;
+}
+
+Status sync_path(const fs::path& p, const std::string& what) {
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return io_error(what + ": cannot open " + p.string() + " to flush it", errno);
+  const int synced = ::fsync(fd);
+  const int err = errno;
+  ::close(fd);
+  if (synced != 0) return io_error(what + ": cannot flush " + p.string() + " to disk", err);
+  return {};
+}
+
+// rename() replaces; link() refuses an existing name atomically, so a backup written meanwhile
+// by someone else is never replaced without --force.
+Status move_into_place(const fs::path& tmp, const fs::path& dest, bool overwrite) {
+  const std::string what = "backup " + dest.string();
+  if (overwrite) {
+    if (::rename(tmp.c_str(), dest.c_str()) != 0) return io_error(what + ": cannot rename the copy into place", errno);
+  } else {
+    if (::link(tmp.c_str(), dest.c_str()) != 0) {
+      if (errno == EEXIST) {
+        return make_error(ErrorCode::kInvalidInput, what +
+                                                        " appeared while copying; name another file, or pass "
+                                                        "--force to replace it");
+      }
+      return io_error(what + ": cannot link the copy into place", errno);
+    }
+    ::unlink(tmp.c_str());
+  }
+  return sync_path(directory_of(dest), what);
+}
+
+void remove_leftovers(const fs::path& tmp) {
+  std::error_code ec;
+  for (const char* suffix : {"", "-journal", "-wal", "-shm"}) fs::remove(tmp.string() + suffix, ec);
+}
+
+// "20261201T151100Z": a file name's time, without colons.
+std::string utc_file_stamp() {
+  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%dT%H%M%SZ", &tm);
+  return buf;
+}
+
+// The first column of the one row `sql` returns, as a number.
+Result<std::int64_t> query_number(Connection& conn, const char* sql, std::string_view operation) {
+  Result<Statement> st = Statement::prepare(conn, sql, operation);
+  if (!st.ok()) return st.error();
+  Result<bool> row = st->step();
+  if (!row.ok()) return row.error();
+  return *row ? st->column_int64(0) : 0;
+}
+
+// Whether the file holds a run or an event (the tables every record hangs on; events came
+// with version 2). One that holds neither is a creation that was interrupted: nothing to keep.
+Result<bool> holds_records(Connection& conn) {
+  const std::string_view operation = "look for runs and events";
+  Result<std::int64_t> has_events =
+      query_number(conn, "SELECT count(*) FROM sqlite_schema WHERE name = 'events'", operation);
+  if (!has_events.ok()) return has_events.error();
+  const char* sql = *has_events != 0 ? "SELECT EXISTS (SELECT 1 FROM runs) OR EXISTS (SELECT 1 FROM events)"
+                                     : "SELECT EXISTS (SELECT 1 FROM runs)";
+  Result<std::int64_t> found = query_number(conn, sql, operation);
+  if (!found.ok()) return found.error();
+  return *found != 0;
+}
+
+fs::path free_upgrade_backup_name(const fs::path& db, int version) {
+  const std::string base = db.string() + ".schema" + std::to_string(version) + "-backup-" + utc_file_stamp();
+  fs::path name = base;
+  std::error_code ec;
+  for (int n = 2; fs::exists(name, ec); ++n) name = base + "-" + std::to_string(n);
+  return name;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Connection>> connect_for_checking(const fs::path& db_path, bool& constraints_checked) {
+  constraints_checked = may_write(db_path);
+  if (!constraints_checked) return connect_read_only(db_path);
+  auto conn = std::make_unique<Connection>();
+  conn->path = db_path;
+  const int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_NOMUTEX | SQLITE_OPEN_EXRESCODE;
+  const int rc = sqlite3_open_v2(db_path.c_str(), &conn->db, flags, nullptr);
+  if (rc != SQLITE_OK) return sqlite_error(*conn, "open the file to check it", rc);
+  sqlite3_busy_timeout(conn->db, kBusyTimeoutMs);
+  return conn;
+}
+
+Result<std::vector<std::string>> find_problems(Connection& conn, IntegrityCheck depth) {
+  std::vector<std::string> problems;
+  const char* pages = depth == IntegrityCheck::kQuick ? "PRAGMA quick_check" : "PRAGMA integrity_check";
+  if (Status s = add_problems(conn, pages, "check the database pages", page_problem, problems); !s.ok()) {
+    return s.error();
+  }
+  if (!problems.empty()) return problems;  // the keys of damaged pages would only repeat it
+  if (Status s = add_problems(conn, "PRAGMA foreign_key_check", "check the references between tables",
+                              foreign_key_problem, problems);
+      !s.ok()) {
+    return s.error();
+  }
+  return problems;
+}
+
+Status backup_connection(Connection& conn, const fs::path& dest, bool overwrite) {
+  if (Status s = check_destination(conn, dest, overwrite); !s.ok()) return s;
+  Result<fs::path> tmp = make_temporary_beside(conn, dest);
+  if (!tmp.ok()) return tmp.error();
+  Status s = copy_and_verify(conn, *tmp, dest);
+  if (s.ok()) s = sync_path(*tmp, "backup " + dest.string());
+  if (s.ok()) s = move_into_place(*tmp, dest, overwrite);
+  if (!s.ok()) remove_leftovers(*tmp);
+  return s;
+}
+
+Status back_up_before_upgrade(Connection& conn) {
+  if (conn.path == ":memory:") return {};
+  Result<int> version = schema_version_not_newer(conn);
+  if (!version.ok()) return version.error();
+  if (*version == 0 || *version >= latest_schema_version()) return {};
+  Result<bool> worth_keeping = holds_records(conn);
+  if (!worth_keeping.ok()) return worth_keeping.error();
+  if (!*worth_keeping) return {};
+  const fs::path backup = free_upgrade_backup_name(conn.path, *version);
+  if (Status s = backup_connection(conn, backup, false); !s.ok()) {
+    Error e = s.error();
+    e.message = "run database " + conn.path.string() + " not upgraded from schema version " + std::to_string(*version) +
+                ": the backup made first failed: " + e.message;
+    return e;
+  }
+  conn.upgraded_from_version = *version;
+  conn.upgrade_backup = backup;
+  return {};
+}
+
+}  // namespace storage_internal
+
+Error damaged_database(const std::filesystem::path& db_path, const std::vector<std::string>& problems) {
+  std::string listed;
+  for (std::size_t i = 0; i < problems.size() && i < storage_internal::kProblemsShown; ++i) {
+    listed += (i == 0 ? "" : "; ") + problems[i];
+  }
+  if (problems.size() > storage_internal::kProblemsShown) {
+    listed += " (and " + std::to_string(problems.size() - storage_internal::kProblemsShown) + " more)";
+  }
+  return make_error(ErrorCode::kStorage,
+                    "database " + db_path.string() + " is damaged: " + listed +
+                        "; stop gaugeloop, move the damaged file aside and put the last sound backup in its place "
+                        "(`gaugeloop db check --db BACKUP` checks one, `gaugeloop db backup FILE` makes one)");
+}
+
+Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path, IntegrityCheck depth) {
+  if (!std::filesystem::exists(db_path)) {
+    return make_error(ErrorCode::kNotFound, "no run database at " + db_path.string());
+  }
+  IntegrityReport report;
+  Result<std::unique_ptr<storage_internal::Connection>> conn =
+      storage_internal::connect_for_checking(db_path, report.constraints_checked);
+  if (!conn.ok()) return conn.error();
+  Result<std::vector<std::string>> problems = storage_internal::find_problems(**conn, depth);
+  if (!problems.ok()) return problems.error();
+  report.problems = std::move(*problems);
+  return report;
+}
+
+Status backup_database_file(const std::filesystem::path& db_path, const std::filesystem::path& dest, bool overwrite) {
+  Result<std::unique_ptr<storage_internal::Connection>> conn = storage_internal::connect_read_only(db_path);
+  if (!conn.ok()) return conn.error();
+  return storage_internal::backup_connection(**conn, dest, overwrite);
+}
+
+Result<int> database_schema_version(const std::filesystem::path& db_path) {
+  Result<std::unique_ptr<storage_internal::Connection>> conn = storage_internal::connect_read_only(db_path);
+  if (!conn.ok()) return conn.error();
+  return storage_internal::schema_version_not_newer(**conn);
+}
+
+Status RunStore::check_integrity(IntegrityCheck depth) const {
+  Result<std::vector<std::string>> problems = storage_internal::find_problems(*conn_, depth);
+  if (!problems.ok()) return problems.error();
+  if (problems->empty()) return {};
+  return damaged_database(conn_->path, *problems);
+}
+
+std::optional<SchemaUpgrade> RunStore::schema_upgrade() const {
+  if (conn_->upgraded_from_version == 0) return std::nullopt;
+  return SchemaUpgrade{conn_->upgraded_from_version, conn_->upgrade_backup};
+}
+
+}  // namespace gaugeloop

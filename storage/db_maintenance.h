@@ -1,0 +1,53 @@
+// Keeping the run database file sound: integrity checks and online backups of any file,
+// whatever its schema version (a backup of an older gaugeloop's file included).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/result.h"
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+
+// The verdict of IntegrityCheck plus PRAGMA foreign_key_check on a file.
+struct IntegrityReport {
+  // Empty: the file is sound. Otherwise each problem as one line, in SQLite's words for the
+  // page checks ("Tree 5 page 5 cell 0: ..."), "<table> row <id>: refers to a missing <parent>
+  // row" for the foreign keys; at most 100 page problems are listed.
+  std::vector<std::string> problems;
+  // False when the file could only be opened read-only: SQLite then does not know the CHECK
+  // constraints, so a value that breaks one (a flipped byte in a run's row) goes unseen.
+  bool constraints_checked = true;
+  bool sound() const { return problems.empty(); }
+};
+
+// Checks a database file at any schema version, never writing it: opened read-write (but
+// neither created nor migrated) where this process may write it, so that the CHECK
+// constraints are verified too, and read-only (as RunStore::open_read_only opens it)
+// elsewhere, e.g. on a read-only mount. Safe beside the service. A file SQLite finds
+// malformed or not a database at all is a report with that problem, not an error.
+// Errors: kNotFound if there is no file; kStorage if it cannot be read at all.
+Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path,
+                                            IntegrityCheck depth = IntegrityCheck::kFull);
+
+// "database <db> is damaged: <the first three problems> (and N more); ..." with what to do:
+// stop gaugeloop, and restore the last sound backup. kStorage.
+Error damaged_database(const std::filesystem::path& db_path, const std::vector<std::string>& problems);
+
+// Copies the database at `db_path` (read-only; any schema version; safe while gaugeloop
+// writes it: the copy is one consistent snapshot) to `dest` with SQLite's online backup API:
+// into a temporary file beside `dest`, checked with integrity_check, flushed to disk, then
+// renamed into place, so `dest` is either absent or a whole, sound copy. The copy gets the
+// database file's permission bits (plus owner write). An existing `dest` is refused
+// (kInvalidInput) unless `overwrite`; so is `dest` naming the database itself.
+// Errors: kNotFound if `db_path` does not exist, kIo if `dest`'s directory is missing or not
+// writable, kStorage if SQLite fails or the copy is not sound (then nothing is left behind).
+Status backup_database_file(const std::filesystem::path& db_path, const std::filesystem::path& dest, bool overwrite);
+
+// The schema version of the file (PRAGMA user_version), read-only; 0 for a file without a
+// gaugeloop schema. For `gaugeloop db upgrade` and reports. Errors as check_database_file.
+Result<int> database_schema_version(const std::filesystem::path& db_path);
+
+}  // namespace gaugeloop

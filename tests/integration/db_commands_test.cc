@@ -1,0 +1,210 @@
+// The database commands and read-only reading as a user runs them: the real binary on a
+// database filled through RunStore, made read-only, damaged, or left at an older schema.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "storage/migrations.h"
+#include "storage/run_store.h"
+#include "storage/sqlite_db.h"
+#include "tests/support/cli.h"
+#include "tests/support/damaged_database.h"
+#include "tests/support/sample_runs.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+
+using testing::CommandResult;
+using testing::run_command;
+using testing::run_shell;
+
+bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+
+class DbCommandsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("gaugeloop-db-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    db_ = dir_ / "data" / "gaugeloop.sqlite";
+    Result<RunStore> store = RunStore::open(db_);
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    for (const char* started : {"2020-11-20T08:00:00Z", "2020-11-21T08:00:00Z"}) {
+      Result<std::int64_t> id = store->insert_run(testing::sample_run("intake", 1, "g1", started, 12.0));
+      ASSERT_TRUE(id.ok()) << id.error().message;
+      ids_.push_back(*id);
+    }
+    ASSERT_TRUE(store->record_nc_file(ids_[0], (dir_ / "nc" / "CAM_INTAKE_L1.SPF").string()).ok());
+    ASSERT_TRUE(store->record_event(testing::sample_refusal_event()).ok());
+    data_ = " --data-dir " + db_.parent_path().string();
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::permissions(db_, fs::perms::owner_all, fs::perm_options::add, ec);
+    fs::remove_all(dir_);
+  }
+
+  // The run ids `runs list --json` prints for the database in `data_dir`.
+  std::vector<std::int64_t> listed(const fs::path& data_dir) {
+    CommandResult r = run_command("runs list --json --data-dir " + data_dir.string());
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    std::vector<std::int64_t> ids;
+    const nlohmann::json j = nlohmann::json::parse(r.output, nullptr, false);
+    if (j.is_array()) {
+      for (const auto& run : j) ids.push_back(run["id"].get<std::int64_t>());
+    }
+    return ids;
+  }
+
+  fs::path dir_;
+  fs::path db_;
+  std::string data_;
+  std::vector<std::int64_t> ids_;
+};
+
+TEST_F(DbCommandsTest, EveryQueryReadsAFileWithoutWritePermissionAndLeavesItAsItWas) {
+  fs::permissions(db_, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  const std::string before = testing::slurp(db_);
+  struct stat st {};
+  ASSERT_EQ(::stat(db_.c_str(), &st), 0);
+  const timespec mtime = st.st_mtim;
+  const std::string run = " " + std::to_string(ids_[1]);
+  for (const std::string& cmd : std::vector<std::string>{
+           "runs list", "runs show" + run, "runs export" + run, "runs compare " + std::to_string(ids_[0]) + run,
+           "runs trend --part intake --lobe 1", "runs plot" + run + " --out " + (dir_ / "run.svg").string(), "events",
+           "nc history", "nc pending", "db check"}) {
+    CommandResult r = run_command(cmd + data_);
+    EXPECT_EQ(r.exit_code, 0) << cmd << ": " << r.output;
+  }
+  // The program was never written: nc check says so, having read the history.
+  CommandResult check = run_command("nc check --nc-dir " + (dir_ / "nc").string() + data_);
+  EXPECT_EQ(check.exit_code, 5) << check.output;
+  EXPECT_TRUE(has(check.output, "not on disk (version 1 was pushed)")) << check.output;
+
+  EXPECT_EQ(testing::slurp(db_), before);
+  ASSERT_EQ(::stat(db_.c_str(), &st), 0);
+  EXPECT_TRUE(st.st_mtim.tv_sec == mtime.tv_sec && st.st_mtim.tv_nsec == mtime.tv_nsec);
+  EXPECT_FALSE(fs::exists(db_.string() + "-wal"));
+  EXPECT_FALSE(fs::exists(db_.string() + "-shm"));
+  // Writing commands refuse it, saying why.
+  CommandResult prune = run_command("runs prune --raw-older-than-days 1" + data_);
+  EXPECT_EQ(prune.exit_code, 4) << prune.output;
+  EXPECT_TRUE(has(prune.output, "read-only")) << prune.output;
+}
+
+TEST_F(DbCommandsTest, QueriesReadOnAReadOnlyMount) {
+  const fs::path mounted = dir_ / "mounted";
+  fs::create_directories(mounted);
+  const std::string setup = "unshare --mount --propagation private sh -c 'mount --bind " + db_.parent_path().string() +
+                            " " + mounted.string() + " && mount -o remount,bind,ro " + mounted.string() + " && ";
+  CommandResult mount = run_shell(setup + "true'");
+  if (mount.exit_code != 0) GTEST_SKIP() << "no read-only bind mount on this machine: " << mount.output;
+  CommandResult probe = run_shell(setup + "touch " + (mounted / "probe").string() + "'");
+  ASSERT_TRUE(has(probe.output, "Read-only file system")) << "the mount is not read-only: " << probe.output;
+
+  for (const std::string cmd : {"runs list", "nc history", "events", "db check"}) {
+    CommandResult r =
+        run_shell(setup + testing::gaugeloop_binary() + " " + cmd + " --data-dir " + mounted.string() + "'");
+    EXPECT_EQ(r.exit_code, 0) << cmd << ": " << r.output;
+  }
+  CommandResult list =
+      run_shell(setup + testing::gaugeloop_binary() + " runs list --json --data-dir " + mounted.string() + "'");
+  EXPECT_TRUE(has(list.output, "\"id\": " + std::to_string(ids_[1]))) << list.output;
+}
+
+TEST_F(DbCommandsTest, CheckSaysASoundDatabaseIsSound) {
+  CommandResult r = run_command("db check" + data_);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "database " + db_.string() + " is sound (schema version ")) << r.output;
+}
+
+TEST_F(DbCommandsTest, ADamagedDatabaseIsRefusedByCheckAndByTheServiceAtStart) {
+  ASSERT_TRUE(testing::damage_runs_table(db_));
+  ASSERT_NE(testing::sqlite_text(db_, "PRAGMA integrity_check"), "ok") << "the damage did not show";
+
+  CommandResult check = run_command("db check --db " + db_.string());
+  EXPECT_EQ(check.exit_code, 4) << check.output;
+  EXPECT_TRUE(has(check.output, "database " + db_.string() + " is damaged: ")) << check.output;
+  EXPECT_TRUE(has(check.output, "gaugeloop db backup")) << check.output;
+
+  const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
+  const fs::path config = dir_ / "gaugeloop.toml";
+  std::ofstream(config) << "[gauge]\n[[part]]\nfile = \"" << (examples / "intake_flat.toml").string()
+                        << "\"\n[nc]\ndir = \"nc\"\ntemplate = \""
+                        << (examples / "sinumerik" / "cam_table.spf").string() << "\"\n[database]\npath = \""
+                        << db_.string() << "\"\n[http]\nport = 0\n";
+  // A service that started would wait for a signal: the guard kills it, and the test fails.
+  CommandResult serve =
+      run_shell("timeout -s KILL 120 " + testing::gaugeloop_binary() + " serve --config " + config.string());
+  EXPECT_EQ(serve.exit_code, 2) << serve.output;
+  EXPECT_TRUE(has(serve.output, "database refused, not starting: database " + db_.string() + " is damaged"))
+      << serve.output;
+  EXPECT_FALSE(has(serve.output, "listening on")) << serve.output;
+}
+
+TEST_F(DbCommandsTest, ABackupHoldsTheSameRunsAndIsNeverOverwrittenUnlessTold) {
+  const fs::path copy = dir_ / "copy" / "gaugeloop.sqlite";
+  fs::create_directories(copy.parent_path());
+  CommandResult r = run_command("db backup " + copy.string() + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "backed up to " + copy.string())) << r.output;
+  EXPECT_EQ(listed(copy.parent_path()), listed(db_.parent_path()));
+  EXPECT_EQ(listed(copy.parent_path()).size(), 2u);
+
+  r = run_command("db backup " + copy.string() + data_);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, copy.string() + " exists already")) << r.output;
+  r = run_command("db backup --force " + copy.string() + data_);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+TEST_F(DbCommandsTest, AnOlderSchemaIsRefusedByQueriesAndUpgradedByDbUpgradeAfterABackup) {
+  const fs::path old_dir = dir_ / "old";
+  const fs::path old_db = old_dir / "gaugeloop.sqlite";
+  fs::create_directories(old_dir);
+  {
+    storage_internal::Connection conn;
+    conn.path = old_db;
+    ASSERT_EQ(sqlite3_open(old_db.c_str(), &conn.db), SQLITE_OK);
+    ASSERT_TRUE(storage_internal::apply_migrations_up_to(conn, 3).ok());
+    ASSERT_EQ(sqlite3_exec(conn.db,
+                           "INSERT INTO events (at_utc, kind, code, message) VALUES "
+                           "('2020-11-22T02:00:00Z', 'fault', 'gauge timeout', 'no reply')",
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+  }
+  for (const std::string cmd : {"runs list", "nc history", "events"}) {
+    CommandResult r = run_command(cmd + " --data-dir " + old_dir.string());
+    EXPECT_EQ(r.exit_code, 4) << cmd << ": " << r.output;
+    EXPECT_TRUE(has(r.output, "schema version 3")) << r.output;
+    EXPECT_TRUE(has(r.output, "run `gaugeloop db upgrade --db " + old_db.string() + "`")) << r.output;
+  }
+  EXPECT_EQ(testing::sqlite_text(old_db, "PRAGMA user_version"), "3");
+
+  CommandResult up = run_command("db upgrade --data-dir " + old_dir.string());
+  ASSERT_EQ(up.exit_code, 0) << up.output;
+  EXPECT_TRUE(has(up.output, "upgraded from schema version 3 to ")) << up.output;
+  std::vector<fs::path> backups;
+  for (const auto& e : fs::directory_iterator(old_dir)) {
+    if (e.path().filename().string().starts_with("gaugeloop.sqlite.schema3-backup-")) backups.push_back(e.path());
+  }
+  ASSERT_EQ(backups.size(), 1u) << up.output;
+  EXPECT_TRUE(has(up.output, "kept in " + backups[0].string())) << up.output;
+  EXPECT_EQ(testing::sqlite_text(backups[0], "PRAGMA user_version"), "3");
+  EXPECT_EQ(run_command("runs list --data-dir " + old_dir.string()).exit_code, 0);
+
+  CommandResult again = run_command("db upgrade --data-dir " + old_dir.string());
+  EXPECT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_TRUE(has(again.output, "nothing to upgrade")) << again.output;
+}
+
+}  // namespace
+}  // namespace gaugeloop
