@@ -700,6 +700,16 @@ Status check_push(std::int64_t run_id, const NcPush& push) {
   return check_table_figures(what, push.block_count, push.command_error_um, push.point_count, push.correction_max_um);
 }
 
+// The next table version of `nc_file`: 1 + the highest recorded (1 if none).
+Result<int> next_version_of(Connection& conn, std::string_view nc_file, const std::string& operation) {
+  Result<Statement> next = Statement::prepare(conn, kNextTableVersion, operation);
+  if (!next.ok()) return next.error();
+  next->bind(1, nc_file);
+  Result<bool> row = next->step();
+  if (!row.ok()) return row.error();
+  return next->column_int(0);
+}
+
 // Records one push inside the caller's write transaction, which makes the version check and
 // the insert one step for other writers: marks the run pushed, takes (or checks) the file's
 // next table version and inserts the nc_pushes row. Returns its id. `push` was checked.
@@ -714,12 +724,9 @@ Result<std::int64_t> insert_push(Connection& conn, std::int64_t run_id, const Nc
     return make_error(ErrorCode::kNotFound, "cannot " + operation + ": run " + std::to_string(run_id) +
                                                 " is not in run database " + conn.path.string());
   }
-  Result<Statement> next = Statement::prepare(conn, kNextTableVersion, operation);
+  Result<int> next = next_version_of(conn, push.nc_file, operation);
   if (!next.ok()) return next.error();
-  next->bind(1, std::string_view(push.nc_file));
-  Result<bool> row = next->step();
-  if (!row.ok()) return row.error();
-  const int version = next->column_int(0);
+  const int version = *next;
   if (push.table_version != 0 && push.table_version != version) {
     return make_error(ErrorCode::kInvalidInput,
                       "cannot " + operation + ": table version " + std::to_string(push.table_version) +
@@ -770,13 +777,7 @@ Result<int> RunStore::next_table_version(const std::string& nc_file) const {
   if (nc_file.empty()) {
     return make_error(ErrorCode::kInvalidInput, "cannot find the next table version: the NC file path is empty");
   }
-  Connection& conn = *conn_;
-  Result<Statement> q = Statement::prepare(conn, kNextTableVersion, "find the next table version of " + nc_file);
-  if (!q.ok()) return q.error();
-  q->bind(1, std::string_view(nc_file));
-  Result<bool> row = q->step();
-  if (!row.ok()) return row.error();
-  return q->column_int(0);
+  return next_version_of(*conn_, nc_file, "find the next table version of " + nc_file);
 }
 
 Result<std::vector<NcPush>> RunStore::list_pushes(const PushQuery& q) const {
@@ -1215,17 +1216,11 @@ Result<std::int64_t> RunStore::begin_push(const PushIntent& intent) {
                                                   " is not in run database " + conn.path.string());
     }
   }
-  {
-    Result<Statement> next = Statement::prepare(conn, kNextTableVersion, operation);
-    if (!next.ok()) return next.error();
-    next->bind(1, std::string_view(p.nc_file));
-    Result<bool> row = next->step();
-    if (!row.ok()) return row.error();
-    if (next->column_int(0) != p.table_version) {
-      return make_error(ErrorCode::kInvalidInput, "cannot " + operation + ": the next version of the file is " +
-                                                      std::to_string(next->column_int(0)) +
-                                                      "; render the program again with it");
-    }
+  Result<int> next = next_version_of(conn, p.nc_file, operation);
+  if (!next.ok()) return next.error();
+  if (*next != p.table_version) {
+    return make_error(ErrorCode::kInvalidInput, "cannot " + operation + ": the next version of the file is " +
+                                                    std::to_string(*next) + "; render the program again with it");
   }
   Result<Statement> ins = Statement::prepare(
       conn,
