@@ -87,6 +87,7 @@ struct MeasureOptions {
   std::string machine = "grinder-1";
   std::string note;
   int response_timeout_ms = 200;
+  int run_timeout_s = 0;         // 0: from the spindle speed (poller.h, run_timeout_at)
   std::string mode = "latched";  // latched | live
   std::string gauge_config;      // measure only
 };
@@ -118,6 +119,11 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
   cmd.add_option("--response-timeout-ms", o.response_timeout_ms, "Gauge response timeout")
       ->capture_default_str()
       ->check(CLI::Range(10, 10000));
+  cmd.add_option("--run-timeout-s", o.run_timeout_s,
+                 "Longest a run may take; 0: (revolutions + 3 spare + 2) revolutions at the spindle speed seen, "
+                 "at least 10 s")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 86400));
   cmd.add_option("--mode", o.mode,
                  "latched: drain the amplifier's per-degree latch buffer; live: poll the reading and interpolate "
                  "(amplifiers without a latch input, slow spindles)")
@@ -136,6 +142,7 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
   js.nc_program = lp.file.nc_program;
   js.poller.revolutions = o.revolutions;
   js.poller.mode = o.mode == "live" ? SamplingMode::kLive : SamplingMode::kLatched;
+  js.poller.run_timeout = std::chrono::seconds(o.run_timeout_s);
   js.db_path = o.paths.db();
   js.nc_dir = o.paths.nc();
   js.nc_template = std::move(*tmpl);

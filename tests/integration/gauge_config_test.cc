@@ -122,6 +122,33 @@ fault_status_address = 107
   EXPECT_EQ(def->map.latch.fault_count_address, -1);
 }
 
+// A status word that is 0 when all is well, with a bit for each fault of the amplifier's own.
+TEST(GaugeConfig, ReadsAStatusWordWithAnOkValueAndNamedBits) {
+  auto cfg = parse_gauge_toml(R"([map]
+[map.reading]
+address = 0
+type = "INT32"
+[map.angle]
+address = 3
+type = "UINT32"
+[map.status]
+address = 9
+ok_value = 0
+[map.status.bits]
+0 = "lever over-range"
+3 = "amplifier not ready"
+)",
+                              "gauge.toml");
+  ASSERT_TRUE(cfg.ok()) << cfg.error().message;
+  const StatusMasks& m = cfg->map.masks;
+  ASSERT_TRUE(m.ok_value.has_value());
+  EXPECT_EQ(*m.ok_value, 0);
+  EXPECT_EQ(m.bit_names[0], "lever over-range");
+  EXPECT_EQ(m.bit_names[3], "amplifier not ready");
+  EXPECT_TRUE(m.bit_names[1].empty());
+  EXPECT_EQ(describe_gauge_status(translate_status(0x0009, m), &m.bit_names), "lever over-range, amplifier not ready");
+}
+
 TEST(GaugeConfig, RefusesMistakesNamingFileLineAndKey) {
   const BadConfig cases[] = {
       {"[link]\nprot = 502\n", "gauge.toml:2: key `link.prot`: unknown key"},
@@ -134,6 +161,12 @@ TEST(GaugeConfig, RefusesMistakesNamingFileLineAndKey) {
        "gauge.toml:4: key `link.port`: a TCP setting in an RTU link"},
       {"[link]\nbaud = 9600\n", "gauge.toml:2: key `link.baud`: a serial setting in a TCP link"},
       {"[link]\ntransport = \"rtu\"\n", "key `link.device` is missing"},
+      {"[map.status]\naddress = 9\nok_value = 0\nready_mask = 1\n",
+       "gauge.toml:3: key `map.status.ok_value`: give either ok_value (and bits) or the masks"},
+      {"[map.status]\naddress = 9\n[map.status.bits]\n0 = \"over-range\"\n",
+       "key `map.status.bits`: names status bits of an ok_value status word"},
+      {"[map.status]\naddress = 9\nok_value = 0\n[map.status.bits]\n16 = \"x\"\n",
+       "gauge.toml:5: key `map.status.bits.16`: a status bit is a number 0 to 15"},
   };
   for (const BadConfig& c : cases) {
     auto cfg = parse_gauge_toml(c.text, "gauge.toml");
