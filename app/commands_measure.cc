@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "acquisition/modbus_gauge.h"
+#include "acquisition/tcp_endpoint.h"
 #include "app/cli_common.h"
 #include "app/embedded_defaults.h"
 #include "app/gauge_config.h"
@@ -283,18 +284,10 @@ int cmd_measure(const MeasureOptions& o, const std::string& gauge_address) {
     ms = std::move(*from_file);
   }
   if (!gauge_address.empty()) {
-    const auto colon = gauge_address.rfind(':');
-    try {
-      if (colon == std::string::npos) throw std::invalid_argument("no port");
-      size_t used = 0;
-      const int port = std::stoi(gauge_address.substr(colon + 1), &used);
-      if (used != gauge_address.size() - colon - 1 || port <= 0 || port > 65535) throw std::invalid_argument("port");
-      ms.host = gauge_address.substr(0, colon);
-      ms.port = port;
-    } catch (const std::exception&) {
-      return report_error(make_error(ErrorCode::kInvalidInput,
-                                     "--gauge `" + gauge_address + "`: expected HOST:PORT, e.g. 192.168.0.20:502"));
-    }
+    Result<TcpEndpoint> endpoint = parse_tcp_endpoint(gauge_address);
+    if (!endpoint) return report_error(make_error(ErrorCode::kInvalidInput, "--gauge " + endpoint.error().message));
+    ms.host = endpoint->host;
+    ms.port = endpoint->port;
   } else if (o.gauge_config.empty()) {
     return report_error(make_error(ErrorCode::kInvalidInput,
                                    "no gauge: give --gauge HOST:PORT or a --gauge-config file with a [link] table"));
@@ -457,7 +450,8 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
       "measure",
       "Measure one run against a gauge amplifier at HOST:PORT, store it and write the corrected curve table.");
   measure->add_option("--gauge", *gauge_address,
-                      "Gauge amplifier, HOST:PORT (Modbus TCP); overrides the config's [link]");
+                      "Gauge amplifier, HOST:PORT (Modbus TCP): a name, an IPv4 address or [IPv6]:PORT; overrides "
+                      "the config's [link]");
   measure->add_option("--gauge-config", measure_opts->gauge_config,
                       "Gauge config (TOML): link and register map, see docs/gauge.md [the simulator's map]");
   measure->add_option("--part", measure_opts->part_path, "Part file (TOML), see examples/");

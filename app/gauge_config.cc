@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "acquisition/tcp_endpoint.h"
 #include "app/toml_reader.h"
 
 namespace gaugeloop {
@@ -93,7 +94,7 @@ void read_field(std::string_view name, std::string_view source, WordOrder defaul
 
 }  // namespace
 
-void read_modbus_link(TomlReader& lr, const ModbusSettings& defaults, ModbusSettings& out) {
+void read_modbus_link(TomlReader& lr, const ModbusSettings& defaults, ModbusSettings& out, std::string_view device) {
   const bool rtu = lr.choice("transport", "tcp", {"tcp", "rtu"}) == "rtu";
   out.transport = rtu ? ModbusTransport::kRtu : ModbusTransport::kTcp;
   if (rtu) {
@@ -111,6 +112,14 @@ void read_modbus_link(TomlReader& lr, const ModbusSettings& defaults, ModbusSett
     }
     out.host = lr.text("host", defaults.host);
     out.port = static_cast<int>(lr.integer("port", defaults.port, 1, 65535));
+    // A name that does not exist fails now, not at the first run. A resolver that cannot
+    // answer now (kGaugeUnreachable) is let pass: the name may exist, and the link retries.
+    if (!lr.error) {
+      Status resolved = resolve_tcp_host(out.host, out.port, device);
+      if (!resolved && resolved.error().code == ErrorCode::kInvalidInput) {
+        lr.fail(lr.where("host") + ": " + resolved.error().message);
+      }
+    }
   }
   out.unit_id = static_cast<int>(lr.integer("unit_id", defaults.unit_id, 0, 247));
   out.response_timeout =

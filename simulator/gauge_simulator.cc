@@ -197,8 +197,9 @@ Status GaugeSimulator::listen() {
     return {};
   }
   if (ctx_ == nullptr) {
-    // The context only frames requests and replies; the sockets are ours (see serve()).
-    ctx_ = modbus_new_tcp(settings_.host.c_str(), settings_.port);
+    // The context only frames requests and replies; the sockets are ours (see serve()). The
+    // protocol-independent backend, so the host may be IPv4 or IPv6.
+    ctx_ = modbus_new_tcp_pi(settings_.host.c_str(), std::to_string(settings_.port).c_str());
     if (ctx_ == nullptr) {
       return make_error(ErrorCode::kInvalidInput,
                         "simulator address " + settings_.host + " is not usable: " + modbus_strerror(errno));

@@ -149,6 +149,23 @@ ok_value = 0
   EXPECT_EQ(describe_gauge_status(translate_status(0x0009, m), &m.bit_names), "lever over-range, amplifier not ready");
 }
 
+// Host names and IPv6 addresses are taken, and a name that does not exist is refused when
+// the config is read, not at the first run (".invalid" never resolves, RFC 2606).
+TEST(GaugeConfig, ResolvesTheHostWhenRead) {
+  for (const char* host : {"localhost", "127.0.0.1", "::1"}) {
+    auto cfg = parse_gauge_toml("[link]\nhost = \"" + std::string(host) + "\"\nport = 1502\n", "gauge.toml");
+    ASSERT_TRUE(cfg.ok()) << host << ": " << cfg.error().message;
+    EXPECT_EQ(cfg->host, host);
+  }
+  auto bad = parse_gauge_toml("[link]\nhost = \"gauge-amp.invalid\"\n", "gauge.toml");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().code, ErrorCode::kInvalidInput);
+  EXPECT_NE(bad.error().message.find("gauge.toml:2: key `link.host`: cannot resolve host 'gauge-amp.invalid': "),
+            std::string::npos)
+      << bad.error().message;
+  EXPECT_NE(bad.error().message.find("check the gauge's address"), std::string::npos) << bad.error().message;
+}
+
 TEST(GaugeConfig, RefusesMistakesNamingFileLineAndKey) {
   const BadConfig cases[] = {
       {"[link]\nprot = 502\n", "gauge.toml:2: key `link.prot`: unknown key"},
