@@ -4,14 +4,13 @@
 // than a scheduler slice when one other process competes for the CPU.
 #include <gtest/gtest.h>
 
-#include <cctype>
 #include <filesystem>
-#include <string>
 
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/poller.h"
 #include "core/lift_table.h"
 #include "simulator/gauge_simulator.h"
+#include "outage_faults.h"
 #include "tests/support/intake_simulator.h"
 
 namespace gaugeloop {
@@ -72,14 +71,8 @@ TEST_P(LiveOutageTest, AnOutageOfUpToARevolutionIsAbsorbedInLiveMode) {
   expect_lobe(*run);
 }
 
-INSTANTIATE_TEST_SUITE_P(SimulatorFaults, LiveOutageTest,
-                         ::testing::Values("refuse@1.5+1", "drop@1.5", "silent@1.5+1", "exception@1.5+1",
-                                           "late@1.5:300", "frozen@1.5+1"),
-                         [](const ::testing::TestParamInfo<const char*>& fault) {
-                           std::string name;
-                           for (char c : std::string(fault.param)) name += std::isalnum(c) ? c : '_';
-                           return name;
-                         });
+INSTANTIATE_TEST_SUITE_P(SimulatorFaults, LiveOutageTest, ::testing::ValuesIn(testing::kOutagesUpToARevolution),
+                         testing::fault_test_name);
 
 // The revolution register moves 3 degrees after the angle wraps. Taken as the encoder
 // running backwards, it would break every revolution at its wrap.

@@ -6,7 +6,6 @@
 // 250 ms of wall time.
 #include <gtest/gtest.h>
 
-#include <cctype>
 #include <filesystem>
 #include <string>
 
@@ -14,6 +13,7 @@
 #include "acquisition/poller.h"
 #include "core/lift_table.h"
 #include "simulator/gauge_simulator.h"
+#include "outage_faults.h"
 #include "tests/support/intake_simulator.h"
 
 namespace gaugeloop {
@@ -75,14 +75,8 @@ TEST_P(OutageTest, AnOutageOfUpToARevolutionIsAbsorbedInLatchedMode) {
   expect_lobe(*run);
 }
 
-INSTANTIATE_TEST_SUITE_P(SimulatorFaults, OutageTest,
-                         ::testing::Values("refuse@1.5+1", "drop@1.5", "silent@1.5+1", "exception@1.5+1",
-                                           "late@1.5:300", "frozen@1.5+1"),
-                         [](const ::testing::TestParamInfo<const char*>& fault) {
-                           std::string name;
-                           for (char c : std::string(fault.param)) name += std::isalnum(c) ? c : '_';
-                           return name;
-                         });
+INSTANTIATE_TEST_SUITE_P(SimulatorFaults, OutageTest, ::testing::ValuesIn(testing::kOutagesUpToARevolution),
+                         testing::fault_test_name);
 
 // 45 revolutions at 250 ms take over 11 s, longer than the shortest run timeout (10 s): the
 // timeout follows the speed seen (50 revolutions: 12.5 s).
@@ -104,24 +98,24 @@ TEST_F(SimulatorFaultTest, ALastingSilenceIsNamedAsTheLink) {
 }
 
 // An amplifier that stands still while the link answers fails the run as a freeze, after
-// 5 stale periods, well before the run timeout (at least 10 s).
-TEST_F(SimulatorFaultTest, ALastingFreezeFailsTheRunNamingItInLatchedMode) {
-  Result<MeasuredRun> run = measure_with("frozen@1.5");
+// 5 stale periods and 2 revolutions, well before the run timeout (at least 10 s); `what`
+// says what stood still.
+void expect_freeze_named(const Result<MeasuredRun>& run, const char* what) {
   ASSERT_FALSE(run.ok());
   EXPECT_EQ(run.error().code, ErrorCode::kGaugeTimeout);
   EXPECT_NE(run.error().message.find("stood still during revolution"), std::string::npos) << run.error().message;
-  EXPECT_NE(run.error().message.find("latch count stayed at"), std::string::npos) << run.error().message;
+  EXPECT_NE(run.error().message.find(what), std::string::npos) << run.error().message;
+}
+
+TEST_F(SimulatorFaultTest, ALastingFreezeFailsTheRunNamingItInLatchedMode) {
+  expect_freeze_named(measure_with("frozen@1.5"), "latch count stayed at");
 }
 
 // Live mode: the next poll after a reconnect meets the same sample number and is no new
 // sample, so the freeze is found as in latched mode.
 TEST_F(SimulatorFaultTest, ALastingFreezeFailsTheRunNamingItInLiveMode) {
-  Result<MeasuredRun> run =
-      measure_with("frozen@1.5", std::chrono::milliseconds(100), RegisterMap{}, SamplingMode::kLive);
-  ASSERT_FALSE(run.ok());
-  EXPECT_EQ(run.error().code, ErrorCode::kGaugeTimeout);
-  EXPECT_NE(run.error().message.find("stood still during revolution"), std::string::npos) << run.error().message;
-  EXPECT_NE(run.error().message.find("sample number stayed at"), std::string::npos) << run.error().message;
+  expect_freeze_named(measure_with("frozen@1.5", std::chrono::milliseconds(100), RegisterMap{}, SamplingMode::kLive),
+                      "sample number stayed at");
 }
 
 // A status that stays bad is named, with its degrees, in live mode too.
