@@ -8,7 +8,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/poller.h"
@@ -193,11 +196,11 @@ TEST(GaugeConfig, RefusesMistakesNamingFileLineAndKey) {
   }
 }
 
-// The pymodbus peer as a child process: started with its spindle speed, its port read from
-// its first line of output, stopped by closing its stdin.
+// The pymodbus peer as a child process: started with its spindle speed and options (see the
+// script), its port read from its first line of output, stopped by closing its stdin.
 class PymodbusPeer {
  public:
-  explicit PymodbusPeer(double speed_rpm) {
+  explicit PymodbusPeer(double speed_rpm, std::vector<std::string> options = {}) {
     int in[2];
     int out[2];
     if (::pipe(in) != 0 || ::pipe(out) != 0) return;
@@ -208,9 +211,12 @@ class PymodbusPeer {
       ::close(in[1]);
       ::close(out[0]);
       const std::string script = std::string(GAUGELOOP_SOURCE_DIR) + "/tests/peers/pymodbus_gauge.py";
-      const std::string speed = std::to_string(speed_rpm);
+      options.insert(options.begin(), {"python3", script, std::to_string(speed_rpm)});
+      std::vector<char*> argv;
+      for (std::string& o : options) argv.push_back(o.data());
+      argv.push_back(nullptr);
       // Debian's interpreter: python3-pymodbus is installed for it, not for others on PATH.
-      ::execl("/usr/bin/python3", "python3", script.c_str(), speed.c_str(), static_cast<char*>(nullptr));
+      ::execv("/usr/bin/python3", argv.data());
       ::_exit(127);
     }
     ::close(in[0]);
@@ -241,16 +247,28 @@ double peer_lift_mm(int deg) {
   return 2.0 + 1.5 * std::cos(rad) + 0.2 * std::sin(3.0 * rad);
 }
 
-Result<MeasuredRun> measure_peer(int port, SamplingMode mode) {
+// Measures through examples/gauges/other_amplifier.toml, changed by `adapt` when given.
+Result<MeasuredRun> measure_peer(int port, SamplingMode mode,
+                                 const std::function<void(RegisterMap&)>& adapt = nullptr) {
   auto cfg = read_gauge_file(example("other_amplifier.toml"));
   if (!cfg) return cfg.error();
   cfg->port = port;
+  if (adapt) adapt(cfg->map);
   ModbusGauge gauge(*cfg);
   PollerSettings ps;
   ps.mode = mode;
   ps.spare_revolutions = 6;
   Poller poller(gauge, ps);
   return poller.measure();
+}
+
+// The peer's revolution count (register 16) and its ok-value status code (register 17).
+void read_peer_count_and_status_code(RegisterMap& m) {
+  m.revolution = FieldSpec{true, RegisterTable::kHolding, 16, ValueType::kUInt16, WordOrder::kABCD, 1.0, 0.0};
+  m.status.address = 17;
+  m.masks = StatusMasks{};
+  m.masks.ok_value = 0;
+  m.masks.bit_names[5] = "coil open";
 }
 
 TEST(PymodbusPeer, LatchedRunDecodesItsMap) {
@@ -280,6 +298,41 @@ TEST(PymodbusPeer, LiveRunCountsRevolutionsFromTheAngle) {
   for (const auto& rev : run->revolutions) {
     for (int d = 0; d < 360; ++d) ASSERT_NEAR(rev.lift_mm[d], peer_lift_mm(d), 5e-4) << "degree " << d;
   }
+}
+
+// A third-party amplifier that moves its revolution count 2 degrees after the angle wraps,
+// with a status word that is 0 when all is well: every revolution taken, none lost at a wrap.
+TEST(PymodbusPeer, LiveRunTakesARevolutionCountLaggingTheWrap) {
+  PymodbusPeer peer(12.0, {"--revolution-lag-deg", "2"});
+  ASSERT_GT(peer.port(), 0) << "the pymodbus peer did not start (python3-pymodbus: scripts/install-deps.sh)";
+  Result<MeasuredRun> run = measure_peer(peer.port(), SamplingMode::kLive, read_peer_count_and_status_code);
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  ASSERT_EQ(run->revolutions.size(), 3u);
+  for (const auto& rev : run->revolutions) {
+    for (int d = 0; d < 360; ++d) ASSERT_NEAR(rev.lift_mm[d], peer_lift_mm(d), 5e-4) << "degree " << d;
+  }
+}
+
+// Its fault bit 5 from half a revolution on, for good: named by the map's name for it.
+TEST(PymodbusPeer, AFaultBitOfItsOwnIsNamed) {
+  PymodbusPeer peer(60.0, {"--fault-at-rev", "0.5"});
+  ASSERT_GT(peer.port(), 0) << "the pymodbus peer did not start (python3-pymodbus: scripts/install-deps.sh)";
+  Result<MeasuredRun> run = measure_peer(peer.port(), SamplingMode::kLive, read_peer_count_and_status_code);
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kIncompleteRun);
+  EXPECT_NE(run.error().message.find("gauge status coil open at degrees"), std::string::npos) << run.error().message;
+}
+
+// Every register stands still from 1.5 revolutions on while the peer keeps answering: live
+// mode names the freeze instead of polling until the run timeout.
+TEST(PymodbusPeer, AFrozenAmplifierIsNamedInLiveMode) {
+  PymodbusPeer peer(60.0, {"--freeze-at-rev", "1.5"});
+  ASSERT_GT(peer.port(), 0) << "the pymodbus peer did not start (python3-pymodbus: scripts/install-deps.sh)";
+  Result<MeasuredRun> run = measure_peer(peer.port(), SamplingMode::kLive);
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kGaugeTimeout);
+  EXPECT_NE(run.error().message.find("stood still"), std::string::npos) << run.error().message;
+  EXPECT_NE(run.error().message.find("sample number stayed at"), std::string::npos) << run.error().message;
 }
 
 }  // namespace
