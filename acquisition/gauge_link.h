@@ -16,10 +16,10 @@ namespace gaugeloop {
 //   Disconnected --ensure, connect ok-------------------> Connected
 //   Disconnected --ensure, connect fails, attempts left--> BackingOff
 //   BackingOff   --ensure: sleep backoff, connect ok-----> Connected     (a reconnect)
-//   BackingOff   --ensure: connect fails, attempts left--> BackingOff    (backoff doubles)
+//   BackingOff   --ensure: connect fails, not spent------> BackingOff    (backoff doubles)
 //   Connected    --succeeded-----------------------------> Connected     (failures and backoff reset)
-//   Connected    --failed, attempts left-----------------> BackingOff    (link closed: late replies flushed)
-//   any          --failure with no attempts left---------> Failed        (terminal: every call returns the error)
+//   Connected    --failed, not spent---------------------> BackingOff    (link closed: late replies flushed)
+//   any          --failure, attempts and patience spent--> Failed        (terminal: every call returns the error)
 //
 // "Attempts" counts consecutive failures, of connects and of requests alike; a successful
 // request resets it. The backoff starts at backoff_initial and doubles up to backoff_max.
