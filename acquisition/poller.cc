@@ -110,6 +110,33 @@ class RunBudget {
   double rev_per_s_ = 0.0;
 };
 
+// The spindle's rate over a long baseline: the progress (latch marks, unwrapped degrees)
+// since the first observation after the last restart. Restarted at every gap (an outage, a
+// freeze), so a gap never slows it; per-poll ratios of tiny, quantised steps would read
+// several times the true rate.
+class RateWatch {
+ public:
+  explicit RateWatch(Clock::duration baseline) : baseline_(baseline) {}
+  void restart() { origin_.reset(); }
+  // Progress at `now`, counting up. True when the rate was updated: a baseline has passed
+  // and there was progress since the origin.
+  bool observe(Clock::time_point now, double progress) {
+    if (!origin_) {
+      origin_ = {now, progress};
+      return false;
+    }
+    if (now - origin_->first <= baseline_ || progress <= origin_->second) return false;
+    per_s_ = (progress - origin_->second) / std::chrono::duration<double>(now - origin_->first).count();
+    return true;
+  }
+  double per_s() const { return per_s_; }  // 0 until known
+
+ private:
+  Clock::duration baseline_;
+  std::optional<std::pair<Clock::time_point, double>> origin_;
+  double per_s_ = 0.0;
+};
+
 // Whether the amplifier stands still while the link answers: no new sample (live) or latch
 // entry (latched) for stale_after. Time with the link down does not count: the timer
 // restarts at the first good exchange after a failure, so an outage is never taken for a
@@ -284,10 +311,7 @@ Result<MeasuredRun> Poller::measure_live() {
   RevolutionUnwrapper revolutions;
   auto last_new_sample = Clock::now();
   double rate_deg_per_s = 0.0;  // spindle rate from successive new samples, smoothed: paces the polls
-  // The first poll of the chain (time, unwrapped angle): the spindle speed over a long
-  // baseline, for the run's budget. Per-poll rates are ratios of tiny, quantised steps and
-  // read several times the true speed; restarted at every break, so a gap never slows it.
-  std::optional<std::pair<Clock::time_point, double>> speed_origin;
+  RateWatch speed(std::chrono::milliseconds(50));  // unwrapped degrees per second, for the budget
   Clock::time_point last_poll_at{};
   std::string last_discard;  // why the most recent revolution was thrown away
 
@@ -441,6 +465,14 @@ Result<MeasuredRun> Poller::measure_live() {
     return {};
   };
 
+  // Never interpolate across a gap in the polls: a failed read, or a frozen amplifier.
+  auto break_chain = [&](const std::string& why) {
+    if (have_prev) break_span(prev.u_deg, prev.u_deg, why);
+    have_prev = false;
+    speed.restart();
+    fill_ready(/*closing=*/true);
+  };
+
   while (static_cast<int>(run.revolutions.size()) < wanted) {
     if (budget.timed_out(Clock::now())) return run_timed_out(budget, where_now(), last_discard);
     if (link.state() != LinkState::kConnected || !gauge_.connected()) {
@@ -457,13 +489,6 @@ Result<MeasuredRun> Poller::measure_live() {
     last_poll_at = Clock::now();
     Result<GaugeSnapshot> r = gauge_.read_snapshot();
     ++run.polls;
-    // Never interpolate across a gap in the polls: a failed read, or a frozen amplifier.
-    auto break_chain = [&](const std::string& why) {
-      if (have_prev) break_span(prev.u_deg, prev.u_deg, why);
-      have_prev = false;
-      speed_origin.reset();
-      fill_ready(/*closing=*/true);
-    };
     if (!r) {
       break_chain("link fault: " + r.error().message);
       freeze.link_failed();
@@ -494,11 +519,8 @@ Result<MeasuredRun> Poller::measure_live() {
         rate_deg_per_s = rate_deg_per_s > 0.0 ? 0.9 * rate_deg_per_s + 0.1 * rate : rate;
       }
     }
-    if (!speed_origin) {
-      speed_origin = {now, cur.u_deg};
-    } else if (now - speed_origin->first > std::chrono::milliseconds(50) && cur.u_deg > speed_origin->second) {
-      const double elapsed_s = std::chrono::duration<double>(now - speed_origin->first).count();
-      budget.saw_speed((cur.u_deg - speed_origin->second) / 360.0 / elapsed_s);
+    if (speed.observe(now, cur.u_deg)) {
+      budget.saw_speed(speed.per_s() / 360.0);
       link.set_patience(budget.patience());
     }
     last_new_sample = now;
@@ -545,12 +567,12 @@ Result<MeasuredRun> Poller::measure_latched() {
   std::optional<std::pair<std::uint32_t, std::uint32_t>> last_faults;  // (count, fault count) at the last state read
   // Compact entries: whether the latch count has been checked against the encoder angle.
   bool frame_checked = false;
-  // Latch rate, from the first state read after the drain (re)started to the latest: paces
-  // the drain and gives the spindle speed. Restarted with the drain, so a freeze or an
-  // outage never slows the estimate (and so lengthens the patience and the run timeout).
-  std::optional<std::pair<Clock::time_point, std::uint32_t>> rate_origin;
-  double entries_per_s = 0.0;
+  // Latch marks per second: paces the drain and gives the spindle speed. Restarted with the
+  // drain, so a freeze or an outage never slows it (and so lengthens the patience and the run
+  // timeout). The count is taken as it comes: at its 2^32 wrap the rate waits for a restart.
+  RateWatch latch_rate(std::chrono::milliseconds(5));
   auto drain_pause = [&](const LatchState& latch) {
+    const double entries_per_s = latch_rate.per_s();
     if (entries_per_s <= 0.0) return std::chrono::duration<double>(settings_.latch_idle_wait);
     const double wait_s = std::min<double>(latch.entries_per_read, latch.ring_size / 4.0) / entries_per_s;
     return std::min(std::chrono::duration<double>(wait_s), std::chrono::duration<double>(settings_.latch_max_wait));
@@ -571,7 +593,7 @@ Result<MeasuredRun> Poller::measure_latched() {
     discard(why);
     pending.clear();
     have_next = false;
-    rate_origin.reset();
+    latch_rate.restart();
   };
   // A request failed: restart the drain, and let the link decide whether to go on.
   auto link_fault = [&](const Error& e) -> Status {
@@ -707,13 +729,8 @@ Result<MeasuredRun> Poller::measure_latched() {
         if (done) break;
       }
     }
-    const auto now = Clock::now();
-    if (!rate_origin) {
-      rate_origin = {now, state->write_count};
-    } else if (now - rate_origin->first > std::chrono::milliseconds(5) && state->write_count != rate_origin->second) {
-      entries_per_s = static_cast<double>(state->write_count - rate_origin->second) /
-                      std::chrono::duration<double>(now - rate_origin->first).count();
-      budget.saw_speed(entries_per_s / kDegreesPerRevolution);
+    if (latch_rate.observe(Clock::now(), state->write_count)) {
+      budget.saw_speed(latch_rate.per_s() / kDegreesPerRevolution);
       link.set_patience(budget.patience());
     }
     if (!have_next) {
