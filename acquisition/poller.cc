@@ -113,19 +113,22 @@ class RunBudget {
 // The spindle's rate over a long baseline: the progress (latch marks, unwrapped degrees)
 // since the first observation after the last restart. Restarted at every gap (an outage, a
 // freeze), so a gap never slows it; per-poll ratios of tiny, quantised steps would read
-// several times the true rate.
+// several times the true rate. Only progress of kMinProgress or more counts, so an encoder
+// dithering on a stopped spindle never makes the rate (and with it the patience and the
+// run timeout) creep towards zero.
 class RateWatch {
  public:
+  static constexpr double kMinProgress = 10.0;  // degrees, or latch marks
+
   explicit RateWatch(Clock::duration baseline) : baseline_(baseline) {}
   void restart() { origin_.reset(); }
-  // Progress at `now`, counting up. True when the rate was updated: a baseline has passed
-  // and there was progress since the origin.
+  // Progress at `now`, counting up. True when the rate was updated.
   bool observe(Clock::time_point now, double progress) {
     if (!origin_) {
       origin_ = {now, progress};
       return false;
     }
-    if (now - origin_->first <= baseline_ || progress <= origin_->second) return false;
+    if (now - origin_->first <= baseline_ || progress < origin_->second + kMinProgress) return false;
     per_s_ = (progress - origin_->second) / std::chrono::duration<double>(now - origin_->first).count();
     return true;
   }
@@ -472,6 +475,18 @@ Result<MeasuredRun> Poller::measure_live() {
     speed.restart();
     fill_ready(/*closing=*/true);
   };
+  // A poll without progress (`what` stood still). After stale_after the chain breaks and the
+  // link is reset (a stuck connection can look frozen); after the freeze watch's patience
+  // the run fails. An error ends the run. Progress is the angle passing the last point of
+  // progress by kStandstillDeg: an encoder dithers by a count or so on a stopped spindle.
+  constexpr double kStandstillDeg = 0.5;
+  std::optional<double> progress_u;
+  auto no_progress = [&](Clock::time_point now, const std::string& what) -> Status {
+    if (!freeze.stale(now)) return {};
+    if (freeze.exhausted(budget)) return frozen_error(gauge_, what, freeze, where_now());
+    break_chain("frozen amplifier or stopped spindle: " + what);
+    return link.failed(make_error(ErrorCode::kGaugeTimeout, what), where_now());
+  };
 
   while (static_cast<int>(run.revolutions.size()) < wanted) {
     if (budget.timed_out(Clock::now())) return run_timed_out(budget, where_now(), last_discard);
@@ -500,18 +515,21 @@ Result<MeasuredRun> Poller::measure_live() {
     const auto now = Clock::now();
     freeze.answered(now);
     if (last_sequence && snap.sequence == *last_sequence) {
-      // Same amplifier sample as last time. A gauge whose sample number stops is frozen.
-      if (!freeze.stale(now)) continue;
-      const std::string what = "its sample number stayed at " + std::to_string(snap.sequence);
-      if (freeze.exhausted(budget)) return frozen_error(gauge_, what, freeze, where_now());
-      break_chain("frozen amplifier: " + what);
-      if (Status s = link.failed(make_error(ErrorCode::kGaugeTimeout, what), where_now()); !s) return s.error();
-      continue;  // reconnect: a stuck connection can look like a frozen amplifier
+      // Same amplifier sample as last time: an amplifier whose sample number stops is frozen.
+      if (Status s = no_progress(now, "its sample number stayed at " + std::to_string(snap.sequence)); !s) {
+        return s.error();
+      }
+      continue;
     }
     last_sequence = snap.sequence;
-    freeze.progressed(now);
 
     const Poll cur{revolutions.unwrap(snap), snap.reading_mm, snap.sequence, snap.status};
+    if (!progress_u || cur.u_deg > *progress_u + kStandstillDeg) {
+      progress_u = cur.u_deg;
+      freeze.progressed(now);
+    } else if (Status s = no_progress(now, "its angle stayed at " + fmt1(snap.angle_deg) + " deg"); !s) {
+      return s.error();  // new samples, but the spindle stands (or turns backwards)
+    }
     if (have_prev && cur.u_deg > prev.u_deg) {
       const double dt_s = std::chrono::duration<double>(now - last_new_sample).count();
       if (dt_s > 0.0) {

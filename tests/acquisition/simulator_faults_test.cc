@@ -118,6 +118,15 @@ TEST_F(SimulatorFaultTest, ALastingFreezeFailsTheRunNamingItInLiveMode) {
                       "sample number stayed at");
 }
 
+// The spindle stops for good (speed drift of -100 %) while the amplifier keeps sampling:
+// latched, the latch count stands; live, the angle does.
+TEST_F(SimulatorFaultTest, AStoppedSpindleFailsTheRunNamingItInBothModes) {
+  expect_freeze_named(measure_with("drift@1.5:-100"), "latch count stayed at");
+  expect_freeze_named(
+      measure_with("drift@1.5:-100", std::chrono::milliseconds(100), RegisterMap{}, SamplingMode::kLive),
+      "angle stayed at");
+}
+
 // A status that stays bad is named, with its degrees, in live mode too.
 TEST_F(SimulatorFaultTest, ALastingBadStatusIsNamedInLiveMode) {
   Result<MeasuredRun> run =

@@ -16,6 +16,7 @@
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/poller.h"
 #include "app/gauge_config.h"
+#include "app/toml_reader.h"
 
 namespace gaugeloop {
 namespace {
@@ -167,6 +168,20 @@ TEST(GaugeConfig, ResolvesTheHostWhenRead) {
             std::string::npos)
       << bad.error().message;
   EXPECT_NE(bad.error().message.find("check the gauge's address"), std::string::npos) << bad.error().message;
+}
+
+// The service's [plc] link is read by the same function and says whose address to check.
+TEST(GaugeConfig, APlcLinkWithAnUnknownHostNamesThePlc) {
+  auto parsed = parse_toml("[plc]\nhost = \"plc.invalid\"\n", "service.toml");
+  ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+  TomlReader r(*(*parsed)["plc"].as_table(), "service.toml", "plc.");
+  ModbusSettings out;
+  read_modbus_link(r, ModbusSettings{}, out, "PLC");
+  ASSERT_TRUE(r.error.has_value());
+  EXPECT_NE(r.error->message.find("service.toml:2: key `plc.host`: cannot resolve host 'plc.invalid': "),
+            std::string::npos)
+      << r.error->message;
+  EXPECT_NE(r.error->message.find("check the PLC's address"), std::string::npos) << r.error->message;
 }
 
 TEST(GaugeConfig, RefusesMistakesNamingFileLineAndKey) {
