@@ -67,7 +67,7 @@ struct LatchState {
 // One latched entry: the reading at a whole machine degree of C.
 struct LatchedSample {
   double reading_mm = 0.0;
-  int degree = 0;            // machine degree 0..359 at which it latched; -1: implied by the latch number
+  int degree = 0;          // machine degree 0..359 at which it latched; -1: implied by the latch number
   GaugeStatus status = 0;  // at that moment (kGaugeReady when the entry has none)
 };
 

@@ -96,11 +96,10 @@ class RunBudget {
   std::string timeout_text() const {
     const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(run_timeout()).count();
     std::string why = s_.run_timeout.count() > 0 ? std::string("as set")
-                      : rev_per_s_ > 0.0
-                          ? std::to_string(s_.revolutions + s_.spare_revolutions + 2) + " revolutions at " +
-                                fmt1(rev_per_s_ * 60.0) + " rpm, at least " +
-                                std::to_string(kRunTimeoutFloor.count() / 1000) + " s"
-                          : std::string("the spindle speed was never seen");
+                      : rev_per_s_ > 0.0         ? std::to_string(s_.revolutions + s_.spare_revolutions + 2) +
+                                               " revolutions at " + fmt1(rev_per_s_ * 60.0) + " rpm, at least " +
+                                               std::to_string(kRunTimeoutFloor.count() / 1000) + " s"
+                                         : std::string("the spindle speed was never seen");
     return "run timed out after " + std::to_string(ms) + " ms (" + why + ")";
   }
 
@@ -225,10 +224,10 @@ class RevolutionUnwrapper {
 
 // The run fails: more revolutions discarded than there are spares.
 Error too_many_discarded(const MeasuredRun& run, int wanted, const std::string& last_discard, const char* advice) {
-  return make_error(ErrorCode::kIncompleteRun,
-                    "only " + std::to_string(run.revolutions.size()) + " of " + std::to_string(wanted) +
-                        " revolutions were complete, " + std::to_string(run.discarded_revolutions) +
-                        " discarded; last discarded " + last_discard + ". " + advice);
+  return make_error(ErrorCode::kIncompleteRun, "only " + std::to_string(run.revolutions.size()) + " of " +
+                                                   std::to_string(wanted) + " revolutions were complete, " +
+                                                   std::to_string(run.discarded_revolutions) +
+                                                   " discarded; last discarded " + last_discard + ". " + advice);
 }
 
 LinkPolicy link_policy(const PollerSettings& s) { return {s.max_attempts, s.backoff_initial, s.backoff_max}; }

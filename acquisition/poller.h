@@ -49,8 +49,9 @@ struct PollerSettings {
   int patience_revolutions = 2;
   std::chrono::milliseconds backoff_initial{20};  // first reconnect delay, doubled each time
   std::chrono::milliseconds backoff_max{500};
-  // No new amplifier sample (live) or latch entry (latched) for this long while the link
-  // answers = frozen amplifier or stopped spindle: reconnect, discard the revolution.
+  // No new latch entry (latched), or no new amplifier sample or half a degree of angle
+  // (live), for this long while the link answers = frozen amplifier or stopped spindle:
+  // reconnect, discard the revolution.
   std::chrono::milliseconds stale_after{200};
   // Latched mode: after draining the buffer, sleep until about one block (31 entries) has
   // latched again, from the latch rate seen so far, but never longer than
@@ -94,9 +95,14 @@ Status validate(const PollerSettings& settings);
 // - Collection starts at the first revolution boundary after the first poll.
 // - On a read error the link is closed and reopened with exponential backoff; no sample is
 //   interpolated across the gap, so the revolution in progress is discarded.
+// - Outages and freezes: the failure count restarts at every good reply, and the stale
+//   timer does not count time with the link down. Once the speed is seen, an outage or a
+//   freeze is waited out for patience_revolutions beside max_attempts (docs/acquisition.md).
 // - A failure returns an Error and no samples: kGaugeUnreachable or kGaugeTimeout when the
-//   gauge cannot be reached or stops answering, kIncompleteRun when the spare revolutions
-//   run out, naming the missing degrees.
+//   gauge cannot be reached or stops answering (naming the link's last error), kGaugeTimeout
+//   when it stands still while answering (frozen amplifier or stopped spindle),
+//   kIncompleteRun when more than spare_revolutions are discarded (naming the last one's
+//   status and degrees, or its missing degrees) or the run times out (run_timeout_at).
 //
 // Thread: runs on the caller's thread; the GaugeClient must not be used elsewhere meanwhile.
 class Poller {

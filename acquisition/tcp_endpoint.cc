@@ -46,8 +46,7 @@ Status resolve_tcp_host(const std::string& host, int port, std::string_view devi
   if (rc == 0) return {};
   const std::string why = rc == EAI_SYSTEM ? std::string("system error") : ::gai_strerror(rc);
   return make_error(rc == EAI_AGAIN ? ErrorCode::kGaugeUnreachable : ErrorCode::kInvalidInput,
-                    "cannot resolve host '" + host + "': " + why + "; check the " + std::string(device) +
-                        "'s address");
+                    "cannot resolve host '" + host + "': " + why + "; check the " + std::string(device) + "'s address");
 }
 
 }  // namespace gaugeloop

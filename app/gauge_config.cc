@@ -33,8 +33,8 @@ ValueType value_type(const std::string& s) {
 // Reads the status word's description: the masks, or ok_value and the names of its bits
 // ([map.status.bits], bit number = name). The two ways are not mixed.
 void read_status_masks(TomlReader& r, std::string_view source, StatusMasks& masks) {
-  const bool by_masks = r.has("ready_mask") || r.has("over_range_mask") || r.has("under_range_mask") ||
-                        r.has("probe_missing_mask");
+  const bool by_masks =
+      r.has("ready_mask") || r.has("over_range_mask") || r.has("under_range_mask") || r.has("probe_missing_mask");
   if (!r.has("ok_value")) {
     if (r.has("bits")) r.fail(r.where("bits") + ": names status bits of an ok_value status word; give ok_value too");
     masks.ready = static_cast<std::uint16_t>(r.integer("ready_mask", 0x0001, 0, 0xffff));
@@ -51,7 +51,8 @@ void read_status_masks(TomlReader& r, std::string_view source, StatusMasks& mask
   for (auto&& [key, value] : *bits) {
     const std::string k(key.str());
     int bit = -1;
-    if (k.size() <= 2 && std::all_of(k.begin(), k.end(), [](char c) { return c >= '0' && c <= '9'; })) bit = std::stoi(k);
+    if (k.size() <= 2 && std::all_of(k.begin(), k.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      bit = std::stoi(k);
     if (bit < 0 || bit > 15) {
       br.fail(br.where(k) + ": a status bit is a number 0 to 15");
       break;

@@ -68,7 +68,7 @@ struct SimulatorSettings {
   // The revolution register moves this many degrees after the angle wraps, as amplifiers
   // that update the count on their own cycle do; 0: with the angle.
   double revolution_lag_deg = 0.0;
-  std::uint64_t seed = 1;            // noise is a pure function of (seed, sample number)
+  std::uint64_t seed = 1;  // noise is a pure function of (seed, sample number)
   // The lobe on the machine, when it was ground (simulator/virtual_grinder.h): what the flat
   // probe reads at each whole cam degree, mm, 0 on the base circle; served instead of the
   // design with the form error above (lobe_error_peak_um is then ignored).

@@ -9,8 +9,8 @@
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/poller.h"
 #include "core/lift_table.h"
-#include "simulator/gauge_simulator.h"
 #include "outage_faults.h"
+#include "simulator/gauge_simulator.h"
 #include "tests/support/intake_simulator.h"
 
 namespace gaugeloop {

@@ -131,8 +131,8 @@ class ScriptedGauge final : public GaugeClient {
     }
     const double turns = std::floor(u_deg / 360.0);
     s.angle_deg = u_deg - turns * 360.0;
-    s.revolution =
-        static_cast<std::uint16_t>(revolution_base + static_cast<int>(std::floor((u_deg - revolution_lag_deg) / 360.0)));
+    s.revolution = static_cast<std::uint16_t>(revolution_base +
+                                              static_cast<int>(std::floor((u_deg - revolution_lag_deg) / 360.0)));
     s.reading_mm = lift_mm(u_deg);
     s.sequence = ++sequence_;
     s.status = status;

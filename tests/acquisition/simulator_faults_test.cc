@@ -12,8 +12,8 @@
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/poller.h"
 #include "core/lift_table.h"
-#include "simulator/gauge_simulator.h"
 #include "outage_faults.h"
+#include "simulator/gauge_simulator.h"
 #include "tests/support/intake_simulator.h"
 
 namespace gaugeloop {
@@ -146,8 +146,7 @@ TEST_F(SimulatorFaultTest, AStatusWordWithAnOkValueIsNamedByItsBits) {
   map.masks.bit_names[0] = "lever over-range";
   map.masks.bit_names[3] = "amplifier not ready";
   map.latch.present = false;
-  Result<MeasuredRun> run =
-      measure_with("over-range@0.5", std::chrono::milliseconds(100), map, SamplingMode::kLive);
+  Result<MeasuredRun> run = measure_with("over-range@0.5", std::chrono::milliseconds(100), map, SamplingMode::kLive);
   ASSERT_FALSE(run.ok());
   EXPECT_NE(run.error().message.find("gauge status lever over-range at degrees"), std::string::npos)
       << run.error().message;

@@ -96,8 +96,7 @@ TEST(TcpEndpoint, AGaugeWithAnUnknownNameSaysSo) {
   Status c = gauge.connect();
   ASSERT_FALSE(c.ok());
   EXPECT_EQ(c.error().code, ErrorCode::kInvalidInput);
-  EXPECT_NE(c.error().message.find("cannot resolve host 'gauge-amp.invalid'"), std::string::npos)
-      << c.error().message;
+  EXPECT_NE(c.error().message.find("cannot resolve host 'gauge-amp.invalid'"), std::string::npos) << c.error().message;
   EXPECT_FALSE(gauge.connected());
 }
 
