@@ -95,11 +95,13 @@ class RunBudget {
   bool timed_out(Clock::time_point now) const { return now - start_ > run_timeout(); }
   std::string timeout_text() const {
     const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(run_timeout()).count();
-    std::string why = s_.run_timeout.count() > 0 ? std::string("as set")
-                      : rev_per_s_ > 0.0         ? std::to_string(s_.revolutions + s_.spare_revolutions + 2) +
-                                               " revolutions at " + fmt1(rev_per_s_ * 60.0) + " rpm, at least " +
-                                               std::to_string(kRunTimeoutFloor.count() / 1000) + " s"
-                                         : std::string("the spindle speed was never seen");
+    std::string why = "the spindle speed was never seen";
+    if (s_.run_timeout.count() > 0) {
+      why = "as set";
+    } else if (rev_per_s_ > 0.0) {
+      why = std::to_string(s_.revolutions + s_.spare_revolutions + 2) + " revolutions at " + fmt1(rev_per_s_ * 60.0) +
+            " rpm, at least " + std::to_string(kRunTimeoutFloor.count() / 1000) + " s";
+    }
     return "run timed out after " + std::to_string(ms) + " ms (" + why + ")";
   }
 
@@ -139,11 +141,11 @@ class RateWatch {
   double per_s_ = 0.0;
 };
 
-// Whether the amplifier stands still while the link answers: no new sample (live) or latch
-// entry (latched) for stale_after. Time with the link down does not count: the timer
-// restarts at the first good exchange after a failure, so an outage is never taken for a
-// freeze. Each stale period found restarts the timer; the freeze is given up on after
-// max_attempts periods in a row and the budget's patience.
+// Whether the gauge stands still while the link answers: no progress (a new latch entry; a
+// new sample and half a degree of angle in live mode) for stale_after. Time with the link down does not count: the
+// timer restarts at the first good exchange after a failure, so an outage is never taken for a freeze. Each stale
+// period found restarts the timer; the freeze is given up on after max_attempts periods in a row and the budget's
+// patience.
 class FreezeWatch {
  public:
   FreezeWatch(const PollerSettings& s, Clock::time_point now) : s_(s), since_(now) {}

@@ -87,6 +87,17 @@ TEST_F(SimulatorFaultTest, ARunLongerThanTheShortestTimeoutCompletes) {
   EXPECT_EQ(run->revolutions.size(), 45u);
 }
 
+// A timeout set by hand is taken as set and says so; 300 ms cannot hold 3 revolutions of
+// 250 ms, whatever the machine's load.
+TEST_F(SimulatorFaultTest, ARunTimeoutSetByHandIsNamed) {
+  poller_settings_.run_timeout = std::chrono::milliseconds(300);
+  Result<MeasuredRun> run = measure_with("drift@1000");
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kIncompleteRun);
+  EXPECT_NE(run.error().message.find("run timed out after 300 ms (as set) during revolution"), std::string::npos)
+      << run.error().message;
+}
+
 // A link that stays down is named as the link, not as a frozen amplifier.
 TEST_F(SimulatorFaultTest, ALastingSilenceIsNamedAsTheLink) {
   Result<MeasuredRun> run = measure_with("silent@1.5");
