@@ -1,6 +1,7 @@
 // The seam between the poller and a gauge amplifier: one consistent snapshot per call.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -10,12 +11,18 @@
 
 namespace gaugeloop {
 
-// Status word bits of a gauge amplifier (the simulator's map; see docs/simulator.md).
-enum GaugeStatusBit : std::uint16_t {
+// A gauge status as the poller sees it: GaugeStatusBit flags in the low 16 bits; with
+// kGaugeFault, the amplifier's own fault bits that were set (its raw status word's bits, as
+// the register map names them) in the high 16 bits.
+using GaugeStatus = std::uint32_t;
+
+// Status flags (bits 0-3 are also the simulator's status word; see docs/simulator.md).
+enum GaugeStatusBit : std::uint32_t {
   kGaugeReady = 1u << 0,
   kGaugeOverRange = 1u << 1,
   kGaugeUnderRange = 1u << 2,
   kGaugeProbeMissing = 1u << 3,
+  kGaugeFault = 1u << 4,  // a fault the amplifier names itself: its bits are in the high half
 };
 
 // One reading of the amplifier, taken in one request so the fields belong together.
@@ -24,15 +31,20 @@ struct GaugeSnapshot {
   double angle_deg = 0.0;        // work spindle (C) encoder angle, machine frame, [0, 360)
   std::uint16_t revolution = 0;  // encoder revolution count, wraps at 65536
   std::uint16_t sequence = 0;    // amplifier sample number, wraps; unchanged = same sample
-  std::uint16_t status = 0;      // GaugeStatusBit flags
+  GaugeStatus status = 0;
 };
 
-// Human-readable list of the fault bits set in a status word, e.g. "over-range, probe missing".
-std::string describe_gauge_status(std::uint16_t status);
+// Names of an amplifier's own status bits, by bit number; an empty name: unnamed.
+using StatusBitNames = std::array<std::string, 16>;
 
-// True when the status says the reading can be used: ready and no fault bit.
-inline bool gauge_status_ok(std::uint16_t status) {
-  return (status & kGaugeReady) != 0 && (status & (kGaugeOverRange | kGaugeUnderRange | kGaugeProbeMissing)) == 0;
+// Human-readable list of the faults in a status, e.g. "over-range, probe missing"; the
+// amplifier's own fault bits by their names, or as "status bit 5" when unnamed.
+std::string describe_gauge_status(GaugeStatus status, const StatusBitNames* bit_names = nullptr);
+
+// True when the status says the reading can be used: ready and no fault.
+inline bool gauge_status_ok(GaugeStatus status) {
+  return (status & kGaugeReady) != 0 &&
+         (status & (kGaugeOverRange | kGaugeUnderRange | kGaugeProbeMissing | kGaugeFault)) == 0;
 }
 
 // The amplifier's latch buffer: at each encoder degree mark it latches the reading into a
@@ -49,14 +61,14 @@ struct LatchState {
   // status that was not ready or had a fault bit, wrapping at 2^32; and the status
   // (GaugeStatusBit flags) of the latest such mark, when it reports that.
   std::optional<std::uint32_t> fault_count;
-  std::optional<std::uint16_t> fault_status;
+  std::optional<GaugeStatus> fault_status;
 };
 
 // One latched entry: the reading at a whole machine degree of C.
 struct LatchedSample {
   double reading_mm = 0.0;
-  int degree = 0;            // machine degree 0..359 at which it latched; -1: implied by the latch number
-  std::uint16_t status = 0;  // GaugeStatusBit flags at that moment (kGaugeReady when the entry has none)
+  int degree = 0;          // machine degree 0..359 at which it latched; -1: implied by the latch number
+  GaugeStatus status = 0;  // at that moment (kGaugeReady when the entry has none)
 };
 
 // A link to one gauge amplifier. Not thread-safe: one per thread.
@@ -77,6 +89,8 @@ class GaugeClient {
   virtual Result<std::vector<LatchedSample>> read_latched(int first_slot, int count) = 0;
   // Where the gauge is, for messages: "tcp:127.0.0.1:1502".
   virtual std::string address() const = 0;
+  // A status in the amplifier's own words, for messages (its register map names its bits).
+  virtual std::string describe_status(GaugeStatus status) const { return describe_gauge_status(status); }
 };
 
 }  // namespace gaugeloop

@@ -27,6 +27,13 @@ void GaugeLink::move_to(LinkState next) {
   if (on_transition_) on_transition_(from, next);
 }
 
+bool GaugeLink::spent() {
+  const auto now = std::chrono::steady_clock::now();
+  if (failures_++ == 0) outage_since_ = now;
+  if (failures_ < policy_.max_attempts) return false;
+  return !ever_connected_ || now - outage_since_ >= patience_;
+}
+
 Status GaugeLink::give_up(const Error& e, std::string_view where_now) {
   failure_ = e;
   if (!ever_connected_) {
@@ -62,7 +69,7 @@ Status GaugeLink::ensure(std::string_view where_now) {
           move_to(LinkState::kConnected);
           return {};
         }
-        if (++failures_ >= policy_.max_attempts) return give_up(s.error(), where_now);
+        if (spent()) return give_up(s.error(), where_now);
         move_to(LinkState::kBackingOff);
         break;
       }
@@ -73,7 +80,7 @@ Status GaugeLink::ensure(std::string_view where_now) {
 Status GaugeLink::failed(const Error& e, std::string_view where_now) {
   if (state_ == LinkState::kFailed) return failure_;
   if (gauge_.connected()) gauge_.disconnect();  // start clean after any error: no late reply survives
-  if (++failures_ >= policy_.max_attempts) return give_up(e, where_now);
+  if (spent()) return give_up(e, where_now);
   move_to(LinkState::kBackingOff);
   return {};
 }

@@ -16,13 +16,16 @@ namespace gaugeloop {
 //   Disconnected --ensure, connect ok-------------------> Connected
 //   Disconnected --ensure, connect fails, attempts left--> BackingOff
 //   BackingOff   --ensure: sleep backoff, connect ok-----> Connected     (a reconnect)
-//   BackingOff   --ensure: connect fails, attempts left--> BackingOff    (backoff doubles)
+//   BackingOff   --ensure: connect fails, not spent------> BackingOff    (backoff doubles)
 //   Connected    --succeeded-----------------------------> Connected     (failures and backoff reset)
-//   Connected    --failed, attempts left-----------------> BackingOff    (link closed: late replies flushed)
-//   any          --failure with no attempts left---------> Failed        (terminal: every call returns the error)
+//   Connected    --failed, not spent---------------------> BackingOff    (link closed: late replies flushed)
+//   any          --failure, attempts and patience spent--> Failed        (terminal: every call returns the error)
 //
 // "Attempts" counts consecutive failures, of connects and of requests alike; a successful
 // request resets it. The backoff starts at backoff_initial and doubles up to backoff_max.
+// Once the link has been up, it also waits out `patience` (set_patience) from the first
+// failure of an outage before it gives up: the poller sets it to what its spare revolutions
+// can absorb, so a short outage costs revolutions, not the run, whatever the spindle speed.
 enum class LinkState { kDisconnected, kConnected, kBackingOff, kFailed };
 
 std::string_view link_state_name(LinkState state);
@@ -44,8 +47,10 @@ class GaugeLink {
   // Records a failed request or a stale gauge. An error: the attempts are spent (Failed);
   // its message says the gauge stopped answering and that nothing was stored.
   Status failed(const Error& e, std::string_view where_now);
-  // Records a good request.
+  // Records a good request (any reply that is not an error): the outage, if any, is over.
   void succeeded();
+  // The shortest outage given up on once the link has been up; 0 (the default): none.
+  void set_patience(std::chrono::steady_clock::duration patience) { patience_ = patience; }
 
   LinkState state() const { return state_; }
   int reconnects() const { return reconnects_; }
@@ -56,6 +61,8 @@ class GaugeLink {
 
  private:
   void move_to(LinkState next);
+  // Counts one more failure; true when the attempts and the patience are both spent.
+  bool spent();
   Status give_up(const Error& e, std::string_view where_now);
 
   GaugeClient& gauge_;
@@ -63,6 +70,8 @@ class GaugeLink {
   std::chrono::milliseconds backoff_;
   LinkState state_ = LinkState::kDisconnected;
   int failures_ = 0;
+  std::chrono::steady_clock::time_point outage_since_{};  // first failure of the current outage
+  std::chrono::steady_clock::duration patience_{};
   int reconnects_ = 0;
   bool ever_connected_ = false;
   Error failure_;  // kept once Failed

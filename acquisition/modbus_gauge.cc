@@ -3,6 +3,8 @@
 
 #include <modbus/modbus.h>
 
+#include "acquisition/tcp_endpoint.h"
+
 #include <cerrno>
 #include <utility>
 #include <vector>
@@ -23,20 +25,26 @@ std::string ModbusGauge::address() const {
     return "rtu:" + settings_.device + "@" + std::to_string(settings_.baud) + "/" + settings_.parity + "/unit " +
            std::to_string(settings_.unit_id);
   }
-  return "tcp:" + settings_.host + ":" + std::to_string(settings_.port);
+  return "tcp:" + format_tcp_endpoint(settings_.host, settings_.port);
 }
 
 Status ModbusGauge::connect() {
   disconnect();
   const bool rtu = settings_.transport == ModbusTransport::kRtu;
+  // libmodbus's connect turns a name it cannot resolve into "Connection refused": resolve
+  // first, for a message that says what is wrong.
+  if (!rtu) {
+    if (Status s = resolve_tcp_host(settings_.host, settings_.port, "gauge"); !s) return s;
+  }
+  // modbus_new_tcp_pi: a host name, an IPv4 or an IPv6 address (modbus_new_tcp takes IPv4 only).
   modbus_t* ctx = rtu ? modbus_new_rtu(settings_.device.c_str(), settings_.baud, settings_.parity, settings_.data_bits,
                                        settings_.stop_bits)
-                      : modbus_new_tcp(settings_.host.c_str(), settings_.port);
+                      : modbus_new_tcp_pi(settings_.host.c_str(), std::to_string(settings_.port).c_str());
   if (ctx == nullptr) {
     return make_error(ErrorCode::kInvalidInput,
                       "gauge address " + address() + " is not usable: " + modbus_strerror(errno) +
                           (rtu ? "; check the device, baud (e.g. 115200), parity (N, E, O), data and stop bits"
-                               : "; give an IPv4 address and a port"));
+                               : "; give a host name or address and a port"));
   }
   modbus_set_slave(ctx, settings_.unit_id);
   modbus_set_error_recovery(ctx, MODBUS_ERROR_RECOVERY_NONE);

@@ -51,6 +51,9 @@ class ModbusGauge final : public GaugeClient {
   Result<LatchState> read_latch_state() override;
   Result<std::vector<LatchedSample>> read_latched(int first_slot, int count) override;
   std::string address() const override;
+  std::string describe_status(GaugeStatus status) const override {
+    return describe_gauge_status(status, &settings_.map.masks.bit_names);
+  }
 
  private:
   // Reads `count` registers of `table` at `address` into `dest`; on failure returns the

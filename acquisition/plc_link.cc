@@ -7,6 +7,8 @@
 #include <cerrno>
 #include <utility>
 
+#include "acquisition/tcp_endpoint.h"
+
 namespace gaugeloop {
 
 ModbusPlcLink::ModbusPlcLink(PlcLinkSettings settings) : settings_(std::move(settings)) {}
@@ -18,15 +20,22 @@ std::string ModbusPlcLink::address() const {
   if (l.transport == ModbusTransport::kRtu) {
     return "rtu:" + l.device + "@" + std::to_string(l.baud) + "/" + l.parity + "/unit " + std::to_string(l.unit_id);
   }
-  return "tcp:" + l.host + ":" + std::to_string(l.port);
+  return "tcp:" + format_tcp_endpoint(l.host, l.port);
 }
 
 Status ModbusPlcLink::connect() {
   disconnect();
   const ModbusSettings& l = settings_.link;
   const bool rtu = l.transport == ModbusTransport::kRtu;
+  if (!rtu) {
+    // As for the gauge: libmodbus would call a name it cannot resolve "Connection refused".
+    if (Status s = resolve_tcp_host(l.host, l.port, "PLC"); !s) {
+      return make_error(s.error().code == ErrorCode::kInvalidInput ? ErrorCode::kInvalidInput : ErrorCode::kIo,
+                        s.error().message);
+    }
+  }
   modbus_t* ctx = rtu ? modbus_new_rtu(l.device.c_str(), l.baud, l.parity, l.data_bits, l.stop_bits)
-                      : modbus_new_tcp(l.host.c_str(), l.port);
+                      : modbus_new_tcp_pi(l.host.c_str(), std::to_string(l.port).c_str());
   if (ctx == nullptr) {
     return make_error(ErrorCode::kInvalidInput, "PLC address " + address() + " is not usable: " +
                                                     modbus_strerror(errno) + "; check [plc] in the service config");

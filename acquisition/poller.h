@@ -38,18 +38,38 @@ struct PollerSettings {
   // degree; pace only when half a degree lasts far longer than that (below about 5 rpm).
   double poll_step_deg = 0.0;
   std::chrono::microseconds max_poll_interval{2000};
-  int spare_revolutions = 3;                      // revolutions allowed beyond `revolutions` to replace bad ones
-  int max_attempts = 5;                           // consecutive failed reads or reconnects before giving up
+  // Revolutions that may be discarded, in either mode, before the run fails.
+  int spare_revolutions = 3;
+  // Consecutive failed requests or connects, and consecutive stale periods of a frozen
+  // amplifier, before giving up.
+  int max_attempts = 5;
+  // Once the spindle speed is known, an outage or a freeze is also waited out for this many
+  // revolutions before giving up: one of up to a revolution then costs the (at most two)
+  // revolutions it touches, not the run, whatever the speed (docs/acquisition.md).
+  int patience_revolutions = 2;
   std::chrono::milliseconds backoff_initial{20};  // first reconnect delay, doubled each time
   std::chrono::milliseconds backoff_max{500};
-  std::chrono::milliseconds stale_after{200};  // no new amplifier sample for this long = frozen
+  // No new latch entry (latched), or no new amplifier sample or half a degree of angle
+  // (live), for this long while the link answers = frozen amplifier or stopped spindle:
+  // reconnect, discard the revolution.
+  std::chrono::milliseconds stale_after{200};
   // Latched mode: after draining the buffer, sleep until about one block (31 entries) has
   // latched again, from the latch rate seen so far, but never longer than
   // latch_max_wait or a quarter of the ring; latch_idle_wait until the rate is known.
   std::chrono::microseconds latch_idle_wait{500};
   std::chrono::milliseconds latch_max_wait{20};
-  std::chrono::milliseconds run_timeout{60000};
+  // The whole run. 0 (default): (revolutions + spare_revolutions + 2) revolutions at the
+  // spindle speed the poller sees, and at least 10 s.
+  std::chrono::milliseconds run_timeout{0};
 };
+
+// The shortest run timeout derived from the speed.
+inline constexpr std::chrono::milliseconds kRunTimeoutFloor{10000};
+
+// The run timeout at a spindle speed: settings.run_timeout when set; else (revolutions +
+// spare_revolutions + 2 to find the start) revolutions at speed_rpm (the speed the poller
+// sees; <= 0: not seen yet), and never less than kRunTimeoutFloor.
+std::chrono::milliseconds run_timeout_at(const PollerSettings& settings, double speed_rpm);
 
 // Checks settings before a run; the message names the setting and its allowed range.
 Status validate(const PollerSettings& settings);
@@ -75,9 +95,14 @@ Status validate(const PollerSettings& settings);
 // - Collection starts at the first revolution boundary after the first poll.
 // - On a read error the link is closed and reopened with exponential backoff; no sample is
 //   interpolated across the gap, so the revolution in progress is discarded.
+// - Outages and freezes: the failure count restarts at every good reply, and the stale
+//   timer does not count time with the link down. Once the speed is seen, an outage or a
+//   freeze is waited out for patience_revolutions beside max_attempts (docs/acquisition.md).
 // - A failure returns an Error and no samples: kGaugeUnreachable or kGaugeTimeout when the
-//   gauge cannot be reached or stops answering, kIncompleteRun when the spare revolutions
-//   run out, naming the missing degrees.
+//   gauge cannot be reached or stops answering (naming the link's last error), kGaugeTimeout
+//   when it stands still while answering (frozen amplifier or stopped spindle),
+//   kIncompleteRun when more than spare_revolutions are discarded (naming the last one's
+//   status and degrees, or its missing degrees) or the run times out (run_timeout_at).
 //
 // Thread: runs on the caller's thread; the GaugeClient must not be used elsewhere meanwhile.
 class Poller {

@@ -151,8 +151,13 @@ double decode_raw(const FieldSpec& f, std::span<const std::uint16_t> w) {
   return 0.0;
 }
 
-std::uint16_t translate_status(std::uint16_t raw, const StatusMasks& m) {
-  std::uint16_t s = 0;
+GaugeStatus translate_status(std::uint16_t raw, const StatusMasks& m) {
+  if (m.ok_value) {
+    if (raw == *m.ok_value) return kGaugeReady;
+    const std::uint16_t faults = static_cast<std::uint16_t>(raw & ~*m.ok_value);
+    return faults == 0 ? GaugeStatus{0} : GaugeStatus{kGaugeReady | kGaugeFault} | (GaugeStatus{faults} << 16);
+  }
+  GaugeStatus s = 0;
   if (m.ready == 0 || (raw & m.ready) == m.ready) s |= kGaugeReady;
   if (m.over_range != 0 && (raw & m.over_range) != 0) s |= kGaugeOverRange;
   if (m.under_range != 0 && (raw & m.under_range) != 0) s |= kGaugeUnderRange;
@@ -270,7 +275,7 @@ GaugeSnapshot decode_snapshot(const RegisterMap& map, const std::vector<ReadBloc
       map.status.present
           ? translate_status(static_cast<std::uint16_t>(decode_raw(map.status, field_words(map.status, blocks, words))),
                              map.masks)
-          : static_cast<std::uint16_t>(kGaugeReady);
+          : GaugeStatus{kGaugeReady};
   return s;
 }
 
@@ -316,7 +321,7 @@ std::vector<LatchedSample> decode_latched(const RegisterMap& map, std::span<cons
                    map.reading.offset;
     e.degree = l.degree_implied() ? kDegreeImpliedByCount : entry[static_cast<size_t>(l.degree_offset)];
     e.status = l.status_offset >= 0 ? translate_status(entry[static_cast<size_t>(l.status_offset)], map.masks)
-                                    : static_cast<std::uint16_t>(kGaugeReady);
+                                    : GaugeStatus{kGaugeReady};
     out.push_back(e);
   }
   return out;

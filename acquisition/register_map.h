@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -50,17 +51,23 @@ struct FieldSpec {
 // The raw number a field holds (before scale and offset). `words` starts at the field.
 double decode_raw(const FieldSpec& field, std::span<const std::uint16_t> words);
 
-// Status word bits. A reading is ready when every bit of ready_mask is set; each fault
-// mask means that fault when any of its bits is set. A zero mask is not used.
+// The amplifier's status word, described one of two ways (docs/gauge.md):
+// - Masks (ok_value unset): ready when every bit of `ready` is set (0: always); each fault
+//   mask means that fault when any of its bits is set (0: not reported).
+// - An ok value: the word equals ok_value when the reading can be used. Any bit set that is
+//   clear in ok_value is a fault of the amplifier's own (kGaugeFault, its bit kept), named by
+//   bit_names; a word that lacks bits of ok_value and has none extra is "not ready".
 struct StatusMasks {
   std::uint16_t ready = 0x0001;
   std::uint16_t over_range = 0x0002;
   std::uint16_t under_range = 0x0004;
   std::uint16_t probe_missing = 0x0008;
+  std::optional<std::uint16_t> ok_value;
+  StatusBitNames bit_names;
 };
 
 // The amplifier's status word translated to GaugeStatusBit flags.
-std::uint16_t translate_status(std::uint16_t raw, const StatusMasks& masks);
+GaugeStatus translate_status(std::uint16_t raw, const StatusMasks& masks);
 
 // The latch buffer for latched mode: a count of latched degree marks (uint32, the map's word
 // order), the ring size (fixed, or read from a register), and the ring of entries. Latch

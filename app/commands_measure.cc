@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "acquisition/modbus_gauge.h"
+#include "acquisition/tcp_endpoint.h"
 #include "app/cli_common.h"
 #include "app/embedded_defaults.h"
 #include "app/gauge_config.h"
@@ -106,6 +107,7 @@ struct MeasureOptions {
   std::string machine = "grinder-1";
   std::string note;
   int response_timeout_ms = 200;
+  int run_timeout_s = 0;           // 0: from the spindle speed (poller.h, run_timeout_at)
   std::string mode = "latched";    // latched | live
   std::string gauge_config;        // measure only
   std::optional<int> ground_with;  // measure only: the table version that ground the part
@@ -139,6 +141,11 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
   cmd.add_option("--response-timeout-ms", o.response_timeout_ms, "Gauge response timeout")
       ->capture_default_str()
       ->check(CLI::Range(10, 10000));
+  cmd.add_option("--run-timeout-s", o.run_timeout_s,
+                 "Longest a run may take; 0: (revolutions + 3 spare + 2) revolutions at the spindle speed seen, "
+                 "at least 10 s")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 86400));
   cmd.add_option("--mode", o.mode,
                  "latched: drain the amplifier's per-degree latch buffer; live: poll the reading and interpolate "
                  "(amplifiers without a latch input, slow spindles)")
@@ -157,6 +164,7 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
   js.nc_program = lp.file.nc_program;
   js.poller.revolutions = o.revolutions;
   js.poller.mode = o.mode == "live" ? SamplingMode::kLive : SamplingMode::kLatched;
+  js.poller.run_timeout = std::chrono::seconds(o.run_timeout_s);
   js.db_path = o.paths.db();
   js.nc_dir = o.paths.nc();
   js.nc_template = std::move(*tmpl);
@@ -300,18 +308,10 @@ int cmd_measure(const MeasureOptions& o, const std::string& gauge_address) {
     ms = std::move(*from_file);
   }
   if (!gauge_address.empty()) {
-    const auto colon = gauge_address.rfind(':');
-    try {
-      if (colon == std::string::npos) throw std::invalid_argument("no port");
-      size_t used = 0;
-      const int port = std::stoi(gauge_address.substr(colon + 1), &used);
-      if (used != gauge_address.size() - colon - 1 || port <= 0 || port > 65535) throw std::invalid_argument("port");
-      ms.host = gauge_address.substr(0, colon);
-      ms.port = port;
-    } catch (const std::exception&) {
-      return report_error(make_error(ErrorCode::kInvalidInput,
-                                     "--gauge `" + gauge_address + "`: expected HOST:PORT, e.g. 192.168.0.20:502"));
-    }
+    Result<TcpEndpoint> endpoint = parse_tcp_endpoint(gauge_address);
+    if (!endpoint) return report_error(make_error(ErrorCode::kInvalidInput, "--gauge " + endpoint.error().message));
+    ms.host = endpoint->host;
+    ms.port = endpoint->port;
   } else if (o.gauge_config.empty()) {
     return report_error(make_error(ErrorCode::kInvalidInput,
                                    "no gauge: give --gauge HOST:PORT or a --gauge-config file with a [link] table"));
@@ -552,7 +552,8 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
       "measure",
       "Measure one run against a gauge amplifier at HOST:PORT, store it and write the corrected curve table.");
   measure->add_option("--gauge", *gauge_address,
-                      "Gauge amplifier, HOST:PORT (Modbus TCP); overrides the config's [link]");
+                      "Gauge amplifier, HOST:PORT (Modbus TCP): a name, an IPv4 address or [IPv6]:PORT; overrides "
+                      "the config's [link]");
   measure->add_option("--gauge-config", measure_opts->gauge_config,
                       "Gauge config (TOML): link and register map, see docs/gauge.md [the simulator's map]");
   measure->add_option("--part", measure_opts->part_path, "Part file (TOML), see examples/");

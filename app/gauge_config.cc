@@ -1,9 +1,11 @@
 // toml++ reading of gauge configs into ModbusSettings and a RegisterMap.
 #include "app/gauge_config.h"
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 
+#include "acquisition/tcp_endpoint.h"
 #include "app/toml_reader.h"
 #include "core/text_file.h"
 
@@ -29,6 +31,38 @@ ValueType value_type(const std::string& s) {
                           : ValueType::kUInt16;
 }
 
+// Reads the status word's description: the masks, or ok_value and the names of its bits
+// ([map.status.bits], bit number = name). The two ways are not mixed.
+void read_status_masks(TomlReader& r, std::string_view source, StatusMasks& masks) {
+  const bool by_masks =
+      r.has("ready_mask") || r.has("over_range_mask") || r.has("under_range_mask") || r.has("probe_missing_mask");
+  if (!r.has("ok_value")) {
+    if (r.has("bits")) r.fail(r.where("bits") + ": names status bits of an ok_value status word; give ok_value too");
+    masks.ready = static_cast<std::uint16_t>(r.integer("ready_mask", 0x0001, 0, 0xffff));
+    masks.over_range = static_cast<std::uint16_t>(r.integer("over_range_mask", 0, 0, 0xffff));
+    masks.under_range = static_cast<std::uint16_t>(r.integer("under_range_mask", 0, 0, 0xffff));
+    masks.probe_missing = static_cast<std::uint16_t>(r.integer("probe_missing_mask", 0, 0, 0xffff));
+    return;
+  }
+  if (by_masks) r.fail(r.where("ok_value") + ": give either ok_value (and bits) or the masks, not both");
+  masks.ok_value = static_cast<std::uint16_t>(r.integer("ok_value", std::nullopt, 0, 0xffff));
+  const toml::table* bits = r.subtable("bits");
+  if (bits == nullptr) return;
+  TomlReader br(*bits, source, "map.status.bits.");
+  for (auto&& [key, value] : *bits) {
+    const std::string k(key.str());
+    int bit = -1;
+    if (k.size() <= 2 && std::all_of(k.begin(), k.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      bit = std::stoi(k);
+    if (bit < 0 || bit > 15) {
+      br.fail(br.where(k) + ": a status bit is a number 0 to 15");
+      break;
+    }
+    masks.bit_names[static_cast<size_t>(bit)] = br.text(k, std::nullopt);
+  }
+  if (br.error) r.fail(br.error->message);
+}
+
 // Reads [map.<name>] into `f`; absent table = absent field. Returns the reader's error state.
 void read_field(std::string_view name, std::string_view source, WordOrder default_order, FieldSpec& f,
                 TomlReader& parent, bool is_status, StatusMasks* masks) {
@@ -39,8 +73,8 @@ void read_field(std::string_view name, std::string_view source, WordOrder defaul
   }
   TomlReader r(*t, source, "map." + std::string(name) + ".");
   if (is_status) {
-    r.allow_only(
-        {"register", "address", "type", "ready_mask", "over_range_mask", "under_range_mask", "probe_missing_mask"});
+    r.allow_only({"register", "address", "type", "ready_mask", "over_range_mask", "under_range_mask",
+                  "probe_missing_mask", "ok_value", "bits"});
   } else {
     r.allow_only({"register", "address", "type", "byte_order", "scale", "offset"});
   }
@@ -50,10 +84,7 @@ void read_field(std::string_view name, std::string_view source, WordOrder defaul
   f.type = value_type(r.choice("type", is_status ? std::optional<std::string>("UINT16") : std::nullopt,
                                {"INT16", "UINT16", "INT32", "UINT32", "FLOAT32"}));
   if (is_status) {
-    masks->ready = static_cast<std::uint16_t>(r.integer("ready_mask", 0x0001, 0, 0xffff));
-    masks->over_range = static_cast<std::uint16_t>(r.integer("over_range_mask", 0, 0, 0xffff));
-    masks->under_range = static_cast<std::uint16_t>(r.integer("under_range_mask", 0, 0, 0xffff));
-    masks->probe_missing = static_cast<std::uint16_t>(r.integer("probe_missing_mask", 0, 0, 0xffff));
+    read_status_masks(r, source, *masks);
   } else {
     f.order = word_order(
         r.choice("byte_order", std::string(word_order_name(default_order)), {"ABCD", "CDAB", "BADC", "DCBA"}));
@@ -65,7 +96,7 @@ void read_field(std::string_view name, std::string_view source, WordOrder defaul
 
 }  // namespace
 
-void read_modbus_link(TomlReader& lr, const ModbusSettings& defaults, ModbusSettings& out) {
+void read_modbus_link(TomlReader& lr, const ModbusSettings& defaults, ModbusSettings& out, std::string_view device) {
   const bool rtu = lr.choice("transport", "tcp", {"tcp", "rtu"}) == "rtu";
   out.transport = rtu ? ModbusTransport::kRtu : ModbusTransport::kTcp;
   if (rtu) {
@@ -83,6 +114,14 @@ void read_modbus_link(TomlReader& lr, const ModbusSettings& defaults, ModbusSett
     }
     out.host = lr.text("host", defaults.host);
     out.port = static_cast<int>(lr.integer("port", defaults.port, 1, 65535));
+    // A name that does not exist fails now, not at the first run. A resolver that cannot
+    // answer now (kGaugeUnreachable) is let pass: the name may exist, and the link retries.
+    if (!lr.error) {
+      Status resolved = resolve_tcp_host(out.host, out.port, device);
+      if (!resolved && resolved.error().code == ErrorCode::kInvalidInput) {
+        lr.fail(lr.where("host") + ": " + resolved.error().message);
+      }
+    }
   }
   out.unit_id = static_cast<int>(lr.integer("unit_id", defaults.unit_id, 0, 247));
   out.response_timeout =

@@ -14,8 +14,10 @@ class TomlReader;
 // Reads the Modbus link keys of one table onto `out`: transport ("tcp" or "rtu"), host and
 // port (TCP), device, baud, parity, data_bits and stop_bits (RTU), unit_id,
 // response_timeout_ms; keys it leaves out keep `defaults`' values. A TCP key in an RTU link or
-// the other way round fails `lr`. The caller lists these keys in its allow_only.
-void read_modbus_link(TomlReader& lr, const ModbusSettings& defaults, ModbusSettings& out);
+// the other way round fails `lr`, and so does a host name that does not resolve ("check the
+// <device>'s address"). The caller lists these keys in its allow_only.
+void read_modbus_link(TomlReader& lr, const ModbusSettings& defaults, ModbusSettings& out,
+                      std::string_view device = "gauge");
 
 // Parses a gauge config. A missing [link] keeps `defaults`' link settings; a missing [map]
 // keeps the simulator's register map; a [map] describes the whole map (fields it leaves out

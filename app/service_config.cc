@@ -240,7 +240,7 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
     PlcSettings ps;
     ModbusSettings defaults;
     defaults.port = 502;
-    read_modbus_link(plr, defaults, ps.link.link);
+    read_modbus_link(plr, defaults, ps.link.link, "PLC");
     ps.link.base_address = static_cast<int>(plr.integer("base_address", 0, 0, 65536 - plc_registers::kBlockWords));
     ps.poll_interval = std::chrono::milliseconds(plr.integer("poll_interval_ms", 100, 10, 10000));
     if (plr.error) return *plr.error;

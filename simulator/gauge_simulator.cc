@@ -41,6 +41,12 @@ double gaussian(std::uint64_t seed, std::uint64_t n) {
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
 }
 
+// The status word (bit 0 ready, 1 over-range, 2 under-range, 3 probe missing) as the "ok
+// value" register at kStatusCode reports it: 0 ok, bit 3 not ready, the fault bits shifted down.
+std::uint16_t status_code(std::uint16_t status) {
+  return static_cast<std::uint16_t>(((status >> 1) & 0x7) | ((status & 1) == 0 ? 0x8 : 0));
+}
+
 void put_u32(std::uint16_t* regs, int at, std::uint32_t v) {
   regs[at] = static_cast<std::uint16_t>(v >> 16);
   regs[at + 1] = static_cast<std::uint16_t>(v & 0xffff);
@@ -80,6 +86,9 @@ Status validate(const SimulatorSettings& s) {
   }
   if (s.ground_reading_mm) {
     if (Status g = validate_ground_reading(*s.ground_reading_mm); !g) return g;
+  }
+  if (!(s.revolution_lag_deg >= 0.0 && s.revolution_lag_deg < 90.0)) {
+    return make_error(ErrorCode::kInvalidInput, "simulator revolution_lag_deg must be in [0, 90)");
   }
   if (s.port < 0 || s.port > 65535) {
     return make_error(ErrorCode::kInvalidInput, "simulator port must be in [0, 65535]");
@@ -188,8 +197,9 @@ Status GaugeSimulator::listen() {
     return {};
   }
   if (ctx_ == nullptr) {
-    // The context only frames requests and replies; the sockets are ours (see serve()).
-    ctx_ = modbus_new_tcp(settings_.host.c_str(), settings_.port);
+    // The context only frames requests and replies; the sockets are ours (see serve()). The
+    // protocol-independent backend, so the host may be IPv4 or IPv6.
+    ctx_ = modbus_new_tcp_pi(settings_.host.c_str(), std::to_string(settings_.port).c_str());
     if (ctx_ == nullptr) {
       return make_error(ErrorCode::kInvalidInput,
                         "simulator address " + settings_.host + " is not usable: " + modbus_strerror(errno));
@@ -302,8 +312,9 @@ void GaugeSimulator::update_registers(std::int64_t now_ns, const FaultState& fau
   regs[sim_registers::kStatus] = status;
   put_u32(regs, sim_registers::kAngle,
           static_cast<std::uint32_t>(std::min(359999.0, std::floor(reported_deg * 1000.0))));
-  regs[sim_registers::kRevolution] =
-      static_cast<std::uint16_t>(static_cast<std::int64_t>(std::floor(reported_turns)) & 0xffff);
+  regs[sim_registers::kRevolution] = static_cast<std::uint16_t>(
+      static_cast<std::int64_t>(std::floor(reported_turns - settings_.revolution_lag_deg / 360.0)) & 0xffff);
+  regs[sim_registers::kStatusCode] = status_code(status);
   regs[sim_registers::kSequence] = static_cast<std::uint16_t>(n & 0xffff);
   put_u32(regs, sim_registers::kReadingFloat, std::bit_cast<std::uint32_t>(static_cast<float>(reading_mm)));
 

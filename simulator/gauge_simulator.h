@@ -29,7 +29,10 @@ inline constexpr int kAngle = 3;         // uint32, C angle in 0.001 deg, [0, 36
 inline constexpr int kRevolution = 5;    // uint16 revolution count, wraps
 inline constexpr int kSequence = 6;      // uint16 amplifier sample number, wraps
 inline constexpr int kReadingFloat = 7;  // float32, reading in mm, ABCD
-inline constexpr int kSnapshotCount = 9;
+// The same status as an amplifier with an "ok" value reports it: 0 ok; bit 0 over-range,
+// bit 1 under-range, bit 2 probe missing, bit 3 not ready.
+inline constexpr int kStatusCode = 9;
+inline constexpr int kSnapshotCount = 10;
 // Latch buffer: the reading latched at every encoder degree mark.
 inline constexpr int kLatchCount = 100;        // uint32, ABCD: marks latched since start
 inline constexpr int kLatchRingSize = 102;     // uint16: entries in the ring
@@ -62,7 +65,10 @@ struct SimulatorSettings {
   double lobe_error_peak_um = 15.0;  // repeatable form error of the ground lobe, largest |value|
   double noise_rms_um = 0.3;         // gauge noise, Gaussian, per amplifier sample
   double gauge_offset_mm = 0.25;     // reading on the base circle: the gauge is not zeroed
-  std::uint64_t seed = 1;            // noise is a pure function of (seed, sample number)
+  // The revolution register moves this many degrees after the angle wraps, as amplifiers
+  // that update the count on their own cycle do; 0: with the angle.
+  double revolution_lag_deg = 0.0;
+  std::uint64_t seed = 1;  // noise is a pure function of (seed, sample number)
   // The lobe on the machine, when it was ground (simulator/virtual_grinder.h): what the flat
   // probe reads at each whole cam degree, mm, 0 on the base circle; served instead of the
   // design with the form error above (lobe_error_peak_um is then ignored).

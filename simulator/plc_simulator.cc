@@ -28,7 +28,8 @@ Result<std::unique_ptr<PlcSimulator>> PlcSimulator::start(const PlcSimulatorSett
                                                     " leaves no room for the 12-word block; use 0 to 65524");
   }
   std::unique_ptr<PlcSimulator> sim(new PlcSimulator(settings));
-  sim->ctx_ = modbus_new_tcp(settings.host.c_str(), settings.port);
+  // Framing only (the sockets are the listener's); the protocol-independent backend: IPv4 or IPv6.
+  sim->ctx_ = modbus_new_tcp_pi(settings.host.c_str(), std::to_string(settings.port).c_str());
   if (sim->ctx_ == nullptr) {
     return make_error(ErrorCode::kInvalidInput,
                       "PLC simulator address " + settings.host + " is not usable: " + modbus_strerror(errno));

@@ -2,6 +2,7 @@
 #include "simulator/tcp_listener.h"
 
 #include <arpa/inet.h>
+#include <netdb.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -15,28 +16,37 @@
 namespace gaugeloop {
 
 Result<TcpListener> listen_tcp(const std::string& host, int port, const std::string& who) {
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(static_cast<std::uint16_t>(port));
-  if (::inet_pton(AF_INET, host.c_str(), &addr.sin_addr) != 1) {
-    return make_error(ErrorCode::kInvalidInput, who + " address " + host + " is not an IPv4 address");
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_NUMERICHOST | AI_NUMERICSERV | AI_PASSIVE;
+  addrinfo* found = nullptr;
+  if (::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found) != 0 || found == nullptr) {
+    if (found != nullptr) ::freeaddrinfo(found);
+    return make_error(ErrorCode::kInvalidInput,
+                      who + " address " + host + " is not an IPv4 or IPv6 address (e.g. 127.0.0.1 or ::1)");
   }
-  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  const int fd = ::socket(found->ai_family, SOCK_STREAM | SOCK_CLOEXEC, 0);
   const int yes = 1;
   if (fd >= 0) ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
-  if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 || ::listen(fd, 16) != 0) {
-    const int err = errno;
+  const bool bound = fd >= 0 && ::bind(fd, found->ai_addr, found->ai_addrlen) == 0 && ::listen(fd, 16) == 0;
+  const int bind_err = errno;
+  ::freeaddrinfo(found);
+  if (!bound) {
     if (fd >= 0) ::close(fd);
     return make_error(ErrorCode::kIo, who + " cannot listen on " + host + ":" + std::to_string(port) + ": " +
-                                          std::strerror(err) + "; choose another port or 0 for any free one");
+                                          std::strerror(bind_err) + "; choose another port or 0 for any free one");
   }
+  sockaddr_storage addr{};
   socklen_t len = sizeof addr;
   if (::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) {
     const int err = errno;
     ::close(fd);
     return make_error(ErrorCode::kIo, who + " cannot read its port back: " + std::strerror(err));
   }
-  return TcpListener{fd, ntohs(addr.sin_port)};
+  const std::uint16_t bound_port = addr.ss_family == AF_INET6 ? reinterpret_cast<sockaddr_in6*>(&addr)->sin6_port
+                                                              : reinterpret_cast<sockaddr_in*>(&addr)->sin_port;
+  return TcpListener{fd, ntohs(bound_port)};
 }
 
 void ModbusTcpClients::close_all() {

@@ -93,6 +93,29 @@ TEST_F(GaugeLinkTest, AGoodRequestResetsTheCount) {
   EXPECT_EQ(link_.reconnects(), 10);
 }
 
+// Once the link has been up, an outage is waited out for the patience (what the spare
+// revolutions absorb) however many attempts fail in it; an hour is never reached here.
+TEST_F(GaugeLinkTest, AnOutageShorterThanThePatienceOutlastsTheAttempts) {
+  link_.set_patience(std::chrono::hours(1));
+  ASSERT_TRUE(link_.ensure("").ok());
+  gauge_.fail_connects = 10;
+  ASSERT_TRUE(link_.failed(timeout(), "").ok());
+  ASSERT_EQ(link_.state(), kBackingOff);
+  Status back = link_.ensure("");  // 10 refused connects, then the gauge is back
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(link_.state(), kConnected);
+  EXPECT_EQ(gauge_.connects, 12);
+  EXPECT_EQ(link_.reconnects(), 1);
+}
+
+// Before the link was ever up there is no run to save: the attempts alone decide.
+TEST_F(GaugeLinkTest, ThePatienceDoesNotDelayAGaugeNeverReached) {
+  link_.set_patience(std::chrono::hours(1));
+  gauge_.fail_connects = 10;
+  ASSERT_FALSE(link_.ensure("before the run").ok());
+  EXPECT_EQ(gauge_.connects, 3);
+}
+
 TEST_F(GaugeLinkTest, FailedIsTerminal) {
   gauge_.fail_connects = 10;
   ASSERT_FALSE(link_.ensure("").ok());

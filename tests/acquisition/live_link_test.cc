@@ -9,33 +9,42 @@
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/poller.h"
 #include "core/lift_table.h"
+#include "outage_faults.h"
 #include "simulator/gauge_simulator.h"
 #include "tests/support/intake_simulator.h"
 
 namespace gaugeloop {
 namespace {
 
-TEST(LiveLink, PollerMeasuresThreeRevolutionsOverLoopback) {
-  SimulatorSettings ss;
+// A live run at 15 rpm through a simulator with `ss` (speed set here), a spare revolution
+// for every stall of the machine, not the test.
+Result<MeasuredRun> measure_live(SimulatorSettings ss) {
   ss.speed_rpm = 15.0;
   auto sim = testing::start_intake_simulator(ss);
-  ASSERT_TRUE(sim.ok()) << sim.error().message;
+  if (!sim) return sim.error();
   ModbusSettings ms;
   ms.port = (*sim)->port();
   ModbusGauge gauge(ms);
   PollerSettings ps;
   ps.mode = SamplingMode::kLive;
-  ps.spare_revolutions = 6;  // a stall of the machine costs a revolution, not the test
-
+  ps.spare_revolutions = 6;
   Poller poller(gauge, ps);
-  Result<MeasuredRun> run = poller.measure();
-  ASSERT_TRUE(run.ok()) << run.error().message;
-  ASSERT_EQ(run->revolutions.size(), 3u);
-  // Lobe plus the 0.25 mm gauge offset: 8.75 mm at the nose, 0.25 mm on the base circle.
-  for (const auto& rev : run->revolutions) {
+  return poller.measure();
+}
+
+// Lobe plus the 0.25 mm gauge offset: 8.75 mm at the nose, 0.25 mm on the base circle.
+void expect_lobe(const MeasuredRun& run) {
+  ASSERT_EQ(run.revolutions.size(), 3u);
+  for (const auto& rev : run.revolutions) {
     EXPECT_NEAR(rev.lift_mm[0], 8.75, 0.05);
     EXPECT_NEAR(rev.lift_mm[180], 0.25, 0.05);
   }
+}
+
+TEST(LiveLink, PollerMeasuresThreeRevolutionsOverLoopback) {
+  Result<MeasuredRun> run = measure_live({});
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  expect_lobe(*run);
   // Interpolated (cubic) between polls at most 1 deg apart: under 0.001 um; plus 0.3 um noise
   // per sample: revolutions agree within 5 sigma of a difference, 2.1 um.
   for (int d = 0; d < 360; ++d) EXPECT_NEAR(run->revolutions[0].lift_mm[d], run->revolutions[1].lift_mm[d], 0.0021);
@@ -46,6 +55,38 @@ TEST(LiveLink, PollerMeasuresThreeRevolutionsOverLoopback) {
 // Whether the run completes is not the point (oversleeps on a loaded machine cost
 // revolutions; docs/acquisition.md): the requests the simulator served per revolution it
 // turned are. The bound fails only if pacing breaks.
+// An outage of up to a revolution (4 s here: 5 attempts of the backoff, 20 to 320 ms, or 20
+// stale periods) costs the revolutions it touches, not the run.
+class LiveOutageTest : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(LiveOutageTest, AnOutageOfUpToARevolutionIsAbsorbedInLiveMode) {
+  SimulatorSettings ss;
+  Result<FaultSpec> fault = parse_fault_spec(GetParam());
+  ASSERT_TRUE(fault.ok()) << fault.error().message;
+  ss.faults.push_back(*fault);
+  Result<MeasuredRun> run = measure_live(ss);
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_GE(run->reconnects, 1);
+  EXPECT_GE(run->discarded_revolutions, 1);
+  expect_lobe(*run);
+}
+
+INSTANTIATE_TEST_SUITE_P(SimulatorFaults, LiveOutageTest, ::testing::ValuesIn(testing::kOutagesUpToARevolution),
+                         testing::fault_test_name);
+
+// The revolution register moves 3 degrees after the angle wraps. Taken as the encoder
+// running backwards, it would break every revolution at its wrap.
+TEST(LiveLink, ARevolutionCounterLaggingTheWrapCostsNothing) {
+  SimulatorSettings ss;
+  ss.revolution_lag_deg = 3.0;
+  Result<MeasuredRun> run = measure_live(ss);
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  expect_lobe(*run);
+  for (size_t i = 1; i < run->revolutions.size(); ++i) {
+    EXPECT_GT(run->revolutions[i].revolution, run->revolutions[i - 1].revolution);
+  }
+}
+
 TEST(LiveLink, PacedPollingSpacesThePolls) {
   SimulatorSettings ss;
   ss.speed_rpm = 15.0;

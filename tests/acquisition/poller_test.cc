@@ -64,6 +64,29 @@ TEST(Poller, UnwrapsTheRevolutionCounterAcrossItsWrap) {
   EXPECT_EQ(run->revolutions[2].revolution, 65537);
 }
 
+// Amplifiers that update the revolution count on their own cycle move it a little after the
+// angle wraps: up to 5 degrees late it is the same wrap, not the encoder running backwards.
+TEST(Poller, ARevolutionCounterLaggingTheWrapIsTheSameWrap) {
+  ScriptedGauge g;
+  g.revolution_lag_deg = 4.5;
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->discarded_revolutions, 0);
+  EXPECT_EQ(run->revolutions[0].revolution, 1);
+  expect_true_lift(*run, g);
+}
+
+// Beyond the stated tolerance the counter is believed: the angle went back a revolution.
+TEST(Poller, ARevolutionCounterLaggingFartherIsNotExplainedAway) {
+  ScriptedGauge g;
+  g.revolution_lag_deg = 8.0;
+  Poller p(g, fast_settings());
+  Result<MeasuredRun> run = p.measure();
+  ASSERT_FALSE(run.ok());
+  EXPECT_NE(run.error().message.find("encoder angle went backwards"), std::string::npos) << run.error().message;
+}
+
 TEST(Poller, RevolutionWithAGapIsDiscardedWholeAndReplaced) {
   ScriptedGauge g;
   g.faults[1700] = Fault::kSkip;  // in revolution 2: 1700 reads * 0.3 deg = 510 deg
@@ -170,6 +193,7 @@ TEST(Poller, GaugeThatStopsAnsweringFailsWithoutSamples) {
   g.dead_after_faults = true;
   PollerSettings s = fast_settings();
   s.max_attempts = 4;
+  s.patience_revolutions = 0;  // the scripted spindle turns per request, not with the clock
   Poller p(g, s);
   Result<MeasuredRun> run = p.measure();
   ASSERT_FALSE(run.ok());
@@ -311,6 +335,18 @@ TEST(LatchedPoller, TooManyBadRevolutionsFailsNamingTheLast) {
   ASSERT_FALSE(run.ok());
   EXPECT_EQ(run.error().code, ErrorCode::kIncompleteRun);
   EXPECT_NE(run.error().message.find("over-range"), std::string::npos) << run.error().message;
+}
+
+// (revolutions + spares + 2) revolutions at the speed, at least 10 s; or as set.
+TEST(RunTimeout, FollowsTheSpeedAndTheRevolutions) {
+  PollerSettings s;  // 3 revolutions, 3 spares: 8 revolutions
+  EXPECT_EQ(run_timeout_at(s, 3.0), std::chrono::milliseconds(160000)) << "20 s a revolution";
+  EXPECT_EQ(run_timeout_at(s, 600.0), kRunTimeoutFloor);
+  EXPECT_EQ(run_timeout_at(s, 0.0), kRunTimeoutFloor) << "speed not seen yet";
+  s.revolutions = 70;
+  EXPECT_EQ(run_timeout_at(s, 60.0), std::chrono::milliseconds(75000));
+  s.run_timeout = std::chrono::milliseconds(5000);
+  EXPECT_EQ(run_timeout_at(s, 3.0), std::chrono::milliseconds(5000)) << "set by the user";
 }
 
 TEST(DegreeRanges, FormatsRuns) {

@@ -46,9 +46,33 @@ TEST(StatusMasks, TranslateTheAmplifiersBitsToOurs) {
   EXPECT_EQ(translate_status(0x0001, m), kGaugeReady);
   EXPECT_EQ(translate_status(0x0003, m), kGaugeReady | kGaugeOverRange);
   EXPECT_EQ(translate_status(0x0000, m), 0);
-  StatusMasks other{0x8000, 0x0100, 0x0200, 0x0400};  // another amplifier's layout
+  StatusMasks other;  // another amplifier's layout
+  other.ready = 0x8000;
+  other.over_range = 0x0100;
+  other.under_range = 0x0200;
+  other.probe_missing = 0x0400;
   EXPECT_EQ(translate_status(0x8400, other), kGaugeReady | kGaugeProbeMissing);
   EXPECT_FALSE(gauge_status_ok(translate_status(0x0001, other))) << "bit 0 means nothing to this amplifier";
+}
+
+// Many amplifiers report 0 for "ok" and one bit per fault of their own.
+TEST(StatusMasks, AnOkValueAndNamedBitsDescribeAnotherKindOfStatusWord) {
+  StatusMasks m;
+  m.ok_value = 0;
+  m.bit_names[0] = "over-range";
+  m.bit_names[5] = "coil open";
+  EXPECT_TRUE(gauge_status_ok(translate_status(0x0000, m)));
+  const GaugeStatus coil = translate_status(0x0020, m);
+  EXPECT_FALSE(gauge_status_ok(coil));
+  EXPECT_EQ(describe_gauge_status(coil, &m.bit_names), "coil open") << "not \"over-range\": the bit has its own name";
+  EXPECT_EQ(describe_gauge_status(translate_status(0x0201, m), &m.bit_names), "over-range, status bit 9");
+  EXPECT_EQ(describe_gauge_status(translate_status(0x0201, m)), "status bit 0, status bit 9") << "no names given";
+
+  StatusMasks ready_bit;  // ok is 0x8000, the ready bit alone
+  ready_bit.ok_value = 0x8000;
+  EXPECT_TRUE(gauge_status_ok(translate_status(0x8000, ready_bit)));
+  EXPECT_EQ(describe_gauge_status(translate_status(0x0000, ready_bit)), "not ready");
+  EXPECT_EQ(describe_gauge_status(translate_status(0x8004, ready_bit)), "status bit 2");
 }
 
 TEST(SnapshotBlocks, TheSimulatorsContiguousFieldsAreOneRequest) {

@@ -28,6 +28,7 @@ class ScriptedGauge final : public GaugeClient {
   double u_deg = 12.5;    // current unwrapped angle
   double skip_deg = 5.0;
   std::uint16_t revolution_base = 0;  // raw counter at u = 0
+  double revolution_lag_deg = 0.0;    // the counter moves this far after the angle wraps
   std::map<int, Fault> faults;        // by read call number, 1-based
   int fail_connects = 0;              // the next n connects fail
   bool dead_after_faults = false;     // every read after the last scripted fault times out
@@ -130,7 +131,8 @@ class ScriptedGauge final : public GaugeClient {
     }
     const double turns = std::floor(u_deg / 360.0);
     s.angle_deg = u_deg - turns * 360.0;
-    s.revolution = static_cast<std::uint16_t>(revolution_base + static_cast<int>(turns));
+    s.revolution = static_cast<std::uint16_t>(revolution_base +
+                                              static_cast<int>(std::floor((u_deg - revolution_lag_deg) / 360.0)));
     s.reading_mm = lift_mm(u_deg);
     s.sequence = ++sequence_;
     s.status = status;

@@ -8,11 +8,15 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/poller.h"
 #include "app/gauge_config.h"
+#include "app/toml_reader.h"
 
 namespace gaugeloop {
 namespace {
@@ -122,6 +126,64 @@ fault_status_address = 107
   EXPECT_EQ(def->map.latch.fault_count_address, -1);
 }
 
+// A status word that is 0 when all is well, with a bit for each fault of the amplifier's own.
+TEST(GaugeConfig, ReadsAStatusWordWithAnOkValueAndNamedBits) {
+  auto cfg = parse_gauge_toml(R"([map]
+[map.reading]
+address = 0
+type = "INT32"
+[map.angle]
+address = 3
+type = "UINT32"
+[map.status]
+address = 9
+ok_value = 0
+[map.status.bits]
+0 = "lever over-range"
+3 = "amplifier not ready"
+)",
+                              "gauge.toml");
+  ASSERT_TRUE(cfg.ok()) << cfg.error().message;
+  const StatusMasks& m = cfg->map.masks;
+  ASSERT_TRUE(m.ok_value.has_value());
+  EXPECT_EQ(*m.ok_value, 0);
+  EXPECT_EQ(m.bit_names[0], "lever over-range");
+  EXPECT_EQ(m.bit_names[3], "amplifier not ready");
+  EXPECT_TRUE(m.bit_names[1].empty());
+  EXPECT_EQ(describe_gauge_status(translate_status(0x0009, m), &m.bit_names), "lever over-range, amplifier not ready");
+}
+
+// Host names and IPv6 addresses are taken, and a name that does not exist is refused when
+// the config is read, not at the first run (".invalid" never resolves, RFC 2606).
+TEST(GaugeConfig, ResolvesTheHostWhenRead) {
+  for (const char* host : {"localhost", "127.0.0.1", "::1"}) {
+    auto cfg = parse_gauge_toml("[link]\nhost = \"" + std::string(host) + "\"\nport = 1502\n", "gauge.toml");
+    ASSERT_TRUE(cfg.ok()) << host << ": " << cfg.error().message;
+    EXPECT_EQ(cfg->host, host);
+  }
+  auto bad = parse_gauge_toml("[link]\nhost = \"gauge-amp.invalid\"\n", "gauge.toml");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().code, ErrorCode::kInvalidInput);
+  EXPECT_NE(bad.error().message.find("gauge.toml:2: key `link.host`: cannot resolve host 'gauge-amp.invalid': "),
+            std::string::npos)
+      << bad.error().message;
+  EXPECT_NE(bad.error().message.find("check the gauge's address"), std::string::npos) << bad.error().message;
+}
+
+// The service's [plc] link is read by the same function and says whose address to check.
+TEST(GaugeConfig, APlcLinkWithAnUnknownHostNamesThePlc) {
+  auto parsed = parse_toml("[plc]\nhost = \"plc.invalid\"\n", "service.toml");
+  ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+  TomlReader r(*(*parsed)["plc"].as_table(), "service.toml", "plc.");
+  ModbusSettings out;
+  read_modbus_link(r, ModbusSettings{}, out, "PLC");
+  ASSERT_TRUE(r.error.has_value());
+  EXPECT_NE(r.error->message.find("service.toml:2: key `plc.host`: cannot resolve host 'plc.invalid': "),
+            std::string::npos)
+      << r.error->message;
+  EXPECT_NE(r.error->message.find("check the PLC's address"), std::string::npos) << r.error->message;
+}
+
 TEST(GaugeConfig, RefusesMistakesNamingFileLineAndKey) {
   const BadConfig cases[] = {
       {"[link]\nprot = 502\n", "gauge.toml:2: key `link.prot`: unknown key"},
@@ -134,6 +196,12 @@ TEST(GaugeConfig, RefusesMistakesNamingFileLineAndKey) {
        "gauge.toml:4: key `link.port`: a TCP setting in an RTU link"},
       {"[link]\nbaud = 9600\n", "gauge.toml:2: key `link.baud`: a serial setting in a TCP link"},
       {"[link]\ntransport = \"rtu\"\n", "key `link.device` is missing"},
+      {"[map.status]\naddress = 9\nok_value = 0\nready_mask = 1\n",
+       "gauge.toml:3: key `map.status.ok_value`: give either ok_value (and bits) or the masks"},
+      {"[map.status]\naddress = 9\n[map.status.bits]\n0 = \"over-range\"\n",
+       "key `map.status.bits`: names status bits of an ok_value status word"},
+      {"[map.status]\naddress = 9\nok_value = 0\n[map.status.bits]\n16 = \"x\"\n",
+       "gauge.toml:5: key `map.status.bits.16`: a status bit is a number 0 to 15"},
   };
   for (const BadConfig& c : cases) {
     auto cfg = parse_gauge_toml(c.text, "gauge.toml");
@@ -143,11 +211,11 @@ TEST(GaugeConfig, RefusesMistakesNamingFileLineAndKey) {
   }
 }
 
-// The pymodbus peer as a child process: started with its spindle speed, its port read from
-// its first line of output, stopped by closing its stdin.
+// The pymodbus peer as a child process: started with its spindle speed and options (see the
+// script), its port read from its first line of output, stopped by closing its stdin.
 class PymodbusPeer {
  public:
-  explicit PymodbusPeer(double speed_rpm) {
+  explicit PymodbusPeer(double speed_rpm, std::vector<std::string> options = {}) {
     int in[2];
     int out[2];
     if (::pipe(in) != 0 || ::pipe(out) != 0) return;
@@ -158,9 +226,12 @@ class PymodbusPeer {
       ::close(in[1]);
       ::close(out[0]);
       const std::string script = std::string(GAUGELOOP_SOURCE_DIR) + "/tests/peers/pymodbus_gauge.py";
-      const std::string speed = std::to_string(speed_rpm);
+      options.insert(options.begin(), {"python3", script, std::to_string(speed_rpm)});
+      std::vector<char*> argv;
+      for (std::string& o : options) argv.push_back(o.data());
+      argv.push_back(nullptr);
       // Debian's interpreter: python3-pymodbus is installed for it, not for others on PATH.
-      ::execl("/usr/bin/python3", "python3", script.c_str(), speed.c_str(), static_cast<char*>(nullptr));
+      ::execv("/usr/bin/python3", argv.data());
       ::_exit(127);
     }
     ::close(in[0]);
@@ -191,16 +262,28 @@ double peer_lift_mm(int deg) {
   return 2.0 + 1.5 * std::cos(rad) + 0.2 * std::sin(3.0 * rad);
 }
 
-Result<MeasuredRun> measure_peer(int port, SamplingMode mode) {
+// Measures through examples/gauges/other_amplifier.toml, changed by `adapt` when given.
+Result<MeasuredRun> measure_peer(int port, SamplingMode mode,
+                                 const std::function<void(RegisterMap&)>& adapt = nullptr) {
   auto cfg = read_gauge_file(example("other_amplifier.toml"));
   if (!cfg) return cfg.error();
   cfg->port = port;
+  if (adapt) adapt(cfg->map);
   ModbusGauge gauge(*cfg);
   PollerSettings ps;
   ps.mode = mode;
   ps.spare_revolutions = 6;
   Poller poller(gauge, ps);
   return poller.measure();
+}
+
+// The peer's revolution count (register 16) and its ok-value status code (register 17).
+void read_peer_count_and_status_code(RegisterMap& m) {
+  m.revolution = FieldSpec{true, RegisterTable::kHolding, 16, ValueType::kUInt16, WordOrder::kABCD, 1.0, 0.0};
+  m.status.address = 17;
+  m.masks = StatusMasks{};
+  m.masks.ok_value = 0;
+  m.masks.bit_names[5] = "coil open";
 }
 
 TEST(PymodbusPeer, LatchedRunDecodesItsMap) {
@@ -230,6 +313,41 @@ TEST(PymodbusPeer, LiveRunCountsRevolutionsFromTheAngle) {
   for (const auto& rev : run->revolutions) {
     for (int d = 0; d < 360; ++d) ASSERT_NEAR(rev.lift_mm[d], peer_lift_mm(d), 5e-4) << "degree " << d;
   }
+}
+
+// A third-party amplifier that moves its revolution count 2 degrees after the angle wraps,
+// with a status word that is 0 when all is well: every revolution taken, none lost at a wrap.
+TEST(PymodbusPeer, LiveRunTakesARevolutionCountLaggingTheWrap) {
+  PymodbusPeer peer(12.0, {"--revolution-lag-deg", "2"});
+  ASSERT_GT(peer.port(), 0) << "the pymodbus peer did not start (python3-pymodbus: scripts/install-deps.sh)";
+  Result<MeasuredRun> run = measure_peer(peer.port(), SamplingMode::kLive, read_peer_count_and_status_code);
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  ASSERT_EQ(run->revolutions.size(), 3u);
+  for (const auto& rev : run->revolutions) {
+    for (int d = 0; d < 360; ++d) ASSERT_NEAR(rev.lift_mm[d], peer_lift_mm(d), 5e-4) << "degree " << d;
+  }
+}
+
+// Its fault bit 5 from half a revolution on, for good: named by the map's name for it.
+TEST(PymodbusPeer, AFaultBitOfItsOwnIsNamed) {
+  PymodbusPeer peer(60.0, {"--fault-at-rev", "0.5"});
+  ASSERT_GT(peer.port(), 0) << "the pymodbus peer did not start (python3-pymodbus: scripts/install-deps.sh)";
+  Result<MeasuredRun> run = measure_peer(peer.port(), SamplingMode::kLive, read_peer_count_and_status_code);
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kIncompleteRun);
+  EXPECT_NE(run.error().message.find("gauge status coil open at degrees"), std::string::npos) << run.error().message;
+}
+
+// Every register stands still from 1.5 revolutions on while the peer keeps answering: live
+// mode names the freeze instead of polling until the run timeout.
+TEST(PymodbusPeer, AFrozenAmplifierIsNamedInLiveMode) {
+  PymodbusPeer peer(60.0, {"--freeze-at-rev", "1.5"});
+  ASSERT_GT(peer.port(), 0) << "the pymodbus peer did not start (python3-pymodbus: scripts/install-deps.sh)";
+  Result<MeasuredRun> run = measure_peer(peer.port(), SamplingMode::kLive);
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kGaugeTimeout);
+  EXPECT_NE(run.error().message.find("stood still"), std::string::npos) << run.error().message;
+  EXPECT_NE(run.error().message.find("sample number stayed at"), std::string::npos) << run.error().message;
 }
 
 }  // namespace

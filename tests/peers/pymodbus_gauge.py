@@ -6,13 +6,19 @@ Holding registers (function 03), 0-based:
   12     angle, uint16, 0.01 deg
   13     status: 0x8000 ready, 0x0100 over-range, 0x0200 under-range, 0x0400 probe missing
   14-15  sample number, uint32, word order DCBA
-  (no revolution count: the client counts the angle wrapping)
+  (examples/gauges/other_amplifier.toml reads no revolution count: the client counts the
+  angle wrapping; the two registers below are for maps that ask for them)
+  16     revolution count, uint16, moving --revolution-lag-deg after the angle wraps (own cycle)
+  17     status code: 0 ok; bit 5 coil open (from --fault-at-rev on)
   500-501 latch count, uint32 CDAB; ring of 400 entries from 2000, 3 registers each:
           degree uint16, then the reading float32 CDAB.
 
-The lobe: lift_mm(deg) below. Usage: pymodbus_gauge.py [speed_rpm]. Prints "port N" once
-listening on 127.0.0.1 (port chosen by the system); serves until its stdin closes.
+The lobe: lift_mm(deg) below. Usage: pymodbus_gauge.py [speed_rpm] [--revolution-lag-deg D]
+[--fault-at-rev R] [--freeze-at-rev R] (revolutions from the start; a freeze stops every
+register, the sample number too). Prints "port N" once listening on 127.0.0.1 (port chosen
+by the system); serves until its stdin closes.
 """
+import argparse
 import asyncio
 import logging
 import math
@@ -23,8 +29,15 @@ import time
 from pymodbus.datastore import ModbusSequentialDataBlock, ModbusServerContext, ModbusSlaveContext
 from pymodbus.server.async_io import ModbusTcpServer
 
-SPEED_RPM = float(sys.argv[1]) if len(sys.argv) > 1 else 60.0
+ARGS = argparse.ArgumentParser()
+ARGS.add_argument("speed_rpm", type=float, nargs="?", default=60.0)
+ARGS.add_argument("--revolution-lag-deg", type=float, default=0.0)
+ARGS.add_argument("--fault-at-rev", type=float, default=None)
+ARGS.add_argument("--freeze-at-rev", type=float, default=None)
+OPTS = ARGS.parse_args()
+SPEED_RPM = OPTS.speed_rpm
 RING = 400
+COIL_OPEN = 0x0020
 
 
 def lift_mm(deg):
@@ -65,12 +78,17 @@ class Gauge(ModbusSequentialDataBlock):
     def update(self):
         t = time.monotonic() - self.t0
         turns = t * SPEED_RPM / 60.0
+        if OPTS.freeze_at_rev is not None and turns >= OPTS.freeze_at_rev:
+            return  # frozen: the registers keep their last values
+        faulted = OPTS.fault_at_rev is not None and turns >= OPTS.fault_at_rev
         deg = (turns * 360.0) % 360.0
         v = self.values
         v[10:12] = float_cdab(lift_mm(deg))
         v[12] = int(deg * 100.0) % 36000
         v[13] = 0x8000
         v[14:16] = u32_dcba(int(t * 1e6) & 0xFFFFFFFF)
+        v[16] = int(math.floor(turns - OPTS.revolution_lag_deg / 360.0)) & 0xFFFF
+        v[17] = COIL_OPEN if faulted else 0
         marks = int(turns * 360.0) + 1
         for i in range(max(self.latched, marks - RING), marks):
             at = 2000 + 3 * (i % RING)
