@@ -422,9 +422,10 @@ int cmd_sim(const std::string& part_path, const SimulatorSettings& settings, con
     if (!grinder->grind_if_changed()) return kExitBadInput;
   }
   if (settings.rtu_device.empty()) {
+    // An IPv6 address in brackets, as --gauge takes it back.
+    const std::string host = settings.host.find(':') == std::string::npos ? settings.host : "[" + settings.host + "]";
     std::printf("gaugeloop sim: %s lobe %d at %.0f rpm, Modbus TCP on %s:%d (registers: docs/simulator.md)\n",
-                lp->file.part.name.c_str(), lp->file.part.lobe, settings.speed_rpm, settings.host.c_str(),
-                (*sim)->port());
+                lp->file.part.name.c_str(), lp->file.part.lobe, settings.speed_rpm, host.c_str(), (*sim)->port());
     std::printf("port %d\n", (*sim)->port());
   } else {
     std::printf(
