@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "app/run_json.h"
+#include "core/utc_time.h"
 #include "storage/run_store.h"
 
 #ifndef GAUGELOOP_VERSION
@@ -258,20 +259,6 @@ std::string label_value(const std::string& v) {
 std::string number(double v) {
   json j = v;
   return j.dump();  // shortest text that reads back exactly
-}
-
-// Seconds since the epoch of a stored "YYYY-MM-DDTHH:MM:SSZ"; empty if it is not one.
-std::optional<std::time_t> epoch_of(const std::string& utc) {
-  std::tm tm{};
-  int consumed = 0;
-  if (std::sscanf(utc.c_str(), "%4d-%2d-%2dT%2d:%2d:%2dZ%n", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour,
-                  &tm.tm_min, &tm.tm_sec, &consumed) != 6 ||
-      static_cast<std::size_t>(consumed) != utc.size()) {
-    return std::nullopt;
-  }
-  tm.tm_year -= 1900;
-  tm.tm_mon -= 1;
-  return timegm(&tm);
 }
 
 // ---- Run database connections ----
@@ -715,7 +702,7 @@ struct HttpApi::Impl {
     s += "# HELP gaugeloop_last_run_started_timestamp_seconds When the newest run of each lobe started.\n"
          "# TYPE gaugeloop_last_run_started_timestamp_seconds gauge\n";
     for (const auto& [key, r] : last) {
-      if (const std::optional<std::time_t> t = epoch_of(r->started_utc)) {
+      if (const std::optional<std::time_t> t = epoch_of_utc(r->started_utc)) {
         s += "gaugeloop_last_run_started_timestamp_seconds" + labels(*r) + " " + std::to_string(*t) + "\n";
       }
     }

@@ -188,14 +188,6 @@ std::string run_csv(const StoredRun& r) {
   return o.str();
 }
 
-std::string format_utc(std::time_t t) {
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
 Result<std::string> time_bound(const std::string& text, bool until, std::string_view name) {
   if (text.empty()) return std::string();
   std::tm tm{};

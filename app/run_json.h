@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/result.h"
+#include "core/utc_time.h"
 #include "storage/run_store.h"
 
 namespace gaugeloop {
@@ -37,9 +38,6 @@ nlohmann::json event_json(const StoredEvent& event);
 // the cam frame when the run recorded its frame mapping, else kept in the machine frame and the
 // columns say so; a pruned run has no revolution columns.
 std::string run_csv(const StoredRun& run);
-
-// `t` as "YYYY-MM-DDTHH:MM:SSZ".
-std::string format_utc(std::time_t t);
 
 // A time bound given by a person, UTC: "2026-11-22", "2026-11-22T08:30" or
 // "2026-11-22T08:30:00Z" (a space for the T is fine). A bound covers its whole unit, so an

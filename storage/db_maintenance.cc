@@ -11,6 +11,7 @@
 #include <ctime>
 #include <utility>
 
+#include "core/utc_time.h"
 #include "storage/maintenance_internal.h"
 #include "storage/migrations.h"
 #include "storage/sqlite_db.h"
@@ -152,16 +153,6 @@ Status move_into_place(const fs::path& tmp, const fs::path& dest, bool overwrite
 void remove_leftovers(const fs::path& tmp) {
   std::error_code ec;
   for (const char* suffix : {"", "-journal", "-wal", "-shm"}) fs::remove(tmp.string() + suffix, ec);
-}
-
-// "20261201T151100Z": a file name's time, without colons.
-std::string utc_file_stamp() {
-  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y%m%dT%H%M%SZ", &tm);
-  return buf;
 }
 
 // The first column of the one row `sql` returns, as a number.

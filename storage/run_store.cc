@@ -13,6 +13,7 @@
 #include <system_error>
 #include <utility>
 
+#include "core/utc_time.h"
 #include "storage/degree_blob.h"
 #include "storage/degree_json.h"
 #include "storage/maintenance_internal.h"
@@ -36,21 +37,6 @@ Error refused(const std::string& why) { return make_error(ErrorCode::kInvalidInp
 std::string describe_non_finite(double value) {
   if (std::isnan(value)) return "NaN";
   return value > 0 ? "+infinity" : "-infinity";
-}
-
-// Exactly "YYYY-MM-DDTHH:MM:SSZ" with plausible field ranges: fixed width keeps text order
-// equal to time order, which list_runs relies on.
-bool is_utc_timestamp(std::string_view s) {
-  constexpr std::string_view kShape = "dddd-dd-ddTdd:dd:ddZ";
-  if (s.size() != kShape.size()) return false;
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    const bool digit = std::isdigit(static_cast<unsigned char>(s[i])) != 0;
-    if (kShape[i] == 'd' ? !digit : s[i] != kShape[i]) return false;
-  }
-  auto field = [s](std::size_t at) { return (s[at] - '0') * 10 + (s[at + 1] - '0'); };
-  const int month = field(5), day = field(8), hour = field(11), minute = field(14), second = field(17);
-  return month >= 1 && month <= 12 && day >= 1 && day <= 31 && hour <= 23 && minute <= 59 &&
-         second <= 60;  // 60: a leap second
 }
 
 Status check_table(const DegreeTable& table, std::string_view column, std::string_view frame) {
@@ -162,15 +148,6 @@ Status validate(const RunRecord& run) {
 }
 
 bool is_time_bound(std::string_view s) { return s.empty() || is_utc_timestamp(s); }
-
-std::string utc_now() {
-  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
 
 std::string_view follower_db_name(FollowerKind kind) {
   switch (kind) {
