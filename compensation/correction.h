@@ -29,7 +29,7 @@ struct CompensationSettings {
 
 // Correction convention: a correction c(theta) in um, cam frame, per whole cam degree, in
 // flat-probe reading terms. The next part is ground to the target whose flat-probe reading
-// is design - c (correct the target, BRIEF section 5), so a lobe that measured e um high
+// is design - c (correct the target, as iterative learning control does), so a lobe that measured e um high
 // asks for c to grow by g * e.
 
 // What to do with the correction a measurement asks for.

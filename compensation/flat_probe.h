@@ -94,7 +94,7 @@ Result<DegreeTable> flat_probe_reading(const PeriodicSpline& lift_mm, const Part
 // circle of radius part.base_circle_radius_mm. Each wheel position W lies rw outside the lobe
 // along the contact normal, so reading(theta) = max over psi of |W(psi)| cos(psi - theta)
 // - rw - rb, with |W| = X + rw + rb interpolated periodically between the path's points.
-// This closes the round trip of BRIEF section 3: the reading of the ground lobe equals
+// This closes the round trip of the cam-grinding kinematics: the reading of the ground lobe equals
 // flat_probe_reading of the lift the path was computed from.
 // Errors: kInvalidInput when the path is malformed (sizes, fewer than 4 points, psi not
 // strictly increasing in [0, 360)) or the radii are not positive.

@@ -1,4 +1,4 @@
-// Grinding-wheel infeed against wheel angle for a lobe: the kinematics of BRIEF section 3.
+// Grinding-wheel infeed against wheel angle for a lobe: the cam-grinding kinematics.
 #pragma once
 
 #include <vector>
@@ -28,7 +28,7 @@ struct WheelPath {
 
 // Computes the wheel path for the design lift `lift_mm` (cam frame, mm, 0 on the base circle,
 // follower of `part`) with wheel radius part.wheel_radius_mm, at `step_deg` spacing in psi.
-// X(beta) and psi(beta) follow BRIEF section 3 (flat: support function p = rb + H; roller
+// X(beta) and psi(beta) follow the cam-grinding kinematics (flat: support function p = rb + H; roller
 // and knife edge: pitch curve rho = rb + rr + H). Resampling onto the uniform psi grid:
 // psi(beta), X, X' and X'' are tabulated in cells of at most 0.5 deg of beta that never
 // straddle a knot of the lift spline (so everything is smooth inside a cell). Where a cell's

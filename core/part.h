@@ -22,7 +22,7 @@ struct Part {
   double follower_radius_mm = 0.0;     // roller radius; ignored for flat and knife edge
   double base_circle_radius_mm = 0.0;  // rb
   double wheel_radius_mm = 200.0;      // rw, the grinding wheel
-  // Machine angle C = rotation_sense * psi + c_offset_deg (BRIEF section 3).
+  // Machine angle C = rotation_sense * psi + c_offset_deg (the cam-grinding kinematics).
   int rotation_sense = 1;     // +1 or -1
   double c_offset_deg = 0.0;  // c0: the C angle of the lobe nose
   // The gauge probe sits this far (machine degrees) from the wheel contact, in the sense of C.

@@ -42,7 +42,7 @@ struct LobeAnalysis {
   double rms_error_um = 0.0;
   double peak_to_valley_um = 0.0;
   double repeatability_um = 0.0;  // largest per-degree spread
-  // Inspection figures (BRIEF sections 1 and 4).
+  // Inspection figures, as a cam inspection report gives them.
   double phase_error_deg = 0.0;                    // lobe rotation that best explains the error, least squares
   double base_circle_runout_um = 0.0;              // total indicator reading of the base circle
   std::array<double, 31> harmonic_amplitude_um{};  // |error| harmonics 0..30 (Eigen FFT)

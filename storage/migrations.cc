@@ -96,7 +96,7 @@ CREATE TABLE lobes (
   part             TEXT    NOT NULL REFERENCES parts (name),
   lobe             INTEGER NOT NULL CHECK (lobe >= 1),
   -- Machine angle C = rotation_sense * psi + c_offset_deg; the probe sits probe_offset_deg
-  -- of C from the wheel contact (BRIEF section 3). Latest values a run reported.
+  -- of C from the wheel contact (the cam-grinding kinematics). Latest values a run reported.
   rotation_sense   INTEGER CHECK (rotation_sense IN (-1, 1)),
   c_offset_deg     REAL,
   probe_offset_deg REAL,

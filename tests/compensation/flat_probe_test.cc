@@ -70,7 +70,7 @@ TEST(FlatProbeReading, RefusesANonConvexFlatLobe) {
   EXPECT_EQ(reading.error().code, ErrorCode::kRefused);
 }
 
-// Round trip (BRIEF section 3): grind with the path, read the ground lobe with a flat probe,
+// Round trip (the cam-grinding kinematics): grind with the path, read the ground lobe with a flat probe,
 // get back the design's reading.
 void expect_round_trip(const PeriodicSpline& lift, const Part& part, double step_deg, double tolerance_mm) {
   Result<WheelPath> path = compute_wheel_path(lift, part, step_deg);

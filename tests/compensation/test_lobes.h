@@ -49,7 +49,7 @@ struct Disc {
     const double r = rc_mm + rr_mm;
     return e_mm * std::cos(deg * kRadPerDeg) + std::sqrt(r * r - s * s) - (base_circle_mm() + rr_mm);
   }
-  // BRIEF section 3: the exact infeed for wheel radius rw at wheel angle psi.
+  // the cam-grinding kinematics: the exact infeed for wheel radius rw at wheel angle psi.
   double exact_infeed_mm(double psi_deg, double rw_mm) const {
     const double s = e_mm * std::sin(psi_deg * kRadPerDeg);
     return e_mm * std::cos(psi_deg * kRadPerDeg) + std::sqrt((rc_mm + rw_mm) * (rc_mm + rw_mm) - s * s) - rw_mm -

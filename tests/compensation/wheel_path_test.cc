@@ -19,7 +19,7 @@ using testing::Disc;
 using ::testing::HasSubstr;
 using testing::make_part;
 
-// The eccentric disc of BRIEF section 3 under each follower: the same lobe, so the same exact
+// The eccentric disc of the cam-grinding kinematics under each follower: the same lobe, so the same exact
 // infeed whatever follower its lift table was written for.
 struct DiscCase {
   const char* follower;

@@ -1,4 +1,4 @@
-// The closed loop on the virtual grinder (issue 8, docs/virtual_grinder.md): parts ground from
+// The closed loop on the virtual grinder (docs/virtual_grinder.md): parts ground from
 // the table in force through the machine error model, measured through the gauge simulator
 // over loopback by the product's own job, compensated, pushed as real NC files, stored in
 // SQLite. What a change to compensation does to the ground part shows here.
@@ -189,7 +189,7 @@ TEST_F(GrindingLoopTest, DemoIterationsPrintsEveryPartAndPlotsThemOnOneSheet) {
   EXPECT_NE(r.output.find("virtual grinder: intake_flat lobe 1 at 60 rpm; servo 42 Hz"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("   0  design "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("   2  CAM_INTAKE_L1.SPF v2 "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("after 1 iteration (seed 000: 2.6 um)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("after 1 iteration (published cam-grinding result: 2.6 um)"), std::string::npos) << r.output;
   const std::string text = testing::slurp(svg);
   EXPECT_EQ(text.rfind("<?xml", 0), 0u) << text.substr(0, 100);
   EXPECT_NE(text.find("</svg>"), std::string::npos);

@@ -527,7 +527,8 @@ TEST_F(PlcServiceTest, PlcRequestRunNcFileDoneWithTheRunIdThenCleared) {
 // PLC asks for part 1, ground from the design on the default machine (about 16 um); the
 // service measures it and pushes a table; part 2 is ground from that NC file, read back, and
 // the PLC asks again: the service builds on the table in force and the part comes out under
-// seed 000's 2.6 um. Every change to compensation is judged here by the part it grinds.
+// the 2.6 um the published cam-grinding result reached. Every change to compensation is judged here by the part it
+// grinds.
 TEST_F(PlcServiceTest, TheNextPartGroundFromThePushedTableComesOutUnder26Um) {
   auto pf = read_part_file(fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml");
   ASSERT_TRUE(pf.ok()) << pf.error().message;

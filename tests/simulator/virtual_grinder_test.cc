@@ -63,7 +63,7 @@ class VirtualGrinderTest : public ::testing::Test {
   GroundPart last_;
 };
 
-// Tolerance 0.01 um: the envelope round trip (BRIEF section 3) is exact to ~1e-6 um; the
+// Tolerance 0.01 um: the envelope round trip (the cam-grinding kinematics) is exact to ~1e-6 um; the
 // spline through the 0.1 deg path rows adds well under 0.01 um on this lobe.
 TEST_F(VirtualGrinderTest, PerfectMachineGrindsTheDesign) {
   const TrueLiftError e = grind(no_errors());

@@ -1,4 +1,4 @@
-// Upgrading a database written by schema version 1 (`gaugeloop demo` before issue 5): the
+// Upgrading a database written by schema version 1 (`gaugeloop demo` before the compact tables): the
 // data survives, the version-1 names still read the same columns, damage stops the upgrade.
 #include <gtest/gtest.h>
 
