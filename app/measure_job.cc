@@ -232,20 +232,26 @@ Status check_nc_directory(const std::filesystem::path& nc_dir, const std::filesy
 
 // Which table ground the part, and the correction it carries (what a new one builds on).
 struct GroundWith {
-  std::optional<int> version;          // of the NC file; empty: the design
-  std::string source;                  // "plc", "option", "assumed"; empty: not building on a table
-  std::optional<std::int64_t> run_id;  // whose correction that table carries; empty: the design
-  DegreeTable correction_um{};
+  std::optional<int> version;  // of the NC file; empty: the design
+  std::string source;          // "plc", "option", "assumed"; empty: not building on a table
+  // The run whose correction that table carries, read once; empty: the design.
+  std::optional<StoredRun> built_from;
   // The table in force: the newest push of this machine, part and lobe.
   std::optional<std::int64_t> run_in_force;
   std::optional<int> version_in_force;
+
+  std::optional<std::int64_t> run_id() const {
+    return built_from ? std::optional<std::int64_t>(built_from->summary.id) : std::nullopt;
+  }
+  DegreeTable correction_um() const { return built_from ? built_from->correction_um : DegreeTable{}; }
 };
 
-Result<DegreeTable> correction_of(const RunStore& store, std::optional<std::int64_t> run_id) {
-  if (!run_id) return DegreeTable{};
+Result<std::optional<StoredRun>> load_if(const RunStore& store, std::optional<std::int64_t> run_id,
+                                         const std::string& what) {
+  if (!run_id) return std::optional<StoredRun>();
   Result<StoredRun> run = store.load_run(*run_id);
-  if (!run) return in_step("correction in force (run " + std::to_string(*run_id) + ")", run.error());
-  return run->correction_um;
+  if (!run) return in_step(what + " (run " + std::to_string(*run_id) + ")", run.error());
+  return std::optional<StoredRun>(std::move(*run));
 }
 
 // Before the gauge: the table that ground the part, as told or assumed.
@@ -261,10 +267,11 @@ Result<GroundWith> resolve_ground_with(const RunStore& store, const std::filesys
   if (*last_push && g.run_in_force && (**last_push).run_id == *g.run_in_force) {
     g.version_in_force = (**last_push).table_version;
   }
+  std::optional<std::int64_t> run_id;
   if (!s.ground_with_version) {
     g.source = "assumed";
     g.version = g.version_in_force;
-    g.run_id = g.run_in_force;
+    run_id = g.run_in_force;
   } else {
     g.source = s.ground_with_source;
     if (*s.ground_with_version > 0) {
@@ -276,12 +283,12 @@ Result<GroundWith> resolve_ground_with(const RunStore& store, const std::filesys
         return e;
       }
       g.version = *s.ground_with_version;
-      g.run_id = push->run_id;
+      run_id = push->run_id;
     }
   }
-  Result<DegreeTable> c = correction_of(store, g.run_id);
-  if (!c) return c.error();
-  g.correction_um = *c;
+  Result<std::optional<StoredRun>> built_from = load_if(store, run_id, "correction in force");
+  if (!built_from) return built_from.error();
+  g.built_from = std::move(*built_from);
   return g;
 }
 
@@ -304,16 +311,19 @@ Result<std::string> why_not_built_on(const RunStore& store, const GroundWith& g,
            ": a correction built on the older table would repeat what the newer one changed; the run is kept "
            "for inspection. Measure a part ground with the table in force";
   }
-  if (!g.run_in_force) return std::string();  // ground from the design: nothing to repeat
-  Result<StoredRun> before = store.load_run(*g.run_in_force);
-  if (!before) return in_step("the run the table in force was built on", before.error());
-  Result<DegreeTable> base = correction_of(store, before->correction_in_force_run);
+  // Assumed: built_from is the run the table in force was built on.
+  if (!g.built_from) return std::string();  // ground from the design: nothing to repeat
+  const StoredRun& before = *g.built_from;
+  Result<std::optional<StoredRun>> base =
+      load_if(store, before.correction_in_force_run, "the correction the table in force was built on");
   if (!base) return base.error();
-  DegreeTable change{};
-  for (std::size_t d = 0; d < change.size(); ++d) change[d] = before->correction_um[d] - (*base)[d];
+  DegreeTable change = before.correction_um;
+  if (*base) {
+    for (std::size_t d = 0; d < change.size(); ++d) change[d] -= (**base).correction_um[d];
+  }
   const MeasuredError now_error{&now.error_um, &now.spread_um, revolutions};
-  const MeasuredError before_error{&before->analysis.error_um, &before->analysis.spread_um,
-                                   std::max(1, before->summary.revolutions)};
+  const MeasuredError before_error{&before.analysis.error_um, &before.analysis.spread_um,
+                                   std::max(1, before.summary.revolutions)};
   const TableEvidence e = judge_table_evidence(now_error, before_error, change, s.compensation.max_harmonic);
   switch (e.verdict) {
     case TableEvidenceVerdict::kGround:
@@ -387,18 +397,26 @@ Status check_name(std::string_view name, std::string_view what) {
   return {};
 }
 
+namespace {
+
+// The names first: cheap, and a bad one must not reach a file name or the database.
+Result<Prepared> check_names_and_prepare(const JobSettings& s) {
+  if (Status n = check_name(s.part.name, "part name"); !n) return n.error();
+  if (Status n = check_name(s.nc_program, "NC program name"); !n) return n.error();
+  if (Status n = check_name(s.machine, "machine name"); !n) return n.error();
+  return prepare(s);
+}
+
+}  // namespace
+
 Status check_job_settings(const JobSettings& settings) {
-  if (Status n = check_name(settings.part.name, "part name"); !n) return n;
-  if (Status n = check_name(settings.nc_program, "NC program name"); !n) return n;
-  if (Status n = check_name(settings.machine, "machine name"); !n) return n;
-  Result<Prepared> p = prepare(settings);
+  Result<Prepared> p = check_names_and_prepare(settings);
   if (!p) return p.error();
   return {};
 }
 
 Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
-  if (Status c = check_job_settings(s); !c) return c.error();
-  Result<Prepared> prepared = prepare(s);
+  Result<Prepared> prepared = check_names_and_prepare(s);
   if (!prepared) return prepared.error();
   const DesignReading* design_reading = &prepared->reading;
   // Absolute, so the push history names one file whatever directory a command runs in.
@@ -428,8 +446,8 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
   Result<JobReport> result = [&]() -> Result<JobReport> {
     Result<GroundWith> ground = resolve_ground_with(*store, nc_file, s);
     if (!ground) return ground.error();
-    const DegreeTable& in_force = ground->correction_um;
-    const std::optional<std::int64_t> in_force_run = ground->run_id;
+    const DegreeTable in_force = ground->correction_um();
+    const std::optional<std::int64_t> in_force_run = ground->run_id();
 
     Result<std::optional<TablePointsInForce>> in_force_points = points_in_force(*store, nc_file, s);
     if (!in_force_points) return in_force_points.error();
@@ -470,7 +488,6 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
       record.ground_with_source = ground->source;
     }
     auto lost = [&](Error e) {
-      record.correction_um = in_force;
       const std::filesystem::path kept = keep_unstored_measurement(record, s);
       e.message += kept.empty() ? "; the measurement could not be kept anywhere either"
                                 : "; the measurement is kept in " + kept.string();

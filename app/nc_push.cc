@@ -122,10 +122,6 @@ std::string_view push_step_name(PushStep step) {
 
 namespace {
 
-std::filesystem::path nc_directory(const std::filesystem::path& nc_file) {
-  return nc_file.has_parent_path() ? nc_file.parent_path() : std::filesystem::path(".");
-}
-
 // reconcile_pushes with the directory's lock already held.
 Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem::path& nc_file) {
   ReconcileReport report;
@@ -157,7 +153,7 @@ Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem:
     }
   }
   std::error_code ec;
-  if (std::filesystem::is_directory(nc_directory(nc_file), ec)) {
+  if (std::filesystem::is_directory(directory_of(nc_file), ec)) {
     Result<int> removed = remove_atomic_leftovers(nc_file);
     if (!removed) return removed.error();
     report.leftovers_removed = *removed;
@@ -180,11 +176,11 @@ void merge_into(ReconcileReport& total, ReconcileReport one) {
 
 Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file) {
   std::error_code ec;
-  if (!std::filesystem::is_directory(nc_directory(nc_file), ec)) {
+  if (!std::filesystem::is_directory(directory_of(nc_file), ec)) {
     // No directory, no file and no leftovers: every open intent never reached the control.
     return reconcile_locked(store, nc_file);
   }
-  Result<DirectoryLock> lock = DirectoryLock::acquire(nc_directory(nc_file));
+  Result<DirectoryLock> lock = DirectoryLock::acquire(directory_of(nc_file));
   if (!lock) return lock.error();
   return reconcile_locked(store, nc_file);
 }
@@ -206,7 +202,7 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   auto reached = [&options](PushStep step) {
     if (options.observer) options.observer(step);
   };
-  Result<DirectoryLock> lock = DirectoryLock::acquire(nc_directory(nc_file));
+  Result<DirectoryLock> lock = DirectoryLock::acquire(directory_of(nc_file));
   if (!lock) return lock.error();
   if (Result<ReconcileReport> r = reconcile_locked(store, nc_file); !r) return r.error();
   if (!options.overwrite_edited) {

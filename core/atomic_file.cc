@@ -19,11 +19,11 @@ Error io_error(const std::string& what, const std::filesystem::path& path, int e
   return make_error(ErrorCode::kIo, what + " " + path.string() + ": " + std::strerror(err));
 }
 
+}  // namespace
+
 std::filesystem::path directory_of(const std::filesystem::path& path) {
   return path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
 }
-
-}  // namespace
 
 std::string atomic_temporary_prefix(const std::filesystem::path& path) {
   return "." + path.filename().string() + ".tmp-";

@@ -30,6 +30,9 @@ using AtomicWriteObserver = std::function<void(AtomicWriteStep step)>;
 Status write_file_atomically(const std::filesystem::path& path, std::string_view contents,
                              const AtomicWriteObserver& observer = {});
 
+// The directory `path` is in: its parent, or "." for a bare file name.
+std::filesystem::path directory_of(const std::filesystem::path& path);
+
 // ".<file name>.tmp-": how the temporary files of `path` begin.
 std::string atomic_temporary_prefix(const std::filesystem::path& path);
 

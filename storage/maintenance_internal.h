@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/atomic_file.h"
 #include "core/result.h"
 #include "storage/run_store.h"
 
@@ -14,8 +15,7 @@ namespace gaugeloop::storage_internal {
 
 struct Connection;
 
-// The directory a file is in ("." for a bare name).
-std::filesystem::path directory_of(const std::filesystem::path& p);
+using gaugeloop::directory_of;  // core/atomic_file.h
 
 // True for an existing file without any write permission bit (0444): frozen (see
 // RunStore::open_read_only); false if it does not exist.

@@ -57,8 +57,6 @@ bool nobody_is_writing(const fs::path& db_path) {
 
 }  // namespace
 
-fs::path directory_of(const fs::path& p) { return p.has_parent_path() ? p.parent_path() : fs::path("."); }
-
 bool has_no_write_bits(const fs::path& db_path) {
   std::error_code ec;
   const fs::perms perms = fs::status(db_path, ec).permissions();
