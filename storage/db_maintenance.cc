@@ -300,4 +300,13 @@ std::optional<SchemaUpgrade> RunStore::schema_upgrade() const {
   return SchemaUpgrade{conn_->upgraded_from_version, conn_->upgrade_backup};
 }
 
+Result<RunStore> open_checked_for_writing(const std::filesystem::path& db_path) {
+  if (std::filesystem::exists(db_path)) {
+    Result<IntegrityReport> report = check_database_file(db_path, IntegrityCheck::kFull);
+    if (!report) return report.error();
+    if (!report->sound()) return damaged_database(db_path, report->problems);
+  }
+  return RunStore::open(db_path);
+}
+
 }  // namespace gaugeloop

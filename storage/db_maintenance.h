@@ -50,4 +50,10 @@ Status backup_database_file(const std::filesystem::path& db_path, const std::fil
 // gaugeloop schema. For `gaugeloop db upgrade` and reports. Errors as check_database_file.
 Result<int> database_schema_version(const std::filesystem::path& db_path);
 
+// What the service does at start and `db upgrade` does: an existing file is checked whole
+// (integrity_check; a damaged one is refused, kStorage, and nothing is upgraded), then opened
+// for writing, which creates a new file and upgrades an older schema after backing it up
+// (RunStore::schema_upgrade says whether it did, for the caller to tell).
+Result<RunStore> open_checked_for_writing(const std::filesystem::path& db_path);
+
 }  // namespace gaugeloop

@@ -14,9 +14,9 @@
 #include <sstream>
 
 #include "acquisition/modbus_gauge.h"
-#include "app/embedded_defaults.h"
-#include "app/measure_job.h"
-#include "app/part_file.h"
+#include "cli/embedded_defaults.h"
+#include "job/measure_job.h"
+#include "config/part_file.h"
 #include "compensation/flat_probe.h"
 #include "compensation/wheel_path.h"
 #include "simulator/gauge_simulator.h"

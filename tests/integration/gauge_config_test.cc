@@ -15,8 +15,8 @@
 
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/poller.h"
-#include "app/gauge_config.h"
-#include "app/toml_reader.h"
+#include "config/gauge_config.h"
+#include "config/toml_reader.h"
 
 namespace gaugeloop {
 namespace {

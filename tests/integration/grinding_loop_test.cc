@@ -2,7 +2,7 @@
 // the table in force through the machine error model, measured through the gauge simulator
 // over loopback by the product's own job, compensated, pushed as real NC files, stored in
 // SQLite. What a change to compensation does to the ground part shows here.
-#include "app/grinding_loop.h"
+#include "cli/grinding_loop.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -11,8 +11,8 @@
 #include <cmath>
 #include <filesystem>
 
-#include "app/embedded_defaults.h"
-#include "app/part_file.h"
+#include "cli/embedded_defaults.h"
+#include "config/part_file.h"
 #include "tests/support/cli.h"
 #include "tests/support/intake_job.h"
 

@@ -1,6 +1,6 @@
 // The HTTP API as a client sees it: a real server on a loopback port over a database filled
 // through RunStore, read with httplib's client; the token, the hooks and every kind of bad request.
-#include "app/http_api.h"
+#include "service/http_api.h"
 
 #include <gtest/gtest.h>
 #include <httplib.h>

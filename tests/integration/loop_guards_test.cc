@@ -13,9 +13,9 @@
 #include <string>
 
 #include "acquisition/modbus_gauge.h"
-#include "app/gauge_config.h"
-#include "app/measure_job.h"
-#include "app/part_file.h"
+#include "config/gauge_config.h"
+#include "job/measure_job.h"
+#include "config/part_file.h"
 #include "core/lift_table.h"
 #include "core/text_file.h"
 #include "simulator/gauge_simulator.h"

@@ -13,10 +13,10 @@
 #include <sstream>
 
 #include "acquisition/modbus_gauge.h"
-#include "app/embedded_defaults.h"
-#include "app/measure_job.h"
-#include "app/nc_push.h"
-#include "app/part_file.h"
+#include "cli/embedded_defaults.h"
+#include "job/measure_job.h"
+#include "job/nc_push.h"
+#include "config/part_file.h"
 #include "core/atomic_file.h"
 #include "nc_out/table_program.h"
 #include "simulator/gauge_simulator.h"

@@ -14,8 +14,8 @@
 #include <map>
 #include <string>
 
-#include "app/embedded_defaults.h"
-#include "app/nc_push.h"
+#include "cli/embedded_defaults.h"
+#include "job/nc_push.h"
 #include "core/atomic_file.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"

@@ -19,7 +19,7 @@
 #include <thread>
 
 #include "acquisition/modbus_gauge.h"
-#include "app/part_file.h"
+#include "config/part_file.h"
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
 #include "nc_out/table_program.h"

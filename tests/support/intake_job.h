@@ -11,9 +11,9 @@
 #include <string>
 
 #include "acquisition/modbus_gauge.h"
-#include "app/embedded_defaults.h"
-#include "app/measure_job.h"
-#include "app/part_file.h"
+#include "cli/embedded_defaults.h"
+#include "job/measure_job.h"
+#include "config/part_file.h"
 #include "core/lift_table.h"
 #include "simulator/gauge_simulator.h"
 

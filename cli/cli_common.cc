@@ -1,0 +1,73 @@
+// Exit codes, error reporting, data paths and part loading for the subcommands.
+#include "cli/cli_common.h"
+
+#include <spdlog/spdlog.h>
+
+#include "cli/embedded_defaults.h"
+
+namespace gaugeloop {
+
+int exit_code_for(ErrorCode code) {
+  switch (code) {
+    case ErrorCode::kInvalidInput:
+    case ErrorCode::kNotFound:
+    case ErrorCode::kRefused:
+      return kExitBadInput;
+    case ErrorCode::kGaugeUnreachable:
+    case ErrorCode::kGaugeTimeout:
+    case ErrorCode::kGaugeProtocol:
+    case ErrorCode::kIncompleteRun:
+      return kExitGauge;
+    case ErrorCode::kStorage:
+      return kExitStorage;
+    case ErrorCode::kIo:
+      return kExitNcOutput;
+    case ErrorCode::kInternal:
+      return kExitInternal;
+  }
+  return kExitInternal;
+}
+
+int report_error(const Error& e) {
+  spdlog::error("{}", e.message);
+  return exit_code_for(e.code);
+}
+
+void add_data_dir_option(CLI::App& cmd, DataPaths& paths) {
+  cmd.add_option("--data-dir", paths.data_dir, "Directory holding the run database gaugeloop.sqlite")
+      ->capture_default_str();
+}
+
+Result<LoadedPart> load_part(const std::string& part_path) {
+  Result<PartFile> pf = part_path.empty() ? parse_part_toml(embedded::kDemoPartToml, "embedded:intake_flat.toml", "")
+                                          : read_part_file(part_path);
+  if (!pf) return pf.error();
+  Result<LiftTable> design = part_path.empty()
+                                 ? parse_lift_table_csv(embedded::kDemoLiftCsv, "embedded:intake_flat.csv")
+                                 : read_lift_table_csv(pf->part.lift_table);
+  if (!design) return design.error();
+  return LoadedPart{std::move(*pf), std::move(*design)};
+}
+
+Status require_database(const std::filesystem::path& db, std::string_view advice) {
+  if (std::filesystem::exists(db)) return {};
+  return make_error(ErrorCode::kNotFound, "no run database at " + db.string() + "; " + std::string(advice));
+}
+
+namespace {
+
+constexpr std::string_view kMakeOne = "run `gaugeloop demo` or `gaugeloop measure` first, or give --data-dir";
+
+}  // namespace
+
+Result<RunStore> open_history(const DataPaths& paths) {
+  if (Status s = require_database(paths.db(), kMakeOne); !s) return s.error();
+  return RunStore::open(paths.db());
+}
+
+Result<RunStore> open_history_read_only(const DataPaths& paths) {
+  if (Status s = require_database(paths.db(), kMakeOne); !s) return s.error();
+  return RunStore::open_read_only(paths.db());
+}
+
+}  // namespace gaugeloop

@@ -1,0 +1,608 @@
+// demo, sim and measure: the commands that talk to a gauge (or run the simulated one).
+#include <signal.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include "acquisition/modbus_gauge.h"
+#include "acquisition/tcp_endpoint.h"
+#include "cli/cli_common.h"
+#include "cli/embedded_defaults.h"
+#include "config/gauge_config.h"
+#include "cli/grinding_loop.h"
+#include "job/measure_job.h"
+#include "config/service_config.h"
+#include "report/svg_plot.h"
+#include "core/atomic_file.h"
+#include "core/text_file.h"
+#include "simulator/gauge_simulator.h"
+#include "simulator/virtual_grinder.h"
+
+namespace gaugeloop {
+namespace {
+
+Result<std::string> load_template(const std::string& path, std::string& name) {
+  if (path.empty()) {
+    name = "embedded:cam_table.spf";
+    return std::string(embedded::kNcTemplate);
+  }
+  Result<std::string> text = read_regular_file(path, "NC template");
+  if (!text) {
+    Error e = text.error();
+    e.message += " (--template)";
+    return e;
+  }
+  name = path;
+  return std::string(without_utf8_bom(*text));
+}
+
+void print_report(const JobReport& r, const Part& part, const std::string& machine) {
+  const auto& a = r.analysis;
+  const int revs = static_cast<int>(r.measured.revolutions.size());
+  std::printf("run %lld: %s lobe %d on %s\n", static_cast<long long>(r.run_id), part.name.c_str(), part.lobe,
+              machine.c_str());
+  std::printf("  revolutions       %d (%lld discarded, %lld reconnects, %lld polls)\n", revs,
+              static_cast<long long>(r.measured.discarded_revolutions), static_cast<long long>(r.measured.reconnects),
+              static_cast<long long>(r.measured.polls));
+  std::printf("  degrees captured  %d of %d\n", revs * kDegreesPerRevolution, revs * kDegreesPerRevolution);
+  std::printf("  max lift error    %.2f um\n", a.max_abs_error_um);
+  std::printf("  RMS lift error    %.2f um\n", a.rms_error_um);
+  std::printf("  peak to valley    %.2f um\n", a.peak_to_valley_um);
+  std::printf("  repeatability     %.2f um (largest per-degree standard deviation)\n", a.repeatability_um);
+  std::printf("  phase             %+.3f deg (timing; corrected through the lift)\n", a.phase_error_deg);
+  std::printf("  runout            %.2f um (base circle, total indicator reading)\n", a.base_circle_runout_um);
+  if (!r.ground_with_source.empty()) {
+    const std::string table =
+        r.ground_with_version ? "table version " + std::to_string(*r.ground_with_version) : "the design (no table)";
+    const std::string who = r.ground_with_source == "plc"      ? "said by the PLC"
+                            : r.ground_with_source == "option" ? "said by --ground-with"
+                            : r.ground_with_version            ? "assumed: the table in force"
+                                                               : "assumed: no table pushed yet";
+    std::printf("  ground with       %s (%s)\n", table.c_str(), who.c_str());
+    if (!r.ground_with_evidence.empty()) std::printf("                    %s\n", r.ground_with_evidence.c_str());
+  }
+  if (r.inspection) {
+    std::printf("  correction        inspection only: the correction in force stands\n");
+  } else if (r.correction_in_force_run) {
+    std::printf("  correction        %.2f um max, built on run %lld's (the table that ground the part)\n",
+                r.correction_max_um, static_cast<long long>(*r.correction_in_force_run));
+  } else {
+    std::printf("  correction        %.2f um max, from the design\n", r.correction_max_um);
+  }
+  if (!r.interpolation.empty()) {
+    std::printf("  curve table       %d blocks, %s, command position error %.3f um\n", r.table_blocks,
+                r.table_writer.c_str(), r.command_error_um);
+  }
+  if (r.pushed()) {
+    std::printf("  NC file           %s (table version %d)\n", r.nc_file.string().c_str(), r.table_version);
+  } else if (r.inspection) {
+    std::printf("  NC file           untouched (inspection)\n");
+  } else {
+    std::printf("  NC file           not written (compensation: %s); the table in force stays\n",
+                std::string(compensation_verdict_name(r.verdict)).c_str());
+    std::printf("  why               %s\n", r.not_pushed_reason.c_str());
+    if (r.pending_id) {
+      std::printf("  pending table     %lld: `gaugeloop nc approve %lld` writes it\n",
+                  static_cast<long long>(*r.pending_id), static_cast<long long>(*r.pending_id));
+    }
+  }
+  std::printf("  database          %s\n", r.db_path.string().c_str());
+}
+
+struct MeasureOptions {
+  DataPaths paths;
+  std::string part_path;
+  std::string template_path;
+  int revolutions = 3;
+  double table_step_deg = 1.0;
+  std::string table = "auto";
+  double command_error_um = 0.5;
+  bool require_approval = false;
+  std::string machine = "grinder-1";
+  std::string note;
+  int response_timeout_ms = 200;
+  int run_timeout_s = 0;           // 0: from the spindle speed (poller.h, run_timeout_at)
+  std::string mode = "latched";    // latched | live
+  std::string gauge_config;        // measure only
+  std::optional<int> ground_with;  // measure only: the table version that ground the part
+  bool inspect = false;            // measure only
+};
+
+void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
+  add_data_dir_option(cmd, o.paths);
+  cmd.add_option("--nc-dir", o.paths.nc_dir, "Directory the curve-table program is written to [<data-dir>/nc]");
+  cmd.add_option("--template", o.template_path, "NC template with {{placeholders}} [built-in Sinumerik 840D table]");
+  cmd.add_option("--revolutions", o.revolutions, "Complete revolutions to average (at least 3)")
+      ->capture_default_str()
+      ->check(CLI::Range(3, 100));
+  cmd.add_option(
+         "--table", o.table,
+         "Curve table: auto (fewest blocks within --command-error-um; the next keeps the points of the table in "
+         "force), linear or spline (at --table-step-deg), adaptive-linear, adaptive-spline; see docs/nc_output.md")
+      ->check(CLI::IsMember({"auto", "linear", "spline", "adaptive-linear", "adaptive-spline"}))
+      ->capture_default_str();
+  cmd.add_option("--table-step-deg", o.table_step_deg, "C step of a linear or spline table, degrees")
+      ->capture_default_str();
+  cmd.add_option("--command-error-um", o.command_error_um,
+                 "Largest command position error (NC interpolation against the exact path) auto and adaptive "
+                 "tables may have")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 100.0));
+  cmd.add_flag("--require-approval", o.require_approval,
+               "Keep each new table as pending until `gaugeloop nc approve ID` writes it");
+  cmd.add_option("--machine", o.machine, "Machine name stored with the run")->capture_default_str();
+  cmd.add_option("--note", o.note, "Operator note stored with the run");
+  cmd.add_option("--response-timeout-ms", o.response_timeout_ms, "Gauge response timeout")
+      ->capture_default_str()
+      ->check(CLI::Range(10, 10000));
+  cmd.add_option("--run-timeout-s", o.run_timeout_s,
+                 "Longest a run may take; 0: (revolutions + 3 spare + 2) revolutions at the spindle speed seen, "
+                 "at least 10 s")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 86400));
+  cmd.add_option("--mode", o.mode,
+                 "latched: drain the amplifier's per-degree latch buffer; live: poll the reading and interpolate "
+                 "(amplifiers without a latch input, slow spindles)")
+      ->check(CLI::IsMember({"latched", "live"}))
+      ->capture_default_str();
+}
+
+// The job settings of the options, for `lp`.
+Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions& o, bool build_on_table_in_force) {
+  std::string template_name;
+  Result<std::string> tmpl = load_template(o.template_path, template_name);
+  if (!tmpl) return tmpl.error();
+  JobSettings js;
+  js.part = lp.file.part;
+  js.design = lp.design;
+  js.nc_program = lp.file.nc_program;
+  js.poller.revolutions = o.revolutions;
+  js.poller.mode = o.mode == "live" ? SamplingMode::kLive : SamplingMode::kLatched;
+  js.poller.run_timeout = std::chrono::seconds(o.run_timeout_s);
+  js.db_path = o.paths.db();
+  js.nc_dir = o.paths.nc();
+  js.nc_template = std::move(*tmpl);
+  js.nc_template_name = template_name;
+  js.table_step_deg = o.table_step_deg;
+  js.table_kind = o.table == "linear"            ? TableKind::kLinear
+                  : o.table == "spline"          ? TableKind::kSpline
+                  : o.table == "adaptive-linear" ? TableKind::kAdaptiveLinear
+                  : o.table == "adaptive-spline" ? TableKind::kAdaptiveSpline
+                                                 : TableKind::kAuto;
+  js.table_choice.bound_um = o.command_error_um;
+  js.require_approval = o.require_approval;
+  js.machine = o.machine;
+  js.note = o.note;
+  js.build_on_table_in_force = build_on_table_in_force;
+  js.ground_with_version = o.ground_with;
+  js.ground_with_source = "option";
+  js.inspect = o.inspect;
+  return js;
+}
+
+int run_job(GaugeClient& gauge, const LoadedPart& lp, const MeasureOptions& o, bool build_on_table_in_force) {
+  Result<JobSettings> settings = job_settings_for(lp, o, build_on_table_in_force);
+  if (!settings) return report_error(settings.error());
+  const JobSettings& js = *settings;
+  Result<JobReport> report = run_measure_job(gauge, js);
+  if (!report) return report_error(report.error());
+  print_report(*report, js.part, js.machine);
+  return report->pushed() || report->inspection ? kExitOk : kExitNotPushed;
+}
+
+int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {
+  Result<LoadedPart> lp = load_part(o.part_path);
+  if (!lp) return report_error(lp.error());
+  auto sim = GaugeSimulator::start(lp->file.part, lp->design, sim_settings);
+  if (!sim) return report_error(sim.error());
+  std::printf(
+      "simulator: %s lobe %d turning at %.0f rpm on 127.0.0.1:%d (form error %.1f um peak, noise %.1f um RMS)\n",
+      lp->file.part.name.c_str(), lp->file.part.lobe, sim_settings.speed_rpm, (*sim)->port(),
+      sim_settings.lobe_error_peak_um, sim_settings.noise_rms_um);
+  std::printf("measuring %d revolutions in %s mode...\n", o.revolutions, o.mode.c_str());
+  std::fflush(stdout);
+  ModbusSettings ms;
+  ms.port = (*sim)->port();
+  ms.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
+  ModbusGauge gauge(ms);
+  return run_job(gauge, *lp, o, /*build_on_table_in_force=*/false);
+}
+
+// demo --iterations: the loop on the virtual grinder (docs/virtual_grinder.md).
+struct LoopOptions {
+  int iterations = 0;     // 0: one run on the simulator's built-in form error
+  std::string plot_path;  // empty: <data-dir>/loop.svg
+  MachineErrorModel machine;
+};
+
+int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings, const LoopOptions& lo) {
+  Result<LoadedPart> lp = load_part(o.part_path);
+  if (!lp) return report_error(lp.error());
+  Result<JobSettings> job = job_settings_for(*lp, o, /*build_on_table_in_force=*/false);
+  if (!job) return report_error(job.error());
+  LoopSettings ls;
+  ls.job = std::move(*job);
+  ls.machine = lo.machine;
+  ls.gauge = sim_settings;
+  ls.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
+  ls.iterations = lo.iterations;
+  const MachineErrorModel& m = lo.machine;
+  std::printf(
+      "virtual grinder: %s lobe %d at %.0f rpm; servo %.0f Hz (damping %.2f, feed-forward %.3f), geometric "
+      "%.1f + %.1f um, drift %.2f um/part, vibration %.2f um RMS (harmonics %d..%d), seed %llu\n",
+      lp->file.part.name.c_str(), lp->file.part.lobe, m.work_speed_rpm, m.servo_bandwidth_hz, m.servo_damping,
+      m.velocity_feed_forward, m.geometric_once_um, m.geometric_twice_um, m.drift_um_per_part, m.vibration_rms_um,
+      m.vibration_min_harmonic, m.vibration_max_harmonic, static_cast<unsigned long long>(m.seed));
+  std::printf("gauge: simulator at %.0f rpm x %.0f, noise %.1f um RMS, %d revolutions %s; database %s\n\n",
+              sim_settings.speed_rpm, sim_settings.time_scale, sim_settings.noise_rms_um, o.revolutions, o.mode.c_str(),
+              ls.job.db_path.string().c_str());
+  std::printf("part  ground from              run  max um  RMS um  phase deg  runout um | true max  floor  table\n");
+  std::fflush(stdout);
+  Result<std::vector<LoopIteration>> loop = run_grinding_loop(ls, [](const LoopIteration& it) {
+    const LobeAnalysis& a = it.job.analysis;
+    const std::string table =
+        it.job.pushed()
+            ? "v" + std::to_string(it.job.table_version) + ", " + std::to_string(it.job.table_blocks) + " blocks"
+            : "not pushed (" + std::string(compensation_verdict_name(it.job.verdict)) +
+                  "): " + it.job.not_pushed_reason;
+    std::printf("%4d  %-22s %5lld  %6.2f  %6.2f  %+9.4f  %9.2f | %8.2f  %5.2f  %s\n", it.iteration,
+                it.ground_from.c_str(), static_cast<long long>(it.job.run_id), a.max_abs_error_um, a.rms_error_um,
+                a.phase_error_deg, a.base_circle_runout_um, it.part.max_abs_um, it.floor.max_abs_um, table.c_str());
+    std::fflush(stdout);
+  });
+  if (!loop) return report_error(loop.error());
+  const LoopIteration& first = loop->front();
+  const LoopIteration& last = loop->back();
+  std::printf("\nmax lift error %.2f um before compensation", first.job.analysis.max_abs_error_um);
+  if (loop->size() > 1)
+    std::printf(", %.2f um after 1 iteration (published cam-grinding result: 2.6 um)",
+                (*loop)[1].job.analysis.max_abs_error_um);
+  std::printf(
+      ", %.2f um after %d; the part as ground: %.2f um, floor %.2f um (a perfect table under the same "
+      "vibration)\n",
+      last.job.analysis.max_abs_error_um, last.iteration, last.part.max_abs_um, last.floor.max_abs_um);
+
+  LoopPlot plot;
+  plot.title = "Grinding loop \u00b7 " + lp->file.part.name + " lobe " + std::to_string(lp->file.part.lobe) +
+               " \u00b7 virtual grinder";
+  plot.subtitle = std::to_string(loop->size()) + " parts, measured through the gauge simulator; runs " +
+                  std::to_string(first.job.run_id) + " to " + std::to_string(last.job.run_id) + " in " +
+                  ls.job.db_path.string();
+  for (const LoopIteration& it : *loop) {
+    LoopPlotPart part;
+    part.label = "part " + std::to_string(it.iteration);
+    part.error_um = it.job.analysis.error_um;
+    part.measured_max_um = it.job.analysis.max_abs_error_um;
+    part.true_max_um = it.part.max_abs_um;
+    part.floor_max_um = it.floor.max_abs_um;
+    plot.parts.push_back(std::move(part));
+  }
+  char footer[256];
+  std::snprintf(
+      footer, sizeof footer,
+      "servo %.0f Hz, feed-forward %.3f, geometric %.1f + %.1f um, drift %.2f um/part, vibration %.2f um RMS, "
+      "seed %llu \u00b7 gaugeloop %s",
+      m.servo_bandwidth_hz, m.velocity_feed_forward, m.geometric_once_um, m.geometric_twice_um, m.drift_um_per_part,
+      m.vibration_rms_um, static_cast<unsigned long long>(m.seed), GAUGELOOP_VERSION);
+  plot.footer = footer;
+  const std::filesystem::path svg_path =
+      lo.plot_path.empty() ? std::filesystem::path(o.paths.data_dir) / "loop.svg" : std::filesystem::path(lo.plot_path);
+  if (Status w = write_file_atomically(svg_path, render_loop_plot_svg(plot)); !w) return report_error(w.error());
+  std::printf("plot: %s\n", svg_path.string().c_str());
+  return std::all_of(loop->begin(), loop->end(), [](const LoopIteration& it) { return it.job.pushed(); })
+             ? kExitOk
+             : kExitNotPushed;
+}
+
+int cmd_measure(const MeasureOptions& o, const std::string& gauge_address) {
+  ModbusSettings ms;
+  ms.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
+  if (!o.gauge_config.empty()) {
+    Result<ModbusSettings> from_file = read_gauge_file(o.gauge_config, ms);
+    if (!from_file) return report_error(from_file.error());
+    ms = std::move(*from_file);
+  }
+  if (!gauge_address.empty()) {
+    Result<TcpEndpoint> endpoint = parse_tcp_endpoint(gauge_address);
+    if (!endpoint) return report_error(make_error(ErrorCode::kInvalidInput, "--gauge " + endpoint.error().message));
+    ms.host = endpoint->host;
+    ms.port = endpoint->port;
+  } else if (o.gauge_config.empty()) {
+    return report_error(make_error(ErrorCode::kInvalidInput,
+                                   "no gauge: give --gauge HOST:PORT or a --gauge-config file with a [link] table"));
+  }
+  Result<LoadedPart> lp = load_part(o.part_path);
+  if (!lp) return report_error(lp.error());
+  ModbusGauge gauge(ms);
+  return run_job(gauge, *lp, o, /*build_on_table_in_force=*/true);
+}
+
+// measure --config: a run by hand as the service makes one, with its gauge, settings,
+// database and NC directory, beside it or instead of it.
+struct ServiceMeasureOptions {
+  std::string config_path;
+  std::string part_name;
+  int lobe = 0;
+};
+
+int cmd_measure_as_service(const ServiceMeasureOptions& so, const MeasureOptions& by_hand) {
+  Result<ServiceConfig> config = read_service_config(so.config_path);
+  if (!config) return report_error(config.error());
+  if (so.part_name.empty() || so.lobe == 0) {
+    return report_error(make_error(ErrorCode::kInvalidInput, "--config needs --part-name and --lobe: which of " +
+                                                                 configured_parts(*config) + " to measure"));
+  }
+  Result<const ServicePart*> part = find_part(*config, so.part_name, so.lobe);
+  if (!part) return report_error(part.error());
+  JobSettings js = job_for(*config, **part);
+  js.note = by_hand.note;
+  js.ground_with_version = by_hand.ground_with;
+  js.ground_with_source = "option";
+  js.inspect = by_hand.inspect;
+  ModbusGauge gauge(config->gauge);
+  Result<JobReport> report = run_measure_job(gauge, js);
+  if (!report) return report_error(report.error());
+  print_report(*report, js.part, js.machine);
+  return report->pushed() || report->inspection ? kExitOk : kExitNotPushed;
+}
+
+// sim --grind: the machine beside the gauge. Whenever the program in the NC directory
+// changes (a new table pushed), the next part is ground from it on the virtual grinder and put
+// on the gauge; at the start, from the program found there, or from the design.
+struct SimGrind {
+  bool enabled = false;
+  DataPaths paths;
+  MachineErrorModel machine;
+};
+
+class SimGrinder {
+ public:
+  SimGrinder(const LoadedPart& lp, const SimGrind& g, GaugeSimulator& sim)
+      : lp_(lp), g_(g), sim_(sim), nc_file_(g.paths.nc() / (lp.file.nc_program + ".SPF")) {}
+
+  // Grinds the next part when the program changed since the last one; returns false on an
+  // error (said on stderr; the gauge keeps the part it has).
+  bool grind_if_changed() {
+    std::string program;
+    if (std::filesystem::exists(nc_file_)) {
+      Result<std::string> text = read_regular_file(nc_file_, "NC program");
+      if (!text) return complain(text.error());
+      program = std::move(*text);
+    }
+    if (parts_ > 0 && program == last_program_) return true;
+    Result<CommandedPath> path =
+        program.empty() ? commanded_path_from_design(lp_.file.part, lp_.design) : commanded_path_from_program(nc_file_);
+    if (!path) return complain(path.error());
+    Result<GroundPart> part = grind_part(lp_.file.part, *path, g_.machine, parts_);
+    if (!part) return complain(part.error());
+    if (Status s = sim_.load_ground_part(part->reading_mm); !s) return complain(s.error());
+    last_program_ = std::move(program);
+    std::printf("grinder: part %d ground from %s\n", parts_, path->source.c_str());
+    std::fflush(stdout);
+    ++parts_;
+    return true;
+  }
+
+ private:
+  bool complain(const Error& e) {
+    spdlog::error("grinder: {}", e.message);
+    return false;
+  }
+
+  const LoadedPart& lp_;
+  const SimGrind& g_;
+  GaugeSimulator& sim_;
+  std::filesystem::path nc_file_;
+  std::string last_program_;
+  int parts_ = 0;
+};
+
+int cmd_sim(const std::string& part_path, const SimulatorSettings& settings, const SimGrind& grind) {
+  Result<LoadedPart> lp = load_part(part_path);
+  if (!lp) return report_error(lp.error());
+  if (grind.enabled) {
+    if (Status v = validate(grind.machine); !v) return report_error(v.error());
+  }
+  // Block the stop signals before the server thread starts, so only sigwait below sees them.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  auto sim = GaugeSimulator::start(lp->file.part, lp->design, settings);
+  if (!sim) return report_error(sim.error());
+  std::optional<SimGrinder> grinder;
+  if (grind.enabled) {
+    grinder.emplace(*lp, grind, **sim);
+    if (!grinder->grind_if_changed()) return kExitBadInput;
+  }
+  if (settings.rtu_device.empty()) {
+    // An IPv6 address in brackets, as --gauge takes it back.
+    const std::string host = settings.host.find(':') == std::string::npos ? settings.host : "[" + settings.host + "]";
+    std::printf("gaugeloop sim: %s lobe %d at %.0f rpm, Modbus TCP on %s:%d (registers: docs/simulator.md)\n",
+                lp->file.part.name.c_str(), lp->file.part.lobe, settings.speed_rpm, host.c_str(), (*sim)->port());
+    std::printf("port %d\n", (*sim)->port());
+  } else {
+    std::printf(
+        "gaugeloop sim: %s lobe %d at %.0f rpm, Modbus RTU on %s at %d baud, unit %d (registers: "
+        "docs/simulator.md)\n",
+        lp->file.part.name.c_str(), lp->file.part.lobe, settings.speed_rpm, settings.rtu_device.c_str(),
+        settings.rtu_baud, settings.unit_id);
+  }
+  std::fflush(stdout);
+  int sig = 0;
+  if (grinder) {
+    // Look at the NC directory five times a second until a stop signal comes.
+    const timespec look_again{0, 200'000'000};
+    while ((sig = sigtimedwait(&stop_signals, nullptr, &look_again)) < 0) (void)grinder->grind_if_changed();
+  } else {
+    sigwait(&stop_signals, &sig);
+  }
+  (*sim)->stop();
+  spdlog::info("simulator stopped after {} requests", (*sim)->requests_served());
+  return kExitOk;
+}
+
+void add_simulator_options(CLI::App& cmd, SimulatorSettings& s) {
+  cmd.add_option("--speed-rpm", s.speed_rpm, "Work spindle speed")->capture_default_str();
+  cmd.add_option("--lobe-error-um", s.lobe_error_peak_um, "Peak of the repeatable form error of the simulated lobe")
+      ->capture_default_str();
+  cmd.add_option("--noise-um", s.noise_rms_um, "Gauge noise, RMS")->capture_default_str();
+  cmd.add_option("--seed", s.seed, "Seed of the gauge noise, for a repeatable run [from the clock]");
+}
+
+// A fresh noise seed per start unless --seed gave one: real gauge noise does not repeat.
+void seed_from_clock_unless_given(const CLI::App& cmd, SimulatorSettings& s) {
+  if (cmd.count("--seed") == 0) {
+    s.seed = static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count()) | 1u;
+  }
+}
+
+}  // namespace
+
+void add_measure_commands(CLI::App& app, CommandAction& action) {
+  auto demo_opts = std::make_shared<MeasureOptions>();
+  auto demo_sim = std::make_shared<SimulatorSettings>();
+  CLI::App* demo = app.add_subcommand(
+      "demo",
+      "Start the built-in gauge simulator on a free loopback port, measure the sample intake lobe through it, "
+      "store the run and write the corrected curve table. Needs no files.");
+  add_measure_options(*demo, *demo_opts);
+  demo->add_option("--part", demo_opts->part_path, "Part file to simulate and measure [built-in intake_flat]");
+  add_simulator_options(*demo, *demo_sim);
+  demo->add_option("--time-scale", demo_sim->time_scale, "Simulated seconds per real second")->capture_default_str();
+  auto loop = std::make_shared<LoopOptions>();
+  MachineErrorModel& m = loop->machine;
+  demo->add_option("--iterations", loop->iterations,
+                   "Close the loop on the virtual grinder N times: grind -> measure -> compensate -> push -> grind; "
+                   "prints every part and writes an SVG (docs/virtual_grinder.md). 0: one run, no grinding")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100));
+  demo->add_option("--plot", loop->plot_path, "SVG of every part's error, with --iterations [<data-dir>/loop.svg]");
+  demo->add_option("--work-speed-rpm", m.work_speed_rpm, "Grinding: work spindle speed")->capture_default_str();
+  demo->add_option("--servo-hz", m.servo_bandwidth_hz, "Grinding: infeed servo bandwidth; lower lags more, 0 none")
+      ->capture_default_str();
+  demo->add_option("--feed-forward", m.velocity_feed_forward, "Grinding: infeed velocity feed-forward, 0..1")
+      ->capture_default_str();
+  demo->add_option("--geometric-um", m.geometric_once_um, "Grinding: once-per-turn geometric error of X")
+      ->capture_default_str();
+  demo->add_option("--geometric-twice-um", m.geometric_twice_um, "Grinding: twice-per-turn geometric error of X")
+      ->capture_default_str();
+  demo->add_option("--drift-um", m.drift_um_per_part, "Grinding: drift per part at full lift (wear, heat)")
+      ->capture_default_str();
+  demo->add_option("--vibration-um", m.vibration_rms_um, "Grinding: random vibration, RMS on the ground lift")
+      ->capture_default_str();
+  demo->add_option("--machine-seed", m.seed, "Grinding: seed of the vibration")->capture_default_str();
+  demo->callback([&action, demo, demo_opts, demo_sim, loop] {
+    seed_from_clock_unless_given(*demo, *demo_sim);
+    if (loop->iterations > 0) {
+      action = [demo_opts, demo_sim, loop] { return cmd_demo_loop(*demo_opts, *demo_sim, *loop); };
+      return;
+    }
+    action = [demo_opts, demo_sim] { return cmd_demo(*demo_opts, *demo_sim); };
+  });
+
+  auto sim_settings = std::make_shared<SimulatorSettings>();
+  auto sim_part = std::make_shared<std::string>();
+  CLI::App* sim = app.add_subcommand(
+      "sim", "Run the gauge simulator alone as a Modbus TCP server, so any Modbus tool can read it. Stops on Ctrl-C.");
+  sim->add_option("--host", sim_settings->host, "Address to listen on")->capture_default_str();
+  sim_settings->port = 1502;
+  sim->add_option("--port", sim_settings->port, "TCP port; 0 picks a free one")->capture_default_str();
+  sim->add_option("--rtu", sim_settings->rtu_device,
+                  "Serve Modbus RTU on this serial device instead of TCP (e.g. one end of a socat pty pair)");
+  sim->add_option("--baud", sim_settings->rtu_baud, "RTU baud rate; replies keep to its line time")
+      ->capture_default_str();
+  sim->add_option("--unit-id", sim_settings->unit_id, "RTU unit id the simulator answers to")->capture_default_str();
+  sim->add_option("--part", *sim_part, "Part file to simulate [built-in intake_flat]");
+  add_simulator_options(*sim, *sim_settings);
+  sim->add_option("--time-scale", sim_settings->time_scale, "Simulated seconds per real second")->capture_default_str();
+  auto fault_specs = std::make_shared<std::vector<std::string>>();
+  sim->add_option("--fault", *fault_specs,
+                  "Fault KIND@START[+DURATION][:PARAM], START and DURATION in revolutions after the first request; "
+                  "repeatable. Kinds: refuse, drop, silent, exception, late, frozen, over-range, under-range, "
+                  "probe-missing, jump, drift (docs/simulator.md)");
+  auto sim_grind = std::make_shared<SimGrind>();
+  sim->add_flag("--grind", sim_grind->enabled,
+                "Grind each next part on the virtual grinder from the program in the NC directory whenever it "
+                "changes (from the design at first), so measuring the simulator closes the loop "
+                "(docs/virtual_grinder.md)");
+  sim->add_option("--data-dir", sim_grind->paths.data_dir, "With --grind: where the NC directory is [gaugeloop-data]")
+      ->capture_default_str();
+  sim->add_option("--nc-dir", sim_grind->paths.nc_dir, "With --grind: the NC directory [<data-dir>/nc]");
+  sim->add_option("--machine-seed", sim_grind->machine.seed, "With --grind: seed of the grinder's vibration")
+      ->capture_default_str();
+  sim->callback([&action, sim, sim_settings, sim_part, fault_specs, sim_grind] {
+    seed_from_clock_unless_given(*sim, *sim_settings);
+    for (const std::string& text : *fault_specs) {
+      Result<FaultSpec> f = parse_fault_spec(text);
+      if (!f) throw CLI::ValidationError("--fault", f.error().message);
+      sim_settings->faults.push_back(*f);
+    }
+    action = [sim_settings, sim_part, sim_grind] { return cmd_sim(*sim_part, *sim_settings, *sim_grind); };
+  });
+
+  auto measure_opts = std::make_shared<MeasureOptions>();
+  auto gauge_address = std::make_shared<std::string>();
+  CLI::App* measure = app.add_subcommand(
+      "measure",
+      "Measure one run against a gauge amplifier at HOST:PORT, store it and write the corrected curve table.");
+  measure->add_option("--gauge", *gauge_address,
+                      "Gauge amplifier, HOST:PORT (Modbus TCP): a name, an IPv4 address or [IPv6]:PORT; overrides "
+                      "the config's [link]");
+  measure->add_option("--gauge-config", measure_opts->gauge_config,
+                      "Gauge config (TOML): link and register map, see docs/gauge.md [the simulator's map]");
+  measure->add_option("--part", measure_opts->part_path, "Part file (TOML), see examples/");
+  add_measure_options(*measure, *measure_opts);
+  measure
+      ->add_option("--ground-with", measure_opts->ground_with,
+                   "Table version of the NC program that ground the measured part (0: the design). Without it "
+                   "the table in force is assumed, and a part that does not show it is not corrected from "
+                   "(docs/nc_output.md)")
+      ->check(CLI::Range(0, 65534));
+  measure->add_flag("--inspect", measure_opts->inspect,
+                    "Measure, analyse and store only: the correction in force and the NC program are untouched");
+  auto as_service = std::make_shared<ServiceMeasureOptions>();
+  CLI::Option* config = measure->add_option(
+      "--config", as_service->config_path,
+      "The service's config (TOML, docs/service.md): measure as `gaugeloop serve` does, with its gauge, settings, "
+      "database and NC directory; with --part-name and --lobe, and only --note, --ground-with, --inspect");
+  measure->add_option("--part-name", as_service->part_name, "With --config: the part's name")->needs(config);
+  measure->add_option("--lobe", as_service->lobe, "With --config: the lobe number")->needs(config);
+  measure->callback([&action, measure, measure_opts, gauge_address, as_service] {
+    if (!as_service->config_path.empty()) {
+      // The config sets everything else: an option beside it would be silently ignored.
+      for (const CLI::Option* o : measure->get_options()) {
+        const std::string name = o->get_name();
+        if (o->count() == 0 || name == "--config" || name == "--part-name" || name == "--lobe" || name == "--note" ||
+            name == "--ground-with" || name == "--inspect")
+          continue;
+        action = [name] {
+          return report_error(
+              make_error(ErrorCode::kInvalidInput, name + " does not go with --config: the service's config sets it; "
+                                                          "change it there, or measure without --config"));
+        };
+        return;
+      }
+      action = [as_service, measure_opts] { return cmd_measure_as_service(*as_service, *measure_opts); };
+      return;
+    }
+    if (measure_opts->part_path.empty()) {
+      action = [] {
+        return report_error(make_error(ErrorCode::kInvalidInput,
+                                       "no part: give --part FILE (and --gauge or --gauge-config), or --config FILE "
+                                       "--part-name NAME --lobe N to measure as the service does"));
+      };
+      return;
+    }
+    action = [measure_opts, gauge_address] { return cmd_measure(*measure_opts, *gauge_address); };
+  });
+}
+
+}  // namespace gaugeloop

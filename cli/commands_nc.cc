@@ -1,0 +1,414 @@
+// nc: the curve tables pushed to the control, and the decisions on them: history, diff,
+// rollback, check, and the approval of pending tables.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "cli/cli_common.h"
+#include "job/nc_push.h"
+#include "report/run_json.h"
+#include "core/text_file.h"
+#include "nc_out/table_program.h"
+#include "nc_out/table_writer.h"
+
+namespace gaugeloop {
+namespace {
+
+using nlohmann::json;
+
+struct NcOptions {
+  DataPaths paths;
+  std::string program;  // NAME: <nc-dir>/NAME.SPF; empty: the one program the history has
+  bool json_out = false;
+};
+
+void add_nc_options(CLI::App& cmd, NcOptions& o) {
+  add_data_dir_option(cmd, o.paths);
+  cmd.add_option("--nc-dir", o.paths.nc_dir, "Directory the curve-table programs are written to [<data-dir>/nc]");
+  cmd.add_option("--program", o.program,
+                 "Program name, e.g. CAM_INTAKE_L1 (the file <nc-dir>/NAME.SPF) [the only program pushed]");
+}
+
+std::string person(const std::string& given) {
+  if (!given.empty()) return given;
+  const char* user = std::getenv("USER");
+  return user != nullptr && *user != '\0' ? user : "operator";
+}
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+// The NC file the command is about, as measure records it: an absolute path.
+Result<std::string> resolve_program(const RunStore& store, const NcOptions& o) {
+  if (!o.program.empty()) {
+    std::string name = o.program;
+    if (name.size() > 4 && (name.ends_with(".SPF") || name.ends_with(".spf"))) name.resize(name.size() - 4);
+    return std::filesystem::absolute(o.paths.nc() / (name + ".SPF")).lexically_normal().string();
+  }
+  PushQuery q;
+  q.limit = 100000;
+  Result<std::vector<NcPush>> pushes = store.list_pushes(q);
+  if (!pushes) return pushes.error();
+  std::set<std::string> files;
+  for (const NcPush& p : *pushes) files.insert(p.nc_file);
+  if (files.size() == 1) return *files.begin();
+  if (files.empty()) {
+    return make_error(ErrorCode::kNotFound, "no table was pushed yet; run `gaugeloop demo` or `gaugeloop measure`");
+  }
+  std::string list;
+  for (const std::string& f : files) list += (list.empty() ? "" : ", ") + std::filesystem::path(f).stem().string();
+  return make_error(ErrorCode::kInvalidInput, "tables were pushed to several programs (" + list +
+                                                  "): name one with --program, and --nc-dir if it is not the default");
+}
+
+// ---- nc history ----
+
+struct HistoryOptions : NcOptions {
+  int limit = 50;
+};
+
+int cmd_history(const HistoryOptions& o) {
+  Result<RunStore> store = open_history_read_only(o.paths);
+  if (!store) return report_error(store.error());
+  PushQuery q;
+  q.limit = o.limit;
+  if (!o.program.empty()) {
+    Result<std::string> file = resolve_program(*store, o);
+    if (!file) return report_error(file.error());
+    q.nc_file = *file;
+  }
+  Result<std::vector<NcPush>> pushes = store->list_pushes(q);
+  if (!pushes) return report_error(pushes.error());
+  if (o.json_out) {
+    json out = json::array();
+    for (const NcPush& p : *pushes) out.push_back(nc_push_json(p));
+    std::cout << out.dump(2) << "\n";
+    return kExitOk;
+  }
+  std::printf("%-16s %7s  %-20s  %6s  %-8s  %6s  %9s  %s\n", "program", "version", "pushed (UTC)", "run", "table",
+              "blocks", "error um", "reason");
+  for (const NcPush& p : *pushes) {
+    std::printf("%-16s %7d  %-20s  %6lld  %-8s  %6s  %9s  %s\n",
+                std::filesystem::path(p.nc_file).stem().string().c_str(), p.table_version, p.pushed_utc.c_str(),
+                static_cast<long long>(p.run_id), p.interpolation.empty() ? "-" : p.interpolation.c_str(),
+                p.block_count ? std::to_string(*p.block_count).c_str() : "-",
+                p.command_error_um ? fixed(*p.command_error_um, 3).c_str() : "-", p.reason.c_str());
+  }
+  if (pushes->empty()) std::printf("(no table was pushed)\n");
+  return kExitOk;
+}
+
+// ---- nc diff ----
+
+struct DiffOptions : NcOptions {
+  int a = 0;
+  int b = 0;
+  double threshold_um = 0.1;
+};
+
+Result<ParsedTable> pushed_table(const RunStore& store, const std::string& file, int version, NcPush& push) {
+  Result<NcPush> p = store.load_push(file, version);
+  if (!p) return p.error();
+  if (!p->program_text) {
+    return make_error(ErrorCode::kNotFound, "table version " + std::to_string(version) + " of " + file +
+                                                " was pushed before gaugeloop kept program texts; it cannot be "
+                                                "compared or rolled back to");
+  }
+  push = *p;
+  return parse_table_program(*p->program_text, file + " version " + std::to_string(version));
+}
+
+int cmd_diff(const DiffOptions& o) {
+  Result<RunStore> store = open_history_read_only(o.paths);
+  if (!store) return report_error(store.error());
+  Result<std::string> file = resolve_program(*store, o);
+  if (!file) return report_error(file.error());
+  NcPush pa;
+  NcPush pb;
+  Result<ParsedTable> ta = pushed_table(*store, *file, o.a, pa);
+  if (!ta) return report_error(ta.error());
+  Result<ParsedTable> tb = pushed_table(*store, *file, o.b, pb);
+  if (!tb) return report_error(tb.error());
+  Result<TableInterpolant> ia = TableInterpolant::of(ta->points, ta->interpolation);
+  if (!ia) return report_error(ia.error());
+  Result<TableInterpolant> ib = TableInterpolant::of(tb->points, tb->interpolation);
+  if (!ib) return report_error(ib.error());
+  // What the NC runs, compared at every 0.01 deg of C; listed at whole degrees.
+  double worst_um = 0.0;
+  double worst_c = 0.0;
+  double sum_sq = 0.0;
+  constexpr int kRows = 36000;
+  for (int k = 0; k < kRows; ++k) {
+    const double c = k * 0.01;
+    const double d_um = (ib->at(c).x_mm - ia->at(c).x_mm) * 1000.0;
+    sum_sq += d_um * d_um;
+    if (std::abs(d_um) > std::abs(worst_um)) {
+      worst_um = d_um;
+      worst_c = c;
+    }
+  }
+  const double rms_um = std::sqrt(sum_sq / kRows);
+  std::vector<std::pair<int, double>> degrees;
+  for (int d = 0; d < 360; ++d) {
+    const double d_um = (ib->at(d).x_mm - ia->at(d).x_mm) * 1000.0;
+    if (std::abs(d_um) >= o.threshold_um) degrees.emplace_back(d, d_um);
+  }
+  if (o.json_out) {
+    json rows = json::array();
+    for (const auto& [d, um] : degrees) rows.push_back({{"c_deg", d}, {"dx_um", um}});
+    json out{{"nc_file", *file},
+             {"a", nc_push_json(pa)},
+             {"b", nc_push_json(pb)},
+             {"largest_dx_um", worst_um},
+             {"largest_at_c_deg", worst_c},
+             {"rms_dx_um", rms_um},
+             {"threshold_um", o.threshold_um},
+             {"degrees", rows}};
+    std::cout << out.dump(2) << "\n";
+    return kExitOk;
+  }
+  std::printf("%s: version %d -> version %d\n", file->c_str(), o.a, o.b);
+  for (const auto* p : {&pa, &pb}) {
+    std::printf("  version %-4d run %lld, %s, %s, %zu points, pushed %s\n", p->table_version,
+                static_cast<long long>(p->run_id), p->reason.c_str(),
+                p->interpolation.empty() ? "-" : p->interpolation.c_str(), (p == &pa ? ta : tb)->points.size(),
+                p->pushed_utc.c_str());
+  }
+  std::printf("  X(B) - X(A), as the NC interpolates each: largest %+.3f um at C%.2f, RMS %.3f um\n", worst_um, worst_c,
+              rms_um);
+  if (degrees.empty()) {
+    std::printf("  no whole degree differs by %.2f um or more\n", o.threshold_um);
+  } else {
+    std::printf("  whole degrees of C differing by %.2f um or more:\n  %6s  %9s\n", o.threshold_um, "C deg", "dX um");
+    for (const auto& [d, um] : degrees) std::printf("  %6d  %+9.3f\n", d, um);
+  }
+  return kExitOk;
+}
+
+// ---- nc rollback ----
+
+struct RollbackOptions : NcOptions {
+  int version = 0;
+  std::string by;
+};
+
+int cmd_rollback(const RollbackOptions& o) {
+  Result<RunStore> store = open_history(o.paths);
+  if (!store) return report_error(store.error());
+  Result<std::string> file = resolve_program(*store, o);
+  if (!file) return report_error(file.error());
+  Result<PushOutcome> pushed = rollback_to_version(*store, *file, o.version, person(o.by));
+  if (!pushed) return report_error(pushed.error());
+  std::printf("%s: table version %d written, the table of version %d (run %lld); it is now the table in force\n",
+              file->c_str(), pushed->table_version, o.version, static_cast<long long>(pushed->run_id));
+  return kExitOk;
+}
+
+// ---- nc check ----
+
+int cmd_check(const NcOptions& o) {
+  Result<RunStore> store = open_history_read_only(o.paths);
+  if (!store) return report_error(store.error());
+  Result<std::string> file = resolve_program(*store, o);
+  if (!file) return report_error(file.error());
+  if (Status c = check_not_edited_by_hand(*store, *file); !c) return report_error(c.error());
+  Result<std::optional<NcPush>> last = store->last_push(*file);
+  if (!last) return report_error(last.error());
+  if (!std::filesystem::exists(*file)) {
+    std::printf("%s: not on disk%s\n", file->c_str(),
+                *last ? (" (version " + std::to_string((**last).table_version) + " was pushed)").c_str() : "");
+    return kExitNcOutput;
+  }
+  // Written by a push whose record was interrupted: that push's table, recorded at the next
+  // push or by `nc reconcile`.
+  Result<std::vector<PushIntent>> open = store->open_push_intents(*file);
+  if (!open) return report_error(open.error());
+  Result<std::string> on_disk = read_regular_file(*file, "NC program");
+  if (!on_disk) return report_error(on_disk.error());
+  for (const PushIntent& i : *open) {
+    if (i.push.program_text != *on_disk) continue;
+    std::printf(
+        "%s: table version %d as written for run %lld (%s); its push was interrupted before it was "
+        "recorded: `gaugeloop nc reconcile` or the next push records it\n",
+        file->c_str(), i.push.table_version, static_cast<long long>(i.run_id), i.created_utc.c_str());
+    return kExitOk;
+  }
+  std::printf("%s: table version %d as pushed (run %lld, %s)\n", file->c_str(), *last ? (**last).table_version : 0,
+              *last ? static_cast<long long>((**last).run_id) : 0LL, *last ? (**last).pushed_utc.c_str() : "-");
+  return kExitOk;
+}
+
+// ---- nc reconcile ----
+
+int cmd_reconcile(const NcOptions& o) {
+  Result<RunStore> store = RunStore::open(o.paths.db());
+  if (!store) return report_error(store.error());
+  Result<ReconcileReport> r = reconcile_all_pushes(*store);
+  if (!r) return report_error(r.error());
+  for (const std::string& m : r->messages) std::printf("%s\n", m.c_str());
+  std::printf("%d interrupted push(es) recorded, %d abandoned, %d temporary file(s) removed\n", r->completed,
+              r->abandoned, r->leftovers_removed);
+  return kExitOk;
+}
+
+// ---- nc pending, approve, reject ----
+
+struct PendingOptions : NcOptions {
+  bool all = false;
+  int limit = 50;
+};
+
+int cmd_pending(const PendingOptions& o) {
+  Result<RunStore> store = open_history_read_only(o.paths);
+  if (!store) return report_error(store.error());
+  PendingQuery q;
+  q.limit = o.limit;
+  if (!o.all) q.status = PendingStatus::kPending;
+  if (!o.program.empty()) {
+    Result<std::string> file = resolve_program(*store, o);
+    if (!file) return report_error(file.error());
+    q.nc_file = *file;
+  }
+  Result<std::vector<PendingTable>> tables = store->list_pending(q);
+  if (!tables) return report_error(tables.error());
+  if (o.json_out) {
+    json out = json::array();
+    for (const PendingTable& t : *tables) {
+      out.push_back(pending_table_json(t));
+    }
+    std::cout << out.dump(2) << "\n";
+    return kExitOk;
+  }
+  std::printf("%5s  %6s  %-20s  %-16s  %-7s  %-10s  %s\n", "id", "run", "created (UTC)", "program", "verdict", "status",
+              "reason");
+  for (const PendingTable& t : *tables) {
+    std::printf("%5lld  %6lld  %-20s  %-16s  %-7s  %-10s  %s\n", static_cast<long long>(t.id),
+                static_cast<long long>(t.run_id), t.created_utc.c_str(),
+                std::filesystem::path(t.nc_file).stem().string().c_str(),
+                std::string(pending_verdict_name(t.verdict)).c_str(),
+                std::string(pending_status_name(t.status)).c_str(), t.reason.c_str());
+  }
+  if (tables->empty()) std::printf(o.all ? "(no pending tables)\n" : "(no table waits for approval)\n");
+  return kExitOk;
+}
+
+struct DecideOptions {
+  DataPaths paths;
+  std::int64_t id = 0;
+  std::string by;
+  std::string note;
+  bool overwrite_edited = false;
+};
+
+int cmd_approve(const DecideOptions& o) {
+  Result<RunStore> store = open_history(o.paths);
+  if (!store) return report_error(store.error());
+  const std::string by = person(o.by);
+  Result<PushOutcome> pushed = approve_pending(*store, o.id, by, o.note, o.overwrite_edited);
+  if (!pushed) return report_error(pushed.error());
+  std::printf("%s: table version %d written from run %lld (pending table %lld, approved by %s)%s\n",
+              pushed->nc_file.c_str(), pushed->table_version, static_cast<long long>(pushed->run_id),
+              static_cast<long long>(o.id), by.c_str(),
+              pushed->decision_recorded ? "" : "; it had stopped pending meanwhile, the push is recorded alone");
+  return kExitOk;
+}
+
+int cmd_reject(const DecideOptions& o) {
+  Result<RunStore> store = open_history(o.paths);
+  if (!store) return report_error(store.error());
+  if (Status s = store->reject_pending(o.id, person(o.by), o.note); !s) return report_error(s.error());
+  std::printf("pending table %lld rejected; the table in force stays\n", static_cast<long long>(o.id));
+  return kExitOk;
+}
+
+void add_decide_options(CLI::App& cmd, DecideOptions& o) {
+  add_data_dir_option(cmd, o.paths);
+  cmd.add_option("id", o.id, "Pending table id (see `nc pending`)")->required();
+  cmd.add_option("--by", o.by, "Who decides [$USER]");
+  cmd.add_option("--note", o.note, "Why, kept with the decision");
+}
+
+}  // namespace
+
+void add_nc_commands(CLI::App& app, CommandAction& action) {
+  CLI::App* nc = app.add_subcommand("nc", "Curve tables on the control: history, diff, rollback, approval.");
+  nc->require_subcommand(1);
+
+  auto history = std::make_shared<HistoryOptions>();
+  CLI::App* history_cmd = nc->add_subcommand("history", "Every table pushed, newest first: version, run, reason.");
+  add_nc_options(*history_cmd, *history);
+  history_cmd->add_option("--limit", history->limit, "Most pushes to show")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  history_cmd->add_flag("--json", history->json_out, "Print JSON");
+  history_cmd->callback([&action, history] { action = [history] { return cmd_history(*history); }; });
+
+  auto diff = std::make_shared<DiffOptions>();
+  CLI::App* diff_cmd =
+      nc->add_subcommand("diff", "Two table versions of a program: how X differs where the NC interpolates them.");
+  add_nc_options(*diff_cmd, *diff);
+  diff_cmd->add_option("a", diff->a, "First table version (see `nc history`)")->required();
+  diff_cmd->add_option("b", diff->b, "Second table version")->required();
+  diff_cmd->add_option("--threshold-um", diff->threshold_um, "List whole degrees differing by at least this")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  diff_cmd->add_flag("--json", diff->json_out, "Print JSON");
+  diff_cmd->callback([&action, diff] { action = [diff] { return cmd_diff(*diff); }; });
+
+  auto rollback = std::make_shared<RollbackOptions>();
+  CLI::App* rollback_cmd = nc->add_subcommand(
+      "rollback", "Push an earlier table version again, as a new version; the next run builds on its correction.");
+  add_nc_options(*rollback_cmd, *rollback);
+  rollback_cmd->add_option("version", rollback->version, "Table version to restore (see `nc history`)")->required();
+  rollback_cmd->add_option("--by", rollback->by, "Who rolls back [$USER]");
+  rollback_cmd->callback([&action, rollback] { action = [rollback] { return cmd_rollback(*rollback); }; });
+
+  auto check = std::make_shared<NcOptions>();
+  CLI::App* check_cmd = nc->add_subcommand(
+      "check", "Is the program on disk the table last pushed? Reports a table edited by hand (exit status 2).");
+  add_nc_options(*check_cmd, *check);
+  check_cmd->callback([&action, check] { action = [check] { return cmd_check(*check); }; });
+
+  auto reconcile = std::make_shared<NcOptions>();
+  CLI::App* reconcile_cmd = nc->add_subcommand(
+      "reconcile",
+      "Finish pushes that were interrupted (kill, power cut, full disk, locked database): a program the control "
+      "holds is recorded as pushed, one it never got is abandoned, leftover temporary files are removed. Every "
+      "push and measurement does this for its own program first.");
+  add_data_dir_option(*reconcile_cmd, reconcile->paths);
+  reconcile_cmd->callback([&action, reconcile] { action = [reconcile] { return cmd_reconcile(*reconcile); }; });
+
+  auto pending = std::make_shared<PendingOptions>();
+  CLI::App* pending_cmd =
+      nc->add_subcommand("pending", "Tables waiting for approval: held by compensation, or approval required.");
+  add_nc_options(*pending_cmd, *pending);
+  pending_cmd->add_flag("--all", pending->all, "Also those approved, rejected or superseded");
+  pending_cmd->add_option("--limit", pending->limit, "Most to show")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  pending_cmd->add_flag("--json", pending->json_out, "Print JSON");
+  pending_cmd->callback([&action, pending] { action = [pending] { return cmd_pending(*pending); }; });
+
+  auto approve = std::make_shared<DecideOptions>();
+  CLI::App* approve_cmd =
+      nc->add_subcommand("approve", "Write a pending table to the control (atomically) and record who approved it.");
+  add_decide_options(*approve_cmd, *approve);
+  approve_cmd->add_flag("--overwrite-edited", approve->overwrite_edited,
+                        "Overwrite the program even if it was edited by hand since the last push");
+  approve_cmd->callback([&action, approve] { action = [approve] { return cmd_approve(*approve); }; });
+
+  auto reject = std::make_shared<DecideOptions>();
+  CLI::App* reject_cmd = nc->add_subcommand("reject", "Refuse a pending table; the table in force stays.");
+  add_decide_options(*reject_cmd, *reject);
+  reject_cmd->callback([&action, reject] { action = [reject] { return cmd_reject(*reject); }; });
+}
+
+}  // namespace gaugeloop

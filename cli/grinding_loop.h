@@ -1,0 +1,51 @@
+// The closed loop on the virtual grinder: grind -> measure -> compensate -> push, part after
+// part (docs/virtual_grinder.md). Each part is ground from the table in force (the pushed NC
+// program, read back), served by a fresh gauge simulator on loopback and measured by the
+// product's own job (run_measure_job: poller, analysis, compensation, curve table, database).
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "job/measure_job.h"
+#include "simulator/gauge_simulator.h"
+#include "simulator/virtual_grinder.h"
+
+namespace gaugeloop {
+
+struct LoopSettings {
+  // The part, design, measurement, compensation, NC output and database, as for one run.
+  // build_on_table_in_force is decided by the loop: the first part is corrected from the
+  // design, every later one builds on the correction of the table it was ground with.
+  JobSettings job;
+  MachineErrorModel machine;
+  // The gauge: speed, time scale, noise. Its seed is advanced per part; ground_reading_mm
+  // is set to each part ground.
+  SimulatorSettings gauge;
+  std::chrono::milliseconds response_timeout{200};
+  int iterations = 3;  // compensation steps; iterations + 1 parts are ground and measured
+};
+
+// One part of the loop.
+struct LoopIteration {
+  int iteration = 0;        // 0: the first part, ground before any compensation
+  std::string ground_from;  // "design" or the NC file with its table version
+  JobReport job;            // the measurement and what became of its table
+  TrueLiftError part;       // the part as ground (no gauge noise)
+  TrueLiftError floor;      // the same part ground from a perfect table: vibration only
+  // What the loop has left to correct: part - floor, the same vibration taken out, um.
+  double residual_max_um = 0.0;
+  double residual_rms_um = 0.0;
+  double largest_servo_error_um = 0.0;
+};
+
+// Runs the loop; `on_part` (may be empty) sees each iteration as it ends. A held or refused
+// correction does not stop the loop: the next part is ground with the table in force, as on
+// the shop floor. Errors: those of the machine model, the grinder or the job (the iterations
+// done so far are lost to the caller but stored in the database).
+Result<std::vector<LoopIteration>> run_grinding_loop(const LoopSettings& settings,
+                                                     const std::function<void(const LoopIteration&)>& on_part);
+
+}  // namespace gaugeloop

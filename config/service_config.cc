@@ -1,0 +1,338 @@
+// toml++ reading of the service configuration, every message with file, line and key.
+#include "config/service_config.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "config/gauge_config.h"
+#include "config/toml_reader.h"
+#include "core/text_file.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path relative_to(const fs::path& base_dir, const std::string& p) {
+  const fs::path path(p);
+  return path.is_absolute() ? path : (base_dir / path).lexically_normal();
+}
+
+Result<std::string> read_text(const fs::path& path, const std::string& what) {
+  Result<std::string> text = read_regular_file(path, what);
+  if (!text) return text.error();
+  return std::string(without_utf8_bom(*text));
+}
+
+Error at_key(const TomlReader& r, std::string_view key, const Error& e) {
+  Error out = e;
+  out.message = r.where(key) + ": " + e.message;
+  return out;
+}
+
+// The service creates and writes files in `dir` (the database, NC programs): the directory, or
+// the nearest one above it that exists (the rest is created), must be a directory this user
+// may write. Caught at load, not at the first run: under the systemd unit /etc is read-only
+// (ProtectSystem=full), so a path left relative to a config in /etc/gaugeloop fails there.
+Status check_writable_dir(const fs::path& dir, const std::string& what) {
+  fs::path at = dir;
+  std::error_code ec;
+  while (!at.empty() && at != at.root_path() && !fs::exists(at, ec)) at = at.parent_path();
+  if (at.empty()) at = ".";
+  const std::string advice = "; give a directory this user can write, e.g. under /var/lib/gaugeloop";
+  if (!fs::is_directory(at, ec)) {
+    return make_error(ErrorCode::kInvalidInput,
+                      what + " " + dir.string() + ": " + at.string() + " is not a directory" + advice);
+  }
+  if (::access(at.c_str(), W_OK | X_OK) != 0) {
+    const std::string why = std::strerror(errno);
+    return make_error(ErrorCode::kInvalidInput,
+                      what + " " + dir.string() + ": " + at.string() + " is not writable (" + why + ")" + advice);
+  }
+  return {};
+}
+
+// The database: its directory as above, and the file itself writable if it exists.
+Status check_writable_database(const fs::path& db_path) {
+  if (Status d = check_writable_dir(db_path.parent_path(), "database directory"); !d) return d;
+  std::error_code ec;
+  if (fs::exists(db_path, ec) && ::access(db_path.c_str(), W_OK) != 0) {
+    const std::string why = std::strerror(errno);
+    return make_error(ErrorCode::kInvalidInput, "database " + db_path.string() + " is not writable (" + why +
+                                                    "); the service's user must own it (chown it to them)");
+  }
+  return {};
+}
+
+}  // namespace
+
+Result<ServiceConfig> read_service_config(const fs::path& path) {
+  Result<std::string> text = read_text(path, "service config");
+  if (!text) {
+    Error e = text.error();
+    e.message += "; check --config";
+    return e;
+  }
+  const std::string source = path.string();
+  const fs::path base = path.parent_path();
+  Result<toml::table> parsed = parse_toml(*text, source);
+  if (!parsed) return parsed.error();
+  const toml::table& top = *parsed;
+  TomlReader r(top, source);
+  r.allow_only({"machine", "gauge", "part", "analysis", "compensation", "nc", "database", "http", "plc"});
+
+  ServiceConfig c;
+  c.source = path;
+  c.machine = r.text("machine", "grinder-1");
+  JobSettings& job = c.job;
+  job.machine = c.machine;
+
+  // [gauge]
+  std::string gauge_file;
+  if (const toml::table* g = r.subtable("gauge")) {
+    TomlReader gr(*g, source, "gauge.");
+    gr.allow_only({"config", "mode", "revolutions"});
+    gauge_file = gr.text("config", "");
+    job.poller.mode =
+        gr.choice("mode", "latched", {"latched", "live"}) == "live" ? SamplingMode::kLive : SamplingMode::kLatched;
+    job.poller.revolutions = static_cast<int>(gr.integer("revolutions", 3, 3, 100));
+    if (gr.error) return *gr.error;
+    if (!gauge_file.empty()) {
+      Result<ModbusSettings> gs = read_gauge_file(relative_to(base, gauge_file));
+      if (!gs) return at_key(gr, "config", gs.error());
+      c.gauge = std::move(*gs);
+    }
+  } else {
+    r.fail(source + ": no [gauge] table; it names the gauge config (link and register map, docs/gauge.md)");
+  }
+
+  // [analysis]
+  if (const toml::table* a = r.subtable("analysis")) {
+    TomlReader ar(*a, source, "analysis.");
+    ar.allow_only({"base_circle_center_deg", "base_circle_half_width_deg"});
+    job.analysis.base_circle_center_deg = ar.number("base_circle_center_deg", 180.0, 0.0, 360.0);
+    job.analysis.base_circle_half_width_deg = ar.number("base_circle_half_width_deg", 30.0, 0.0, 90.0, true);
+    if (ar.error) return *ar.error;
+  }
+
+  // [compensation]
+  if (const toml::table* k = r.subtable("compensation")) {
+    TomlReader kr(*k, source, "compensation.");
+    kr.allow_only({"gain", "max_harmonic", "max_correction_um", "max_change_um", "max_repeatability_um",
+                   "max_phase_deg", "build_on_table_in_force"});
+    CompensationSettings& s = job.compensation;
+    s.gain = kr.number("gain", 1.0, 0.0, 1.0, true);
+    s.max_harmonic = static_cast<int>(kr.integer("max_harmonic", 30, 0, 180));
+    s.max_correction_um = kr.number("max_correction_um", 100.0, 0.0, 10000.0, true);
+    s.max_change_um = kr.number("max_change_um", 50.0, 0.0, 10000.0, true);
+    s.max_repeatability_um = kr.number("max_repeatability_um", 2.0, 0.0, 1000.0, true);
+    s.max_phase_deg = kr.number("max_phase_deg", 0.5, 0.0, 45.0, true);
+    job.build_on_table_in_force = kr.flag("build_on_table_in_force", true);
+    if (kr.error) return *kr.error;
+  }
+
+  // [nc]
+  std::string template_path;
+  job.nc_dir = relative_to(base, "nc");
+  if (const toml::table* n = r.subtable("nc")) {
+    TomlReader nr(*n, source, "nc.");
+    nr.allow_only({"dir", "template", "table", "table_step_deg", "command_error_um", "max_segment_deg", "allow_spline",
+                   "require_approval", "table_number", "x_min_mm", "x_max_mm", "x_velocity_max_mm_per_s",
+                   "x_acceleration_max_mm_per_s2", "work_speed_rpm"});
+    job.nc_dir = relative_to(base, nr.text("dir", "nc"));
+    template_path = nr.text("template", "");
+    const std::string kind =
+        nr.choice("table", "auto", {"auto", "linear", "spline", "adaptive-linear", "adaptive-spline"});
+    job.table_kind = kind == "linear"            ? TableKind::kLinear
+                     : kind == "spline"          ? TableKind::kSpline
+                     : kind == "adaptive-linear" ? TableKind::kAdaptiveLinear
+                     : kind == "adaptive-spline" ? TableKind::kAdaptiveSpline
+                                                 : TableKind::kAuto;
+    job.table_step_deg = nr.number("table_step_deg", 1.0, 0.0, 10.0, true);
+    job.table_choice.bound_um = nr.number("command_error_um", 0.5, 0.0, 100.0, true);
+    job.table_choice.max_step_deg = nr.number("max_segment_deg", 10.0, 0.0, 90.0, true);
+    job.table_choice.allow_spline = nr.flag("allow_spline", true);
+    job.require_approval = nr.flag("require_approval", false);
+    job.table_number = static_cast<int>(nr.integer("table_number", 1, 1, 999));
+    AxisLimits& l = job.axis_limits;
+    l.x_min_mm = nr.number("x_min_mm", l.x_min_mm, -1000.0, 1000.0);
+    l.x_max_mm = nr.number("x_max_mm", l.x_max_mm, -1000.0, 1000.0);
+    l.x_velocity_max_mm_per_s = nr.number("x_velocity_max_mm_per_s", l.x_velocity_max_mm_per_s, 0.0, 1e6, true);
+    l.x_acceleration_max_mm_per_s2 =
+        nr.number("x_acceleration_max_mm_per_s2", l.x_acceleration_max_mm_per_s2, 0.0, 1e8, true);
+    l.speed_rpm = nr.number("work_speed_rpm", l.speed_rpm, 0.0, 3000.0, true);
+    if (nr.error) return *nr.error;
+    if (!(l.x_min_mm < l.x_max_mm)) {
+      return make_error(ErrorCode::kInvalidInput, nr.where("x_max_mm") + ": must be above x_min_mm");
+    }
+    if (Status w = check_writable_dir(job.nc_dir, "NC directory"); !w) return at_key(nr, "dir", w.error());
+    if (!template_path.empty()) {
+      Result<std::string> t = read_text(relative_to(base, template_path), "NC template");
+      if (!t) return at_key(nr, "template", t.error());
+      job.nc_template = std::move(*t);
+      job.nc_template_name = relative_to(base, template_path).string();
+    }
+  }
+  if (template_path.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      source +
+                          ": [nc] template is required: your table subprogram with {{placeholders}}, e.g. "
+                          "examples/sinumerik/cam_table.spf (docs/nc_output.md)");
+  }
+
+  // [database]
+  job.db_path = relative_to(base, "gaugeloop.sqlite");
+  if (const toml::table* d = r.subtable("database")) {
+    TomlReader dr(*d, source, "database.");
+    dr.allow_only({"path"});
+    job.db_path = relative_to(base, dr.text("path", "gaugeloop.sqlite"));
+    if (dr.error) return *dr.error;
+    if (Status w = check_writable_database(job.db_path); !w) return at_key(dr, "path", w.error());
+  } else if (Status w = check_writable_database(job.db_path); !w) {
+    return make_error(ErrorCode::kInvalidInput,
+                      source + ": [database] path (default " + job.db_path.string() + "): " + w.error().message);
+  }
+
+  // [http]
+  if (const toml::table* h = r.subtable("http")) {
+    TomlReader hr(*h, source, "http.");
+    hr.allow_only({"host", "port", "token", "token_file"});
+    HttpSettings hs;
+    hs.host = hr.text("host", "127.0.0.1");
+    hs.port = static_cast<int>(hr.integer("port", 8080, 0, 65535));
+    hs.token = hr.text("token", "");
+    const std::string token_file = hr.text("token_file", "");
+    if (hr.error) return *hr.error;
+    if (!hs.token.empty() && !token_file.empty()) {
+      return make_error(ErrorCode::kInvalidInput, hr.where("token_file") + ": give token or token_file, not both");
+    }
+    if (!token_file.empty()) {
+      Result<std::string> t = read_text(relative_to(base, token_file), "HTTP token file");
+      if (!t) return at_key(hr, "token_file", t.error());
+      std::string token = *t;
+      while (!token.empty() && (token.back() == '\n' || token.back() == '\r' || token.back() == ' ')) token.pop_back();
+      if (token.empty()) {
+        return make_error(ErrorCode::kInvalidInput, hr.where("token_file") + ": the file is empty");
+      }
+      hs.token = token;
+    }
+    if (!hs.token.empty() && hs.token.size() < 16) {
+      return make_error(
+          ErrorCode::kInvalidInput,
+          hr.where(token_file.empty() ? "token" : "token_file") +
+              ": a token shorter than 16 characters is too easy to guess; use e.g. `openssl rand -hex 16`");
+    }
+    c.http = hs;
+  }
+
+  // [plc]: the link settings of a gauge config's [link], plus where the block is and how often
+  // it is polled.
+  if (const toml::table* p = r.subtable("plc")) {
+    TomlReader plr(*p, source, "plc.");
+    plr.allow_only({"transport", "host", "port", "device", "baud", "parity", "data_bits", "stop_bits", "unit_id",
+                    "response_timeout_ms", "base_address", "poll_interval_ms"});
+    PlcSettings ps;
+    ModbusSettings defaults;
+    defaults.port = 502;
+    read_modbus_link(plr, defaults, ps.link.link, "PLC");
+    ps.link.base_address = static_cast<int>(plr.integer("base_address", 0, 0, 65536 - plc_registers::kBlockWords));
+    ps.poll_interval = std::chrono::milliseconds(plr.integer("poll_interval_ms", 100, 10, 10000));
+    if (plr.error) return *plr.error;
+    c.plc = ps;
+  }
+
+  // [[part]]: each a part file; checked now, so a bad part never waits for the PLC to ask.
+  const toml::node* parts = top.get("part");
+  if (parts == nullptr || !parts->is_array_of_tables() || parts->as_array()->empty()) {
+    r.fail(source + ": no [[part]] entries; add one `[[part]] file = \"PART.toml\"` per part and lobe measured");
+  }
+  if (r.error) return *r.error;
+  std::set<std::pair<std::string, int>> seen;
+  std::map<int, std::string> plc_number_part;  // plc_part_number -> part name
+  std::set<std::pair<int, int>> plc_seen;      // (plc_part_number, lobe)
+  for (const toml::node& node : *parts->as_array()) {
+    const toml::table& pt = *node.as_table();
+    TomlReader pr(pt, source, "part.");
+    pr.allow_only({"file", "plc_part_number"});
+    const std::string file = pr.text("file", std::nullopt);
+    std::optional<int> plc_number;
+    if (pr.has("plc_part_number")) plc_number = static_cast<int>(pr.integer("plc_part_number", std::nullopt, 1, 65535));
+    if (pr.error) return *pr.error;
+    Result<PartFile> pf = read_part_file(relative_to(base, file));
+    if (!pf) return at_key(pr, "file", pf.error());
+    Result<LiftTable> design = read_lift_table_csv(pf->part.lift_table);
+    if (!design) return at_key(pr, "file", design.error());
+    if (!seen.insert({pf->part.name, pf->part.lobe}).second) {
+      return make_error(ErrorCode::kInvalidInput, pr.where("file") + ": part " + pf->part.name + " lobe " +
+                                                      std::to_string(pf->part.lobe) + " is configured twice");
+    }
+    if (plc_number) {
+      const std::string& name = pf->part.name;
+      auto [it, fresh] = plc_number_part.emplace(*plc_number, name);
+      if (!fresh && it->second != name) {
+        return make_error(ErrorCode::kInvalidInput, pr.where("plc_part_number") + ": " + std::to_string(*plc_number) +
+                                                        " already names part " + it->second + ", not " + name +
+                                                        "; give each part its own number");
+      }
+      if (!plc_seen.insert({*plc_number, pf->part.lobe}).second) {
+        return make_error(ErrorCode::kInvalidInput, pr.where("plc_part_number") + ": part number " +
+                                                        std::to_string(*plc_number) + " lobe " +
+                                                        std::to_string(pf->part.lobe) + " is configured twice");
+      }
+    }
+    c.parts.push_back({std::move(*pf), std::move(*design), plc_number});
+    if (Status ok = check_job_settings(job_for(c, c.parts.back())); !ok) return at_key(pr, "file", ok.error());
+  }
+  if (c.plc && plc_number_part.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      source +
+                          ": [plc] is set but no [[part]] has a plc_part_number, so the PLC could ask for "
+                          "nothing; give each part the PLC measures `plc_part_number = N`");
+  }
+  return c;
+}
+
+Result<const ServicePart*> find_plc_part(const ServiceConfig& config, int plc_part_number, int lobe) {
+  std::string known;
+  for (const ServicePart& p : config.parts) {
+    if (!p.plc_part_number) continue;
+    if (*p.plc_part_number == plc_part_number && p.file.part.lobe == lobe) return &p;
+    known += (known.empty() ? "" : ", ") + std::to_string(*p.plc_part_number) + " lobe " +
+             std::to_string(p.file.part.lobe) + " (" + p.file.part.name + ")";
+  }
+  return make_error(ErrorCode::kNotFound, "PLC part number " + std::to_string(plc_part_number) + " lobe " +
+                                              std::to_string(lobe) + " is not in " + config.source.string() +
+                                              "; configured: " + (known.empty() ? "none" : known));
+}
+
+std::string configured_parts(const ServiceConfig& config) {
+  std::string known;
+  for (const ServicePart& p : config.parts) {
+    known += (known.empty() ? "" : ", ") + p.file.part.name + " lobe " + std::to_string(p.file.part.lobe);
+  }
+  return known;
+}
+
+Result<const ServicePart*> find_part(const ServiceConfig& config, const std::string& name, int lobe) {
+  for (const ServicePart& p : config.parts) {
+    if (p.file.part.name == name && p.file.part.lobe == lobe) return &p;
+  }
+  return make_error(ErrorCode::kNotFound, "part " + name + " lobe " + std::to_string(lobe) + " is not in " +
+                                              config.source.string() + "; configured: " + configured_parts(config));
+}
+
+JobSettings job_for(const ServiceConfig& config, const ServicePart& part) {
+  JobSettings js = config.job;
+  js.part = part.file.part;
+  js.design = part.design;
+  js.nc_program = part.file.nc_program;
+  return js;
+}
+
+}  // namespace gaugeloop

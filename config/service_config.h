@@ -1,0 +1,68 @@
+// The service's one configuration file (TOML): gauge link and register map, parts, analysis,
+// compensation, NC output, database and HTTP. Documented key by key in docs/service.md, with
+// a commented example in examples/service/gaugeloop.toml.
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "acquisition/modbus_gauge.h"
+#include "acquisition/plc_link.h"
+#include "service/http_api.h"
+#include "job/measure_job.h"
+#include "config/part_file.h"
+#include "core/lift_table.h"
+#include "core/result.h"
+
+namespace gaugeloop {
+
+// A part the service may be asked to measure, with its design already read.
+struct ServicePart {
+  PartFile file;
+  LiftTable design;
+  // The number the PLC names this part by (with the part file's lobe); absent: the PLC
+  // cannot ask for it. One number is one part name; (number, lobe) is unique.
+  std::optional<int> plc_part_number;
+};
+
+// The PLC trigger: the PLC's Modbus server and the handshake block on it (docs/service.md).
+struct PlcSettings {
+  PlcLinkSettings link;
+  std::chrono::milliseconds poll_interval{100};  // one read and one write per interval
+};
+
+struct ServiceConfig {
+  std::filesystem::path source;  // the file it was read from
+  std::string machine = "grinder-1";
+  ModbusSettings gauge;
+  std::vector<ServicePart> parts;  // distinct (name, lobe); at least one
+  // Everything a job needs except the part: poller, analysis, compensation, NC output,
+  // database (JobSettings' part, design and nc_program are filled per part by job_for).
+  JobSettings job;
+  std::optional<HttpSettings> http;  // absent: no HTTP API
+  std::optional<PlcSettings> plc;    // absent: no PLC trigger
+};
+
+// Reads and checks the whole file before anything uses it: every part file and lift table
+// is read, every design is made into a curve table within the axis limits, the NC template
+// renders. Paths in the file are relative to its directory. Errors (kInvalidInput, or
+// kNotFound for a missing file) name the file, the line and the key, and say what is allowed;
+// unknown keys are refused so a typo never falls back to a default silently.
+Result<ServiceConfig> read_service_config(const std::filesystem::path& path);
+
+// The part (name and lobe) among the configured ones; kNotFound listing them.
+Result<const ServicePart*> find_part(const ServiceConfig& config, const std::string& name, int lobe);
+
+// "intake_flat lobe 1, exhaust_roller lobe 2": the parts a config has, for messages.
+std::string configured_parts(const ServiceConfig& config);
+
+// The part the PLC names by `plc_part_number` and `lobe`; kNotFound listing the numbered ones.
+Result<const ServicePart*> find_plc_part(const ServiceConfig& config, int plc_part_number, int lobe);
+
+// The job settings for measuring `part` under `config`.
+JobSettings job_for(const ServiceConfig& config, const ServicePart& part);
+
+}  // namespace gaugeloop

@@ -1,0 +1,694 @@
+// The measurement pipeline, wiring acquisition, compensation, storage and nc_out.
+#include "job/measure_job.h"
+
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <system_error>
+
+#include "job/nc_push.h"
+#include "report/run_json.h"
+#include "compensation/flat_probe.h"
+#include "compensation/periodic_spline.h"
+#include "compensation/table_evidence.h"
+#include "compensation/wheel_path.h"
+#include "core/atomic_file.h"
+#include "nc_out/table_guards.h"
+#include "nc_out/table_program.h"
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+namespace {
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+// The exact wheel path the tables are chosen against and checked on: 36,000 rows.
+constexpr double kFinePathStepDeg = 0.01;
+
+Error in_step(const std::string& step, Error e) {
+  e.message = std::string(step) + ": " + e.message;
+  return e;
+}
+
+// A table and the exact path it was chosen against.
+struct BuiltTable {
+  SampledPath fine;
+  CurveTable table;
+};
+
+// The wheel path of `lift_mm` on the fine C grid (compute_machine_path: exact rows), the
+// axis guards on it, the table the settings ask for, and the guards on the table as the NC
+// will interpolate it. Refusals (a wheel that does not fit, a limit broken) are kRefused.
+Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings& s,
+                               const TablePointsInForce* in_force = nullptr) {
+  Result<MachinePath> path = compute_machine_path(lift_mm, s.part, kFinePathStepDeg);
+  if (!path) return in_step("wheel path", path.error());
+  BuiltTable out;
+  out.fine.c_step_deg = kFinePathStepDeg;
+  out.fine.x_mm = std::move(path->x_mm);
+  out.fine.dx_dc_mm_per_deg = std::move(path->dx_dc_mm_per_deg);
+  out.fine.d2x_dc2_mm_per_deg2 = std::move(path->d2x_dc2_mm_per_deg2);
+  if (Status g = check_path_guards(out.fine, s.axis_limits); !g) return in_step("wheel path", g.error());
+  const AdaptiveSettings adaptive{s.table_choice.bound_um, s.table_choice.max_step_deg};
+  Result<CurveTable> table = [&]() -> Result<CurveTable> {
+    switch (s.table_kind) {
+      case TableKind::kAuto:
+        return write_default_table(out.fine, s.table_choice, {}, in_force);
+      case TableKind::kLinear:
+        return write_linear_table(out.fine, s.table_step_deg);
+      case TableKind::kSpline:
+        return write_spline_table(out.fine, s.table_step_deg);
+      case TableKind::kAdaptiveLinear:
+        return write_adaptive_linear_table(out.fine, adaptive);
+      case TableKind::kAdaptiveSpline:
+        return write_adaptive_spline_table(out.fine, adaptive);
+    }
+    return make_error(ErrorCode::kInternal, "unknown table kind");
+  }();
+  if (!table) return in_step("curve table", table.error());
+  if (Status g = check_table_guards(*table, out.fine, s.axis_limits); !g) return in_step("curve table", g.error());
+  out.table = std::move(*table);
+  return out;
+}
+
+std::map<std::string, std::string> template_values(const JobSettings& s) {
+  return {{"program_name", s.nc_program},
+          {"part", s.part.name},
+          {"lobe", std::to_string(s.part.lobe)},
+          {"version", GAUGELOOP_VERSION},
+          {"run_id", "0"},
+          {"created_utc", ""},
+          {"correction_max_um", "0"},
+          {"table_number", std::to_string(s.table_number)}};
+}
+
+// The settings a run was made with, one "key = value" a line in a fixed order, so that
+// `runs compare` can show what differs and equal settings hash alike.
+std::string settings_text(const JobSettings& s) {
+  std::string out;
+  auto line = [&out](const std::string& key, const std::string& value) { out += key + " = " + value + "\n"; };
+  auto num = [](double v) { return fixed(v, 6); };
+  line("design.lift_table", s.design.source);
+  line("part.follower", std::string(follower_kind_name(s.part.follower)));
+  line("part.follower_radius_mm", num(s.part.follower_radius_mm));
+  line("part.base_circle_radius_mm", num(s.part.base_circle_radius_mm));
+  line("part.wheel_radius_mm", num(s.part.wheel_radius_mm));
+  line("part.rotation_sense", std::to_string(s.part.rotation_sense));
+  line("part.c_offset_deg", num(s.part.c_offset_deg));
+  line("part.probe_offset_deg", num(s.part.probe_offset_deg));
+  line("poller.mode", std::string(sampling_mode_name(s.poller.mode)));
+  line("poller.revolutions", std::to_string(s.poller.revolutions));
+  line("analysis.base_circle_center_deg", num(s.analysis.base_circle_center_deg));
+  line("analysis.base_circle_half_width_deg", num(s.analysis.base_circle_half_width_deg));
+  line("compensation.gain", num(s.compensation.gain));
+  line("compensation.max_harmonic", std::to_string(s.compensation.max_harmonic));
+  line("compensation.max_correction_um", num(s.compensation.max_correction_um));
+  line("compensation.max_change_um", num(s.compensation.max_change_um));
+  line("compensation.max_repeatability_um", num(s.compensation.max_repeatability_um));
+  line("compensation.max_phase_deg", num(s.compensation.max_phase_deg));
+  line("compensation.builds_on_table_in_force", s.build_on_table_in_force ? "true" : "false");
+  line("nc.template", s.nc_template_name);
+  line("nc.table", std::string(table_kind_name(s.table_kind)));
+  line("nc.table_step_deg", num(s.table_step_deg));
+  line("nc.command_error_bound_um", num(s.table_choice.bound_um));
+  line("nc.max_segment_deg", num(s.table_choice.max_step_deg));
+  line("nc.allow_spline", s.table_choice.allow_spline ? "true" : "false");
+  line("nc.x_min_mm", num(s.axis_limits.x_min_mm));
+  line("nc.x_max_mm", num(s.axis_limits.x_max_mm));
+  line("nc.x_velocity_max_mm_per_s", num(s.axis_limits.x_velocity_max_mm_per_s));
+  line("nc.x_acceleration_max_mm_per_s2", num(s.axis_limits.x_acceleration_max_mm_per_s2));
+  line("nc.work_speed_rpm", num(s.axis_limits.speed_rpm));
+  line("nc.require_approval", s.require_approval ? "true" : "false");
+  line("nc.table_number", std::to_string(s.table_number));
+  return out;
+}
+
+// Where the points of the table in force lie, from the program as last pushed to `nc_file`:
+// the automatic choice keeps them, refined, while that costs at most 25 % more blocks than the
+// fewest (write_default_table). Only for a part ground with that table (a run that builds
+// on it); none when nothing was pushed, or the text was not kept (pushes before schema 3).
+Result<std::optional<TablePointsInForce>> points_in_force(const RunStore& store, const std::filesystem::path& nc_file,
+                                                          const JobSettings& s) {
+  if (s.table_kind != TableKind::kAuto || !s.build_on_table_in_force) return std::optional<TablePointsInForce>{};
+  Result<std::optional<NcPush>> last = store.last_push(nc_file.string());
+  if (!last) return last.error();
+  if (!*last || !(**last).program_text) return std::optional<TablePointsInForce>{};
+  // It parsed when it was pushed; should a later gaugeloop read it otherwise, the table is
+  // chosen afresh rather than the run refused: keeping points is a refinement, not a need.
+  Result<ParsedTable> pushed = parse_table_program(*(**last).program_text, nc_file.string() + " as pushed");
+  if (!pushed) return std::optional<TablePointsInForce>{};
+  TablePointsInForce points;
+  points.interpolation = pushed->interpolation;
+  for (const CurvePoint& p : pushed->points) points.c_deg.push_back(p.c_deg);
+  return std::optional<TablePointsInForce>{std::move(points)};
+}
+
+// What the checks before the gauge produce and the job goes on with.
+struct Prepared {
+  PeriodicSpline design;
+  DesignReading reading;
+};
+
+// Checks that need no gauge, so bad input costs no measurement: the design must make a
+// table within the axis limits, and the template must render it.
+Result<Prepared> prepare(const JobSettings& s) {
+  if (s.table_kind == TableKind::kLinear || s.table_kind == TableKind::kSpline) {
+    const double steps = 360.0 / s.table_step_deg;
+    if (!(s.table_step_deg > 0.0) || std::abs(steps - std::round(steps)) > 1e-9 || steps < 36) {
+      return make_error(ErrorCode::kInvalidInput,
+                        "table step " + fixed(s.table_step_deg, 4) + " deg must divide 360 into at least 36 steps");
+    }
+  }
+  if (Status l = check_axis_limits(s.axis_limits); !l) return l.error();
+  Result<PeriodicSpline> design = PeriodicSpline::fit(s.design.angle_deg, s.design.lift_mm);
+  if (!design) return in_step("design lift table " + s.design.source, design.error());
+  Result<BuiltTable> design_table = build_table(*design, s);
+  if (!design_table) return in_step("the design", design_table.error());
+  Result<DesignReading> design_reading = DesignReading::of_lobe(*design, s.part);
+  if (!design_reading) return in_step("flat-probe reading", design_reading.error());
+  if (auto r = render_table_program(s.nc_template, s.nc_template_name, template_values(s), design_table->table, {});
+      !r) {
+    return r.error();
+  }
+  return Prepared{std::move(*design), std::move(*design_reading)};
+}
+
+// Room a run and a program need, checked before measuring: a run of 3 revolutions is about
+// 20 KB in the database, its WAL pages and the push journal's copy of the program some more,
+// a program well under 64 KB. The margins cover a hundred revolutions and the largest tables.
+constexpr std::uintmax_t kRoomForRunBytes = 2u * 1024u * 1024u;
+constexpr std::uintmax_t kRoomForProgramBytes = 512u * 1024u;
+
+Status check_room(const std::filesystem::path& dir, std::uintmax_t need, const std::string& what) {
+  std::error_code ec;
+  const std::filesystem::space_info room = std::filesystem::space(dir, ec);
+  if (ec)
+    return make_error(ErrorCode::kIo, what + " " + dir.string() + ": cannot tell the free space: " + ec.message());
+  if (room.available < need) {
+    return make_error(ErrorCode::kIo, what + " " + dir.string() + " has " + std::to_string(room.available / 1024) +
+                                          " KB free, less than the " + std::to_string(need / 1024) +
+                                          " KB a run needs; free space there, then measure");
+  }
+  return {};
+}
+
+// The NC directory exists (made if need be) and takes a file: a probe named like our
+// temporary files (so a leftover is cleaned up with them) is made and removed.
+Status check_nc_directory(const std::filesystem::path& nc_dir, const std::filesystem::path& nc_file) {
+  std::error_code ec;
+  std::filesystem::create_directories(nc_dir, ec);
+  if (ec) return make_error(ErrorCode::kIo, "NC output directory " + nc_dir.string() + ": " + ec.message());
+  // Something other than a file where the program goes (a directory, a device) would fail
+  // the push after the run is stored.
+  if (std::filesystem::exists(nc_file, ec) && !std::filesystem::is_regular_file(nc_file, ec)) {
+    return make_error(ErrorCode::kIo, "NC program " + nc_file.string() +
+                                          " exists but is not a file (a directory?); gaugeloop writes the curve "
+                                          "table there: move it away, then measure");
+  }
+  std::string probe = (nc_dir / (atomic_temporary_prefix(nc_file) + "XXXXXX")).string();
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0) {
+    return make_error(ErrorCode::kIo, "NC output directory " + nc_dir.string() + " is not writable by this user (" +
+                                          std::strerror(errno) + "); fix its permissions or set another --nc-dir");
+  }
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return check_room(nc_dir, kRoomForProgramBytes, "NC output directory");
+}
+
+// Which table ground the part, and the correction it carries (what a new one builds on).
+struct GroundWith {
+  std::optional<int> version;  // of the NC file; empty: the design
+  std::string source;          // "plc", "option", "assumed"; empty: not building on a table
+  // The run whose correction that table carries, read once; empty: the design.
+  std::optional<StoredRun> built_from;
+  // The table in force: the newest push of this machine, part and lobe.
+  std::optional<std::int64_t> run_in_force;
+  std::optional<int> version_in_force;
+
+  std::optional<std::int64_t> run_id() const {
+    return built_from ? std::optional<std::int64_t>(built_from->summary.id) : std::nullopt;
+  }
+  DegreeTable correction_um() const { return built_from ? built_from->correction_um : DegreeTable{}; }
+};
+
+Result<std::optional<StoredRun>> load_if(const RunStore& store, std::optional<std::int64_t> run_id,
+                                         const std::string& what) {
+  if (!run_id) return std::optional<StoredRun>();
+  Result<StoredRun> run = store.load_run(*run_id);
+  if (!run) return in_step(what + " (run " + std::to_string(*run_id) + ")", run.error());
+  return std::optional<StoredRun>(std::move(*run));
+}
+
+// Before the gauge: the table that ground the part, as told or assumed.
+Result<GroundWith> resolve_ground_with(const RunStore& store, const std::filesystem::path& nc_file,
+                                       const JobSettings& s) {
+  GroundWith g;
+  if (!s.build_on_table_in_force) return g;
+  Result<std::optional<std::int64_t>> last = store.last_pushed_run(s.machine, s.part.name, s.part.lobe);
+  if (!last) return last.error();
+  g.run_in_force = *last;
+  Result<std::optional<NcPush>> last_push = store.last_push(nc_file.string());
+  if (!last_push) return last_push.error();
+  if (*last_push && g.run_in_force && (**last_push).run_id == *g.run_in_force) {
+    g.version_in_force = (**last_push).table_version;
+  }
+  std::optional<std::int64_t> run_id;
+  if (!s.ground_with_version) {
+    g.source = "assumed";
+    g.version = g.version_in_force;
+    run_id = g.run_in_force;
+  } else {
+    g.source = s.ground_with_source;
+    if (*s.ground_with_version > 0) {
+      Result<NcPush> push = store.load_push(nc_file.string(), *s.ground_with_version);
+      if (!push) {
+        Error e = push.error();
+        e.message = "the part was ground with table version " + std::to_string(*s.ground_with_version) + " (" +
+                    g.source + "), but " + e.message + "; give the version the part was ground with (0: the design)";
+        return e;
+      }
+      g.version = *s.ground_with_version;
+      run_id = push->run_id;
+    }
+  }
+  Result<std::optional<StoredRun>> built_from = load_if(store, run_id, "correction in force");
+  if (!built_from) return built_from.error();
+  g.built_from = std::move(*built_from);
+  return g;
+}
+
+std::string version_text(std::optional<int> version) {
+  return version ? "table version " + std::to_string(*version) : std::string("the design (no table)");
+}
+
+// After the analysis: may a correction built on `g` be pushed? Empty: yes. Otherwise why not.
+// A table is corrected from a part it ground, once: a part ground with an older table (or
+// measured again after its table was replaced) would repeat the change already made.
+Result<std::string> why_not_built_on(const RunStore& store, const GroundWith& g, const LobeAnalysis& now,
+                                     int revolutions, const JobSettings& s, std::string& evidence) {
+  if (g.source.empty()) return std::string();
+  if (g.source != "assumed") {
+    if (g.version == g.version_in_force) return std::string();
+    return "the part was ground with " + version_text(g.version) + " (said by " +
+           (g.source == "plc" ? std::string("the PLC") : std::string("--ground-with")) + "), but " +
+           version_text(g.version_in_force) + " is in force" +
+           (g.run_in_force ? " (run " + std::to_string(*g.run_in_force) + ")" : std::string()) +
+           ": a correction built on the older table would repeat what the newer one changed; the run is kept "
+           "for inspection. Measure a part ground with the table in force";
+  }
+  // Assumed: built_from is the run the table in force was built on.
+  if (!g.built_from) return std::string();  // ground from the design: nothing to repeat
+  const StoredRun& before = *g.built_from;
+  Result<std::optional<StoredRun>> base =
+      load_if(store, before.correction_in_force_run, "the correction the table in force was built on");
+  if (!base) return base.error();
+  DegreeTable change = before.correction_um;
+  if (*base) {
+    for (std::size_t d = 0; d < change.size(); ++d) change[d] -= (**base).correction_um[d];
+  }
+  const MeasuredError now_error{&now.error_um, &now.spread_um, revolutions};
+  const MeasuredError before_error{&before.analysis.error_um, &before.analysis.spread_um,
+                                   std::max(1, before.summary.revolutions)};
+  const TableEvidence e = judge_table_evidence(now_error, before_error, change, s.compensation.max_harmonic);
+  switch (e.verdict) {
+    case TableEvidenceVerdict::kGround:
+      evidence = "the part shows the table in force: " + e.describe();
+      return std::string();
+    case TableEvidenceVerdict::kCannotTell:
+      evidence = "assumed ground with the table in force; the part cannot tell: " + e.describe();
+      return std::string();
+    case TableEvidenceVerdict::kNotGround:
+      evidence = "the part does not show the table in force: " + e.describe();
+      return "the part does not show the table in force (" + version_text(g.version) + ", built on run " +
+             std::to_string(*g.run_in_force) + "): " + e.describe() +
+             ". It was measured again, or ground before that table; a correction built on it would repeat the "
+             "table's change. The run is kept for inspection; measure a part ground with the table in force, or "
+             "say which table ground it with --ground-with";
+  }
+  return std::string();
+}
+
+// The measurement of a run the database did not take, as JSON, so it is not lost. Tried
+// beside the database, then in the NC directory, then in the temporary directory. Returns
+// the file written, or empty if none could be.
+std::filesystem::path keep_unstored_measurement(const RunRecord& r, const JobSettings& s) {
+  nlohmann::json j;
+  j["kind"] = "gaugeloop unstored run";
+  j["machine"] = r.machine;
+  j["part"] = r.part;
+  j["lobe"] = r.lobe;
+  j["gauge"] = r.gauge;
+  j["started_utc"] = r.started_utc;
+  j["finished_utc"] = r.finished_utc;
+  j["note"] = r.note;
+  j["frame"] = "machine degrees of C, lift in mm";
+  nlohmann::json revs = nlohmann::json::array();
+  for (const RevolutionSamples& rev : r.measured.revolutions) {
+    revs.push_back({{"amplifier_revolution", rev.revolution}, {"lift_mm", rev.lift_mm}});
+  }
+  j["revolutions"] = std::move(revs);
+  std::string name = r.started_utc + "-" + r.part + "-lobe" + std::to_string(r.lobe) + ".json";
+  std::replace(name.begin(), name.end(), ':', '-');
+  const std::filesystem::path db_dir =
+      s.db_path.has_parent_path() ? s.db_path.parent_path() : std::filesystem::path(".");
+  for (const std::filesystem::path& dir :
+       {db_dir / "unstored-runs", s.nc_dir / "unstored-runs", std::filesystem::temp_directory_path()}) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) continue;
+    if (write_file_atomically(dir / name, j.dump(1) + "\n")) return dir / name;
+  }
+  return {};
+}
+
+}  // namespace
+
+Status check_name(std::string_view name, std::string_view what) {
+  if (name.empty() || name.size() > 64) {
+    return make_error(ErrorCode::kInvalidInput, std::string(what) + " has " + std::to_string(name.size()) +
+                                                    " characters; give 1 to 64 letters, digits, '_' or '-'");
+  }
+  for (std::size_t i = 0; i < name.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(name[i]);
+    if (std::isalnum(c) != 0 && c < 0x80) continue;
+    if (c == '_' || c == '-') continue;
+    char shown[16];
+    std::snprintf(shown, sizeof shown, c >= 0x20 && c < 0x7f ? "'%c'" : "byte 0x%02X", c);
+    return make_error(ErrorCode::kInvalidInput, std::string(what) + " '" +
+                                                    std::string(name.substr(0, std::min<std::size_t>(i, 64))) +
+                                                    "...' has " + shown + " at position " + std::to_string(i + 1) +
+                                                    "; use only letters, digits, '_' or '-'");
+  }
+  return {};
+}
+
+namespace {
+
+// The names first: cheap, and a bad one must not reach a file name or the database.
+Result<Prepared> check_names_and_prepare(const JobSettings& s) {
+  if (Status n = check_name(s.part.name, "part name"); !n) return n.error();
+  if (Status n = check_name(s.nc_program, "NC program name"); !n) return n.error();
+  if (Status n = check_name(s.machine, "machine name"); !n) return n.error();
+  return prepare(s);
+}
+
+}  // namespace
+
+Status check_job_settings(const JobSettings& settings) {
+  Result<Prepared> p = check_names_and_prepare(settings);
+  if (!p) return p.error();
+  return {};
+}
+
+Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
+  Result<Prepared> prepared = check_names_and_prepare(s);
+  if (!prepared) return prepared.error();
+  const DesignReading* design_reading = &prepared->reading;
+  // Absolute, so the push history names one file whatever directory a command runs in.
+  const std::filesystem::path nc_file =
+      std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal();
+  if (Status d = check_nc_directory(s.nc_dir, nc_file); !d) return d.error();
+  if (s.db_path != ":memory:") {
+    const std::filesystem::path db_dir = std::filesystem::absolute(s.db_path).parent_path();
+    std::error_code ec;
+    std::filesystem::create_directories(db_dir, ec);  // RunStore::open would; the room is checked first
+    if (Status r = check_room(db_dir, kRoomForRunBytes, "database directory"); !r) return r.error();
+  }
+  Result<RunStore> store = RunStore::open(s.db_path);
+  if (!store) return store.error();
+  // A damaged file is refused before the gauge is read: a correction read from it could be
+  // anything, and a run stored into it could be lost.
+  if (s.check_integrity) {
+    if (Status sound = store->check_integrity(); !sound) return sound.error();
+  }
+  if (Status w = store->check_writable(); !w) return w.error();
+  // A push interrupted earlier is recorded or abandoned before the table in force is read.
+  if (Result<ReconcileReport> r = reconcile_pushes(*store, nc_file); !r) return r.error();
+
+  // From here on a failure is also kept in the database as an event (a fault or a refusal),
+  // naming the run when one was stored, so `gaugeloop events` shows why a run is missing.
+  std::optional<std::int64_t> stored_run;
+  Result<JobReport> result = [&]() -> Result<JobReport> {
+    Result<GroundWith> ground = resolve_ground_with(*store, nc_file, s);
+    if (!ground) return ground.error();
+    const DegreeTable in_force = ground->correction_um();
+    const std::optional<std::int64_t> in_force_run = ground->run_id();
+
+    Result<std::optional<TablePointsInForce>> in_force_points = points_in_force(*store, nc_file, s);
+    if (!in_force_points) return in_force_points.error();
+
+    auto step = [&s](std::string code, std::string message, std::optional<std::int64_t> run_id = std::nullopt) {
+      if (s.on_step) s.on_step(JobStep{std::move(code), std::move(message), run_id});
+    };
+
+    // Acquire.
+    const std::string started = format_utc(std::time(nullptr));
+    const auto acquire_start = std::chrono::steady_clock::now();
+    Poller poller(gauge, s.poller);
+    Result<MeasuredRun> measured = poller.measure();
+    if (!measured) return measured.error();
+    const std::string finished = format_utc(std::time(nullptr));
+    step("acquired",
+         std::to_string(measured->revolutions.size()) + " revolutions from " + gauge.address() + " in " +
+             fixed(std::chrono::duration<double>(std::chrono::steady_clock::now() - acquire_start).count(), 1) +
+             " s (" + std::to_string(measured->discarded_revolutions) + " discarded, " +
+             std::to_string(measured->reconnects) + " reconnects, " + std::to_string(measured->polls) + " polls)");
+
+    // The record as far as the measurement goes: kept whatever happens next.
+    RunRecord record;
+    record.started_utc = started;
+    record.finished_utc = finished;
+    record.machine = s.machine;
+    record.part = s.part.name;
+    record.lobe = s.part.lobe;
+    record.gauge = gauge.address();
+    record.note = s.note;
+    record.measured = *measured;
+    record.correction_in_force_run = in_force_run;
+    record.geometry = s.part;
+    record.settings = settings_text(s);
+    record.inspection = s.inspect;
+    if (!ground->source.empty() && ground->version) {
+      record.ground_with_version = ground->version;
+      record.ground_with_source = ground->source;
+    }
+    auto lost = [&](Error e) {
+      const std::filesystem::path kept = keep_unstored_measurement(record, s);
+      e.message += kept.empty() ? "; the measurement could not be kept anywhere either"
+                                : "; the measurement is kept in " + kept.string();
+      return e;
+    };
+
+    // Analyse and correct.
+    Result<LobeAnalysis> analysis = analyse_lobe(*measured, *design_reading, s.part, s.analysis);
+    if (!analysis) return lost(in_step("analysis", analysis.error()));
+    record.analysis = *analysis;
+    step("analysed", "max lift error " + fixed(analysis->max_abs_error_um, 2) + " um, RMS " +
+                         fixed(analysis->rms_error_um, 2) + " um, phase " + fixed(analysis->phase_error_deg, 4) +
+                         " deg, runout " + fixed(analysis->base_circle_runout_um, 2) + " um, repeatability " +
+                         fixed(analysis->repeatability_um, 2) + " um");
+    std::string evidence;
+    std::string not_built_on;
+    if (!s.inspect) {
+      Result<std::string> why =
+          why_not_built_on(*store, *ground, *analysis, static_cast<int>(measured->revolutions.size()), s, evidence);
+      if (!why) return lost(why.error());
+      not_built_on = std::move(*why);
+    }
+    Result<CompensationDecision> decision = decide_correction(*analysis, *design_reading, in_force, s.compensation);
+    if (!decision) return lost(in_step("compensation", decision.error()));
+    // An inspection, or a part the table did not grind, leaves the correction in force as it is.
+    const bool correction_stands = s.inspect || !not_built_on.empty();
+    const DegreeTable& correction = correction_stands ? in_force : decision->correction_um;
+    CompensationVerdict verdict = decision->verdict;
+    std::string verdict_reasons = decision->reasons();
+    // The table is built before the run is stored, for a held correction too (a person may
+    // approve it). One the geometry or the axis guards refuse (a concave flank the wheel no
+    // longer fits, a limit broken) is a refusal: the run is stored, nothing is pushed.
+    std::optional<BuiltTable> built;
+    if (verdict != CompensationVerdict::kRefuse && !correction_stands) {
+      Result<BuiltTable> b = [&]() -> Result<BuiltTable> {
+        Result<PeriodicSpline> target = corrected_lift(s.design, *design_reading, correction, s.part);
+        if (!target) return in_step("corrected lift", target.error());
+        return build_table(*target, s, *in_force_points ? &**in_force_points : nullptr);
+      }();
+      if (b) {
+        built = std::move(*b);
+      } else if (b.error().code == ErrorCode::kRefused) {
+        verdict = CompensationVerdict::kRefuse;
+        verdict_reasons = verdict_reasons.empty() ? b.error().message : verdict_reasons + "; " + b.error().message;
+      } else {
+        return lost(b.error());
+      }
+    }
+    const double correction_max_um = std::abs(decision->largest_correction_um);
+    {
+      std::string what = s.inspect ? std::string("inspection: the correction in force stands")
+                                   : std::string(compensation_verdict_name(verdict)) + ": largest correction " +
+                                         fixed(decision->largest_correction_um, 2) + " um at " +
+                                         std::to_string(decision->largest_correction_deg) + " deg";
+      if (in_force_run) what += ", built on run " + std::to_string(*in_force_run) + "'s";
+      if (built) {
+        what += "; table " + std::to_string(built->table.block_count()) + " blocks (" + built->table.writer +
+                "), command position error " + fixed(built->table.error.max_abs_um, 3) + " um";
+      }
+      if (!verdict_reasons.empty()) what += "; " + verdict_reasons;
+      if (!evidence.empty()) what += "; " + evidence;
+      step("compensated", what);
+    }
+
+    // Store the run: one transaction, all or nothing.
+    record.correction_um = correction;
+    Result<std::int64_t> run_id = store->insert_run(record);
+    if (!run_id) return lost(run_id.error());
+    stored_run = *run_id;
+    step("stored", "run " + std::to_string(*run_id) + " stored in " + store->path().string(), *run_id);
+
+    JobReport report;
+    report.run_id = *run_id;
+    report.measured = std::move(*measured);
+    report.analysis = *analysis;
+    report.verdict = verdict;
+    report.correction_max_um = correction_max_um;
+    report.correction_in_force_run = in_force_run;
+    report.ground_with_version = ground->version;
+    report.ground_with_source = ground->source;
+    report.ground_with_evidence = evidence;
+    report.inspection = s.inspect;
+    report.db_path = store->path();
+    if (built) {
+      report.interpolation = std::string(interpolation_name(built->table.interpolation));
+      report.table_writer = built->table.writer;
+      report.table_blocks = built->table.block_count();
+      report.command_error_um = built->table.error.max_abs_um;
+    }
+    if (s.inspect) {
+      report.not_pushed_reason = "inspection: the correction in force and the NC program are untouched";
+      return report;
+    }
+
+    auto values = template_values(s);
+    values["run_id"] = std::to_string(*run_id);
+    values["created_utc"] = finished;
+    values["correction_max_um"] = fixed(correction_max_um, 1);
+    auto render = [&](int table_version) {
+      return render_table_program(s.nc_template, s.nc_template_name, values, built->table,
+                                  {*run_id, static_cast<std::int64_t>(table_version)});
+    };
+    PushFacts facts;
+    facts.run_id = *run_id;
+    facts.reason = "run " + std::to_string(*run_id);
+    if (built) {
+      facts.interpolation = report.interpolation;
+      facts.block_count = report.table_blocks;
+      facts.command_error_um = report.command_error_um;
+      facts.point_count = static_cast<int>(built->table.points.size());
+    }
+    facts.correction_max_um = correction_max_um;
+
+    // Not pushed: keep the table for approval when there is one, and say why in the events.
+    auto keep = [&](const std::string& reason, CompensationVerdict why, const std::string& code) -> Result<JobReport> {
+      report.not_pushed_reason = reason;
+      if (built) {
+        Result<std::string> program = render(0);
+        if (!program) return program.error();
+        PendingTable pending;
+        pending.run_id = *run_id;
+        pending.nc_file = nc_file.string();
+        pending.program_text = std::move(*program);
+        pending.verdict = why == CompensationVerdict::kHold ? PendingVerdict::kHold : PendingVerdict::kApply;
+        pending.reason = reason;
+        pending.interpolation = facts.interpolation;
+        pending.block_count = facts.block_count;
+        pending.command_error_um = facts.command_error_um;
+        pending.correction_max_um = facts.correction_max_um;
+        pending.point_count = facts.point_count;
+        Result<std::int64_t> id = store->add_pending(pending);
+        if (!id) return id.error();
+        report.pending_id = *id;
+      }
+      EventRecord event;
+      event.kind = EventKind::kRefusal;
+      event.code = code;
+      event.machine = s.machine;
+      event.part = s.part.name;
+      event.lobe = s.part.lobe;
+      event.run_id = *run_id;
+      event.message = "run " + std::to_string(*run_id) + " is stored, its table was not pushed: " + reason;
+      if (report.pending_id) {
+        event.message += " (waiting as pending table " + std::to_string(*report.pending_id) + ")";
+      }
+      if (Result<std::int64_t> e = store->record_event(event); !e) return e.error();
+      return report;
+    };
+
+    if (!not_built_on.empty()) {
+      // Nothing to approve: the correction would repeat a change already made.
+      report.verdict = CompensationVerdict::kRefuse;
+      built.reset();
+      return keep(not_built_on, CompensationVerdict::kRefuse, "part not ground with the table in force");
+    }
+    if (verdict != CompensationVerdict::kApply) {
+      return keep(verdict_reasons, verdict, "compensation " + std::string(compensation_verdict_name(verdict)));
+    }
+    if (s.require_approval) return keep("approval required", CompensationVerdict::kApply, "table not pushed");
+    Result<PushCompletion> version = push_program(*store, nc_file, facts, render);
+    if (!version) {
+      // A table edited by hand on the control is not overwritten: a person decides.
+      if (version.error().code == ErrorCode::kRefused)
+        return keep(version.error().message, CompensationVerdict::kApply, "table not pushed");
+      Error e = version.error();
+      e.message = "run " + std::to_string(*run_id) + " is stored; " + e.message;
+      return e;
+    }
+    report.table_version = version->table_version;
+    report.nc_file = nc_file;
+    return report;
+  }();
+
+  if (!result) {
+    EventRecord event;
+    event.kind = event_kind_for(result.error().code);
+    event.code = std::string(error_code_name(result.error().code));
+    event.machine = s.machine;
+    event.part = s.part.name;
+    event.lobe = s.part.lobe;
+    event.run_id = stored_run;
+    event.message = result.error().message;
+    (void)store->record_event(event);  // best effort: the error itself is what the user is told
+  }
+  return result;
+}
+
+std::string_view table_kind_name(TableKind kind) {
+  switch (kind) {
+    case TableKind::kAuto:
+      return "auto";
+    case TableKind::kLinear:
+      return "linear";
+    case TableKind::kSpline:
+      return "spline";
+    case TableKind::kAdaptiveLinear:
+      return "adaptive-linear";
+    case TableKind::kAdaptiveSpline:
+      return "adaptive-spline";
+  }
+  return "?";
+}
+
+}  // namespace gaugeloop

@@ -1,0 +1,231 @@
+// JSON and CSV of stored runs, pushes, pending tables and events; UTC time bounds.
+#include "report/run_json.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace gaugeloop {
+namespace {
+
+using nlohmann::json;
+
+template <typename T>
+json opt_json(const std::optional<T>& v) {
+  return v ? json(*v) : json(nullptr);
+}
+
+json text_or_null(const std::string& s) { return s.empty() ? json(nullptr) : json(s); }
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+std::size_t argmax_abs(const DegreeTable& t) {
+  std::size_t best = 0;
+  for (std::size_t d = 1; d < t.size(); ++d) {
+    if (std::abs(t[d]) > std::abs(t[best])) best = d;
+  }
+  return best;
+}
+
+// The raw reading of revolution `rev` at cam degree `beta`, when the frame is known: the
+// probe saw cam angle beta at machine angle C = c0 + probe_offset + s * beta (the inverse of
+// cam_angle_at_probe_deg). A C between whole degrees is interpolated linearly.
+double raw_at_cam_deg(const RevolutionSamples& rev, const Part& g, int beta) {
+  double c = g.c_offset_deg + g.probe_offset_deg + g.rotation_sense * static_cast<double>(beta);
+  c = std::fmod(c, 360.0);
+  if (c < 0) c += 360.0;
+  const double lo = std::floor(c);
+  const double w = c - lo;
+  const auto i = static_cast<std::size_t>(lo) % 360;
+  return rev.lift_mm[i] * (1.0 - w) + rev.lift_mm[(i + 1) % 360] * w;
+}
+
+}  // namespace
+
+json run_summary_json(const RunSummary& r) {
+  return {{"id", r.id},
+          {"started_utc", r.started_utc},
+          {"machine", r.machine},
+          {"part", r.part},
+          {"lobe", r.lobe},
+          {"status", r.status},
+          {"revolutions", r.revolutions},
+          {"degrees_captured", r.degrees_captured},
+          {"max_abs_error_um", r.max_abs_error_um},
+          {"rms_error_um", r.rms_error_um},
+          {"peak_to_valley_um", r.peak_to_valley_um},
+          {"repeatability_um", r.repeatability_um},
+          {"phase_error_deg", opt_json(r.phase_error_deg)},
+          {"base_circle_runout_um", opt_json(r.base_circle_runout_um)},
+          {"settings_hash", text_or_null(r.settings_hash)},
+          {"note", r.note},
+          {"nc_file", r.nc_file},
+          {"raw_pruned_utc", text_or_null(r.raw_pruned_utc)}};
+}
+
+json run_detail_json(const StoredRun& r) {
+  const LobeAnalysis& a = r.analysis;
+  // Runs stored before schema version 2 computed no inspection figures, harmonics included.
+  const bool has_inspection = r.summary.phase_error_deg.has_value();
+  json j = run_summary_json(r.summary);
+  j["finished_utc"] = r.finished_utc;
+  j["gauge"] = r.gauge;
+  j["polls"] = r.polls;
+  j["reconnects"] = r.reconnects;
+  j["discarded_revolutions"] = r.discarded_revolutions;
+  j["zero_offset_mm"] = a.zero_offset_mm;
+  j["max_abs_error_at_cam_deg"] = argmax_abs(a.error_um);
+  j["correction_max_um"] = std::abs(r.correction_um[argmax_abs(r.correction_um)]);
+  j["correction_in_force_run"] = opt_json(r.correction_in_force_run);
+  j["ground_with_version"] = opt_json(r.ground_with_version);
+  j["ground_with_source"] = text_or_null(r.ground_with_source);
+  j["inspection"] = r.inspection;
+  j["harmonic_amplitude_um"] =
+      has_inspection ? json(std::vector<double>(a.harmonic_amplitude_um.begin(), a.harmonic_amplitude_um.end()))
+                     : json(nullptr);
+  j["settings"] = text_or_null(r.settings);
+  if (r.geometry) {
+    j["frame"] = {{"rotation_sense", r.geometry->rotation_sense},
+                  {"c_offset_deg", r.geometry->c_offset_deg},
+                  {"probe_offset_deg", r.geometry->probe_offset_deg}};
+  } else {
+    j["frame"] = nullptr;
+  }
+  json pushes = json::array();
+  for (const NcPush& p : r.pushes) pushes.push_back(nc_push_json(p));
+  j["nc_pushes"] = pushes;
+  return j;
+}
+
+json nc_push_json(const NcPush& p) {
+  return {{"table_version", p.table_version},
+          {"pushed_utc", p.pushed_utc},
+          {"run_id", p.run_id},
+          {"reason", p.reason},
+          {"nc_file", p.nc_file},
+          {"interpolation", p.interpolation},
+          {"block_count", opt_json(p.block_count)},
+          {"command_error_um", opt_json(p.command_error_um)},
+          {"point_count", opt_json(p.point_count)},
+          {"correction_max_um", opt_json(p.correction_max_um)},
+          {"program_hash", text_or_null(p.program_hash)}};
+}
+
+json pending_table_json(const PendingTable& t) {
+  return {{"id", t.id},
+          {"run_id", t.run_id},
+          {"created_utc", t.created_utc},
+          {"nc_file", t.nc_file},
+          {"verdict", pending_verdict_name(t.verdict)},
+          {"status", pending_status_name(t.status)},
+          {"reason", t.reason},
+          {"interpolation", t.interpolation},
+          {"block_count", opt_json(t.block_count)},
+          {"command_error_um", opt_json(t.command_error_um)},
+          {"point_count", opt_json(t.point_count)},
+          {"correction_max_um", opt_json(t.correction_max_um)},
+          {"decided_by", t.decided_by},
+          {"decided_utc", t.decided_utc},
+          {"note", t.note},
+          {"push_id", opt_json(t.push_id)},
+          {"superseded_by", opt_json(t.superseded_by)}};
+}
+
+json event_json(const StoredEvent& e) {
+  return {{"id", e.id},
+          {"at_utc", e.event.at_utc},
+          {"kind", event_kind_name(e.event.kind)},
+          {"code", e.event.code},
+          {"machine", e.event.machine},
+          {"part", e.event.part},
+          {"lobe", e.event.lobe > 0 ? json(e.event.lobe) : json(nullptr)},
+          {"run_id", opt_json(e.event.run_id)},
+          {"message", e.event.message}};
+}
+
+std::string run_csv(const StoredRun& r) {
+  const RunSummary& s = r.summary;
+  std::ostringstream o;
+  o << "# gaugeloop run " << s.id << ": " << s.part << " lobe " << s.lobe << " on " << s.machine << ", started "
+    << s.started_utc << ", status " << s.status << "\n";
+  o << "# One row per cam degree (cam frame: 0 at the nose, counter-clockwise).\n";
+  o << "# design_lift_mm, mean_lift_mm, spread_um, error_um, correction_um: cam frame. mean is zeroed on the base "
+       "circle (gauge reading minus zero_offset_mm "
+    << fixed(r.analysis.zero_offset_mm, 6) << "); error = mean - design; spread = standard deviation across "
+    << "revolutions.\n";
+  const bool cam_frame_raw = r.geometry.has_value();
+  if (!s.raw_pruned_utc.empty()) {
+    o << "# Raw revolutions were pruned on " << s.raw_pruned_utc << ": no revN columns.\n";
+  } else if (cam_frame_raw) {
+    const Part& g = *r.geometry;
+    o << "# revN_lift_mm: raw gauge reading of revolution N (mm, not zeroed), mapped to the CAM frame with the "
+         "run's frame: C = "
+      << (g.rotation_sense > 0 ? "+" : "-") << "beta + " << fixed(g.c_offset_deg + g.probe_offset_deg, 3)
+      << " deg (c0 + probe offset); linearly interpolated between machine degrees when that is not whole.\n";
+  } else {
+    o << "# revN_at_machine_deg_lift_mm: raw gauge reading of revolution N (mm, not zeroed) in the MACHINE frame: "
+         "row k holds the reading at C = k deg, NOT at cam degree k. This run did not record its frame mapping.\n";
+  }
+  o << "cam_deg,design_lift_mm";
+  for (std::size_t i = 0; i < r.revolutions.size(); ++i) {
+    o << ",rev" << (i + 1) << (cam_frame_raw ? "_lift_mm" : "_at_machine_deg_lift_mm");
+  }
+  o << ",mean_lift_mm,spread_um,error_um,correction_um\n";
+  for (int d = 0; d < kDegreesPerRevolution; ++d) {
+    const auto k = static_cast<std::size_t>(d);
+    o << d << "," << fixed(r.analysis.design_lift_mm[k], 7);
+    for (const RevolutionSamples& rev : r.revolutions) {
+      o << "," << fixed(cam_frame_raw ? raw_at_cam_deg(rev, *r.geometry, d) : rev.lift_mm[k], 7);
+    }
+    o << "," << fixed(r.analysis.mean_lift_mm[k], 7) << "," << fixed(r.analysis.spread_um[k], 4) << ","
+      << fixed(r.analysis.error_um[k], 4) << "," << fixed(r.correction_um[k], 4) << "\n";
+  }
+  return o.str();
+}
+
+Result<std::string> time_bound(const std::string& text, bool until, std::string_view name) {
+  if (text.empty()) return std::string();
+  std::tm tm{};
+  int consumed = 0;
+  int precision = 0;  // 0 day, 1 minute, 2 second
+  std::string t = text;
+  if (t.size() > 10 && (t[10] == ' ' || t[10] == 't')) t[10] = 'T';
+  if (!t.empty() && (t.back() == 'Z' || t.back() == 'z')) t.pop_back();
+  if (std::sscanf(t.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d%n", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour, &tm.tm_min,
+                  &tm.tm_sec, &consumed) == 6 &&
+      static_cast<std::size_t>(consumed) == t.size()) {
+    precision = 2;
+  } else if (tm = std::tm{}, consumed = 0; std::sscanf(t.c_str(), "%4d-%2d-%2dT%2d:%2d%n", &tm.tm_year, &tm.tm_mon,
+                                                       &tm.tm_mday, &tm.tm_hour, &tm.tm_min, &consumed) == 5 &&
+                                           static_cast<std::size_t>(consumed) == t.size()) {
+    precision = 1;
+  } else if (tm = std::tm{}, consumed = 0;
+             std::sscanf(t.c_str(), "%4d-%2d-%2d%n", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &consumed) == 3 &&
+             static_cast<std::size_t>(consumed) == t.size()) {
+    precision = 0;
+  } else {
+    return make_error(ErrorCode::kInvalidInput, std::string(name) + " '" + text +
+                                                    "' is not a UTC date or time; write 2026-11-22 or "
+                                                    "2026-11-22T08:30 or 2026-11-22T08:30:00Z");
+  }
+  const std::tm given = tm;
+  tm.tm_year -= 1900;
+  tm.tm_mon -= 1;
+  const std::time_t at = timegm(&tm);
+  // timegm normalises 2026-02-30 to March: a date that changed was not a date.
+  std::tm back{};
+  gmtime_r(&at, &back);
+  if (back.tm_year + 1900 != given.tm_year || back.tm_mon + 1 != given.tm_mon || back.tm_mday != given.tm_mday ||
+      back.tm_hour != given.tm_hour || back.tm_min != given.tm_min || back.tm_sec != given.tm_sec) {
+    return make_error(ErrorCode::kInvalidInput, std::string(name) + " '" + text + "' is not a real date or time");
+  }
+  const std::time_t unit = precision == 0 ? 86400 : precision == 1 ? 60 : 1;
+  return format_utc(until ? at + unit : at);
+}
+
+}  // namespace gaugeloop

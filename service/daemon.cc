@@ -1,0 +1,190 @@
+// The service process: start, reload on SIGHUP, stop on SIGTERM.
+#include "service/daemon.h"
+
+#include <signal.h>
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <memory>
+#include <optional>
+
+#include "acquisition/plc_link.h"
+#include "job/nc_push.h"
+#include "service/http_api.h"
+#include "service/plc_trigger.h"
+#include "service/service.h"
+#include "storage/db_maintenance.h"
+
+namespace gaugeloop {
+
+namespace {
+
+// The [plc] settings that need a restart, as one text to compare; empty without [plc].
+std::string plc_text(const std::optional<PlcSettings>& p) {
+  if (!p) return "";
+  const ModbusSettings& l = p->link.link;
+  return ModbusPlcLink(p->link).address() + " unit " + std::to_string(l.unit_id) + " base " +
+         std::to_string(p->link.base_address) + " poll " + std::to_string(p->poll_interval.count()) + " timeout " +
+         std::to_string(l.response_timeout.count());
+}
+
+Error not_starting(const Error& e, const std::string& what) {
+  return Error{e.code, what + ", not starting: " + e.message};
+}
+
+// The database checked whole (a damaged one refused), upgraded if older, and the pushes a
+// power cut interrupted finished, before anything else reads the tables.
+Status prepare_database(const std::filesystem::path& db_path) {
+  Result<RunStore> store = open_checked_for_writing(db_path);
+  if (!store) return not_starting(Error{ErrorCode::kInvalidInput, store.error().message}, "database refused");
+  if (const std::optional<SchemaUpgrade> upgrade = store->schema_upgrade()) {
+    spdlog::info("database {} upgraded from schema version {}; the file as it was is kept in {}", db_path.string(),
+                 upgrade->from_version, upgrade->backup.string());
+  }
+  Result<ReconcileReport> reconciled = reconcile_all_pushes(*store);
+  if (!reconciled) return not_starting(reconciled.error(), "interrupted pushes could not be reconciled");
+  for (const std::string& line : reconciled->messages) spdlog::warn("reconciled: {}", line);
+  return {};
+}
+
+Result<std::unique_ptr<HttpApi>> start_http(Service& service, PlcTrigger* plc, const HttpSettings& settings,
+                                            const std::filesystem::path& db_path) {
+  HttpWrites writes;
+  writes.trigger_measure = [&service](const std::string& part, int lobe, const std::string& note) {
+    return service.measure(part, lobe, note);
+  };
+  writes.approve = [&service](std::int64_t id, const std::string& by, const std::string& note) {
+    return service.approve(id, by, note);
+  };
+  writes.rollback = [&service](const std::string& program, int version, const std::string& by) {
+    return service.rollback(program, version, by);
+  };
+  HttpStatus status;
+  status.health = [&service] { return service.health(); };
+  status.extra_metrics = [&service, plc] { return service.metrics() + (plc ? plc->metrics() : ""); };
+  Result<std::unique_ptr<HttpApi>> started = HttpApi::start(settings, db_path, writes, status);
+  if (!started) return not_starting(started.error(), "HTTP API not started");
+  // One line on stdout for whoever started us (tests, scripts) to find the port.
+  std::printf("listening on http://%s:%d\n", settings.host.c_str(), (*started)->port());
+  std::fflush(stdout);
+  spdlog::info("HTTP API on http://{}:{} ({})", settings.host, (*started)->port(),
+               settings.token.empty() ? "read-only: no token configured" : "writes need the token");
+  return started;
+}
+
+// What the service started with and keeps until it restarts.
+struct StartedWith {
+  std::optional<HttpSettings> http;
+  std::optional<PlcSettings> plc;
+  std::filesystem::path db_path;
+};
+
+// SIGHUP: a configuration that reads and checks whole replaces the one in force; what needs a
+// restart ([plc], [http], the database path) is said, and the database path kept.
+void reload(Service& service, const std::filesystem::path& config_path, const StartedWith& started) {
+  Result<ServiceConfig> fresh = read_service_config(config_path);
+  if (!fresh) {
+    spdlog::error("reload refused, keeping the configuration in use: {}", fresh.error().message);
+    service.record_event(EventKind::kFault, "config reload refused", "", 0, std::nullopt,
+                         "reload refused, keeping the configuration in use: " + fresh.error().message);
+    service.count_reload(false);  // after the event: once /api/health counts it, it is stored
+    return;
+  }
+  if (plc_text(fresh->plc) != plc_text(started.plc)) {
+    spdlog::warn("reload: [plc] changes take effect when the service restarts");
+  }
+  const std::optional<HttpSettings>& was = started.http;
+  if (fresh->http.has_value() != was.has_value() ||
+      (fresh->http && (fresh->http->host != was->host || fresh->http->port != was->port ||
+                       fresh->http->token != was->token))) {
+    spdlog::warn("reload: [http] changes take effect when the service restarts");
+  }
+  if (fresh->job.db_path != started.db_path) {
+    spdlog::warn("reload: [database] path changes take effect when the service restarts");
+    fresh->job.db_path = started.db_path;
+  }
+  const std::string line = "reloaded: " + describe_service_config(*fresh);
+  spdlog::info("{}", line);
+  service.replace_config(std::move(*fresh));
+  service.record_event(EventKind::kInfo, "config reload", "", 0, std::nullopt, line);
+  service.count_reload(true);  // last: once /api/health counts it, it is in force and stored
+}
+
+}  // namespace
+
+std::string describe_service_config(const ServiceConfig& c) {
+  std::string parts;
+  for (const ServicePart& p : c.parts) {
+    parts += (parts.empty() ? "" : ", ") + p.file.part.name + " lobe " + std::to_string(p.file.part.lobe);
+  }
+  std::string plc = "none";
+  if (c.plc) {
+    std::string numbers;
+    for (const ServicePart& p : c.parts) {
+      if (!p.plc_part_number) continue;
+      numbers += (numbers.empty() ? "" : ", ") + std::to_string(*p.plc_part_number) + " lobe " +
+                 std::to_string(p.file.part.lobe) + " = " + p.file.part.name;
+    }
+    plc = ModbusPlcLink(c.plc->link).address() + " base " + std::to_string(c.plc->link.base_address) +
+          " (part numbers " + numbers + ")";
+  }
+  return c.source.string() + ": machine " + c.machine + ", parts " + parts + ", database " + c.job.db_path.string() +
+         ", NC directory " + c.job.nc_dir.string() + ", PLC " + plc;
+}
+
+Status run_service(const std::filesystem::path& config_path) {
+  // Block the signals before any thread starts, so only the loop below receives them.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGHUP);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  Result<ServiceConfig> config = read_service_config(config_path);
+  if (!config) return not_starting(config.error(), "configuration refused");
+  const StartedWith started{config->http, config->plc, config->job.db_path};
+  const std::optional<HttpSettings>& http_settings = started.http;
+  const std::optional<PlcSettings>& plc_settings = started.plc;
+  const std::filesystem::path& db_path = started.db_path;
+  if (Status s = prepare_database(db_path); !s) return s;
+  Service service(std::move(*config));
+  spdlog::info("starting: {}", describe_service_config(*service.config()));
+
+  // Before the HTTP API, which reports its status; started after it.
+  std::unique_ptr<PlcTrigger> plc;
+  if (plc_settings) {
+    plc = std::make_unique<PlcTrigger>(service, *plc_settings);
+    service.set_plc_status([p = plc.get()] { return p->status(); });
+  }
+  std::unique_ptr<HttpApi> http;
+  if (http_settings) {
+    Result<std::unique_ptr<HttpApi>> api = start_http(service, plc.get(), *http_settings, db_path);
+    if (!api) return api.error();
+    http = std::move(*api);
+  }
+  if (plc) {
+    spdlog::info("PLC trigger: handshake block at holding register {} of {}, polled every {} ms",
+                 plc_settings->link.base_address, plc->address(), plc_settings->poll_interval.count());
+    plc->start();
+  }
+  if (!http && !plc) spdlog::warn("no [http] and no [plc] table: nothing can trigger a run but `gaugeloop measure`");
+
+  for (;;) {
+    int sig = 0;
+    if (sigwait(&signals, &sig) != 0) continue;
+    if (sig == SIGHUP) {
+      reload(service, config_path, started);
+      continue;
+    }
+    spdlog::info("{} received: letting the run in progress finish", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    service.set_stopping();
+    if (plc) plc->stop();  // after the run in progress, done or fault is written to the PLC
+    service.stop();
+    if (http) http->stop();
+    spdlog::info("stopped");
+    return {};
+  }
+}
+
+}  // namespace gaugeloop

@@ -1,0 +1,879 @@
+// The HTTP API on cpp-httplib: routes, query and body parsing, the token, errors as JSON, and
+// the Prometheus metrics.
+#include "service/http_api.h"
+
+#include <httplib.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <charconv>
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <exception>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <regex>
+#include <set>
+#include <thread>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "report/run_json.h"
+#include "core/utc_time.h"
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// Every list the API reads in full (metrics, program names) asks for this many rows.
+constexpr int kAll = INT_MAX;
+constexpr int kMaxLimit = 100000;
+constexpr int kMaxLobe = 1000;  // as `runs list --lobe`
+constexpr std::size_t kMaxBodyBytes = 64 * 1024;
+const char* const kDocs = "see docs/http_api.md";
+
+// ---- Answers ----
+
+// Bodies are indented for people reading them with curl. Text from the database or the request
+// that is not UTF-8 is replaced, never a reason to fail.
+void send_json(httplib::Response& res, int status, const json& body) {
+  res.status = status;
+  res.set_content(body.dump(2, ' ', false, json::error_handler_t::replace) + "\n", "application/json");
+}
+
+void send_error(httplib::Response& res, int status, const std::string& message) {
+  send_json(res, status, json{{"error", message}});
+}
+
+int http_status_for(ErrorCode code) {
+  switch (code) {
+    case ErrorCode::kInvalidInput:
+      return 400;
+    case ErrorCode::kNotFound:
+      return 404;
+    case ErrorCode::kRefused:
+      return 409;
+    case ErrorCode::kStorage:
+    case ErrorCode::kIo:
+      return 503;
+    case ErrorCode::kGaugeUnreachable:
+    case ErrorCode::kGaugeTimeout:
+    case ErrorCode::kGaugeProtocol:
+    case ErrorCode::kIncompleteRun:
+      return 502;
+    case ErrorCode::kInternal:
+      return 500;
+  }
+  return 500;
+}
+
+void send_error(httplib::Response& res, const Error& e) { send_error(res, http_status_for(e.code), e.message); }
+
+Error bad_request(std::string message) { return make_error(ErrorCode::kInvalidInput, std::move(message)); }
+
+// ---- Query parameters ----
+
+// The query of a GET request, checked against the parameters its endpoint knows: a misspelt
+// filter must not silently widen the answer.
+class Query {
+ public:
+  static Result<Query> of(const httplib::Request& req, std::vector<std::string> known) {
+    std::set<std::string> seen;
+    for (const auto& [name, value] : req.params) {
+      if (std::find(known.begin(), known.end(), name) == known.end()) {
+        std::string list;
+        for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+        return bad_request("unknown query parameter `" + name + "` for " + req.path + "; it takes " +
+                           (list.empty() ? std::string("none") : list) + " (" + kDocs + ")");
+      }
+      if (!seen.insert(name).second) return bad_request("query parameter `" + name + "` is given twice; give it once");
+    }
+    return Query(req);
+  }
+
+  std::string text(const std::string& name) const { return req_->get_param_value(name); }
+
+  // An integer in [min, max], or `absent` when the parameter is not given.
+  Result<int> integer(const std::string& name, int absent, int min, int max) const {
+    if (!req_->has_param(name)) return absent;
+    const std::string v = text(name);
+    int out = 0;
+    const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), out);
+    if (ec != std::errc() || end != v.data() + v.size() || v.empty() || out < min || out > max) {
+      return bad_request("query parameter `" + name + "` must be a whole number from " + std::to_string(min) + " to " +
+                         std::to_string(max) + ", not '" + v + "'");
+    }
+    return out;
+  }
+
+  Result<bool> flag(const std::string& name) const {
+    const std::string v = text(name);
+    if (v.empty() || v == "false" || v == "0") return false;
+    if (v == "true" || v == "1") return true;
+    return bad_request("query parameter `" + name + "` must be true or false, not '" + v + "'");
+  }
+
+  // A UTC time bound as `--since`/`--until` take it; see time_bound.
+  Result<std::string> time(const std::string& name, bool until) const {
+    return time_bound(text(name), until, "query parameter `" + name + "`:");
+  }
+
+  // One of `allowed`, or empty when not given.
+  Result<std::string> choice(const std::string& name, const std::vector<std::string>& allowed) const {
+    const std::string v = text(name);
+    if (v.empty() || std::find(allowed.begin(), allowed.end(), v) != allowed.end()) return v;
+    std::string list;
+    for (const std::string& a : allowed) list += (list.empty() ? "" : " or ") + a;
+    return bad_request("query parameter `" + name + "` must be " + list + ", not '" + v + "'");
+  }
+
+ private:
+  explicit Query(const httplib::Request& req) : req_(&req) {}
+  const httplib::Request* req_;
+};
+
+// The filters `runs list` and `runs trend` share.
+Result<RunQuery> run_query(const Query& q, int default_limit) {
+  RunQuery out;
+  out.part = q.text("part");
+  out.machine = q.text("machine");
+  Result<int> lobe = q.integer("lobe", 0, 1, kMaxLobe);
+  if (!lobe) return lobe.error();
+  out.lobe = *lobe;
+  Result<int> limit = q.integer("limit", default_limit, 1, kMaxLimit);
+  if (!limit) return limit.error();
+  out.limit = *limit;
+  Result<std::string> since = q.time("since", false);
+  if (!since) return since.error();
+  out.since_utc = *since;
+  Result<std::string> until = q.time("until", true);
+  if (!until) return until.error();
+  out.until_utc = *until;
+  return out;
+}
+
+// A positive id from a path segment, e.g. the 12 of /api/runs/12.
+Result<std::int64_t> path_id(const std::string& text, const std::string& what) {
+  std::int64_t id = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), id);
+  if (ec != std::errc() || end != text.data() + text.size() || text.empty() || id < 1) {
+    return bad_request(what + " '" + text + "' is not a number; ids are whole numbers from 1");
+  }
+  return id;
+}
+
+// ---- Request bodies ----
+
+// The body of a write: a JSON object with only the fields its endpoint knows.
+Result<json> body_object(const httplib::Request& req, const std::vector<std::string>& known, const char* example) {
+  const std::string hint = std::string("; send a JSON object such as ") + example;
+  if (req.body.empty()) return bad_request("the request body is empty" + hint);
+  json body;
+  try {
+    body = json::parse(req.body);
+  } catch (const json::parse_error& e) {
+    // what(): "[json.exception.parse_error.101] parse error at line 1, column 2: ..."
+    std::string why = e.what();
+    if (const std::size_t at = why.find("] "); at != std::string::npos) why = why.substr(at + 2);
+    return bad_request("the request body is not JSON: " + why + hint);
+  }
+  if (!body.is_object())
+    return bad_request(std::string("the request body must be a JSON object, not ") + body.type_name() + hint);
+  for (const auto& [key, value] : body.items()) {
+    if (std::find(known.begin(), known.end(), key) == known.end()) {
+      std::string list;
+      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+      return bad_request("unknown field `" + key + "` in the request body; it takes " + list);
+    }
+  }
+  return body;
+}
+
+// A string field: kInvalidInput if of another type, or if required and missing or empty.
+Result<std::string> string_field(const json& body, const std::string& name, bool required) {
+  const auto it = body.find(name);
+  if (it == body.end() || it->is_null()) {
+    if (required) return bad_request("the request body needs `" + name + "` (a string)");
+    return std::string();
+  }
+  if (!it->is_string()) return bad_request("`" + name + "` must be a string, not " + std::string(it->type_name()));
+  std::string v = it->get<std::string>();
+  if (required && v.empty()) return bad_request("`" + name + "` must not be empty");
+  return v;
+}
+
+// A required integer field in [min, max].
+Result<int> int_field(const json& body, const std::string& name, int min, int max) {
+  const auto it = body.find(name);
+  if (it == body.end() || it->is_null()) return bad_request("the request body needs `" + name + "` (a whole number)");
+  const bool whole =
+      it->is_number_integer() || (it->is_number_float() && std::floor(it->get<double>()) == it->get<double>());
+  if (!whole || it->get<double>() < min || it->get<double>() > max) {
+    return bad_request("`" + name + "` must be a whole number from " + std::to_string(min) + " to " +
+                       std::to_string(max) + ", not " + it->dump(-1, ' ', false, json::error_handler_t::replace));
+  }
+  return static_cast<int>(it->get<double>());
+}
+
+// Equal in time that depends only on the length of `expected`, so the answer's timing does not
+// tell how much of a guessed token was right.
+bool same_secret(std::string_view given, std::string_view expected) {
+  unsigned char diff = given.size() == expected.size() ? 0 : 1;
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const char g = i < given.size() ? given[i] : '\0';
+    diff = static_cast<unsigned char>(diff | (static_cast<unsigned char>(g) ^ static_cast<unsigned char>(expected[i])));
+  }
+  return diff == 0;
+}
+
+// ---- Prometheus text ----
+
+std::string label_value(const std::string& v) {
+  std::string out;
+  for (const char c : v) {
+    if (c == '\\' || c == '"') {
+      out += '\\';
+      out += c;
+    } else if (c == '\n') {
+      out += "\\n";
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+std::string number(double v) {
+  json j = v;
+  return j.dump();  // shortest text that reads back exactly
+}
+
+// ---- Run database connections ----
+
+// Idle RunStores on the database, handed to one request at a time: a connection is used by one
+// thread at a time, and requests reuse connections instead of opening (and checking the schema)
+// each time.
+class StorePool {
+ public:
+  explicit StorePool(fs::path db) : db_(std::move(db)) {}
+
+  // A store for one request, given back when the lease ends (unless discard()ed).
+  class Lease {
+   public:
+    Lease(StorePool* pool, RunStore store) : pool_(pool), store_(std::move(store)) {}
+    Lease(Lease&& other) noexcept : pool_(std::exchange(other.pool_, nullptr)), store_(std::move(other.store_)) {}
+    Lease& operator=(Lease&&) = delete;
+    ~Lease() {
+      if (pool_ != nullptr) pool_->give_back(std::move(store_));
+    }
+    RunStore& operator*() { return store_; }
+    RunStore* operator->() { return &store_; }
+    // The connection failed: close it rather than hand it to the next request.
+    void discard() { pool_ = nullptr; }
+
+   private:
+    StorePool* pool_;
+    RunStore store_;
+  };
+
+  // kStorage when there is no database yet or it cannot be opened (503).
+  Result<Lease> acquire() {
+    // RunStore::open would create an empty database: the API only reads what the service wrote.
+    std::error_code ec;
+    if (!fs::exists(db_, ec)) {
+      return make_error(ErrorCode::kStorage, "no run database at " + db_.string() +
+                                                 " yet; it is created by the first measurement (POST /api/measure, "
+                                                 "the PLC, or `gaugeloop measure`)");
+    }
+    {
+      std::lock_guard lock(mutex_);
+      if (!idle_.empty()) {
+        RunStore store = std::move(idle_.back());
+        idle_.pop_back();
+        return Lease(this, std::move(store));
+      }
+    }
+    Result<RunStore> store = RunStore::open(db_);
+    if (!store) return make_error(ErrorCode::kStorage, store.error().message);
+    return Lease(this, std::move(*store));
+  }
+
+  const fs::path& path() const { return db_; }
+
+ private:
+  void give_back(RunStore store) {
+    std::lock_guard lock(mutex_);
+    idle_.push_back(std::move(store));
+  }
+
+  const fs::path db_;
+  std::mutex mutex_;
+  std::vector<RunStore> idle_;
+};
+
+// Program names a client gives, against the NC files the history knows: "CAM_INTAKE_L1",
+// "CAM_INTAKE_L1.SPF", or the file's path as recorded.
+bool names_file(const std::string& program, const std::string& nc_file) {
+  if (program == nc_file) return true;
+  std::string name = program;
+  if (name.size() > 4 && (name.ends_with(".SPF") || name.ends_with(".spf"))) name.resize(name.size() - 4);
+  return fs::path(nc_file).stem().string() == name;
+}
+
+std::string program_list(const std::set<std::string>& files) {
+  std::string list;
+  for (const std::string& f : files) list += (list.empty() ? "" : ", ") + fs::path(f).stem().string();
+  return list;
+}
+
+// The NC files tables were pushed to (and, with `pending`, those with pending tables).
+Result<std::set<std::string>> known_files(const RunStore& store, bool pending) {
+  std::set<std::string> files;
+  PushQuery pq;
+  pq.limit = kAll;
+  Result<std::vector<NcPush>> pushes = store.list_pushes(pq);
+  if (!pushes) return pushes.error();
+  for (const NcPush& p : *pushes) files.insert(p.nc_file);
+  if (pending) {
+    PendingQuery q;
+    q.limit = kAll;
+    Result<std::vector<PendingTable>> tables = store.list_pending(q);
+    if (!tables) return tables.error();
+    for (const PendingTable& t : *tables) files.insert(t.nc_file);
+  }
+  return files;
+}
+
+// The one NC file `program` names; empty `program`: the only file there is.
+Result<std::string> resolve_program(const RunStore& store, const std::string& program, bool pending) {
+  Result<std::set<std::string>> files = known_files(store, pending);
+  if (!files) return files.error();
+  if (program.empty()) {
+    if (files->size() == 1) return *files->begin();
+    if (files->empty()) {
+      return make_error(ErrorCode::kNotFound,
+                        "no table was pushed yet; the first measurement writes one (POST /api/measure)");
+    }
+    return bad_request("tables were pushed to several programs (" + program_list(*files) +
+                       "): name one with ?program=NAME");
+  }
+  std::set<std::string> named;
+  for (const std::string& f : *files) {
+    if (names_file(program, f)) named.insert(f);
+  }
+  if (named.size() == 1) return *named.begin();
+  if (named.empty()) {
+    return make_error(ErrorCode::kNotFound, "no table of program '" + program + "' is recorded; " +
+                                                (files->empty() ? std::string("no table was pushed yet")
+                                                                : "the programs are " + program_list(*files)));
+  }
+  std::string paths;
+  for (const std::string& f : named) paths += (paths.empty() ? "" : ", ") + f;
+  return bad_request("program '" + program + "' names several NC files (" + paths +
+                     "); give the path as ?program=PATH");
+}
+
+}  // namespace
+
+// ---- The server ----
+
+struct HttpApi::Impl {
+  Impl(HttpSettings s, fs::path db, HttpWrites w, HttpStatus st)
+      : settings(std::move(s)), stores(std::move(db)), writes(std::move(w)), status(std::move(st)) {}
+
+  using Handler = std::function<void(const httplib::Request&, httplib::Response&)>;
+
+  // Registers a route behind the one boundary that turns any exception into a 500.
+  void route(const std::string& method, const std::string& pattern, Handler handler) {
+    routes.emplace_back(method, std::regex(pattern));
+    httplib::Server::Handler guarded = [this, handler = std::move(handler)](const httplib::Request& req,
+                                                                            httplib::Response& res) {
+      try {
+        handler(req, res);
+      } catch (...) {
+        internal_error(req, res, std::current_exception());
+      }
+    };
+    if (method == "GET") server.Get(pattern, std::move(guarded));
+    if (method == "POST") server.Post(pattern, std::move(guarded));
+  }
+
+  static void internal_error(const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) {
+    std::string what = "unknown exception";
+    try {
+      if (ep) std::rethrow_exception(ep);
+    } catch (const std::exception& e) {
+      what = e.what();
+    } catch (...) {
+    }
+    spdlog::error("http: {} {} failed: {}", req.method, req.path, what);
+    send_error(res, 500,
+               "internal error answering " + req.method + " " + req.path + ": " + what +
+                   "; this is a bug in gaugeloop, please report it with the service log");
+  }
+
+  // Every answer of 400 or more without a body (no route, a request httplib refused) gets one.
+  void fill_error(const httplib::Request& req, httplib::Response& res) {
+    if (!res.body.empty()) return;
+    if (res.status == 404) {
+      std::string allowed;
+      for (const auto& [method, pattern] : routes) {
+        if (method != req.method && std::regex_match(req.path, pattern)) allowed = method;
+      }
+      if (!allowed.empty()) {
+        res.set_header("Allow", allowed);
+        send_error(res, 405, req.method + " is not allowed on " + req.path + "; use " + allowed + " (" + kDocs + ")");
+        return;
+      }
+      send_error(res, 404,
+                 "no such endpoint: " + req.method + " " + req.path + "; the API is under /api/ and " + "/metrics (" +
+                     kDocs + ")");
+      return;
+    }
+    if (res.status == 413) {
+      send_error(res, 413, "the request body is larger than " + std::to_string(kMaxBodyBytes / 1024) + " KiB");
+      return;
+    }
+    send_error(res, res.status, "the request was malformed (HTTP status " + std::to_string(res.status) + ")");
+  }
+
+  // ---- Reads ----
+
+  void health(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {});
+    if (!q) return send_error(res, q.error());
+    json out = json::object();
+    if (status.health) {
+      json service = status.health();
+      if (service.is_object()) out.update(service);
+    }
+    out["version"] = GAUGELOOP_VERSION;
+    out["time_utc"] = format_utc(std::time(nullptr));
+    json db{{"path", stores.path().string()}};
+    Result<StorePool::Lease> store = stores.acquire();
+    db["available"] = store.ok();
+    if (!store) db["error"] = store.error().message;
+    out["database"] = db;
+    out["writes"] = settings.token.empty() ? "disabled (no token configured)" : "enabled with the token";
+    send_json(res, 200, out);
+  }
+
+  void list_runs(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {"part", "lobe", "machine", "since", "until", "status", "limit"});
+    if (!q) return send_error(res, q.error());
+    Result<RunQuery> rq = run_query(*q, 50);
+    if (!rq) return send_error(res, rq.error());
+    Result<std::string> st = q->choice("status", {"measured", "pushed"});
+    if (!st) return send_error(res, st.error());
+    rq->status = *st;
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      Result<std::vector<RunSummary>> runs = store.list_runs(*rq);
+      if (!runs) return runs.error();
+      json out = json::array();
+      for (const RunSummary& r : *runs) out.push_back(run_summary_json(r));
+      return out;
+    });
+  }
+
+  Result<StoredRun> load_run(RunStore& store, const std::string& id_text) {
+    Result<std::int64_t> id = path_id(id_text, "run id");
+    if (!id) return id.error();
+    Result<StoredRun> run = store.load_run(*id);
+    if (!run && run.error().code == ErrorCode::kNotFound) {
+      return make_error(ErrorCode::kNotFound, run.error().message + "; GET /api/runs lists the ids");
+    }
+    return run;
+  }
+
+  void show_run(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {});
+    if (!q) return send_error(res, q.error());
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      Result<StoredRun> run = load_run(store, req.matches[1]);
+      if (!run) return run.error();
+      return run_detail_json(*run);
+    });
+  }
+
+  void export_run(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {});
+    if (!q) return send_error(res, q.error());
+    Result<StorePool::Lease> store = stores.acquire();
+    if (!store) return send_error(res, store.error());
+    Result<StoredRun> run = load_run(**store, req.matches[1]);
+    if (!run) return fail_with_store(res, *store, run.error());
+    res.status = 200;
+    res.set_header("Content-Disposition", "inline; filename=\"run" + std::to_string(run->summary.id) + ".csv\"");
+    res.set_content(run_csv(*run), "text/csv; charset=utf-8");
+  }
+
+  void trend(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {"part", "lobe", "machine", "since", "until", "limit"});
+    if (!q) return send_error(res, q.error());
+    Result<RunQuery> rq = run_query(*q, 10000);
+    if (!rq) return send_error(res, rq.error());
+    if (rq->part.empty() || rq->lobe == 0) {
+      return send_error(res, 400, "a trend is of one lobe: give both `part` and `lobe`, e.g. ?part=intake_flat&lobe=1");
+    }
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      Result<std::vector<RunSummary>> runs = store.trend(*rq);
+      if (!runs) return runs.error();
+      json out = json::array();
+      for (const RunSummary& r : *runs) out.push_back(run_summary_json(r));
+      return out;
+    });
+  }
+
+  void events(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {"kind", "machine", "part", "since", "until", "limit"});
+    if (!q) return send_error(res, q.error());
+    EventQuery eq;
+    Result<std::string> kind = q->choice("kind", {"fault", "refusal", "info"});
+    if (!kind) return send_error(res, kind.error());
+    if (*kind == "fault") eq.kind = EventKind::kFault;
+    if (*kind == "refusal") eq.kind = EventKind::kRefusal;
+    if (*kind == "info") eq.kind = EventKind::kInfo;
+    eq.machine = q->text("machine");
+    eq.part = q->text("part");
+    Result<int> limit = q->integer("limit", 50, 1, kMaxLimit);
+    if (!limit) return send_error(res, limit.error());
+    eq.limit = *limit;
+    Result<std::string> since = q->time("since", false);
+    if (!since) return send_error(res, since.error());
+    eq.since_utc = *since;
+    Result<std::string> until = q->time("until", true);
+    if (!until) return send_error(res, until.error());
+    eq.until_utc = *until;
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      Result<std::vector<StoredEvent>> events = store.list_events(eq);
+      if (!events) return events.error();
+      json out = json::array();
+      for (const StoredEvent& e : *events) out.push_back(event_json(e));
+      return out;
+    });
+  }
+
+  void nc_table(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {"program"});
+    if (!q) return send_error(res, q.error());
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      Result<std::string> file = resolve_program(store, q->text("program"), false);
+      if (!file) return file.error();
+      Result<std::optional<NcPush>> last = store.last_push(*file);
+      if (!last) return last.error();
+      if (!*last) return make_error(ErrorCode::kNotFound, "no table was pushed to " + *file);
+      json out = nc_push_json(**last);
+      out["program"] = fs::path(*file).stem().string();
+      out["program_text"] = (*last)->program_text ? json(*(*last)->program_text) : json(nullptr);
+      return out;
+    });
+  }
+
+  void nc_history(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {"program", "limit"});
+    if (!q) return send_error(res, q.error());
+    Result<int> limit = q->integer("limit", 50, 1, kMaxLimit);
+    if (!limit) return send_error(res, limit.error());
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      PushQuery pq;
+      pq.limit = *limit;
+      if (const std::string program = q->text("program"); !program.empty()) {
+        Result<std::string> file = resolve_program(store, program, false);
+        if (!file) return file.error();
+        pq.nc_file = *file;
+      }
+      Result<std::vector<NcPush>> pushes = store.list_pushes(pq);
+      if (!pushes) return pushes.error();
+      json out = json::array();
+      for (const NcPush& p : *pushes) out.push_back(nc_push_json(p));
+      return out;
+    });
+  }
+
+  void nc_pending(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {"program", "all", "limit"});
+    if (!q) return send_error(res, q.error());
+    Result<int> limit = q->integer("limit", 50, 1, kMaxLimit);
+    if (!limit) return send_error(res, limit.error());
+    Result<bool> all = q->flag("all");
+    if (!all) return send_error(res, all.error());
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      PendingQuery pq;
+      pq.limit = *limit;
+      if (!*all) pq.status = PendingStatus::kPending;
+      if (const std::string program = q->text("program"); !program.empty()) {
+        Result<std::string> file = resolve_program(store, program, true);
+        if (!file) return file.error();
+        pq.nc_file = *file;
+      }
+      Result<std::vector<PendingTable>> tables = store.list_pending(pq);
+      if (!tables) return tables.error();
+      json out = json::array();
+      for (const PendingTable& t : *tables) out.push_back(pending_table_json(t));
+      return out;
+    });
+  }
+
+  void metrics(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {});
+    if (!q) return send_error(res, q.error());
+    std::string text;
+    Result<StorePool::Lease> store = stores.acquire();
+    Status read = store ? database_metrics(**store, text) : Status(store.error());
+    if (!read) {
+      if (store) store->discard();
+      spdlog::warn("http: /metrics without the run database: {}", read.error().message);
+    }
+    text +=
+        "# HELP gaugeloop_database_up Whether the run database could be read for this scrape.\n"
+        "# TYPE gaugeloop_database_up gauge\n"
+        "gaugeloop_database_up " +
+        std::string(read ? "1" : "0") + "\n";
+    if (status.extra_metrics) {
+      std::string extra = status.extra_metrics();
+      if (!extra.empty() && extra.back() != '\n') extra += '\n';
+      text += extra;
+    }
+    res.status = 200;
+    res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
+  }
+
+  // The series read from the database, appended to `out` only if every query succeeded.
+  static Status database_metrics(const RunStore& store, std::string& out) {
+    RunQuery rq;
+    rq.limit = kAll;
+    Result<std::vector<RunSummary>> runs = store.list_runs(rq);  // newest first
+    if (!runs) return runs.error();
+    EventQuery eq;
+    eq.limit = kAll;
+    Result<std::vector<StoredEvent>> events = store.list_events(eq);
+    if (!events) return events.error();
+    PendingQuery pq;
+    pq.limit = kAll;
+    pq.status = PendingStatus::kPending;
+    Result<std::vector<PendingTable>> pending = store.list_pending(pq);
+    if (!pending) return pending.error();
+
+    std::map<std::string, std::int64_t> by_status{{"measured", 0}, {"pushed", 0}};
+    // The newest run of each machine, part and lobe (the list is newest first).
+    std::map<std::tuple<std::string, std::string, int>, const RunSummary*> last;
+    for (const RunSummary& r : *runs) {
+      ++by_status[r.status];
+      last.emplace(std::make_tuple(r.machine, r.part, r.lobe), &r);
+    }
+    std::map<std::string, std::int64_t> by_kind{{"fault", 0}, {"refusal", 0}, {"info", 0}};
+    for (const StoredEvent& e : *events) ++by_kind[std::string(event_kind_name(e.event.kind))];
+
+    std::string s;
+    s += "# HELP gaugeloop_runs_stored Runs in the database, by status.\n# TYPE gaugeloop_runs_stored gauge\n";
+    for (const auto& [st, n] : by_status) {
+      s += "gaugeloop_runs_stored{status=\"" + label_value(st) + "\"} " + std::to_string(n) + "\n";
+    }
+    s += "# HELP gaugeloop_events_stored Faults, refusals and service steps (info) in the database, by kind.\n"
+         "# TYPE gaugeloop_events_stored gauge\n";
+    for (const auto& [kind, n] : by_kind) {
+      s += "gaugeloop_events_stored{kind=\"" + label_value(kind) + "\"} " + std::to_string(n) + "\n";
+    }
+    s += "# HELP gaugeloop_pending_tables NC tables waiting for approval.\n# TYPE gaugeloop_pending_tables gauge\n";
+    s += "gaugeloop_pending_tables " + std::to_string(pending->size()) + "\n";
+    const auto labels = [](const RunSummary& r) {
+      return "{machine=\"" + label_value(r.machine) + "\",part=\"" + label_value(r.part) + "\",lobe=\"" +
+             std::to_string(r.lobe) + "\"}";
+    };
+    s += "# HELP gaugeloop_last_run_max_abs_error_um Largest lift error of the newest run of each lobe (um, cam "
+         "frame).\n# TYPE gaugeloop_last_run_max_abs_error_um gauge\n";
+    for (const auto& [key, r] : last)
+      s += "gaugeloop_last_run_max_abs_error_um" + labels(*r) + " " + number(r->max_abs_error_um) + "\n";
+    s += "# HELP gaugeloop_last_run_id Id of the newest run of each lobe.\n# TYPE gaugeloop_last_run_id gauge\n";
+    for (const auto& [key, r] : last) s += "gaugeloop_last_run_id" + labels(*r) + " " + std::to_string(r->id) + "\n";
+    s += "# HELP gaugeloop_last_run_started_timestamp_seconds When the newest run of each lobe started.\n"
+         "# TYPE gaugeloop_last_run_started_timestamp_seconds gauge\n";
+    for (const auto& [key, r] : last) {
+      if (const std::optional<std::time_t> t = epoch_of_utc(r->started_utc)) {
+        s += "gaugeloop_last_run_started_timestamp_seconds" + labels(*r) + " " + std::to_string(*t) + "\n";
+      }
+    }
+    out += s;
+    return {};
+  }
+
+  // ---- Writes ----
+
+  // The token check every write passes first. False: the answer is already set.
+  bool authorized(const httplib::Request& req, httplib::Response& res) const {
+    if (settings.token.empty()) {
+      send_error(res, 403,
+                 "the API is read-only: no token is configured; set one in the service's [http] config to allow "
+                 "writes");
+      return false;
+    }
+    const std::string header = req.get_header_value("Authorization");
+    constexpr std::string_view kScheme = "Bearer ";
+    const bool bearer =
+        header.size() >= kScheme.size() &&
+        std::equal(kScheme.begin(), kScheme.end(), header.begin(), [](char a, char b) {
+          return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
+        });
+    if (!bearer || !same_secret(std::string_view(header).substr(kScheme.size()), settings.token)) {
+      res.set_header("WWW-Authenticate", "Bearer realm=\"gaugeloop\"");
+      send_error(res, 401,
+                 header.empty() ? "this write needs the header `Authorization: Bearer <token>`"
+                 : !bearer      ? "the Authorization header must be `Bearer <token>`"
+                                : "the token is not the one configured");
+      return false;
+    }
+    return true;
+  }
+
+  static void answer(httplib::Response& res, const Result<json>& out) {
+    if (!out) return send_error(res, out.error());
+    send_json(res, 200, *out);
+  }
+
+  void measure(const httplib::Request& req, httplib::Response& res) {
+    if (!authorized(req, res)) return;
+    if (!writes.trigger_measure) return send_error(res, 501, "this service does not take measurement triggers");
+    Result<json> body = body_object(req, {"part", "lobe", "note"}, R"({"part": "intake_flat", "lobe": 1})");
+    if (!body) return send_error(res, body.error());
+    Result<std::string> part = string_field(*body, "part", true);
+    if (!part) return send_error(res, part.error());
+    Result<int> lobe = int_field(*body, "lobe", 1, kMaxLobe);
+    if (!lobe) return send_error(res, lobe.error());
+    Result<std::string> note = string_field(*body, "note", false);
+    if (!note) return send_error(res, note.error());
+    answer(res, writes.trigger_measure(*part, *lobe, *note));
+  }
+
+  void approve(const httplib::Request& req, httplib::Response& res) {
+    if (!authorized(req, res)) return;
+    if (!writes.approve) return send_error(res, 501, "this service does not approve tables");
+    Result<std::int64_t> id = path_id(req.matches[1], "pending table id");
+    if (!id) return send_error(res, id.error());
+    Result<json> body = body_object(req, {"by", "note"}, R"({"by": "anna", "note": "checked the lobe"})");
+    if (!body) return send_error(res, body.error());
+    Result<std::string> by = string_field(*body, "by", true);
+    if (!by) return send_error(res, by.error());
+    Result<std::string> note = string_field(*body, "note", false);
+    if (!note) return send_error(res, note.error());
+    answer(res, writes.approve(*id, *by, *note));
+  }
+
+  void rollback(const httplib::Request& req, httplib::Response& res) {
+    if (!authorized(req, res)) return;
+    if (!writes.rollback) return send_error(res, 501, "this service does not roll tables back");
+    Result<json> body =
+        body_object(req, {"program", "version", "by"}, R"({"program": "CAM_INTAKE_L1", "version": 3, "by": "anna"})");
+    if (!body) return send_error(res, body.error());
+    Result<std::string> program = string_field(*body, "program", true);
+    if (!program) return send_error(res, program.error());
+    Result<int> version = int_field(*body, "version", 1, INT_MAX);
+    if (!version) return send_error(res, version.error());
+    Result<std::string> by = string_field(*body, "by", true);
+    if (!by) return send_error(res, by.error());
+    answer(res, writes.rollback(*program, *version, *by));
+  }
+
+  // ---- Helpers ----
+
+  // Answers with what `read` builds from a pooled store, or with its error.
+  void with_store(httplib::Response& res, const std::function<Result<json>(RunStore&)>& read) {
+    Result<StorePool::Lease> store = stores.acquire();
+    if (!store) return send_error(res, store.error());
+    Result<json> out = read(**store);
+    if (!out) return fail_with_store(res, *store, out.error());
+    send_json(res, 200, *out);
+  }
+
+  static void fail_with_store(httplib::Response& res, StorePool::Lease& store, const Error& e) {
+    if (e.code == ErrorCode::kStorage) store.discard();
+    send_error(res, e);
+  }
+
+  const HttpSettings settings;
+  StorePool stores;
+  const HttpWrites writes;
+  const HttpStatus status;
+  std::vector<std::pair<std::string, std::regex>> routes;  // for 405: the method a path takes
+  httplib::Server server;
+  int port = 0;
+  std::thread listener;
+  std::atomic<bool> listener_done{false};
+};
+
+HttpApi::HttpApi(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+HttpApi::~HttpApi() { stop(); }
+
+int HttpApi::port() const { return impl_->port; }
+
+Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, std::filesystem::path db_path,
+                                                HttpWrites writes, HttpStatus status) {
+  if (settings.port < 0 || settings.port > 65535) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "HTTP port " + std::to_string(settings.port) + " is not a port; use 1 to 65535, or 0 for any");
+  }
+  auto impl = std::make_unique<Impl>(settings, std::move(db_path), std::move(writes), std::move(status));
+  Impl& s = *impl;
+  using R = const httplib::Request&;
+  using W = httplib::Response&;
+  s.route("GET", "/api/health", [&s](R q, W a) { s.health(q, a); });
+  s.route("GET", "/api/runs", [&s](R q, W a) { s.list_runs(q, a); });
+  s.route("GET", "/api/runs/([^/]+)", [&s](R q, W a) { s.show_run(q, a); });
+  s.route("GET", "/api/runs/([^/]+)/export", [&s](R q, W a) { s.export_run(q, a); });
+  s.route("GET", "/api/trend", [&s](R q, W a) { s.trend(q, a); });
+  s.route("GET", "/api/events", [&s](R q, W a) { s.events(q, a); });
+  s.route("GET", "/api/nc/table", [&s](R q, W a) { s.nc_table(q, a); });
+  s.route("GET", "/api/nc/history", [&s](R q, W a) { s.nc_history(q, a); });
+  s.route("GET", "/api/nc/pending", [&s](R q, W a) { s.nc_pending(q, a); });
+  s.route("GET", "/metrics", [&s](R q, W a) { s.metrics(q, a); });
+  s.route("POST", "/api/measure", [&s](R q, W a) { s.measure(q, a); });
+  s.route("POST", "/api/nc/approve/([^/]+)", [&s](R q, W a) { s.approve(q, a); });
+  s.route("POST", "/api/nc/rollback", [&s](R q, W a) { s.rollback(q, a); });
+  s.server.set_error_handler([&s](R q, W a) { s.fill_error(q, a); });
+  s.server.set_exception_handler([](R q, W a, std::exception_ptr ep) { Impl::internal_error(q, a, std::move(ep)); });
+  s.server.set_payload_max_length(kMaxBodyBytes);
+  // httplib's default also sets SO_REUSEPORT, which lets a second service bind the same port and
+  // take half the requests. SO_REUSEADDR alone still allows a restart while old connections
+  // linger in TIME_WAIT.
+  s.server.set_socket_options([](socket_t sock) {
+    const int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
+  s.server.set_logger([](R q, const httplib::Response& a) {
+    spdlog::debug("http: {} {} from {} -> {}", q.method, q.path, q.remote_addr, a.status);
+  });
+
+  const int port = settings.port == 0 ? s.server.bind_to_any_port(settings.host)
+                                      : (s.server.bind_to_port(settings.host, settings.port) ? settings.port : -1);
+  if (port < 0) {
+    return make_error(ErrorCode::kIo, "cannot serve HTTP on " + settings.host + ":" + std::to_string(settings.port) +
+                                          ": the port is in use or the host is not an address of this machine; "
+                                          "change [http] host or port");
+  }
+  s.port = port;
+  s.listener = std::thread([&s] {
+    s.server.listen_after_bind();
+    s.listener_done = true;
+  });
+  // stop() before the listener runs would be lost (httplib only stops a running server), so
+  // start() returns once it runs (or, should it fail at once, has ended).
+  while (!s.server.is_running() && !s.listener_done) std::this_thread::yield();
+  return std::unique_ptr<HttpApi>(new HttpApi(std::move(impl)));
+}
+
+void HttpApi::stop() {
+  if (!impl_ || !impl_->listener.joinable()) return;
+  impl_->server.stop();
+  impl_->listener.join();
+}
+
+}  // namespace gaugeloop

@@ -1,0 +1,85 @@
+// The PLC trigger: the handshake block polled on a thread of its own, each PLC request run as
+// one measuring cycle of the service on a worker thread, each step logged once and kept as an
+// event. docs/service.md, "The PLC handshake".
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "config/service_config.h"
+#include "service/plc_handshake.h"
+#include "service/service.h"
+
+namespace gaugeloop {
+
+// The outcome the PLC is told for a run (or a refusal to start one). `stored_run`: the run's
+// id if it was stored, which a failure after that (the push) still reports.
+PlcCycleOutcome plc_outcome(const Result<JobReport>& report, std::optional<std::int64_t> stored_run);
+
+// Runs a PLC request's cycle on a worker thread, so the handshake keeps polling (and the
+// heartbeat counting) while the lobe is measured. Used by the PLC trigger's thread only.
+class ServiceCycleRunner final : public PlcCycleRunner {
+ public:
+  explicit ServiceCycleRunner(Service& service) : service_(service) {}
+  ~ServiceCycleRunner() override;
+
+  std::optional<PlcCycleOutcome> start(const PlcRequestWords& request) override;
+  std::optional<PlcCycleOutcome> poll() override;
+
+ private:
+  void finish(PlcCycleOutcome outcome);
+
+  Service& service_;
+  std::thread worker_;
+  std::mutex mutex_;
+  bool finished_ = false;                   // guarded by mutex_
+  std::optional<PlcCycleOutcome> outcome_;  // guarded by mutex_
+};
+
+// Polls the handshake block every poll interval on a thread of its own. stop() returns once
+// no cycle is in progress and its outcome is in the PLC's registers (or the link is down and
+// cannot carry it). An exception in a poll is recorded (Service::record_thread_fault) and
+// the trigger polls on after one interval.
+class PlcTrigger {
+ public:
+  // `plc`: the PLC's registers; by default a Modbus link built from `settings`.
+  PlcTrigger(Service& service, PlcSettings settings, std::unique_ptr<PlcRegisters> plc = nullptr);
+  ~PlcTrigger();
+
+  void start();
+  void stop();  // idempotent
+
+  std::string address() const { return link_->address(); }
+  nlohmann::json status() const;  // for /api/health
+  std::string metrics() const;    // Prometheus lines
+
+ private:
+  void loop();
+  void report(PlcEvent e);
+  std::string request_text() const;
+  std::string part_name() const;
+  bool wait_poll_interval();  // false once stop() was called
+
+  Service& service_;
+  const PlcSettings settings_;
+  std::unique_ptr<PlcRegisters> link_;  // the trigger thread's only
+  ServiceCycleRunner runner_;
+  PlcHandshake handshake_;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false;       // guarded by mutex_
+  bool link_down_ = false;  // trigger thread only
+  std::atomic<bool> connected_{false};
+  std::atomic<int> state_{0};
+  std::atomic<long long> requests_{0};
+};
+
+}  // namespace gaugeloop
