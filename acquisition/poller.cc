@@ -1,6 +1,7 @@
 // Live and latched collection of complete revolutions, with reconnects and whole-revolution
 // rejection.
 #include "acquisition/poller.h"
+#include "core/number_text.h"
 
 #include <sys/prctl.h>
 
@@ -28,14 +29,6 @@ struct Poll {
   std::uint16_t sequence = 0;
   GaugeStatus status = 0;
 };
-
-std::string fmt1(double v) {
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(1);
-  os << v;
-  return os.str();
-}
 
 struct RevolutionInProgress {
   DegreeTable lift_mm{};
@@ -99,7 +92,7 @@ class RunBudget {
     if (s_.run_timeout.count() > 0) {
       why = "as set";
     } else if (rev_per_s_ > 0.0) {
-      why = std::to_string(s_.revolutions + s_.spare_revolutions + 2) + " revolutions at " + fmt1(rev_per_s_ * 60.0) +
+      why = std::to_string(s_.revolutions + s_.spare_revolutions + 2) + " revolutions at " + format_fixed(rev_per_s_ * 60.0, 1) +
             " rpm, at least " + std::to_string(kRunTimeoutFloor.count() / 1000) + " s";
     }
     return "run timed out after " + std::to_string(ms) + " ms (" + why + ")";
@@ -430,8 +423,8 @@ Result<MeasuredRun> Poller::measure_live() {
         fill_ready(/*closing=*/true);
         if (backwards) {
           break_span(cur.u_deg, last.u_deg,
-                     "encoder angle went backwards from " + fmt1(std::fmod(last.u_deg, 360.0)) + " to " +
-                         fmt1(std::fmod(cur.u_deg, 360.0)) + " deg");
+                     "encoder angle went backwards from " + format_fixed(std::fmod(last.u_deg, 360.0), 1) + " to " +
+                         format_fixed(std::fmod(cur.u_deg, 360.0), 1) + " deg");
         }  // too far: the degrees in between stay missing
       }
     }
@@ -528,7 +521,7 @@ Result<MeasuredRun> Poller::measure_live() {
     if (!progress_u || cur.u_deg > *progress_u + kStandstillDeg) {
       progress_u = cur.u_deg;
       freeze.progressed(now);
-    } else if (Status s = no_progress(now, "its angle stayed at " + fmt1(snap.angle_deg) + " deg"); !s) {
+    } else if (Status s = no_progress(now, "its angle stayed at " + format_fixed(snap.angle_deg, 1) + " deg"); !s) {
       return s.error();  // new samples, but the spindle stands (or turns backwards)
     }
     if (have_prev && cur.u_deg > prev.u_deg) {
@@ -700,7 +693,7 @@ Result<MeasuredRun> Poller::measure_latched() {
     return make_error(ErrorCode::kInvalidInput,
                       "compact latch entries: the latch count " + std::to_string(c1) + " says machine degree " +
                           std::to_string((c1 + 359ULL) % 360) + " but the encoder angle reads " +
-                          fmt1(snap->angle_deg) +
+                          format_fixed(snap->angle_deg, 1) +
                           " deg. The count must be zeroed at the encoder's index pulse (mark 0 = degree 0) and "
                           "must not have passed 2^32; reset the amplifier's latch count, or use an entry layout "
                           "with a degree word (docs/gauge.md)");

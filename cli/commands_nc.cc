@@ -15,6 +15,7 @@
 #include "core/text_file.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
+#include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
@@ -38,12 +39,6 @@ std::string person(const std::string& given) {
   if (!given.empty()) return given;
   const char* user = std::getenv("USER");
   return user != nullptr && *user != '\0' ? user : "operator";
-}
-
-std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
 }
 
 // The NC file the command is about, as measure records it: an absolute path.
@@ -100,7 +95,7 @@ int cmd_history(const HistoryOptions& o) {
                 std::filesystem::path(p.nc_file).stem().string().c_str(), p.table_version, p.pushed_utc.c_str(),
                 static_cast<long long>(p.run_id), p.interpolation.empty() ? "-" : p.interpolation.c_str(),
                 p.block_count ? std::to_string(*p.block_count).c_str() : "-",
-                p.command_error_um ? fixed(*p.command_error_um, 3).c_str() : "-", p.reason.c_str());
+                p.command_error_um ? format_fixed(*p.command_error_um, 3).c_str() : "-", p.reason.c_str());
   }
   if (pushes->empty()) std::printf("(no table was pushed)\n");
   return kExitOk;

@@ -15,6 +15,7 @@
 #include "report/svg_plot.h"
 #include "core/atomic_file.h"
 #include "storage/run_store.h"
+#include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
@@ -37,21 +38,9 @@ Result<StoredRun> load(const RunStore& store, std::int64_t id, const DataPaths& 
 
 std::time_t now() { return std::time(nullptr); }
 
-std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
-std::string signed_fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%+.*f", decimals, v);
-  return buf;
-}
-
 std::string opt(const std::optional<double>& v, int decimals, bool with_sign = false) {
   if (!v) return "-";
-  return with_sign ? signed_fixed(*v, decimals) : fixed(*v, decimals);
+  return with_sign ? format_signed_fixed(*v, decimals) : format_fixed(*v, decimals);
 }
 
 std::size_t argmax_abs(const DegreeTable& t) {
@@ -124,8 +113,8 @@ struct RunOptions {
 std::string frame_text(const StoredRun& r) {
   if (!r.geometry) return "not recorded with this run (revolutions stay in the machine frame)";
   const Part& g = *r.geometry;
-  return "C = " + std::string(g.rotation_sense > 0 ? "+" : "-") + "psi + " + fixed(g.c_offset_deg, 3) + " deg; probe " +
-         signed_fixed(g.probe_offset_deg, 3) + " deg of C from the wheel";
+  return "C = " + std::string(g.rotation_sense > 0 ? "+" : "-") + "psi + " + format_fixed(g.c_offset_deg, 3) + " deg; probe " +
+         format_signed_fixed(g.probe_offset_deg, 3) + " deg of C from the wheel";
 }
 
 std::vector<std::pair<int, double>> top_harmonics(const LobeAnalysis& a, std::size_t n) {
@@ -178,7 +167,7 @@ int cmd_show(const RunOptions& o) {
               opt(s.base_circle_runout_um, 2).c_str());
   if (has_inspection) {
     std::string h;
-    for (const auto& [n, amp] : top_harmonics(a, 5)) h += "  h" + std::to_string(n) + " " + fixed(amp, 2);
+    for (const auto& [n, amp] : top_harmonics(a, 5)) h += "  h" + std::to_string(n) + " " + format_fixed(amp, 2);
     std::printf("  largest harmonics%s um\n", h.c_str());
   }
   std::printf("correction (cam frame)\n");
@@ -199,8 +188,8 @@ int cmd_show(const RunOptions& o) {
     std::string detail = ", version " + std::to_string(p.table_version);
     if (!p.reason.empty()) detail += " (" + p.reason + ")";
     if (p.point_count) detail += ", " + std::to_string(*p.point_count) + " points";
-    if (p.command_error_um) detail += ", command position error " + fixed(*p.command_error_um, 3) + " um";
-    if (p.correction_max_um) detail += ", " + fixed(*p.correction_max_um, 2) + " um max";
+    if (p.command_error_um) detail += ", command position error " + format_fixed(*p.command_error_um, 3) + " um";
+    if (p.correction_max_um) detail += ", " + format_fixed(*p.correction_max_um, 2) + " um max";
     std::printf("  NC push           %s  %s%s\n", p.pushed_utc.c_str(), p.nc_file.c_str(), detail.c_str());
   }
   return kExitOk;
@@ -322,7 +311,7 @@ int cmd_compare(const CompareOptions& o) {
   std::printf("%-24s %-22s %-22s\n", "ground with correction", in_force(A).c_str(), in_force(B).c_str());
   for (const Figure& f : figures) {
     std::printf("%-24s %-22s %-22s %s\n", f.name, opt(f.a, f.decimals).c_str(), opt(f.b, f.decimals).c_str(),
-                (f.a && f.b) ? signed_fixed(*f.b - *f.a, f.decimals).c_str() : "-");
+                (f.a && f.b) ? format_signed_fixed(*f.b - *f.a, f.decimals).c_str() : "-");
   }
   if (!same_lobe)
     std::printf("note: the runs are of different parts or lobes; per-degree differences compare unlike lobes\n");
@@ -402,8 +391,8 @@ int cmd_plot(const PlotOptions& o) {
   p.spread_um = run->analysis.spread_um;
   if (!o.no_correction) p.correction_um = run->correction_um;
   if (o.tolerance_um > 0) p.tolerance_um = o.tolerance_um;
-  p.footer = "RMS " + fixed(s.rms_error_um, 2) + " \u00b5m \u00b7 peak to valley " + fixed(s.peak_to_valley_um, 2) +
-             " \u00b5m \u00b7 repeatability " + fixed(s.repeatability_um, 2) + " \u00b5m \u00b7 phase " +
+  p.footer = "RMS " + format_fixed(s.rms_error_um, 2) + " \u00b5m \u00b7 peak to valley " + format_fixed(s.peak_to_valley_um, 2) +
+             " \u00b5m \u00b7 repeatability " + format_fixed(s.repeatability_um, 2) + " \u00b5m \u00b7 phase " +
              opt(s.phase_error_deg, 3, true) + "\u00b0 \u00b7 runout " + opt(s.base_circle_runout_um, 2) +
              " \u00b5m \u00b7 " + std::to_string(s.revolutions) + " revolutions \u00b7 " + o.paths.db().string();
   if (Status w = write_file_atomically(o.out, render_error_plot_svg(p)); !w) return report_error(w.error());

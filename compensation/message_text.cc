@@ -7,15 +7,6 @@
 
 namespace gaugeloop {
 
-std::string format_fixed(double value, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, value);
-  std::string s(buf);
-  // A value that rounds to zero prints as "0.0", not "-0.0".
-  if (s.front() == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
-  return s;
-}
-
 std::string describe_angle_ranges(const std::vector<double>& angle_deg, const std::vector<bool>& flagged,
                                   int max_ranges) {
   const size_t n = angle_deg.size();

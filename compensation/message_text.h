@@ -1,13 +1,13 @@
-// Number and angle-range formatting for the messages compensation/ puts in its errors.
+// Angle-range formatting for the messages compensation/ puts in its errors (numbers:
+// core/number_text.h, included here for the callers).
 #pragma once
 
 #include <string>
 #include <vector>
 
-namespace gaugeloop {
+#include "core/number_text.h"
 
-// `value` with `decimals` digits after the point, e.g. format_fixed(47.31, 1) == "47.3".
-std::string format_fixed(double value, int decimals);
+namespace gaugeloop {
 
 // Describes where `flagged[i]` holds on a periodic grid of angles, as at most `max_ranges`
 // ranges, e.g. "52.3 to 61.0 deg and 299.0 to 307.7 deg". `angle_deg` must be strictly

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "compensation/correction.h"
+#include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
@@ -40,12 +41,9 @@ std::string_view table_evidence_verdict_name(TableEvidenceVerdict verdict) {
 }
 
 std::string TableEvidence::describe() const {
-  char buf[256];
-  std::snprintf(buf, sizeof buf,
-                "the part differs from the one the table was built on by %.2f um RMS; the table changed the "
-                "lobe by %.2f um RMS; the gauge's noise alone would give %.2f um RMS",
-                difference_rms_um, change_rms_um, noise_rms_um);
-  return buf;
+  return "the part differs from the one the table was built on by " + format_fixed(difference_rms_um, 2) +
+         " um RMS; the table changed the lobe by " + format_fixed(change_rms_um, 2) +
+         " um RMS; the gauge's noise alone would give " + format_fixed(noise_rms_um, 2) + " um RMS";
 }
 
 TableEvidence judge_table_evidence(const MeasuredError& now, const MeasuredError& before, const DegreeTable& change_um,

@@ -26,15 +26,10 @@
 #include "nc_out/table_guards.h"
 #include "nc_out/table_program.h"
 #include "storage/run_store.h"
+#include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
-
-std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
 
 // The exact wheel path the tables are chosen against and checked on: 36,000 rows.
 constexpr double kFinePathStepDeg = 0.01;
@@ -101,7 +96,7 @@ std::map<std::string, std::string> template_values(const JobSettings& s) {
 std::string settings_text(const JobSettings& s) {
   std::string out;
   auto line = [&out](const std::string& key, const std::string& value) { out += key + " = " + value + "\n"; };
-  auto num = [](double v) { return fixed(v, 6); };
+  auto num = [](double v) { return format_fixed(v, 6); };
   line("design.lift_table", s.design.source);
   line("part.follower", std::string(follower_kind_name(s.part.follower)));
   line("part.follower_radius_mm", num(s.part.follower_radius_mm));
@@ -170,7 +165,7 @@ Result<Prepared> prepare(const JobSettings& s) {
     const double steps = 360.0 / s.table_step_deg;
     if (!(s.table_step_deg > 0.0) || std::abs(steps - std::round(steps)) > 1e-9 || steps < 36) {
       return make_error(ErrorCode::kInvalidInput,
-                        "table step " + fixed(s.table_step_deg, 4) + " deg must divide 360 into at least 36 steps");
+                        "table step " + format_fixed(s.table_step_deg, 4) + " deg must divide 360 into at least 36 steps");
     }
   }
   if (Status l = check_axis_limits(s.axis_limits); !l) return l.error();
@@ -465,7 +460,7 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     const std::string finished = format_utc(std::time(nullptr));
     step("acquired",
          std::to_string(measured->revolutions.size()) + " revolutions from " + gauge.address() + " in " +
-             fixed(std::chrono::duration<double>(std::chrono::steady_clock::now() - acquire_start).count(), 1) +
+             format_fixed(std::chrono::duration<double>(std::chrono::steady_clock::now() - acquire_start).count(), 1) +
              " s (" + std::to_string(measured->discarded_revolutions) + " discarded, " +
              std::to_string(measured->reconnects) + " reconnects, " + std::to_string(measured->polls) + " polls)");
 
@@ -498,10 +493,10 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     Result<LobeAnalysis> analysis = analyse_lobe(*measured, *design_reading, s.part, s.analysis);
     if (!analysis) return lost(in_step("analysis", analysis.error()));
     record.analysis = *analysis;
-    step("analysed", "max lift error " + fixed(analysis->max_abs_error_um, 2) + " um, RMS " +
-                         fixed(analysis->rms_error_um, 2) + " um, phase " + fixed(analysis->phase_error_deg, 4) +
-                         " deg, runout " + fixed(analysis->base_circle_runout_um, 2) + " um, repeatability " +
-                         fixed(analysis->repeatability_um, 2) + " um");
+    step("analysed", "max lift error " + format_fixed(analysis->max_abs_error_um, 2) + " um, RMS " +
+                         format_fixed(analysis->rms_error_um, 2) + " um, phase " + format_fixed(analysis->phase_error_deg, 4) +
+                         " deg, runout " + format_fixed(analysis->base_circle_runout_um, 2) + " um, repeatability " +
+                         format_fixed(analysis->repeatability_um, 2) + " um");
     std::string evidence;
     std::string not_built_on;
     if (!s.inspect) {
@@ -540,12 +535,12 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     {
       std::string what = s.inspect ? std::string("inspection: the correction in force stands")
                                    : std::string(compensation_verdict_name(verdict)) + ": largest correction " +
-                                         fixed(decision->largest_correction_um, 2) + " um at " +
+                                         format_fixed(decision->largest_correction_um, 2) + " um at " +
                                          std::to_string(decision->largest_correction_deg) + " deg";
       if (in_force_run) what += ", built on run " + std::to_string(*in_force_run) + "'s";
       if (built) {
         what += "; table " + std::to_string(built->table.block_count()) + " blocks (" + built->table.writer +
-                "), command position error " + fixed(built->table.error.max_abs_um, 3) + " um";
+                "), command position error " + format_fixed(built->table.error.max_abs_um, 3) + " um";
       }
       if (!verdict_reasons.empty()) what += "; " + verdict_reasons;
       if (!evidence.empty()) what += "; " + evidence;
@@ -585,7 +580,7 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
     auto values = template_values(s);
     values["run_id"] = std::to_string(*run_id);
     values["created_utc"] = finished;
-    values["correction_max_um"] = fixed(correction_max_um, 1);
+    values["correction_max_um"] = format_fixed(correction_max_um, 1);
     auto render = [&](int table_version) {
       return render_table_program(s.nc_template, s.nc_template_name, values, built->table,
                                   {*run_id, static_cast<std::int64_t>(table_version)});

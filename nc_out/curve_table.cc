@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/number_text.h"
+
 namespace gaugeloop {
 namespace {
 
@@ -51,21 +53,15 @@ std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpola
                                 const CurveTableFormat& format) {
   std::string out;
   out.reserve(points.size() * 24 + 32);
-  char buf[96];
-  const double q = std::pow(10.0, format.x_decimals);
   for (size_t i = 0; i < points.size(); ++i) {
-    // Print -0.0000 as 0.0000: a tiny negative infeed rounds to zero, not to a signed zero.
-    double x = points[i].x_mm;
-    if (std::round(x * q) == 0.0) x = 0.0;
-    const char* prefix = "";
+    if (i > 0) out += '\n';
     if (i == 0) {
-      prefix = "G1 ";
+      out += "G1 ";
     } else if (i == 1 && interpolation == Interpolation::kCubicSpline) {
-      prefix = "BNAT ENAT CSPLINE ";
+      out += "BNAT ENAT CSPLINE ";
     }
-    std::snprintf(buf, sizeof buf, "%s%sC%.*f X%.*f", i == 0 ? "" : "\n", prefix, format.c_decimals, points[i].c_deg,
-                  format.x_decimals, x);
-    out += buf;
+    // A tiny negative infeed prints as 0.0000, not as a signed zero (format_fixed).
+    out += "C" + format_fixed(points[i].c_deg, format.c_decimals) + " X" + format_fixed(points[i].x_mm, format.x_decimals);
   }
   return out;
 }

@@ -1,5 +1,6 @@
 // Axis-limit guards on the wheel path and on the table.
 #include "nc_out/table_guards.h"
+#include "core/number_text.h"
 
 #include <cmath>
 #include <cstdio>
@@ -8,13 +9,7 @@
 namespace gaugeloop {
 namespace {
 
-std::string num(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
-std::string at_c(double c_deg) { return "at C" + num(c_deg, 3); }
+std::string at_c(double c_deg) { return "at C" + format_fixed(c_deg, 3); }
 
 // What a guard checks, at one C: value and the velocity/acceleration per degree.
 struct Row {
@@ -34,9 +29,9 @@ Status check_row(const char* what, const Row& r, const AxisLimits& l, bool check
   if (r.x_mm < l.x_min_mm || r.x_mm > l.x_max_mm) {
     const bool low = r.x_mm < l.x_min_mm;
     return make_error(ErrorCode::kRefused,
-                      std::string(what) + " X " + num(r.x_mm, 4) + " mm " + at_c(r.c_deg) + " is " +
-                          (low ? "below the axis limit x_min_mm " + num(l.x_min_mm, 4)
-                               : "above the axis limit x_max_mm " + num(l.x_max_mm, 4)) +
+                      std::string(what) + " X " + format_fixed(r.x_mm, 4) + " mm " + at_c(r.c_deg) + " is " +
+                          (low ? "below the axis limit x_min_mm " + format_fixed(l.x_min_mm, 4)
+                               : "above the axis limit x_max_mm " + format_fixed(l.x_max_mm, 4)) +
                           " mm; check the part geometry and the correction, or the configured axis limits; "
                           "nothing was written");
   }
@@ -44,21 +39,21 @@ Status check_row(const char* what, const Row& r, const AxisLimits& l, bool check
   if (std::abs(v) > l.x_velocity_max_mm_per_s) {
     // Velocity grows with the speed: this speed would just fit.
     const double fits_rpm = std::abs(l.speed_rpm) * l.x_velocity_max_mm_per_s / std::abs(v);
-    return make_error(ErrorCode::kRefused, std::string(what) + " X velocity " + num(std::abs(v), 2) + " mm/s " +
+    return make_error(ErrorCode::kRefused, std::string(what) + " X velocity " + format_fixed(std::abs(v), 2) + " mm/s " +
                                                at_c(r.c_deg) + " exceeds the limit " +
-                                               num(l.x_velocity_max_mm_per_s, 2) + " mm/s at " +
-                                               num(std::abs(l.speed_rpm), 2) + " rpm; grind at most " +
-                                               num(fits_rpm, 2) + " rpm; nothing was written");
+                                               format_fixed(l.x_velocity_max_mm_per_s, 2) + " mm/s at " +
+                                               format_fixed(std::abs(l.speed_rpm), 2) + " rpm; grind at most " +
+                                               format_fixed(fits_rpm, 2) + " rpm; nothing was written");
   }
   const double a = r.d2x_dc2 * w * w;
   if (check_acceleration && std::abs(a) > l.x_acceleration_max_mm_per_s2) {
     // Acceleration grows with the square of the speed.
     const double fits_rpm = std::abs(l.speed_rpm) * std::sqrt(l.x_acceleration_max_mm_per_s2 / std::abs(a));
-    return make_error(ErrorCode::kRefused, std::string(what) + " X acceleration " + num(std::abs(a), 1) + " mm/s^2 " +
+    return make_error(ErrorCode::kRefused, std::string(what) + " X acceleration " + format_fixed(std::abs(a), 1) + " mm/s^2 " +
                                                at_c(r.c_deg) + " exceeds the limit " +
-                                               num(l.x_acceleration_max_mm_per_s2, 1) + " mm/s^2 at " +
-                                               num(std::abs(l.speed_rpm), 2) + " rpm; grind at most " +
-                                               num(fits_rpm, 2) + " rpm; nothing was written");
+                                               format_fixed(l.x_acceleration_max_mm_per_s2, 1) + " mm/s^2 at " +
+                                               format_fixed(std::abs(l.speed_rpm), 2) + " rpm; grind at most " +
+                                               format_fixed(fits_rpm, 2) + " rpm; nothing was written");
   }
   return {};
 }
@@ -68,7 +63,7 @@ Status check_row(const char* what, const Row& r, const AxisLimits& l, bool check
 Status check_axis_limits(const AxisLimits& l) {
   auto bad = [](const std::string& m) { return make_error(ErrorCode::kInvalidInput, m); };
   if (!std::isfinite(l.x_min_mm) || !std::isfinite(l.x_max_mm) || !(l.x_min_mm < l.x_max_mm)) {
-    return bad("axis limits x_min_mm " + num(l.x_min_mm, 4) + " and x_max_mm " + num(l.x_max_mm, 4) +
+    return bad("axis limits x_min_mm " + format_fixed(l.x_min_mm, 4) + " and x_max_mm " + format_fixed(l.x_max_mm, 4) +
                " must be finite with x_min_mm < x_max_mm");
   }
   if (!(l.x_velocity_max_mm_per_s > 0.0) || !std::isfinite(l.x_velocity_max_mm_per_s)) {

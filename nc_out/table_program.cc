@@ -7,17 +7,12 @@
 #include <optional>
 
 #include "nc_out/nc_template.h"
+#include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
 
 constexpr std::string_view kHeaderPrefix = "; gaugeloop ";
-
-std::string num(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
@@ -115,8 +110,8 @@ std::string render_table_header(const CurveTable& table, const TableProvenance& 
   line("interpolation", std::string(interpolation_name(table.interpolation)));
   line("point_count", std::to_string(table.points.size()));
   line("block_count", std::to_string(table.block_count()));
-  line("command_error_um", num(table.error.max_abs_um, 3));
-  line("command_error_at_c_deg", num(table.error.at_c_deg, 3));
+  line("command_error_um", format_fixed(table.error.max_abs_um, 3));
+  line("command_error_at_c_deg", format_fixed(table.error.at_c_deg, 3));
   line("writer", table.writer);
   line("body_checksum_fnv1a64", table_body_checksum(body));
   return out;
@@ -132,7 +127,7 @@ Result<std::string> render_table_program(std::string_view template_text, std::st
   values["point_count"] = std::to_string(table.points.size());
   values["block_count"] = std::to_string(table.block_count());
   values["interpolation"] = std::string(interpolation_name(table.interpolation));
-  values["command_error_um"] = num(table.error.max_abs_um, 3);
+  values["command_error_um"] = format_fixed(table.error.max_abs_um, 3);
   Result<std::string> program = render_nc_template(template_text, template_name, values);
   if (!program) return program.error();
   // Read back what would be pushed: it must be the table we meant, checksum and all.
@@ -260,7 +255,7 @@ Result<ParsedTable> parse_table_program(std::string_view text, std::string_view 
       return fail(i, "the table mixes G1 and CSPLINE segments; gaugeloop models one kind per table");
     }
     if (!t.points.empty() && !(*c > t.points.back().c_deg)) {
-      return fail(i, t.leading_axis + " " + num(*c, 3) + " does not increase");
+      return fail(i, t.leading_axis + " " + format_fixed(*c, 3) + " does not increase");
     }
     t.points.push_back({*c, x ? *x : t.points.back().x_mm});
     t.point_lines.push_back(static_cast<int>(i + 1));
@@ -310,19 +305,19 @@ Status compare_table_points(const ParsedTable& table, const std::vector<CurvePoi
     const CurvePoint& a = table.points[i];
     const CurvePoint& b = expected[i];
     // Compare as written: the decimals the table carries.
-    if (num(a.c_deg, format.c_decimals) != num(b.c_deg, format.c_decimals) ||
-        num(a.x_mm, format.x_decimals) != num(b.x_mm + 0.0, format.x_decimals)) {
-      const bool zero = num(a.x_mm, format.x_decimals) == num(0.0, format.x_decimals);
-      if (zero && num(std::abs(b.x_mm), format.x_decimals) == num(0.0, format.x_decimals) &&
-          num(a.c_deg, format.c_decimals) == num(b.c_deg, format.c_decimals)) {
+    if (format_fixed(a.c_deg, format.c_decimals) != format_fixed(b.c_deg, format.c_decimals) ||
+        format_fixed(a.x_mm, format.x_decimals) != format_fixed(b.x_mm + 0.0, format.x_decimals)) {
+      const bool zero = format_fixed(a.x_mm, format.x_decimals) == format_fixed(0.0, format.x_decimals);
+      if (zero && format_fixed(std::abs(b.x_mm), format.x_decimals) == format_fixed(0.0, format.x_decimals) &&
+          format_fixed(a.c_deg, format.c_decimals) == format_fixed(b.c_deg, format.c_decimals)) {
         continue;  // -0.0000 written as 0.0000
       }
       return make_error(ErrorCode::kRefused, std::string(file_name) + ":" + std::to_string(table.point_lines[i]) +
                                                  ": point " + std::to_string(i) + " reads C" +
-                                                 num(a.c_deg, format.c_decimals) + " X" +
-                                                 num(a.x_mm, format.x_decimals) + ", the pushed table has C" +
-                                                 num(b.c_deg, format.c_decimals) + " X" +
-                                                 num(b.x_mm, format.x_decimals) + "; edited by hand");
+                                                 format_fixed(a.c_deg, format.c_decimals) + " X" +
+                                                 format_fixed(a.x_mm, format.x_decimals) + ", the pushed table has C" +
+                                                 format_fixed(b.c_deg, format.c_decimals) + " X" +
+                                                 format_fixed(b.x_mm, format.x_decimals) + "; edited by hand");
     }
   }
   if (table.points.size() != expected.size()) {

@@ -1,5 +1,6 @@
 // Table writers and the command position error they report.
 #include "nc_out/table_writer.h"
+#include "core/number_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,12 +15,6 @@ constexpr double kUmPerMm = 1000.0;
 // How many more blocks than the fewest the points of the table in force may grow to before
 // the default choice starts afresh (write_default_table).
 constexpr double kKeptBlocksOverFewest = 1.25;
-
-std::string num(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
 
 // Rounds as the table text does (%.*f rounds half away from zero on glibc's exact decimal
 // expansion; std::round on the scaled value agrees except at ties nobody can see in a table
@@ -45,7 +40,7 @@ Status check_format(const SampledPath& path, const CurveTableFormat& format) {
   }
   const double q = path.c_step_deg * std::pow(10.0, format.c_decimals);
   if (std::abs(q - std::round(q)) > 1e-6) {
-    return make_error(ErrorCode::kInvalidInput, "fine path step " + num(path.c_step_deg, 6) +
+    return make_error(ErrorCode::kInvalidInput, "fine path step " + format_fixed(path.c_step_deg, 6) +
                                                     " deg cannot be written with " + std::to_string(format.c_decimals) +
                                                     " decimals of C; use a step that can or more decimals");
   }
@@ -113,17 +108,17 @@ Result<CurveTable> write_uniform(const SampledPath& path, double c_step_deg, con
   if (Status s = check_inputs(path, format); !s) return s.error();
   const std::size_t r = rows_per_step(path, c_step_deg);
   if (r == 0) {
-    return make_error(ErrorCode::kInvalidInput, "table step " + num(c_step_deg, 4) +
+    return make_error(ErrorCode::kInvalidInput, "table step " + format_fixed(c_step_deg, 4) +
                                                     " deg must divide 360 and be a whole multiple of the fine step " +
-                                                    num(path.c_step_deg, 4) + " deg");
+                                                    format_fixed(path.c_step_deg, 4) + " deg");
   }
   std::vector<std::size_t> rows;
   for (std::size_t k = 0; k <= path.size(); k += r) rows.push_back(k);
   if (rows.size() < 4) {
-    return make_error(ErrorCode::kInvalidInput, "table step " + num(c_step_deg, 4) + " deg gives fewer than 4 points");
+    return make_error(ErrorCode::kInvalidInput, "table step " + format_fixed(c_step_deg, 4) + " deg gives fewer than 4 points");
   }
   const std::string kind = interpolation == Interpolation::kLinear ? "linear " : "spline ";
-  return table_at_rows(path, rows, interpolation, format, kind + num(c_step_deg, 3) + " deg");
+  return table_at_rows(path, rows, interpolation, format, kind + format_fixed(c_step_deg, 3) + " deg");
 }
 
 Status check_adaptive(const AdaptiveSettings& s) {
@@ -136,7 +131,7 @@ Status check_adaptive(const AdaptiveSettings& s) {
   return {};
 }
 
-std::string refusal_where(const CommandError& e) { return num(e.max_abs_um, 3) + " um at C" + num(e.at_c_deg, 3); }
+std::string refusal_where(const CommandError& e) { return format_fixed(e.max_abs_um, 3) + " um at C" + format_fixed(e.at_c_deg, 3); }
 
 // Fine rows in the widest table segment settings allow (at least 1).
 std::size_t widest_rows(const SampledPath& path, const AdaptiveSettings& settings) {
@@ -156,9 +151,9 @@ Result<std::vector<std::size_t>> rows_of_points(const SampledPath& path, const T
     const long long k = std::llround(r);
     if (std::abs(r - static_cast<double>(k)) > 1e-6 || k < 0 || static_cast<std::size_t>(k) > path.size() ||
         (!rows.empty() && static_cast<std::size_t>(k) <= rows.back())) {
-      return make_error(ErrorCode::kInvalidInput, "point C" + num(at, 6) +
+      return make_error(ErrorCode::kInvalidInput, "point C" + format_fixed(at, 6) +
                                                       " of the table in force is not a row of the " +
-                                                      num(path.c_step_deg, 4) + " deg path or not in order");
+                                                      format_fixed(path.c_step_deg, 4) + " deg path or not in order");
     }
     rows.push_back(static_cast<std::size_t>(k));
   }
@@ -177,7 +172,7 @@ Result<TableInterpolant> TableInterpolant::of(const std::vector<CurvePoint>& poi
   for (std::size_t i = 0; i < m; ++i) {
     if (!std::isfinite(points[i].c_deg) || !std::isfinite(points[i].x_mm) ||
         (i > 0 && !(points[i].c_deg > points[i - 1].c_deg))) {
-      return make_error(ErrorCode::kInvalidInput, "table point " + std::to_string(i) + " (C" + num(points[i].c_deg, 3) +
+      return make_error(ErrorCode::kInvalidInput, "table point " + std::to_string(i) + " (C" + format_fixed(points[i].c_deg, 3) +
                                                       ") is not finite or C does not increase");
     }
     t.c_deg_.push_back(points[i].c_deg);
@@ -281,8 +276,8 @@ Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const Ad
   while (a < n) {
     const std::size_t reach = std::min(max_rows, n - a);
     if (!keeps_bound(a, a + 1)) {
-      return make_error(ErrorCode::kRefused, "adaptive G1 table: even one fine step at C" + num(path.c_deg(a), 3) +
-                                                 " breaks the " + num(settings.bound_um, 3) +
+      return make_error(ErrorCode::kRefused, "adaptive G1 table: even one fine step at C" + format_fixed(path.c_deg(a), 3) +
+                                                 " breaks the " + format_fixed(settings.bound_um, 3) +
                                                  " um bound (rounding to " + std::to_string(format.x_decimals) +
                                                  " decimals?); write X with more decimals or raise the bound");
     }
@@ -312,7 +307,7 @@ Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const Ad
     rows.push_back(a);
   }
   return table_at_rows(path, rows, Interpolation::kLinear, format,
-                       "adaptive linear, bound " + num(settings.bound_um, 3) + " um");
+                       "adaptive linear, bound " + format_fixed(settings.bound_um, 3) + " um");
 }
 
 Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const AdaptiveSettings& settings,
@@ -393,7 +388,7 @@ Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const Ad
           }
           Result<CurveTable> t = table_at_rows(
               path, rows, Interpolation::kCubicSpline, format,
-              "adaptive spline from " + num(start_deg, 3) + " deg, bound " + num(settings.bound_um, 3) + " um");
+              "adaptive spline from " + format_fixed(start_deg, 3) + " deg, bound " + format_fixed(settings.bound_um, 3) + " um");
           if (!t) return t.error();
           if (!best || t->block_count() < best->block_count()) best = std::move(*t);
         } else {
@@ -407,7 +402,7 @@ Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const Ad
   }
   if (!best) {
     return make_error(ErrorCode::kRefused, "adaptive CSPLINE table: no knot choice keeps the " +
-                                               num(settings.bound_um, 3) + " um bound; closest " +
+                                               format_fixed(settings.bound_um, 3) + " um bound; closest " +
                                                refusal_where(closest) + "; use a G1 table or raise the bound");
   }
   return std::move(*best);
@@ -501,7 +496,7 @@ Result<CurveTable> write_default_table(const SampledPath& path, const TableChoic
   }
   if (!best) {
     return make_error(ErrorCode::kRefused, "no curve table keeps the command position error at or below " +
-                                               num(settings.bound_um, 3) + " um; the closest reached " +
+                                               format_fixed(settings.bound_um, 3) + " um; the closest reached " +
                                                refusal_where(closest) +
                                                "; raise the bound or allow CSPLINE tables; nothing was written");
   }

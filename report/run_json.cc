@@ -1,5 +1,6 @@
 // JSON and CSV of stored runs, pushes, pending tables and events; UTC time bounds.
 #include "report/run_json.h"
+#include "core/number_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -17,12 +18,6 @@ json opt_json(const std::optional<T>& v) {
 }
 
 json text_or_null(const std::string& s) { return s.empty() ? json(nullptr) : json(s); }
-
-std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
 
 std::size_t argmax_abs(const DegreeTable& t) {
   std::size_t best = 0;
@@ -156,7 +151,7 @@ std::string run_csv(const StoredRun& r) {
   o << "# One row per cam degree (cam frame: 0 at the nose, counter-clockwise).\n";
   o << "# design_lift_mm, mean_lift_mm, spread_um, error_um, correction_um: cam frame. mean is zeroed on the base "
        "circle (gauge reading minus zero_offset_mm "
-    << fixed(r.analysis.zero_offset_mm, 6) << "); error = mean - design; spread = standard deviation across "
+    << format_fixed(r.analysis.zero_offset_mm, 6) << "); error = mean - design; spread = standard deviation across "
     << "revolutions.\n";
   const bool cam_frame_raw = r.geometry.has_value();
   if (!s.raw_pruned_utc.empty()) {
@@ -165,7 +160,7 @@ std::string run_csv(const StoredRun& r) {
     const Part& g = *r.geometry;
     o << "# revN_lift_mm: raw gauge reading of revolution N (mm, not zeroed), mapped to the CAM frame with the "
          "run's frame: C = "
-      << (g.rotation_sense > 0 ? "+" : "-") << "beta + " << fixed(g.c_offset_deg + g.probe_offset_deg, 3)
+      << (g.rotation_sense > 0 ? "+" : "-") << "beta + " << format_fixed(g.c_offset_deg + g.probe_offset_deg, 3)
       << " deg (c0 + probe offset); linearly interpolated between machine degrees when that is not whole.\n";
   } else {
     o << "# revN_at_machine_deg_lift_mm: raw gauge reading of revolution N (mm, not zeroed) in the MACHINE frame: "
@@ -178,12 +173,12 @@ std::string run_csv(const StoredRun& r) {
   o << ",mean_lift_mm,spread_um,error_um,correction_um\n";
   for (int d = 0; d < kDegreesPerRevolution; ++d) {
     const auto k = static_cast<std::size_t>(d);
-    o << d << "," << fixed(r.analysis.design_lift_mm[k], 7);
+    o << d << "," << format_fixed(r.analysis.design_lift_mm[k], 7);
     for (const RevolutionSamples& rev : r.revolutions) {
-      o << "," << fixed(cam_frame_raw ? raw_at_cam_deg(rev, *r.geometry, d) : rev.lift_mm[k], 7);
+      o << "," << format_fixed(cam_frame_raw ? raw_at_cam_deg(rev, *r.geometry, d) : rev.lift_mm[k], 7);
     }
-    o << "," << fixed(r.analysis.mean_lift_mm[k], 7) << "," << fixed(r.analysis.spread_um[k], 4) << ","
-      << fixed(r.analysis.error_um[k], 4) << "," << fixed(r.correction_um[k], 4) << "\n";
+    o << "," << format_fixed(r.analysis.mean_lift_mm[k], 7) << "," << format_fixed(r.analysis.spread_um[k], 4) << ","
+      << format_fixed(r.analysis.error_um[k], 4) << "," << format_fixed(r.correction_um[k], 4) << "\n";
   }
   return o.str();
 }

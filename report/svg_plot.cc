@@ -1,5 +1,6 @@
 // The lobe error of one run as an SVG picture: polar and linear, with the tolerance band.
 #include "report/svg_plot.h"
+#include "core/number_text.h"
 
 #include <algorithm>
 #include <array>
@@ -38,12 +39,8 @@ constexpr const char* kTextColour = "#1d2329";
 constexpr const char* kMutedColour = "#5f6b76";
 
 // Fixed notation with `decimals`, '.' as the separator whatever the C locale.
-std::string num(double v, int decimals = 1) {
-  std::array<char, 64> buf{};
-  if (std::abs(v) < 0.5 * std::pow(10.0, -decimals)) v = 0.0;  // no "-0.0"
-  const auto [end, ec] = std::to_chars(buf.data(), buf.data() + buf.size(), v, std::chars_format::fixed, decimals);
-  return ec == std::errc() ? std::string(buf.data(), end) : std::string("0");
-}
+// A coordinate or a figure on the plot: one decimal unless said.
+std::string num(double v, int decimals = 1) { return format_fixed(v, decimals); }
 
 std::string escape(const std::string& text) {
   std::string out;
