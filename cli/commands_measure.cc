@@ -464,9 +464,7 @@ void seed_from_clock_unless_given(const CLI::App& cmd, SimulatorSettings& s) {
   }
 }
 
-}  // namespace
-
-void add_measure_commands(CLI::App& app, CommandAction& action) {
+void add_demo_command(CLI::App& app, CommandAction& action) {
   auto demo_opts = std::make_shared<MeasureOptions>();
   auto demo_sim = std::make_shared<SimulatorSettings>();
   CLI::App* demo = app.add_subcommand(
@@ -507,7 +505,9 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
     }
     action = [demo_opts, demo_sim] { return cmd_demo(*demo_opts, *demo_sim); };
   });
+}
 
+void add_sim_command(CLI::App& app, CommandAction& action) {
   auto sim_settings = std::make_shared<SimulatorSettings>();
   auto sim_part = std::make_shared<std::string>();
   CLI::App* sim = app.add_subcommand(
@@ -547,7 +547,9 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
     }
     action = [sim_settings, sim_part, sim_grind] { return cmd_sim(*sim_part, *sim_settings, *sim_grind); };
   });
+}
 
+void add_measure_command(CLI::App& app, CommandAction& action) {
   auto measure_opts = std::make_shared<MeasureOptions>();
   auto gauge_address = std::make_shared<std::string>();
   CLI::App* measure = app.add_subcommand(
@@ -603,6 +605,14 @@ void add_measure_commands(CLI::App& app, CommandAction& action) {
     }
     action = [measure_opts, gauge_address] { return cmd_measure(*measure_opts, *gauge_address); };
   });
+}
+
+}  // namespace
+
+void add_measure_commands(CLI::App& app, CommandAction& action) {
+  add_demo_command(app, action);
+  add_sim_command(app, action);
+  add_measure_command(app, action);
 }
 
 }  // namespace gaugeloop

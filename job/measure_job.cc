@@ -410,13 +410,12 @@ Status check_job_settings(const JobSettings& settings) {
   return {};
 }
 
-Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
-  Result<Prepared> prepared = check_names_and_prepare(s);
-  if (!prepared) return prepared.error();
-  const DesignReading* design_reading = &prepared->reading;
-  // Absolute, so the push history names one file whatever directory a command runs in.
-  const std::filesystem::path nc_file =
-      std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal();
+namespace {
+
+// Everything that needs the database and the NC directory but not the gauge, before the
+// first poll: the NC directory takes a file, both file systems have room, the database is
+// sound and writable, and pushes interrupted earlier are reconciled.
+Result<RunStore> open_for_run(const JobSettings& s, const std::filesystem::path& nc_file) {
   if (Status d = check_nc_directory(s.nc_dir, nc_file); !d) return d.error();
   if (s.db_path != ":memory:") {
     const std::filesystem::path db_dir = std::filesystem::absolute(s.db_path).parent_path();
@@ -433,240 +432,328 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
   }
   if (Status w = store->check_writable(); !w) return w.error();
   // A push interrupted earlier is recorded or abandoned before the table in force is read.
-  if (Result<ReconcileReport> r = reconcile_pushes(*store, nc_file); !r) return r.error();
+  NcFiles& files = s.nc_files ? *s.nc_files : real_nc_files();
+  if (Result<ReconcileReport> r = reconcile_pushes(*store, nc_file, files); !r) return r.error();
+  return store;
+}
 
-  // From here on a failure is also kept in the database as an event (a fault or a refusal),
-  // naming the run when one was stored, so `gaugeloop events` shows why a run is missing.
-  std::optional<std::int64_t> stored_run;
-  Result<JobReport> result = [&]() -> Result<JobReport> {
-    Result<GroundWith> ground = resolve_ground_with(*store, nc_file, s);
+// One run through the job's steps, in order: the table in force, acquire, analyse and
+// correct, store, then push the table or keep it. Each step leaves its results in members
+// for the next; a step's failure ends the run with that step's error.
+class JobRun {
+ public:
+  JobRun(GaugeClient& gauge, const JobSettings& s, const Prepared& prepared, RunStore& store,
+         std::filesystem::path nc_file)
+      : gauge_(gauge), s_(s), design_reading_(prepared.reading), store_(store), nc_file_(std::move(nc_file)) {}
+
+  Result<JobReport> run() {
+    if (Status t = read_table_in_force(); !t) return t.error();
+    if (Status a = acquire(); !a) return a.error();
+    if (Status c = analyse_and_correct(); !c) return lost(c.error());
+    if (Status r = store_run(); !r) return lost(r.error());
+    return push_or_keep();
+  }
+
+  // The run's id once it is stored: a failure after that still names it.
+  std::optional<std::int64_t> stored_run() const {
+    return report_.run_id != 0 ? std::optional<std::int64_t>(report_.run_id) : std::nullopt;
+  }
+
+ private:
+  void step(std::string code, std::string message, std::optional<std::int64_t> run_id = std::nullopt) const {
+    if (s_.on_step) s_.on_step(JobStep{std::move(code), std::move(message), run_id});
+  }
+
+  // A failure after the measurement: the measurement is kept in a file, and the error says where.
+  Error lost(Error e) const {
+    const std::filesystem::path kept = keep_unstored_measurement(record_, s_);
+    e.message += kept.empty() ? "; the measurement could not be kept anywhere either"
+                              : "; the measurement is kept in " + kept.string();
+    return e;
+  }
+
+  // Which table ground the part, the correction it carries, and where its points lie.
+  Status read_table_in_force() {
+    Result<GroundWith> ground = resolve_ground_with(store_, nc_file_, s_);
     if (!ground) return ground.error();
-    const DegreeTable in_force = ground->correction_um();
-    const std::optional<std::int64_t> in_force_run = ground->run_id();
+    ground_ = std::move(*ground);
+    correction_in_force_ = ground_.correction_um();
+    Result<std::optional<TablePointsInForce>> points = points_in_force(store_, nc_file_, s_);
+    if (!points) return points.error();
+    points_in_force_ = std::move(*points);
+    return {};
+  }
 
-    Result<std::optional<TablePointsInForce>> in_force_points = points_in_force(*store, nc_file, s);
-    if (!in_force_points) return in_force_points.error();
-
-    auto step = [&s](std::string code, std::string message, std::optional<std::int64_t> run_id = std::nullopt) {
-      if (s.on_step) s.on_step(JobStep{std::move(code), std::move(message), run_id});
-    };
-
-    // Acquire.
+  // The revolutions from the gauge, and the record as far as the measurement goes: kept
+  // whatever happens next.
+  Status acquire() {
     const std::string started = format_utc(std::time(nullptr));
     const auto acquire_start = std::chrono::steady_clock::now();
-    Poller poller(gauge, s.poller);
+    Poller poller(gauge_, s_.poller);
     Result<MeasuredRun> measured = poller.measure();
     if (!measured) return measured.error();
-    const std::string finished = format_utc(std::time(nullptr));
+    finished_utc_ = format_utc(std::time(nullptr));
     step("acquired",
-         std::to_string(measured->revolutions.size()) + " revolutions from " + gauge.address() + " in " +
+         std::to_string(measured->revolutions.size()) + " revolutions from " + gauge_.address() + " in " +
              format_fixed(std::chrono::duration<double>(std::chrono::steady_clock::now() - acquire_start).count(), 1) +
              " s (" + std::to_string(measured->discarded_revolutions) + " discarded, " +
              std::to_string(measured->reconnects) + " reconnects, " + std::to_string(measured->polls) + " polls)");
-
-    // The record as far as the measurement goes: kept whatever happens next.
-    RunRecord record;
-    record.started_utc = started;
-    record.finished_utc = finished;
-    record.machine = s.machine;
-    record.part = s.part.name;
-    record.lobe = s.part.lobe;
-    record.gauge = gauge.address();
-    record.note = s.note;
-    record.measured = *measured;
-    record.correction_in_force_run = in_force_run;
-    record.geometry = s.part;
-    record.settings = settings_text(s);
-    record.inspection = s.inspect;
-    if (!ground->source.empty() && ground->version) {
-      record.ground_with_version = ground->version;
-      record.ground_with_source = ground->source;
+    record_.started_utc = started;
+    record_.finished_utc = finished_utc_;
+    record_.machine = s_.machine;
+    record_.part = s_.part.name;
+    record_.lobe = s_.part.lobe;
+    record_.gauge = gauge_.address();
+    record_.note = s_.note;
+    record_.measured = std::move(*measured);
+    record_.correction_in_force_run = ground_.run_id();
+    record_.geometry = s_.part;
+    record_.settings = settings_text(s_);
+    record_.inspection = s_.inspect;
+    if (!ground_.source.empty() && ground_.version) {
+      record_.ground_with_version = ground_.version;
+      record_.ground_with_source = ground_.source;
     }
-    auto lost = [&](Error e) {
-      const std::filesystem::path kept = keep_unstored_measurement(record, s);
-      e.message += kept.empty() ? "; the measurement could not be kept anywhere either"
-                                : "; the measurement is kept in " + kept.string();
-      return e;
-    };
+    return {};
+  }
 
-    // Analyse and correct.
-    Result<LobeAnalysis> analysis = analyse_lobe(*measured, *design_reading, s.part, s.analysis);
-    if (!analysis) return lost(in_step("analysis", analysis.error()));
-    record.analysis = *analysis;
-    step("analysed", "max lift error " + format_fixed(analysis->max_abs_error_um, 2) + " um, RMS " +
-                         format_fixed(analysis->rms_error_um, 2) + " um, phase " + format_fixed(analysis->phase_error_deg, 4) +
-                         " deg, runout " + format_fixed(analysis->base_circle_runout_um, 2) + " um, repeatability " +
-                         format_fixed(analysis->repeatability_um, 2) + " um");
-    std::string evidence;
-    std::string not_built_on;
-    if (!s.inspect) {
-      Result<std::string> why =
-          why_not_built_on(*store, *ground, *analysis, static_cast<int>(measured->revolutions.size()), s, evidence);
-      if (!why) return lost(why.error());
-      not_built_on = std::move(*why);
+  // The lift error, whether the part shows the table in force, the correction and its verdict,
+  // and the table built from it (for a held correction too: a person may approve it).
+  Status analyse_and_correct() {
+    Result<LobeAnalysis> analysis = analyse_lobe(record_.measured, design_reading_, s_.part, s_.analysis);
+    if (!analysis) return in_step("analysis", analysis.error());
+    record_.analysis = std::move(*analysis);
+    const LobeAnalysis& a = record_.analysis;
+    step("analysed", "max lift error " + format_fixed(a.max_abs_error_um, 2) + " um, RMS " +
+                         format_fixed(a.rms_error_um, 2) + " um, phase " + format_fixed(a.phase_error_deg, 4) +
+                         " deg, runout " + format_fixed(a.base_circle_runout_um, 2) + " um, repeatability " +
+                         format_fixed(a.repeatability_um, 2) + " um");
+    if (!s_.inspect) {
+      const int revolutions = static_cast<int>(record_.measured.revolutions.size());
+      Result<std::string> why = why_not_built_on(store_, ground_, a, revolutions, s_, evidence_);
+      if (!why) return why.error();
+      not_built_on_ = std::move(*why);
     }
-    Result<CompensationDecision> decision = decide_correction(*analysis, *design_reading, in_force, s.compensation);
-    if (!decision) return lost(in_step("compensation", decision.error()));
+    Result<CompensationDecision> decision =
+        decide_correction(a, design_reading_, correction_in_force_, s_.compensation);
+    if (!decision) return in_step("compensation", decision.error());
     // An inspection, or a part the table did not grind, leaves the correction in force as it is.
-    const bool correction_stands = s.inspect || !not_built_on.empty();
-    const DegreeTable& correction = correction_stands ? in_force : decision->correction_um;
-    CompensationVerdict verdict = decision->verdict;
-    std::string verdict_reasons = decision->reasons();
-    // The table is built before the run is stored, for a held correction too (a person may
-    // approve it). One the geometry or the axis guards refuse (a concave flank the wheel no
-    // longer fits, a limit broken) is a refusal: the run is stored, nothing is pushed.
-    std::optional<BuiltTable> built;
-    if (verdict != CompensationVerdict::kRefuse && !correction_stands) {
-      Result<BuiltTable> b = [&]() -> Result<BuiltTable> {
-        Result<PeriodicSpline> target = corrected_lift(s.design, *design_reading, correction, s.part);
-        if (!target) return in_step("corrected lift", target.error());
-        return build_table(*target, s, *in_force_points ? &**in_force_points : nullptr);
-      }();
-      if (b) {
-        built = std::move(*b);
-      } else if (b.error().code == ErrorCode::kRefused) {
-        verdict = CompensationVerdict::kRefuse;
-        verdict_reasons = verdict_reasons.empty() ? b.error().message : verdict_reasons + "; " + b.error().message;
-      } else {
-        return lost(b.error());
-      }
+    const bool correction_stands = s_.inspect || !not_built_on_.empty();
+    record_.correction_um = correction_stands ? correction_in_force_ : decision->correction_um;
+    verdict_ = decision->verdict;
+    verdict_reasons_ = decision->reasons();
+    correction_max_um_ = std::abs(decision->largest_correction_um);
+    if (verdict_ != CompensationVerdict::kRefuse && !correction_stands) {
+      if (Status b = build_corrected_table(); !b) return b;
     }
-    const double correction_max_um = std::abs(decision->largest_correction_um);
-    {
-      std::string what = s.inspect ? std::string("inspection: the correction in force stands")
-                                   : std::string(compensation_verdict_name(verdict)) + ": largest correction " +
-                                         format_fixed(decision->largest_correction_um, 2) + " um at " +
-                                         std::to_string(decision->largest_correction_deg) + " deg";
-      if (in_force_run) what += ", built on run " + std::to_string(*in_force_run) + "'s";
-      if (built) {
-        what += "; table " + std::to_string(built->table.block_count()) + " blocks (" + built->table.writer +
-                "), command position error " + format_fixed(built->table.error.max_abs_um, 3) + " um";
-      }
-      if (!verdict_reasons.empty()) what += "; " + verdict_reasons;
-      if (!evidence.empty()) what += "; " + evidence;
-      step("compensated", what);
-    }
+    step("compensated", compensated_text(*decision));
+    return {};
+  }
 
-    // Store the run: one transaction, all or nothing.
-    record.correction_um = correction;
-    Result<std::int64_t> run_id = store->insert_run(record);
-    if (!run_id) return lost(run_id.error());
-    stored_run = *run_id;
-    step("stored", "run " + std::to_string(*run_id) + " stored in " + store->path().string(), *run_id);
-
-    JobReport report;
-    report.run_id = *run_id;
-    report.measured = std::move(*measured);
-    report.analysis = *analysis;
-    report.verdict = verdict;
-    report.correction_max_um = correction_max_um;
-    report.correction_in_force_run = in_force_run;
-    report.ground_with_version = ground->version;
-    report.ground_with_source = ground->source;
-    report.ground_with_evidence = evidence;
-    report.inspection = s.inspect;
-    report.db_path = store->path();
-    if (built) {
-      report.interpolation = std::string(interpolation_name(built->table.interpolation));
-      report.table_writer = built->table.writer;
-      report.table_blocks = built->table.block_count();
-      report.command_error_um = built->table.error.max_abs_um;
+  // A table the geometry or the axis guards refuse (a concave flank the wheel no longer fits,
+  // a limit broken) is a refusal: the run is stored, nothing is pushed.
+  Status build_corrected_table() {
+    Result<BuiltTable> b = [&]() -> Result<BuiltTable> {
+      Result<PeriodicSpline> target = corrected_lift(s_.design, design_reading_, record_.correction_um, s_.part);
+      if (!target) return in_step("corrected lift", target.error());
+      return build_table(*target, s_, points_in_force_ ? &*points_in_force_ : nullptr);
+    }();
+    if (b) {
+      built_ = std::move(*b);
+    } else if (b.error().code == ErrorCode::kRefused) {
+      verdict_ = CompensationVerdict::kRefuse;
+      verdict_reasons_ = verdict_reasons_.empty() ? b.error().message : verdict_reasons_ + "; " + b.error().message;
+    } else {
+      return b.error();
     }
-    if (s.inspect) {
-      report.not_pushed_reason = "inspection: the correction in force and the NC program are untouched";
-      return report;
-    }
+    return {};
+  }
 
-    auto values = template_values(s);
-    values["run_id"] = std::to_string(*run_id);
-    values["created_utc"] = finished;
-    values["correction_max_um"] = format_fixed(correction_max_um, 1);
-    auto render = [&](int table_version) {
-      return render_table_program(s.nc_template, s.nc_template_name, values, built->table,
-                                  {*run_id, static_cast<std::int64_t>(table_version)});
-    };
+  std::string compensated_text(const CompensationDecision& decision) const {
+    std::string what = s_.inspect ? std::string("inspection: the correction in force stands")
+                                  : std::string(compensation_verdict_name(verdict_)) + ": largest correction " +
+                                        format_fixed(decision.largest_correction_um, 2) + " um at " +
+                                        std::to_string(decision.largest_correction_deg) + " deg";
+    if (const std::optional<std::int64_t> r = ground_.run_id()) what += ", built on run " + std::to_string(*r) + "'s";
+    if (built_) {
+      what += "; table " + std::to_string(built_->table.block_count()) + " blocks (" + built_->table.writer +
+              "), command position error " + format_fixed(built_->table.error.max_abs_um, 3) + " um";
+    }
+    if (!verdict_reasons_.empty()) what += "; " + verdict_reasons_;
+    if (!evidence_.empty()) what += "; " + evidence_;
+    return what;
+  }
+
+  // One transaction, all or nothing; the report is filled from here on.
+  Status store_run() {
+    Result<std::int64_t> run_id = store_.insert_run(record_);
+    if (!run_id) return run_id.error();
+    step("stored", "run " + std::to_string(*run_id) + " stored in " + store_.path().string(), *run_id);
+    report_.run_id = *run_id;
+    report_.measured = record_.measured;
+    report_.analysis = record_.analysis;
+    report_.verdict = verdict_;
+    report_.correction_max_um = correction_max_um_;
+    report_.correction_in_force_run = ground_.run_id();
+    report_.ground_with_version = ground_.version;
+    report_.ground_with_source = ground_.source;
+    report_.ground_with_evidence = evidence_;
+    report_.inspection = s_.inspect;
+    report_.db_path = store_.path();
+    if (built_) {
+      report_.interpolation = std::string(interpolation_name(built_->table.interpolation));
+      report_.table_writer = built_->table.writer;
+      report_.table_blocks = built_->table.block_count();
+      report_.command_error_um = built_->table.error.max_abs_um;
+    }
+    return {};
+  }
+
+  Result<std::string> render(int table_version) const {
+    std::map<std::string, std::string> values = template_values(s_);
+    values["run_id"] = std::to_string(report_.run_id);
+    values["created_utc"] = finished_utc_;
+    values["correction_max_um"] = format_fixed(correction_max_um_, 1);
+    return render_table_program(s_.nc_template, s_.nc_template_name, values, built_->table,
+                                {report_.run_id, static_cast<std::int64_t>(table_version)});
+  }
+
+  PushFacts push_facts() const {
     PushFacts facts;
-    facts.run_id = *run_id;
-    facts.reason = "run " + std::to_string(*run_id);
-    if (built) {
-      facts.interpolation = report.interpolation;
-      facts.block_count = report.table_blocks;
-      facts.command_error_um = report.command_error_um;
-      facts.point_count = static_cast<int>(built->table.points.size());
+    facts.run_id = report_.run_id;
+    facts.reason = "run " + std::to_string(report_.run_id);
+    if (built_) {
+      facts.interpolation = report_.interpolation;
+      facts.block_count = report_.table_blocks;
+      facts.command_error_um = report_.command_error_um;
+      facts.point_count = static_cast<int>(built_->table.points.size());
     }
-    facts.correction_max_um = correction_max_um;
+    facts.correction_max_um = correction_max_um_;
+    return facts;
+  }
 
-    // Not pushed: keep the table for approval when there is one, and say why in the events.
-    auto keep = [&](const std::string& reason, CompensationVerdict why, const std::string& code) -> Result<JobReport> {
-      report.not_pushed_reason = reason;
-      if (built) {
-        Result<std::string> program = render(0);
-        if (!program) return program.error();
-        PendingTable pending;
-        pending.run_id = *run_id;
-        pending.nc_file = nc_file.string();
-        pending.program_text = std::move(*program);
-        pending.verdict = why == CompensationVerdict::kHold ? PendingVerdict::kHold : PendingVerdict::kApply;
-        pending.reason = reason;
-        pending.interpolation = facts.interpolation;
-        pending.block_count = facts.block_count;
-        pending.command_error_um = facts.command_error_um;
-        pending.correction_max_um = facts.correction_max_um;
-        pending.point_count = facts.point_count;
-        Result<std::int64_t> id = store->add_pending(pending);
-        if (!id) return id.error();
-        report.pending_id = *id;
-      }
-      EventRecord event;
-      event.kind = EventKind::kRefusal;
-      event.code = code;
-      event.machine = s.machine;
-      event.part = s.part.name;
-      event.lobe = s.part.lobe;
-      event.run_id = *run_id;
-      event.message = "run " + std::to_string(*run_id) + " is stored, its table was not pushed: " + reason;
-      if (report.pending_id) {
-        event.message += " (waiting as pending table " + std::to_string(*report.pending_id) + ")";
-      }
-      if (Result<std::int64_t> e = store->record_event(event); !e) return e.error();
-      return report;
-    };
-
-    if (!not_built_on.empty()) {
+  // The table goes to the control unless something says not: an inspection, a part the table
+  // in force did not grind, a held or refused correction, approval required, a program edited
+  // by hand on the control.
+  Result<JobReport> push_or_keep() {
+    if (s_.inspect) {
+      report_.not_pushed_reason = "inspection: the correction in force and the NC program are untouched";
+      return report_;
+    }
+    if (!not_built_on_.empty()) {
       // Nothing to approve: the correction would repeat a change already made.
-      report.verdict = CompensationVerdict::kRefuse;
-      built.reset();
-      return keep(not_built_on, CompensationVerdict::kRefuse, "part not ground with the table in force");
+      report_.verdict = CompensationVerdict::kRefuse;
+      built_.reset();
+      return keep(not_built_on_, CompensationVerdict::kRefuse, "part not ground with the table in force");
     }
-    if (verdict != CompensationVerdict::kApply) {
-      return keep(verdict_reasons, verdict, "compensation " + std::string(compensation_verdict_name(verdict)));
+    if (verdict_ != CompensationVerdict::kApply) {
+      return keep(verdict_reasons_, verdict_, "compensation " + std::string(compensation_verdict_name(verdict_)));
     }
-    if (s.require_approval) return keep("approval required", CompensationVerdict::kApply, "table not pushed");
-    Result<PushCompletion> version = push_program(*store, nc_file, facts, render);
+    if (s_.require_approval) return keep("approval required", CompensationVerdict::kApply, "table not pushed");
+    PushOptions options;
+    options.files = s_.nc_files.get();
+    Result<PushCompletion> version = push_program(
+        store_, nc_file_, push_facts(), [this](int table_version) { return render(table_version); }, options);
     if (!version) {
       // A table edited by hand on the control is not overwritten: a person decides.
       if (version.error().code == ErrorCode::kRefused)
         return keep(version.error().message, CompensationVerdict::kApply, "table not pushed");
       Error e = version.error();
-      e.message = "run " + std::to_string(*run_id) + " is stored; " + e.message;
+      e.message = "run " + std::to_string(report_.run_id) + " is stored; " + e.message;
       return e;
     }
-    report.table_version = version->table_version;
-    report.nc_file = nc_file;
-    return report;
-  }();
-
-  if (!result) {
-    EventRecord event;
-    event.kind = event_kind_for(result.error().code);
-    event.code = std::string(error_code_name(result.error().code));
-    event.machine = s.machine;
-    event.part = s.part.name;
-    event.lobe = s.part.lobe;
-    event.run_id = stored_run;
-    event.message = result.error().message;
-    (void)store->record_event(event);  // best effort: the error itself is what the user is told
+    report_.table_version = version->table_version;
+    report_.nc_file = nc_file_;
+    return report_;
   }
+
+  // Not pushed: the table is kept for approval when there is one, and the reason is an event.
+  Result<JobReport> keep(const std::string& reason, CompensationVerdict why, const std::string& code) {
+    report_.not_pushed_reason = reason;
+    if (built_) {
+      Result<std::string> program = render(0);
+      if (!program) return program.error();
+      const PushFacts facts = push_facts();
+      PendingTable pending;
+      pending.run_id = report_.run_id;
+      pending.nc_file = nc_file_.string();
+      pending.program_text = std::move(*program);
+      pending.verdict = why == CompensationVerdict::kHold ? PendingVerdict::kHold : PendingVerdict::kApply;
+      pending.reason = reason;
+      pending.interpolation = facts.interpolation;
+      pending.block_count = facts.block_count;
+      pending.command_error_um = facts.command_error_um;
+      pending.correction_max_um = facts.correction_max_um;
+      pending.point_count = facts.point_count;
+      Result<std::int64_t> id = store_.add_pending(pending);
+      if (!id) return id.error();
+      report_.pending_id = *id;
+    }
+    EventRecord event;
+    event.kind = EventKind::kRefusal;
+    event.code = code;
+    event.machine = s_.machine;
+    event.part = s_.part.name;
+    event.lobe = s_.part.lobe;
+    event.run_id = report_.run_id;
+    event.message = "run " + std::to_string(report_.run_id) + " is stored, its table was not pushed: " + reason;
+    if (report_.pending_id) {
+      event.message += " (waiting as pending table " + std::to_string(*report_.pending_id) + ")";
+    }
+    if (Result<std::int64_t> e = store_.record_event(event); !e) return e.error();
+    return report_;
+  }
+
+  GaugeClient& gauge_;
+  const JobSettings& s_;
+  const DesignReading& design_reading_;
+  RunStore& store_;
+  const std::filesystem::path nc_file_;
+  // read_table_in_force
+  GroundWith ground_;
+  DegreeTable correction_in_force_;
+  std::optional<TablePointsInForce> points_in_force_;
+  // acquire
+  RunRecord record_;
+  std::string finished_utc_;
+  // analyse_and_correct
+  std::string evidence_;
+  std::string not_built_on_;
+  CompensationVerdict verdict_ = CompensationVerdict::kApply;
+  std::string verdict_reasons_;
+  double correction_max_um_ = 0.0;
+  std::optional<BuiltTable> built_;
+  // store_run on
+  JobReport report_;
+};
+
+// A failure once the database is open is also kept there as an event (a fault or a refusal),
+// naming the run when one was stored, so `gaugeloop events` shows why a run is missing.
+void record_failure(RunStore& store, const JobSettings& s, const Error& error, std::optional<std::int64_t> run_id) {
+  EventRecord event;
+  event.kind = event_kind_for(error.code);
+  event.code = std::string(error_code_name(error.code));
+  event.machine = s.machine;
+  event.part = s.part.name;
+  event.lobe = s.part.lobe;
+  event.run_id = run_id;
+  event.message = error.message;
+  (void)store.record_event(event);  // best effort: the error itself is what the user is told
+}
+
+}  // namespace
+
+Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
+  Result<Prepared> prepared = check_names_and_prepare(s);
+  if (!prepared) return prepared.error();
+  // Absolute, so the push history names one file whatever directory a command runs in.
+  const std::filesystem::path nc_file =
+      std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal();
+  Result<RunStore> store = open_for_run(s, nc_file);
+  if (!store) return store.error();
+  JobRun run(gauge, s, *prepared, *store, nc_file);
+  Result<JobReport> result = run.run();
+  if (!result) record_failure(*store, s, result.error(), run.stored_run());
   return result;
 }
 

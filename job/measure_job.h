@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -16,6 +17,7 @@
 #include "core/part.h"
 #include "core/result.h"
 #include "core/run.h"
+#include "job/nc_files.h"
 #include "nc_out/table_guards.h"
 #include "nc_out/table_writer.h"
 
@@ -86,6 +88,8 @@ struct JobSettings {
   // The service checks once at start (integrity_check) and sets this false: the quick check
   // reads every page, a second or more on a database of years.
   bool check_integrity = true;
+  // The NC directory the push writes (empty: the real one); a test's fake fails on demand.
+  std::shared_ptr<NcFiles> nc_files;
   // Called as each step of the cycle goes through (JobStep), for a caller that logs and
   // records every step (the service). Failures are not steps: they are the job's error.
   // "stored" comes before the table is pushed: a caller that must name the run even when the

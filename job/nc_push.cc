@@ -2,7 +2,6 @@
 #include "job/nc_push.h"
 
 #include "core/atomic_file.h"
-#include "core/text_file.h"
 #include "nc_out/table_program.h"
 
 namespace gaugeloop {
@@ -23,15 +22,6 @@ Error refused(const std::filesystem::path& nc_file, const std::string& what, con
 
 namespace {
 
-// The file on the control, or empty if there is none.
-Result<std::optional<std::string>> read_program_on_control(const std::filesystem::path& nc_file) {
-  std::error_code ec;
-  if (!std::filesystem::exists(nc_file, ec)) return std::optional<std::string>();
-  Result<std::string> text = read_regular_file(nc_file, "NC program");
-  if (!text) return text.error();
-  return std::optional<std::string>(std::move(*text));
-}
-
 std::string header_value(const ParsedTable& t, const std::string& key) {
   auto it = t.header.find(key);
   return it == t.header.end() ? std::string("?") : it->second;
@@ -39,8 +29,8 @@ std::string header_value(const ParsedTable& t, const std::string& key) {
 
 }  // namespace
 
-Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::path& nc_file) {
-  Result<std::optional<std::string>> on_disk = read_program_on_control(nc_file);
+Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::path& nc_file, NcFiles& files) {
+  Result<std::optional<std::string>> on_disk = files.read_program(nc_file);
   if (!on_disk) return on_disk.error();
   if (!*on_disk) return {};
   const std::string& text = **on_disk;
@@ -123,12 +113,12 @@ std::string_view push_step_name(PushStep step) {
 namespace {
 
 // reconcile_pushes with the directory's lock already held.
-Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem::path& nc_file) {
+Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem::path& nc_file, NcFiles& files) {
   ReconcileReport report;
   Result<std::vector<PushIntent>> open = store.open_push_intents(nc_file.string());
   if (!open) return open.error();
   if (!open->empty()) {
-    Result<std::optional<std::string>> on_disk = read_program_on_control(nc_file);
+    Result<std::optional<std::string>> on_disk = files.read_program(nc_file);
     if (!on_disk) return on_disk.error();
     for (const PushIntent& i : *open) {
       const std::string what = "table version " + std::to_string(i.push.table_version) + " of run " +
@@ -152,9 +142,8 @@ Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem:
       }
     }
   }
-  std::error_code ec;
-  if (std::filesystem::is_directory(directory_of(nc_file), ec)) {
-    Result<int> removed = remove_atomic_leftovers(nc_file);
+  if (files.is_directory(directory_of(nc_file))) {
+    Result<int> removed = files.remove_leftovers(nc_file);
     if (!removed) return removed.error();
     report.leftovers_removed = *removed;
     if (*removed > 0) {
@@ -174,15 +163,14 @@ void merge_into(ReconcileReport& total, ReconcileReport one) {
 
 }  // namespace
 
-Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file) {
-  std::error_code ec;
-  if (!std::filesystem::is_directory(directory_of(nc_file), ec)) {
+Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file, NcFiles& files) {
+  if (!files.is_directory(directory_of(nc_file))) {
     // No directory, no file and no leftovers: every open intent never reached the control.
-    return reconcile_locked(store, nc_file);
+    return reconcile_locked(store, nc_file, files);
   }
-  Result<DirectoryLock> lock = DirectoryLock::acquire(directory_of(nc_file));
+  Result<DirectoryLock> lock = files.lock_directory(directory_of(nc_file));
   if (!lock) return lock.error();
-  return reconcile_locked(store, nc_file);
+  return reconcile_locked(store, nc_file, files);
 }
 
 Result<ReconcileReport> reconcile_all_pushes(RunStore& store) {
@@ -202,11 +190,12 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   auto reached = [&options](PushStep step) {
     if (options.observer) options.observer(step);
   };
-  Result<DirectoryLock> lock = DirectoryLock::acquire(directory_of(nc_file));
+  NcFiles& files = options.files != nullptr ? *options.files : real_nc_files();
+  Result<DirectoryLock> lock = files.lock_directory(directory_of(nc_file));
   if (!lock) return lock.error();
-  if (Result<ReconcileReport> r = reconcile_locked(store, nc_file); !r) return r.error();
+  if (Result<ReconcileReport> r = reconcile_locked(store, nc_file, files); !r) return r.error();
   if (!options.overwrite_edited) {
-    if (Status c = check_not_edited_by_hand(store, nc_file); !c) return c.error();
+    if (Status c = check_not_edited_by_hand(store, nc_file, files); !c) return c.error();
   }
   Result<int> version = store.next_table_version(nc_file.string());
   if (!version) return version.error();
@@ -236,7 +225,7 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   if (!intent_id) return not_pushed(intent_id.error());
   reached(PushStep::kIntentRecorded);
 
-  Status written = write_file_atomically(nc_file, *program, [&reached](AtomicWriteStep step) {
+  Status written = files.write_program(nc_file, *program, [&reached](AtomicWriteStep step) {
     switch (step) {
       case AtomicWriteStep::kTemporaryWritten:
         return reached(PushStep::kTemporaryWritten);

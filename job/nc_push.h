@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/result.h"
+#include "job/nc_files.h"
 #include "storage/run_store.h"
 
 namespace gaugeloop {
@@ -24,7 +25,8 @@ namespace gaugeloop {
 // (the control may have been cleaned); so is a file never pushed that is absent. A file that
 // holds the program of a push still open in the journal (written, its record interrupted) is
 // that push's, not a hand edit.
-Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::path& nc_file);
+Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::path& nc_file,
+                                NcFiles& files = real_nc_files());
 
 // What a push records besides the program.
 struct PushFacts {
@@ -58,6 +60,7 @@ std::string_view push_step_name(PushStep step);
 struct PushOptions {
   bool overwrite_edited = false;  // a person approved overwriting a program edited by hand
   std::function<void(PushStep step)> observer;
+  NcFiles* files = nullptr;  // null: the real NC directory (real_nc_files)
 };
 
 // The push as one recoverable step. Under the NC directory's lock (DirectoryLock, so one
@@ -86,7 +89,8 @@ struct ReconcileReport {
 // lock: an open intent whose program the file holds byte for byte is completed (recorded as
 // pushed, "found on the control"), any other open intent is abandoned, and leftover temporary
 // files of ours are removed. Nothing is ever called edited by hand here.
-Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file);
+Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file,
+                                         NcFiles& files = real_nc_files());
 
 // reconcile_pushes for every file that has an open intent (the service at start, `gaugeloop
 // nc reconcile`).

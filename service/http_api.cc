@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "report/run_json.h"
+#include "core/guarded_thread.h"
 #include "core/utc_time.h"
 #include "storage/run_store.h"
 
@@ -860,10 +861,16 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
                                           "change [http] host or port");
   }
   s.port = port;
-  s.listener = std::thread([&s] {
-    s.server.listen_after_bind();
-    s.listener_done = true;
-  });
+  s.listener = start_guarded_thread(
+      "HTTP listener",
+      [&s] {
+        s.server.listen_after_bind();
+        s.listener_done = true;
+      },
+      [&s](std::string_view name, std::string_view what) {
+        spdlog::error("the {} thread was ended by an exception: {}; the HTTP API no longer answers", name, what);
+        s.listener_done = true;
+      });
   // stop() before the listener runs would be lost (httplib only stops a running server), so
   // start() returns once it runs (or, should it fail at once, has ended).
   while (!s.server.is_running() && !s.listener_done) std::this_thread::yield();

@@ -22,38 +22,15 @@
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
 #include "tests/support/sample_runs.h"
+#include "tests/support/table_program.h"
 #include "tests/support/tmpfs_mount.h"
 
 namespace gaugeloop {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::program_for;
 using testing::slurp;
-
-// A real table program for `run` and `version`: a linear table of 360 blocks on a path whose
-// stroke depends on `stroke_mm`, through the embedded Sinumerik template.
-Result<std::string> program_for(std::int64_t run, int version, double stroke_mm) {
-  SampledPath p;
-  p.c_step_deg = 0.01;
-  constexpr double kRad = M_PI / 180.0;
-  for (int k = 0; k < 36000; ++k) {
-    const double c = k * 0.01 * kRad;
-    p.x_mm.push_back(5.0 + stroke_mm * std::cos(c));
-    p.dx_dc_mm_per_deg.push_back(-stroke_mm * std::sin(c) * kRad);
-    p.d2x_dc2_mm_per_deg2.push_back(-stroke_mm * std::cos(c) * kRad * kRad);
-  }
-  Result<CurveTable> table = write_linear_table(p, 1.0);
-  if (!table) return table.error();
-  std::map<std::string, std::string> values = {{"program_name", "CAM_TEST"},
-                                               {"part", "intake"},
-                                               {"lobe", "1"},
-                                               {"version", "test"},
-                                               {"run_id", std::to_string(run)},
-                                               {"created_utc", ""},
-                                               {"correction_max_um", "0"},
-                                               {"table_number", "1"}};
-  return render_table_program(embedded::kNcTemplate, "embedded", values, *table, {run, version});
-}
 
 // The directory of one test: the database and the NC directory, possibly on a small tmpfs.
 class PushJournalTest : public ::testing::Test {

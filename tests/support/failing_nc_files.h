@@ -1,0 +1,44 @@
+// The real NC directory with faults on demand: each operation a push makes can be told to fail
+// with a given error (a full disk, a share gone, a lock held elsewhere), the others reach the
+// real file system. For the push's error paths, beside the tests on real full disks.
+#pragma once
+
+#include <map>
+#include <vector>
+
+#include "job/nc_files.h"
+
+namespace gaugeloop::testing {
+
+class FailingNcFiles final : public NcFiles {
+ public:
+  enum class Op { kLock, kRead, kWrite, kRemoveLeftovers };
+
+  std::map<Op, Error> fail;  // an operation listed fails with its error, every time
+  std::vector<Op> calls;     // every operation asked for, in order
+
+  Result<DirectoryLock> lock_directory(const std::filesystem::path& dir) override {
+    calls.push_back(Op::kLock);
+    if (auto it = fail.find(Op::kLock); it != fail.end()) return it->second;
+    return real_nc_files().lock_directory(dir);
+  }
+  bool is_directory(const std::filesystem::path& dir) override { return real_nc_files().is_directory(dir); }
+  Result<std::optional<std::string>> read_program(const std::filesystem::path& path) override {
+    calls.push_back(Op::kRead);
+    if (auto it = fail.find(Op::kRead); it != fail.end()) return it->second;
+    return real_nc_files().read_program(path);
+  }
+  Status write_program(const std::filesystem::path& path, std::string_view contents,
+                       const AtomicWriteObserver& observer) override {
+    calls.push_back(Op::kWrite);
+    if (auto it = fail.find(Op::kWrite); it != fail.end()) return it->second;
+    return real_nc_files().write_program(path, contents, observer);
+  }
+  Result<int> remove_leftovers(const std::filesystem::path& path) override {
+    calls.push_back(Op::kRemoveLeftovers);
+    if (auto it = fail.find(Op::kRemoveLeftovers); it != fail.end()) return it->second;
+    return real_nc_files().remove_leftovers(path);
+  }
+};
+
+}  // namespace gaugeloop::testing
