@@ -148,6 +148,99 @@ Result<std::string> render_table_program(std::string_view template_text, std::st
   return program;
 }
 
+namespace {
+
+// CTABDEF(following axis, leading axis, table number, periodicity[, memory]) on `code` into
+// `t`. Returns why it cannot be read; empty when it was.
+std::string read_ctabdef(std::string_view code, ParsedTable& t) {
+  // Rejoin: the arguments may contain blanks.
+  const size_t open = code.find('(');
+  const size_t close = code.rfind(')');
+  if (open == std::string_view::npos || close == std::string_view::npos || close < open) {
+    return "CTABDEF needs (following axis, leading axis, table number, periodicity)";
+  }
+  std::vector<std::string_view> args;
+  std::string_view rest = code.substr(open + 1, close - open - 1);
+  while (true) {
+    const size_t comma = rest.find(',');
+    args.push_back(trim(rest.substr(0, comma)));
+    if (comma == std::string_view::npos) break;
+    rest = rest.substr(comma + 1);
+  }
+  std::optional<int> n = args.size() >= 4 ? parse_int(args[2]) : std::nullopt;
+  std::optional<int> p = args.size() >= 4 ? parse_int(args[3]) : std::nullopt;
+  if (args.size() < 4 || args.size() > 5 || args[0].empty() || args[1].empty() || !n || !p) {
+    return "CTABDEF needs (following axis, leading axis, table number, periodicity[, memory])";
+  }
+  t.following_axis = upper(args[0]);
+  t.leading_axis = upper(args[1]);
+  t.table_number = *n;
+  t.periodicity = *p;
+  return "";
+}
+
+// The spline's end conditions, modal as on the control: the last of BAUTO/BNAT/BTAN and of
+// EAUTO/ENAT/ETAN programmed.
+struct SplineEnds {
+  bool bnat = false;
+  bool enat = false;
+};
+
+// One block between CTABDEF and CTABEND: its point (if it has one) appended to `t`, line
+// `line` (1-based) kept with it. Returns why it cannot be read; empty when it was.
+std::string read_table_block(const std::vector<std::string_view>& words, int line, ParsedTable& t,
+                             SplineEnds& ends) {
+  std::optional<double> c;
+  std::optional<double> x;
+  std::optional<Interpolation> mode;
+  for (std::string_view w : words) {
+    const std::string u = upper(w);
+    if (u == "G1" || u == "G01") {
+      mode = Interpolation::kLinear;
+    } else if (u == "CSPLINE") {
+      mode = Interpolation::kCubicSpline;
+    } else if (u == "BNAT" || u == "ENAT" || u == "BAUTO" || u == "EAUTO" || u == "BTAN" || u == "ETAN") {
+      // Only BNAT + ENAT is modelled; the others are read so that natural_ends says no.
+      if (u[0] == 'B') ends.bnat = u == "BNAT";
+      if (u[0] == 'E') ends.enat = u == "ENAT";
+    } else {
+      bool read = false;
+      for (const std::string* a : {&t.leading_axis, &t.following_axis}) {
+        if (u.size() > a->size() && u.compare(0, a->size(), *a) == 0) {
+          std::string_view value = w.substr(a->size());
+          if (!value.empty() && value.front() == '=') value.remove_prefix(1);
+          const std::optional<double> v = parse_number(value);
+          if (!v) return "`" + std::string(w) + "`: not a number after " + *a;
+          (*a == t.leading_axis ? c : x) = *v;
+          read = true;
+          break;
+        }
+      }
+      if (!read) {
+        return "`" + std::string(w) + "` in the curve table: gaugeloop reads only G1, CSPLINE, BNAT/ENAT, block " +
+               "numbers, " + t.leading_axis + " and " + t.following_axis;
+      }
+    }
+  }
+  if (!c && !x && !mode) return "";
+  if (!c) return "a table block needs the leading axis " + t.leading_axis;
+  if (!x && t.points.empty()) return "the first table block needs " + t.following_axis + " too";
+  const Interpolation block_mode = mode ? *mode : (t.points.empty() ? Interpolation::kLinear : t.interpolation);
+  if (t.points.size() == 1) {
+    t.interpolation = block_mode;
+  } else if (t.points.size() > 1 && block_mode != t.interpolation) {
+    return "the table mixes G1 and CSPLINE segments; gaugeloop models one kind per table";
+  }
+  if (!t.points.empty() && !(*c > t.points.back().c_deg)) {
+    return t.leading_axis + " " + format_fixed(*c, 3) + " does not increase";
+  }
+  t.points.push_back({*c, x ? *x : t.points.back().x_mm});
+  t.point_lines.push_back(line);
+  return "";
+}
+
+}  // namespace
+
 Result<ParsedTable> parse_table_program(std::string_view text, std::string_view file_name) {
   const std::vector<std::string_view> lines = split_lines(text);
   auto fail = [&](size_t index, const std::string& why) {
@@ -156,8 +249,7 @@ Result<ParsedTable> parse_table_program(std::string_view text, std::string_view 
   ParsedTable t;
   std::optional<size_t> def;
   std::optional<size_t> end;
-  bool bnat = false;  // modal, as on the control: the last of BAUTO/BNAT/BTAN programmed
-  bool enat = false;
+  SplineEnds ends;
   for (size_t i = 0; i < lines.size(); ++i) {
     const std::string_view l = trim(lines[i]);
     if (l.substr(0, kHeaderPrefix.size()) == kHeaderPrefix) {
@@ -173,30 +265,7 @@ Result<ParsedTable> parse_table_program(std::string_view text, std::string_view 
     const std::string first = upper(words.front());
     if (first.rfind("CTABDEF", 0) == 0) {
       if (def) return fail(i, "a second CTABDEF; gaugeloop reads programs with one curve table");
-      // Rejoin: the arguments may contain blanks.
-      const std::string_view code = code_of(l);
-      const size_t open = code.find('(');
-      const size_t close = code.rfind(')');
-      if (open == std::string_view::npos || close == std::string_view::npos || close < open) {
-        return fail(i, "CTABDEF needs (following axis, leading axis, table number, periodicity)");
-      }
-      std::vector<std::string_view> args;
-      std::string_view rest = code.substr(open + 1, close - open - 1);
-      while (true) {
-        const size_t comma = rest.find(',');
-        args.push_back(trim(rest.substr(0, comma)));
-        if (comma == std::string_view::npos) break;
-        rest = rest.substr(comma + 1);
-      }
-      std::optional<int> n = args.size() >= 4 ? parse_int(args[2]) : std::nullopt;
-      std::optional<int> p = args.size() >= 4 ? parse_int(args[3]) : std::nullopt;
-      if (args.size() < 4 || args.size() > 5 || args[0].empty() || args[1].empty() || !n || !p) {
-        return fail(i, "CTABDEF needs (following axis, leading axis, table number, periodicity[, memory])");
-      }
-      t.following_axis = upper(args[0]);
-      t.leading_axis = upper(args[1]);
-      t.table_number = *n;
-      t.periodicity = *p;
+      if (std::string why = read_ctabdef(code_of(l), t); !why.empty()) return fail(i, why);
       t.ctabdef_line = static_cast<int>(i + 1);
       def = i;
       continue;
@@ -209,62 +278,13 @@ Result<ParsedTable> parse_table_program(std::string_view text, std::string_view 
       continue;
     }
     if (!def || end) continue;  // outside the table: the user's own program
-
-    // A table block.
-    std::optional<double> c;
-    std::optional<double> x;
-    std::optional<Interpolation> mode;
-    for (std::string_view w : words) {
-      const std::string u = upper(w);
-      if (u == "G1" || u == "G01") {
-        mode = Interpolation::kLinear;
-      } else if (u == "CSPLINE") {
-        mode = Interpolation::kCubicSpline;
-      } else if (u == "BNAT" || u == "ENAT" || u == "BAUTO" || u == "EAUTO" || u == "BTAN" || u == "ETAN") {
-        // Only BNAT + ENAT is modelled; the others are read so that natural_ends says no.
-        if (u[0] == 'B') bnat = u == "BNAT";
-        if (u[0] == 'E') enat = u == "ENAT";
-      } else {
-        std::string_view axis;
-        std::string_view value;
-        for (const std::string* a : {&t.leading_axis, &t.following_axis}) {
-          if (u.size() > a->size() && u.compare(0, a->size(), *a) == 0) {
-            axis = w.substr(0, a->size());
-            value = w.substr(a->size());
-            if (!value.empty() && value.front() == '=') value.remove_prefix(1);
-            const std::optional<double> v = parse_number(value);
-            if (!v) return fail(i, "`" + std::string(w) + "`: not a number after " + *a);
-            (*a == t.leading_axis ? c : x) = *v;
-            break;
-          }
-        }
-        if (axis.empty()) {
-          return fail(i, "`" + std::string(w) +
-                             "` in the curve table: gaugeloop reads only G1, CSPLINE, BNAT/ENAT, block numbers, " +
-                             t.leading_axis + " and " + t.following_axis);
-        }
-      }
-    }
-    if (!c && !x && !mode) continue;
-    if (!c) return fail(i, "a table block needs the leading axis " + t.leading_axis);
-    if (!x && t.points.empty()) return fail(i, "the first table block needs " + t.following_axis + " too");
-    const Interpolation block_mode = mode ? *mode : (t.points.empty() ? Interpolation::kLinear : t.interpolation);
-    if (t.points.size() == 1) {
-      t.interpolation = block_mode;
-    } else if (t.points.size() > 1 && block_mode != t.interpolation) {
-      return fail(i, "the table mixes G1 and CSPLINE segments; gaugeloop models one kind per table");
-    }
-    if (!t.points.empty() && !(*c > t.points.back().c_deg)) {
-      return fail(i, t.leading_axis + " " + format_fixed(*c, 3) + " does not increase");
-    }
-    t.points.push_back({*c, x ? *x : t.points.back().x_mm});
-    t.point_lines.push_back(static_cast<int>(i + 1));
+    if (std::string why = read_table_block(words, static_cast<int>(i + 1), t, ends); !why.empty()) return fail(i, why);
   }
   if (!def)
     return make_error(ErrorCode::kInvalidInput, std::string(file_name) + ": no CTABDEF: not a curve table program");
   if (!end) return fail(*def, "CTABDEF is not closed by CTABEND");
   if (t.points.size() < 2) return fail(*def, "the curve table has fewer than 2 points");
-  t.natural_ends = t.interpolation == Interpolation::kCubicSpline && bnat && enat;
+  t.natural_ends = t.interpolation == Interpolation::kCubicSpline && ends.bnat && ends.enat;
   std::string body;
   for (size_t i = *def + 1; i < *end; ++i) {
     if (i > *def + 1) body += '\n';
