@@ -22,6 +22,7 @@
 
 #include "compensation/flat_probe.h"
 #include "simulator/seeded_random.h"
+#include "core/guarded_thread.h"
 
 namespace gaugeloop {
 namespace {
@@ -161,7 +162,7 @@ Result<std::unique_ptr<GaugeSimulator>> GaugeSimulator::start(const Part& part, 
   for (const FaultSpec& f : settings.faults) sim->inject(f);
   if (Status s = sim->listen(); !s) return s.error();
   sim->start_ns_ = now_ns();
-  sim->thread_ = std::thread([raw = sim.get()] { raw->serve(); });
+  sim->thread_ = start_guarded_thread("gauge simulator", [raw = sim.get()] { raw->serve(); }, {});
   return sim;
 }
 

@@ -1,6 +1,7 @@
 // The virtual PLC's libmodbus server loop and its handshake API.
 #include "simulator/plc_simulator.h"
 #include "simulator/tcp_listener.h"
+#include "core/guarded_thread.h"
 
 #include <arpa/inet.h>
 #include <modbus/modbus.h>
@@ -41,7 +42,7 @@ Result<std::unique_ptr<PlcSimulator>> PlcSimulator::start(const PlcSimulatorSett
   sim->wake_fd_ = ::eventfd(0, EFD_CLOEXEC);
   if (sim->wake_fd_ < 0) return make_error(ErrorCode::kIo, std::string("eventfd: ") + std::strerror(errno));
   if (Status s = sim->listen(); !s) return s.error();
-  sim->thread_ = std::thread([raw = sim.get()] { raw->serve(); });
+  sim->thread_ = start_guarded_thread("PLC simulator", [raw = sim.get()] { raw->serve(); }, {});
   return sim;
 }
 
