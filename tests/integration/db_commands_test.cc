@@ -16,6 +16,7 @@
 #include "tests/support/cli.h"
 #include "tests/support/damaged_database.h"
 #include "tests/support/sample_runs.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -31,9 +32,7 @@ bool has(const std::string& text, const std::string& fragment) { return text.fin
 class DbCommandsTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("gaugeloop-db-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
+    dir_ = tmp_.path();
     db_ = dir_ / "data" / "gaugeloop.sqlite";
     Result<RunStore> store = RunStore::open(db_);
     ASSERT_TRUE(store.ok()) << store.error().message;
@@ -49,7 +48,6 @@ class DbCommandsTest : public ::testing::Test {
   void TearDown() override {
     std::error_code ec;
     fs::permissions(db_, fs::perms::owner_all, fs::perm_options::add, ec);
-    fs::remove_all(dir_);
   }
 
   // The run ids `runs list --json` prints for the database in `data_dir`.
@@ -64,6 +62,7 @@ class DbCommandsTest : public ::testing::Test {
     return ids;
   }
 
+  testing::TempDir tmp_;  // before everything that lives in it
   fs::path dir_;
   fs::path db_;
   std::string data_;

@@ -17,6 +17,7 @@
 
 #include "storage/run_store.h"
 #include "tests/support/sample_runs.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -53,13 +54,10 @@ struct HookLog {
 class HttpApiTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("gaugeloop-http-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
+    dir_ = tmp_.path();
   }
   void TearDown() override {
     api_.reset();
-    fs::remove_all(dir_);
   }
 
   fs::path db() const { return dir_ / "gaugeloop.sqlite"; }
@@ -169,6 +167,7 @@ class HttpApiTest : public ::testing::Test {
     return a.j.is_object() ? a.j.value("error", std::string()) : std::string();
   }
 
+  testing::TempDir tmp_;  // before everything that lives in it
   fs::path dir_;
   std::vector<std::int64_t> ids_;
   std::int64_t pending_id_ = 0;

@@ -24,6 +24,7 @@
 #include "tests/support/damaged_database.h"
 #include "tests/support/intake_job.h"
 #include "tests/support/tmpfs_mount.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -258,8 +259,8 @@ TEST_F(LoopGuardsTest, ARunTheDatabaseRefusesAfterMeasuringIsKeptInAFile) {
 
 // Inputs are read only from regular files of a bounded size, with a clear message otherwise.
 TEST(BoundedInput, DevicesDirectoriesAndHugeFilesAreRefusedByName) {
-  const fs::path dir = fs::temp_directory_path() / ("gaugeloop-bounded-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const testing::TempDir tmp;
+  const std::filesystem::path dir = tmp.path();
   Result<LiftTable> zero = read_lift_table_csv("/dev/zero");
   ASSERT_FALSE(zero.ok());
   EXPECT_NE(zero.error().message.find("/dev/zero is not a regular file"), std::string::npos) << zero.error().message;
@@ -280,13 +281,12 @@ TEST(BoundedInput, DevicesDirectoriesAndHugeFilesAreRefusedByName) {
   const auto cli = testing::run_command("measure --gauge 127.0.0.1:1 --part /dev/zero --data-dir " + dir.string());
   EXPECT_EQ(cli.exit_code, 2) << cli.output;
   EXPECT_NE(cli.output.find("part file /dev/zero is not a regular file"), std::string::npos) << cli.output;
-  fs::remove_all(dir);
 }
 
 // A lift table and a part file saved with a UTF-8 byte order mark read as without one.
 TEST(BoundedInput, AByteOrderMarkIsAccepted) {
-  const fs::path dir = fs::temp_directory_path() / ("gaugeloop-bom-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const testing::TempDir tmp;
+  const std::filesystem::path dir = tmp.path();
   const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
   const std::string csv = slurp(examples / "intake_flat.csv");
   const std::string toml = slurp(examples / "intake_flat.toml");
@@ -300,7 +300,6 @@ TEST(BoundedInput, AByteOrderMarkIsAccepted) {
   Result<PartFile> part = read_part_file(dir / "intake_flat.toml");
   ASSERT_TRUE(part.ok()) << part.error().message;
   EXPECT_EQ(part->part.name, "intake_flat");
-  fs::remove_all(dir);
 }
 
 }  // namespace

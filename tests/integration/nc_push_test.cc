@@ -23,6 +23,7 @@
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
 #include "tests/support/intake_job.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -269,9 +270,8 @@ TEST_F(NcPushTest, APushFailingAfterTheRunIsStoredKeepsTheRunAndNamesIt) {
 // two programs in turn; the parent kills it right after it reports starting a write, 40
 // times, and each time the file must be exactly one of the two.
 TEST(NcPushKill, KilledPushLeavesTheOldProgramOrTheNewOne) {
-  const fs::path dir = fs::temp_directory_path() / ("gaugeloop-nc-kill-" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const testing::TempDir tmp;
+  const std::filesystem::path dir = tmp.path();
   const fs::path file = dir / "CAM.SPF";
   // Large programs, so a kill lands inside a write more often than between writes.
   std::string a = "; program A\n";
@@ -309,7 +309,6 @@ TEST(NcPushKill, KilledPushLeavesTheOldProgramOrTheNewOne) {
     ++old_or_new;
   }
   EXPECT_EQ(old_or_new, 40);
-  fs::remove_all(dir);
 }
 
 }  // namespace

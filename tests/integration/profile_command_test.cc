@@ -18,6 +18,7 @@
 #include "compensation/wheel_path.h"
 #include "core/lift_table.h"
 #include "core/part.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -87,12 +88,8 @@ Part intake_part() {
 class ProfileCommandTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("gaugeloop-profile-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = tmp_.path();
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   // A part file in the test directory: `body` plus the lift table of an example, by path.
   std::string write_part(const std::string& name, const std::string& csv_file, const std::string& body) {
@@ -103,6 +100,7 @@ class ProfileCommandTest : public ::testing::Test {
     return path.string();
   }
 
+  testing::TempDir tmp_;  // before everything that lives in it
   fs::path dir_;
 };
 

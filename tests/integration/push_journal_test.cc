@@ -23,6 +23,7 @@
 #include "tests/support/cli.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/table_program.h"
+#include "tests/support/temp_dir.h"
 #include "tests/support/tmpfs_mount.h"
 
 namespace gaugeloop {
@@ -35,15 +36,11 @@ using testing::slurp;
 // The directory of one test: the database and the NC directory, possibly on a small tmpfs.
 class PushJournalTest : public ::testing::Test {
  protected:
-  void SetUp() override { use_dir(fs::temp_directory_path() / ("gaugeloop-journal-" + std::to_string(::getpid()))); }
-  void TearDown() override {
-    std::error_code ec;
-    if (owns_dir_) fs::remove_all(dir_, ec);
-  }
+  void SetUp() override { use_dir(tmp_.path()); }
 
-  void use_dir(const fs::path& dir, bool owns = true) {
+  // Another directory for the rest of the test (one on a small tmpfs); its owner removes it.
+  void use_dir(const fs::path& dir) {
     dir_ = dir;
-    owns_dir_ = owns;
     std::error_code ec;
     fs::remove_all(dir_ / "nc", ec);
     fs::remove(db(), ec);
@@ -111,8 +108,8 @@ class PushJournalTest : public ::testing::Test {
     return n;
   }
 
+  testing::TempDir tmp_;
   fs::path dir_;
-  bool owns_dir_ = true;
 };
 
 // A push killed (the process ends on the spot, as kill -9 or a power cut would end it, with no
@@ -233,7 +230,7 @@ TEST_F(PushJournalTest, ADatabaseLockedThroughThePushLosesNothing) {
 TEST_F(PushJournalTest, ADiskFullAtEveryLevelLosesNothing) {
   testing::TmpfsMount fs_small(8 * 1024);
   if (!fs_small.mounted()) GTEST_SKIP() << fs_small.why_not();
-  use_dir(fs_small.dir(), /*owns=*/false);
+  use_dir(fs_small.dir());
   const std::int64_t run = stored_run("2026-11-30T08:00:00Z");
   ASSERT_TRUE(push(run).ok());
   int version = 1;

@@ -17,6 +17,7 @@
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
 #include "tests/support/sample_runs.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -38,9 +39,7 @@ RunRecord record(const std::string& part, int lobe, const std::string& machine, 
 class RunsCommandsTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("gaugeloop-runs-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
+    dir_ = tmp_.path();
     Result<RunStore> store = RunStore::open(dir_ / "gaugeloop.sqlite");
     ASSERT_TRUE(store.ok()) << store.error().message;
     // 1, 2: lobe 1 on g1 over two days; 3: lobe 2; 4: lobe 1 on g2 without frame or settings.
@@ -59,7 +58,6 @@ class RunsCommandsTest : public ::testing::Test {
     ASSERT_TRUE(store->record_event(e).ok());
     data_ = " --data-dir " + dir_.string();
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   nlohmann::json json_of(const std::string& args) {
     CommandResult r = run_command(args + data_);
@@ -75,6 +73,7 @@ class RunsCommandsTest : public ::testing::Test {
     return out;
   }
 
+  testing::TempDir tmp_;  // before everything that lives in it
   fs::path dir_;
   std::string data_;
   std::vector<std::int64_t> ids_;

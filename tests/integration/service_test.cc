@@ -28,6 +28,7 @@
 #include "simulator/virtual_grinder.h"
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
+#include "tests/support/temp_dir.h"
 
 // Last: httplib brings <resolv.h>, whose `res` macro breaks Eigen's headers.
 #include <httplib.h>
@@ -106,10 +107,7 @@ bool has_code(const std::vector<StoredEvent>& events, const std::string& code) {
 class ServiceTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("gaugeloop-serve-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = tmp_.path();
     const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
     auto pf = read_part_file(examples / "intake_flat.toml");
     ASSERT_TRUE(pf.ok()) << pf.error().message;
@@ -127,7 +125,6 @@ class ServiceTest : public ::testing::Test {
                    "\"\n[database]\npath = \"runs.sqlite\"\n[http]\nport = 0\ntoken = \"" + kToken + "\"\n";
     std::ofstream(dir_ / "gaugeloop.toml") << config_text_;
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   std::string log() const { return slurp(dir_ / "serve.log"); }
 
@@ -142,6 +139,7 @@ class ServiceTest : public ::testing::Test {
     return list.ok() ? *list : std::vector<StoredEvent>{};
   }
 
+  testing::TempDir tmp_;  // before everything that lives in it
   fs::path dir_;
   std::string config_text_;
   std::unique_ptr<GaugeSimulator> sim_;
@@ -658,8 +656,8 @@ TEST(ServiceConfigFile, ExampleConfigChecksAndABadOneNamesFileLineAndKey) {
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_NE(ok.output.find("intake_flat lobe 1, exhaust_roller lobe 2"), std::string::npos) << ok.output;
 
-  const fs::path dir = fs::temp_directory_path() / ("gaugeloop-badcfg-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const testing::TempDir tmp;
+  const std::filesystem::path dir = tmp.path();
   std::ofstream(dir / "bad.toml") << "machine = \"m\"\n[gauge]\nmode = \"fast\"\n";
   testing::CommandResult bad = testing::run_command("serve --config " + (dir / "bad.toml").string());
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
@@ -687,13 +685,12 @@ TEST(ServiceConfigFile, ExampleConfigChecksAndABadOneNamesFileLineAndKey) {
   EXPECT_EQ(ncdir.exit_code, 2) << ncdir.output;
   EXPECT_NE(ncdir.output.find("ncdir.toml:5"), std::string::npos) << ncdir.output;
   EXPECT_NE(ncdir.output.find("NC directory"), std::string::npos) << ncdir.output;
-  fs::remove_all(dir);
 }
 
 TEST(ServiceConfigFile, PlcSettingsAndPartNumbersAreCheckedAtLoad) {
   const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
-  const fs::path dir = fs::temp_directory_path() / ("gaugeloop-plccfg-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const testing::TempDir tmp;
+  const std::filesystem::path dir = tmp.path();
   const std::string intake = "[[part]]\nfile = \"" + (examples / "intake_flat.toml").string() + "\"\n";
   const std::string exhaust = "[[part]]\nfile = \"" + (examples / "exhaust_roller.toml").string() + "\"\n";
   const std::string nc = "[nc]\ntemplate = \"" + (examples / "sinumerik" / "cam_table.spf").string() + "\"\n";
@@ -727,7 +724,6 @@ TEST(ServiceConfigFile, PlcSettingsAndPartNumbersAreCheckedAtLoad) {
   testing::CommandResult unnumbered = check("unnumbered.toml", "[gauge]\n" + intake + nc + "[plc]\n");
   EXPECT_EQ(unnumbered.exit_code, 2) << unnumbered.output;
   EXPECT_NE(unnumbered.output.find("no [[part]] has a plc_part_number"), std::string::npos) << unnumbered.output;
-  fs::remove_all(dir);
 }
 
 }  // namespace

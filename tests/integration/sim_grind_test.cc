@@ -12,6 +12,7 @@
 #include <string>
 
 #include "tests/support/cli.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -68,8 +69,8 @@ double max_lift_error_um(const std::string& report) {
 }
 
 TEST(SimGrind, EachTablePushedGrindsTheNextPartAndTheLoopConverges) {
-  const fs::path dir = fs::temp_directory_path() / ("gaugeloop-sim-grind-" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const testing::TempDir tmp;
+  const std::filesystem::path dir = tmp.path();
   SimProcess sim("--port 0 --seed 3 --time-scale 10 --grind --data-dir " + dir.string());
   ASSERT_FALSE(sim.wait_for_line("grinder: part 0 ground from design").empty());
   int port = 0;
@@ -94,7 +95,6 @@ TEST(SimGrind, EachTablePushedGrindsTheNextPartAndTheLoopConverges) {
   const double after = max_lift_error_um(second.output);
   ASSERT_GT(before, 0.0);
   EXPECT_LT(after, before / 3.0) << second.output;
-  fs::remove_all(dir);
 }
 
 }  // namespace

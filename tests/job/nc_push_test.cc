@@ -13,6 +13,7 @@
 #include "tests/support/failing_nc_files.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/table_program.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -24,9 +25,7 @@ using Op = FailingNcFiles::Op;
 class PushSeamTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const ::testing::TestInfo* t = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("gaugeloop-PushSeamTest-" + std::to_string(::getpid()) + "-" + t->name());
-    fs::remove_all(dir_);
+    dir_ = tmp_.path();
     fs::create_directories(dir_ / "nc");
     Result<RunStore> store = RunStore::open(dir_ / "gaugeloop.sqlite");
     ASSERT_TRUE(store.ok()) << store.error().message;
@@ -35,10 +34,6 @@ class PushSeamTest : public ::testing::Test {
         store_->insert_run(testing::sample_run("intake", 1, "grinder-1", "2026-12-01T08:00:00Z", 5.0));
     ASSERT_TRUE(id.ok()) << id.error().message;
     run_ = *id;
-  }
-  void TearDown() override {
-    store_.reset();
-    fs::remove_all(dir_);
   }
 
   fs::path nc_file() const { return dir_ / "nc" / "CAM_TEST.SPF"; }
@@ -71,6 +66,7 @@ class PushSeamTest : public ::testing::Test {
     EXPECT_TRUE(open->empty()) << context << ": an intent is left open";
   }
 
+  testing::TempDir tmp_;
   fs::path dir_;
   std::optional<RunStore> store_;
   std::int64_t run_ = 0;

@@ -18,6 +18,7 @@
 #include "service/plc_trigger.h"
 #include "storage/run_store.h"
 #include "tests/acquisition/scripted_gauge.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -27,10 +28,7 @@ namespace fs = std::filesystem;
 class ServiceTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const ::testing::TestInfo* t = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("gaugeloop-ServiceTest-" + std::to_string(::getpid()) + "-" + t->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = tmp_.path();
     const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
     std::ofstream(dir_ / "gaugeloop.toml") << "machine = \"grinder-7\"\n"
                                            << "[gauge]\nconfig = \"" << (examples / "gauges" / "simulator.toml").string()
@@ -55,7 +53,6 @@ class ServiceTest : public ::testing::Test {
     ASSERT_TRUE(reading.ok()) << reading.error().message;
     reading_ = std::make_shared<DesignReading>(std::move(*reading));
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   // A gauge on the design lobe for every run, counting the runs that asked for one.
   GaugeFactory design_gauge() {
@@ -68,6 +65,7 @@ class ServiceTest : public ::testing::Test {
     };
   }
 
+  testing::TempDir tmp_;
   fs::path dir_;
   ServiceConfig config_;
   std::shared_ptr<DesignReading> reading_;

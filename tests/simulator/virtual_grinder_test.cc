@@ -13,6 +13,7 @@
 #include "compensation/periodic_spline.h"
 #include "simulator/gauge_simulator.h"
 #include "tests/support/intake_simulator.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -159,9 +160,8 @@ TEST_F(VirtualGrinderTest, BadModelIsRefusedNamingTheTerm) {
 }
 
 TEST_F(VirtualGrinderTest, TableInForceMustBeReadable) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("gaugeloop-grinder-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const testing::TempDir tmp;
+  const std::filesystem::path dir = tmp.path();
   Result<CommandedPath> missing = commanded_path_from_program(dir / "NONE.SPF");
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.error().code, ErrorCode::kNotFound);
@@ -171,7 +171,6 @@ TEST_F(VirtualGrinderTest, TableInForceMustBeReadable) {
   Result<CommandedPath> parsed = commanded_path_from_program(bad);
   ASSERT_FALSE(parsed.ok());
   EXPECT_NE(parsed.error().message.find("BAD.SPF"), std::string::npos) << parsed.error().message;
-  std::filesystem::remove_all(dir);
 }
 
 // The gauge simulator serves the ground lobe: its form error is the ground lobe's against the

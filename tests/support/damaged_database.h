@@ -28,10 +28,12 @@ inline std::string sqlite_text(const std::filesystem::path& db, const std::strin
   return out;
 }
 
-// Overwrites 16 bytes with 0xFF in the middle of the cell content of the runs table's root
-// page (a leaf while the table holds a few runs), where the runs' values lie: the file
-// still opens and reads, but integrity_check and quick_check report the page. The database
-// must be closed (no -wal). Returns false if the file could not be written.
+// Overwrites 16 bytes with 0xFF at the start of the cell content of the runs table's root
+// page (a leaf while the table holds a few runs): the header of the cell there (its payload
+// size and row id) becomes nonsense, whatever the values in the row, so integrity_check and
+// quick_check report the page while the file still opens. (Bytes inside a text value would
+// not do: a corrupted text is still a text.) The database must be closed (no -wal). Returns
+// false if the file could not be written.
 inline bool damage_runs_table(const std::filesystem::path& db) {
   const std::int64_t page_size = std::stoll(sqlite_text(db, "PRAGMA page_size"));
   const std::int64_t root = std::stoll(sqlite_text(db, "SELECT rootpage FROM sqlite_schema WHERE name = 'runs'"));
@@ -42,7 +44,7 @@ inline bool damage_runs_table(const std::filesystem::path& db) {
   f.seekg(page_at);
   f.read(reinterpret_cast<char*>(header), sizeof header);
   const std::int64_t content_start = header[5] * 256 + header[6];
-  f.seekp(page_at + (content_start + page_size) / 2);
+  f.seekp(page_at + content_start);
   f.write(std::string(16, '\xff').data(), 16);
   return static_cast<bool>(f);
 }

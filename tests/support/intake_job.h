@@ -16,17 +16,14 @@
 #include "config/part_file.h"
 #include "core/lift_table.h"
 #include "simulator/gauge_simulator.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop::testing {
 
 class IntakeJobTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::temp_directory_path() / ("gaugeloop-" + std::string(test->test_suite_name()) + "-" +
-                                                     std::to_string(::getpid()) + "-" + test->name());
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
+    dir_ = tmp_.path();
     Result<PartFile> pf = read_part_file(std::filesystem::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml");
     ASSERT_TRUE(pf.ok()) << pf.error().message;
     part_ = *pf;
@@ -34,7 +31,6 @@ class IntakeJobTest : public ::testing::Test {
     ASSERT_TRUE(design.ok()) << design.error().message;
     design_ = *design;
   }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
 
   // The job on dir_: database dir_/gaugeloop.sqlite, NC files in dir_/nc, the built-in template.
   JobSettings job_settings() const {
@@ -49,6 +45,7 @@ class IntakeJobTest : public ::testing::Test {
     return js;
   }
 
+  TempDir tmp_;
   std::filesystem::path dir_;
   PartFile part_;
   LiftTable design_;

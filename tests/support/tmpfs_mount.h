@@ -11,15 +11,14 @@
 #include <filesystem>
 #include <string>
 
+#include "tests/support/temp_dir.h"
+
 namespace gaugeloop::testing {
 
 class TmpfsMount {
  public:
   // Mounts a tmpfs of `size_kb` at a new directory under the temporary directory.
-  explicit TmpfsMount(int size_kb) {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("gaugeloop-tmpfs-" + std::to_string(::getpid()) + "-" + std::to_string(counter()++));
-    std::filesystem::create_directories(dir_);
+  explicit TmpfsMount(int size_kb) : base_("tmpfs"), dir_(base_.path()) {
     if (::geteuid() != 0) {
       why_not_ = "mounting a tmpfs needs root";
       return;
@@ -32,9 +31,7 @@ class TmpfsMount {
     mounted_ = true;
   }
   ~TmpfsMount() {
-    if (mounted_) ::umount2(dir_.c_str(), MNT_DETACH);
-    std::error_code ec;
-    std::filesystem::remove_all(dir_, ec);
+    if (mounted_) ::umount2(dir_.c_str(), MNT_DETACH);  // before base_ removes the directory
   }
   TmpfsMount(const TmpfsMount&) = delete;
   TmpfsMount& operator=(const TmpfsMount&) = delete;
@@ -51,10 +48,7 @@ class TmpfsMount {
   }
 
  private:
-  static int& counter() {
-    static int n = 0;
-    return n;
-  }
+  TempDir base_;
   std::filesystem::path dir_;
   bool mounted_ = false;
   std::string why_not_;
