@@ -343,14 +343,14 @@ Status convert_v1_rows(Connection& conn) {
     ins_raw->reset();
     ins_raw->bind(1, current);
     ins_raw->bind(2, std::string_view(amplifier + "]"));
-    ins_raw->bind_blob(3, lift);
+    ins_raw->bind(3, Blob{lift});
     return ins_raw->run();
   };
   for (;;) {
     Result<bool> row = revs->step();
     if (!row.ok()) return row.error();
     if (!*row) break;
-    const std::int64_t run_id = revs->column_int64(0);
+    const std::int64_t run_id = revs->column<std::int64_t>(0);
     if (run_id != current) {
       if (Status s = flush_raw(); !s.ok()) return s;
       current = run_id;
@@ -358,14 +358,14 @@ Status convert_v1_rows(Connection& conn) {
       lift.clear();
       count = 0;
     }
-    if (revs->column_int(1) != count) return damaged(run_id, "revolution " + std::to_string(count) + " is missing");
-    Result<DegreeTable> table = degree_table_from_json(revs->column_text(3));
+    if (revs->column<int>(1) != count) return damaged(run_id, "revolution " + std::to_string(count) + " is missing");
+    Result<DegreeTable> table = degree_table_from_json(revs->column<std::string>(3));
     if (!table.ok())
       return damaged(run_id, "lift_mm of revolution " + std::to_string(count) + ": " + table.error().message);
     Status s = append_degree_blob(*table, kCountsPerMm, "lift_mm of revolution " + std::to_string(count), lift);
     if (!s.ok()) return damaged(run_id, s.error().message);
     if (count > 0) amplifier += ",";
-    amplifier += std::to_string(revs->column_int64(2));
+    amplifier += std::to_string(revs->column<std::int64_t>(2));
     ++count;
   }
   if (Status s = flush_raw(); !s.ok()) return s;
@@ -398,7 +398,7 @@ Status convert_v1_rows(Connection& conn) {
       std::string blob;
       Status s = append_degree_blob(tables[i], kScale[i], kName[i], blob);
       if (!s.ok()) return damaged(current, s.error().message);
-      ins_tables->bind_blob(static_cast<int>(i) + 2, blob);
+      ins_tables->bind(static_cast<int>(i) + 2, Blob{blob});
     }
     return ins_tables->run();
   };
@@ -406,17 +406,17 @@ Status convert_v1_rows(Connection& conn) {
     Result<bool> row = prof->step();
     if (!row.ok()) return row.error();
     if (!*row) break;
-    const std::int64_t run_id = prof->column_int64(0);
+    const std::int64_t run_id = prof->column<std::int64_t>(0);
     if (run_id != current) {
       if (Status s = flush_tables(); !s.ok()) return s;
       current = run_id;
       deg = 0;
     }
-    if (deg >= kDegreesPerRevolution || prof->column_int(1) != deg) {
+    if (deg >= kDegreesPerRevolution || prof->column<int>(1) != deg) {
       return damaged(run_id, "the profile row for cam degree " + std::to_string(deg) + " is missing");
     }
     for (std::size_t i = 0; i < tables.size(); ++i) {
-      tables[i][static_cast<std::size_t>(deg)] = prof->column_double(static_cast<int>(i) + 2);
+      tables[i][static_cast<std::size_t>(deg)] = prof->column<double>(static_cast<int>(i) + 2);
     }
     ++deg;
   }
@@ -430,7 +430,7 @@ Status convert_v1_rows(Connection& conn) {
   if (!orphan.ok()) return orphan.error();
   Result<bool> row = orphan->step();
   if (!row.ok()) return row.error();
-  if (*row) return damaged(orphan->column_int64(0), "it has no raw revolutions or no profile rows");
+  if (*row) return damaged(orphan->column<std::int64_t>(0), "it has no raw revolutions or no profile rows");
   return {};
 }
 
@@ -531,7 +531,7 @@ Result<int> read_user_version(Connection& conn) {
   if (!stmt.ok()) return stmt.error();
   Result<bool> row = stmt->step();
   if (!row.ok()) return row.error();
-  return *row ? stmt->column_int(0) : 0;
+  return *row ? stmt->column<int>(0) : 0;
 }
 
 Error too_new(const Connection& conn, int version) {
