@@ -314,18 +314,19 @@ CREATE VIEW run_harmonics (run_id, harmonic, amplitude_um) AS
   return sql;
 }
 
-// Moves the version-1 rows (JSON raw revolutions, one profile row per degree) into the
-// compact tables, run by run. A run whose rows do not add up stops the migration, naming it:
-// nothing is lost, the database stays at version 1.
-Status convert_v1_rows(Connection& conn) {
-  const std::string operation = "migrate the schema to version 2 (convert the stored runs)";
-  auto damaged = [&](std::int64_t run_id, const std::string& what) {
-    return make_error(ErrorCode::kStorage,
-                      "run database " + conn.path.string() + ": cannot " + operation + ": run " +
-                          std::to_string(run_id) + " is damaged: " + what +
-                          "; restore a backup, or delete that run with sqlite3 and open the database again");
-  };
+constexpr std::string_view kConvertV1 = "migrate the schema to version 2 (convert the stored runs)";
 
+Error v1_run_damaged(const Connection& conn, std::int64_t run_id, const std::string& what) {
+  return make_error(ErrorCode::kStorage,
+                    "run database " + conn.path.string() + ": cannot " + std::string(kConvertV1) + ": run " +
+                        std::to_string(run_id) + " is damaged: " + what +
+                        "; restore a backup, or delete that run with sqlite3 and open the database again");
+}
+
+// run_revolutions (one JSON row per revolution) into run_raw (one row per run).
+Status convert_v1_revolutions(Connection& conn) {
+  const std::string operation(kConvertV1);
+  auto damaged = [&](std::int64_t run_id, const std::string& what) { return v1_run_damaged(conn, run_id, what); };
   Result<Statement> ins_raw = Statement::prepare(
       conn, "INSERT INTO run_raw (run_id, amplifier_revolutions, lift) VALUES (?1, ?2, ?3)", operation);
   if (!ins_raw.ok()) return ins_raw.error();
@@ -368,8 +369,13 @@ Status convert_v1_rows(Connection& conn) {
     amplifier += std::to_string(revs->column<std::int64_t>(2));
     ++count;
   }
-  if (Status s = flush_raw(); !s.ok()) return s;
+  return flush_raw();
+}
 
+// run_profile (one row per cam degree) into run_tables (one row per run).
+Status convert_v1_profiles(Connection& conn) {
+  const std::string operation(kConvertV1);
+  auto damaged = [&](std::int64_t run_id, const std::string& what) { return v1_run_damaged(conn, run_id, what); };
   Result<Statement> ins_tables = Statement::prepare(conn,
                                                     "INSERT INTO run_tables (run_id, design_lift, mean_lift, spread,"
                                                     " error, correction) VALUES (?1, ?2, ?3, ?4, ?5, ?6)",
@@ -381,7 +387,7 @@ Status convert_v1_rows(Connection& conn) {
                                               operation);
   if (!prof.ok()) return prof.error();
   std::array<DegreeTable, 5> tables{};
-  current = -1;
+  std::int64_t current = -1;
   int deg = 0;
   auto flush_tables = [&]() -> Status {
     if (current < 0) return {};
@@ -420,17 +426,26 @@ Status convert_v1_rows(Connection& conn) {
     }
     ++deg;
   }
-  if (Status s = flush_tables(); !s.ok()) return s;
+  return flush_tables();
+}
 
+// Moves the version-1 rows (JSON raw revolutions, one profile row per degree) into the
+// compact tables, run by run. A run whose rows do not add up stops the migration, naming it:
+// nothing is lost, the database stays at version 1.
+Status convert_v1_rows(Connection& conn) {
+  if (Status s = convert_v1_revolutions(conn); !s.ok()) return s;
+  if (Status s = convert_v1_profiles(conn); !s.ok()) return s;
   // A run row without its tables would load as damaged later; say so now, by id.
   Result<Statement> orphan = Statement::prepare(conn,
                                                 "SELECT id FROM runs WHERE id NOT IN (SELECT run_id FROM run_tables)"
                                                 " OR id NOT IN (SELECT run_id FROM run_raw) ORDER BY id LIMIT 1",
-                                                operation);
+                                                std::string(kConvertV1));
   if (!orphan.ok()) return orphan.error();
   Result<bool> row = orphan->step();
   if (!row.ok()) return row.error();
-  if (*row) return damaged(orphan->column<std::int64_t>(0), "it has no raw revolutions or no profile rows");
+  if (*row) {
+    return v1_run_damaged(conn, orphan->column<std::int64_t>(0), "it has no raw revolutions or no profile rows");
+  }
   return {};
 }
 

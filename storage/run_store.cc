@@ -16,7 +16,6 @@
 namespace gaugeloop {
 
 using storage_internal::Connection;
-using storage_internal::Statement;
 using storage_internal::Transaction;
 
 namespace storage_internal {
