@@ -32,8 +32,8 @@ template <typename Describe>
 Status add_problems(Connection& conn, const char* sql, std::string_view operation, Describe describe,
                     std::vector<std::string>& problems) {
   auto damage_or_error = [&](const Error& e) -> Status {
-    if (!is_damage(sqlite3_extended_errcode(conn.db))) return e;
-    problems.emplace_back(sqlite3_errmsg(conn.db));
+    if (!is_damage(conn.last_error_code())) return e;
+    problems.emplace_back(conn.last_error_message());
     return {};
   };
   Result<Statement> st = Statement::prepare(conn, sql, operation);
@@ -48,14 +48,14 @@ Status add_problems(Connection& conn, const char* sql, std::string_view operatio
 }
 
 std::string page_problem(const Statement& st) {
-  std::string text = st.column_text(0);
+  std::string text = st.column<std::string>(0);
   return text == "ok" ? std::string() : text;
 }
 
 // foreign_key_check rows: table, rowid (NULL for a table without rowid), parent, fk index.
 std::string foreign_key_problem(const Statement& st) {
-  const std::string row = st.column_is_null(1) ? "a row" : "row " + std::to_string(st.column_int64(1));
-  return st.column_text(0) + " " + row + ": refers to a missing " + st.column_text(2) + " row";
+  const std::string row = st.column_is_null(1) ? "a row" : "row " + std::to_string(st.column<std::int64_t>(1));
+  return st.column<std::string>(0) + " " + row + ": refers to a missing " + st.column<std::string>(2) + " row";
 }
 
 Error io_error(const std::string& what, int err) {
@@ -99,20 +99,11 @@ Result<fs::path> make_temporary_beside(const Connection& conn, const fs::path& d
 }
 
 Status copy_and_verify(Connection& source, const fs::path& tmp, const fs::path& dest) {
-  Connection copy;  // closed at return: before the file is moved into place
-  copy.path = dest;
-  const int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_NOMUTEX | SQLITE_OPEN_EXRESCODE;
-  int rc = sqlite3_open_v2(tmp.c_str(), &copy.db, flags, nullptr);
-  if (rc != SQLITE_OK) return sqlite_error(copy, "create the backup", rc);
-  const std::string operation = "copy " + source.path.string() + " into it";
-  sqlite3_backup* backup = sqlite3_backup_init(copy.db, "main", source.db, "main");
-  if (backup == nullptr) return sqlite_error(copy, operation, sqlite3_extended_errcode(copy.db));
-  // One step copies every page under one read lock: one consistent snapshot, and in WAL mode
-  // a writer is never blocked by it.
-  rc = sqlite3_backup_step(backup, -1);
-  sqlite3_backup_finish(backup);
-  if (rc != SQLITE_DONE) return sqlite_error(copy, operation, rc);
-  Result<std::vector<std::string>> problems = find_problems(copy, IntegrityCheck::kFull);
+  // Closed at return: before the file is moved into place.
+  Result<std::unique_ptr<Connection>> copy = Connection::open(tmp.string(), OpenMode::kBackupCopy, dest);
+  if (!copy.ok()) return copy.error();
+  if (Status s = copy_database(source, **copy, "copy " + source.path.string() + " into it"); !s.ok()) return s;
+  Result<std::vector<std::string>> problems = find_problems(**copy, IntegrityCheck::kFull);
   if (!problems.ok()) return problems.error();
   if (problems->empty()) return {};
   Error damaged = damaged_database(source.path, *problems);
@@ -161,7 +152,7 @@ Result<std::int64_t> query_number(Connection& conn, const char* sql, std::string
   if (!st.ok()) return st.error();
   Result<bool> row = st->step();
   if (!row.ok()) return row.error();
-  return *row ? st->column_int64(0) : 0;
+  return *row ? st->column<std::int64_t>(0) : 0;
 }
 
 // Whether the file holds a run or an event (the tables every record hangs on; events came
@@ -191,13 +182,7 @@ fs::path free_upgrade_backup_name(const fs::path& db, int version) {
 Result<std::unique_ptr<Connection>> connect_for_checking(const fs::path& db_path, bool& constraints_checked) {
   constraints_checked = may_write(db_path);
   if (!constraints_checked) return connect_read_only(db_path);
-  auto conn = std::make_unique<Connection>();
-  conn->path = db_path;
-  const int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_NOMUTEX | SQLITE_OPEN_EXRESCODE;
-  const int rc = sqlite3_open_v2(db_path.c_str(), &conn->db, flags, nullptr);
-  if (rc != SQLITE_OK) return sqlite_error(*conn, "open the file to check it", rc);
-  sqlite3_busy_timeout(conn->db, kBusyTimeoutMs);
-  return conn;
+  return Connection::open(db_path.string(), OpenMode::kChecker, db_path);
 }
 
 Result<std::vector<std::string>> find_problems(Connection& conn, IntegrityCheck depth) {

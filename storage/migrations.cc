@@ -314,18 +314,19 @@ CREATE VIEW run_harmonics (run_id, harmonic, amplitude_um) AS
   return sql;
 }
 
-// Moves the version-1 rows (JSON raw revolutions, one profile row per degree) into the
-// compact tables, run by run. A run whose rows do not add up stops the migration, naming it:
-// nothing is lost, the database stays at version 1.
-Status convert_v1_rows(Connection& conn) {
-  const std::string operation = "migrate the schema to version 2 (convert the stored runs)";
-  auto damaged = [&](std::int64_t run_id, const std::string& what) {
-    return make_error(ErrorCode::kStorage,
-                      "run database " + conn.path.string() + ": cannot " + operation + ": run " +
-                          std::to_string(run_id) + " is damaged: " + what +
-                          "; restore a backup, or delete that run with sqlite3 and open the database again");
-  };
+constexpr std::string_view kConvertV1 = "migrate the schema to version 2 (convert the stored runs)";
 
+Error v1_run_damaged(const Connection& conn, std::int64_t run_id, const std::string& what) {
+  return make_error(ErrorCode::kStorage,
+                    "run database " + conn.path.string() + ": cannot " + std::string(kConvertV1) + ": run " +
+                        std::to_string(run_id) + " is damaged: " + what +
+                        "; restore a backup, or delete that run with sqlite3 and open the database again");
+}
+
+// run_revolutions (one JSON row per revolution) into run_raw (one row per run).
+Status convert_v1_revolutions(Connection& conn) {
+  const std::string operation(kConvertV1);
+  auto damaged = [&](std::int64_t run_id, const std::string& what) { return v1_run_damaged(conn, run_id, what); };
   Result<Statement> ins_raw = Statement::prepare(
       conn, "INSERT INTO run_raw (run_id, amplifier_revolutions, lift) VALUES (?1, ?2, ?3)", operation);
   if (!ins_raw.ok()) return ins_raw.error();
@@ -343,14 +344,14 @@ Status convert_v1_rows(Connection& conn) {
     ins_raw->reset();
     ins_raw->bind(1, current);
     ins_raw->bind(2, std::string_view(amplifier + "]"));
-    ins_raw->bind_blob(3, lift);
+    ins_raw->bind(3, Blob{lift});
     return ins_raw->run();
   };
   for (;;) {
     Result<bool> row = revs->step();
     if (!row.ok()) return row.error();
     if (!*row) break;
-    const std::int64_t run_id = revs->column_int64(0);
+    const std::int64_t run_id = revs->column<std::int64_t>(0);
     if (run_id != current) {
       if (Status s = flush_raw(); !s.ok()) return s;
       current = run_id;
@@ -358,18 +359,23 @@ Status convert_v1_rows(Connection& conn) {
       lift.clear();
       count = 0;
     }
-    if (revs->column_int(1) != count) return damaged(run_id, "revolution " + std::to_string(count) + " is missing");
-    Result<DegreeTable> table = degree_table_from_json(revs->column_text(3));
+    if (revs->column<int>(1) != count) return damaged(run_id, "revolution " + std::to_string(count) + " is missing");
+    Result<DegreeTable> table = degree_table_from_json(revs->column<std::string>(3));
     if (!table.ok())
       return damaged(run_id, "lift_mm of revolution " + std::to_string(count) + ": " + table.error().message);
     Status s = append_degree_blob(*table, kCountsPerMm, "lift_mm of revolution " + std::to_string(count), lift);
     if (!s.ok()) return damaged(run_id, s.error().message);
     if (count > 0) amplifier += ",";
-    amplifier += std::to_string(revs->column_int64(2));
+    amplifier += std::to_string(revs->column<std::int64_t>(2));
     ++count;
   }
-  if (Status s = flush_raw(); !s.ok()) return s;
+  return flush_raw();
+}
 
+// run_profile (one row per cam degree) into run_tables (one row per run).
+Status convert_v1_profiles(Connection& conn) {
+  const std::string operation(kConvertV1);
+  auto damaged = [&](std::int64_t run_id, const std::string& what) { return v1_run_damaged(conn, run_id, what); };
   Result<Statement> ins_tables = Statement::prepare(conn,
                                                     "INSERT INTO run_tables (run_id, design_lift, mean_lift, spread,"
                                                     " error, correction) VALUES (?1, ?2, ?3, ?4, ?5, ?6)",
@@ -381,7 +387,7 @@ Status convert_v1_rows(Connection& conn) {
                                               operation);
   if (!prof.ok()) return prof.error();
   std::array<DegreeTable, 5> tables{};
-  current = -1;
+  std::int64_t current = -1;
   int deg = 0;
   auto flush_tables = [&]() -> Status {
     if (current < 0) return {};
@@ -398,7 +404,7 @@ Status convert_v1_rows(Connection& conn) {
       std::string blob;
       Status s = append_degree_blob(tables[i], kScale[i], kName[i], blob);
       if (!s.ok()) return damaged(current, s.error().message);
-      ins_tables->bind_blob(static_cast<int>(i) + 2, blob);
+      ins_tables->bind(static_cast<int>(i) + 2, Blob{blob});
     }
     return ins_tables->run();
   };
@@ -406,31 +412,40 @@ Status convert_v1_rows(Connection& conn) {
     Result<bool> row = prof->step();
     if (!row.ok()) return row.error();
     if (!*row) break;
-    const std::int64_t run_id = prof->column_int64(0);
+    const std::int64_t run_id = prof->column<std::int64_t>(0);
     if (run_id != current) {
       if (Status s = flush_tables(); !s.ok()) return s;
       current = run_id;
       deg = 0;
     }
-    if (deg >= kDegreesPerRevolution || prof->column_int(1) != deg) {
+    if (deg >= kDegreesPerRevolution || prof->column<int>(1) != deg) {
       return damaged(run_id, "the profile row for cam degree " + std::to_string(deg) + " is missing");
     }
     for (std::size_t i = 0; i < tables.size(); ++i) {
-      tables[i][static_cast<std::size_t>(deg)] = prof->column_double(static_cast<int>(i) + 2);
+      tables[i][static_cast<std::size_t>(deg)] = prof->column<double>(static_cast<int>(i) + 2);
     }
     ++deg;
   }
-  if (Status s = flush_tables(); !s.ok()) return s;
+  return flush_tables();
+}
 
+// Moves the version-1 rows (JSON raw revolutions, one profile row per degree) into the
+// compact tables, run by run. A run whose rows do not add up stops the migration, naming it:
+// nothing is lost, the database stays at version 1.
+Status convert_v1_rows(Connection& conn) {
+  if (Status s = convert_v1_revolutions(conn); !s.ok()) return s;
+  if (Status s = convert_v1_profiles(conn); !s.ok()) return s;
   // A run row without its tables would load as damaged later; say so now, by id.
   Result<Statement> orphan = Statement::prepare(conn,
                                                 "SELECT id FROM runs WHERE id NOT IN (SELECT run_id FROM run_tables)"
                                                 " OR id NOT IN (SELECT run_id FROM run_raw) ORDER BY id LIMIT 1",
-                                                operation);
+                                                std::string(kConvertV1));
   if (!orphan.ok()) return orphan.error();
   Result<bool> row = orphan->step();
   if (!row.ok()) return row.error();
-  if (*row) return damaged(orphan->column_int64(0), "it has no raw revolutions or no profile rows");
+  if (*row) {
+    return v1_run_damaged(conn, orphan->column<std::int64_t>(0), "it has no raw revolutions or no profile rows");
+  }
   return {};
 }
 
@@ -531,7 +546,7 @@ Result<int> read_user_version(Connection& conn) {
   if (!stmt.ok()) return stmt.error();
   Result<bool> row = stmt->step();
   if (!row.ok()) return row.error();
-  return *row ? stmt->column_int(0) : 0;
+  return *row ? stmt->column<int>(0) : 0;
 }
 
 Error too_new(const Connection& conn, int version) {

@@ -78,16 +78,7 @@ Result<std::unique_ptr<Connection>> connect_read_only(const fs::path& db_path) {
   if (!fs::exists(db_path, ec)) {
     return make_error(ErrorCode::kNotFound, "no run database at " + shown + "; check --data-dir");
   }
-  auto conn = std::make_unique<Connection>();
-  conn->path = db_path;
-  conn->read_only = true;
-  const std::string uri = read_only_uri(db_path, nobody_is_writing(db_path));
-  const int flags = SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_NOMUTEX | SQLITE_OPEN_EXRESCODE;
-  const int rc = sqlite3_open_v2(uri.c_str(), &conn->db, flags, nullptr);
-  if (rc != SQLITE_OK) return sqlite_error(*conn, "open the file for reading", rc);
-  // A reader waits for a writer only while the -wal is recovered after a crash.
-  sqlite3_busy_timeout(conn->db, kBusyTimeoutMs);
-  return conn;
+  return Connection::open(read_only_uri(db_path, nobody_is_writing(db_path)), OpenMode::kReader, db_path);
 }
 
 namespace {
@@ -109,7 +100,7 @@ Error unreadable_log(const Connection& conn, const Error& e) {
 Status check_schema_for_reading(Connection& conn) {
   Result<int> version = schema_version_not_newer(conn);
   if (!version.ok()) {
-    const bool cannot_open = (sqlite3_extended_errcode(conn.db) & 0xff) == SQLITE_CANTOPEN;
+    const bool cannot_open = (conn.last_error_code() & 0xff) == SQLITE_CANTOPEN;
     return cannot_open ? unreadable_log(conn, version.error()) : version.error();
   }
   const std::string shown = conn.path.string();

@@ -1,8 +1,11 @@
 // RAII over the SQLite C API for storage/: a connection, prepared statements, transactions.
+// The only file of storage/ that calls the SQLite C API.
 #include "storage/sqlite_db.h"
 
 #include <climits>
 #include <utility>
+
+#include "storage/maintenance_internal.h"
 
 namespace gaugeloop::storage_internal {
 namespace {
@@ -51,6 +54,97 @@ Connection::~Connection() {
   if (db != nullptr) sqlite3_close_v2(db);
 }
 
+namespace {
+
+int open_flags(OpenMode mode) {
+  // NOMUTEX: a connection is used by one thread only (see RunStore). EXRESCODE: extended
+  // result codes, which the messages and is-it-damage checks read.
+  const int common = SQLITE_OPEN_NOMUTEX | SQLITE_OPEN_EXRESCODE;
+  switch (mode) {
+    case OpenMode::kWriter:
+      return common | SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
+    case OpenMode::kChecker:
+    case OpenMode::kBackupCopy:
+      return common | SQLITE_OPEN_READWRITE;
+    case OpenMode::kReader:
+      return common | SQLITE_OPEN_READONLY | SQLITE_OPEN_URI;
+  }
+  return common | SQLITE_OPEN_READONLY;
+}
+
+std::string_view open_operation(OpenMode mode) {
+  switch (mode) {
+    case OpenMode::kChecker:
+      return "open the file to check it";
+    case OpenMode::kReader:
+      return "open the file for reading";
+    case OpenMode::kBackupCopy:
+      return "create the backup";
+    case OpenMode::kWriter:
+      break;
+  }
+  return "open the file";
+}
+
+// The writer's set-up after the file is open: it must be writable, and in WAL mode.
+Status configure_writer(Connection& conn) {
+  const std::string shown = conn.path.string();
+  // SQLite silently falls back to read-only when the file exists but is not writable; we
+  // would only find out at the first insert, after a whole measurement. A file without write
+  // bits is refused for root too: readers open it immutable (RunStore::open_read_only).
+  if (sqlite3_db_readonly(conn.db, "main") == 1 || has_no_write_bits(conn.path)) {
+    return make_error(ErrorCode::kStorage, "cannot open run database " + shown +
+                                               " for writing: the file is read-only; check the file and the "
+                                               "--data-dir are writable by this user");
+  }
+  sqlite3_busy_timeout(conn.db, kBusyTimeoutMs);
+  Status s = exec(conn, "PRAGMA foreign_keys = ON", "enable foreign keys");
+  if (!s.ok()) return s;
+  Result<Statement> wal = Statement::prepare(conn, "PRAGMA journal_mode = WAL", "switch to WAL journal mode");
+  if (!wal.ok()) return wal.error();
+  Result<std::optional<std::string>> mode =
+      wal->first([](const Statement& st) { return st.column<std::string>(0); });
+  if (!mode.ok()) return mode.error();
+  const std::string journal = mode->value_or(std::string());
+  if (conn.path != ":memory:" && journal != "wal") {
+    return make_error(ErrorCode::kStorage, "run database " + shown + ": cannot switch to WAL journal mode (it stays '" +
+                                               journal +
+                                               "'), so readers would block the writer; keep the --data-dir on a "
+                                               "local file system");
+  }
+  return {};
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Connection>> Connection::open(const std::string& file, OpenMode mode,
+                                                     const std::filesystem::path& shown) {
+  auto conn = std::make_unique<Connection>();
+  conn->path = shown;
+  conn->read_only = mode == OpenMode::kReader;
+  const int rc = sqlite3_open_v2(file.c_str(), &conn->db, open_flags(mode), nullptr);
+  if (rc != SQLITE_OK) {
+    if (mode != OpenMode::kWriter) return sqlite_error(*conn, open_operation(mode), rc);
+    const std::string reason = conn->db != nullptr ? sqlite3_errmsg(conn->db) : sqlite3_errstr(rc);
+    return make_error(ErrorCode::kStorage, "cannot open run database " + shown.string() + ": " + reason +
+                                               "; check the --data-dir is writable");
+  }
+  if (mode == OpenMode::kWriter) {
+    if (Status s = configure_writer(*conn); !s.ok()) return s.error();
+  } else if (mode != OpenMode::kBackupCopy) {
+    sqlite3_busy_timeout(conn->db, kBusyTimeoutMs);
+  }
+  return conn;
+}
+
+std::int64_t Connection::last_insert_rowid() const { return sqlite3_last_insert_rowid(db); }
+
+std::int64_t Connection::changes() const { return sqlite3_changes64(db); }
+
+int Connection::last_error_code() const { return sqlite3_extended_errcode(db); }
+
+std::string Connection::last_error_message() const { return sqlite3_errmsg(db); }
+
 Error sqlite_error(const Connection& conn, std::string_view operation, int rc) {
   std::string message = "run database " + conn.path.string() + ": cannot ";
   message += operation;
@@ -69,6 +163,15 @@ Error sqlite_error(const Connection& conn, std::string_view operation, int rc) {
 Status exec(Connection& conn, const char* sql, std::string_view operation) {
   const int rc = sqlite3_exec(conn.db, sql, nullptr, nullptr, nullptr);
   if (rc != SQLITE_OK) return sqlite_error(conn, operation, rc);
+  return {};
+}
+
+Status copy_database(Connection& from, Connection& to, std::string_view operation) {
+  sqlite3_backup* backup = sqlite3_backup_init(to.db, "main", from.db, "main");
+  if (backup == nullptr) return sqlite_error(to, operation, sqlite3_extended_errcode(to.db));
+  const int rc = sqlite3_backup_step(backup, -1);
+  sqlite3_backup_finish(backup);
+  if (rc != SQLITE_DONE) return sqlite_error(to, operation, rc);
   return {};
 }
 
@@ -94,24 +197,36 @@ Statement::Statement(Statement&& other) noexcept
     : conn_(other.conn_),
       stmt_(std::exchange(other.stmt_, nullptr)),
       operation_(std::move(other.operation_)),
-      bind_rc_(other.bind_rc_) {}
+      bind_rc_(other.bind_rc_),
+      bind_failed_(std::move(other.bind_failed_)) {}
 
 Statement::~Statement() { sqlite3_finalize(stmt_); }  // no-op on nullptr
 
-void Statement::bind(int index, std::int64_t value) {
-  const int rc = sqlite3_bind_int64(stmt_, index, value);
-  if (bind_rc_ == SQLITE_OK) bind_rc_ = rc;
+void Statement::note_bind(int rc, int index) {
+  if (bind_rc_ != SQLITE_OK || rc == SQLITE_OK) return;
+  bind_rc_ = rc;
+  if (bind_failed_.empty()) {
+    const char* name = sqlite3_bind_parameter_name(stmt_, index);
+    bind_failed_ = name != nullptr ? std::string(name) : "?" + std::to_string(index);
+  }
 }
 
-void Statement::bind(int index, int value) {
-  const int rc = sqlite3_bind_int(stmt_, index, value);
-  if (bind_rc_ == SQLITE_OK) bind_rc_ = rc;
+int Statement::parameter_index(std::string_view name) {
+  const std::string terminated(name);
+  const int index = sqlite3_bind_parameter_index(stmt_, terminated.c_str());
+  if (index == 0 && bind_rc_ == SQLITE_OK) {
+    // A programmer's mistake, reported by step() like any other failed bind.
+    bind_rc_ = SQLITE_RANGE;
+    bind_failed_ = terminated + " (the statement has no such parameter)";
+  }
+  return index;
 }
 
-void Statement::bind(int index, double value) {
-  const int rc = sqlite3_bind_double(stmt_, index, value);
-  if (bind_rc_ == SQLITE_OK) bind_rc_ = rc;
-}
+void Statement::bind(int index, std::int64_t value) { note_bind(sqlite3_bind_int64(stmt_, index, value), index); }
+
+void Statement::bind(int index, int value) { note_bind(sqlite3_bind_int(stmt_, index, value), index); }
+
+void Statement::bind(int index, double value) { note_bind(sqlite3_bind_double(stmt_, index, value), index); }
 
 void Statement::bind(int index, std::string_view text) {
   int rc = SQLITE_TOOBIG;
@@ -120,29 +235,27 @@ void Statement::bind(int index, std::string_view text) {
     rc = sqlite3_bind_text(stmt_, index, text.empty() ? "" : text.data(), static_cast<int>(text.size()),
                            SQLITE_TRANSIENT);
   }
-  if (bind_rc_ == SQLITE_OK) bind_rc_ = rc;
+  note_bind(rc, index);
 }
 
-void Statement::bind_blob(int index, std::string_view bytes) {
+void Statement::bind(int index, Blob blob) {
   int rc = SQLITE_TOOBIG;
-  if (bytes.size() <= static_cast<std::size_t>(INT_MAX)) {
+  if (blob.bytes.size() <= static_cast<std::size_t>(INT_MAX)) {
     // A non-null pointer even when empty, so the value is an empty BLOB, not NULL.
-    rc = sqlite3_bind_blob(stmt_, index, bytes.empty() ? "" : bytes.data(), static_cast<int>(bytes.size()),
-                           SQLITE_TRANSIENT);
+    rc = sqlite3_bind_blob(stmt_, index, blob.bytes.empty() ? "" : blob.bytes.data(),
+                           static_cast<int>(blob.bytes.size()), SQLITE_TRANSIENT);
   }
-  if (bind_rc_ == SQLITE_OK) bind_rc_ = rc;
+  note_bind(rc, index);
 }
 
-void Statement::bind_null(int index) {
-  const int rc = sqlite3_bind_null(stmt_, index);
-  if (bind_rc_ == SQLITE_OK) bind_rc_ = rc;
-}
+void Statement::bind(int index, std::nullopt_t) { note_bind(sqlite3_bind_null(stmt_, index), index); }
 
 Result<bool> Statement::step() {
   if (bind_rc_ != SQLITE_OK) {
     // sqlite3_errmsg may describe an older failure; the code is the reliable part here.
     return make_error(ErrorCode::kStorage, "run database " + conn_->path.string() + ": cannot " + operation_ +
-                                               ": binding a parameter failed: " + sqlite3_errstr(bind_rc_));
+                                               ": binding parameter " + bind_failed_ +
+                                               " failed: " + sqlite3_errstr(bind_rc_));
   }
   const int rc = sqlite3_step(stmt_);
   if (rc == SQLITE_ROW) return true;

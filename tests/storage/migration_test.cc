@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
 #include <string>
 
 #include "storage/migrations.h"
@@ -88,16 +89,18 @@ TEST(MigrationFromV1, KeepsEveryRunAndItsNumbers) {
     EXPECT_EQ(loaded->settings, "");
     ASSERT_EQ(loaded->revolutions.size(), 3u);
     for (int rev = 0; rev < 3; ++rev) {
-      EXPECT_EQ(loaded->revolutions[rev].revolution, 40 + rev);
+      const RevolutionSamples& samples = loaded->revolutions[static_cast<std::size_t>(rev)];
+      EXPECT_EQ(samples.revolution, 40 + rev);
       for (int deg = 0; deg < 360; ++deg) {
         // Version 1 kept 1e-6 mm; version 2 keeps 1e-7 mm: the conversion is exact to 1e-12.
-        ASSERT_NEAR(loaded->revolutions[rev].lift_mm[deg], v1_lift(rev, deg), 1e-12) << rev << "/" << deg;
+        ASSERT_NEAR(samples.lift_mm[static_cast<std::size_t>(deg)], v1_lift(rev, deg), 1e-12) << rev << "/" << deg;
       }
     }
     for (int deg = 0; deg < 360; ++deg) {
-      ASSERT_NEAR(loaded->analysis.error_um[deg], v1_error(run, deg), 0.5e-4 + 1e-9) << deg;
-      ASSERT_NEAR(loaded->correction_um[deg], -0.5 * v1_error(run, deg), 0.5e-4 + 1e-9) << deg;
-      ASSERT_NEAR(loaded->analysis.design_lift_mm[deg], 1.0 + deg * 0.001, 0.5e-7 + 1e-12) << deg;
+      const auto d = static_cast<std::size_t>(deg);
+      ASSERT_NEAR(loaded->analysis.error_um[d], v1_error(run, deg), 0.5e-4 + 1e-9) << deg;
+      ASSERT_NEAR(loaded->correction_um[d], -0.5 * v1_error(run, deg), 0.5e-4 + 1e-9) << deg;
+      ASSERT_NEAR(loaded->analysis.design_lift_mm[d], 1.0 + deg * 0.001, 0.5e-7 + 1e-12) << deg;
     }
   }
   Result<StoredRun> pushed = store->load_run(1);

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstddef>
 #include <fstream>
 #include <string>
 
@@ -169,7 +170,9 @@ TEST(Schema, ViewsDecodeNegativeAndExtremeValuesAsTheStoreDoes) {
   EXPECT_DOUBLE_EQ(sample(2, 359), 214.7483647);
   for (int rev = 0; rev < 3; ++rev) {
     for (int deg = 0; deg < 360; deg += 17) {
-      EXPECT_DOUBLE_EQ(sample(rev, deg), loaded->revolutions[rev].lift_mm[deg]) << rev << "/" << deg;
+      const auto ri = static_cast<std::size_t>(rev);
+      const auto d = static_cast<std::size_t>(deg);
+      EXPECT_DOUBLE_EQ(sample(rev, deg), loaded->revolutions[ri].lift_mm[d]) << rev << "/" << deg;
     }
   }
   auto profile = [&](const std::string& column, int deg) {
@@ -179,11 +182,12 @@ TEST(Schema, ViewsDecodeNegativeAndExtremeValuesAsTheStoreDoes) {
   EXPECT_DOUBLE_EQ(profile("error_um", 10), -0.0001);
   EXPECT_DOUBLE_EQ(profile("error_um", 11), -123456.7891);
   for (int deg = 0; deg < 360; deg += 7) {
-    EXPECT_DOUBLE_EQ(profile("design_lift_mm", deg), loaded->analysis.design_lift_mm[deg]) << deg;
-    EXPECT_DOUBLE_EQ(profile("mean_lift_mm", deg), loaded->analysis.mean_lift_mm[deg]) << deg;
-    EXPECT_DOUBLE_EQ(profile("spread_um", deg), loaded->analysis.spread_um[deg]) << deg;
-    EXPECT_DOUBLE_EQ(profile("error_um", deg), loaded->analysis.error_um[deg]) << deg;
-    EXPECT_DOUBLE_EQ(profile("correction_um", deg), loaded->correction_um[deg]) << deg;
+    const auto d = static_cast<std::size_t>(deg);
+    EXPECT_DOUBLE_EQ(profile("design_lift_mm", deg), loaded->analysis.design_lift_mm[d]) << deg;
+    EXPECT_DOUBLE_EQ(profile("mean_lift_mm", deg), loaded->analysis.mean_lift_mm[d]) << deg;
+    EXPECT_DOUBLE_EQ(profile("spread_um", deg), loaded->analysis.spread_um[d]) << deg;
+    EXPECT_DOUBLE_EQ(profile("error_um", deg), loaded->analysis.error_um[d]) << deg;
+    EXPECT_DOUBLE_EQ(profile("correction_um", deg), loaded->correction_um[d]) << deg;
   }
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_profile WHERE run_id = " + run), 360);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_harmonics WHERE run_id = " + run), 31);

@@ -1,0 +1,70 @@
+// What the files of RunStore (run_store*.cc) share: row readers, WHERE clauses, the steps of
+// recording a push inside a caller's transaction. Internal to storage/.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/result.h"
+#include "storage/run_store.h"
+#include "storage/sqlite_db.h"
+
+namespace gaugeloop::storage_internal {
+
+// NULL for empty text: the columns that say "not recorded" with NULL.
+inline std::optional<std::string_view> text_or_null(std::string_view text) {
+  if (text.empty()) return std::nullopt;
+  return text;
+}
+
+// kStorage: run `run_id` has rows that contradict each other or are missing.
+Error damaged_run(const Connection& conn, std::int64_t run_id, const std::string& what);
+
+// kNotFound "cannot <operation>: run <id> is not in run database <file>" unless the run is stored.
+Status require_run(Connection& conn, std::int64_t run_id, const std::string& operation);
+Error run_not_found(const Connection& conn, std::int64_t run_id, const std::string& operation);
+
+// The WHERE clause of a list query, from the filters it sets; text values are bound by name.
+class WhereClause {
+ public:
+  // Adds "<column_op> :where<N>", bound to `value` by bind(): add("r.part =", q.part).
+  void add(std::string_view column_op, std::string value);
+  // Adds a condition without a parameter: "r.lobe = 3".
+  void add_literal(const std::string& condition);
+  // " WHERE a AND b", or "" without conditions.
+  const std::string& sql() const { return sql_; }
+  void bind(Statement& st) const;
+
+ private:
+  void start_condition();
+
+  std::string sql_;
+  std::vector<std::string> values_;
+};
+
+// Columns 0..11 of nc_pushes AS p, read by read_push(); program_text, when selected, follows.
+inline constexpr std::string_view kPushColumns =
+    "p.id, p.run_id, p.pushed_utc, p.nc_file, p.table_version, p.reason, p.interpolation, p.block_count, "
+    "p.command_error_um, p.point_count, p.correction_max_um, p.program_hash";
+NcPush read_push(const Statement& s, bool with_text);
+
+// The next table version of `nc_file`: 1 + the highest recorded (1 if none).
+Result<int> next_version_of(Connection& conn, std::string_view nc_file, const std::string& operation);
+
+// Records one push inside the caller's write transaction, which makes the version check and
+// the insert one step for other writers: marks the run pushed, takes (or checks) the file's
+// next table version and inserts the nc_pushes row. Returns its id. `push` was checked.
+Result<std::int64_t> insert_push(Connection& conn, std::int64_t run_id, const NcPush& push, std::string_view text,
+                                 const std::string& operation);
+
+// Inside the caller's write transaction: records `push` as the approved push of pending table
+// `pending_id` and marks the table approved, as RunStore::record_approved_push describes.
+// Returns the push's id.
+Result<std::int64_t> approve_in_transaction(Connection& conn, std::int64_t pending_id, const NcPush& push,
+                                            const std::string& by, const std::string& note,
+                                            const std::string& operation);
+
+}  // namespace gaugeloop::storage_internal
