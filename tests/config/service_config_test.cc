@@ -288,8 +288,6 @@ TEST_F(ServiceConfigTest, AnUnknownKeyIsRefusedListingTheKnownOnes) {
                       at(2, "gauge.revs") + ": unknown key; known keys: config, mode, revolutions"));
   EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + "lobe = 2\n" + kNc), ErrorCode::kInvalidInput,
                       at(4, "part.lobe") + ": unknown key; known keys: file, plc_part_number"));
-  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "[plc]\npoll_ms = 50\n"), ErrorCode::kInvalidInput,
-                      at(7, "plc.poll_ms") + ": unknown key"));
   EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "[database]\nfile = \"x.sqlite\"\n"), ErrorCode::kInvalidInput,
                       at(7, "database.file") + ": unknown key; known keys: path"));
 }
