@@ -2,8 +2,6 @@
 #include "config/gauge_config.h"
 
 #include <algorithm>
-#include <fstream>
-#include <sstream>
 
 #include "acquisition/tcp_endpoint.h"
 #include "config/toml_reader.h"

@@ -2,8 +2,6 @@
 #include "config/part_file.h"
 
 #include <cctype>
-#include <fstream>
-#include <sstream>
 
 #include "config/toml_reader.h"
 #include "core/text_file.h"

@@ -5,10 +5,8 @@
 
 #include <cerrno>
 #include <cstring>
-#include <fstream>
 #include <map>
 #include <set>
-#include <sstream>
 
 #include "config/gauge_config.h"
 #include "config/toml_reader.h"
@@ -70,8 +68,276 @@ Status check_writable_database(const fs::path& db_path) {
   return {};
 }
 
+// The file being read: its name for messages and the directory its relative paths are in.
+struct ConfigFile {
+  std::string source;
+  fs::path base;
+
+  fs::path resolve(const std::string& p) const { return relative_to(base, p); }
+};
+
+// [gauge]: the gauge config file (link and register map), sampling mode and revolutions. A
+// missing table fails `top` (reported after the other tables, with the top level's errors).
+Status read_gauge_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
+  const toml::table* g = top.subtable("gauge");
+  if (g == nullptr) {
+    top.fail(f.source + ": no [gauge] table; it names the gauge config (link and register map, docs/gauge.md)");
+    return {};
+  }
+  TomlReader gr(*g, f.source, "gauge.");
+  gr.allow_only({"config", "mode", "revolutions"});
+  const std::string gauge_file = gr.text("config", "");
+  PollerSettings& poller = c.job.poller;
+  poller.mode =
+      gr.choice("mode", "latched", {"latched", "live"}) == "live" ? SamplingMode::kLive : SamplingMode::kLatched;
+  poller.revolutions = static_cast<int>(gr.integer("revolutions", 3, 3, 100));
+  if (gr.error) return *gr.error;
+  if (!gauge_file.empty()) {
+    Result<ModbusSettings> gs = read_gauge_file(f.resolve(gauge_file));
+    if (!gs) return at_key(gr, "config", gs.error());
+    c.gauge = std::move(*gs);
+  }
+  return {};
+}
+
+// [analysis]: the base-circle window the lobe is zeroed on.
+Status read_analysis_table(TomlReader& top, const ConfigFile& f, AnalysisSettings& a) {
+  const toml::table* t = top.subtable("analysis");
+  if (t == nullptr) return {};
+  TomlReader ar(*t, f.source, "analysis.");
+  ar.allow_only({"base_circle_center_deg", "base_circle_half_width_deg"});
+  a.base_circle_center_deg = ar.number("base_circle_center_deg", 180.0, 0.0, 360.0);
+  a.base_circle_half_width_deg = ar.number("base_circle_half_width_deg", 30.0, 0.0, 90.0, true);
+  if (ar.error) return *ar.error;
+  return {};
+}
+
+// [compensation]: the gain and the guards on a correction.
+Status read_compensation_table(TomlReader& top, const ConfigFile& f, JobSettings& job) {
+  const toml::table* t = top.subtable("compensation");
+  if (t == nullptr) return {};
+  TomlReader kr(*t, f.source, "compensation.");
+  kr.allow_only({"gain", "max_harmonic", "max_correction_um", "max_change_um", "max_repeatability_um", "max_phase_deg",
+                 "build_on_table_in_force"});
+  CompensationSettings& s = job.compensation;
+  s.gain = kr.number("gain", 1.0, 0.0, 1.0, true);
+  s.max_harmonic = static_cast<int>(kr.integer("max_harmonic", 30, 0, 180));
+  s.max_correction_um = kr.number("max_correction_um", 100.0, 0.0, 10000.0, true);
+  s.max_change_um = kr.number("max_change_um", 50.0, 0.0, 10000.0, true);
+  s.max_repeatability_um = kr.number("max_repeatability_um", 2.0, 0.0, 1000.0, true);
+  s.max_phase_deg = kr.number("max_phase_deg", 0.5, 0.0, 45.0, true);
+  job.build_on_table_in_force = kr.flag("build_on_table_in_force", true);
+  if (kr.error) return *kr.error;
+  return {};
+}
+
+TableKind table_kind(const std::string& name) {
+  return name == "linear"            ? TableKind::kLinear
+         : name == "spline"          ? TableKind::kSpline
+         : name == "adaptive-linear" ? TableKind::kAdaptiveLinear
+         : name == "adaptive-spline" ? TableKind::kAdaptiveSpline
+                                     : TableKind::kAuto;
+}
+
+// The keys of [nc] that shape the table and bound the infeed axis.
+void read_nc_table_keys(TomlReader& nr, JobSettings& job) {
+  job.table_kind =
+      table_kind(nr.choice("table", "auto", {"auto", "linear", "spline", "adaptive-linear", "adaptive-spline"}));
+  job.table_step_deg = nr.number("table_step_deg", 1.0, 0.0, 10.0, true);
+  job.table_choice.bound_um = nr.number("command_error_um", 0.5, 0.0, 100.0, true);
+  job.table_choice.max_step_deg = nr.number("max_segment_deg", 10.0, 0.0, 90.0, true);
+  job.table_choice.allow_spline = nr.flag("allow_spline", true);
+  job.require_approval = nr.flag("require_approval", false);
+  job.table_number = static_cast<int>(nr.integer("table_number", 1, 1, 999));
+  AxisLimits& l = job.axis_limits;
+  l.x_min_mm = nr.number("x_min_mm", l.x_min_mm, -1000.0, 1000.0);
+  l.x_max_mm = nr.number("x_max_mm", l.x_max_mm, -1000.0, 1000.0);
+  l.x_velocity_max_mm_per_s = nr.number("x_velocity_max_mm_per_s", l.x_velocity_max_mm_per_s, 0.0, 1e6, true);
+  l.x_acceleration_max_mm_per_s2 =
+      nr.number("x_acceleration_max_mm_per_s2", l.x_acceleration_max_mm_per_s2, 0.0, 1e8, true);
+  l.speed_rpm = nr.number("work_speed_rpm", l.speed_rpm, 0.0, 3000.0, true);
+}
+
+// [nc]: the output directory (writable), the template (required, read now) and the table keys.
+Status read_nc_table(TomlReader& top, const ConfigFile& f, JobSettings& job) {
+  std::string template_path;
+  job.nc_dir = f.resolve("nc");
+  if (const toml::table* t = top.subtable("nc")) {
+    TomlReader nr(*t, f.source, "nc.");
+    nr.allow_only({"dir", "template", "table", "table_step_deg", "command_error_um", "max_segment_deg", "allow_spline",
+                   "require_approval", "table_number", "x_min_mm", "x_max_mm", "x_velocity_max_mm_per_s",
+                   "x_acceleration_max_mm_per_s2", "work_speed_rpm"});
+    job.nc_dir = f.resolve(nr.text("dir", "nc"));
+    template_path = nr.text("template", "");
+    read_nc_table_keys(nr, job);
+    if (nr.error) return *nr.error;
+    if (!(job.axis_limits.x_min_mm < job.axis_limits.x_max_mm)) {
+      return make_error(ErrorCode::kInvalidInput, nr.where("x_max_mm") + ": must be above x_min_mm");
+    }
+    if (Status w = check_writable_dir(job.nc_dir, "NC directory"); !w) return at_key(nr, "dir", w.error());
+    if (!template_path.empty()) {
+      Result<std::string> text = read_text(f.resolve(template_path), "NC template");
+      if (!text) return at_key(nr, "template", text.error());
+      job.nc_template = std::move(*text);
+      job.nc_template_name = f.resolve(template_path).string();
+    }
+  }
+  if (template_path.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      f.source +
+                          ": [nc] template is required: your table subprogram with {{placeholders}}, e.g. "
+                          "examples/sinumerik/cam_table.spf (docs/nc_output.md)");
+  }
+  return {};
+}
+
+// [database]: the run database's path, writable by this user (also when left at its default).
+Status read_database_table(TomlReader& top, const ConfigFile& f, JobSettings& job) {
+  job.db_path = f.resolve("gaugeloop.sqlite");
+  if (const toml::table* t = top.subtable("database")) {
+    TomlReader dr(*t, f.source, "database.");
+    dr.allow_only({"path"});
+    job.db_path = f.resolve(dr.text("path", "gaugeloop.sqlite"));
+    if (dr.error) return *dr.error;
+    if (Status w = check_writable_database(job.db_path); !w) return at_key(dr, "path", w.error());
+  } else if (Status w = check_writable_database(job.db_path); !w) {
+    return make_error(ErrorCode::kInvalidInput,
+                      f.source + ": [database] path (default " + job.db_path.string() + "): " + w.error().message);
+  }
+  return {};
+}
+
+// The token read from [http] token_file: the file's text without trailing blanks, not empty.
+Result<std::string> read_token_file(const TomlReader& hr, const ConfigFile& f, const std::string& token_file) {
+  Result<std::string> text = read_text(f.resolve(token_file), "HTTP token file");
+  if (!text) return at_key(hr, "token_file", text.error());
+  std::string token = *text;
+  while (!token.empty() && (token.back() == '\n' || token.back() == '\r' || token.back() == ' ')) token.pop_back();
+  if (token.empty()) return make_error(ErrorCode::kInvalidInput, hr.where("token_file") + ": the file is empty");
+  return token;
+}
+
+// [http]: address and token of the HTTP API; absent table, no API.
+Result<std::optional<HttpSettings>> read_http_table(TomlReader& top, const ConfigFile& f) {
+  const toml::table* t = top.subtable("http");
+  if (t == nullptr) return std::optional<HttpSettings>();
+  TomlReader hr(*t, f.source, "http.");
+  hr.allow_only({"host", "port", "token", "token_file"});
+  HttpSettings hs;
+  hs.host = hr.text("host", "127.0.0.1");
+  hs.port = static_cast<int>(hr.integer("port", 8080, 0, 65535));
+  hs.token = hr.text("token", "");
+  const std::string token_file = hr.text("token_file", "");
+  if (hr.error) return *hr.error;
+  if (!hs.token.empty() && !token_file.empty()) {
+    return make_error(ErrorCode::kInvalidInput, hr.where("token_file") + ": give token or token_file, not both");
+  }
+  if (!token_file.empty()) {
+    Result<std::string> token = read_token_file(hr, f, token_file);
+    if (!token) return token.error();
+    hs.token = std::move(*token);
+  }
+  if (!hs.token.empty() && hs.token.size() < 16) {
+    return make_error(ErrorCode::kInvalidInput,
+                      hr.where(token_file.empty() ? "token" : "token_file") +
+                          ": a token shorter than 16 characters is too easy to guess; use e.g. `openssl rand -hex 16`");
+  }
+  return std::optional<HttpSettings>(std::move(hs));
+}
+
+// [plc]: the link settings of a gauge config's [link], plus where the block is and how often
+// it is polled; absent table, no PLC trigger.
+Result<std::optional<PlcSettings>> read_plc_table(TomlReader& top, const ConfigFile& f) {
+  const toml::table* t = top.subtable("plc");
+  if (t == nullptr) return std::optional<PlcSettings>();
+  TomlReader plr(*t, f.source, "plc.");
+  plr.allow_only({"transport", "host", "port", "device", "baud", "parity", "data_bits", "stop_bits", "unit_id",
+                  "response_timeout_ms", "base_address", "poll_interval_ms"});
+  PlcSettings ps;
+  ModbusSettings defaults;
+  defaults.port = 502;
+  read_modbus_link(plr, defaults, ps.link.link, "PLC");
+  ps.link.base_address = static_cast<int>(plr.integer("base_address", 0, 0, 65536 - plc_registers::kBlockWords));
+  ps.poll_interval = std::chrono::milliseconds(plr.integer("poll_interval_ms", 100, 10, 10000));
+  if (plr.error) return *plr.error;
+  return std::optional<PlcSettings>(std::move(ps));
+}
+
+// What the [[part]] entries read so far claim, to refuse a part or a PLC number given twice.
+struct PartClaims {
+  std::set<std::pair<std::string, int>> parts;  // (name, lobe)
+  std::map<int, std::string> plc_number_part;   // plc_part_number -> part name
+  std::set<std::pair<int, int>> plc_numbers;    // (plc_part_number, lobe)
+};
+
+// The PLC number of a part: one number is one part name, and (number, lobe) is unique.
+Status claim_plc_number(const TomlReader& pr, int plc_number, const Part& part, PartClaims& claims) {
+  auto [it, fresh] = claims.plc_number_part.emplace(plc_number, part.name);
+  if (!fresh && it->second != part.name) {
+    return make_error(ErrorCode::kInvalidInput, pr.where("plc_part_number") + ": " + std::to_string(plc_number) +
+                                                    " already names part " + it->second + ", not " + part.name +
+                                                    "; give each part its own number");
+  }
+  if (!claims.plc_numbers.insert({plc_number, part.lobe}).second) {
+    return make_error(ErrorCode::kInvalidInput, pr.where("plc_part_number") + ": part number " +
+                                                    std::to_string(plc_number) + " lobe " + std::to_string(part.lobe) +
+                                                    " is configured twice");
+  }
+  return {};
+}
+
+// One [[part]]: its part file and design read, its claims checked, and its job settings
+// checked (the design within the axis limits, the template rendering) before it is added.
+Status read_part_entry(const toml::table& entry, const ConfigFile& f, PartClaims& claims, ServiceConfig& c) {
+  TomlReader pr(entry, f.source, "part.");
+  pr.allow_only({"file", "plc_part_number"});
+  const std::string file = pr.text("file", std::nullopt);
+  std::optional<int> plc_number;
+  if (pr.has("plc_part_number")) plc_number = static_cast<int>(pr.integer("plc_part_number", std::nullopt, 1, 65535));
+  if (pr.error) return *pr.error;
+  Result<PartFile> pf = read_part_file(f.resolve(file));
+  if (!pf) return at_key(pr, "file", pf.error());
+  Result<LiftTable> design = read_lift_table_csv(pf->part.lift_table);
+  if (!design) return at_key(pr, "file", design.error());
+  if (!claims.parts.insert({pf->part.name, pf->part.lobe}).second) {
+    return make_error(ErrorCode::kInvalidInput, pr.where("file") + ": part " + pf->part.name + " lobe " +
+                                                    std::to_string(pf->part.lobe) + " is configured twice");
+  }
+  if (plc_number) {
+    if (Status claimed = claim_plc_number(pr, *plc_number, pf->part, claims); !claimed) return claimed;
+  }
+  c.parts.push_back({std::move(*pf), std::move(*design), plc_number});
+  if (Status ok = check_job_settings(job_for(c, c.parts.back())); !ok) return at_key(pr, "file", ok.error());
+  return {};
+}
+
+// [[part]]: each a part file; checked now, so a bad part never waits for the PLC to ask.
+// Reports the top level's own errors first (unknown keys, a missing [gauge]), as those were
+// found before any part was read.
+Status read_part_entries(const toml::table& table, TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
+  const toml::node* parts = table.get("part");
+  if (parts == nullptr || !parts->is_array_of_tables() || parts->as_array()->empty()) {
+    top.fail(f.source + ": no [[part]] entries; add one `[[part]] file = \"PART.toml\"` per part and lobe measured");
+  }
+  if (top.error) return *top.error;
+  PartClaims claims;
+  for (const toml::node& node : *parts->as_array()) {
+    if (Status read = read_part_entry(*node.as_table(), f, claims, c); !read) return read;
+  }
+  if (c.plc && claims.plc_number_part.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      f.source +
+                          ": [plc] is set but no [[part]] has a plc_part_number, so the PLC could ask for "
+                          "nothing; give each part the PLC measures `plc_part_number = N`");
+  }
+  return {};
+}
+
 }  // namespace
 
+// The tables are read in a fixed order and the first error is returned, except that the top
+// level's own errors (unknown keys, a table of the wrong type, a missing [gauge]) are kept
+// until the parts are read (read_part_entries).
 Result<ServiceConfig> read_service_config(const fs::path& path) {
   Result<std::string> text = read_text(path, "service config");
   if (!text) {
@@ -79,222 +345,29 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
     e.message += "; check --config";
     return e;
   }
-  const std::string source = path.string();
-  const fs::path base = path.parent_path();
-  Result<toml::table> parsed = parse_toml(*text, source);
+  const ConfigFile f{path.string(), path.parent_path()};
+  Result<toml::table> parsed = parse_toml(*text, f.source);
   if (!parsed) return parsed.error();
-  const toml::table& top = *parsed;
-  TomlReader r(top, source);
-  r.allow_only({"machine", "gauge", "part", "analysis", "compensation", "nc", "database", "http", "plc"});
+  const toml::table& table = *parsed;
+  TomlReader top(table, f.source);
+  top.allow_only({"machine", "gauge", "part", "analysis", "compensation", "nc", "database", "http", "plc"});
 
   ServiceConfig c;
   c.source = path;
-  c.machine = r.text("machine", "grinder-1");
-  JobSettings& job = c.job;
-  job.machine = c.machine;
-
-  // [gauge]
-  std::string gauge_file;
-  if (const toml::table* g = r.subtable("gauge")) {
-    TomlReader gr(*g, source, "gauge.");
-    gr.allow_only({"config", "mode", "revolutions"});
-    gauge_file = gr.text("config", "");
-    job.poller.mode =
-        gr.choice("mode", "latched", {"latched", "live"}) == "live" ? SamplingMode::kLive : SamplingMode::kLatched;
-    job.poller.revolutions = static_cast<int>(gr.integer("revolutions", 3, 3, 100));
-    if (gr.error) return *gr.error;
-    if (!gauge_file.empty()) {
-      Result<ModbusSettings> gs = read_gauge_file(relative_to(base, gauge_file));
-      if (!gs) return at_key(gr, "config", gs.error());
-      c.gauge = std::move(*gs);
-    }
-  } else {
-    r.fail(source + ": no [gauge] table; it names the gauge config (link and register map, docs/gauge.md)");
-  }
-
-  // [analysis]
-  if (const toml::table* a = r.subtable("analysis")) {
-    TomlReader ar(*a, source, "analysis.");
-    ar.allow_only({"base_circle_center_deg", "base_circle_half_width_deg"});
-    job.analysis.base_circle_center_deg = ar.number("base_circle_center_deg", 180.0, 0.0, 360.0);
-    job.analysis.base_circle_half_width_deg = ar.number("base_circle_half_width_deg", 30.0, 0.0, 90.0, true);
-    if (ar.error) return *ar.error;
-  }
-
-  // [compensation]
-  if (const toml::table* k = r.subtable("compensation")) {
-    TomlReader kr(*k, source, "compensation.");
-    kr.allow_only({"gain", "max_harmonic", "max_correction_um", "max_change_um", "max_repeatability_um",
-                   "max_phase_deg", "build_on_table_in_force"});
-    CompensationSettings& s = job.compensation;
-    s.gain = kr.number("gain", 1.0, 0.0, 1.0, true);
-    s.max_harmonic = static_cast<int>(kr.integer("max_harmonic", 30, 0, 180));
-    s.max_correction_um = kr.number("max_correction_um", 100.0, 0.0, 10000.0, true);
-    s.max_change_um = kr.number("max_change_um", 50.0, 0.0, 10000.0, true);
-    s.max_repeatability_um = kr.number("max_repeatability_um", 2.0, 0.0, 1000.0, true);
-    s.max_phase_deg = kr.number("max_phase_deg", 0.5, 0.0, 45.0, true);
-    job.build_on_table_in_force = kr.flag("build_on_table_in_force", true);
-    if (kr.error) return *kr.error;
-  }
-
-  // [nc]
-  std::string template_path;
-  job.nc_dir = relative_to(base, "nc");
-  if (const toml::table* n = r.subtable("nc")) {
-    TomlReader nr(*n, source, "nc.");
-    nr.allow_only({"dir", "template", "table", "table_step_deg", "command_error_um", "max_segment_deg", "allow_spline",
-                   "require_approval", "table_number", "x_min_mm", "x_max_mm", "x_velocity_max_mm_per_s",
-                   "x_acceleration_max_mm_per_s2", "work_speed_rpm"});
-    job.nc_dir = relative_to(base, nr.text("dir", "nc"));
-    template_path = nr.text("template", "");
-    const std::string kind =
-        nr.choice("table", "auto", {"auto", "linear", "spline", "adaptive-linear", "adaptive-spline"});
-    job.table_kind = kind == "linear"            ? TableKind::kLinear
-                     : kind == "spline"          ? TableKind::kSpline
-                     : kind == "adaptive-linear" ? TableKind::kAdaptiveLinear
-                     : kind == "adaptive-spline" ? TableKind::kAdaptiveSpline
-                                                 : TableKind::kAuto;
-    job.table_step_deg = nr.number("table_step_deg", 1.0, 0.0, 10.0, true);
-    job.table_choice.bound_um = nr.number("command_error_um", 0.5, 0.0, 100.0, true);
-    job.table_choice.max_step_deg = nr.number("max_segment_deg", 10.0, 0.0, 90.0, true);
-    job.table_choice.allow_spline = nr.flag("allow_spline", true);
-    job.require_approval = nr.flag("require_approval", false);
-    job.table_number = static_cast<int>(nr.integer("table_number", 1, 1, 999));
-    AxisLimits& l = job.axis_limits;
-    l.x_min_mm = nr.number("x_min_mm", l.x_min_mm, -1000.0, 1000.0);
-    l.x_max_mm = nr.number("x_max_mm", l.x_max_mm, -1000.0, 1000.0);
-    l.x_velocity_max_mm_per_s = nr.number("x_velocity_max_mm_per_s", l.x_velocity_max_mm_per_s, 0.0, 1e6, true);
-    l.x_acceleration_max_mm_per_s2 =
-        nr.number("x_acceleration_max_mm_per_s2", l.x_acceleration_max_mm_per_s2, 0.0, 1e8, true);
-    l.speed_rpm = nr.number("work_speed_rpm", l.speed_rpm, 0.0, 3000.0, true);
-    if (nr.error) return *nr.error;
-    if (!(l.x_min_mm < l.x_max_mm)) {
-      return make_error(ErrorCode::kInvalidInput, nr.where("x_max_mm") + ": must be above x_min_mm");
-    }
-    if (Status w = check_writable_dir(job.nc_dir, "NC directory"); !w) return at_key(nr, "dir", w.error());
-    if (!template_path.empty()) {
-      Result<std::string> t = read_text(relative_to(base, template_path), "NC template");
-      if (!t) return at_key(nr, "template", t.error());
-      job.nc_template = std::move(*t);
-      job.nc_template_name = relative_to(base, template_path).string();
-    }
-  }
-  if (template_path.empty()) {
-    return make_error(ErrorCode::kInvalidInput,
-                      source +
-                          ": [nc] template is required: your table subprogram with {{placeholders}}, e.g. "
-                          "examples/sinumerik/cam_table.spf (docs/nc_output.md)");
-  }
-
-  // [database]
-  job.db_path = relative_to(base, "gaugeloop.sqlite");
-  if (const toml::table* d = r.subtable("database")) {
-    TomlReader dr(*d, source, "database.");
-    dr.allow_only({"path"});
-    job.db_path = relative_to(base, dr.text("path", "gaugeloop.sqlite"));
-    if (dr.error) return *dr.error;
-    if (Status w = check_writable_database(job.db_path); !w) return at_key(dr, "path", w.error());
-  } else if (Status w = check_writable_database(job.db_path); !w) {
-    return make_error(ErrorCode::kInvalidInput,
-                      source + ": [database] path (default " + job.db_path.string() + "): " + w.error().message);
-  }
-
-  // [http]
-  if (const toml::table* h = r.subtable("http")) {
-    TomlReader hr(*h, source, "http.");
-    hr.allow_only({"host", "port", "token", "token_file"});
-    HttpSettings hs;
-    hs.host = hr.text("host", "127.0.0.1");
-    hs.port = static_cast<int>(hr.integer("port", 8080, 0, 65535));
-    hs.token = hr.text("token", "");
-    const std::string token_file = hr.text("token_file", "");
-    if (hr.error) return *hr.error;
-    if (!hs.token.empty() && !token_file.empty()) {
-      return make_error(ErrorCode::kInvalidInput, hr.where("token_file") + ": give token or token_file, not both");
-    }
-    if (!token_file.empty()) {
-      Result<std::string> t = read_text(relative_to(base, token_file), "HTTP token file");
-      if (!t) return at_key(hr, "token_file", t.error());
-      std::string token = *t;
-      while (!token.empty() && (token.back() == '\n' || token.back() == '\r' || token.back() == ' ')) token.pop_back();
-      if (token.empty()) {
-        return make_error(ErrorCode::kInvalidInput, hr.where("token_file") + ": the file is empty");
-      }
-      hs.token = token;
-    }
-    if (!hs.token.empty() && hs.token.size() < 16) {
-      return make_error(
-          ErrorCode::kInvalidInput,
-          hr.where(token_file.empty() ? "token" : "token_file") +
-              ": a token shorter than 16 characters is too easy to guess; use e.g. `openssl rand -hex 16`");
-    }
-    c.http = hs;
-  }
-
-  // [plc]: the link settings of a gauge config's [link], plus where the block is and how often
-  // it is polled.
-  if (const toml::table* p = r.subtable("plc")) {
-    TomlReader plr(*p, source, "plc.");
-    plr.allow_only({"transport", "host", "port", "device", "baud", "parity", "data_bits", "stop_bits", "unit_id",
-                    "response_timeout_ms", "base_address", "poll_interval_ms"});
-    PlcSettings ps;
-    ModbusSettings defaults;
-    defaults.port = 502;
-    read_modbus_link(plr, defaults, ps.link.link, "PLC");
-    ps.link.base_address = static_cast<int>(plr.integer("base_address", 0, 0, 65536 - plc_registers::kBlockWords));
-    ps.poll_interval = std::chrono::milliseconds(plr.integer("poll_interval_ms", 100, 10, 10000));
-    if (plr.error) return *plr.error;
-    c.plc = ps;
-  }
-
-  // [[part]]: each a part file; checked now, so a bad part never waits for the PLC to ask.
-  const toml::node* parts = top.get("part");
-  if (parts == nullptr || !parts->is_array_of_tables() || parts->as_array()->empty()) {
-    r.fail(source + ": no [[part]] entries; add one `[[part]] file = \"PART.toml\"` per part and lobe measured");
-  }
-  if (r.error) return *r.error;
-  std::set<std::pair<std::string, int>> seen;
-  std::map<int, std::string> plc_number_part;  // plc_part_number -> part name
-  std::set<std::pair<int, int>> plc_seen;      // (plc_part_number, lobe)
-  for (const toml::node& node : *parts->as_array()) {
-    const toml::table& pt = *node.as_table();
-    TomlReader pr(pt, source, "part.");
-    pr.allow_only({"file", "plc_part_number"});
-    const std::string file = pr.text("file", std::nullopt);
-    std::optional<int> plc_number;
-    if (pr.has("plc_part_number")) plc_number = static_cast<int>(pr.integer("plc_part_number", std::nullopt, 1, 65535));
-    if (pr.error) return *pr.error;
-    Result<PartFile> pf = read_part_file(relative_to(base, file));
-    if (!pf) return at_key(pr, "file", pf.error());
-    Result<LiftTable> design = read_lift_table_csv(pf->part.lift_table);
-    if (!design) return at_key(pr, "file", design.error());
-    if (!seen.insert({pf->part.name, pf->part.lobe}).second) {
-      return make_error(ErrorCode::kInvalidInput, pr.where("file") + ": part " + pf->part.name + " lobe " +
-                                                      std::to_string(pf->part.lobe) + " is configured twice");
-    }
-    if (plc_number) {
-      const std::string& name = pf->part.name;
-      auto [it, fresh] = plc_number_part.emplace(*plc_number, name);
-      if (!fresh && it->second != name) {
-        return make_error(ErrorCode::kInvalidInput, pr.where("plc_part_number") + ": " + std::to_string(*plc_number) +
-                                                        " already names part " + it->second + ", not " + name +
-                                                        "; give each part its own number");
-      }
-      if (!plc_seen.insert({*plc_number, pf->part.lobe}).second) {
-        return make_error(ErrorCode::kInvalidInput, pr.where("plc_part_number") + ": part number " +
-                                                        std::to_string(*plc_number) + " lobe " +
-                                                        std::to_string(pf->part.lobe) + " is configured twice");
-      }
-    }
-    c.parts.push_back({std::move(*pf), std::move(*design), plc_number});
-    if (Status ok = check_job_settings(job_for(c, c.parts.back())); !ok) return at_key(pr, "file", ok.error());
-  }
-  if (c.plc && plc_number_part.empty()) {
-    return make_error(ErrorCode::kInvalidInput,
-                      source +
-                          ": [plc] is set but no [[part]] has a plc_part_number, so the PLC could ask for "
-                          "nothing; give each part the PLC measures `plc_part_number = N`");
-  }
+  c.machine = top.text("machine", "grinder-1");
+  c.job.machine = c.machine;
+  if (Status s = read_gauge_table(top, f, c); !s) return s.error();
+  if (Status s = read_analysis_table(top, f, c.job.analysis); !s) return s.error();
+  if (Status s = read_compensation_table(top, f, c.job); !s) return s.error();
+  if (Status s = read_nc_table(top, f, c.job); !s) return s.error();
+  if (Status s = read_database_table(top, f, c.job); !s) return s.error();
+  Result<std::optional<HttpSettings>> http = read_http_table(top, f);
+  if (!http) return http.error();
+  c.http = std::move(*http);
+  Result<std::optional<PlcSettings>> plc = read_plc_table(top, f);
+  if (!plc) return plc.error();
+  c.plc = std::move(*plc);
+  if (Status s = read_part_entries(table, top, f, c); !s) return s.error();
   return c;
 }
 

@@ -11,7 +11,6 @@
 
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/plc_link.h"
-#include "service/http_api.h"
 #include "job/measure_job.h"
 #include "config/part_file.h"
 #include "core/lift_table.h"
@@ -26,6 +25,15 @@ struct ServicePart {
   // The number the PLC names this part by (with the part file's lobe); absent: the PLC
   // cannot ask for it. One number is one part name; (number, lobe) is unique.
   std::optional<int> plc_part_number;
+};
+
+// The HTTP API's address and token ([http]; served by service/http_api.h).
+struct HttpSettings {
+  std::string host = "127.0.0.1";  // bound to loopback unless configured
+  int port = 8080;                 // 0: a free port (tests); read it back with HttpApi::port()
+  // Empty: the API is read-only, and every write is refused with 403. Otherwise a write needs
+  // the header `Authorization: Bearer <token>` (401 without it or with another token).
+  std::string token;
 };
 
 // The PLC trigger: the PLC's Modbus server and the handshake block on it (docs/service.md).

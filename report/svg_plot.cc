@@ -173,41 +173,55 @@ struct DegreePanel {
   }
 };
 
-}  // namespace
-
-std::string render_error_plot_svg(const ErrorPlot& p) {
-  // The scale: the largest error (with its spread) or the tolerance, whichever is larger.
-  double extent = 0.0;
+// The error plot's scale and what it marks: the axis runs -scale..+scale um with a grid line
+// every `step`; `worst` is the degree of the largest |error|, `outside` how many degrees are
+// beyond the tolerance.
+struct ErrorScale {
+  double scale = 0.0;
+  double step = 0.0;
   std::size_t worst = 0;
+  int outside = 0;
+};
+
+bool out_of_tolerance(const ErrorPlot& p, std::size_t d) {
+  return p.tolerance_um && std::abs(p.error_um[d]) > *p.tolerance_um;
+}
+
+// The scale: the largest error (with its spread) or the tolerance, whichever is larger.
+ErrorScale error_scale(const ErrorPlot& p) {
+  ErrorScale s;
+  double extent = 0.0;
   for (std::size_t d = 0; d < p.error_um.size(); ++d) {
     const double spread = p.spread_um ? (*p.spread_um)[d] : 0.0;
     extent = std::max(extent, std::abs(p.error_um[d]) + spread);
     if (p.correction_um) extent = std::max(extent, std::abs((*p.correction_um)[d]));
-    if (std::abs(p.error_um[d]) > std::abs(p.error_um[worst])) worst = d;
+    if (std::abs(p.error_um[d]) > std::abs(p.error_um[s.worst])) s.worst = d;
   }
   if (p.tolerance_um) extent = std::max(extent, *p.tolerance_um * 1.15);
-  const double step = nice_step(2.0 * extent);
-  const double scale = std::max(step, std::ceil(extent / step) * step);  // axis runs -scale..+scale
+  s.step = nice_step(2.0 * extent);
+  s.scale = std::max(s.step, std::ceil(extent / s.step) * s.step);
+  for (std::size_t d = 0; d < p.error_um.size(); ++d) s.outside += out_of_tolerance(p, d) ? 1 : 0;
+  return s;
+}
 
-  const auto out_of_tolerance = [&](std::size_t d) {
-    return p.tolerance_um && std::abs(p.error_um[d]) > *p.tolerance_um;
-  };
-  int outside = 0;
-  for (std::size_t d = 0; d < p.error_um.size(); ++d) outside += out_of_tolerance(d) ? 1 : 0;
-
-  std::string svg = start_document(p.title, p.subtitle);
+// The verdict at the top right: the largest error and where, and the tolerance kept or not.
+void draw_error_verdict(std::string& svg, const ErrorPlot& p, const ErrorScale& s) {
   std::string verdict =
-      "max |error| " + num(std::abs(p.error_um[worst]), 2) + " \u00b5m at cam " + std::to_string(worst) + "\u00b0";
+      "max |error| " + num(std::abs(p.error_um[s.worst]), 2) + " \u00b5m at cam " + std::to_string(s.worst) + "\u00b0";
   if (p.tolerance_um) {
-    verdict += outside == 0 ? " \u00b7 within \u00b1" + num(*p.tolerance_um, 1) + " \u00b5m"
-                            : " \u00b7 " + std::to_string(outside) + " degrees outside \u00b1" +
-                                  num(*p.tolerance_um, 1) + " \u00b5m";
+    verdict += s.outside == 0 ? " \u00b7 within \u00b1" + num(*p.tolerance_um, 1) + " \u00b5m"
+                              : " \u00b7 " + std::to_string(s.outside) + " degrees outside \u00b1" +
+                                    num(*p.tolerance_um, 1) + " \u00b5m";
   }
-  add_text(svg, {kWidth - 40.0, 46, verdict, 16, "end", outside > 0 ? kOutColour : kTextColour, "bold"});
+  add_text(svg, {kWidth - 40.0, 46, verdict, 16, "end", s.outside > 0 ? kOutColour : kTextColour, "bold"});
   add_text(svg, {kWidth - 40.0, 72, "lift error = measured \u2212 design, cam frame, 0\u00b0 at the nose", 13, "end",
                  kMutedColour});
+}
 
-  // ---- Polar panel ----
+// The polar panel: the error as a ring around the zero circle, the tolerance as a band.
+void draw_polar_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s) {
+  const double scale = s.scale;
+  const double step = s.step;
   const double k = kPolarSpan / scale;  // px per um
   add_text(svg, {kPolarCx, 104, "Polar: error around the zero circle", 14, "middle", kTextColour, "bold"});
   if (p.tolerance_um) {
@@ -242,7 +256,7 @@ std::string render_error_plot_svg(const ErrorPlot& p) {
            "\" fill=\"none\" stroke=\"" + kCorrectionColour + "\" stroke-width=\"1.2\" stroke-dasharray=\"5,3\"/>\n";
   }
   for (std::size_t d = 0; d < p.error_um.size(); ++d) {
-    if (!out_of_tolerance(d)) continue;
+    if (!out_of_tolerance(p, d)) continue;
     const double r = kPolarR0 + p.error_um[d] * k;
     svg += "<circle cx=\"" + num(polar_x(static_cast<double>(d), r), 2) + "\" cy=\"" +
            num(polar_y(static_cast<double>(d), r), 2) + "\" r=\"2\" fill=\"" + kOutColour + "\"/>\n";
@@ -252,9 +266,26 @@ std::string render_error_plot_svg(const ErrorPlot& p) {
   add_text(svg,
            {kPolarCx, 604, "radial scale " + num(step, step < 1 ? 1 : 0) + " \u00b5m per ring, outward = more material",
             12, "middle", kMutedColour});
+}
 
-  // ---- Linear panel ----
-  const DegreePanel panel{kPlotLeft, kPlotRight, kPlotTop, kPlotBottom, scale, step};
+// The spread as a band around the error, in the linear panel.
+std::string spread_band_points(const ErrorPlot& p, const DegreePanel& panel) {
+  std::string band;
+  for (int deg = 0; deg <= kDegreesPerRevolution; ++deg) {
+    const auto d = static_cast<std::size_t>(deg % kDegreesPerRevolution);
+    band += num(panel.x_of(deg), 2) + "," + num(panel.y_of(p.error_um[d] + (*p.spread_um)[d]), 2) + " ";
+  }
+  for (int deg = kDegreesPerRevolution; deg >= 0; --deg) {
+    const auto d = static_cast<std::size_t>(deg % kDegreesPerRevolution);
+    band += num(panel.x_of(deg), 2) + "," + num(panel.y_of(p.error_um[d] - (*p.spread_um)[d]), 2) + " ";
+  }
+  return band;
+}
+
+// The linear panel: error, spread and correction per cam degree, the tolerance as a strip,
+// the degrees outside it marked, and the worst degree ringed and labelled.
+void draw_linear_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s) {
+  const DegreePanel panel{kPlotLeft, kPlotRight, kPlotTop, kPlotBottom, s.scale, s.step};
   const auto x_of = [&](double deg) { return panel.x_of(deg); };
   const auto y_of = [&](double um) { return panel.y_of(um); };
   add_text(svg, {(kPlotLeft + kPlotRight) / 2, 104, "Linear: error per cam degree", 14, "middle", kTextColour, "bold"});
@@ -264,31 +295,23 @@ std::string render_error_plot_svg(const ErrorPlot& p) {
            "\" fill=\"" + kToleranceColour + "\"/>\n";
   }
   panel.draw_axes(svg);
-  const auto polyline = [&](const DegreeTable& t) { return panel.points(t); };
   if (p.spread_um) {
-    std::string band;
-    for (int deg = 0; deg <= kDegreesPerRevolution; ++deg) {
-      const auto d = static_cast<std::size_t>(deg % kDegreesPerRevolution);
-      band += num(x_of(deg), 2) + "," + num(y_of(p.error_um[d] + (*p.spread_um)[d]), 2) + " ";
-    }
-    for (int deg = kDegreesPerRevolution; deg >= 0; --deg) {
-      const auto d = static_cast<std::size_t>(deg % kDegreesPerRevolution);
-      band += num(x_of(deg), 2) + "," + num(y_of(p.error_um[d] - (*p.spread_um)[d]), 2) + " ";
-    }
-    svg += "<polygon points=\"" + band + "\" fill=\"" + kSpreadColour + "\" fill-opacity=\"0.6\" stroke=\"none\"/>\n";
+    svg += "<polygon points=\"" + spread_band_points(p, panel) + "\" fill=\"" + kSpreadColour +
+           "\" fill-opacity=\"0.6\" stroke=\"none\"/>\n";
   }
-  svg += "<polyline points=\"" + polyline(p.error_um) + "\" fill=\"none\" stroke=\"" + kErrorColour +
+  svg += "<polyline points=\"" + panel.points(p.error_um) + "\" fill=\"none\" stroke=\"" + kErrorColour +
          "\" stroke-width=\"1.8\" stroke-linejoin=\"round\"/>\n";
   if (p.correction_um) {
-    svg += "<polyline points=\"" + polyline(*p.correction_um) + "\" fill=\"none\" stroke=\"" + kCorrectionColour +
+    svg += "<polyline points=\"" + panel.points(*p.correction_um) + "\" fill=\"none\" stroke=\"" + kCorrectionColour +
            "\" stroke-width=\"1.2\" stroke-dasharray=\"5,3\"/>\n";
   }
   for (std::size_t d = 0; d < p.error_um.size(); ++d) {
-    if (!out_of_tolerance(d)) continue;
+    if (!out_of_tolerance(p, d)) continue;
     svg += "<circle cx=\"" + num(x_of(static_cast<double>(d)), 2) + "\" cy=\"" + num(y_of(p.error_um[d]), 2) +
            "\" r=\"2\" fill=\"" + kOutColour + "\"/>\n";
   }
   // The worst degree, marked and labelled on the side with room.
+  const std::size_t worst = s.worst;
   const double wx = x_of(static_cast<double>(worst));
   const double wy = y_of(p.error_um[worst]);
   svg += "<circle cx=\"" + num(wx, 2) + "\" cy=\"" + num(wy, 2) + "\" r=\"4.5\" fill=\"none\" stroke=\"" + kTextColour +
@@ -298,41 +321,51 @@ std::string render_error_plot_svg(const ErrorPlot& p) {
   add_text(svg, {wx + (label_left ? -8 : 8), ly,
                  num(p.error_um[worst], 2) + " \u00b5m at " + std::to_string(worst) + "\u00b0", 12,
                  label_left ? "end" : "start", kTextColour, "bold"});
+}
 
-  // ---- Legend and footer ----
+// The legend under the linear panel: a swatch and a label for each thing drawn.
+void draw_error_legend(std::string& svg, const ErrorPlot& p) {
   double lx = kPlotLeft - 40;
-  const double ly2 = 606;
+  const double ly = 606;
   const auto legend = [&](const std::string& swatch, const std::string& label) {
     svg += swatch;
-    add_text(svg, {lx + 30, ly2 + 4, label, 12, "start", kTextColour});
+    add_text(svg, {lx + 30, ly + 4, label, 12, "start", kTextColour});
     lx += 30 + 6.5 * static_cast<double>(label.size()) + 18;
   };
-  legend("<line x1=\"" + num(lx) + "\" y1=\"" + num(ly2) + "\" x2=\"" + num(lx + 24) + "\" y2=\"" + num(ly2) +
+  legend("<line x1=\"" + num(lx) + "\" y1=\"" + num(ly) + "\" x2=\"" + num(lx + 24) + "\" y2=\"" + num(ly) +
              "\" stroke=\"" + kErrorColour + "\" stroke-width=\"2\"/>\n",
          "error");
   if (p.spread_um) {
-    legend("<rect x=\"" + num(lx) + "\" y=\"" + num(ly2 - 6) + "\" width=\"24\" height=\"12\" fill=\"" + kSpreadColour +
+    legend("<rect x=\"" + num(lx) + "\" y=\"" + num(ly - 6) + "\" width=\"24\" height=\"12\" fill=\"" + kSpreadColour +
                "\"/>\n",
            "\u00b1 spread (1 s.d.)");
   }
   if (p.correction_um) {
-    legend("<line x1=\"" + num(lx) + "\" y1=\"" + num(ly2) + "\" x2=\"" + num(lx + 24) + "\" y2=\"" + num(ly2) +
+    legend("<line x1=\"" + num(lx) + "\" y1=\"" + num(ly) + "\" x2=\"" + num(lx + 24) + "\" y2=\"" + num(ly) +
                "\" stroke=\"" + kCorrectionColour + "\" stroke-width=\"1.5\" stroke-dasharray=\"5,3\"/>\n",
            "correction");
   }
   if (p.tolerance_um) {
-    legend("<rect x=\"" + num(lx) + "\" y=\"" + num(ly2 - 6) + "\" width=\"24\" height=\"12\" fill=\"" +
+    legend("<rect x=\"" + num(lx) + "\" y=\"" + num(ly - 6) + "\" width=\"24\" height=\"12\" fill=\"" +
                kToleranceColour + "\" stroke=\"#9fcfa4\"/>\n",
            "tolerance \u00b1" + num(*p.tolerance_um, 1) + " \u00b5m");
   }
+}
+
+}  // namespace
+
+std::string render_error_plot_svg(const ErrorPlot& p) {
+  const ErrorScale s = error_scale(p);
+  std::string svg = start_document(p.title, p.subtitle);
+  draw_error_verdict(svg, p, s);
+  draw_polar_panel(svg, p, s);
+  draw_linear_panel(svg, p, s);
+  draw_error_legend(svg, p);
   add_text(svg, {40, kHeight - 10.0, p.footer, 11, "start", kMutedColour});
   svg += "</svg>\n";
   return svg;
 }
 
-}  // namespace gaugeloop
-
-namespace gaugeloop {
 namespace {
 
 // From the first part (light orange) to the last (dark blue): the eye follows the loop.

@@ -10,17 +10,10 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "config/service_config.h"
 #include "core/result.h"
 
 namespace gaugeloop {
-
-struct HttpSettings {
-  std::string host = "127.0.0.1";  // bound to loopback unless configured
-  int port = 8080;                 // 0: a free port (tests); read it back with HttpApi::port()
-  // Empty: the API is read-only, and every write is refused with 403. Otherwise a write needs
-  // the header `Authorization: Bearer <token>` (401 without it or with another token).
-  std::string token;
-};
 
 // Writes the service provides. Each returns the JSON body of a 200 answer, or an Error whose
 // code chooses the status (docs/http_api.md, "Errors"): kInvalidInput 400, kNotFound 404,

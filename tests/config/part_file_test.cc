@@ -1,0 +1,143 @@
+// Part files: a lobe's description read back, and every refusal naming the file, line and key.
+#include "config/part_file.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "tests/config/temp_dir.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A complete flat-follower part; `extra` is appended (line 9 on).
+std::string flat_part(const std::string& extra = {}) {
+  return "name = \"intake\"\n"
+         "lobe = 2\n"
+         "lift_table = \"intake.csv\"\n"
+         "follower = \"flat\"\n"
+         "base_circle_radius_mm = 18.0\n"
+         "wheel_radius_mm = 200.0\n"
+         "c_offset_deg = 12.5\n"
+         "nc_program = \"CAM_INTAKE_L2\"\n" +
+         extra;
+}
+
+Result<PartFile> parse(const std::string& text) { return parse_part_toml(text, "part.toml", "/parts"); }
+
+::testing::AssertionResult refused(const Result<PartFile>& r, const std::string& expected) {
+  if (r.ok()) return ::testing::AssertionFailure() << "read, expected a refusal containing: " << expected;
+  if (r.error().code != ErrorCode::kInvalidInput) {
+    return ::testing::AssertionFailure() << "code " << static_cast<int>(r.error().code) << ": " << r.error().message;
+  }
+  if (r.error().message.find(expected) == std::string::npos) {
+    return ::testing::AssertionFailure() << "message: " << r.error().message << "\nexpected in it: " << expected;
+  }
+  return ::testing::AssertionSuccess();
+}
+
+TEST(PartFile, ReadsEveryKeyAndTheDefaults) {
+  auto pf = parse(flat_part());
+  ASSERT_TRUE(pf.ok()) << pf.error().message;
+  const Part& p = pf->part;
+  EXPECT_EQ(p.name, "intake");
+  EXPECT_EQ(p.lobe, 2);
+  EXPECT_EQ(p.lift_table, fs::path("/parts/intake.csv")) << "relative to the part file's directory";
+  EXPECT_EQ(p.follower, FollowerKind::kFlat);
+  EXPECT_EQ(p.base_circle_radius_mm, 18.0);
+  EXPECT_EQ(p.wheel_radius_mm, 200.0);
+  EXPECT_EQ(p.rotation_sense, 1) << "default";
+  EXPECT_EQ(p.c_offset_deg, 12.5);
+  EXPECT_EQ(p.probe_offset_deg, 0.0) << "default";
+  EXPECT_EQ(pf->nc_program, "CAM_INTAKE_L2");
+
+  auto roller = parse(
+      "name = \"ex\"\nlift_table = \"/abs/ex.csv\"\nfollower = \"roller\"\nfollower_radius_mm = 11\n"
+      "base_circle_radius_mm = 17\nwheel_radius_mm = 45\nrotation_sense = -1\nprobe_offset_deg = -30\n"
+      "nc_program = \"EX\"\n");
+  ASSERT_TRUE(roller.ok()) << roller.error().message;
+  EXPECT_EQ(roller->part.lobe, 1) << "default";
+  EXPECT_EQ(roller->part.lift_table, fs::path("/abs/ex.csv")) << "an absolute path is kept";
+  EXPECT_EQ(roller->part.follower, FollowerKind::kRoller);
+  EXPECT_EQ(roller->part.follower_radius_mm, 11.0);
+  EXPECT_EQ(roller->part.rotation_sense, -1);
+  EXPECT_EQ(roller->part.probe_offset_deg, -30.0);
+
+  std::string knife_text = flat_part();
+  knife_text.replace(knife_text.find("\"flat\""), 6, "\"knife_edge\"");
+  auto knife = parse(knife_text);
+  ASSERT_TRUE(knife.ok()) << knife.error().message;
+  EXPECT_EQ(knife->part.follower, FollowerKind::kKnifeEdge);
+}
+
+TEST(PartFile, RefusesMistakesNamingFileLineAndKey) {
+  struct Case {
+    std::string text;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {flat_part("colour = \"red\"\n"), "part.toml:9: key `colour`: unknown key; known keys: name, lobe,"},
+      {"lobe = 1\n", "part.toml: key `name` is missing; it is required"},
+      {flat_part("follower_radius_mm = 11\n"),
+       "part.toml:9: key `follower_radius_mm`: only a roller follower has a radius"},
+      {"name = \"r\"\nlift_table = \"r.csv\"\nfollower = \"roller\"\nbase_circle_radius_mm = 17\n"
+       "wheel_radius_mm = 45\nnc_program = \"R\"\n",
+       "part.toml: key `follower_radius_mm` is missing"},
+      {flat_part("rotation_sense = 0\n"), "part.toml:9: key `rotation_sense`: must be 1 or -1"},
+      {flat_part("rotation_sense = 2\n"), "part.toml:9: key `rotation_sense`: 2 is out of range; allowed [-1, 1]"},
+      {flat_part("probe_offset_deg = 400\n"), "part.toml:9: key `probe_offset_deg`: 400 is out of range"},
+      {flat_part("[extra]\n"), "part.toml:9: key `extra`: unknown key"},
+  };
+  for (const Case& c : cases) EXPECT_TRUE(refused(parse(c.text), c.expected)) << c.text;
+
+  std::string bad = flat_part();
+  bad.replace(bad.find("\"flat\""), 6, "\"flat-faced\"");
+  EXPECT_TRUE(refused(parse(bad), "part.toml:4: key `follower`: `flat-faced` is not one of flat, roller, knife_edge"));
+  bad = flat_part();
+  bad.replace(bad.find("lobe = 2"), 8, "lobe = 65");
+  EXPECT_TRUE(refused(parse(bad), "part.toml:2: key `lobe`: 65 is out of range; allowed [1, 64]"));
+  bad = flat_part();
+  bad.replace(bad.find("18.0"), 4, "0");
+  EXPECT_TRUE(refused(parse(bad), "part.toml:5: key `base_circle_radius_mm`: 0 is out of range; allowed (0, 1000]"));
+  bad = flat_part();
+  bad.replace(bad.find("200.0"), 5, "\"200\"");
+  EXPECT_TRUE(refused(parse(bad), "part.toml:6: key `wheel_radius_mm`: expected a number"));
+}
+
+TEST(PartFile, RefusesAnInvalidNcProgramName) {
+  for (const char* name : {"1CAM", "CAM-1", "", "A234567890123456789012345"}) {
+    std::string text = flat_part();
+    text.replace(text.find("\"CAM_INTAKE_L2\""), 15, "\"" + std::string(name) + "\"");
+    EXPECT_TRUE(refused(parse(text), "part.toml:8: key `nc_program`: `" + std::string(name) +
+                                         "` is not a valid NC program name; use up to 24 letters"));
+  }
+  std::string longest = flat_part();
+  longest.replace(longest.find("\"CAM_INTAKE_L2\""), 15, "\"A23456789012345678901234\"");
+  EXPECT_TRUE(parse(longest).ok()) << "24 characters are allowed";
+}
+
+TEST(PartFile, ReadsAFileWithAByteOrderMarkAndNamesAMissingOne) {
+  testing::ScratchDir dir;
+  const fs::path file = dir.write("sub/intake.toml", "\xEF\xBB\xBF" + flat_part());
+  auto pf = read_part_file(file);
+  ASSERT_TRUE(pf.ok()) << pf.error().message;
+  EXPECT_EQ(pf->part.lift_table, dir.path() / "sub" / "intake.csv");
+
+  auto missing = read_part_file(dir.path() / "absent.toml");
+  ASSERT_FALSE(missing.ok());
+  EXPECT_EQ(missing.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(missing.error().message.find("part file " + (dir.path() / "absent.toml").string() + ": no such file"),
+            std::string::npos)
+      << missing.error().message;
+
+  const fs::path bad = dir.write("bad.toml", flat_part("lobe = 3\n"));
+  auto twice = read_part_file(bad);
+  ASSERT_FALSE(twice.ok());
+  EXPECT_NE(twice.error().message.find(bad.string() + ":9"), std::string::npos) << twice.error().message;
+}
+
+}  // namespace
+}  // namespace gaugeloop

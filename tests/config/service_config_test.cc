@@ -1,0 +1,446 @@
+// The service's configuration file: every table read back, and every refusal naming the file,
+// the line and the key. The files are written into a fresh directory per test.
+#include "config/service_config.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "tests/config/temp_dir.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kExamples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
+
+// The parts used below, in the order of their [[part]] entries' lines: line 2 [[part]], line 3
+// file (and line 4 plc_part_number when given).
+const std::string kIntake = "[[part]]\nfile = \"parts/intake_flat.toml\"\n";
+const std::string kExhaust = "[[part]]\nfile = \"parts/exhaust_roller.toml\"\n";
+const std::string kNc = "[nc]\ntemplate = \"table.spf\"\n";
+
+class ServiceConfigTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    // The sample parts and the Sinumerik template, copied so relative paths are relative to
+    // this directory.
+    for (const char* name : {"intake_flat.toml", "intake_flat.csv", "exhaust_roller.toml", "exhaust_roller.csv"}) {
+      fs::create_directories(dir_.path() / "parts");
+      fs::copy_file(kExamples / name, dir_.path() / "parts" / name);
+    }
+    fs::copy_file(kExamples / "sinumerik" / "cam_table.spf", dir_.path() / "table.spf");
+  }
+
+  Result<ServiceConfig> read(const std::string& text) { return read_service_config(dir_.write("svc.toml", text)); }
+
+  // "<dir>/svc.toml:<line>: key `<key>`", as a message starts.
+  std::string at(int line, const std::string& key) const {
+    return (dir_.path() / "svc.toml").string() + ":" + std::to_string(line) + ": key `" + key + "`";
+  }
+
+  testing::ScratchDir dir_;
+};
+
+// Refused with `code` and a message containing `expected`.
+::testing::AssertionResult refused(const Result<ServiceConfig>& r, ErrorCode code, const std::string& expected) {
+  if (r.ok()) return ::testing::AssertionFailure() << "read, expected a refusal containing: " << expected;
+  if (r.error().code != code) {
+    return ::testing::AssertionFailure() << "code " << static_cast<int>(r.error().code) << ": " << r.error().message;
+  }
+  if (r.error().message.find(expected) == std::string::npos) {
+    return ::testing::AssertionFailure() << "message: " << r.error().message << "\nexpected in it: " << expected;
+  }
+  return ::testing::AssertionSuccess();
+}
+
+TEST_F(ServiceConfigTest, AMinimalFileTakesTheDocumentedDefaults) {
+  auto c = read("[gauge]\n" + kIntake + kNc);
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->machine, "grinder-1");
+  EXPECT_EQ(c->job.machine, "grinder-1");
+  EXPECT_EQ(c->gauge.host, "127.0.0.1");
+  EXPECT_EQ(c->gauge.port, 502);
+  EXPECT_EQ(c->job.poller.mode, SamplingMode::kLatched);
+  EXPECT_EQ(c->job.poller.revolutions, 3);
+  EXPECT_EQ(c->job.analysis.base_circle_center_deg, 180.0);
+  EXPECT_EQ(c->job.analysis.base_circle_half_width_deg, 30.0);
+  EXPECT_EQ(c->job.compensation.gain, 1.0);
+  EXPECT_EQ(c->job.compensation.max_harmonic, 30);
+  EXPECT_EQ(c->job.compensation.max_correction_um, 100.0);
+  EXPECT_EQ(c->job.compensation.max_change_um, 50.0);
+  EXPECT_EQ(c->job.compensation.max_repeatability_um, 2.0);
+  EXPECT_EQ(c->job.compensation.max_phase_deg, 0.5);
+  EXPECT_TRUE(c->job.build_on_table_in_force);
+  EXPECT_EQ(c->job.nc_dir, dir_.path() / "nc");
+  EXPECT_EQ(c->job.table_kind, TableKind::kAuto);
+  EXPECT_EQ(c->job.table_step_deg, 1.0);
+  EXPECT_EQ(c->job.table_choice.bound_um, 0.5);
+  EXPECT_EQ(c->job.table_choice.max_step_deg, 10.0);
+  EXPECT_TRUE(c->job.table_choice.allow_spline);
+  EXPECT_FALSE(c->job.require_approval);
+  EXPECT_EQ(c->job.table_number, 1);
+  EXPECT_EQ(c->job.axis_limits.x_min_mm, -0.5);
+  EXPECT_EQ(c->job.axis_limits.x_max_mm, 20.0);
+  EXPECT_EQ(c->job.axis_limits.x_velocity_max_mm_per_s, 300.0);
+  EXPECT_EQ(c->job.axis_limits.x_acceleration_max_mm_per_s2, 20000.0);
+  EXPECT_EQ(c->job.axis_limits.speed_rpm, 60.0);
+  EXPECT_EQ(c->job.db_path, dir_.path() / "gaugeloop.sqlite");
+  EXPECT_FALSE(c->http.has_value());
+  EXPECT_FALSE(c->plc.has_value());
+  ASSERT_EQ(c->parts.size(), 1u);
+  EXPECT_FALSE(c->parts[0].plc_part_number.has_value());
+}
+
+TEST_F(ServiceConfigTest, AFullFileIsReadBackFieldByField) {
+  dir_.write("gauge.toml", "[link]\nhost = \"127.0.0.1\"\nport = 1502\nunit_id = 9\n");
+  dir_.write("token", "0123456789abcdef0123\n");
+  const std::string text = R"(machine = "grinder-7"
+[gauge]
+config = "gauge.toml"
+mode = "live"
+revolutions = 5
+[[part]]
+file = "parts/intake_flat.toml"
+plc_part_number = 11
+[[part]]
+file = "parts/exhaust_roller.toml"
+plc_part_number = 12
+[analysis]
+base_circle_center_deg = 170.0
+base_circle_half_width_deg = 25
+[compensation]
+gain = 0.5
+max_harmonic = 20
+max_correction_um = 80.0
+max_change_um = 40.0
+max_repeatability_um = 3.0
+max_phase_deg = 1.0
+build_on_table_in_force = false
+[nc]
+dir = "out"
+template = "table.spf"
+table = "adaptive-spline"
+table_step_deg = 0.5
+command_error_um = 0.25
+max_segment_deg = 5.0
+allow_spline = false
+require_approval = true
+table_number = 7
+x_min_mm = -1.0
+x_max_mm = 25.0
+x_velocity_max_mm_per_s = 250.0
+x_acceleration_max_mm_per_s2 = 15000.0
+work_speed_rpm = 50.0
+[database]
+path = "data/runs.sqlite"
+[http]
+host = "0.0.0.0"
+port = 9090
+token_file = "token"
+[plc]
+host = "127.0.0.1"
+port = 1503
+unit_id = 3
+response_timeout_ms = 300
+base_address = 200
+poll_interval_ms = 50
+)";
+  auto c = read(text);
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->source, dir_.path() / "svc.toml");
+  EXPECT_EQ(c->machine, "grinder-7");
+  EXPECT_EQ(c->job.machine, "grinder-7");
+  EXPECT_EQ(c->gauge.port, 1502);
+  EXPECT_EQ(c->gauge.unit_id, 9);
+  EXPECT_EQ(c->job.poller.mode, SamplingMode::kLive);
+  EXPECT_EQ(c->job.poller.revolutions, 5);
+  ASSERT_EQ(c->parts.size(), 2u);
+  EXPECT_EQ(c->parts[0].file.part.name, "intake_flat");
+  EXPECT_EQ(c->parts[0].plc_part_number, 11);
+  EXPECT_EQ(c->parts[1].file.part.name, "exhaust_roller");
+  EXPECT_EQ(c->parts[1].file.part.lobe, 2);
+  EXPECT_EQ(c->parts[1].plc_part_number, 12);
+  EXPECT_EQ(c->parts[1].file.nc_program, "CAM_EXHAUST_L2");
+  EXPECT_FALSE(c->parts[1].design.lift_mm.empty());
+  EXPECT_EQ(c->job.analysis.base_circle_center_deg, 170.0);
+  EXPECT_EQ(c->job.analysis.base_circle_half_width_deg, 25.0) << "an integer is taken as a number";
+  EXPECT_EQ(c->job.compensation.gain, 0.5);
+  EXPECT_EQ(c->job.compensation.max_harmonic, 20);
+  EXPECT_EQ(c->job.compensation.max_correction_um, 80.0);
+  EXPECT_EQ(c->job.compensation.max_change_um, 40.0);
+  EXPECT_EQ(c->job.compensation.max_repeatability_um, 3.0);
+  EXPECT_EQ(c->job.compensation.max_phase_deg, 1.0);
+  EXPECT_FALSE(c->job.build_on_table_in_force);
+  EXPECT_EQ(c->job.nc_dir, dir_.path() / "out");
+  EXPECT_EQ(c->job.nc_template_name, (dir_.path() / "table.spf").string());
+  EXPECT_NE(c->job.nc_template.find("{{"), std::string::npos) << "the template's text is read";
+  EXPECT_EQ(c->job.table_kind, TableKind::kAdaptiveSpline);
+  EXPECT_EQ(c->job.table_step_deg, 0.5);
+  EXPECT_EQ(c->job.table_choice.bound_um, 0.25);
+  EXPECT_EQ(c->job.table_choice.max_step_deg, 5.0);
+  EXPECT_FALSE(c->job.table_choice.allow_spline);
+  EXPECT_TRUE(c->job.require_approval);
+  EXPECT_EQ(c->job.table_number, 7);
+  EXPECT_EQ(c->job.axis_limits.x_min_mm, -1.0);
+  EXPECT_EQ(c->job.axis_limits.x_max_mm, 25.0);
+  EXPECT_EQ(c->job.axis_limits.x_velocity_max_mm_per_s, 250.0);
+  EXPECT_EQ(c->job.axis_limits.x_acceleration_max_mm_per_s2, 15000.0);
+  EXPECT_EQ(c->job.axis_limits.speed_rpm, 50.0);
+  EXPECT_EQ(c->job.db_path, dir_.path() / "data" / "runs.sqlite");
+  ASSERT_TRUE(c->http.has_value());
+  EXPECT_EQ(c->http->host, "0.0.0.0");
+  EXPECT_EQ(c->http->port, 9090);
+  EXPECT_EQ(c->http->token, "0123456789abcdef0123") << "the token file's line end is not part of the token";
+  ASSERT_TRUE(c->plc.has_value());
+  EXPECT_EQ(c->plc->link.link.transport, ModbusTransport::kTcp);
+  EXPECT_EQ(c->plc->link.link.host, "127.0.0.1");
+  EXPECT_EQ(c->plc->link.link.port, 1503);
+  EXPECT_EQ(c->plc->link.link.unit_id, 3);
+  EXPECT_EQ(c->plc->link.link.response_timeout.count(), 300);
+  EXPECT_EQ(c->plc->link.base_address, 200);
+  EXPECT_EQ(c->plc->poll_interval.count(), 50);
+}
+
+TEST_F(ServiceConfigTest, TheExampleConfigReads) {
+  auto c = read_service_config(kExamples / "service" / "gaugeloop.toml");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(configured_parts(*c), "intake_flat lobe 1, exhaust_roller lobe 2");
+  EXPECT_EQ(c->gauge.port, 1502) << "from ../gauges/simulator.toml";
+}
+
+// Paths in the file are relative to the file's directory, wherever the process runs; a part
+// file's lift table is relative to the part file.
+TEST_F(ServiceConfigTest, RelativePathsAreResolvedAgainstTheConfigsDirectory) {
+  dir_.write("etc/gauge.toml", "[link]\nport = 1602\n");
+  dir_.write("etc/keys/token", "fedcba9876543210fedc");
+  const fs::path config = dir_.write("etc/svc.toml", R"([gauge]
+config = "gauge.toml"
+[[part]]
+file = "../parts/intake_flat.toml"
+[nc]
+dir = "out/nc"
+template = "../table.spf"
+[database]
+path = "../var/runs.sqlite"
+[http]
+token_file = "keys/token"
+)");
+  const fs::path elsewhere = fs::current_path();
+  fs::current_path(dir_.path() / "parts");
+  auto c = read_service_config(config);
+  fs::current_path(elsewhere);
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->gauge.port, 1602);
+  EXPECT_EQ(c->parts.at(0).file.part.lift_table.lexically_normal(), dir_.path() / "parts" / "intake_flat.csv");
+  EXPECT_EQ(c->job.nc_dir, dir_.path() / "etc" / "out" / "nc");
+  EXPECT_EQ(c->job.nc_template_name, (dir_.path() / "table.spf").string());
+  EXPECT_EQ(c->job.db_path, dir_.path() / "var" / "runs.sqlite");
+  EXPECT_EQ(c->http->token, "fedcba9876543210fedc");
+}
+
+TEST_F(ServiceConfigTest, AMissingFileIsNotFoundAndSaysCheckConfig) {
+  auto c = read_service_config(dir_.path() / "absent.toml");
+  EXPECT_TRUE(refused(c, ErrorCode::kNotFound, (dir_.path() / "absent.toml").string() + ": no such file"));
+  EXPECT_TRUE(refused(c, ErrorCode::kNotFound, "; check --config"));
+}
+
+TEST_F(ServiceConfigTest, ASyntaxErrorNamesTheFileAndLine) {
+  EXPECT_TRUE(
+      refused(read("[gauge]\n[[part]\n"), ErrorCode::kInvalidInput, (dir_.path() / "svc.toml").string() + ":2: "));
+}
+
+TEST_F(ServiceConfigTest, AMissingRequiredKeyIsNamed) {
+  const std::string svc = (dir_.path() / "svc.toml").string();
+  EXPECT_TRUE(refused(read("[gauge]\n[[part]]\nplc_part_number = 1\n" + kNc), ErrorCode::kInvalidInput,
+                      svc + ": key `part.file` is missing; it is required"));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + "[nc]\ndir = \"nc\"\n"), ErrorCode::kInvalidInput,
+                      svc + ": [nc] template is required"));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake), ErrorCode::kInvalidInput, svc + ": [nc] template is required"));
+  EXPECT_TRUE(refused(read(kIntake + kNc), ErrorCode::kInvalidInput, svc + ": no [gauge] table"));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kNc), ErrorCode::kInvalidInput, svc + ": no [[part]] entries"));
+  EXPECT_TRUE(refused(read("part = 3\n[gauge]\n" + kNc), ErrorCode::kInvalidInput, svc + ": no [[part]] entries"));
+}
+
+TEST_F(ServiceConfigTest, AValueOfTheWrongTypeIsRefused) {
+  EXPECT_TRUE(refused(read("machine = 7\n[gauge]\n" + kIntake + kNc), ErrorCode::kInvalidInput,
+                      at(1, "machine") + ": expected a string in quotes"));
+  EXPECT_TRUE(refused(read("[gauge]\nrevolutions = 3.5\n" + kIntake + kNc), ErrorCode::kInvalidInput,
+                      at(2, "gauge.revolutions") + ": expected a whole number"));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "require_approval = \"yes\"\n"), ErrorCode::kInvalidInput,
+                      at(6, "nc.require_approval") + ": expected true or false (no quotes)"));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "x_min_mm = \"-1\"\n"), ErrorCode::kInvalidInput,
+                      at(6, "nc.x_min_mm") + ": expected a number"));
+  EXPECT_TRUE(refused(read("gauge = \"sim\"\n" + kIntake + kNc), ErrorCode::kInvalidInput,
+                      at(1, "gauge") + ": expected a table ([gauge])"));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "[http]\nport = \"80\"\n"), ErrorCode::kInvalidInput,
+                      at(7, "http.port") + ": expected a whole number"));
+}
+
+TEST_F(ServiceConfigTest, AnUnknownKeyIsRefusedListingTheKnownOnes) {
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + "[nc]\ntemplat = \"table.spf\"\n"), ErrorCode::kInvalidInput,
+                      at(5, "nc.templat") + ": unknown key; known keys: dir, template, table,"));
+  EXPECT_TRUE(refused(read("machin = \"m\"\n[gauge]\n" + kIntake + kNc), ErrorCode::kInvalidInput,
+                      at(1, "machin") + ": unknown key; known keys: machine, gauge, part,"));
+  EXPECT_TRUE(refused(read("[gauge]\nrevs = 3\n" + kIntake + kNc), ErrorCode::kInvalidInput,
+                      at(2, "gauge.revs") + ": unknown key; known keys: config, mode, revolutions"));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + "lobe = 2\n" + kNc), ErrorCode::kInvalidInput,
+                      at(4, "part.lobe") + ": unknown key; known keys: file, plc_part_number"));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "[database]\nfile = \"x.sqlite\"\n"), ErrorCode::kInvalidInput,
+                      at(7, "database.file") + ": unknown key; known keys: path"));
+}
+
+TEST_F(ServiceConfigTest, AValueOutOfRangeSaysWhatIsAllowed) {
+  const std::string ok = "[gauge]\n" + kIntake + kNc;  // 5 lines
+  EXPECT_TRUE(refused(read(ok + "[compensation]\ngain = 3.0\n"), ErrorCode::kInvalidInput,
+                      at(7, "compensation.gain") + ": 3 is out of range; allowed (0, 1]"));
+  EXPECT_TRUE(refused(read(ok + "[compensation]\ngain = 0\n"), ErrorCode::kInvalidInput,
+                      at(7, "compensation.gain") + ": 0 is out of range; allowed (0, 1]"));
+  EXPECT_TRUE(refused(read("[gauge]\nrevolutions = 2\n" + kIntake + kNc), ErrorCode::kInvalidInput,
+                      at(2, "gauge.revolutions") + ": 2 is out of range; allowed [3, 100]"));
+  EXPECT_TRUE(refused(read(ok + "[analysis]\nbase_circle_center_deg = 361\n"), ErrorCode::kInvalidInput,
+                      at(7, "analysis.base_circle_center_deg") + ": 361 is out of range; allowed [0, 360]"));
+  EXPECT_TRUE(refused(read(ok + "table_number = 1000\n"), ErrorCode::kInvalidInput,
+                      at(6, "nc.table_number") + ": 1000 is out of range; allowed [1, 999]"));
+  EXPECT_TRUE(refused(read(ok + "x_min_mm = 5\nx_max_mm = 5\n"), ErrorCode::kInvalidInput,
+                      at(7, "nc.x_max_mm") + ": must be above x_min_mm"));
+  EXPECT_TRUE(refused(read(ok + "table = \"cubic\"\n"), ErrorCode::kInvalidInput,
+                      at(6, "nc.table") + ": `cubic` is not one of auto, linear, spline, adaptive-linear, "
+                                          "adaptive-spline"));
+  EXPECT_TRUE(refused(read(ok + "[http]\nport = 65536\n"), ErrorCode::kInvalidInput,
+                      at(7, "http.port") + ": 65536 is out of range; allowed [0, 65535]"));
+  EXPECT_TRUE(refused(read(ok + "[plc]\nbase_address = 65524\n"), ErrorCode::kInvalidInput,
+                      at(7, "plc.base_address") + ": 65524 is out of range; allowed [0, 65523]"));
+  EXPECT_TRUE(refused(read(ok + "[plc]\npoll_interval_ms = 5\n"), ErrorCode::kInvalidInput,
+                      at(7, "plc.poll_interval_ms") + ": 5 is out of range; allowed [10, 10000]"));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + "plc_part_number = 0\n" + kNc), ErrorCode::kInvalidInput,
+                      at(4, "part.plc_part_number") + ": 0 is out of range; allowed [1, 65535]"));
+}
+
+TEST_F(ServiceConfigTest, APartFileThatDoesNotExistIsNotFoundAtItsKey) {
+  auto c = read("[gauge]\n[[part]]\nfile = \"parts/crank.toml\"\n" + kNc);
+  EXPECT_TRUE(refused(
+      c, ErrorCode::kNotFound,
+      at(3, "part.file") + ": part file " + (dir_.path() / "parts" / "crank.toml").string() + ": no such file"));
+}
+
+TEST_F(ServiceConfigTest, AGaugeConfigOrTemplateThatDoesNotExistIsNotFoundAtItsKey) {
+  EXPECT_TRUE(refused(read("[gauge]\nconfig = \"amp.toml\"\n" + kIntake + kNc), ErrorCode::kNotFound,
+                      at(2, "gauge.config") + ": gauge config " + (dir_.path() / "amp.toml").string()));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + "[nc]\ntemplate = \"none.spf\"\n"), ErrorCode::kNotFound,
+                      at(5, "nc.template") + ": NC template " + (dir_.path() / "none.spf").string()));
+  // An error inside the gauge config names that file's line and key too.
+  dir_.write("amp.toml", "[link]\nport = 0\n");
+  EXPECT_TRUE(refused(read("[gauge]\nconfig = \"amp.toml\"\n" + kIntake + kNc), ErrorCode::kInvalidInput,
+                      at(2, "gauge.config") + ": " + (dir_.path() / "amp.toml").string() + ":2: key `link.port`"));
+}
+
+TEST_F(ServiceConfigTest, APartConfiguredTwiceIsRefusedAtTheSecond) {
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kExhaust + kIntake + kNc), ErrorCode::kInvalidInput,
+                      at(7, "part.file") + ": part intake_flat lobe 1 is configured twice"));
+}
+
+TEST_F(ServiceConfigTest, APlcPartNumberNamesOnePart) {
+  const std::string text =
+      "[gauge]\n" + kIntake + "plc_part_number = 7\n" + kExhaust + "plc_part_number = 7\n" + kNc + "[plc]\n";
+  EXPECT_TRUE(refused(read(text), ErrorCode::kInvalidInput,
+                      at(7, "part.plc_part_number") +
+                          ": 7 already names part intake_flat, not exhaust_roller; give each part its own number"));
+}
+
+TEST_F(ServiceConfigTest, APlcWithoutNumberedPartsIsRefused) {
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "[plc]\n"), ErrorCode::kInvalidInput,
+                      (dir_.path() / "svc.toml").string() + ": [plc] is set but no [[part]] has a plc_part_number"));
+}
+
+TEST_F(ServiceConfigTest, APlcLinkIsReadLikeAGaugeLink) {
+  auto c = read("[gauge]\n" + kIntake + "plc_part_number = 3\n" + kNc +
+                "[plc]\ntransport = \"rtu\"\ndevice = \"/dev/ttyS2\"\nbaud = 9600\nparity = \"E\"\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->plc->link.link.transport, ModbusTransport::kRtu);
+  EXPECT_EQ(c->plc->link.link.device, "/dev/ttyS2");
+  EXPECT_EQ(c->plc->link.link.baud, 9600);
+  EXPECT_EQ(c->plc->link.link.parity, 'E');
+  EXPECT_EQ(c->plc->poll_interval.count(), 100);
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + "plc_part_number = 3\n" + kNc + "[plc]\nbaud = 9600\n"),
+                      ErrorCode::kInvalidInput, at(8, "plc.baud") + ": a serial setting in a TCP link"));
+}
+
+TEST_F(ServiceConfigTest, HttpTokensAreCheckedWhenRead) {
+  const std::string ok = "[gauge]\n" + kIntake + kNc + "[http]\n";  // [http] on line 6
+  EXPECT_TRUE(refused(read(ok + "token = \"short\"\n"), ErrorCode::kInvalidInput,
+                      at(7, "http.token") + ": a token shorter than 16 characters is too easy to guess"));
+  dir_.write("token", "0123456789abcdef");
+  EXPECT_TRUE(refused(read(ok + "token = \"0123456789abcdef\"\ntoken_file = \"token\"\n"), ErrorCode::kInvalidInput,
+                      at(8, "http.token_file") + ": give token or token_file, not both"));
+  dir_.write("blank", " \r\n\n");
+  EXPECT_TRUE(refused(read(ok + "token_file = \"blank\"\n"), ErrorCode::kInvalidInput,
+                      at(7, "http.token_file") + ": the file is empty"));
+  dir_.write("short", "abc\n");
+  EXPECT_TRUE(refused(read(ok + "token_file = \"short\"\n"), ErrorCode::kInvalidInput,
+                      at(7, "http.token_file") + ": a token shorter than 16 characters"));
+  EXPECT_TRUE(refused(read(ok + "token_file = \"absent\"\n"), ErrorCode::kNotFound,
+                      at(7, "http.token_file") + ": HTTP token file"));
+  auto readonly = read(ok + "port = 0\n");
+  ASSERT_TRUE(readonly.ok()) << readonly.error().message;
+  EXPECT_TRUE(readonly->http->token.empty());
+  EXPECT_EQ(readonly->http->host, "127.0.0.1");
+  EXPECT_EQ(readonly->http->port, 0);
+}
+
+// A file where the NC directory or the database's directory should be: refused at load.
+TEST_F(ServiceConfigTest, AnOutputPathThatCannotBeADirectoryIsRefusedAtItsKey) {
+  dir_.write("afile", "not a directory\n");
+  const std::string afile = (dir_.path() / "afile").string();
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "dir = \"afile/nc\"\n"), ErrorCode::kInvalidInput,
+                      at(6, "nc.dir") + ": NC directory " + afile + "/nc: " + afile + " is not a directory"));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "[database]\npath = \"afile/runs.sqlite\"\n"),
+                      ErrorCode::kInvalidInput,
+                      at(7, "database.path") + ": database directory " + afile + ": " + afile + " is not a directory"));
+}
+
+// The top level's own mistakes are reported even when every table is fine.
+TEST_F(ServiceConfigTest, ATopLevelErrorIsReportedAfterTheTablesAreRead) {
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "[compensation]\ngain = 2\n[extra]\n"),
+                      ErrorCode::kInvalidInput, at(7, "compensation.gain")));
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "[extra]\n"), ErrorCode::kInvalidInput,
+                      at(6, "extra") + ": unknown key"));
+}
+
+TEST_F(ServiceConfigTest, PartsAreFoundByNameOrPlcNumberAndLobe) {
+  auto c = read("[gauge]\n" + kIntake + "plc_part_number = 5\n" + kExhaust + kNc + "[plc]\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  auto exhaust = find_part(*c, "exhaust_roller", 2);
+  ASSERT_TRUE(exhaust.ok()) << exhaust.error().message;
+  EXPECT_EQ((*exhaust)->file.part.name, "exhaust_roller");
+  auto wrong_lobe = find_part(*c, "exhaust_roller", 1);
+  ASSERT_FALSE(wrong_lobe.ok());
+  EXPECT_EQ(wrong_lobe.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(
+      wrong_lobe.error().message.find("part exhaust_roller lobe 1 is not in " + (dir_.path() / "svc.toml").string() +
+                                      "; configured: intake_flat lobe 1, exhaust_roller lobe 2"),
+      std::string::npos)
+      << wrong_lobe.error().message;
+
+  auto by_number = find_plc_part(*c, 5, 1);
+  ASSERT_TRUE(by_number.ok()) << by_number.error().message;
+  EXPECT_EQ((*by_number)->file.part.name, "intake_flat");
+  auto unknown = find_plc_part(*c, 6, 1);
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_EQ(unknown.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(unknown.error().message.find("PLC part number 6 lobe 1 is not in"), std::string::npos);
+  EXPECT_NE(unknown.error().message.find("configured: 5 lobe 1 (intake_flat)"), std::string::npos)
+      << unknown.error().message;
+
+  const JobSettings job = job_for(*c, **exhaust);
+  EXPECT_EQ(job.part.name, "exhaust_roller");
+  EXPECT_EQ(job.nc_program, "CAM_EXHAUST_L2");
+  EXPECT_EQ(job.design.lift_mm.size(), (*exhaust)->design.lift_mm.size());
+  EXPECT_EQ(job.db_path, c->job.db_path);
+  EXPECT_EQ(job.nc_dir, c->job.nc_dir);
+}
+
+}  // namespace
+}  // namespace gaugeloop

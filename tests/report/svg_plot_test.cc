@@ -1,0 +1,252 @@
+// The SVG plots: well-formed XML, what each must show (tolerance band, worst degree, axis
+// titles with units), and no number printed as "-0.0", "nan" or "inf".
+#include "report/svg_plot.h"
+
+#include <gtest/gtest.h>
+
+#include <cctype>
+#include <cmath>
+#include <regex>
+#include <string>
+#include <vector>
+
+namespace gaugeloop {
+namespace {
+
+bool name_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == ':'; }
+
+// ` a="1" b="x y"`: each attribute after a blank, its value in double quotes without '<'.
+// (By hand: std::regex recurses per character and the path data runs to kilobytes.)
+bool attributes_well_formed(const std::string& s) {
+  std::size_t i = 0;
+  while (i < s.size()) {
+    if (s[i] != ' ' && s[i] != '\n') return false;
+    while (i < s.size() && (s[i] == ' ' || s[i] == '\n')) ++i;
+    if (i == s.size()) return true;
+    if (!std::isalpha(static_cast<unsigned char>(s[i]))) return false;
+    while (i < s.size() && name_char(s[i])) ++i;
+    if (i + 1 >= s.size() || s[i] != '=' || s[i + 1] != '"') return false;
+    const std::size_t close = s.find('"', i + 2);
+    if (close == std::string::npos || s.find('<', i + 2) < close) return false;
+    i = close + 1;
+  }
+  return true;
+}
+
+// Checks the document is well-formed XML as far as these plots go: one XML declaration, tags
+// balanced and properly nested with one root `svg`, attribute values quoted, no '<' in text and
+// every '&' an entity. Returns "" or what is wrong and where.
+std::string xml_problem(const std::string& doc) {
+  std::size_t at = 0;
+  const std::string decl = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  if (doc.rfind(decl, 0) != 0) return "no XML declaration";
+  at = decl.size();
+  std::vector<std::string> open;
+  int roots = 0;
+  const std::regex entity("^&(amp|lt|gt|quot|apos|#[0-9]+|#x[0-9a-fA-F]+);");
+  while (at < doc.size()) {
+    if (doc[at] == '&') {
+      if (!std::regex_search(doc.substr(at, 12), entity)) return "bare & at " + std::to_string(at);
+      ++at;
+      continue;
+    }
+    if (doc[at] != '<') {
+      if (open.empty() && doc[at] != '\n' && doc[at] != ' ') return "text outside the root at " + std::to_string(at);
+      ++at;
+      continue;
+    }
+    // A tag: find its end outside quoted values.
+    std::size_t end = at + 1;
+    bool quoted = false;
+    while (end < doc.size() && (quoted || doc[end] != '>')) {
+      if (doc[end] == '"') quoted = !quoted;
+      if (!quoted && doc[end] == '<') return "'<' inside a tag at " + std::to_string(end);
+      ++end;
+    }
+    if (end >= doc.size()) return "unterminated tag at " + std::to_string(at);
+    const std::string tag = doc.substr(at + 1, end - at - 1);
+    at = end + 1;
+    if (tag.empty()) return "empty tag";
+    if (tag[0] == '/') {
+      const std::string name = tag.substr(1);
+      if (open.empty() || open.back() != name) {
+        return "</" + name + "> closes " + (open.empty() ? std::string("nothing") : "<" + open.back() + ">");
+      }
+      open.pop_back();
+      continue;
+    }
+    const bool self_closing = tag.back() == '/';
+    const std::string body = self_closing ? tag.substr(0, tag.size() - 1) : tag;
+    const std::string name = body.substr(0, body.find_first_of(" \n"));
+    if (!attributes_well_formed(body.substr(name.size()))) return "malformed tag <" + tag + ">";
+    if (open.empty()) {
+      ++roots;
+      if (name != "svg") return "root <" + name + ">";
+    }
+    if (!self_closing) open.push_back(name);
+  }
+  if (!open.empty()) return "<" + open.back() + "> never closed";
+  if (roots != 1) return std::to_string(roots) + " roots";
+  return "";
+}
+
+// Text a number must never print as: a negative zero ("-0", "-0.0", "-0.00") or NaN/infinity.
+std::string bad_number(const std::string& doc) {
+  static const std::regex negative_zero(R"(-0(\.0+)?(?![0-9.]))");
+  static const std::regex not_finite(R"(\b(nan|NaN|inf|Inf|INF)\b)");
+  std::smatch m;
+  if (std::regex_search(doc, m, negative_zero))
+    return "negative zero `" + m.str() + "` at " + std::to_string(m.position());
+  if (std::regex_search(doc, m, not_finite)) return "`" + m.str() + "` at " + std::to_string(m.position());
+  return "";
+}
+
+int count(const std::string& doc, const std::string& what) {
+  int n = 0;
+  for (std::size_t at = doc.find(what); at != std::string::npos; at = doc.find(what, at + 1)) ++n;
+  return n;
+}
+
+// An error of `amplitude_um` sin(deg) with a sharper dip of `dip_um` at cam degree 200.
+ErrorPlot sample_plot(double amplitude_um, double dip_um) {
+  ErrorPlot p;
+  p.title = "Run 12 \u00b7 intake_flat lobe 1 \u00b7 <grinder-1> & co";
+  p.subtitle = "2026-11-22 02:34 UTC \u00b7 pushed";
+  DegreeTable spread{};
+  DegreeTable correction{};
+  for (std::size_t d = 0; d < 360; ++d) {
+    p.error_um[d] = amplitude_um * std::sin(static_cast<double>(d) * 3.14159265358979 / 180.0);
+    spread[d] = 0.2;
+    correction[d] = 0.9 * p.error_um[d];
+  }
+  p.error_um[200] = -dip_um;
+  p.spread_um = spread;
+  p.correction_um = correction;
+  p.footer = "db runs.sqlite \u00b7 settings 0123456789abcdef";
+  return p;
+}
+
+TEST(ErrorPlotSvg, IsWellFormedAndEscapesText) {
+  const std::string svg = render_error_plot_svg(sample_plot(3.0, 7.0));
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_NE(svg.find("&lt;grinder-1&gt; &amp; co"), std::string::npos);
+  EXPECT_EQ(bad_number(svg), "");
+}
+
+TEST(ErrorPlotSvg, ShowsTheToleranceBandAndTheWorstDegree) {
+  ErrorPlot p = sample_plot(3.0, 7.0);
+  p.tolerance_um = 5.0;
+  const std::string svg = render_error_plot_svg(p);
+  EXPECT_EQ(xml_problem(svg), "");
+  // The band: a ring on the polar panel and a strip on the linear one, and its legend.
+  EXPECT_EQ(count(svg, "fill=\"#d7efd9\""), 3) << "polar ring, linear strip, legend swatch";
+  EXPECT_NE(svg.find("tolerance \u00b15.0 \u00b5m"), std::string::npos);
+  // The worst degree: the verdict, the ring around it and its label.
+  EXPECT_NE(svg.find("max |error| 7.00 \u00b5m at cam 200\u00b0"), std::string::npos);
+  EXPECT_EQ(count(svg, "r=\"4.5\""), 1);
+  EXPECT_NE(svg.find(">-7.00 \u00b5m at 200\u00b0</text>"), std::string::npos);
+  // Only degree 200 is outside +-5 um: one mark on each panel, and the verdict says so.
+  EXPECT_EQ(count(svg, "r=\"2\" fill=\"#c62828\""), 2);
+  EXPECT_NE(svg.find("1 degrees outside \u00b15.0 \u00b5m"), std::string::npos);
+  EXPECT_EQ(bad_number(svg), "");
+
+  // Without a tolerance there is no band and nothing is marked outside.
+  const std::string plain = render_error_plot_svg(sample_plot(3.0, 7.0));
+  EXPECT_EQ(count(plain, "#d7efd9"), 0);
+  EXPECT_EQ(count(plain, "#c62828"), 0);
+  EXPECT_EQ(count(plain, "r=\"4.5\""), 1) << "the worst degree is marked all the same";
+
+  p.tolerance_um = 10.0;
+  EXPECT_NE(render_error_plot_svg(p).find("within \u00b110.0 \u00b5m"), std::string::npos);
+}
+
+TEST(ErrorPlotSvg, LabelsTheAxesWithUnits) {
+  const std::string svg = render_error_plot_svg(sample_plot(3.0, 7.0));
+  EXPECT_NE(svg.find(">lift error (\u00b5m)</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">cam angle (deg, 0 = nose)</text>"), std::string::npos);
+  EXPECT_NE(svg.find("\u00b5m per ring"), std::string::npos) << "the polar panel's radial scale";
+}
+
+// A perfect lobe (all zero) and errors that round to zero on the page: no "-0.0" anywhere, no
+// NaN from a zero scale.
+TEST(ErrorPlotSvg, AZeroOrTinyErrorPrintsNoNegativeZeroOrNan) {
+  ErrorPlot zero;
+  zero.title = "zero";
+  zero.tolerance_um = 1.0;
+  std::string svg = render_error_plot_svg(zero);
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(bad_number(svg), "");
+
+  ErrorPlot tiny = sample_plot(-0.0004, 0.0001);
+  svg = render_error_plot_svg(tiny);
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(bad_number(svg), "");
+
+  ErrorPlot nothing;
+  nothing.title = "no tolerance, no spread";
+  svg = render_error_plot_svg(nothing);
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(bad_number(svg), "");
+}
+
+LoopPlot sample_loop(int parts, double first_max_um) {
+  LoopPlot p;
+  p.title = "Grinding loop \u00b7 intake_flat lobe 1";
+  p.subtitle = "simulated";
+  for (int i = 0; i < parts; ++i) {
+    LoopPlotPart part;
+    part.label = "part " + std::to_string(i) + " \u00b7 v" + std::to_string(i);
+    const double max_um = first_max_um / std::pow(3.0, i);
+    for (std::size_t d = 0; d < 360; ++d) {
+      part.error_um[d] = max_um * std::cos(static_cast<double>(d) * 3.14159265358979 / 90.0);
+    }
+    part.measured_max_um = max_um;
+    part.true_max_um = 0.9 * max_um;
+    part.floor_max_um = 0.4;
+    p.parts.push_back(part);
+  }
+  p.footer = "footer";
+  return p;
+}
+
+TEST(LoopPlotSvg, IsWellFormedWithAProfilePerPartAndTheConvergence) {
+  const std::string svg = render_loop_plot_svg(sample_loop(4, 27.0));
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(bad_number(svg), "");
+  EXPECT_NE(svg.find("max |error| 27.00 \u2192 1.00 \u00b5m \u00b7 floor 0.40 \u00b5m"), std::string::npos);
+  EXPECT_NE(svg.find(">lift error (\u00b5m)</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">cam angle (deg, 0 = nose)</text>"), std::string::npos);
+  EXPECT_EQ(count(svg, "r=\"3.5\""), 4) << "one measured point per part";
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NE(svg.find(">part " + std::to_string(i) + " \u00b7 v" + std::to_string(i) + "</text>"), std::string::npos);
+  }
+}
+
+TEST(LoopPlotSvg, OnePartOrAllZeroPrintsNoNegativeZeroOrNan) {
+  std::string svg = render_loop_plot_svg(sample_loop(1, 5.0));
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(bad_number(svg), "");
+  LoopPlot zero = sample_loop(2, 0.0);
+  for (LoopPlotPart& part : zero.parts) part.floor_max_um = 0.0;
+  svg = render_loop_plot_svg(zero);
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(bad_number(svg), "");
+}
+
+// The checkers themselves catch what they are for.
+TEST(SvgCheckers, CatchBrokenXmlAndBadNumbers) {
+  const std::string head = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  EXPECT_EQ(xml_problem(head + "<svg><g></g></svg>\n"), "");
+  EXPECT_NE(xml_problem(head + "<svg><g></svg>\n"), "");
+  EXPECT_NE(xml_problem(head + "<svg><text>a & b</text></svg>\n"), "");
+  EXPECT_NE(xml_problem(head + "<svg><line x1=1/></svg>\n"), "");
+  EXPECT_NE(xml_problem(head + "<svg/><svg/>\n"), "");
+  EXPECT_EQ(bad_number("x=\"-0.05\" y=\"10.0\" z=\"-0.1\""), "");
+  EXPECT_NE(bad_number("y=\"-0.0\""), "");
+  EXPECT_NE(bad_number(">-0 \u00b5m<"), "");
+  EXPECT_NE(bad_number("x=\"nan\""), "");
+  EXPECT_NE(bad_number(">-inf<"), "");
+}
+
+}  // namespace
+}  // namespace gaugeloop
