@@ -6,7 +6,7 @@
 #include <string>
 
 #include "config/gauge_config.h"
-#include "tests/config/temp_dir.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -97,7 +97,7 @@ TEST(GaugeConfigReader, RefusesMistakesNamingFileLineAndKey) {
 }
 
 TEST(GaugeConfigReader, ReadsAFileWithAByteOrderMarkAndNamesAMissingOne) {
-  testing::ScratchDir dir;
+  testing::TempDir dir;
   const fs::path file = dir.write("amp.toml", "\xEF\xBB\xBF[link]\nport = 1700\n");
   auto cfg = read_gauge_file(file);
   ASSERT_TRUE(cfg.ok()) << cfg.error().message;

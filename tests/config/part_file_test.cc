@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-#include "tests/config/temp_dir.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -120,7 +120,7 @@ TEST(PartFile, RefusesAnInvalidNcProgramName) {
 }
 
 TEST(PartFile, ReadsAFileWithAByteOrderMarkAndNamesAMissingOne) {
-  testing::ScratchDir dir;
+  testing::TempDir dir;
   const fs::path file = dir.write("sub/intake.toml", "\xEF\xBB\xBF" + flat_part());
   auto pf = read_part_file(file);
   ASSERT_TRUE(pf.ok()) << pf.error().message;

@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <string>
 
-#include "tests/config/temp_dir.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -41,7 +41,7 @@ class ServiceConfigTest : public ::testing::Test {
     return (dir_.path() / "svc.toml").string() + ":" + std::to_string(line) + ": key `" + key + "`";
   }
 
-  testing::ScratchDir dir_;
+  testing::TempDir dir_;
 };
 
 // Refused with `code` and a message containing `expected`.

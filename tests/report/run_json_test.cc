@@ -8,7 +8,7 @@
 #include <string>
 
 #include "storage/run_store.h"
-#include "tests/config/temp_dir.h"
+#include "tests/support/temp_dir.h"
 #include "tests/support/sample_runs.h"
 
 namespace gaugeloop {
@@ -104,7 +104,7 @@ class RunJsonTest : public ::testing::Test {
     return run.ok() ? *run : StoredRun{};
   }
 
-  testing::ScratchDir dir_;
+  testing::TempDir dir_;
   std::optional<RunStore> store_;
 };
 

@@ -200,9 +200,9 @@ TEST(CrashSafety, KilledAtFiftyMomentsTheDatabaseHoldsWholeRunsOnly) {
   // Calibration: how many writes, syncs and truncates one child makes on an existing
   // database, so the kills spread over all of it (opening, each insert, each commit).
   TempDir scratch;
-  ChildResult first = run_child(scratch.db(), -1, 0);
+  ChildResult first = run_child(db_in(scratch), -1, 0);
   ASSERT_EQ(first.exit_code, 0);
-  ChildResult calibration = run_child(scratch.db(), -1, 0);
+  ChildResult calibration = run_child(db_in(scratch), -1, 0);
   ASSERT_EQ(calibration.exit_code, 0);
   const long per_child = calibration.io_count;
   ASSERT_GT(per_child, kRunsPerChild * 2) << "the shim sees no I/O: the test would prove nothing";
@@ -215,18 +215,18 @@ TEST(CrashSafety, KilledAtFiftyMomentsTheDatabaseHoldsWholeRunsOnly) {
   for (int i = 0; i < kIterations; ++i) {
     // Iteration 0 kills at the very first write, on a database that does not exist yet.
     const long kill_at = 1 + (static_cast<long>(i) * per_child) / kIterations;
-    const ChildResult child = run_child(dir.db(), i, kill_at);
+    const ChildResult child = run_child(db_in(dir), i, kill_at);
     if (child.killed) {
       ++killed;
     } else {
       ASSERT_EQ(child.exit_code, 0) << "iteration " << i << ": the child failed without being killed";
     }
 
-    if (!std::filesystem::exists(dir.db())) {
+    if (!std::filesystem::exists(db_in(dir))) {
       ASSERT_EQ(runs_before, 0);
       continue;  // killed before the file was created
     }
-    RawDb raw(dir.db());
+    RawDb raw(db_in(dir));
     ASSERT_EQ(raw.query_text("PRAGMA integrity_check"), "ok") << "iteration " << i;
     if (const std::int64_t version = raw.query_int("PRAGMA user_version");
         version < storage_internal::latest_schema_version()) {
@@ -256,7 +256,7 @@ TEST(CrashSafety, KilledAtFiftyMomentsTheDatabaseHoldsWholeRunsOnly) {
     const std::int64_t added = n.runs - runs_before;
     if (child.killed && added > 0 && added < kRunsPerChild) ++killed_with_a_partial_child;
     // The runs this child committed are its first `added`, each whole and right.
-    Result<RunStore> store = RunStore::open(dir.db());
+    Result<RunStore> store = RunStore::open(db_in(dir));
     ASSERT_TRUE(store.ok()) << "iteration " << i << ": " << store.error().message;
     Result<std::vector<RunSummary>> runs = store->list_runs([&] {
       RunQuery q;

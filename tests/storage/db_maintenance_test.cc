@@ -40,7 +40,7 @@ std::vector<std::string> files_starting(const fs::path& dir, const std::string& 
 class DbMaintenance : public ::testing::Test {
  protected:
   void SetUp() override {
-    Result<RunStore> store = RunStore::open(dir_.db());
+    Result<RunStore> store = RunStore::open(db_in(dir_));
     ASSERT_TRUE(store.ok()) << store.error().message;
     for (const char* started : {"2026-11-20T08:00:00Z", "2026-11-21T08:00:00Z", "2026-11-22T08:00:00Z"}) {
       Result<std::int64_t> id = store->insert_run(make_record("intake", started));
@@ -50,40 +50,40 @@ class DbMaintenance : public ::testing::Test {
 
   // Damages the closed database and makes sure SQLite itself sees the damage.
   void damage() {
-    ASSERT_TRUE(testing::damage_runs_table(dir_.db()));
-    ASSERT_NE(testing::sqlite_text(dir_.db(), "PRAGMA integrity_check"), "ok") << "the damage did not show";
+    ASSERT_TRUE(testing::damage_runs_table(db_in(dir_)));
+    ASSERT_NE(testing::sqlite_text(db_in(dir_), "PRAGMA integrity_check"), "ok") << "the damage did not show";
   }
 
   TempDir dir_;
 };
 
 TEST_F(DbMaintenance, ASoundDatabasePassesEveryCheck) {
-  Result<RunStore> store = RunStore::open(dir_.db());
+  Result<RunStore> store = RunStore::open(db_in(dir_));
   ASSERT_TRUE(store.ok());
   Status quick = store->check_integrity(IntegrityCheck::kQuick);
   EXPECT_TRUE(quick.ok()) << quick.error().message;
   Status full = store->check_integrity(IntegrityCheck::kFull);
   EXPECT_TRUE(full.ok()) << full.error().message;
-  Result<IntegrityReport> report = check_database_file(dir_.db());
+  Result<IntegrityReport> report = check_database_file(db_in(dir_));
   ASSERT_TRUE(report.ok()) << report.error().message;
   EXPECT_TRUE(report->sound()) << report->problems.front();
 }
 
 TEST_F(DbMaintenance, FlippedBytesInTheRunsTableAreFoundByEveryCheck) {
   damage();
-  Result<IntegrityReport> report = check_database_file(dir_.db());
+  Result<IntegrityReport> report = check_database_file(db_in(dir_));
   ASSERT_TRUE(report.ok()) << report.error().message;
   ASSERT_FALSE(report->sound());
   EXPECT_TRUE(report->constraints_checked);
 
-  Result<RunStore> store = RunStore::open(dir_.db());
+  Result<RunStore> store = RunStore::open(db_in(dir_));
   ASSERT_TRUE(store.ok()) << "the damage leaves the file readable, which is why it must be checked: "
                           << store.error().message;
   for (IntegrityCheck depth : {IntegrityCheck::kQuick, IntegrityCheck::kFull}) {
     Status s = store->check_integrity(depth);
     ASSERT_FALSE(s.ok()) << "a damaged database passed the check";
     EXPECT_EQ(s.error().code, ErrorCode::kStorage);
-    EXPECT_TRUE(contains(s.error().message, "database " + dir_.db().string() + " is damaged: ")) << s.error().message;
+    EXPECT_TRUE(contains(s.error().message, "database " + db_in(dir_).string() + " is damaged: ")) << s.error().message;
     EXPECT_TRUE(contains(s.error().message, report->problems.front())) << s.error().message;
     EXPECT_TRUE(contains(s.error().message, "restore the last sound backup") ||
                 contains(s.error().message, "put the last sound backup in its place"))
@@ -94,8 +94,8 @@ TEST_F(DbMaintenance, FlippedBytesInTheRunsTableAreFoundByEveryCheck) {
 // SQLite loads no CHECK constraints on a read-only connection: the report must say so.
 TEST_F(DbMaintenance, ACheckWithoutWriteAccessSaysTheConstraintsWentUnverified) {
   damage();
-  fs::permissions(dir_.db(), fs::perms::owner_read | fs::perms::others_read);
-  Result<IntegrityReport> report = check_database_file(dir_.db());
+  fs::permissions(db_in(dir_), fs::perms::owner_read | fs::perms::others_read);
+  Result<IntegrityReport> report = check_database_file(db_in(dir_));
   ASSERT_TRUE(report.ok()) << report.error().message;
   EXPECT_FALSE(report->constraints_checked);
 }
@@ -111,13 +111,13 @@ TEST_F(DbMaintenance, AFileThatIsNotADatabaseIsReportedNotFailed) {
 
 TEST_F(DbMaintenance, ARowPointingAtAMissingRunIsAProblem) {
   {
-    RawDb raw(dir_.db());
+    RawDb raw(db_in(dir_));
     ASSERT_EQ(raw.exec("PRAGMA foreign_keys = OFF"), SQLITE_OK);
     ASSERT_EQ(raw.exec("INSERT INTO events (id, at_utc, kind, code, message, run_id) VALUES "
                        "(41, '2026-11-22T09:00:00Z', 'fault', 'gauge timeout', 'no reply', 999)"),
               SQLITE_OK);
   }
-  Result<IntegrityReport> report = check_database_file(dir_.db());
+  Result<IntegrityReport> report = check_database_file(db_in(dir_));
   ASSERT_TRUE(report.ok()) << report.error().message;
   ASSERT_EQ(report->problems.size(), 1u);
   EXPECT_EQ(report->problems.front(), "events row 41: refers to a missing runs row");
@@ -125,11 +125,11 @@ TEST_F(DbMaintenance, ARowPointingAtAMissingRunIsAProblem) {
 
 TEST_F(DbMaintenance, ABackupLoadsTheSameRuns) {
   const fs::path copy = dir_.path() / "copy.sqlite";
-  Status s = backup_database_file(dir_.db(), copy, false);
+  Status s = backup_database_file(db_in(dir_), copy, false);
   ASSERT_TRUE(s.ok()) << s.error().message;
   EXPECT_EQ(files_starting(dir_.path(), "copy"), std::vector<std::string>{"copy.sqlite"}) << "no temporary left";
 
-  Result<RunStore> original = RunStore::open_read_only(dir_.db());
+  Result<RunStore> original = RunStore::open_read_only(db_in(dir_));
   Result<RunStore> backup = RunStore::open_read_only(copy);
   ASSERT_TRUE(original.ok() && backup.ok());
   Result<std::vector<RunSummary>> a = original->list_runs(RunQuery{});
@@ -149,11 +149,11 @@ TEST_F(DbMaintenance, ABackupLoadsTheSameRuns) {
 
 // The copy is one snapshot of what was committed, taken while a writer holds the lock.
 TEST_F(DbMaintenance, ABackupWhileAnotherConnectionWritesHoldsTheCommittedRunsOnly) {
-  RawDb writer(dir_.db());
+  RawDb writer(db_in(dir_));
   ASSERT_EQ(writer.exec("BEGIN IMMEDIATE"), SQLITE_OK);
   ASSERT_EQ(writer.exec("DELETE FROM runs WHERE id = 1"), SQLITE_OK);
   const fs::path copy = dir_.path() / "copy.sqlite";
-  Status s = backup_database_file(dir_.db(), copy, false);
+  Status s = backup_database_file(db_in(dir_), copy, false);
   ASSERT_TRUE(s.ok()) << s.error().message;
   ASSERT_EQ(writer.exec("ROLLBACK"), SQLITE_OK);
   EXPECT_EQ(testing::sqlite_text(copy, "SELECT count(*) FROM runs"), "3");
@@ -162,7 +162,7 @@ TEST_F(DbMaintenance, ABackupWhileAnotherConnectionWritesHoldsTheCommittedRunsOn
 TEST_F(DbMaintenance, ABackupNeverReplacesAFileUnlessTold) {
   const fs::path copy = dir_.path() / "copy.sqlite";
   std::ofstream(copy) << "last week's backup";
-  Status s = backup_database_file(dir_.db(), copy, false);
+  Status s = backup_database_file(db_in(dir_), copy, false);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().code, ErrorCode::kInvalidInput);
   EXPECT_TRUE(contains(s.error().message, copy.string() + " exists already")) << s.error().message;
@@ -170,22 +170,22 @@ TEST_F(DbMaintenance, ABackupNeverReplacesAFileUnlessTold) {
   EXPECT_EQ(testing::slurp(copy), "last week's backup");
   EXPECT_EQ(files_starting(dir_.path(), "copy"), std::vector<std::string>{"copy.sqlite"});
 
-  s = backup_database_file(dir_.db(), copy, true);
+  s = backup_database_file(db_in(dir_), copy, true);
   ASSERT_TRUE(s.ok()) << s.error().message;
   EXPECT_EQ(testing::sqlite_text(copy, "SELECT count(*) FROM runs"), "3");
 }
 
 TEST_F(DbMaintenance, ABackupOntoTheDatabaseItselfIsRefused) {
-  Status s = backup_database_file(dir_.db(), dir_.db(), true);
+  Status s = backup_database_file(db_in(dir_), db_in(dir_), true);
   ASSERT_FALSE(s.ok());
   EXPECT_TRUE(contains(s.error().message, "is the database itself")) << s.error().message;
-  EXPECT_EQ(testing::sqlite_text(dir_.db(), "SELECT count(*) FROM runs"), "3");
+  EXPECT_EQ(testing::sqlite_text(db_in(dir_), "SELECT count(*) FROM runs"), "3");
 }
 
 TEST_F(DbMaintenance, ABackupOfADamagedDatabaseLeavesNothingBehind) {
   damage();
   const fs::path copy = dir_.path() / "copy.sqlite";
-  Status s = backup_database_file(dir_.db(), copy, false);
+  Status s = backup_database_file(db_in(dir_), copy, false);
   ASSERT_FALSE(s.ok()) << "a damaged database was backed up as if sound";
   EXPECT_EQ(s.error().code, ErrorCode::kStorage);
   EXPECT_TRUE(contains(s.error().message, "not written, the copy is not sound")) << s.error().message;
@@ -211,42 +211,42 @@ void make_v3_database(const fs::path& db, bool with_event = true) {
 
 TEST(SchemaUpgradeBackup, AnOlderFileIsCopiedBeforeItIsUpgraded) {
   TempDir dir;
-  make_v3_database(dir.db());
-  Result<RunStore> store = RunStore::open(dir.db());
+  make_v3_database(db_in(dir));
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
   const std::optional<SchemaUpgrade> upgrade = store->schema_upgrade();
   ASSERT_TRUE(upgrade.has_value()) << "upgraded without a backup";
   EXPECT_EQ(upgrade->from_version, 3);
   const std::string name = upgrade->backup.filename();
-  EXPECT_TRUE(name.starts_with(dir.db().filename().string() + ".schema3-backup-")) << name;
-  EXPECT_EQ(upgrade->backup.parent_path(), dir.db().parent_path());
+  EXPECT_TRUE(name.starts_with(db_in(dir).filename().string() + ".schema3-backup-")) << name;
+  EXPECT_EQ(upgrade->backup.parent_path(), db_in(dir).parent_path());
 
   EXPECT_EQ(testing::sqlite_text(upgrade->backup, "PRAGMA user_version"), "3") << "the file as it was";
   EXPECT_EQ(testing::sqlite_text(upgrade->backup, "SELECT code FROM events WHERE id = 7"), "gauge timeout");
   EXPECT_EQ(testing::sqlite_text(upgrade->backup, "PRAGMA integrity_check"), "ok");
-  EXPECT_EQ(RawDb(dir.db()).query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
+  EXPECT_EQ(RawDb(db_in(dir)).query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
 }
 
 TEST(SchemaUpgradeBackup, ANewOrCurrentDatabaseIsNotCopied) {
   TempDir dir;
-  Result<RunStore> fresh = RunStore::open(dir.db());
+  Result<RunStore> fresh = RunStore::open(db_in(dir));
   ASSERT_TRUE(fresh.ok());
   EXPECT_FALSE(fresh->schema_upgrade().has_value());
-  Result<RunStore> again = RunStore::open(dir.db());
+  Result<RunStore> again = RunStore::open(db_in(dir));
   ASSERT_TRUE(again.ok());
   EXPECT_FALSE(again->schema_upgrade().has_value());
-  EXPECT_EQ(files_starting(dir.db().parent_path(), dir.db().filename().string() + ".schema").size(), 0u);
+  EXPECT_EQ(files_starting(db_in(dir).parent_path(), db_in(dir).filename().string() + ".schema").size(), 0u);
 }
 
 // A file killed while its schema was being created holds no record: nothing to keep.
 TEST(SchemaUpgradeBackup, AnOlderFileWithoutRunsOrEventsIsUpgradedWithoutACopy) {
   TempDir dir;
-  make_v3_database(dir.db(), /*with_event=*/false);
-  Result<RunStore> store = RunStore::open(dir.db());
+  make_v3_database(db_in(dir), /*with_event=*/false);
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
   EXPECT_FALSE(store->schema_upgrade().has_value());
-  EXPECT_EQ(files_starting(dir.db().parent_path(), dir.db().filename().string() + ".schema").size(), 0u);
-  EXPECT_EQ(RawDb(dir.db()).query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
+  EXPECT_EQ(files_starting(db_in(dir).parent_path(), db_in(dir).filename().string() + ".schema").size(), 0u);
+  EXPECT_EQ(RawDb(db_in(dir)).query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
 }
 
 }  // namespace

@@ -70,11 +70,11 @@ void make_v1_database(const std::filesystem::path& path) {
 
 TEST(MigrationFromV1, KeepsEveryRunAndItsNumbers) {
   TempDir dir;
-  make_v1_database(dir.db());
-  Result<RunStore> store = RunStore::open(dir.db());
+  make_v1_database(db_in(dir));
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
 
-  RawDb raw(dir.db());
+  RawDb raw(db_in(dir));
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
   EXPECT_EQ(raw.query_text("PRAGMA integrity_check"), "ok");
   EXPECT_EQ(raw.query_int("PRAGMA foreign_key_check"), 0) << "no row points at a missing parent";
@@ -133,19 +133,19 @@ TEST(MigrationFromV1, KeepsEveryRunAndItsNumbers) {
 
 TEST(MigrationFromV1, ADamagedRunStopsTheUpgradeAndLeavesVersion1Intact) {
   TempDir dir;
-  make_v1_database(dir.db());
+  make_v1_database(db_in(dir));
   {
-    RawDb raw(dir.db());
+    RawDb raw(db_in(dir));
     ASSERT_EQ(raw.exec("DELETE FROM run_profile WHERE run_id = 2 AND angle_deg = 100"), SQLITE_OK);
   }
-  Result<RunStore> store = RunStore::open(dir.db());
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_FALSE(store.ok());
   EXPECT_EQ(store.error().code, ErrorCode::kStorage);
   EXPECT_NE(store.error().message.find("run 2 is damaged"), std::string::npos) << store.error().message;
   EXPECT_NE(store.error().message.find("cam degree 100"), std::string::npos) << store.error().message;
-  EXPECT_NE(store.error().message.find(dir.db().string()), std::string::npos) << store.error().message;
+  EXPECT_NE(store.error().message.find(db_in(dir).string()), std::string::npos) << store.error().message;
 
-  RawDb raw(dir.db());
+  RawDb raw(db_in(dir));
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), 1);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_revolutions"), 6);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name IN ('run_raw', 'parts', 'events')"), 0);
@@ -153,12 +153,12 @@ TEST(MigrationFromV1, ADamagedRunStopsTheUpgradeAndLeavesVersion1Intact) {
 
 TEST(MigrationFromV1, StepsOneVersionAtATime) {
   TempDir dir;
-  std::filesystem::create_directories(dir.db().parent_path());
+  std::filesystem::create_directories(db_in(dir).parent_path());
   storage_internal::Connection conn;
-  conn.path = dir.db();
-  ASSERT_EQ(sqlite3_open(dir.db().c_str(), &conn.db), SQLITE_OK);
+  conn.path = db_in(dir);
+  ASSERT_EQ(sqlite3_open(db_in(dir).c_str(), &conn.db), SQLITE_OK);
   ASSERT_TRUE(storage_internal::apply_migrations_up_to(conn, 1).ok());
-  RawDb raw(dir.db());
+  RawDb raw(db_in(dir));
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), 1);
   EXPECT_EQ(raw.query_text("SELECT type FROM sqlite_schema WHERE name = 'run_profile'"), "table");
   Status s = storage_internal::apply_migrations_up_to(conn, 2);

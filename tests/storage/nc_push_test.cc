@@ -36,7 +36,7 @@ std::string sample_program(int version) {
 class NcPushTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    Result<RunStore> opened = RunStore::open(dir_.db());
+    Result<RunStore> opened = RunStore::open(db_in(dir_));
     ASSERT_TRUE(opened.ok()) << opened.error().message;
     store_.emplace(std::move(opened).value());
   }
@@ -86,7 +86,7 @@ TEST_F(NcPushTest, TableVersionsCountUpPerFile) {
 
   EXPECT_EQ(*store().next_table_version("/nc/A.SPF"), 4);
   EXPECT_EQ(*store().next_table_version("/nc/B.SPF"), 2);
-  RawDb raw(dir_.db());
+  RawDb raw(db_in(dir_));
   EXPECT_EQ(raw.query_text("SELECT group_concat(table_version, ',') FROM"
                            " (SELECT table_version FROM nc_pushes WHERE nc_file = '/nc/A.SPF' ORDER BY id)"),
             "1,2,3");
@@ -111,7 +111,7 @@ TEST_F(NcPushTest, AVersionThatIsNotNextIsRefusedAndRecordsNothing) {
       EXPECT_TRUE(contains(s.error().message, "the next is 2")) << s.error().message;
     }
   }
-  RawDb raw(dir_.db());
+  RawDb raw(db_in(dir_));
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM nc_pushes"), 1);
   EXPECT_EQ(raw.query_text("SELECT status FROM runs WHERE id = " + std::to_string(other)), "measured")
       << "the run is not marked pushed by a refused push";
@@ -119,7 +119,7 @@ TEST_F(NcPushTest, AVersionThatIsNotNextIsRefusedAndRecordsNothing) {
 
 TEST_F(NcPushTest, TwoWritersCannotBothClaimAVersion) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
-  Result<RunStore> second = RunStore::open(dir_.db());
+  Result<RunStore> second = RunStore::open(db_in(dir_));
   ASSERT_TRUE(second.ok()) << second.error().message;
   // Both render version 1 before either records it.
   const int mine = *store().next_table_version("/nc/A.SPF");
@@ -335,7 +335,7 @@ TEST_F(NcPushTest, ANewerPendingTableSupersedesTheOlderOneForTheSameFile) {
   EXPECT_EQ(store().list_pending(for_a)->size(), 2u);
 
   // The schema itself keeps one pending table per file.
-  RawDb raw(dir_.db());
+  RawDb raw(db_in(dir_));
   EXPECT_NE(raw.exec("INSERT INTO nc_pending (run_id, created_utc, nc_file, program_text, verdict)"
                      " VALUES (1, '2026-11-22T10:00:00Z', '/nc/A.SPF', 'x', 'apply')"),
             SQLITE_OK);
@@ -353,7 +353,7 @@ TEST_F(NcPushTest, RejectingIsOnlyFromPendingAndARefusalChangesNothing) {
   EXPECT_EQ(t->note, "lobe 2 flank looks wrong");
   EXPECT_EQ(t->decided_utc.size(), 20u) << t->decided_utc;
 
-  RawDb raw(dir_.db());
+  RawDb raw(db_in(dir_));
   const std::string before = pending_row(raw, *a);
   s = store().reject_pending(*a, "bert", "again");
   ASSERT_FALSE(s.ok());
@@ -410,7 +410,7 @@ TEST_F(NcPushTest, AFailedApprovedPushLeavesTheTablePendingAndNoPush) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   Result<std::int64_t> a = store().add_pending(pending_for(run, "/nc/A.SPF", "A1"));
   ASSERT_TRUE(a.ok()) << a.error().message;
-  RawDb raw(dir_.db());
+  RawDb raw(db_in(dir_));
   const std::string before = pending_row(raw, *a);
 
   NcPush stale;  // rendered as version 2, but the file has none yet
@@ -449,7 +449,7 @@ TEST_F(NcPushTest, PendingTablesAreRefusedWhenIncomplete) {
   PendingTable bad_error = pending_for(run, "/nc/A.SPF", "x");
   bad_error.command_error_um = -1.0;
   EXPECT_EQ(store().add_pending(bad_error).error().code, ErrorCode::kInvalidInput);
-  EXPECT_EQ(RawDb(dir_.db()).query_int("SELECT count(*) FROM nc_pending"), 0);
+  EXPECT_EQ(RawDb(db_in(dir_)).query_int("SELECT count(*) FROM nc_pending"), 0);
 }
 
 // ---- Upgrading a version-2 database ----
@@ -490,11 +490,11 @@ void make_v2_database(const std::filesystem::path& path) {
 
 TEST(MigrationFromV2, KeepsEveryPushAndNumbersThemPerFileInPushOrder) {
   TempDir dir;
-  make_v2_database(dir.db());
-  Result<RunStore> store = RunStore::open(dir.db());
+  make_v2_database(db_in(dir));
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
 
-  RawDb raw(dir.db());
+  RawDb raw(db_in(dir));
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
   EXPECT_EQ(raw.query_text("PRAGMA integrity_check"), "ok");
   EXPECT_EQ(raw.query_int("PRAGMA foreign_key_check"), 0);
@@ -528,16 +528,16 @@ TEST(MigrationFromV2, KeepsEveryPushAndNumbersThemPerFileInPushOrder) {
 
 TEST(MigrationFromV2, AnEmptyVersion2DatabaseUpgrades) {
   TempDir dir;
-  std::filesystem::create_directories(dir.db().parent_path());
+  std::filesystem::create_directories(db_in(dir).parent_path());
   {
     storage_internal::Connection conn;
-    conn.path = dir.db();
-    ASSERT_EQ(sqlite3_open(dir.db().c_str(), &conn.db), SQLITE_OK);
+    conn.path = db_in(dir);
+    ASSERT_EQ(sqlite3_open(db_in(dir).c_str(), &conn.db), SQLITE_OK);
     ASSERT_TRUE(storage_internal::apply_migrations_up_to(conn, 2).ok());
   }
-  Result<RunStore> store = RunStore::open(dir.db());
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
-  EXPECT_EQ(RawDb(dir.db()).query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
+  EXPECT_EQ(RawDb(db_in(dir)).query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
   EXPECT_EQ(*store->next_table_version("/nc/A.SPF"), 1);
 }
 

@@ -20,7 +20,7 @@ using testing::TempDir;
 class QueryTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    Result<RunStore> opened = RunStore::open(dir_.db());
+    Result<RunStore> opened = RunStore::open(db_in(dir_));
     ASSERT_TRUE(opened.ok()) << opened.error().message;
     store_.emplace(std::move(opened).value());
   }
@@ -176,7 +176,7 @@ TEST_F(QueryTest, AFailedPushRecordLeavesNoHalf) {
   Status s = store().record_push(77, push);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().code, ErrorCode::kNotFound);
-  EXPECT_EQ(RawDb(dir_.db()).query_int("SELECT count(*) FROM nc_pushes"), 0);
+  EXPECT_EQ(RawDb(db_in(dir_)).query_int("SELECT count(*) FROM nc_pushes"), 0);
 }
 
 TEST_F(QueryTest, EventsAreKeptAndListedNewestFirstByKind) {
@@ -270,7 +270,7 @@ TEST_F(QueryTest, PruneRemovesOldRawSamplesAndKeepsEverythingElse) {
   pruned = store().prune_raw_samples("2026-11-01T00:00:00Z", "2026-11-23T00:00:00Z");
   ASSERT_TRUE(pruned.ok());
   EXPECT_EQ(*pruned, 0);
-  RawDb raw(dir_.db());
+  RawDb raw(db_in(dir_));
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_samples WHERE run_id = " + std::to_string(old_run)), 0);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_profile WHERE run_id = " + std::to_string(old_run)), 360);
 }
@@ -281,9 +281,9 @@ TEST_F(QueryTest, PruneRemovesOldRawSamplesAndKeepsEverythingElse) {
 // reader call must succeed (WAL: readers never wait for the writer) and see whole runs only.
 TEST(Concurrency, AReaderWorksWhileAWriterWrites) {
   TempDir dir;
-  Result<RunStore> writer = RunStore::open(dir.db());
+  Result<RunStore> writer = RunStore::open(db_in(dir));
   ASSERT_TRUE(writer.ok()) << writer.error().message;
-  Result<RunStore> reader = RunStore::open(dir.db());
+  Result<RunStore> reader = RunStore::open(db_in(dir));
   ASSERT_TRUE(reader.ok()) << reader.error().message;
 
   constexpr int kRuns = 40;
@@ -333,12 +333,12 @@ TEST(Concurrency, AReaderWorksWhileAWriterWrites) {
 // neither sees "database is locked".
 TEST(Concurrency, TwoWritersBothSucceed) {
   TempDir dir;
-  ASSERT_TRUE(RunStore::open(dir.db()).ok());
+  ASSERT_TRUE(RunStore::open(db_in(dir)).ok());
   constexpr int kRunsEach = 25;
   std::atomic<int> failures{0};
   std::string failure;
   auto write = [&](const std::string& machine) {
-    Result<RunStore> store = RunStore::open(dir.db());
+    Result<RunStore> store = RunStore::open(db_in(dir));
     if (!store.ok()) {
       ++failures;
       return;
@@ -359,7 +359,7 @@ TEST(Concurrency, TwoWritersBothSucceed) {
   a.join();
   b.join();
   EXPECT_EQ(failures.load(), 0);
-  RawDb raw(dir.db());
+  RawDb raw(db_in(dir));
   EXPECT_EQ(raw.counts().runs, 2 * kRunsEach);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM events"), 2 * kRunsEach);
 }

@@ -66,7 +66,7 @@ std::string reads_runs(const fs::path& db, std::size_t expected) {
 class ReadOnlyStore : public ::testing::Test {
  protected:
   void SetUp() override {
-    Result<RunStore> store = RunStore::open(dir_.db());
+    Result<RunStore> store = RunStore::open(db_in(dir_));
     ASSERT_TRUE(store.ok()) << store.error().message;
     ASSERT_TRUE(store->insert_run(make_record("intake", "2026-11-20T08:00:00Z")).ok());
     ASSERT_TRUE(store->insert_run(make_record("intake", "2026-11-21T08:00:00Z")).ok());
@@ -76,12 +76,12 @@ class ReadOnlyStore : public ::testing::Test {
 };
 
 TEST_F(ReadOnlyStore, ReadsAFileWithoutWritePermissionAndLeavesItAsItWas) {
-  fs::permissions(dir_.db(), fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
-  const FileState before = state_of(dir_.db());
-  EXPECT_EQ(reads_runs(dir_.db(), 2), "");
+  fs::permissions(db_in(dir_), fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  const FileState before = state_of(db_in(dir_));
+  EXPECT_EQ(reads_runs(db_in(dir_), 2), "");
 
   // Root ignores permission bits: what proves nothing was written is the file itself.
-  Result<RunStore> store = RunStore::open_read_only(dir_.db());
+  Result<RunStore> store = RunStore::open_read_only(db_in(dir_));
   ASSERT_TRUE(store.ok()) << store.error().message;
   EventRecord e;
   e.code = "gauge timeout";
@@ -90,65 +90,65 @@ TEST_F(ReadOnlyStore, ReadsAFileWithoutWritePermissionAndLeavesItAsItWas) {
   ASSERT_FALSE(written.ok()) << "a read-only store wrote an event";
   EXPECT_EQ(written.error().code, ErrorCode::kStorage);
   EXPECT_TRUE(contains(written.error().message, "opened for reading only")) << written.error().message;
-  EXPECT_EQ(differences(before, state_of(dir_.db())), "");
-  EXPECT_FALSE(fs::exists(dir_.db().string() + "-wal"));
-  EXPECT_FALSE(fs::exists(dir_.db().string() + "-shm"));
+  EXPECT_EQ(differences(before, state_of(db_in(dir_))), "");
+  EXPECT_FALSE(fs::exists(db_in(dir_).string() + "-wal"));
+  EXPECT_FALSE(fs::exists(db_in(dir_).string() + "-shm"));
 }
 
 TEST_F(ReadOnlyStore, ReadsInADirectoryThisUserCannotWrite) {
   dir_.share();
-  fs::permissions(dir_.db().parent_path(), fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+  fs::permissions(db_in(dir_).parent_path(), fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
                                                fs::perms::others_read | fs::perms::others_exec);
-  const FileState before = state_of(dir_.db());
-  EXPECT_EQ(testing::run_unprivileged([&] { return reads_runs(dir_.db(), 2); }), "");
-  EXPECT_EQ(differences(before, state_of(dir_.db())), "");
+  const FileState before = state_of(db_in(dir_));
+  EXPECT_EQ(testing::run_unprivileged([&] { return reads_runs(db_in(dir_), 2); }), "");
+  EXPECT_EQ(differences(before, state_of(db_in(dir_))), "");
 }
 
 TEST_F(ReadOnlyStore, ReadsOnAReadOnlyMount) {
-  const FileState before = state_of(dir_.db());
+  const FileState before = state_of(db_in(dir_));
   const std::string result = testing::run_on_read_only_mount(
-      dir_.db().parent_path(), [&](const fs::path& mounted) { return reads_runs(mounted / dir_.db().filename(), 2); });
+      db_in(dir_).parent_path(), [&](const fs::path& mounted) { return reads_runs(mounted / db_in(dir_).filename(), 2); });
   if (result.starts_with(kSkipped)) GTEST_SKIP() << "no read-only mount on this machine: " << result;
   EXPECT_EQ(result, "");
-  EXPECT_EQ(differences(before, state_of(dir_.db())), "");
+  EXPECT_EQ(differences(before, state_of(db_in(dir_))), "");
 }
 
 // The service holds the database open, so the newest run is still in the -wal: a reader on a
 // read-only mount must see it (an immutable open would not).
 TEST_F(ReadOnlyStore, ReadsRunsStillInTheWriteAheadLogOnAReadOnlyMount) {
-  Result<RunStore> writer = RunStore::open(dir_.db());
+  Result<RunStore> writer = RunStore::open(db_in(dir_));
   ASSERT_TRUE(writer.ok()) << writer.error().message;
   ASSERT_TRUE(writer->insert_run(make_record("intake", "2026-11-22T08:00:00Z")).ok());
-  ASSERT_GT(fs::file_size(dir_.db().string() + "-wal"), 0u) << "the third run should be in the log only";
+  ASSERT_GT(fs::file_size(db_in(dir_).string() + "-wal"), 0u) << "the third run should be in the log only";
   const std::string result = testing::run_on_read_only_mount(
-      dir_.db().parent_path(), [&](const fs::path& mounted) { return reads_runs(mounted / dir_.db().filename(), 3); });
+      db_in(dir_).parent_path(), [&](const fs::path& mounted) { return reads_runs(mounted / db_in(dir_).filename(), 3); });
   if (result.starts_with(kSkipped)) GTEST_SKIP() << "no read-only mount on this machine: " << result;
   EXPECT_EQ(result, "");
 }
 
 TEST_F(ReadOnlyStore, RefusesAnOlderSchemaNamingTheCommandThatUpgradesIt) {
   TempDir old;
-  fs::create_directories(old.db().parent_path());
+  fs::create_directories(db_in(old).parent_path());
   {
     storage_internal::Connection conn;
-    conn.path = old.db();
-    ASSERT_EQ(sqlite3_open(old.db().c_str(), &conn.db), SQLITE_OK);
+    conn.path = db_in(old);
+    ASSERT_EQ(sqlite3_open(db_in(old).c_str(), &conn.db), SQLITE_OK);
     ASSERT_TRUE(storage_internal::apply_migrations_up_to(conn, 3).ok());
   }
-  const FileState before = state_of(old.db());
-  Result<RunStore> store = RunStore::open_read_only(old.db());
+  const FileState before = state_of(db_in(old));
+  Result<RunStore> store = RunStore::open_read_only(db_in(old));
   ASSERT_FALSE(store.ok()) << "read a version-3 database as if it were current";
   EXPECT_EQ(store.error().code, ErrorCode::kStorage);
   EXPECT_TRUE(contains(store.error().message, "schema version 3")) << store.error().message;
-  EXPECT_TRUE(contains(store.error().message, "`gaugeloop db upgrade --db " + old.db().string() + "`"))
+  EXPECT_TRUE(contains(store.error().message, "`gaugeloop db upgrade --db " + db_in(old).string() + "`"))
       << store.error().message;
-  EXPECT_EQ(differences(before, state_of(old.db())), "") << "neither upgraded nor backed up";
-  EXPECT_EQ(RawDb(old.db()).query_int("PRAGMA user_version"), 3);
+  EXPECT_EQ(differences(before, state_of(db_in(old))), "") << "neither upgraded nor backed up";
+  EXPECT_EQ(RawDb(db_in(old)).query_int("PRAGMA user_version"), 3);
 }
 
 TEST_F(ReadOnlyStore, RefusesANewerSchemaAsOpenDoes) {
-  ASSERT_EQ(RawDb(dir_.db()).exec("PRAGMA user_version = 99"), SQLITE_OK);
-  Result<RunStore> store = RunStore::open_read_only(dir_.db());
+  ASSERT_EQ(RawDb(db_in(dir_)).exec("PRAGMA user_version = 99"), SQLITE_OK);
+  Result<RunStore> store = RunStore::open_read_only(db_in(dir_));
   ASSERT_FALSE(store.ok());
   EXPECT_EQ(store.error().code, ErrorCode::kStorage);
   EXPECT_TRUE(contains(store.error().message, "schema version 99")) << store.error().message;
@@ -175,13 +175,13 @@ TEST_F(ReadOnlyStore, AnEmptyFileHasNoSchemaToRead) {
 
 // A file without write bits is frozen: readers rely on it, so writers refuse it even as root.
 TEST_F(ReadOnlyStore, OpenForWritingRefusesAFileWithoutWritePermissionEvenForRoot) {
-  fs::permissions(dir_.db(), fs::perms::owner_read | fs::perms::others_read);
-  const FileState before = state_of(dir_.db());
-  Result<RunStore> store = RunStore::open(dir_.db());
+  fs::permissions(db_in(dir_), fs::perms::owner_read | fs::perms::others_read);
+  const FileState before = state_of(db_in(dir_));
+  Result<RunStore> store = RunStore::open(db_in(dir_));
   ASSERT_FALSE(store.ok());
   EXPECT_EQ(store.error().code, ErrorCode::kStorage);
   EXPECT_TRUE(contains(store.error().message, "read-only")) << store.error().message;
-  EXPECT_EQ(differences(before, state_of(dir_.db())), "");
+  EXPECT_EQ(differences(before, state_of(db_in(dir_))), "");
 }
 
 }  // namespace

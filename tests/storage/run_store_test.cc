@@ -94,7 +94,7 @@ void expect_same_run(const StoredRun& got, const RunRecord& want) {
 class RunStoreTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    Result<RunStore> opened = RunStore::open(dir_.db());
+    Result<RunStore> opened = RunStore::open(db_in(dir_));
     ASSERT_TRUE(opened.ok()) << opened.error().message;
     store_.emplace(std::move(opened).value());
   }
@@ -106,8 +106,8 @@ class RunStoreTest : public ::testing::Test {
 };
 
 TEST_F(RunStoreTest, OpenCreatesParentDirectoriesAndFile) {
-  EXPECT_TRUE(std::filesystem::is_regular_file(dir_.db()));
-  EXPECT_EQ(store().path(), dir_.db());
+  EXPECT_TRUE(std::filesystem::is_regular_file(db_in(dir_)));
+  EXPECT_EQ(store().path(), db_in(dir_));
 }
 
 TEST_F(RunStoreTest, InsertThenLoadReturnsTheSameRunToATenthOfANanometre) {
@@ -125,7 +125,7 @@ TEST_F(RunStoreTest, ReopeningTheFileKeepsTheRun) {
   const std::int64_t id = insert_ok(store(), record);
   store_.reset();
 
-  Result<RunStore> reopened = RunStore::open(dir_.db());
+  Result<RunStore> reopened = RunStore::open(db_in(dir_));
   ASSERT_TRUE(reopened.ok()) << reopened.error().message;
   Result<StoredRun> loaded = reopened->load_run(id);
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
@@ -267,7 +267,7 @@ TEST_F(RunStoreTest, CorrectionInForceMustNameAStoredRun) {
   r.correction_in_force_run = 999;
   Result<std::int64_t> id = store().insert_run(r);
   ASSERT_FALSE(id.ok());
-  EXPECT_EQ(RawDb(dir_.db()).counts().runs, 0);
+  EXPECT_EQ(RawDb(db_in(dir_)).counts().runs, 0);
 }
 
 TEST_F(RunStoreTest, RecordNcFileOnAMissingRunIsNotFoundAndChangesNothing) {
@@ -277,7 +277,7 @@ TEST_F(RunStoreTest, RecordNcFileOnAMissingRunIsNotFoundAndChangesNothing) {
   EXPECT_EQ(s.error().code, ErrorCode::kNotFound);
   EXPECT_NE(s.error().message.find("run " + std::to_string(id + 1)), std::string::npos) << s.error().message;
 
-  RawDb raw(dir_.db());
+  RawDb raw(db_in(dir_));
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM runs WHERE status = 'pushed'"), 0);
 }
 
@@ -296,7 +296,7 @@ TEST_F(RunStoreTest, LoadOfAMissingRunIsNotFound) {
   ASSERT_FALSE(loaded.ok());
   EXPECT_EQ(loaded.error().code, ErrorCode::kNotFound);
   EXPECT_NE(loaded.error().message.find("run 42"), std::string::npos) << loaded.error().message;
-  EXPECT_NE(loaded.error().message.find(dir_.db().string()), std::string::npos);
+  EXPECT_NE(loaded.error().message.find(db_in(dir_).string()), std::string::npos);
 }
 
 TEST_F(RunStoreTest, MovedStoreKeepsWorking) {
@@ -304,7 +304,7 @@ TEST_F(RunStoreTest, MovedStoreKeepsWorking) {
   store_.reset();
   const std::int64_t id = insert_ok(moved, make_record("a", "2026-11-22T02:34:44Z"));
   EXPECT_TRUE(moved.load_run(id).ok());
-  EXPECT_EQ(moved.path(), dir_.db());
+  EXPECT_EQ(moved.path(), db_in(dir_));
 }
 
 // ---- Refusals: a bad record leaves no row behind ----
@@ -319,7 +319,7 @@ class RunStoreRefusalTest : public RunStoreTest {
     for (const std::string& f : fragments) {
       EXPECT_NE(id.error().message.find(f), std::string::npos) << "'" << f << "' not in: " << id.error().message;
     }
-    RawDb raw(dir_.db());
+    RawDb raw(db_in(dir_));
     const RawDb::Counts n = raw.counts();
     EXPECT_EQ(n.runs, 0);
     EXPECT_EQ(n.raw, 0);
@@ -396,7 +396,7 @@ TEST_F(RunStoreRefusalTest, EmptyPartIsRefused) {
 // A failure inside the transaction, after the runs row is written, rolls back the whole run.
 // The fault is injected through the database itself: a trigger that aborts the last insert.
 TEST_F(RunStoreTest, FailureHalfWayThroughTheInsertRollsEverythingBack) {
-  RawDb raw(dir_.db());
+  RawDb raw(db_in(dir_));
   ASSERT_EQ(raw.exec("CREATE TRIGGER fail_at_200 BEFORE INSERT ON run_tables"
                      " BEGIN SELECT RAISE(ABORT, 'injected fault'); END"),
             SQLITE_OK)
@@ -406,7 +406,7 @@ TEST_F(RunStoreTest, FailureHalfWayThroughTheInsertRollsEverythingBack) {
   ASSERT_FALSE(id.ok());
   EXPECT_EQ(id.error().code, ErrorCode::kStorage);
   EXPECT_NE(id.error().message.find("injected fault"), std::string::npos) << id.error().message;
-  EXPECT_NE(id.error().message.find(dir_.db().string()), std::string::npos);
+  EXPECT_NE(id.error().message.find(db_in(dir_).string()), std::string::npos);
   EXPECT_NE(id.error().message.find("store the run of part a"), std::string::npos);
   const RawDb::Counts n = raw.counts();
   EXPECT_EQ(n.runs, 0);
@@ -424,7 +424,7 @@ TEST_F(RunStoreTest, FailureHalfWayThroughTheInsertRollsEverythingBack) {
 
 TEST_F(RunStoreTest, LoadReportsAProfileDeletedByHand) {
   const std::int64_t id = insert_ok(store(), make_record("a", "2026-11-22T02:34:44Z"));
-  RawDb raw(dir_.db());
+  RawDb raw(db_in(dir_));
   ASSERT_EQ(raw.exec("DELETE FROM run_tables"), SQLITE_OK);
   Result<StoredRun> loaded = store().load_run(id);
   ASSERT_FALSE(loaded.ok());
@@ -435,7 +435,7 @@ TEST_F(RunStoreTest, LoadReportsAProfileDeletedByHand) {
 
 TEST_F(RunStoreTest, LoadReportsRawSamplesDeletedByHandButNeverPruned) {
   const std::int64_t id = insert_ok(store(), make_record("a", "2026-11-22T02:34:44Z"));
-  RawDb raw(dir_.db());
+  RawDb raw(db_in(dir_));
   ASSERT_EQ(raw.exec("DELETE FROM run_raw"), SQLITE_OK);
   Result<StoredRun> loaded = store().load_run(id);
   ASSERT_FALSE(loaded.ok());
@@ -446,7 +446,7 @@ TEST_F(RunStoreTest, LoadReportsRawSamplesDeletedByHandButNeverPruned) {
 
 TEST_F(RunStoreTest, TheSchemaRefusesABlobOfTheWrongLength) {
   insert_ok(store(), make_record("a", "2026-11-22T02:34:44Z"));
-  RawDb raw(dir_.db());
+  RawDb raw(db_in(dir_));
   EXPECT_EQ(raw.exec("UPDATE run_tables SET error = zeroblob(1436)"), SQLITE_CONSTRAINT);
   EXPECT_EQ(raw.exec("UPDATE run_raw SET lift = zeroblob(1440 * 2)"), SQLITE_CONSTRAINT);
 }

@@ -33,15 +33,15 @@ TEST(Migrations, AreNumberedOneUpInOrder) {
 
 TEST(Schema, UserVersionIsTheLatestMigrationAfterOpen) {
   TempDir dir;
-  ASSERT_TRUE(RunStore::open(dir.db()).ok());
-  RawDb raw(dir.db());
+  ASSERT_TRUE(RunStore::open(db_in(dir)).ok());
+  RawDb raw(db_in(dir));
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), latest_schema_version());
 }
 
 TEST(Schema, JournalModeIsWal) {
   TempDir dir;
-  ASSERT_TRUE(RunStore::open(dir.db()).ok());
-  RawDb raw(dir.db());
+  ASSERT_TRUE(RunStore::open(db_in(dir)).ok());
+  RawDb raw(db_in(dir));
   EXPECT_EQ(raw.query_text("PRAGMA journal_mode"), "wal");
 }
 
@@ -49,20 +49,20 @@ TEST(Schema, OpeningTwiceIsIdempotent) {
   TempDir dir;
   std::int64_t id = 0;
   {
-    Result<RunStore> first = RunStore::open(dir.db());
+    Result<RunStore> first = RunStore::open(db_in(dir));
     ASSERT_TRUE(first.ok()) << first.error().message;
     Result<std::int64_t> inserted = first->insert_run(make_record("a", "2026-11-22T02:34:44Z"));
     ASSERT_TRUE(inserted.ok()) << inserted.error().message;
     id = *inserted;
     // A second store while the first is still open, and another after it closed.
-    Result<RunStore> second = RunStore::open(dir.db());
+    Result<RunStore> second = RunStore::open(db_in(dir));
     ASSERT_TRUE(second.ok()) << second.error().message;
   }
-  Result<RunStore> third = RunStore::open(dir.db());
+  Result<RunStore> third = RunStore::open(db_in(dir));
   ASSERT_TRUE(third.ok()) << third.error().message;
   EXPECT_TRUE(third->load_run(id).ok());
 
-  RawDb raw(dir.db());
+  RawDb raw(db_in(dir));
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), latest_schema_version());
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE type = 'table'"
                           " AND name IN ('runs', 'run_raw', 'run_tables', 'parts', 'lobes', 'settings',"
@@ -73,8 +73,8 @@ TEST(Schema, OpeningTwiceIsIdempotent) {
 
 TEST(Schema, HasTheIndexesForListing) {
   TempDir dir;
-  ASSERT_TRUE(RunStore::open(dir.db()).ok());
-  RawDb raw(dir.db());
+  ASSERT_TRUE(RunStore::open(db_in(dir)).ok());
+  RawDb raw(db_in(dir));
   EXPECT_EQ(raw.query_text("SELECT group_concat(name, ',') FROM"
                            " (SELECT name FROM pragma_index_info('runs_by_part_lobe_started')"
                            " ORDER BY seqno)"),
@@ -84,32 +84,32 @@ TEST(Schema, HasTheIndexesForListing) {
 
 TEST(Schema, RefusesADatabaseFromANewerGaugeloop) {
   TempDir dir;
-  ASSERT_TRUE(RunStore::open(dir.db()).ok());
+  ASSERT_TRUE(RunStore::open(db_in(dir)).ok());
   {
-    RawDb raw(dir.db());
+    RawDb raw(db_in(dir));
     ASSERT_EQ(raw.exec("PRAGMA user_version = 99"), SQLITE_OK);
   }
-  Result<RunStore> store = RunStore::open(dir.db());
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_FALSE(store.ok());
   EXPECT_EQ(store.error().code, ErrorCode::kStorage);
   EXPECT_TRUE(contains(store.error().message, "schema version 99")) << store.error().message;
-  EXPECT_TRUE(contains(store.error().message, dir.db().string()));
+  EXPECT_TRUE(contains(store.error().message, db_in(dir).string()));
 }
 
 TEST(Schema, ProfileColumnsRefuseNull) {
   // The backstop behind insert_run's validation.
   TempDir dir;
-  Result<RunStore> store = RunStore::open(dir.db());
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
   ASSERT_TRUE(store->insert_run(make_record("a", "2026-11-22T02:34:44Z")).ok());
-  RawDb raw(dir.db());
+  RawDb raw(db_in(dir));
   EXPECT_EQ(raw.exec("UPDATE run_tables SET error = NULL"), SQLITE_CONSTRAINT);
   EXPECT_EQ(raw.exec("UPDATE runs SET status = 'pushed'"), SQLITE_CONSTRAINT) << "a pushed run must name its NC file";
 }
 
 TEST(Schema, RunSamplesViewHasOneRowPerDegreeOfEachRevolution) {
   TempDir dir;
-  Result<RunStore> store = RunStore::open(dir.db());
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
   constexpr int kRevolutions = 4;
   Result<std::int64_t> id = store->insert_run(make_record("a", "2026-11-22T02:34:44Z", kRevolutions));
@@ -117,7 +117,7 @@ TEST(Schema, RunSamplesViewHasOneRowPerDegreeOfEachRevolution) {
   // A second run, so the view's rows are seen to belong to the right run.
   ASSERT_TRUE(store->insert_run(make_record("b", "2026-11-22T03:00:00Z", 3)).ok());
 
-  RawDb raw(dir.db());
+  RawDb raw(db_in(dir));
   const std::string run = std::to_string(*id);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_samples WHERE run_id = " + run), 360 * kRevolutions);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_samples"), 360 * (kRevolutions + 3));
@@ -133,10 +133,10 @@ TEST(Schema, RunSamplesViewHasOneRowPerDegreeOfEachRevolution) {
 
 TEST(Schema, RawLiftsAreBigEndianCountsOfATenthOfANanometre) {
   TempDir dir;
-  Result<RunStore> store = RunStore::open(dir.db());
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
   ASSERT_TRUE(store->insert_run(make_record("a", "2026-11-22T02:34:44Z")).ok());
-  RawDb raw(dir.db());
+  RawDb raw(db_in(dir));
   // sample_lift_mm(0, 0) = 1.5 mm exactly = 15,000,000 counts = 0x00E4E1C0.
   EXPECT_EQ(raw.query_text("SELECT hex(substr(lift, 1, 4)) FROM run_raw"), "00E4E1C0");
   EXPECT_EQ(raw.query_int("SELECT length(lift) FROM run_raw"), 3 * 1440);
@@ -147,7 +147,7 @@ TEST(Schema, RawLiftsAreBigEndianCountsOfATenthOfANanometre) {
 // person with sqlite3 reads the same numbers gaugeloop does.
 TEST(Schema, ViewsDecodeNegativeAndExtremeValuesAsTheStoreDoes) {
   TempDir dir;
-  Result<RunStore> store = RunStore::open(dir.db());
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
   RunRecord r = make_record("a", "2026-11-22T02:34:44Z");
   r.measured.revolutions[1].lift_mm[7] = -214.7483647;   // INT32_MIN + 1 counts
@@ -160,7 +160,7 @@ TEST(Schema, ViewsDecodeNegativeAndExtremeValuesAsTheStoreDoes) {
   Result<StoredRun> loaded = store->load_run(*id);
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
 
-  RawDb raw(dir.db());
+  RawDb raw(db_in(dir));
   const std::string run = std::to_string(*id);
   auto sample = [&](int rev, int deg) {
     return raw.query_double("SELECT lift_mm FROM run_samples WHERE run_id = " + run + " AND revolution_index = " +
@@ -197,7 +197,7 @@ TEST(Schema, ViewsDecodeNegativeAndExtremeValuesAsTheStoreDoes) {
 
 TEST(Schema, TheCatalogueHoldsEveryPartAndLobeWithTheLatestGeometry) {
   TempDir dir;
-  Result<RunStore> store = RunStore::open(dir.db());
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
   RunRecord first = make_record("a", "2026-11-22T02:34:44Z");
   ASSERT_TRUE(store->insert_run(first).ok());
@@ -208,7 +208,7 @@ TEST(Schema, TheCatalogueHoldsEveryPartAndLobeWithTheLatestGeometry) {
   unknown.geometry.reset();
   ASSERT_TRUE(store->insert_run(unknown).ok());
 
-  RawDb raw(dir.db());
+  RawDb raw(db_in(dir));
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM parts"), 2);
   EXPECT_EQ(raw.query_text("SELECT follower FROM parts WHERE name = 'a'"), "roller");
   EXPECT_EQ(raw.query_text("SELECT coalesce(follower, 'unknown') FROM parts WHERE name = 'b'"), "unknown");
@@ -222,17 +222,17 @@ TEST(Schema, TheCatalogueHoldsEveryPartAndLobeWithTheLatestGeometry) {
 // Deterministic: the lock is held by a raw connection for the whole test, no threads.
 TEST(Concurrency, ReaderOpensListsAndLoadsWhileAnotherConnectionHoldsTheWriteLock) {
   TempDir dir;
-  Result<RunStore> writer = RunStore::open(dir.db());
+  Result<RunStore> writer = RunStore::open(db_in(dir));
   ASSERT_TRUE(writer.ok()) << writer.error().message;
   const RunRecord record = make_record("a", "2026-11-22T02:34:44Z");
   Result<std::int64_t> id = writer->insert_run(record);
   ASSERT_TRUE(id.ok()) << id.error().message;
 
-  RawDb locker(dir.db());
+  RawDb locker(db_in(dir));
   ASSERT_EQ(locker.exec("BEGIN IMMEDIATE"), SQLITE_OK) << locker.errmsg();
   ASSERT_EQ(locker.exec("UPDATE runs SET note = 'uncommitted'"), SQLITE_OK) << locker.errmsg();
 
-  Result<RunStore> reader = RunStore::open(dir.db());
+  Result<RunStore> reader = RunStore::open(db_in(dir));
   ASSERT_TRUE(reader.ok()) << reader.error().message;
   Result<std::vector<RunSummary>> runs = reader->list_runs({});
   ASSERT_TRUE(runs.ok()) << runs.error().message;
@@ -295,11 +295,11 @@ TEST(OpenFailure, UnwritableDirectoryIsAClearStorageError) {
 TEST(OpenFailure, ReadOnlyFileIsRefusedAtOpenNotAtTheFirstInsert) {
   TempDir dir;
   dir.share();
-  ASSERT_TRUE(RunStore::open(dir.db()).ok());
-  std::filesystem::permissions(dir.db().parent_path(), std::filesystem::perms::all);  // the directory is not the point
-  std::filesystem::permissions(dir.db(), std::filesystem::perms::owner_read | std::filesystem::perms::others_read);
+  ASSERT_TRUE(RunStore::open(db_in(dir)).ok());
+  std::filesystem::permissions(db_in(dir).parent_path(), std::filesystem::perms::all);  // the directory is not the point
+  std::filesystem::permissions(db_in(dir), std::filesystem::perms::owner_read | std::filesystem::perms::others_read);
   const std::string failure = run_unprivileged([&]() -> std::string {
-    Result<RunStore> store = RunStore::open(dir.db());
+    Result<RunStore> store = RunStore::open(db_in(dir));
     if (store.ok()) return "opened a read-only database for writing";
     if (store.error().code != ErrorCode::kStorage) return "wrong code: " + store.error().message;
     if (!contains(store.error().message, "read-only")) return "unclear message: " + store.error().message;
@@ -310,13 +310,13 @@ TEST(OpenFailure, ReadOnlyFileIsRefusedAtOpenNotAtTheFirstInsert) {
 
 TEST(OpenFailure, AFileThatIsNotADatabaseSaysSo) {
   TempDir dir;
-  std::filesystem::create_directories(dir.db().parent_path());
-  std::ofstream(dir.db()) << std::string(4096, 'x');
-  Result<RunStore> store = RunStore::open(dir.db());
+  std::filesystem::create_directories(db_in(dir).parent_path());
+  std::ofstream(db_in(dir)) << std::string(4096, 'x');
+  Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_FALSE(store.ok());
   EXPECT_EQ(store.error().code, ErrorCode::kStorage);
   EXPECT_TRUE(contains(store.error().message, "not a database")) << store.error().message;
-  EXPECT_TRUE(contains(store.error().message, dir.db().string())) << store.error().message;
+  EXPECT_TRUE(contains(store.error().message, db_in(dir).string())) << store.error().message;
 }
 
 TEST(OpenFailure, EmptyPathIsInvalidInput) {

@@ -17,21 +17,6 @@
 
 namespace gaugeloop::testing {
 
-TempDir::TempDir() {
-  std::string pattern = (std::filesystem::temp_directory_path() / "gaugeloop-storage-XXXXXX").string();
-  std::vector<char> buffer(pattern.begin(), pattern.end());
-  buffer.push_back('\0');
-  const char* made = mkdtemp(buffer.data());
-  EXPECT_NE(made, nullptr) << "mkdtemp failed for " << pattern;
-  path_ = made != nullptr ? std::filesystem::path(made) : std::filesystem::path();
-}
-
-void TempDir::share() const {
-  std::filesystem::permissions(path_, std::filesystem::perms::owner_all | std::filesystem::perms::group_read |
-                                          std::filesystem::perms::group_exec | std::filesystem::perms::others_read |
-                                          std::filesystem::perms::others_exec);
-}
-
 namespace {
 
 // Runs `body` in a forked child and returns what it returned ("" on success); the child's
@@ -94,17 +79,6 @@ std::string run_on_read_only_mount(const std::filesystem::path& dir,
   });
 }
 
-TempDir::~TempDir() {
-  if (path_.empty()) return;
-  std::error_code ec;
-  // A test may have made parts read-only; give them back before removing.
-  std::filesystem::permissions(path_, std::filesystem::perms::owner_all, std::filesystem::perm_options::add, ec);
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(path_, ec)) {
-    std::filesystem::permissions(entry.path(), std::filesystem::perms::owner_all, std::filesystem::perm_options::add,
-                                 ec);
-  }
-  std::filesystem::remove_all(path_, ec);
-}
 
 double sample_lift_mm(int revolution_index, int degree) {
   return 1.5 + 3.2 * std::sin(degree * 0.0174532925199) + 0.0000123456789 * revolution_index + 1e-7 * degree;

@@ -10,25 +10,12 @@
 #include <string_view>
 
 #include "storage/run_store.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop::testing {
 
-// A fresh directory under the system temp dir, removed with everything in it on destruction.
-class TempDir {
- public:
-  TempDir();
-  ~TempDir();
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  const std::filesystem::path& path() const { return path_; }
-  // Lets other users traverse and read the directory (mkdtemp makes it private).
-  void share() const;
-  std::filesystem::path db() const { return path_ / "data" / "runs.sqlite"; }
-
- private:
-  std::filesystem::path path_;
-};
+// The database file storage tests use in their temporary directory (not yet made).
+inline std::filesystem::path db_in(const TempDir& dir) { return dir / "data" / "runs.sqlite"; }
 
 // Runs `check` as an unprivileged user, so permission checks mean something when the tests
 // run as root (as CI does): as root it forks, switches the child to nobody (65534) and runs

@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <string_view>
 
@@ -25,14 +26,30 @@ class TempDir {
     path_ = made != nullptr ? std::filesystem::path(made) : std::filesystem::path();
   }
   ~TempDir() {
+    if (path_.empty()) return;
     std::error_code ec;
-    if (!path_.empty()) std::filesystem::remove_all(path_, ec);
+    // A test may have made parts read-only; give them back before removing.
+    std::filesystem::permissions(path_, std::filesystem::perms::owner_all, std::filesystem::perm_options::add, ec);
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(path_, ec)) {
+      std::filesystem::permissions(entry.path(), std::filesystem::perms::owner_all,
+                                   std::filesystem::perm_options::add, ec);
+    }
+    std::filesystem::remove_all(path_, ec);
   }
   TempDir(const TempDir&) = delete;
   TempDir& operator=(const TempDir&) = delete;
 
   const std::filesystem::path& path() const { return path_; }
   std::filesystem::path operator/(const std::filesystem::path& p) const { return path_ / p; }
+
+  // Writes `text` to `relative` under the directory (its parent directories made) and
+  // returns the full path.
+  std::filesystem::path write(const std::filesystem::path& relative, const std::string& text) const {
+    const std::filesystem::path to = path_ / relative;
+    std::filesystem::create_directories(to.parent_path());
+    std::ofstream(to, std::ios::binary) << text;
+    return to;
+  }
 
   // Lets other users traverse and read the directory (mkdtemp makes it private), for checks
   // run as an unprivileged user.
