@@ -93,9 +93,9 @@ int cmd_history(const HistoryOptions& o) {
   for (const NcPush& p : *pushes) {
     std::printf("%-16s %7d  %-20s  %6lld  %-8s  %6s  %9s  %s\n",
                 std::filesystem::path(p.nc_file).stem().string().c_str(), p.table_version, p.pushed_utc.c_str(),
-                static_cast<long long>(p.run_id), p.interpolation.empty() ? "-" : p.interpolation.c_str(),
-                p.block_count ? std::to_string(*p.block_count).c_str() : "-",
-                p.command_error_um ? format_fixed(*p.command_error_um, 3).c_str() : "-", p.reason.c_str());
+                static_cast<long long>(p.run_id), p.table.interpolation.empty() ? "-" : p.table.interpolation.c_str(),
+                p.table.block_count ? std::to_string(*p.table.block_count).c_str() : "-",
+                p.table.command_error_um ? format_fixed(*p.table.command_error_um, 3).c_str() : "-", p.reason.c_str());
   }
   if (pushes->empty()) std::printf("(no table was pushed)\n");
   return kExitOk;
@@ -174,7 +174,7 @@ int cmd_diff(const DiffOptions& o) {
   for (const auto* p : {&pa, &pb}) {
     std::printf("  version %-4d run %lld, %s, %s, %zu points, pushed %s\n", p->table_version,
                 static_cast<long long>(p->run_id), p->reason.c_str(),
-                p->interpolation.empty() ? "-" : p->interpolation.c_str(), (p == &pa ? ta : tb)->points.size(),
+                p->table.interpolation.empty() ? "-" : p->table.interpolation.c_str(), (p == &pa ? ta : tb)->points.size(),
                 p->pushed_utc.c_str());
   }
   std::printf("  X(B) - X(A), as the NC interpolates each: largest %+.3f um at C%.2f, RMS %.3f um\n", worst_um, worst_c,

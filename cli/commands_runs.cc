@@ -187,9 +187,11 @@ int cmd_show(const RunOptions& o) {
   for (const NcPush& p : r.pushes) {
     std::string detail = ", version " + std::to_string(p.table_version);
     if (!p.reason.empty()) detail += " (" + p.reason + ")";
-    if (p.point_count) detail += ", " + std::to_string(*p.point_count) + " points";
-    if (p.command_error_um) detail += ", command position error " + format_fixed(*p.command_error_um, 3) + " um";
-    if (p.correction_max_um) detail += ", " + format_fixed(*p.correction_max_um, 2) + " um max";
+    if (p.table.point_count) detail += ", " + std::to_string(*p.table.point_count) + " points";
+    if (p.table.command_error_um) {
+      detail += ", command position error " + format_fixed(*p.table.command_error_um, 3) + " um";
+    }
+    if (p.table.correction_max_um) detail += ", " + format_fixed(*p.table.correction_max_um, 2) + " um max";
     std::printf("  NC push           %s  %s%s\n", p.pushed_utc.c_str(), p.nc_file.c_str(), detail.c_str());
   }
   return kExitOk;

@@ -618,17 +618,24 @@ class JobRun {
                                 {report_.run_id, static_cast<std::int64_t>(table_version)});
   }
 
+  // What the push or the pending table records of the table built.
+  TableFacts table_facts() const {
+    TableFacts t;
+    if (built_) {
+      t.interpolation = report_.interpolation;
+      t.block_count = report_.table_blocks;
+      t.command_error_um = report_.command_error_um;
+      t.point_count = static_cast<int>(built_->table.points.size());
+    }
+    t.correction_max_um = correction_max_um_;
+    return t;
+  }
+
   PushFacts push_facts() const {
     PushFacts facts;
     facts.run_id = report_.run_id;
     facts.reason = "run " + std::to_string(report_.run_id);
-    if (built_) {
-      facts.interpolation = report_.interpolation;
-      facts.block_count = report_.table_blocks;
-      facts.command_error_um = report_.command_error_um;
-      facts.point_count = static_cast<int>(built_->table.points.size());
-    }
-    facts.correction_max_um = correction_max_um_;
+    facts.table = table_facts();
     return facts;
   }
 
@@ -673,18 +680,13 @@ class JobRun {
     if (built_) {
       Result<std::string> program = render(0);
       if (!program) return program.error();
-      const PushFacts facts = push_facts();
       PendingTable pending;
       pending.run_id = report_.run_id;
       pending.nc_file = nc_file_.string();
       pending.program_text = std::move(*program);
       pending.verdict = why == CompensationVerdict::kHold ? PendingVerdict::kHold : PendingVerdict::kApply;
       pending.reason = reason;
-      pending.interpolation = facts.interpolation;
-      pending.block_count = facts.block_count;
-      pending.command_error_um = facts.command_error_um;
-      pending.correction_max_um = facts.correction_max_um;
-      pending.point_count = facts.point_count;
+      pending.table = table_facts();
       Result<std::int64_t> id = store_.add_pending(pending);
       if (!id) return id.error();
       report_.pending_id = *id;

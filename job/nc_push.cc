@@ -212,11 +212,7 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   intent.push.nc_file = nc_file.string();
   intent.push.table_version = *version;
   intent.push.reason = facts.reason;
-  intent.push.interpolation = facts.interpolation;
-  intent.push.block_count = facts.block_count;
-  intent.push.command_error_um = facts.command_error_um;
-  intent.push.point_count = facts.point_count;
-  intent.push.correction_max_um = facts.correction_max_um;
+  intent.push.table = facts.table;
   intent.push.program_text = *program;
   intent.pending_id = facts.pending_id;
   intent.approved_by = facts.approved_by;
@@ -266,11 +262,7 @@ Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, co
   PushFacts facts;
   facts.run_id = t->run_id;
   facts.reason = "approved by " + by;
-  facts.interpolation = t->interpolation;
-  facts.block_count = t->block_count;
-  facts.command_error_um = t->command_error_um;
-  facts.point_count = t->point_count;
-  facts.correction_max_um = t->correction_max_um;
+  facts.table = t->table;
   facts.pending_id = pending_id;
   facts.approved_by = by;
   facts.note = note;
@@ -300,11 +292,7 @@ Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_f
   PushFacts facts;
   facts.run_id = old->run_id;
   facts.reason = "rollback to version " + std::to_string(table_version) + " by " + by;
-  facts.interpolation = old->interpolation;
-  facts.block_count = old->block_count;
-  facts.command_error_um = old->command_error_um;
-  facts.point_count = old->point_count;
-  facts.correction_max_um = old->correction_max_um;
+  facts.table = old->table;
   const std::string& text = *old->program_text;
   Result<PushCompletion> pushed =
       push_program(store, nc_file, facts, [&text](int version) { return with_table_version(text, version); });

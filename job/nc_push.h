@@ -32,11 +32,7 @@ Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::pa
 struct PushFacts {
   std::int64_t run_id = 0;
   std::string reason;  // "run 12", "approved by anna", "rollback to version 3"
-  std::string interpolation;
-  std::optional<int> block_count;
-  std::optional<double> command_error_um;
-  std::optional<int> point_count;
-  std::optional<double> correction_max_um;
+  TableFacts table;
   // An approval: the pending table pushed, who approved it and their note; the push and the
   // decision are recorded in one transaction.
   std::optional<std::int64_t> pending_id;

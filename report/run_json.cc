@@ -97,38 +97,45 @@ json run_detail_json(const StoredRun& r) {
   return j;
 }
 
+namespace {
+
+// The table's facts, as pushes and pending tables show them alike.
+void add_table_facts(json& j, const TableFacts& t) {
+  j["interpolation"] = t.interpolation;
+  j["block_count"] = opt_json(t.block_count);
+  j["command_error_um"] = opt_json(t.command_error_um);
+  j["point_count"] = opt_json(t.point_count);
+  j["correction_max_um"] = opt_json(t.correction_max_um);
+}
+
+}  // namespace
+
 json nc_push_json(const NcPush& p) {
-  return {{"table_version", p.table_version},
-          {"pushed_utc", p.pushed_utc},
-          {"run_id", p.run_id},
-          {"reason", p.reason},
-          {"nc_file", p.nc_file},
-          {"interpolation", p.interpolation},
-          {"block_count", opt_json(p.block_count)},
-          {"command_error_um", opt_json(p.command_error_um)},
-          {"point_count", opt_json(p.point_count)},
-          {"correction_max_um", opt_json(p.correction_max_um)},
-          {"program_hash", text_or_null(p.program_hash)}};
+  json j{{"table_version", p.table_version},
+         {"pushed_utc", p.pushed_utc},
+         {"run_id", p.run_id},
+         {"reason", p.reason},
+         {"nc_file", p.nc_file},
+         {"program_hash", text_or_null(p.program_hash)}};
+  add_table_facts(j, p.table);
+  return j;
 }
 
 json pending_table_json(const PendingTable& t) {
-  return {{"id", t.id},
-          {"run_id", t.run_id},
-          {"created_utc", t.created_utc},
-          {"nc_file", t.nc_file},
-          {"verdict", pending_verdict_name(t.verdict)},
-          {"status", pending_status_name(t.status)},
-          {"reason", t.reason},
-          {"interpolation", t.interpolation},
-          {"block_count", opt_json(t.block_count)},
-          {"command_error_um", opt_json(t.command_error_um)},
-          {"point_count", opt_json(t.point_count)},
-          {"correction_max_um", opt_json(t.correction_max_um)},
-          {"decided_by", t.decided_by},
-          {"decided_utc", t.decided_utc},
-          {"note", t.note},
-          {"push_id", opt_json(t.push_id)},
-          {"superseded_by", opt_json(t.superseded_by)}};
+  json j{{"id", t.id},
+         {"run_id", t.run_id},
+         {"created_utc", t.created_utc},
+         {"nc_file", t.nc_file},
+         {"verdict", pending_verdict_name(t.verdict)},
+         {"status", pending_status_name(t.status)},
+         {"reason", t.reason},
+         {"decided_by", t.decided_by},
+         {"decided_utc", t.decided_utc},
+         {"note", t.note},
+         {"push_id", opt_json(t.push_id)},
+         {"superseded_by", opt_json(t.superseded_by)}};
+  add_table_facts(j, t.table);
+  return j;
 }
 
 json event_json(const StoredEvent& e) {

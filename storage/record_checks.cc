@@ -148,9 +148,11 @@ Status check_run_record(const RunRecord& run) {
   return {};
 }
 
-Status check_table_figures(const std::string& what, const std::optional<int>& block_count,
-                           const std::optional<double>& command_error_um, const std::optional<int>& point_count,
-                           const std::optional<double>& correction_max_um) {
+Status check_table_figures(const std::string& what, const TableFacts& table) {
+  const std::optional<int>& block_count = table.block_count;
+  const std::optional<int>& point_count = table.point_count;
+  const std::optional<double>& command_error_um = table.command_error_um;
+  const std::optional<double>& correction_max_um = table.correction_max_um;
   if (block_count && *block_count < 0) {
     return make_error(ErrorCode::kInvalidInput,
                       what + ": block_count " + std::to_string(*block_count) + " is negative");
@@ -184,7 +186,7 @@ Status check_push(std::int64_t run_id, const NcPush& push) {
     return make_error(ErrorCode::kInvalidInput, what + ": table version " + std::to_string(push.table_version) +
                                                     " is negative (0: the next one)");
   }
-  return check_table_figures(what, push.block_count, push.command_error_um, push.point_count, push.correction_max_um);
+  return check_table_figures(what, push.table);
 }
 
 Error bad_bound(std::string_view what, const std::string& value) {

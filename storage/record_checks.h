@@ -25,9 +25,7 @@ Status check_run_record(const RunRecord& run);
 // What a push or a pending table says about its table: counts not negative, figures finite
 // (command_error_um also not below 0). `what` opens the message: "cannot record NC file
 // /nc/A.SPF for run 3".
-Status check_table_figures(const std::string& what, const std::optional<int>& block_count,
-                           const std::optional<double>& command_error_um, const std::optional<int>& point_count,
-                           const std::optional<double>& correction_max_um);
+Status check_table_figures(const std::string& what, const TableFacts& table);
 
 // A push to record for `run_id`: a file, a well-formed time if any, a version not negative
 // and its table figures.

@@ -84,6 +84,19 @@ struct RunSummary {
   std::string raw_pruned_utc;  // when prune removed the raw samples; empty: still stored
 };
 
+// What a curve table is, as kept with each push, pending table and push journal entry.
+// Empty optionals and interpolation: unknown (recorded before schema version 2 or 3, by
+// record_nc_file, or not said).
+struct TableFacts {
+  std::string interpolation;               // "linear", "cspline"
+  std::optional<int> block_count;          // table blocks in the program; >= 0
+  std::optional<double> command_error_um;  // the table's command position error; finite, >= 0
+  std::optional<int> point_count;          // points of the table (blocks + 1 for a spline's start)
+  std::optional<double> correction_max_um;  // the largest |correction| the table carries
+
+  bool operator==(const TableFacts&) const = default;
+};
+
 // One NC program written to the control from a run, as nc_pushes keeps it.
 struct NcPush {
   std::int64_t id = 0;      // read back (nc_pushes.id: push order); ignored when recording
@@ -97,13 +110,7 @@ struct NcPush {
   // Why it was pushed: "run 12", "approved by anna", "rollback to version 3". When recording,
   // empty: "run <run id>". Empty for pushes recorded before schema version 3.
   std::string reason;
-  // Empty: unknown (pushes recorded before schema version 3, or not said).
-  std::string interpolation;               // "G1", "CSPLINE"...
-  std::optional<int> block_count;          // table blocks in the program; >= 0
-  std::optional<double> command_error_um;  // the table's command position error; finite, >= 0
-  // Empty for pushes recorded by record_nc_file or before schema version 2.
-  std::optional<int> point_count;
-  std::optional<double> correction_max_um;
+  TableFacts table;
   std::string program_hash;  // settings_hash() of the program text; empty if unknown
   // The whole program as written, byte for byte, so a diff or a rollback never depends on the
   // file on the control. Unset when not recorded (pushes before schema version 3, or without
@@ -166,12 +173,8 @@ struct PendingTable {
   std::string nc_file;       // where it would be written; not empty
   std::string program_text;  // the program as rendered; not empty. Empty in list_pending results.
   PendingVerdict verdict = PendingVerdict::kApply;
-  std::string reason;                      // why it waits: "approval required", or the reasons compensation held it
-  std::string interpolation;               // "G1", "CSPLINE"...; empty: unknown
-  std::optional<int> block_count;          // >= 0
-  std::optional<double> command_error_um;  // finite, >= 0
-  std::optional<double> correction_max_um;
-  std::optional<int> point_count;
+  std::string reason;  // why it waits: "approval required", or the reasons compensation held it
+  TableFacts table;
   // Read back; ignored by add_pending.
   PendingStatus status = PendingStatus::kPending;
   std::string decided_utc;                    // when it left kPending; empty while pending

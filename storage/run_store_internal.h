@@ -45,6 +45,12 @@ class WhereClause {
   std::vector<std::string> values_;
 };
 
+// The five table columns of nc_pushes, nc_push_intents and nc_pending, in this order where a
+// query selects them: interpolation, block_count, command_error_um, point_count,
+// correction_max_um. Bound by name (:interpolation ...) and read from column `first` on.
+void bind_table_facts(Statement& s, const TableFacts& table);
+TableFacts read_table_facts(const Statement& s, int first);
+
 // Columns 0..11 of nc_pushes AS p, read by read_push(); program_text, when selected, follows.
 inline constexpr std::string_view kPushColumns =
     "p.id, p.run_id, p.pushed_utc, p.nc_file, p.table_version, p.reason, p.interpolation, p.block_count, "

@@ -20,7 +20,7 @@ namespace {
 // Columns 0..17, read by read_pending(); program_text is column 4 ('' in lists).
 constexpr std::string_view kPendingColumns =
     "id, run_id, created_utc, nc_file, {text}, verdict, reason, interpolation, block_count, command_error_um, "
-    "correction_max_um, point_count, status, decided_utc, decided_by, note, push_id, superseded_by";
+    "point_count, correction_max_um, status, decided_utc, decided_by, note, push_id, superseded_by";
 
 constexpr std::string_view kInsertPending = R"sql(
 INSERT INTO nc_pending (run_id, created_utc, nc_file, program_text, verdict, reason, interpolation, block_count,
@@ -51,11 +51,7 @@ PendingTable read_pending(const Statement& s) {
   t.program_text = s.column<std::string>(4);
   t.verdict = s.column<std::string>(5) == "hold" ? PendingVerdict::kHold : PendingVerdict::kApply;
   t.reason = s.column<std::string>(6);
-  t.interpolation = s.column<std::string>(7);
-  t.block_count = s.column<std::optional<int>>(8);
-  t.command_error_um = s.column<std::optional<double>>(9);
-  t.correction_max_um = s.column<std::optional<double>>(10);
-  t.point_count = s.column<std::optional<int>>(11);
+  t.table = storage_internal::read_table_facts(s, 7);
   // The schema's CHECK admits only the four names.
   t.status = pending_status_from_db(s.column<std::string>(12)).value_or(PendingStatus::kPending);
   t.decided_utc = s.column<std::string>(13);
@@ -110,8 +106,7 @@ Status check_pending(const PendingTable& table) {
   if (!table.created_utc.empty() && !is_utc_timestamp(table.created_utc)) {
     return storage_internal::bad_bound(what + ": created_utc", table.created_utc);
   }
-  return storage_internal::check_table_figures(what + " (" + table.nc_file + ")", table.block_count,
-                                               table.command_error_um, table.point_count, table.correction_max_um);
+  return storage_internal::check_table_figures(what + " (" + table.nc_file + ")", table.table);
 }
 
 // The table still pending for `nc_file`, if any (at most one: nc_pending_one_per_file), is
@@ -143,11 +138,7 @@ Result<std::int64_t> insert_pending(Connection& conn, const PendingTable& table,
   ins->bind(":program_text", table.program_text);
   ins->bind(":verdict", pending_verdict_name(table.verdict));
   ins->bind(":reason", table.reason);
-  ins->bind(":interpolation", text_or_null(table.interpolation));
-  ins->bind(":block_count", table.block_count);
-  ins->bind(":command_error_um", table.command_error_um);
-  ins->bind(":correction_max_um", table.correction_max_um);
-  ins->bind(":point_count", table.point_count);
+  storage_internal::bind_table_facts(*ins, table.table);
   if (Status s = ins->run(); !s.ok()) return s.error();
   return conn.last_insert_rowid();
 }
@@ -233,11 +224,12 @@ NcPush approved_push(const NcPush& push, const PendingTable& t, const std::strin
   NcPush full = push;
   full.nc_file = t.nc_file;
   if (full.reason.empty()) full.reason = "approved by " + by;
-  if (full.interpolation.empty()) full.interpolation = t.interpolation;
-  if (!full.block_count) full.block_count = t.block_count;
-  if (!full.command_error_um) full.command_error_um = t.command_error_um;
-  if (!full.correction_max_um) full.correction_max_um = t.correction_max_um;
-  if (!full.point_count) full.point_count = t.point_count;
+  TableFacts& f = full.table;
+  if (f.interpolation.empty()) f.interpolation = t.table.interpolation;
+  if (!f.block_count) f.block_count = t.table.block_count;
+  if (!f.command_error_um) f.command_error_um = t.table.command_error_um;
+  if (!f.correction_max_um) f.correction_max_um = t.table.correction_max_um;
+  if (!f.point_count) f.point_count = t.table.point_count;
   if (!full.program_text || full.program_text->empty()) full.program_text = t.program_text;
   return full;
 }

@@ -37,6 +37,24 @@ Status check_claimed_version(const NcPush& push, int next, const std::string& op
 
 }  // namespace
 
+void bind_table_facts(Statement& s, const TableFacts& table) {
+  s.bind(":interpolation", text_or_null(table.interpolation));
+  s.bind(":block_count", table.block_count);
+  s.bind(":command_error_um", table.command_error_um);
+  s.bind(":point_count", table.point_count);
+  s.bind(":correction_max_um", table.correction_max_um);
+}
+
+TableFacts read_table_facts(const Statement& s, int first) {
+  TableFacts t;
+  t.interpolation = s.column<std::string>(first);
+  t.block_count = s.column<std::optional<int>>(first + 1);
+  t.command_error_um = s.column<std::optional<double>>(first + 2);
+  t.point_count = s.column<std::optional<int>>(first + 3);
+  t.correction_max_um = s.column<std::optional<double>>(first + 4);
+  return t;
+}
+
 NcPush read_push(const Statement& s, bool with_text) {
   NcPush p;
   p.id = s.column<std::int64_t>(0);
@@ -45,11 +63,7 @@ NcPush read_push(const Statement& s, bool with_text) {
   p.nc_file = s.column<std::string>(3);
   p.table_version = s.column<int>(4);
   p.reason = s.column<std::string>(5);
-  p.interpolation = s.column<std::string>(6);
-  p.block_count = s.column<std::optional<int>>(7);
-  p.command_error_um = s.column<std::optional<double>>(8);
-  p.point_count = s.column<std::optional<int>>(9);
-  p.correction_max_um = s.column<std::optional<double>>(10);
+  p.table = read_table_facts(s, 6);
   p.program_hash = s.column<std::string>(11);
   if (with_text) p.program_text = s.column<std::optional<std::string>>(12);
   return p;
@@ -84,11 +98,7 @@ Result<std::int64_t> insert_push(Connection& conn, std::int64_t run_id, const Nc
   ins->bind(":nc_file", push.nc_file);
   ins->bind(":table_version", *version);
   ins->bind(":reason", std::string_view(push.reason.empty() ? "run " + std::to_string(run_id) : push.reason));
-  ins->bind(":interpolation", text_or_null(push.interpolation));
-  ins->bind(":block_count", push.block_count);
-  ins->bind(":command_error_um", push.command_error_um);
-  ins->bind(":point_count", push.point_count);
-  ins->bind(":correction_max_um", push.correction_max_um);
+  storage_internal::bind_table_facts(*ins, push.table);
   const std::string hash = text.empty() ? push.program_hash : settings_hash(text);
   ins->bind(":program_hash", text_or_null(hash));
   ins->bind(":program_text", text_or_null(text));
@@ -231,11 +241,7 @@ PushIntent read_intent(const Statement& s) {
   i.push.nc_file = s.column<std::string>(3);
   i.push.table_version = s.column<int>(4);
   i.push.reason = s.column<std::string>(5);
-  i.push.interpolation = s.column<std::string>(6);
-  i.push.block_count = s.column<std::optional<int>>(7);
-  i.push.command_error_um = s.column<std::optional<double>>(8);
-  i.push.point_count = s.column<std::optional<int>>(9);
-  i.push.correction_max_um = s.column<std::optional<double>>(10);
+  i.push.table = storage_internal::read_table_facts(s, 6);
   i.push.program_hash = s.column<std::string>(11);
   i.push.program_text = s.column<std::string>(12);
   i.pending_id = s.column<std::optional<std::int64_t>>(13);
@@ -302,11 +308,7 @@ Result<std::int64_t> insert_intent(Connection& conn, const PushIntent& intent, c
   ins->bind(":nc_file", p.nc_file);
   ins->bind(":table_version", p.table_version);
   ins->bind(":reason", std::string_view(p.reason.empty() ? "run " + std::to_string(intent.run_id) : p.reason));
-  ins->bind(":interpolation", text_or_null(p.interpolation));
-  ins->bind(":block_count", p.block_count);
-  ins->bind(":command_error_um", p.command_error_um);
-  ins->bind(":point_count", p.point_count);
-  ins->bind(":correction_max_um", p.correction_max_um);
+  storage_internal::bind_table_facts(*ins, p.table);
   ins->bind(":program_hash", std::string_view(settings_hash(*p.program_text)));
   ins->bind(":program_text", *p.program_text);
   ins->bind(":pending_id", intent.pending_id);

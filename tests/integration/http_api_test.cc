@@ -73,9 +73,9 @@ class HttpApiTest : public ::testing::Test {
     ids_.push_back(*store->insert_run(record("intake", 1, "g2", "2020-11-22T08:00:00Z", 6.0)));
     NcPush push;
     push.nc_file = "/nc/CAM_INTAKE_L1.SPF";
-    push.interpolation = "CSPLINE";
-    push.block_count = 47;
-    push.command_error_um = 0.497;
+    push.table.interpolation = "CSPLINE";
+    push.table.block_count = 47;
+    push.table.command_error_um = 0.497;
     ASSERT_TRUE(store->record_push(ids_[0], push, kProgramV1).ok());
     push.reason = "rollback to version 1 by anna";
     ASSERT_TRUE(store->record_push(ids_[0], push, kProgramV2).ok());

@@ -118,11 +118,11 @@ TEST_F(RunJsonTest, AStoredRunHasEveryDocumentedKeyAndItsFigures) {
   const std::int64_t id = insert(record);
   NcPush push;
   push.nc_file = "/nc/CAM_INTAKE_L1.SPF";
-  push.interpolation = "CSPLINE";
-  push.block_count = 72;
-  push.command_error_um = 0.31;
-  push.point_count = 73;
-  push.correction_max_um = 4.5;
+  push.table.interpolation = "CSPLINE";
+  push.table.block_count = 72;
+  push.table.command_error_um = 0.31;
+  push.table.point_count = 73;
+  push.table.correction_max_um = 4.5;
   push.program_hash = settings_hash("program");
   ASSERT_TRUE(store_->record_push(id, push, "program").ok());
 

@@ -59,11 +59,11 @@ class NcPushTest : public ::testing::Test {
     p.nc_file = nc_file;
     p.table_version = next.ok() ? *next : 0;
     p.reason = reason;
-    p.interpolation = "CSPLINE";
-    p.block_count = 96;
-    p.command_error_um = 0.42;
-    p.point_count = 361;
-    p.correction_max_um = 12.5;
+    p.table.interpolation = "CSPLINE";
+    p.table.block_count = 96;
+    p.table.command_error_um = 0.42;
+    p.table.point_count = 361;
+    p.table.correction_max_um = 12.5;
     Status s = store().record_push(run_id, p, sample_program(p.table_version));
     EXPECT_TRUE(s.ok()) << s.error().message;
     return p;
@@ -178,11 +178,11 @@ TEST_F(NcPushTest, ListLoadAndLastPush) {
   EXPECT_EQ((*all)[1].run_id, r1);
   EXPECT_EQ((*all)[1].table_version, 2);
   EXPECT_EQ((*all)[1].reason, "approved by anna");
-  EXPECT_EQ((*all)[1].interpolation, "CSPLINE");
-  EXPECT_EQ((*all)[1].block_count, 96);
-  EXPECT_EQ((*all)[1].command_error_um, 0.42);
-  EXPECT_EQ((*all)[1].point_count, 361);
-  EXPECT_EQ((*all)[1].correction_max_um, 12.5);
+  EXPECT_EQ((*all)[1].table.interpolation, "CSPLINE");
+  EXPECT_EQ((*all)[1].table.block_count, 96);
+  EXPECT_EQ((*all)[1].table.command_error_um, 0.42);
+  EXPECT_EQ((*all)[1].table.point_count, 361);
+  EXPECT_EQ((*all)[1].table.correction_max_um, 12.5);
   EXPECT_GT((*all)[0].id, (*all)[1].id);
 
   PushQuery by_file;
@@ -271,11 +271,11 @@ PendingTable pending_for(std::int64_t run_id, const std::string& nc_file, const 
   t.program_text = text;
   t.verdict = PendingVerdict::kHold;
   t.reason = "correction 31 um exceeds the 25 um step limit";
-  t.interpolation = "G1";
-  t.block_count = 721;
-  t.command_error_um = 0.31;
-  t.correction_max_um = 31.0;
-  t.point_count = 721;
+  t.table.interpolation = "G1";
+  t.table.block_count = 721;
+  t.table.command_error_um = 0.31;
+  t.table.correction_max_um = 31.0;
+  t.table.point_count = 721;
   return t;
 }
 
@@ -317,8 +317,8 @@ TEST_F(NcPushTest, ANewerPendingTableSupersedesTheOlderOneForTheSameFile) {
   EXPECT_EQ(now->verdict, PendingVerdict::kApply);
   EXPECT_EQ(now->run_id, run2);
   EXPECT_EQ(now->program_text, sample_program(2));
-  EXPECT_EQ(now->block_count, 721);
-  EXPECT_EQ(now->command_error_um, 0.31);
+  EXPECT_EQ(now->table.block_count, 721);
+  EXPECT_EQ(now->table.command_error_um, 0.31);
 
   PendingQuery waiting;
   waiting.status = PendingStatus::kPending;
@@ -398,10 +398,10 @@ TEST_F(NcPushTest, AnApprovedPushIsRecordedAndMarkedInOneStep) {
   EXPECT_EQ(p.table_version, 1);
   EXPECT_EQ(p.reason, "approved by anna");
   EXPECT_EQ(p.program_text, sample_program(1)) << "the text written, not the one kept pending";
-  EXPECT_EQ(p.interpolation, "G1") << "unset figures come from the pending table";
-  EXPECT_EQ(p.block_count, 721);
-  EXPECT_EQ(p.command_error_um, 0.31);
-  EXPECT_EQ(p.correction_max_um, 31.0);
+  EXPECT_EQ(p.table.interpolation, "G1") << "unset figures come from the pending table";
+  EXPECT_EQ(p.table.block_count, 721);
+  EXPECT_EQ(p.table.command_error_um, 0.31);
+  EXPECT_EQ(p.table.correction_max_um, 31.0);
   EXPECT_EQ(**store().last_pushed_run("grinder-1", "intake_flat", 2), run);
   EXPECT_EQ(store().load_run(run)->summary.status, "pushed");
 }
@@ -447,7 +447,7 @@ TEST_F(NcPushTest, PendingTablesAreRefusedWhenIncomplete) {
   PendingTable no_run = pending_for(run + 1, "/nc/A.SPF", "x");
   EXPECT_EQ(store().add_pending(no_run).error().code, ErrorCode::kNotFound);
   PendingTable bad_error = pending_for(run, "/nc/A.SPF", "x");
-  bad_error.command_error_um = -1.0;
+  bad_error.table.command_error_um = -1.0;
   EXPECT_EQ(store().add_pending(bad_error).error().code, ErrorCode::kInvalidInput);
   EXPECT_EQ(RawDb(db_in(dir_)).query_int("SELECT count(*) FROM nc_pending"), 0);
 }

@@ -153,8 +153,8 @@ TEST_F(QueryTest, EveryPushIsKeptWithWhatWasPushed) {
   NcPush push;
   push.pushed_utc = "2026-11-20T10:05:00Z";
   push.nc_file = "/nc/B.SPF";
-  push.point_count = 361;
-  push.correction_max_um = 16.6;
+  push.table.point_count = 361;
+  push.table.correction_max_um = 16.6;
   Status s = store().record_push(id, push, "CTABDEF(X,C,1,1)\n");
   ASSERT_TRUE(s.ok()) << s.error().message;
   Result<StoredRun> run = store().load_run(id);
@@ -163,10 +163,10 @@ TEST_F(QueryTest, EveryPushIsKeptWithWhatWasPushed) {
   ASSERT_EQ(run->pushes.size(), 2u);
   EXPECT_EQ(run->pushes[0].nc_file, "/nc/A.SPF");
   EXPECT_EQ(run->pushes[0].pushed_utc.size(), 20u) << "recorded now, as an ISO time: " << run->pushes[0].pushed_utc;
-  EXPECT_FALSE(run->pushes[0].point_count.has_value());
+  EXPECT_FALSE(run->pushes[0].table.point_count.has_value());
   EXPECT_EQ(run->pushes[1].pushed_utc, "2026-11-20T10:05:00Z");
-  EXPECT_EQ(run->pushes[1].point_count, 361);
-  EXPECT_EQ(run->pushes[1].correction_max_um, 16.6);
+  EXPECT_EQ(run->pushes[1].table.point_count, 361);
+  EXPECT_EQ(run->pushes[1].table.correction_max_um, 16.6);
   EXPECT_EQ(run->pushes[1].program_hash, settings_hash("CTABDEF(X,C,1,1)\n"));
 }
 
