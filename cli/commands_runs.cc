@@ -77,17 +77,27 @@ Result<RunQuery> resolved(const ListOptions& o) {
   return q;
 }
 
-int cmd_list(const ListOptions& o) {
+// The runs `runs list` (RunStore::list_runs) or `runs trend` (RunStore::trend) selects.
+using RunSelection = Result<std::vector<RunSummary>> (RunStore::*)(const RunQuery&) const;
+Result<std::vector<RunSummary>> selected_runs(const ListOptions& o, RunSelection select) {
   Result<RunQuery> q = resolved(o);
-  if (!q) return report_error(q.error());
+  if (!q) return q.error();
   Result<RunStore> store = open_history_read_only(o.paths);
-  if (!store) return report_error(store.error());
-  Result<std::vector<RunSummary>> runs = store->list_runs(*q);
+  if (!store) return store.error();
+  return ((*store).*select)(*q);
+}
+
+void print_runs_json(const std::vector<RunSummary>& runs) {
+  json out = json::array();
+  for (const RunSummary& r : runs) out.push_back(run_summary_json(r));
+  print_json(out);
+}
+
+int cmd_list(const ListOptions& o) {
+  Result<std::vector<RunSummary>> runs = selected_runs(o, &RunStore::list_runs);
   if (!runs) return report_error(runs.error());
   if (o.json_out) {
-    json out = json::array();
-    for (const RunSummary& r : *runs) out.push_back(run_summary_json(r));
-    print_json(out);
+    print_runs_json(*runs);
     return kExitOk;
   }
   std::printf("%6s  %-20s  %-10s  %-24s %4s  %4s  %8s  %8s  %8s  %8s  %s\n", "run", "started (UTC)", "machine", "part",
@@ -334,20 +344,15 @@ int cmd_compare(const CompareOptions& o) {
 // ---- runs trend ----
 
 int cmd_trend(const ListOptions& o) {
-  Result<RunQuery> q = resolved(o);
-  if (!q) return report_error(q.error());
-  Result<RunStore> store = open_history_read_only(o.paths);
-  if (!store) return report_error(store.error());
-  Result<std::vector<RunSummary>> runs = store->trend(*q);
+  Result<std::vector<RunSummary>> runs = selected_runs(o, &RunStore::trend);
   if (!runs) return report_error(runs.error());
   if (o.json_out) {
-    json out = json::array();
-    for (const RunSummary& r : *runs) out.push_back(run_summary_json(r));
-    print_json(out);
+    print_runs_json(*runs);
     return kExitOk;
   }
-  std::printf("%s lobe %d%s, oldest first (cam frame figures)\n", q->part.c_str(), q->lobe,
-              q->machine.empty() ? "" : (" on " + q->machine).c_str());
+  const RunQuery& q = o.query;
+  std::printf("%s lobe %d%s, oldest first (cam frame figures)\n", q.part.c_str(), q.lobe,
+              q.machine.empty() ? "" : (" on " + q.machine).c_str());
   std::printf("%6s  %-20s  %-10s  %8s  %8s  %9s  %10s  %8s  %s\n", "run", "started (UTC)", "machine", "max um",
               "rms um", "phase deg", "runout um", "rep um", "status");
   for (const RunSummary& r : *runs) {
@@ -358,7 +363,7 @@ int cmd_trend(const ListOptions& o) {
   }
   if (runs->empty()) {
     std::printf("(no runs of %s lobe %d match; `gaugeloop runs list` shows which parts and lobes have runs)\n",
-                q->part.c_str(), q->lobe);
+                q.part.c_str(), q.lobe);
   } else if (runs->size() >= 2) {
     const RunSummary& f = runs->front();
     const RunSummary& l = runs->back();
