@@ -442,29 +442,7 @@ void GaugeSimulator::serve() {
 }
 
 void GaugeSimulator::stop() {
-  if (thread_.joinable()) {
-    const std::uint64_t one = 1;
-    [[maybe_unused]] auto w = ::write(wake_fd_, &one, sizeof one);
-    thread_.join();
-  }
-  close_listener();
-  if (wake_fd_ >= 0) {
-    ::close(wake_fd_);
-    wake_fd_ = -1;
-  }
-  if (ctx_ != nullptr) {
-    if (!settings_.rtu_device.empty()) {
-      modbus_close(ctx_);  // the serial line is libmodbus's own
-    } else {
-      modbus_set_socket(ctx_, -1);  // the sockets are closed already; keep modbus_free from closing one again
-    }
-    modbus_free(ctx_);
-    ctx_ = nullptr;
-  }
-  if (mapping_ != nullptr) {
-    modbus_mapping_free(mapping_);
-    mapping_ = nullptr;
-  }
+  shut_down_modbus_server(thread_, wake_fd_, listen_fd_, ctx_, mapping_, !settings_.rtu_device.empty());
 }
 
 GaugeSimulator::~GaugeSimulator() { stop(); }

@@ -173,28 +173,8 @@ void PlcSimulator::set_refusing(bool refusing) {
 }
 
 void PlcSimulator::stop() {
-  if (thread_.joinable()) {
-    stopping_.store(true);
-    wake();
-    thread_.join();
-  }
-  if (listen_fd_ >= 0) {
-    ::close(listen_fd_);
-    listen_fd_ = -1;
-  }
-  if (wake_fd_ >= 0) {
-    ::close(wake_fd_);
-    wake_fd_ = -1;
-  }
-  if (ctx_ != nullptr) {
-    modbus_set_socket(ctx_, -1);  // the sockets are closed already; keep modbus_free from closing one again
-    modbus_free(ctx_);
-    ctx_ = nullptr;
-  }
-  if (mapping_ != nullptr) {
-    modbus_mapping_free(mapping_);
-    mapping_ = nullptr;
-  }
+  shut_down_modbus_server(thread_, wake_fd_, listen_fd_, ctx_, mapping_, /*serial=*/false,
+                          [this] { stopping_.store(true); });
 }
 
 PlcSimulator::~PlcSimulator() { stop(); }

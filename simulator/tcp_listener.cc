@@ -82,4 +82,33 @@ ModbusTcpClients::Round ModbusTcpClients::serve_round(modbus_t* ctx, int wake_fd
   return Round::kServed;
 }
 
+void shut_down_modbus_server(std::thread& thread, int& wake_fd, int& listen_fd, modbus_t*& ctx,
+                             modbus_mapping_t*& mapping, bool serial, const std::function<void()>& before_wake) {
+  if (thread.joinable()) {
+    if (before_wake) before_wake();
+    const std::uint64_t one = 1;
+    [[maybe_unused]] auto w = ::write(wake_fd, &one, sizeof one);
+    thread.join();
+  }
+  for (int* fd : {&listen_fd, &wake_fd}) {
+    if (*fd >= 0) {
+      ::close(*fd);
+      *fd = -1;
+    }
+  }
+  if (ctx != nullptr) {
+    if (serial) {
+      modbus_close(ctx);  // the serial line is libmodbus's own
+    } else {
+      modbus_set_socket(ctx, -1);  // the sockets are closed already; keep modbus_free from closing one again
+    }
+    modbus_free(ctx);
+    ctx = nullptr;
+  }
+  if (mapping != nullptr) {
+    modbus_mapping_free(mapping);
+    mapping = nullptr;
+  }
+}
+
 }  // namespace gaugeloop

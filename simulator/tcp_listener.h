@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/result.h"
@@ -50,5 +51,13 @@ class ModbusTcpClients {
   std::vector<int> clients_;
   std::vector<std::uint8_t> query_ = std::vector<std::uint8_t>(MODBUS_TCP_MAX_ADU_LENGTH);
 };
+
+// The one teardown of a simulator's server: `before_wake` (e.g. setting a stop flag), a wake
+// of the serving thread through its eventfd, the thread joined; then the listening socket and
+// the eventfd closed, the context freed (a serial one closes its line first; a TCP one's
+// sockets are the clients' and closed already) and the register mapping freed. Each handle is
+// reset, so a second call does nothing.
+void shut_down_modbus_server(std::thread& thread, int& wake_fd, int& listen_fd, modbus_t*& ctx,
+                             modbus_mapping_t*& mapping, bool serial, const std::function<void()>& before_wake = {});
 
 }  // namespace gaugeloop
