@@ -337,6 +337,32 @@ TEST(LatchedPoller, TooManyBadRevolutionsFailsNamingTheLast) {
   EXPECT_NE(run.error().message.find("over-range"), std::string::npos) << run.error().message;
 }
 
+// On a manual clock that moves 1 ms at every reading, a run that cannot finish in its
+// timeout fails at the first check past it; no time passes but the clock's own ticks.
+TEST(RunTimeout, ARunLongerThanItsTimeoutFailsNamingIt) {
+  for (SamplingMode mode : {SamplingMode::kLive, SamplingMode::kLatched}) {
+    SCOPED_TRACE(sampling_mode_name(mode));
+    ScriptedGauge g;
+    g.step_deg = 0.05;     // live: 7200 polls a revolution, half a degree well within stale_after
+    g.marks_per_poll = 1;  // latched: one mark a poll
+    PollerSettings s = fast_settings(mode);
+    s.run_timeout = std::chrono::milliseconds(1000);
+    ManualClock clock;
+    clock.set_tick(std::chrono::milliseconds(1));
+    Poller p(g, s, clock);
+    Result<MeasuredRun> run = p.measure();
+    ASSERT_FALSE(run.ok());
+    EXPECT_EQ(run.error().code, ErrorCode::kIncompleteRun);
+    EXPECT_NE(run.error().message.find("run timed out after 1000 ms (as set) during revolution 1 of 3"),
+              std::string::npos)
+        << run.error().message;
+    const Clock::duration ended = clock.now() - Clock::time_point{};
+    EXPECT_GT(ended, std::chrono::milliseconds(1000));
+    EXPECT_LT(ended, std::chrono::milliseconds(1020));
+    for (Clock::duration slept : clock.sleeps()) EXPECT_EQ(slept, Clock::duration::zero());
+  }
+}
+
 // (revolutions + spares + 2) revolutions at the speed, at least 10 s; or as set.
 TEST(RunTimeout, FollowsTheSpeedAndTheRevolutions) {
   PollerSettings s;  // 3 revolutions, 3 spares: 8 revolutions
