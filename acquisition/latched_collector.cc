@@ -198,11 +198,10 @@ void LatchedCollector::mark_fault_windows(std::uint32_t index, bool implied) {
   for (const FaultWindow& w : fault_windows_) {
     if (rev_.broken.empty() && index - w.from < w.to - w.from) {
       const std::string what = w.status ? gauge_.describe_status(*w.status) : std::string("a fault");
-      rev_.broken =
-          "the gauge counted a mark latched with status " + what +
-          (implied ? " between degrees " + std::to_string(w.from % kDegreesPerRevolution) + " and " +
-                         std::to_string((w.to - 1) % kDegreesPerRevolution)
-                   : " between latch numbers " + std::to_string(w.from) + " and " + std::to_string(w.to - 1));
+      rev_.broken = "the gauge counted a mark latched with status " + what +
+                    (implied ? " between degrees " + std::to_string(w.from % kDegreesPerRevolution) + " and " +
+                                   std::to_string((w.to - 1) % kDegreesPerRevolution)
+                             : " between latch numbers " + std::to_string(w.from) + " and " + std::to_string(w.to - 1));
     }
   }
 }

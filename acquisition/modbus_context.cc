@@ -34,8 +34,8 @@ Status ModbusContext::open() {
   modbus_t* ctx = rtu ? modbus_new_rtu(s.device.c_str(), s.baud, s.parity, s.data_bits, s.stop_bits)
                       : modbus_new_tcp_pi(s.host.c_str(), std::to_string(s.port).c_str());
   if (ctx == nullptr) {
-    return make_error(ErrorCode::kInvalidInput, peer_.name + " address " + address() +
-                                                    " is not usable: " + modbus_strerror(errno) + peer_.settings_advice);
+    return make_error(ErrorCode::kInvalidInput, peer_.name + " address " + address() + " is not usable: " +
+                                                    modbus_strerror(errno) + peer_.settings_advice);
   }
   modbus_set_slave(ctx, s.unit_id);
   modbus_set_error_recovery(ctx, MODBUS_ERROR_RECOVERY_NONE);
@@ -77,8 +77,8 @@ Status ModbusContext::write_registers(int first, int count, const std::uint16_t*
 
 Error ModbusContext::failed(int err, const std::string& verb, RegisterTable table, int first, int count) {
   const std::string where = verb + " " + std::string(register_table_name(table)) + " registers " +
-                            std::to_string(first) + ".." + std::to_string(first + count - 1) + " of the " +
-                            peer_.name + " at " + address();
+                            std::to_string(first) + ".." + std::to_string(first + count - 1) + " of the " + peer_.name +
+                            " at " + address();
   if (err == ETIMEDOUT) {
     modbus_flush(ctx_);
     close();

@@ -19,10 +19,10 @@ std::string modbus_address(const ModbusSettings& settings);
 
 // The device at the other end of a link, as its errors name it.
 struct ModbusPeer {
-  std::string name;       // "gauge", "PLC": "cannot connect to the gauge at ..."
-  ErrorCode unreachable;  // a refused connection, a lost link, a request while closed
-  ErrorCode timeout;      // no reply within the response timeout
-  ErrorCode exception;    // an exception reply or a malformed one
+  std::string name;              // "gauge", "PLC": "cannot connect to the gauge at ..."
+  ErrorCode unreachable;         // a refused connection, a lost link, a request while closed
+  ErrorCode timeout;             // no reply within the response timeout
+  ErrorCode exception;           // an exception reply or a malformed one
   std::string settings_advice;   // follows "<name> address A is not usable: <why>"
   std::string connect_advice;    // follows "cannot connect to the <name> at A: <why>"
   std::string exception_advice;  // follows "<reading ... registers> of the <name> at A: <why>"

@@ -144,8 +144,8 @@ TEST(GaugeLinkBackoff, DoublesFromTheInitialDelayUpToTheMaximumAndResetsOnAGoodR
   gauge.fail_connects = 4;
   ASSERT_TRUE(link.ensure("").ok());
   using std::chrono::milliseconds;
-  EXPECT_EQ(clock.sleeps(), (std::vector<Clock::duration>{milliseconds(20), milliseconds(40), milliseconds(80),
-                                                          milliseconds(100)}));
+  EXPECT_EQ(clock.sleeps(),
+            (std::vector<Clock::duration>{milliseconds(20), milliseconds(40), milliseconds(80), milliseconds(100)}));
   EXPECT_EQ(clock.now(), Clock::time_point{} + milliseconds(240));
 
   link.succeeded();

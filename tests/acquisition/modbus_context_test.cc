@@ -19,8 +19,13 @@ bool ends_with(const std::string& s, const std::string& suffix) {
 }
 
 ModbusPeer widget() {
-  return ModbusPeer{"widget",   ErrorCode::kGaugeUnreachable, ErrorCode::kGaugeTimeout, ErrorCode::kGaugeProtocol,
-                    "; check A", "; check B",                  "; check C"};
+  return ModbusPeer{"widget",
+                    ErrorCode::kGaugeUnreachable,
+                    ErrorCode::kGaugeTimeout,
+                    ErrorCode::kGaugeProtocol,
+                    "; check A",
+                    "; check B",
+                    "; check C"};
 }
 
 class ModbusContextTest : public ::testing::Test {

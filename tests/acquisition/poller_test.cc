@@ -32,7 +32,7 @@ constexpr double kInterpolationTolMm = 1e-9;
 void expect_true_lift(const MeasuredRun& run, const ScriptedGauge& g) {
   for (const auto& rev : run.revolutions) {
     for (int d = 0; d < 360; ++d) {
-      ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm)
+      ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(static_cast<double>(rev.revolution) * 360.0 + d), kInterpolationTolMm)
           << "revolution " << rev.revolution << " degree " << d;
     }
   }
@@ -49,7 +49,8 @@ TEST(Poller, CollectsCompleteRevolutionsFromTheNextBoundary) {
     const auto& rev = run->revolutions[i];
     EXPECT_EQ(rev.revolution, static_cast<std::int64_t>(i) + 1) << "starts at the boundary after the first poll";
     for (int d = 0; d < 360; ++d) {
-      EXPECT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm) << "degree " << d;
+      EXPECT_NEAR(rev.lift_mm[d], g.lift_mm(static_cast<double>(rev.revolution) * 360.0 + d), kInterpolationTolMm)
+          << "degree " << d;
     }
   }
 }
