@@ -2,7 +2,6 @@
 #include "acquisition/gauge_link.h"
 
 #include <algorithm>
-#include <thread>
 
 namespace gaugeloop {
 
@@ -28,7 +27,7 @@ void GaugeLink::move_to(LinkState next) {
 }
 
 bool GaugeLink::spent() {
-  const auto now = std::chrono::steady_clock::now();
+  const auto now = clock_.now();
   if (failures_++ == 0) outage_since_ = now;
   if (failures_ < policy_.max_attempts) return false;
   return !ever_connected_ || now - outage_since_ >= patience_;
@@ -59,7 +58,7 @@ Status GaugeLink::ensure(std::string_view where_now) {
       case LinkState::kBackingOff: {
         const bool reconnect = state_ == LinkState::kBackingOff;
         if (reconnect) {
-          std::this_thread::sleep_for(backoff_);  // backoff between reconnects, not synchronisation
+          clock_.sleep_for(backoff_);  // backoff between reconnects, not synchronisation
           backoff_ = std::min(backoff_ * 2, policy_.backoff_max);
         }
         Status s = gauge_.connect();

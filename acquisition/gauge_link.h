@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "acquisition/gauge_client.h"
+#include "core/clock.h"
 #include "core/result.h"
 
 namespace gaugeloop {
@@ -36,10 +37,12 @@ struct LinkPolicy {
   std::chrono::milliseconds backoff_max{500};
 };
 
-// Not thread-safe: one per run, on the poller's thread.
+// Not thread-safe: one per run, on the poller's thread. `clock` times the outage and sleeps
+// the backoff; it must outlive the link.
 class GaugeLink {
  public:
-  GaugeLink(GaugeClient& gauge, LinkPolicy policy) : gauge_(gauge), policy_(policy), backoff_(policy.backoff_initial) {}
+  GaugeLink(GaugeClient& gauge, LinkPolicy policy, Clock& clock = real_clock())
+      : gauge_(gauge), policy_(policy), clock_(clock), backoff_(policy.backoff_initial) {}
 
   // Makes sure the link is up before a request. An error: the attempts are spent (Failed).
   // `where_now` says where the run is, for the message ("during revolution 2 of 3").
@@ -50,7 +53,7 @@ class GaugeLink {
   // Records a good request (any reply that is not an error): the outage, if any, is over.
   void succeeded();
   // The shortest outage given up on once the link has been up; 0 (the default): none.
-  void set_patience(std::chrono::steady_clock::duration patience) { patience_ = patience; }
+  void set_patience(Clock::duration patience) { patience_ = patience; }
 
   LinkState state() const { return state_; }
   int reconnects() const { return reconnects_; }
@@ -67,11 +70,12 @@ class GaugeLink {
 
   GaugeClient& gauge_;
   LinkPolicy policy_;
+  Clock& clock_;
   std::chrono::milliseconds backoff_;
   LinkState state_ = LinkState::kDisconnected;
   int failures_ = 0;
-  std::chrono::steady_clock::time_point outage_since_{};  // first failure of the current outage
-  std::chrono::steady_clock::duration patience_{};
+  Clock::time_point outage_since_{};  // first failure of the current outage
+  Clock::duration patience_{};
   int reconnects_ = 0;
   bool ever_connected_ = false;
   Error failure_;  // kept once Failed

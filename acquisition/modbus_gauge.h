@@ -3,15 +3,16 @@
 
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "acquisition/gauge_client.h"
 #include "acquisition/register_map.h"
 
-typedef struct _modbus modbus_t;  // libmodbus stays private to acquisition/
-
 namespace gaugeloop {
+
+class ModbusContext;  // libmodbus stays private to acquisition/ (modbus_context.h)
 
 enum class ModbusTransport { kTcp, kRtu };
 
@@ -44,7 +45,7 @@ class ModbusGauge final : public GaugeClient {
 
   Status connect() override;
   void disconnect() override;
-  bool connected() const override { return ctx_ != nullptr; }
+  bool connected() const override;
   // After a timeout the link is flushed and closed: a late reply would otherwise be taken as
   // the answer to the next request (transaction ids shift by one).
   Result<GaugeSnapshot> read_snapshot() override;
@@ -56,16 +57,12 @@ class ModbusGauge final : public GaugeClient {
   }
 
  private:
-  // Reads `count` registers of `table` at `address` into `dest`; on failure returns the
-  // error, with errno turned into a code, after flushing and closing the link where needed.
-  Status read_registers(RegisterTable table, int address, int count, std::uint16_t* dest);
-
   ModbusSettings settings_;
   std::vector<ReadBlock> blocks_;  // the requests of one snapshot
   std::vector<std::vector<std::uint16_t>> words_;
   std::vector<ReadBlock> latch_blocks_;  // the requests of one latch state read
   std::vector<std::vector<std::uint16_t>> latch_words_;
-  modbus_t* ctx_ = nullptr;
+  std::unique_ptr<ModbusContext> ctx_;  // never null
   std::uint64_t polls_ = 0;
   // Revolution count inferred from the angle wrapping, for maps without a revolution field.
   std::uint16_t inferred_revolution_ = 0;

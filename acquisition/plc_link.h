@@ -2,15 +2,16 @@
 // RTU: the service is the client, the PLC the server.
 #pragma once
 
+#include <memory>
 #include <string>
 
 #include "acquisition/modbus_gauge.h"
 #include "core/plc_registers.h"
 #include "core/result.h"
 
-typedef struct _modbus modbus_t;  // libmodbus stays private to acquisition/
-
 namespace gaugeloop {
+
+class ModbusContext;  // libmodbus stays private to acquisition/ (modbus_context.h)
 
 // Access to the handshake block, whatever carries it. Implemented by ModbusPlcLink; tests
 // script a fake. Errors leave the link disconnected when the connection is in doubt.
@@ -30,7 +31,7 @@ class PlcRegisters {
 struct PlcLinkSettings {
   // Transport, TCP host and port or serial line, unit id, response timeout; `map` unused.
   ModbusSettings link;
-  int base_address = 0;  // holding register of word 0 (the request); the block is 12 words
+  int base_address = 0;  // holding register of word 0 (the request); the block is 13 words
 };
 
 // Owns one libmodbus context. Not thread-safe: one thread polls the PLC.
@@ -47,18 +48,14 @@ class ModbusPlcLink final : public PlcRegisters {
 
   Status connect() override;
   void disconnect() override;
-  bool connected() const override { return ctx_ != nullptr; }
+  bool connected() const override;
   Result<PlcRequestWords> read_request() override;
   Status write_service_words(const PlcServiceWords& words) override;
   std::string address() const override;
 
  private:
-  // The error of the libmodbus call just made (`n` its return value); closes the link where
-  // its state is in doubt.
-  Error failed(int n, const std::string& what);
-
   PlcLinkSettings settings_;
-  modbus_t* ctx_ = nullptr;
+  std::unique_ptr<ModbusContext> ctx_;  // never null
 };
 
 }  // namespace gaugeloop

@@ -8,6 +8,7 @@
 
 #include "acquisition/gauge_client.h"
 #include "acquisition/gauge_link.h"
+#include "core/clock.h"
 #include "core/result.h"
 #include "core/run.h"
 
@@ -105,9 +106,11 @@ Status validate(const PollerSettings& settings);
 //   status and degrees, or its missing degrees) or the run times out (run_timeout_at).
 //
 // Thread: runs on the caller's thread; the GaugeClient must not be used elsewhere meanwhile.
+// `clock` times the run, the freezes and the backoffs and sleeps the pacing; it must outlive
+// the poller.
 class Poller {
  public:
-  Poller(GaugeClient& gauge, PollerSettings settings);
+  Poller(GaugeClient& gauge, PollerSettings settings, Clock& clock = real_clock());
 
   // Called on the poller's thread after each complete revolution with the count so far.
   void set_on_revolution(std::function<void(int completed)> callback) { on_revolution_ = std::move(callback); }
@@ -115,11 +118,9 @@ class Poller {
   Result<MeasuredRun> measure();
 
  private:
-  Result<MeasuredRun> measure_live();
-  Result<MeasuredRun> measure_latched();
-
   GaugeClient& gauge_;
   PollerSettings settings_;
+  Clock& clock_;
   std::function<void(int)> on_revolution_;
 };
 

@@ -42,14 +42,14 @@ std::string_view plc_event_name(PlcEvent event) {
   return "?";
 }
 
-PlcHandshake::PlcHandshake(PlcRegisters& plc, PlcCycleRunner& runner, PlcHandshakeSettings settings, Clock now)
-    : plc_(plc), runner_(runner), settings_(settings), now_(std::move(now)) {}
+PlcHandshake::PlcHandshake(PlcRegisters& plc, PlcCycleRunner& runner, PlcHandshakeSettings settings, Clock& clock)
+    : plc_(plc), runner_(runner), settings_(settings), clock_(clock) {}
 
 void PlcHandshake::link_failed(const Error& e, std::vector<PlcEvent>& events) {
   plc_.disconnect();
   last_link_error_ = e.message;
   backoff_ = settings_.reconnect_min;
-  next_connect_ = now_() + backoff_;
+  next_connect_ = clock_.now() + backoff_;
   events.push_back(PlcEvent::kLinkLost);
 }
 
@@ -66,7 +66,7 @@ std::vector<PlcEvent> PlcHandshake::step() {
   }
 
   if (!plc_.connected()) {
-    const auto t = now_();
+    const auto t = clock_.now();
     if (t < next_connect_) return events;
     if (Status s = plc_.connect(); !s) {
       backoff_ = backoff_.count() == 0 ? settings_.reconnect_min : std::min(backoff_ * 2, settings_.reconnect_max);

@@ -5,13 +5,13 @@
 
 #include <chrono>
 #include <cstdint>
-#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "acquisition/plc_link.h"
+#include "core/clock.h"
 #include "core/plc_registers.h"
 #include "core/result.h"
 
@@ -73,14 +73,12 @@ struct PlcHandshakeSettings {
   std::chrono::milliseconds reconnect_max{5000};  // backoff doubles up to this
 };
 
-// Not thread-safe: one thread calls step() once per poll interval. `plc` and `runner` must
-// outlive the handshake. `now` is the clock for the reconnect backoff.
+// Not thread-safe: one thread calls step() once per poll interval. `plc`, `runner` and `clock`
+// must outlive the handshake. `clock` times the reconnect backoff (step() never sleeps).
 class PlcHandshake {
  public:
-  using Clock = std::function<std::chrono::steady_clock::time_point()>;
-  PlcHandshake(
-      PlcRegisters& plc, PlcCycleRunner& runner, PlcHandshakeSettings settings = {},
-      Clock now = [] { return std::chrono::steady_clock::now(); });
+  PlcHandshake(PlcRegisters& plc, PlcCycleRunner& runner, PlcHandshakeSettings settings = {},
+               Clock& clock = real_clock());
 
   // One poll: collect a finished cycle, (re)connect if due, read the PLC's words, move the
   // state on, write the service's words. Never throws; link errors are events, and the link
@@ -106,7 +104,7 @@ class PlcHandshake {
   PlcRegisters& plc_;
   PlcCycleRunner& runner_;
   PlcHandshakeSettings settings_;
-  Clock now_;
+  Clock& clock_;
   PlcState state_ = PlcState::kIdle;
   bool armed_ = false;  // the request was seen low since the start or the last outcome
   bool cleared_early_ = false;
@@ -114,7 +112,7 @@ class PlcHandshake {
   PlcRequestWords request_;
   std::optional<PlcCycleOutcome> outcome_;
   PlcServiceWords words_;
-  std::chrono::steady_clock::time_point next_connect_{};
+  Clock::time_point next_connect_{};
   std::chrono::milliseconds backoff_{0};
   std::string last_link_error_;
 };

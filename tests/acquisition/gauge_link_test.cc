@@ -136,6 +136,46 @@ TEST_F(GaugeLinkTest, AClientThatClosedItselfIsReopened) {
                        {kDisconnected, kConnected}, {kConnected, kBackingOff}, {kBackingOff, kConnected}}));
 }
 
+// The backoff, timed on a manual clock: each sleep is recorded and returns at once.
+TEST(GaugeLinkBackoff, DoublesFromTheInitialDelayUpToTheMaximumAndResetsOnAGoodRequest) {
+  ScriptedGauge gauge;
+  ManualClock clock;
+  GaugeLink link(gauge, LinkPolicy{10, std::chrono::milliseconds(20), std::chrono::milliseconds(100)}, clock);
+  gauge.fail_connects = 4;
+  ASSERT_TRUE(link.ensure("").ok());
+  using std::chrono::milliseconds;
+  EXPECT_EQ(clock.sleeps(),
+            (std::vector<Clock::duration>{milliseconds(20), milliseconds(40), milliseconds(80), milliseconds(100)}));
+  EXPECT_EQ(clock.now(), Clock::time_point{} + milliseconds(240));
+
+  link.succeeded();
+  ASSERT_TRUE(link.failed(make_error(ErrorCode::kGaugeTimeout, "no reply"), "").ok());
+  ASSERT_TRUE(link.ensure("").ok());
+  EXPECT_EQ(clock.sleeps().back(), milliseconds(20)) << "a good request starts the backoff over";
+}
+
+// Once the link has been up, an outage ends the run only when both the attempts and the
+// patience are spent; the patience is counted on the clock from the outage's first failure.
+TEST(GaugeLinkBackoff, AnOutageIsGivenUpOnOnceThePatienceHasPassed) {
+  ScriptedGauge gauge;
+  ManualClock clock;
+  GaugeLink link(gauge, LinkPolicy{3, std::chrono::milliseconds(100), std::chrono::milliseconds(400)}, clock);
+  link.set_patience(std::chrono::milliseconds(1000));
+  ASSERT_TRUE(link.ensure("").ok());
+  const Clock::time_point outage_start = clock.now();
+  gauge.fail_connects = 100;
+  ASSERT_TRUE(link.failed(make_error(ErrorCode::kGaugeTimeout, "no reply"), "").ok());
+  Status s = link.ensure("during revolution 2 of 3");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(link.state(), LinkState::kFailed);
+  // The failed request, then reconnects after 100, 200, 400 and 400 ms, all refused: the
+  // third failure spent the attempts, the fifth, at 1100 ms, is the first past the patience.
+  EXPECT_EQ(clock.now() - outage_start, std::chrono::milliseconds(1100));
+  EXPECT_EQ(clock.sleeps().size(), 4u);
+  EXPECT_EQ(gauge.connects, 1 + 4);
+  EXPECT_NE(s.error().message.find("gave up after 5 attempts"), std::string::npos) << s.error().message;
+}
+
 TEST(LinkState, HasNames) {
   EXPECT_EQ(link_state_name(LinkState::kBackingOff), "backing off");
   EXPECT_EQ(link_state_name(LinkState::kFailed), "failed");

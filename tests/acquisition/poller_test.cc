@@ -32,7 +32,7 @@ constexpr double kInterpolationTolMm = 1e-9;
 void expect_true_lift(const MeasuredRun& run, const ScriptedGauge& g) {
   for (const auto& rev : run.revolutions) {
     for (int d = 0; d < 360; ++d) {
-      ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm)
+      ASSERT_NEAR(rev.lift_mm[d], g.lift_mm(static_cast<double>(rev.revolution) * 360.0 + d), kInterpolationTolMm)
           << "revolution " << rev.revolution << " degree " << d;
     }
   }
@@ -49,7 +49,8 @@ TEST(Poller, CollectsCompleteRevolutionsFromTheNextBoundary) {
     const auto& rev = run->revolutions[i];
     EXPECT_EQ(rev.revolution, static_cast<std::int64_t>(i) + 1) << "starts at the boundary after the first poll";
     for (int d = 0; d < 360; ++d) {
-      EXPECT_NEAR(rev.lift_mm[d], g.lift_mm(rev.revolution * 360.0 + d), kInterpolationTolMm) << "degree " << d;
+      EXPECT_NEAR(rev.lift_mm[d], g.lift_mm(static_cast<double>(rev.revolution) * 360.0 + d), kInterpolationTolMm)
+          << "degree " << d;
     }
   }
 }
@@ -335,6 +336,32 @@ TEST(LatchedPoller, TooManyBadRevolutionsFailsNamingTheLast) {
   ASSERT_FALSE(run.ok());
   EXPECT_EQ(run.error().code, ErrorCode::kIncompleteRun);
   EXPECT_NE(run.error().message.find("over-range"), std::string::npos) << run.error().message;
+}
+
+// On a manual clock that moves 1 ms at every reading, a run that cannot finish in its
+// timeout fails at the first check past it; no time passes but the clock's own ticks.
+TEST(RunTimeout, ARunLongerThanItsTimeoutFailsNamingIt) {
+  for (SamplingMode mode : {SamplingMode::kLive, SamplingMode::kLatched}) {
+    SCOPED_TRACE(sampling_mode_name(mode));
+    ScriptedGauge g;
+    g.step_deg = 0.05;     // live: 7200 polls a revolution, half a degree well within stale_after
+    g.marks_per_poll = 1;  // latched: one mark a poll
+    PollerSettings s = fast_settings(mode);
+    s.run_timeout = std::chrono::milliseconds(1000);
+    ManualClock clock;
+    clock.set_tick(std::chrono::milliseconds(1));
+    Poller p(g, s, clock);
+    Result<MeasuredRun> run = p.measure();
+    ASSERT_FALSE(run.ok());
+    EXPECT_EQ(run.error().code, ErrorCode::kIncompleteRun);
+    EXPECT_NE(run.error().message.find("run timed out after 1000 ms (as set) during revolution 1 of 3"),
+              std::string::npos)
+        << run.error().message;
+    const Clock::duration ended = clock.now() - Clock::time_point{};
+    EXPECT_GT(ended, std::chrono::milliseconds(1000));
+    EXPECT_LT(ended, std::chrono::milliseconds(1020));
+    for (Clock::duration slept : clock.sleeps()) EXPECT_EQ(slept, Clock::duration::zero());
+  }
 }
 
 // (revolutions + spares + 2) revolutions at the speed, at least 10 s; or as set.

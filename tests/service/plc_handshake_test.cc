@@ -105,7 +105,7 @@ std::string bits(const PlcServiceWords& w) {
 
 class PlcHandshakeTest : public ::testing::Test {
  protected:
-  PlcHandshakeTest() : hs_(plc_, cycle_, settings(), [this] { return now_; }) {}
+  PlcHandshakeTest() : hs_(plc_, cycle_, settings(), clock_) {}
 
   static PlcHandshakeSettings settings() {
     PlcHandshakeSettings s;
@@ -132,7 +132,7 @@ class PlcHandshakeTest : public ::testing::Test {
 
   ScriptedPlc plc_;
   ScriptedCycle cycle_;
-  std::chrono::steady_clock::time_point now_{};
+  ManualClock clock_;
   PlcHandshake hs_;
 };
 
@@ -286,7 +286,7 @@ TEST_F(PlcHandshakeTest, LinkLostMidCycleDeliversTheOutcomeAfterReconnecting) {
   EXPECT_FALSE(hs_.outcome_delivered());
   EXPECT_EQ(plc_.writes, writes_before);
 
-  now_ += milliseconds(100);
+  clock_.advance(milliseconds(100));
   e = hs_.step();
   EXPECT_TRUE(has(e, PlcEvent::kConnected));
   EXPECT_TRUE(has(e, PlcEvent::kOutcomeWritten));
@@ -308,7 +308,7 @@ TEST_F(PlcHandshakeTest, AFailedWriteIsALostLinkAndTheStateIsKept) {
   EXPECT_TRUE(has(e, PlcEvent::kLinkLost));
   EXPECT_EQ(hs_.state(), PlcState::kBusy);
   EXPECT_FALSE(hs_.connected());
-  now_ += milliseconds(100);
+  clock_.advance(milliseconds(100));
   EXPECT_TRUE(has(hs_.step(), PlcEvent::kConnected));
   EXPECT_TRUE(plc_.written.busy) << "written once the link is back";
 }
@@ -320,17 +320,17 @@ TEST_F(PlcHandshakeTest, ReconnectBacksOffDoublingUpToTheMaximum) {
   // Next attempts at +100, +200, +400, +800, then every 1000 ms.
   const int waits_ms[] = {100, 200, 400, 800, 1000, 1000};
   for (int wait : waits_ms) {
-    now_ += milliseconds(wait - 1);
+    clock_.advance(milliseconds(wait - 1));
     const int before = plc_.connects;
     EXPECT_TRUE(hs_.step().empty()) << "no attempt before " << wait << " ms";
     EXPECT_EQ(plc_.connects, before);
-    now_ += milliseconds(1);
+    clock_.advance(milliseconds(1));
     EXPECT_TRUE(has(hs_.step(), PlcEvent::kConnectFailed));
     EXPECT_EQ(plc_.connects, before + 1);
   }
   EXPECT_FALSE(hs_.last_link_error().empty());
   plc_.refuse_connect = false;
-  now_ += milliseconds(1000);
+  clock_.advance(milliseconds(1000));
   EXPECT_TRUE(has(hs_.step(), PlcEvent::kConnected));
 }
 
