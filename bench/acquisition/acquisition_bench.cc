@@ -23,7 +23,7 @@
 namespace gaugeloop {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using SteadyClock = std::chrono::steady_clock;
 
 std::unique_ptr<GaugeSimulator> start_sim(double speed_rpm, const std::string& rtu_device = {}) {
   SimulatorSettings ss;
@@ -61,11 +61,11 @@ void BM_SnapshotReadsVersusBareLibmodbus(benchmark::State& state) {
   double ours_s = 0.0;
   std::int64_t reads = 0;
   for (auto _ : state) {
-    const auto t0 = Clock::now();
+    const auto t0 = SteadyClock::now();
     for (int i = 0; i < 500; ++i) benchmark::DoNotOptimize(modbus_read_input_registers(bare, 0, 7, regs));
-    const auto t1 = Clock::now();
+    const auto t1 = SteadyClock::now();
     for (int i = 0; i < 500; ++i) benchmark::DoNotOptimize(gauge.read_snapshot());
-    const auto t2 = Clock::now();
+    const auto t2 = SteadyClock::now();
     bare_s += std::chrono::duration<double>(t1 - t0).count();
     ours_s += std::chrono::duration<double>(t2 - t1).count();
     reads += 500;
@@ -90,11 +90,11 @@ void BM_ReplyGapsBareLibmodbus(benchmark::State& state) {
   std::vector<double> gaps_us;
   double seconds = 0.0;
   for (auto _ : state) {
-    const auto t0 = Clock::now();
+    const auto t0 = SteadyClock::now();
     auto last = t0;
     while (last - t0 < std::chrono::seconds(4)) {
       benchmark::DoNotOptimize(modbus_read_input_registers(bare, 0, 7, regs));
-      const auto now = Clock::now();
+      const auto now = SteadyClock::now();
       gaps_us.push_back(std::chrono::duration<double, std::micro>(now - last).count());
       last = now;
     }
@@ -138,11 +138,11 @@ bool clean_run(SamplingMode mode, double rpm, double* cpu_fraction, int spares =
   ps.run_timeout = std::chrono::milliseconds(40000);
   Poller poller(gauge, ps);
   const double cpu0 = thread_cpu_s();
-  const auto t0 = Clock::now();
+  const auto t0 = SteadyClock::now();
   const auto measured = poller.measure();
   const bool ok = measured.ok();
   if (cpu_fraction != nullptr) {
-    *cpu_fraction = (thread_cpu_s() - cpu0) / std::chrono::duration<double>(Clock::now() - t0).count();
+    *cpu_fraction = (thread_cpu_s() - cpu0) / std::chrono::duration<double>(SteadyClock::now() - t0).count();
   }
   if (!ok) std::fprintf(stderr, "  %.0f rpm: %s\n", rpm, measured.error().message.c_str());  // why the ladder stops
   return ok;
