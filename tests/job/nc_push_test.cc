@@ -13,7 +13,7 @@
 #include "tests/support/failing_nc_files.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/table_program.h"
-#include "tests/support/temp_dir.h"
+#include "tests/support/store_test.h"
 
 namespace gaugeloop {
 namespace {
@@ -22,14 +22,12 @@ namespace fs = std::filesystem;
 using testing::FailingNcFiles;
 using Op = FailingNcFiles::Op;
 
-class PushSeamTest : public ::testing::Test {
+class PushSeamTest : public testing::StoreTest {
  protected:
   void SetUp() override {
-    dir_ = tmp_.path();
+    StoreTest::SetUp();
+    if (HasFatalFailure()) return;
     fs::create_directories(dir_ / "nc");
-    Result<RunStore> store = RunStore::open(dir_ / "gaugeloop.sqlite");
-    ASSERT_TRUE(store.ok()) << store.error().message;
-    store_.emplace(std::move(*store));
     Result<std::int64_t> id =
         store_->insert_run(testing::sample_run("intake", 1, "grinder-1", "2026-12-01T08:00:00Z", 5.0));
     ASSERT_TRUE(id.ok()) << id.error().message;
@@ -66,9 +64,6 @@ class PushSeamTest : public ::testing::Test {
     EXPECT_TRUE(open->empty()) << context << ": an intent is left open";
   }
 
-  testing::TempDir tmp_;
-  fs::path dir_;
-  std::optional<RunStore> store_;
   std::int64_t run_ = 0;
 };
 

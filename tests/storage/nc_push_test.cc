@@ -33,15 +33,8 @@ std::string sample_program(int version) {
   return p;
 }
 
-class NcPushTest : public ::testing::Test {
+class NcPushTest : public testing::StoreTest {
  protected:
-  void SetUp() override {
-    Result<RunStore> opened = RunStore::open(db_in(dir_));
-    ASSERT_TRUE(opened.ok()) << opened.error().message;
-    store_.emplace(std::move(opened).value());
-  }
-  RunStore& store() { return *store_; }
-
   std::int64_t add_run(const std::string& started, int lobe = 2, const std::string& machine = "grinder-1") {
     RunRecord r = make_record("intake_flat", started);
     r.lobe = lobe;
@@ -69,8 +62,6 @@ class NcPushTest : public ::testing::Test {
     return p;
   }
 
-  TempDir dir_;
-  std::optional<RunStore> store_;
 };
 
 TEST_F(NcPushTest, TableVersionsCountUpPerFile) {

@@ -17,15 +17,8 @@ using testing::make_record;
 using testing::RawDb;
 using testing::TempDir;
 
-class QueryTest : public ::testing::Test {
+class QueryTest : public testing::StoreTest {
  protected:
-  void SetUp() override {
-    Result<RunStore> opened = RunStore::open(db_in(dir_));
-    ASSERT_TRUE(opened.ok()) << opened.error().message;
-    store_.emplace(std::move(opened).value());
-  }
-  RunStore& store() { return *store_; }
-
   std::int64_t add(const std::string& part, int lobe, const std::string& machine, const std::string& started,
                    double max_um = 4.0) {
     RunRecord r = make_record(part, started);
@@ -46,8 +39,6 @@ class QueryTest : public ::testing::Test {
     return out;
   }
 
-  TempDir dir_;
-  std::optional<RunStore> store_;
 };
 
 using Ids = std::vector<std::int64_t>;

@@ -91,18 +91,8 @@ void expect_same_run(const StoredRun& got, const RunRecord& want) {
   EXPECT_EQ(got.discarded_revolutions, want.measured.discarded_revolutions);
 }
 
-class RunStoreTest : public ::testing::Test {
+class RunStoreTest : public testing::StoreTest {
  protected:
-  void SetUp() override {
-    Result<RunStore> opened = RunStore::open(db_in(dir_));
-    ASSERT_TRUE(opened.ok()) << opened.error().message;
-    store_.emplace(std::move(opened).value());
-  }
-
-  RunStore& store() { return *store_; }
-
-  TempDir dir_;
-  std::optional<RunStore> store_;
 };
 
 TEST_F(RunStoreTest, OpenCreatesParentDirectoriesAndFile) {

@@ -10,12 +10,11 @@
 #include <string_view>
 
 #include "storage/run_store.h"
+#include "tests/support/store_test.h"
 #include "tests/support/temp_dir.h"
 
 namespace gaugeloop::testing {
 
-// The database file storage tests use in their temporary directory (not yet made).
-inline std::filesystem::path db_in(const TempDir& dir) { return dir / "data" / "runs.sqlite"; }
 
 // Runs `check` as an unprivileged user, so permission checks mean something when the tests
 // run as root (as CI does): as root it forks, switches the child to nobody (65534) and runs
