@@ -25,7 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class ServiceTest : public ::testing::Test {
+class ServiceStateTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = tmp_.path();
@@ -72,7 +72,7 @@ class ServiceTest : public ::testing::Test {
   int gauges_made_ = 0;
 };
 
-TEST_F(ServiceTest, OneRunAtATimeAndTheReservationEndsWithItsHolder) {
+TEST_F(ServiceStateTest, OneRunAtATimeAndTheReservationEndsWithItsHolder) {
   Service service(config_, design_gauge());
   Result<RunReservation> first = service.reserve_run();
   ASSERT_TRUE(first.ok());
@@ -93,7 +93,7 @@ TEST_F(ServiceTest, OneRunAtATimeAndTheReservationEndsWithItsHolder) {
   EXPECT_TRUE(service.reserve_run().ok());
 }
 
-TEST_F(ServiceTest, NoRunStartsOnceTheServiceStops) {
+TEST_F(ServiceStateTest, NoRunStartsOnceTheServiceStops) {
   Service service(config_, design_gauge());
   service.set_stopping();
   Result<RunReservation> r = service.reserve_run();
@@ -103,7 +103,7 @@ TEST_F(ServiceTest, NoRunStartsOnceTheServiceStops) {
   service.stop();  // nothing running: returns at once
 }
 
-TEST_F(ServiceTest, ARunIsMeasuredStoredPushedAndCounted) {
+TEST_F(ServiceStateTest, ARunIsMeasuredStoredPushedAndCounted) {
   Service service(config_, design_gauge());
   Result<nlohmann::json> r = service.measure("intake_flat", 1, "from the test");
   ASSERT_TRUE(r.ok()) << r.error().message;
@@ -137,7 +137,7 @@ TEST_F(ServiceTest, ARunIsMeasuredStoredPushedAndCounted) {
   EXPECT_TRUE(service.reserve_run().ok()) << "the run's reservation ended with it";
 }
 
-TEST_F(ServiceTest, AnUnknownPartIsRefusedBeforeTheGaugeAndKeptAsAnEvent) {
+TEST_F(ServiceStateTest, AnUnknownPartIsRefusedBeforeTheGaugeAndKeptAsAnEvent) {
   Service service(config_, design_gauge());
   Result<nlohmann::json> r = service.measure("exhaust_roller", 1, "");
   ASSERT_FALSE(r.ok());
@@ -155,7 +155,7 @@ std::optional<PlcCycleOutcome> wait_for_outcome(ServiceCycleRunner& runner) {
   }
 }
 
-TEST_F(ServiceTest, APlcCycleRunsOnAWorkerAndEndsWithTheTablePushed) {
+TEST_F(ServiceStateTest, APlcCycleRunsOnAWorkerAndEndsWithTheTablePushed) {
   Service service(config_, design_gauge());
   ServiceCycleRunner runner(service);
   PlcRequestWords request;
@@ -171,7 +171,7 @@ TEST_F(ServiceTest, APlcCycleRunsOnAWorkerAndEndsWithTheTablePushed) {
   EXPECT_TRUE(service.reserve_run().ok());
 }
 
-TEST_F(ServiceTest, APlcRequestForAPartNotConfiguredIsAnsweredAtOnce) {
+TEST_F(ServiceStateTest, APlcRequestForAPartNotConfiguredIsAnsweredAtOnce) {
   Service service(config_, design_gauge());
   ServiceCycleRunner runner(service);
   PlcRequestWords request;
@@ -183,7 +183,7 @@ TEST_F(ServiceTest, APlcRequestForAPartNotConfiguredIsAnsweredAtOnce) {
   EXPECT_EQ(gauges_made_, 0);
 }
 
-TEST_F(ServiceTest, AnExceptionOnTheWorkerIsAFaultForThePlcAndTheServiceGoesOn) {
+TEST_F(ServiceStateTest, AnExceptionOnTheWorkerIsAFaultForThePlcAndTheServiceGoesOn) {
   int calls = 0;
   Service service(config_, [&calls, good = design_gauge()](const ServiceConfig& c) -> std::unique_ptr<GaugeClient> {
     if (++calls == 1) throw std::runtime_error("scripted failure");
