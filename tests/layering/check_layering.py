@@ -34,10 +34,12 @@ ALLOWED = {
 ORDER = ["core", *MIDDLE, "simulator", "report", "job", "config", "service", "cli"]
 
 # Includes that break the rules today and are being removed. Each entry is reported, but
-# does not fail the check; an entry that no longer matches an include fails it, so the list
-# only shrinks. Key: (file relative to the source dir, included path).
+# does not fail the check; an entry that no longer matches an include is reported too, to be
+# deleted (not failed: the fix may land on another branch first). Key: (file relative to the
+# source dir, included path).
 KNOWN_VIOLATIONS = {
-    # HttpSettings belongs below config (e.g. in config/ itself or core/); service/ owns it today.
+    # HttpSettings belongs below config (e.g. in config/ itself or core/); service/ owns it
+    # here. Already moved on main: delete this entry once this branch is merged.
     ("config/service_config.h", "service/http_api.h"),
 }
 
@@ -91,7 +93,7 @@ def check(source_dir, known=KNOWN_VIOLATIONS):
                         else:
                             errors.append(where)
     for rel, included in sorted(set(known) - seen):
-        errors.append(f'{rel}: no longer includes "{included}": remove it from KNOWN_VIOLATIONS')
+        notes.append(f'{rel}: no longer includes "{included}": delete the entry from KNOWN_VIOLATIONS')
     return errors, notes, files
 
 
@@ -149,9 +151,9 @@ def self_test():
             failures.append(f"a known violation should be a note, not an error: {errors} {notes}")
     with tempfile.TemporaryDirectory() as root:
         make_tree(root, [])
-        errors, _, _ = check(root, known={("config/c.h", "service/http_api.h")})
-        if len(errors) != 1 or "remove it from KNOWN_VIOLATIONS" not in errors[0]:
-            failures.append(f"a stale known violation should fail: {errors}")
+        errors, notes, _ = check(root, known={("config/c.h", "service/http_api.h")})
+        if errors or len(notes) != 1 or "delete the entry from KNOWN_VIOLATIONS" not in notes[0]:
+            failures.append(f"a stale known violation should be a note: {errors} {notes}")
 
     for failure in failures:
         print(f"self-test: {failure}")
@@ -171,7 +173,7 @@ def main(argv):
         print(f"note: {note}")
     for error in errors:
         print(f"error: {error}")
-    print(f"layering: {files} files checked, {len(errors)} errors, {len(notes)} known violations")
+    print(f"layering: {files} files checked, {len(errors)} errors, {len(notes)} notes")
     return 1 if errors else 0
 
 
