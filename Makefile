@@ -1,40 +1,67 @@
 # Thin front end over CMake. `make demo` and `make test` are the README's quick start.
+# Build directories, what each builds and what it costs: docs/building.md.
 BUILD_DIR ?= build
 ASAN_DIR ?= build-asan
+TSAN_DIR ?= build-tsan
 JOBS ?= $(shell nproc)
 CMAKE_GEN := -G Ninja
 
-.PHONY: all deps build build-asan demo test test-normal test-asan bench clean
+# The tests that time live polling against a real clock (SERIAL: about 280 s run alone). They
+# run in the normal build only: under a sanitizer's slowdown they test the machine, not the code.
+REALTIME_TESTS := ^(LiveLink\.|PymodbusPeer\.|SimulatorFaults/LiveOutageTest\.)
+# The tests of the service's threads (HTTP server, PLC trigger and handshake, the run), the
+# ones ThreadSanitizer runs: service_unit_test and service_integration_test.
+TSAN_TESTS := ^(PlcHandshakeTest|PlcServiceWords|PlcServiceTest|HttpApiTest|ServiceTest|ServiceConfigFile)\.
+TSAN_TARGETS := service_unit_test service_integration_test gaugeloop
+
+.PHONY: all deps configure build build-asan build-tsan demo test test-normal test-asan test-tsan bench clean
 
 all: build
 
 deps:
 	@scripts/install-deps.sh
 
-build: deps
-	cmake -S . -B $(BUILD_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGAUGELOOP_WERROR=ON
+# Release: what users run, and asserts off, as they are for users; -Werror for CI and developers.
+configure: deps
+	cmake -S . -B $(BUILD_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Release -DGAUGELOOP_WERROR=ON
+
+# Everything: the binary, every test and every benchmark.
+build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
 build-asan: deps
 	cmake -S . -B $(ASAN_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DGAUGELOOP_SANITIZE=ON -DGAUGELOOP_BENCH=OFF -DGAUGELOOP_WERROR=ON
 	cmake --build $(ASAN_DIR) -j $(JOBS)
 
-demo: build
+# Only what the ThreadSanitizer run needs.
+build-tsan: deps
+	cmake -S . -B $(TSAN_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DGAUGELOOP_TSAN=ON -DGAUGELOOP_BENCH=OFF -DGAUGELOOP_WERROR=ON
+	cmake --build $(TSAN_DIR) -j $(JOBS) --target $(TSAN_TARGETS)
+
+demo: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target gaugeloop
 	$(BUILD_DIR)/bin/gaugeloop demo --iterations 3
 
-test-normal: build
+# Every test, without building the benchmarks.
+test-normal: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target gaugeloop_tests
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
 test-asan: build-asan
 	cd $(ASAN_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
-	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS)
+	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS) -E '$(REALTIME_TESTS)'
 
-# Every test, in a normal build and under AddressSanitizer + UndefinedBehaviorSanitizer.
-test: test-normal test-asan
+test-tsan: build-tsan
+	cd $(TSAN_DIR) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
+	  ctest --output-on-failure -j $(JOBS) --no-tests=error -R '$(TSAN_TESTS)'
+
+# Every test in a normal build and under AddressSanitizer + UndefinedBehaviorSanitizer (less the
+# real-time ones); the service's threads under ThreadSanitizer.
+test: test-normal test-asan test-tsan
 
 # Every benchmark, one after the other (figures: docs/PERFORMANCE.md). Run on a quiet machine.
 bench: build
 	@for b in $(BUILD_DIR)/bin/*_bench; do echo "== $$b"; $$b || exit 1; done
 
 clean:
-	rm -rf $(BUILD_DIR) $(ASAN_DIR)
+	rm -rf $(BUILD_DIR) $(ASAN_DIR) $(TSAN_DIR)

@@ -22,6 +22,7 @@ packages=(
   sqlite3            # the CLI users query the database with; tests use it too
   mbpoll             # independent Modbus client: tests read the simulator with it
   socat              # pseudo-terminal pairs for Modbus RTU tests
+  python3            # runs tests/layering's include check (and the pymodbus peer)
   python3-pymodbus   # an independent Modbus server: tests read a gauge served by it
   python3-serial python3-serial-asyncio  # pymodbus imports both even for TCP; only Recommended, so named here
   locales            # a decimal-comma locale, to test that output ignores the C locale
