@@ -9,10 +9,10 @@ CMAKE_GEN := -G Ninja
 # The tests that time live polling against a real clock (SERIAL: about 280 s run alone). They
 # run in the normal build only: under a sanitizer's slowdown they test the machine, not the code.
 REALTIME_TESTS := ^(LiveLink\.|PymodbusPeer\.|SimulatorFaults/LiveOutageTest\.)
-# The tests of the service's threads (HTTP server, PLC trigger and handshake, the run), the
-# ones ThreadSanitizer runs: service_unit_test and service_integration_test.
-TSAN_TESTS := ^(PlcHandshakeTest|PlcServiceWords|PlcServiceTest|HttpApiTest|ServiceTest|ServiceConfigFile)\.
-TSAN_TARGETS := service_unit_test service_integration_test gaugeloop
+# The tests of the service's threads (HTTP server, PLC trigger and handshake, the run) and of
+# the guard every thread starts through, the ones ThreadSanitizer runs.
+TSAN_TESTS := ^(GuardedThread|PlcHandshakeTest|PlcServiceWords|PlcServiceTest|HttpApiTest|ServiceTest|ServiceStateTest|ServiceConfigFile)\.
+TSAN_TARGETS := core_test service_unit_test service_integration_test gaugeloop
 
 .PHONY: all deps configure build build-asan build-tsan demo test test-normal test-asan test-tsan bench clean
 
