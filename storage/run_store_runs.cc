@@ -81,6 +81,8 @@ LEFT JOIN settings AS s ON s.hash = r.settings_hash
 LEFT JOIN parts AS p ON p.name = r.part
 WHERE r.id = :run_id)sql";
 
+// The follower as the schema stores it (its CHECK names these three). Apart from
+// follower_kind_name on purpose: the words shown to people may change, the stored ones not.
 std::string_view follower_db_name(FollowerKind kind) {
   switch (kind) {
     case FollowerKind::kFlat:
