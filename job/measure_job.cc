@@ -16,17 +16,17 @@
 #include <nlohmann/json.hpp>
 #include <system_error>
 
-#include "job/nc_push.h"
-#include "report/run_json.h"
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
 #include "compensation/table_evidence.h"
 #include "compensation/wheel_path.h"
 #include "core/atomic_file.h"
+#include "core/number_text.h"
+#include "job/nc_push.h"
 #include "nc_out/table_guards.h"
 #include "nc_out/table_program.h"
+#include "report/run_json.h"
 #include "storage/run_store.h"
-#include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
@@ -164,8 +164,8 @@ Result<Prepared> prepare(const JobSettings& s) {
   if (s.table_kind == TableKind::kLinear || s.table_kind == TableKind::kSpline) {
     const double steps = 360.0 / s.table_step_deg;
     if (!(s.table_step_deg > 0.0) || std::abs(steps - std::round(steps)) > 1e-9 || steps < 36) {
-      return make_error(ErrorCode::kInvalidInput,
-                        "table step " + format_fixed(s.table_step_deg, 4) + " deg must divide 360 into at least 36 steps");
+      return make_error(ErrorCode::kInvalidInput, "table step " + format_fixed(s.table_step_deg, 4) +
+                                                      " deg must divide 360 into at least 36 steps");
     }
   }
   if (Status l = check_axis_limits(s.axis_limits); !l) return l.error();

@@ -61,7 +61,8 @@ std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpola
       out += "BNAT ENAT CSPLINE ";
     }
     // A tiny negative infeed prints as 0.0000, not as a signed zero (format_fixed).
-    out += "C" + format_fixed(points[i].c_deg, format.c_decimals) + " X" + format_fixed(points[i].x_mm, format.x_decimals);
+    out +=
+        "C" + format_fixed(points[i].c_deg, format.c_decimals) + " X" + format_fixed(points[i].x_mm, format.x_decimals);
   }
   return out;
 }

@@ -39,8 +39,8 @@ Status check_row(const char* what, const Row& r, const AxisLimits& l, bool check
   if (std::abs(v) > l.x_velocity_max_mm_per_s) {
     // Velocity grows with the speed: this speed would just fit.
     const double fits_rpm = std::abs(l.speed_rpm) * l.x_velocity_max_mm_per_s / std::abs(v);
-    return make_error(ErrorCode::kRefused, std::string(what) + " X velocity " + format_fixed(std::abs(v), 2) + " mm/s " +
-                                               at_c(r.c_deg) + " exceeds the limit " +
+    return make_error(ErrorCode::kRefused, std::string(what) + " X velocity " + format_fixed(std::abs(v), 2) +
+                                               " mm/s " + at_c(r.c_deg) + " exceeds the limit " +
                                                format_fixed(l.x_velocity_max_mm_per_s, 2) + " mm/s at " +
                                                format_fixed(std::abs(l.speed_rpm), 2) + " rpm; grind at most " +
                                                format_fixed(fits_rpm, 2) + " rpm; nothing was written");
@@ -49,8 +49,8 @@ Status check_row(const char* what, const Row& r, const AxisLimits& l, bool check
   if (check_acceleration && std::abs(a) > l.x_acceleration_max_mm_per_s2) {
     // Acceleration grows with the square of the speed.
     const double fits_rpm = std::abs(l.speed_rpm) * std::sqrt(l.x_acceleration_max_mm_per_s2 / std::abs(a));
-    return make_error(ErrorCode::kRefused, std::string(what) + " X acceleration " + format_fixed(std::abs(a), 1) + " mm/s^2 " +
-                                               at_c(r.c_deg) + " exceeds the limit " +
+    return make_error(ErrorCode::kRefused, std::string(what) + " X acceleration " + format_fixed(std::abs(a), 1) +
+                                               " mm/s^2 " + at_c(r.c_deg) + " exceeds the limit " +
                                                format_fixed(l.x_acceleration_max_mm_per_s2, 1) + " mm/s^2 at " +
                                                format_fixed(std::abs(l.speed_rpm), 2) + " rpm; grind at most " +
                                                format_fixed(fits_rpm, 2) + " rpm; nothing was written");

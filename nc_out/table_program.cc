@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <optional>
 
-#include "nc_out/nc_template.h"
 #include "core/number_text.h"
+#include "nc_out/nc_template.h"
 
 namespace gaugeloop {
 namespace {
@@ -188,8 +188,7 @@ struct SplineEnds {
 
 // One block between CTABDEF and CTABEND: its point (if it has one) appended to `t`, line
 // `line` (1-based) kept with it. Returns why it cannot be read; empty when it was.
-std::string read_table_block(const std::vector<std::string_view>& words, int line, ParsedTable& t,
-                             SplineEnds& ends) {
+std::string read_table_block(const std::vector<std::string_view>& words, int line, ParsedTable& t, SplineEnds& ends) {
   std::optional<double> c;
   std::optional<double> x;
   std::optional<Interpolation> mode;

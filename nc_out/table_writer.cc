@@ -115,7 +115,8 @@ Result<CurveTable> write_uniform(const SampledPath& path, double c_step_deg, con
   std::vector<std::size_t> rows;
   for (std::size_t k = 0; k <= path.size(); k += r) rows.push_back(k);
   if (rows.size() < 4) {
-    return make_error(ErrorCode::kInvalidInput, "table step " + format_fixed(c_step_deg, 4) + " deg gives fewer than 4 points");
+    return make_error(ErrorCode::kInvalidInput,
+                      "table step " + format_fixed(c_step_deg, 4) + " deg gives fewer than 4 points");
   }
   const std::string kind = interpolation == Interpolation::kLinear ? "linear " : "spline ";
   return table_at_rows(path, rows, interpolation, format, kind + format_fixed(c_step_deg, 3) + " deg");
@@ -131,7 +132,9 @@ Status check_adaptive(const AdaptiveSettings& s) {
   return {};
 }
 
-std::string refusal_where(const CommandError& e) { return format_fixed(e.max_abs_um, 3) + " um at C" + format_fixed(e.at_c_deg, 3); }
+std::string refusal_where(const CommandError& e) {
+  return format_fixed(e.max_abs_um, 3) + " um at C" + format_fixed(e.at_c_deg, 3);
+}
 
 // Fine rows in the widest table segment settings allow (at least 1).
 std::size_t widest_rows(const SampledPath& path, const AdaptiveSettings& settings) {
@@ -172,7 +175,8 @@ Result<TableInterpolant> TableInterpolant::of(const std::vector<CurvePoint>& poi
   for (std::size_t i = 0; i < m; ++i) {
     if (!std::isfinite(points[i].c_deg) || !std::isfinite(points[i].x_mm) ||
         (i > 0 && !(points[i].c_deg > points[i - 1].c_deg))) {
-      return make_error(ErrorCode::kInvalidInput, "table point " + std::to_string(i) + " (C" + format_fixed(points[i].c_deg, 3) +
+      return make_error(ErrorCode::kInvalidInput, "table point " + std::to_string(i) + " (C" +
+                                                      format_fixed(points[i].c_deg, 3) +
                                                       ") is not finite or C does not increase");
     }
     t.c_deg_.push_back(points[i].c_deg);
@@ -276,9 +280,10 @@ Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const Ad
   while (a < n) {
     const std::size_t reach = std::min(max_rows, n - a);
     if (!keeps_bound(a, a + 1)) {
-      return make_error(ErrorCode::kRefused, "adaptive G1 table: even one fine step at C" + format_fixed(path.c_deg(a), 3) +
-                                                 " breaks the " + format_fixed(settings.bound_um, 3) +
-                                                 " um bound (rounding to " + std::to_string(format.x_decimals) +
+      return make_error(ErrorCode::kRefused, "adaptive G1 table: even one fine step at C" +
+                                                 format_fixed(path.c_deg(a), 3) + " breaks the " +
+                                                 format_fixed(settings.bound_um, 3) + " um bound (rounding to " +
+                                                 std::to_string(format.x_decimals) +
                                                  " decimals?); write X with more decimals or raise the bound");
     }
     // Furthest row that keeps the bound: grow the chord by doubling, then bisect between the
@@ -386,9 +391,9 @@ Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const Ad
           if (std::all_of(fe.begin(), fe.end(), [&](double v) { return std::abs(v) <= bound_mm; })) {
             rows = std::move(pruned);
           }
-          Result<CurveTable> t = table_at_rows(
-              path, rows, Interpolation::kCubicSpline, format,
-              "adaptive spline from " + format_fixed(start_deg, 3) + " deg, bound " + format_fixed(settings.bound_um, 3) + " um");
+          Result<CurveTable> t = table_at_rows(path, rows, Interpolation::kCubicSpline, format,
+                                               "adaptive spline from " + format_fixed(start_deg, 3) + " deg, bound " +
+                                                   format_fixed(settings.bound_um, 3) + " um");
           if (!t) return t.error();
           if (!best || t->block_count() < best->block_count()) best = std::move(*t);
         } else {

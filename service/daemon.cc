@@ -95,8 +95,8 @@ void reload(Service& service, const std::filesystem::path& config_path, const St
   }
   const std::optional<HttpSettings>& was = started.http;
   if (fresh->http.has_value() != was.has_value() ||
-      (fresh->http && (fresh->http->host != was->host || fresh->http->port != was->port ||
-                       fresh->http->token != was->token))) {
+      (fresh->http &&
+       (fresh->http->host != was->host || fresh->http->port != was->port || fresh->http->token != was->token))) {
     spdlog::warn("reload: [http] changes take effect when the service restarts");
   }
   if (fresh->job.db_path != started.db_path) {

@@ -130,7 +130,8 @@ void PlcTrigger::start() {
       [this, fault] {
         // A poll that threw is recorded; the trigger polls on after an interval, unless it
         // is stopping (a poll that keeps throwing must not hold the service's exit).
-        while (!run_guarded("PLC trigger", [this] { loop(); }, fault)) {
+        while (!run_guarded(
+            "PLC trigger", [this] { loop(); }, fault)) {
           if (!wait_poll_interval()) return;
         }
       },
@@ -180,8 +181,8 @@ void PlcTrigger::loop() {
     if (stop_ && handshake_.state() != PlcState::kBusy) {
       if (handshake_.outcome_delivered()) break;
       if (!handshake_.connected()) {
-        spdlog::error("PLC at {}: stopping with the outcome of the last request undelivered (link down): {}",
-                      address(), handshake_.last_link_error());
+        spdlog::error("PLC at {}: stopping with the outcome of the last request undelivered (link down): {}", address(),
+                      handshake_.last_link_error());
         break;
       }
     }

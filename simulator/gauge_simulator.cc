@@ -21,8 +21,8 @@
 #include <vector>
 
 #include "compensation/flat_probe.h"
-#include "simulator/seeded_random.h"
 #include "core/guarded_thread.h"
+#include "simulator/seeded_random.h"
 
 namespace gaugeloop {
 namespace {

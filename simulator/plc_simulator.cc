@@ -1,7 +1,7 @@
 // The virtual PLC's libmodbus server loop and its handshake API.
 #include "simulator/plc_simulator.h"
-#include "simulator/tcp_listener.h"
 #include "core/guarded_thread.h"
+#include "simulator/tcp_listener.h"
 
 #include <arpa/inet.h>
 #include <modbus/modbus.h>

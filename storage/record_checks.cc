@@ -14,8 +14,8 @@ namespace {
 Status check_table(const DegreeTable& table, std::string_view column, std::string_view frame) {
   for (std::size_t deg = 0; deg < table.size(); ++deg) {
     if (!std::isfinite(table[deg])) {
-      return run_refused(std::string(column) + " at " + std::string(frame) + " degree " + std::to_string(deg) +
-                         " is " + describe_non_finite(table[deg]) +
+      return run_refused(std::string(column) + " at " + std::string(frame) + " degree " + std::to_string(deg) + " is " +
+                         describe_non_finite(table[deg]) +
                          "; the computation that produced it failed, nothing was written");
     }
   }
@@ -33,8 +33,7 @@ Status check_identity(const RunRecord& run) {
     return run_refused("started_utc '" + run.started_utc + "' is not an ISO 8601 UTC time like 2026-11-22T02:34:44Z");
   }
   if (!is_utc_timestamp(run.finished_utc)) {
-    return run_refused("finished_utc '" + run.finished_utc +
-                       "' is not an ISO 8601 UTC time like 2026-11-22T02:34:44Z");
+    return run_refused("finished_utc '" + run.finished_utc + "' is not an ISO 8601 UTC time like 2026-11-22T02:34:44Z");
   }
   if (run.finished_utc < run.started_utc) {
     return run_refused("finished_utc " + run.finished_utc + " is before started_utc " + run.started_utc);

@@ -88,10 +88,10 @@ struct RunSummary {
 // Empty optionals and interpolation: unknown (recorded before schema version 2 or 3, by
 // record_nc_file, or not said).
 struct TableFacts {
-  std::string interpolation;               // "linear", "cspline"
-  std::optional<int> block_count;          // table blocks in the program; >= 0
-  std::optional<double> command_error_um;  // the table's command position error; finite, >= 0
-  std::optional<int> point_count;          // points of the table (blocks + 1 for a spline's start)
+  std::string interpolation;                // "linear", "cspline"
+  std::optional<int> block_count;           // table blocks in the program; >= 0
+  std::optional<double> command_error_um;   // the table's command position error; finite, >= 0
+  std::optional<int> point_count;           // points of the table (blocks + 1 for a spline's start)
   std::optional<double> correction_max_um;  // the largest |correction| the table carries
 
   bool operator==(const TableFacts&) const = default;

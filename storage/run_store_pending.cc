@@ -113,8 +113,8 @@ Status check_pending(const PendingTable& table) {
 // marked superseded at `created`; returns its id.
 Result<std::optional<std::int64_t>> supersede_pending(Connection& conn, const std::string& nc_file,
                                                       const std::string& created, const std::string& operation) {
-  Result<Statement> q = Statement::prepare(
-      conn, "SELECT id FROM nc_pending WHERE nc_file = :nc_file AND status = 'pending'", operation);
+  Result<Statement> q =
+      Statement::prepare(conn, "SELECT id FROM nc_pending WHERE nc_file = :nc_file AND status = 'pending'", operation);
   if (!q.ok()) return q.error();
   q->bind(":nc_file", nc_file);
   Result<std::optional<std::int64_t>> older = q->first([](const Statement& s) { return s.column<std::int64_t>(0); });
@@ -277,8 +277,7 @@ Status RunStore::record_approved_push(std::int64_t pending_id, const NcPush& pus
   Connection& conn = *conn_;
   Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
   if (!tx.ok()) return tx.error();
-  Result<std::int64_t> push_id =
-      storage_internal::approve_in_transaction(conn, pending_id, push, by, note, operation);
+  Result<std::int64_t> push_id = storage_internal::approve_in_transaction(conn, pending_id, push, by, note, operation);
   if (!push_id.ok()) return push_id.error();
   return tx->commit();
 }

@@ -149,8 +149,8 @@ Result<std::vector<NcPush>> RunStore::list_pushes(const PushQuery& q) const {
   if (q.lobe > 0) where.add_literal("r.lobe = " + std::to_string(q.lobe));
   Result<Statement> st = Statement::prepare(*conn_,
                                             "SELECT " + std::string(storage_internal::kPushColumns) +
-                                                " FROM nc_pushes AS p JOIN runs AS r ON r.id = p.run_id" +
-                                                where.sql() + " ORDER BY p.id DESC LIMIT :limit",
+                                                " FROM nc_pushes AS p JOIN runs AS r ON r.id = p.run_id" + where.sql() +
+                                                " ORDER BY p.id DESC LIMIT :limit",
                                             "list NC pushes");
   if (!st.ok()) return st.error();
   st->bind(":limit", q.limit);
@@ -194,7 +194,8 @@ Result<NcPush> RunStore::load_push(const std::string& nc_file, int table_version
   if (!q.ok()) return q.error();
   q->bind(":nc_file", nc_file);
   q->bind(":table_version", table_version);
-  Result<std::optional<NcPush>> push = q->first([](const Statement& s) { return storage_internal::read_push(s, true); });
+  Result<std::optional<NcPush>> push =
+      q->first([](const Statement& s) { return storage_internal::read_push(s, true); });
   if (!push.ok()) return push.error();
   if (*push) return std::move(**push);
 
@@ -261,12 +262,11 @@ Result<std::optional<PushIntent>> read_open_intent(Connection& conn, std::int64_
 
 Status resolve_intent(Connection& conn, std::int64_t id, std::string_view state, const std::string& resolution,
                       std::optional<std::int64_t> push_id, const std::string& operation) {
-  Result<Statement> upd =
-      Statement::prepare(conn,
-                         "UPDATE nc_push_intents SET state = :state, resolved_utc = :resolved_utc,"
-                         " resolution = :resolution, push_id = :push_id, program_text = ''"
-                         " WHERE id = :id AND state = 'open'",
-                         operation);
+  Result<Statement> upd = Statement::prepare(conn,
+                                             "UPDATE nc_push_intents SET state = :state, resolved_utc = :resolved_utc,"
+                                             " resolution = :resolution, push_id = :push_id, program_text = ''"
+                                             " WHERE id = :id AND state = 'open'",
+                                             operation);
   if (!upd.ok()) return upd.error();
   upd->bind(":id", id);
   upd->bind(":state", state);
@@ -291,12 +291,11 @@ Status require_no_open_intent(Connection& conn, const std::string& nc_file, cons
   Result<bool> row = open->step();
   if (!row.ok()) return row.error();
   if (!*row) return {};
-  return make_error(ErrorCode::kRefused, "cannot " + operation + ": push intent " +
-                                             std::to_string(open->column<std::int64_t>(0)) + " (run " +
-                                             std::to_string(open->column<std::int64_t>(2)) + ", " +
-                                             open->column<std::string>(1) +
-                                             ") is still open for this file: another push is under way, or one "
-                                             "was interrupted and must be reconciled first");
+  return make_error(ErrorCode::kRefused,
+                    "cannot " + operation + ": push intent " + std::to_string(open->column<std::int64_t>(0)) +
+                        " (run " + std::to_string(open->column<std::int64_t>(2)) + ", " + open->column<std::string>(1) +
+                        ") is still open for this file: another push is under way, or one "
+                        "was interrupted and must be reconciled first");
 }
 
 Result<std::int64_t> insert_intent(Connection& conn, const PushIntent& intent, const std::string& operation) {

@@ -114,8 +114,8 @@ std::string exact_number(double v) {
 // A run's per-degree tables and lists as they are stored, made before the transaction
 // begins: a value out of range is refused with nothing written.
 struct EncodedRun {
-  std::string lift;       // every revolution's lift_mm, one BLOB
-  std::string amplifier;  // JSON array of the amplifier's revolution counts
+  std::string lift;                   // every revolution's lift_mm, one BLOB
+  std::string amplifier;              // JSON array of the amplifier's revolution counts
   std::array<std::string, 5> tables;  // design, mean, spread, error, correction BLOBs
   std::string harmonics;              // JSON array
   std::string settings_hash;          // empty: no settings recorded
@@ -159,8 +159,8 @@ Result<EncodedRun> encode(const RunRecord& run) {
 
 Status insert_settings(Connection& conn, const RunRecord& run, const EncodedRun& e, const std::string& operation) {
   if (e.settings_hash.empty()) return {};
-  Result<Statement> st = Statement::prepare(conn, "INSERT OR IGNORE INTO settings (hash, text) VALUES (?1, ?2)",
-                                            operation);
+  Result<Statement> st =
+      Statement::prepare(conn, "INSERT OR IGNORE INTO settings (hash, text) VALUES (?1, ?2)", operation);
   if (!st.ok()) return st.error();
   st->bind_all(std::string_view(e.settings_hash), std::string_view(run.settings));
   return st->run();
@@ -233,8 +233,7 @@ Status insert_degree_rows(Connection& conn, std::int64_t run_id, const EncodedRu
   if (Status s = raw->run(); !s.ok()) return s;
   Result<Statement> tab = Statement::prepare(conn, kInsertTables, operation);
   if (!tab.ok()) return tab.error();
-  tab->bind_all(run_id, Blob{e.tables[0]}, Blob{e.tables[1]}, Blob{e.tables[2]}, Blob{e.tables[3]},
-                Blob{e.tables[4]});
+  tab->bind_all(run_id, Blob{e.tables[0]}, Blob{e.tables[1]}, Blob{e.tables[2]}, Blob{e.tables[3]}, Blob{e.tables[4]});
   return tab->run();
 }
 

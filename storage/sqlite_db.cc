@@ -102,8 +102,7 @@ Status configure_writer(Connection& conn) {
   if (!s.ok()) return s;
   Result<Statement> wal = Statement::prepare(conn, "PRAGMA journal_mode = WAL", "switch to WAL journal mode");
   if (!wal.ok()) return wal.error();
-  Result<std::optional<std::string>> mode =
-      wal->first([](const Statement& st) { return st.column<std::string>(0); });
+  Result<std::optional<std::string>> mode = wal->first([](const Statement& st) { return st.column<std::string>(0); });
   if (!mode.ok()) return mode.error();
   const std::string journal = mode->value_or(std::string());
   if (conn.path != ":memory:" && journal != "wal") {

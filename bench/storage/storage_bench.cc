@@ -154,7 +154,8 @@ void build_history(const fs::path& path) {
   (void)storage_internal::append_degree_blob(r.analysis.error_um, storage_internal::kCountsPerUm, "e", error);
   (void)storage_internal::append_degree_blob(r.correction_um, storage_internal::kCountsPerUm, "c", correction);
   std::string harmonics = "[";
-  for (std::size_t h = 0; h < 31; ++h) harmonics += (h ? "," : "") + std::to_string(15.0 / (1.0 + static_cast<double>(h)));
+  for (std::size_t h = 0; h < 31; ++h)
+    harmonics += (h ? "," : "") + std::to_string(15.0 / (1.0 + static_cast<double>(h)));
   harmonics += "]";
   const std::string hash = settings_hash(r.settings);
   exec(db, "INSERT INTO settings VALUES ('" + hash + "', 'bench')");

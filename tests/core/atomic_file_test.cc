@@ -25,9 +25,7 @@ std::string slurp(const fs::path& p) {
 
 class AtomicFileTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = tmp_.path();
-  }
+  void SetUp() override { dir_ = tmp_.path(); }
   testing::TempDir tmp_;  // before everything that lives in it
   fs::path dir_;
 };

@@ -12,7 +12,8 @@ namespace {
 TEST(GuardedThread, ABodyThatReturnsIsNotAFault) {
   bool ran = false;
   bool told = false;
-  EXPECT_TRUE(run_guarded("worker", [&] { ran = true; }, [&](std::string_view, std::string_view) { told = true; }));
+  EXPECT_TRUE(run_guarded(
+      "worker", [&] { ran = true; }, [&](std::string_view, std::string_view) { told = true; }));
   EXPECT_TRUE(ran);
   EXPECT_FALSE(told);
 }
@@ -33,7 +34,8 @@ TEST(GuardedThread, AnExceptionIsToldWithTheThreadsName) {
 
 TEST(GuardedThread, SomethingThatIsNotAStdExceptionIsToldToo) {
   std::string what;
-  EXPECT_FALSE(run_guarded("worker", [] { throw 42; }, [&](std::string_view, std::string_view w) { what = w; }));
+  EXPECT_FALSE(run_guarded(
+      "worker", [] { throw 42; }, [&](std::string_view, std::string_view w) { what = w; }));
   EXPECT_EQ(what, "unknown exception");
 }
 

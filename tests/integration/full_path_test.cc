@@ -15,10 +15,10 @@
 
 #include "acquisition/modbus_gauge.h"
 #include "cli/embedded_defaults.h"
-#include "job/measure_job.h"
-#include "config/part_file.h"
 #include "compensation/flat_probe.h"
 #include "compensation/wheel_path.h"
+#include "config/part_file.h"
+#include "job/measure_job.h"
 #include "simulator/gauge_simulator.h"
 #include "storage/run_store.h"
 #include "tests/nc_out/nc_reference.h"

@@ -53,12 +53,8 @@ struct HookLog {
 
 class HttpApiTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = tmp_.path();
-  }
-  void TearDown() override {
-    api_.reset();
-  }
+  void SetUp() override { dir_ = tmp_.path(); }
+  void TearDown() override { api_.reset(); }
 
   fs::path db() const { return dir_ / "gaugeloop.sqlite"; }
 

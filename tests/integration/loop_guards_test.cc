@@ -14,17 +14,17 @@
 
 #include "acquisition/modbus_gauge.h"
 #include "config/gauge_config.h"
-#include "job/measure_job.h"
 #include "config/part_file.h"
 #include "core/lift_table.h"
 #include "core/text_file.h"
+#include "job/measure_job.h"
 #include "simulator/gauge_simulator.h"
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
 #include "tests/support/damaged_database.h"
 #include "tests/support/intake_job.h"
-#include "tests/support/tmpfs_mount.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/tmpfs_mount.h"
 
 namespace gaugeloop {
 namespace {

@@ -14,10 +14,10 @@
 
 #include "acquisition/modbus_gauge.h"
 #include "cli/embedded_defaults.h"
-#include "job/measure_job.h"
-#include "job/nc_push.h"
 #include "config/part_file.h"
 #include "core/atomic_file.h"
+#include "job/measure_job.h"
+#include "job/nc_push.h"
 #include "nc_out/table_program.h"
 #include "simulator/gauge_simulator.h"
 #include "storage/run_store.h"

@@ -87,9 +87,7 @@ Part intake_part() {
 
 class ProfileCommandTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = tmp_.path();
-  }
+  void SetUp() override { dir_ = tmp_.path(); }
 
   // A part file in the test directory: `body` plus the lift table of an example, by path.
   std::string write_part(const std::string& name, const std::string& csv_file, const std::string& body) {

@@ -15,8 +15,8 @@
 #include <string>
 
 #include "cli/embedded_defaults.h"
-#include "job/nc_push.h"
 #include "core/atomic_file.h"
+#include "job/nc_push.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
 #include "storage/run_store.h"

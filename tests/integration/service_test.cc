@@ -19,9 +19,9 @@
 #include <thread>
 
 #include "acquisition/modbus_gauge.h"
-#include "config/part_file.h"
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
+#include "config/part_file.h"
 #include "nc_out/table_program.h"
 #include "simulator/gauge_simulator.h"
 #include "simulator/plc_simulator.h"

@@ -12,8 +12,8 @@
 #include "storage/run_store.h"
 #include "tests/support/failing_nc_files.h"
 #include "tests/support/sample_runs.h"
-#include "tests/support/table_program.h"
 #include "tests/support/store_test.h"
+#include "tests/support/table_program.h"
 
 namespace gaugeloop {
 namespace {
@@ -76,8 +76,7 @@ TEST_F(PushSeamTest, AFailedWriteLeavesTheProgramInForceAndAbandonsTheIntent) {
   Result<PushCompletion> second = push(files);
   ASSERT_FALSE(second.ok());
   EXPECT_EQ(second.error().code, ErrorCode::kIo);
-  EXPECT_NE(second.error().message.find("table version 2 was not pushed"), std::string::npos)
-      << second.error().message;
+  EXPECT_NE(second.error().message.find("table version 2 was not pushed"), std::string::npos) << second.error().message;
   EXPECT_NE(second.error().message.find("No space left on device"), std::string::npos) << second.error().message;
   EXPECT_EQ(*read_regular_file(nc_file(), "NC program"), in_force);
   expect_agreement("after the failed write");

@@ -8,8 +8,8 @@
 #include <string>
 
 #include "storage/run_store.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/sample_runs.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {

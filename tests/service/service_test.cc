@@ -30,14 +30,12 @@ class ServiceStateTest : public ::testing::Test {
   void SetUp() override {
     dir_ = tmp_.path();
     const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
-    std::ofstream(dir_ / "gaugeloop.toml") << "machine = \"grinder-7\"\n"
-                                           << "[gauge]\nconfig = \"" << (examples / "gauges" / "simulator.toml").string()
-                                           << "\"\nmode = \"live\"\n"
-                                           << "[[part]]\nfile = \"" << (examples / "intake_flat.toml").string()
-                                           << "\"\nplc_part_number = 1\n"
-                                           << "[nc]\ndir = \"nc\"\ntemplate = \""
-                                           << (examples / "sinumerik" / "cam_table.spf").string() << "\"\n"
-                                           << "[database]\npath = \"gaugeloop.sqlite\"\n";
+    std::ofstream(dir_ / "gaugeloop.toml")
+        << "machine = \"grinder-7\"\n"
+        << "[gauge]\nconfig = \"" << (examples / "gauges" / "simulator.toml").string() << "\"\nmode = \"live\"\n"
+        << "[[part]]\nfile = \"" << (examples / "intake_flat.toml").string() << "\"\nplc_part_number = 1\n"
+        << "[nc]\ndir = \"nc\"\ntemplate = \"" << (examples / "sinumerik" / "cam_table.spf").string() << "\"\n"
+        << "[database]\npath = \"gaugeloop.sqlite\"\n";
     Result<ServiceConfig> c = read_service_config(dir_ / "gaugeloop.toml");
     ASSERT_TRUE(c.ok()) << c.error().message;
     config_ = std::move(*c);
@@ -142,7 +140,8 @@ TEST_F(ServiceStateTest, AnUnknownPartIsRefusedBeforeTheGaugeAndKeptAsAnEvent) {
   Result<nlohmann::json> r = service.measure("exhaust_roller", 1, "");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, ErrorCode::kNotFound);
-  EXPECT_NE(r.error().message.find("intake_flat lobe 1"), std::string::npos) << "lists the parts: " << r.error().message;
+  EXPECT_NE(r.error().message.find("intake_flat lobe 1"), std::string::npos)
+      << "lists the parts: " << r.error().message;
   EXPECT_EQ(gauges_made_, 0);
   EXPECT_TRUE(service.reserve_run().ok());
 }
@@ -206,7 +205,8 @@ TEST_F(ServiceStateTest, AnExceptionOnTheWorkerIsAFaultForThePlcAndTheServiceGoe
   Result<std::vector<StoredEvent>> events = store->list_events(EventQuery{});
   ASSERT_TRUE(events.ok()) << events.error().message;
   bool recorded = false;
-  for (const StoredEvent& e : *events) recorded |= e.event.code == "internal error" && e.event.kind == EventKind::kFault;
+  for (const StoredEvent& e : *events)
+    recorded |= e.event.code == "internal error" && e.event.kind == EventKind::kFault;
   EXPECT_TRUE(recorded);
 
   // The run was released: the next request runs.

@@ -61,7 +61,6 @@ class NcPushTest : public testing::StoreTest {
     EXPECT_TRUE(s.ok()) << s.error().message;
     return p;
   }
-
 };
 
 TEST_F(NcPushTest, TableVersionsCountUpPerFile) {

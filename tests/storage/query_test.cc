@@ -38,7 +38,6 @@ class QueryTest : public testing::StoreTest {
     }
     return out;
   }
-
 };
 
 using Ids = std::vector<std::int64_t>;

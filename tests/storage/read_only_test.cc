@@ -98,7 +98,7 @@ TEST_F(ReadOnlyStore, ReadsAFileWithoutWritePermissionAndLeavesItAsItWas) {
 TEST_F(ReadOnlyStore, ReadsInADirectoryThisUserCannotWrite) {
   dir_.share();
   fs::permissions(db_in(dir_).parent_path(), fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
-                                               fs::perms::others_read | fs::perms::others_exec);
+                                                 fs::perms::others_read | fs::perms::others_exec);
   const FileState before = state_of(db_in(dir_));
   EXPECT_EQ(testing::run_unprivileged([&] { return reads_runs(db_in(dir_), 2); }), "");
   EXPECT_EQ(differences(before, state_of(db_in(dir_))), "");
@@ -106,8 +106,9 @@ TEST_F(ReadOnlyStore, ReadsInADirectoryThisUserCannotWrite) {
 
 TEST_F(ReadOnlyStore, ReadsOnAReadOnlyMount) {
   const FileState before = state_of(db_in(dir_));
-  const std::string result = testing::run_on_read_only_mount(
-      db_in(dir_).parent_path(), [&](const fs::path& mounted) { return reads_runs(mounted / db_in(dir_).filename(), 2); });
+  const std::string result = testing::run_on_read_only_mount(db_in(dir_).parent_path(), [&](const fs::path& mounted) {
+    return reads_runs(mounted / db_in(dir_).filename(), 2);
+  });
   if (result.starts_with(kSkipped)) GTEST_SKIP() << "no read-only mount on this machine: " << result;
   EXPECT_EQ(result, "");
   EXPECT_EQ(differences(before, state_of(db_in(dir_))), "");
@@ -120,8 +121,9 @@ TEST_F(ReadOnlyStore, ReadsRunsStillInTheWriteAheadLogOnAReadOnlyMount) {
   ASSERT_TRUE(writer.ok()) << writer.error().message;
   ASSERT_TRUE(writer->insert_run(make_record("intake", "2026-11-22T08:00:00Z")).ok());
   ASSERT_GT(fs::file_size(db_in(dir_).string() + "-wal"), 0u) << "the third run should be in the log only";
-  const std::string result = testing::run_on_read_only_mount(
-      db_in(dir_).parent_path(), [&](const fs::path& mounted) { return reads_runs(mounted / db_in(dir_).filename(), 3); });
+  const std::string result = testing::run_on_read_only_mount(db_in(dir_).parent_path(), [&](const fs::path& mounted) {
+    return reads_runs(mounted / db_in(dir_).filename(), 3);
+  });
   if (result.starts_with(kSkipped)) GTEST_SKIP() << "no read-only mount on this machine: " << result;
   EXPECT_EQ(result, "");
 }

@@ -296,7 +296,8 @@ TEST(OpenFailure, ReadOnlyFileIsRefusedAtOpenNotAtTheFirstInsert) {
   TempDir dir;
   dir.share();
   ASSERT_TRUE(RunStore::open(db_in(dir)).ok());
-  std::filesystem::permissions(db_in(dir).parent_path(), std::filesystem::perms::all);  // the directory is not the point
+  std::filesystem::permissions(db_in(dir).parent_path(),
+                               std::filesystem::perms::all);  // the directory is not the point
   std::filesystem::permissions(db_in(dir), std::filesystem::perms::owner_read | std::filesystem::perms::others_read);
   const std::string failure = run_unprivileged([&]() -> std::string {
     Result<RunStore> store = RunStore::open(db_in(dir));

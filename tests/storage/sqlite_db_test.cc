@@ -32,8 +32,7 @@ std::unique_ptr<Connection> open_memory() {
   Result<std::unique_ptr<Connection>> conn = Connection::open(":memory:", OpenMode::kWriter, ":memory:");
   EXPECT_TRUE(conn.ok()) << conn.error().message;
   if (!conn.ok()) return nullptr;
-  Status made = exec(**conn,
-                     "CREATE TABLE t (id INTEGER PRIMARY KEY, name TEXT NOT NULL, size REAL, bytes BLOB)",
+  Status made = exec(**conn, "CREATE TABLE t (id INTEGER PRIMARY KEY, name TEXT NOT NULL, size REAL, bytes BLOB)",
                      "create a table");
   EXPECT_TRUE(made.ok()) << made.error().message;
   return std::move(*conn);

@@ -79,7 +79,6 @@ std::string run_on_read_only_mount(const std::filesystem::path& dir,
   });
 }
 
-
 double sample_lift_mm(int revolution_index, int degree) {
   return 1.5 + 3.2 * std::sin(degree * 0.0174532925199) + 0.0000123456789 * revolution_index + 1e-7 * degree;
 }

@@ -15,7 +15,6 @@
 
 namespace gaugeloop::testing {
 
-
 // Runs `check` as an unprivileged user, so permission checks mean something when the tests
 // run as root (as CI does): as root it forks, switches the child to nobody (65534) and runs
 // `check` there; otherwise it runs `check` in place. `check` returns "" on success or what

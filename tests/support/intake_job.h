@@ -12,9 +12,9 @@
 
 #include "acquisition/modbus_gauge.h"
 #include "cli/embedded_defaults.h"
-#include "job/measure_job.h"
 #include "config/part_file.h"
 #include "core/lift_table.h"
+#include "job/measure_job.h"
 #include "simulator/gauge_simulator.h"
 #include "tests/support/temp_dir.h"
 
