@@ -93,8 +93,6 @@ struct TableFacts {
   std::optional<double> command_error_um;   // the table's command position error; finite, >= 0
   std::optional<int> point_count;           // points of the table (blocks + 1 for a spline's start)
   std::optional<double> correction_max_um;  // the largest |correction| the table carries
-
-  bool operator==(const TableFacts&) const = default;
 };
 
 // One NC program written to the control from a run, as nc_pushes keeps it.

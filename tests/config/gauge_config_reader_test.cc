@@ -7,25 +7,17 @@
 
 #include "config/gauge_config.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/refused.h"
 
 namespace gaugeloop {
 namespace {
+
+using testing::refused;
 
 namespace fs = std::filesystem;
 
 // The smallest map validate() takes: a reading and an angle.
 const std::string kMap = "[map.reading]\naddress = 0\ntype = \"INT32\"\n[map.angle]\naddress = 3\ntype = \"UINT32\"\n";
-
-::testing::AssertionResult refused(const Result<ModbusSettings>& r, const std::string& expected) {
-  if (r.ok()) return ::testing::AssertionFailure() << "read, expected a refusal containing: " << expected;
-  if (r.error().code != ErrorCode::kInvalidInput) {
-    return ::testing::AssertionFailure() << "code " << static_cast<int>(r.error().code) << ": " << r.error().message;
-  }
-  if (r.error().message.find(expected) == std::string::npos) {
-    return ::testing::AssertionFailure() << "message: " << r.error().message << "\nexpected in it: " << expected;
-  }
-  return ::testing::AssertionSuccess();
-}
 
 TEST(GaugeConfigReader, KeysLeftOutKeepTheDefaults) {
   ModbusSettings defaults;

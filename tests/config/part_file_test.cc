@@ -7,9 +7,12 @@
 #include <string>
 
 #include "tests/support/temp_dir.h"
+#include "tests/support/refused.h"
 
 namespace gaugeloop {
 namespace {
+
+using testing::refused;
 
 namespace fs = std::filesystem;
 
@@ -27,17 +30,6 @@ std::string flat_part(const std::string& extra = {}) {
 }
 
 Result<PartFile> parse(const std::string& text) { return parse_part_toml(text, "part.toml", "/parts"); }
-
-::testing::AssertionResult refused(const Result<PartFile>& r, const std::string& expected) {
-  if (r.ok()) return ::testing::AssertionFailure() << "read, expected a refusal containing: " << expected;
-  if (r.error().code != ErrorCode::kInvalidInput) {
-    return ::testing::AssertionFailure() << "code " << static_cast<int>(r.error().code) << ": " << r.error().message;
-  }
-  if (r.error().message.find(expected) == std::string::npos) {
-    return ::testing::AssertionFailure() << "message: " << r.error().message << "\nexpected in it: " << expected;
-  }
-  return ::testing::AssertionSuccess();
-}
 
 TEST(PartFile, ReadsEveryKeyAndTheDefaults) {
   auto pf = parse(flat_part());

@@ -8,9 +8,12 @@
 #include <string>
 
 #include "tests/support/temp_dir.h"
+#include "tests/support/refused.h"
 
 namespace gaugeloop {
 namespace {
+
+using testing::refused;
 
 namespace fs = std::filesystem;
 
@@ -43,18 +46,6 @@ class ServiceConfigTest : public ::testing::Test {
 
   testing::TempDir dir_;
 };
-
-// Refused with `code` and a message containing `expected`.
-::testing::AssertionResult refused(const Result<ServiceConfig>& r, ErrorCode code, const std::string& expected) {
-  if (r.ok()) return ::testing::AssertionFailure() << "read, expected a refusal containing: " << expected;
-  if (r.error().code != code) {
-    return ::testing::AssertionFailure() << "code " << static_cast<int>(r.error().code) << ": " << r.error().message;
-  }
-  if (r.error().message.find(expected) == std::string::npos) {
-    return ::testing::AssertionFailure() << "message: " << r.error().message << "\nexpected in it: " << expected;
-  }
-  return ::testing::AssertionSuccess();
-}
 
 TEST_F(ServiceConfigTest, AMinimalFileTakesTheDocumentedDefaults) {
   auto c = read("[gauge]\n" + kIntake + kNc);

@@ -108,9 +108,10 @@ TEST_F(ServiceStateTest, ARunIsMeasuredStoredPushedAndCounted) {
   EXPECT_EQ(gauges_made_, 1);
   ASSERT_TRUE((*r)["run_id"].is_number_integer());
   const std::int64_t run_id = (*r)["run_id"];
-  // On design, the lift error is the gauge's interpolation only (polls 0.25 deg apart on a
-  // smooth lobe: far below a micrometre), and the table is pushed.
-  EXPECT_LT((*r)["max_abs_error_um"].get<double>(), 1.0);
+  // On design, the lift error is the live mode's interpolation only: the cubic between polls
+  // h = 0.25 deg apart errs by about h^4/24 |H''''|, under 0.001 um even at 1 deg on the
+  // sample lobes (acquisition/poller.h); 0.01 um leaves room for the analysis' rounding.
+  EXPECT_LT((*r)["max_abs_error_um"].get<double>(), 0.01);
   EXPECT_TRUE((*r)["pushed"].get<bool>()) << r->dump();
   EXPECT_EQ((*r)["table_version"], 1);
 
