@@ -24,9 +24,10 @@
 #include <utility>
 #include <vector>
 
-#include "report/run_json.h"
 #include "core/guarded_thread.h"
 #include "core/utc_time.h"
+#include "report/run_json.h"
+#include "service/metrics_text.h"
 #include "storage/run_store.h"
 
 namespace gaugeloop {
@@ -236,28 +237,6 @@ bool same_secret(std::string_view given, std::string_view expected) {
   return diff == 0;
 }
 
-// ---- Prometheus text ----
-
-std::string label_value(const std::string& v) {
-  std::string out;
-  for (const char c : v) {
-    if (c == '\\' || c == '"') {
-      out += '\\';
-      out += c;
-    } else if (c == '\n') {
-      out += "\\n";
-    } else {
-      out += c;
-    }
-  }
-  return out;
-}
-
-std::string number(double v) {
-  json j = v;
-  return j.dump();  // shortest text that reads back exactly
-}
-
 // ---- Run database connections ----
 
 // Idle RunStores on the database, handed to one request at a time: a connection is used by one
@@ -464,7 +443,7 @@ struct HttpApi::Impl {
     db["available"] = store.ok();
     if (!store) db["error"] = store.error().message;
     out["database"] = db;
-    out["writes"] = settings.token.empty() ? "disabled (no token configured)" : "enabled with the token";
+    out["writes"] = current_token().empty() ? "disabled (no token configured)" : "enabled with the token";
     send_json(res, 200, out);
   }
 
@@ -629,7 +608,7 @@ struct HttpApi::Impl {
     if (!q) return send_error(res, q.error());
     std::string text;
     Result<StorePool::Lease> store = stores.acquire();
-    Status read = store ? database_metrics(**store, text) : Status(store.error());
+    Status read = store ? append_database_metrics(**store, text) : Status(store.error());
     if (!read) {
       if (store) store->discard();
       spdlog::warn("http: /metrics without the run database: {}", read.error().message);
@@ -648,70 +627,12 @@ struct HttpApi::Impl {
     res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
   }
 
-  // The series read from the database, appended to `out` only if every query succeeded.
-  static Status database_metrics(const RunStore& store, std::string& out) {
-    RunQuery rq;
-    rq.limit = kAll;
-    Result<std::vector<RunSummary>> runs = store.list_runs(rq);  // newest first
-    if (!runs) return runs.error();
-    EventQuery eq;
-    eq.limit = kAll;
-    Result<std::vector<StoredEvent>> events = store.list_events(eq);
-    if (!events) return events.error();
-    PendingQuery pq;
-    pq.limit = kAll;
-    pq.status = PendingStatus::kPending;
-    Result<std::vector<PendingTable>> pending = store.list_pending(pq);
-    if (!pending) return pending.error();
-
-    std::map<std::string, std::int64_t> by_status{{"measured", 0}, {"pushed", 0}};
-    // The newest run of each machine, part and lobe (the list is newest first).
-    std::map<std::tuple<std::string, std::string, int>, const RunSummary*> last;
-    for (const RunSummary& r : *runs) {
-      ++by_status[r.status];
-      last.emplace(std::make_tuple(r.machine, r.part, r.lobe), &r);
-    }
-    std::map<std::string, std::int64_t> by_kind{{"fault", 0}, {"refusal", 0}, {"info", 0}};
-    for (const StoredEvent& e : *events) ++by_kind[std::string(event_kind_name(e.event.kind))];
-
-    std::string s;
-    s += "# HELP gaugeloop_runs_stored Runs in the database, by status.\n# TYPE gaugeloop_runs_stored gauge\n";
-    for (const auto& [st, n] : by_status) {
-      s += "gaugeloop_runs_stored{status=\"" + label_value(st) + "\"} " + std::to_string(n) + "\n";
-    }
-    s += "# HELP gaugeloop_events_stored Faults, refusals and service steps (info) in the database, by kind.\n"
-         "# TYPE gaugeloop_events_stored gauge\n";
-    for (const auto& [kind, n] : by_kind) {
-      s += "gaugeloop_events_stored{kind=\"" + label_value(kind) + "\"} " + std::to_string(n) + "\n";
-    }
-    s += "# HELP gaugeloop_pending_tables NC tables waiting for approval.\n# TYPE gaugeloop_pending_tables gauge\n";
-    s += "gaugeloop_pending_tables " + std::to_string(pending->size()) + "\n";
-    const auto labels = [](const RunSummary& r) {
-      return "{machine=\"" + label_value(r.machine) + "\",part=\"" + label_value(r.part) + "\",lobe=\"" +
-             std::to_string(r.lobe) + "\"}";
-    };
-    s += "# HELP gaugeloop_last_run_max_abs_error_um Largest lift error of the newest run of each lobe (um, cam "
-         "frame).\n# TYPE gaugeloop_last_run_max_abs_error_um gauge\n";
-    for (const auto& [key, r] : last)
-      s += "gaugeloop_last_run_max_abs_error_um" + labels(*r) + " " + number(r->max_abs_error_um) + "\n";
-    s += "# HELP gaugeloop_last_run_id Id of the newest run of each lobe.\n# TYPE gaugeloop_last_run_id gauge\n";
-    for (const auto& [key, r] : last) s += "gaugeloop_last_run_id" + labels(*r) + " " + std::to_string(r->id) + "\n";
-    s += "# HELP gaugeloop_last_run_started_timestamp_seconds When the newest run of each lobe started.\n"
-         "# TYPE gaugeloop_last_run_started_timestamp_seconds gauge\n";
-    for (const auto& [key, r] : last) {
-      if (const std::optional<std::time_t> t = epoch_of_utc(r->started_utc)) {
-        s += "gaugeloop_last_run_started_timestamp_seconds" + labels(*r) + " " + std::to_string(*t) + "\n";
-      }
-    }
-    out += s;
-    return {};
-  }
-
   // ---- Writes ----
 
   // The token check every write passes first. False: the answer is already set.
   bool authorized(const httplib::Request& req, httplib::Response& res) const {
-    if (settings.token.empty()) {
+    const std::string expected = current_token();
+    if (expected.empty()) {
       send_error(res, 403,
                  "the API is read-only: no token is configured; set one in the service's [http] config to allow "
                  "writes");
@@ -724,7 +645,7 @@ struct HttpApi::Impl {
         std::equal(kScheme.begin(), kScheme.end(), header.begin(), [](char a, char b) {
           return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
         });
-    if (!bearer || !same_secret(std::string_view(header).substr(kScheme.size()), settings.token)) {
+    if (!bearer || !same_secret(std::string_view(header).substr(kScheme.size()), expected)) {
       res.set_header("WWW-Authenticate", "Bearer realm=\"gaugeloop\"");
       send_error(res, 401,
                  header.empty() ? "this write needs the header `Authorization: Bearer <token>`"
@@ -799,7 +720,14 @@ struct HttpApi::Impl {
     send_error(res, e);
   }
 
+  std::string current_token() const {
+    std::lock_guard lock(token_mutex);
+    return token;
+  }
+
   const HttpSettings settings;
+  mutable std::mutex token_mutex;
+  std::string token = settings.token;  // guarded by token_mutex; set_token replaces it
   StorePool stores;
   const HttpWrites writes;
   const HttpStatus status;
@@ -815,6 +743,13 @@ HttpApi::HttpApi(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 HttpApi::~HttpApi() { stop(); }
 
 int HttpApi::port() const { return impl_->port; }
+
+void HttpApi::set_token(std::string token) {
+  std::lock_guard lock(impl_->token_mutex);
+  impl_->token = std::move(token);
+}
+
+bool HttpApi::alive() const { return impl_->server.is_running() && !impl_->listener_done; }
 
 Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, std::filesystem::path db_path,
                                                 HttpWrites writes, HttpStatus status) {

@@ -56,6 +56,11 @@ class HttpApi {
 
   int port() const;  // the port bound, also when settings.port was 0
 
+  // The token writes need from now on (empty: read-only), e.g. re-read on SIGHUP. Any thread.
+  void set_token(std::string token);
+  // True while the listener accepts connections (for the watchdog). Any thread.
+  bool alive() const;
+
   // Stops accepting, lets requests in progress finish, and joins the threads. Idempotent.
   void stop();
 

@@ -171,8 +171,17 @@ std::string PlcTrigger::metrics() const {
   return m;
 }
 
+bool PlcTrigger::alive(std::chrono::steady_clock::duration within) const {
+  const std::chrono::steady_clock::rep last = last_poll_.load();
+  if (last == 0) return false;
+  return std::chrono::steady_clock::now() -
+             std::chrono::steady_clock::time_point(std::chrono::steady_clock::duration(last)) <=
+         within;
+}
+
 void PlcTrigger::loop() {
   for (;;) {
+    last_poll_ = std::chrono::steady_clock::now().time_since_epoch().count();
     const std::vector<PlcEvent> events = handshake_.step();
     for (PlcEvent e : events) report(e);
     connected_ = handshake_.connected();

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <memory>
@@ -57,6 +58,9 @@ class PlcTrigger {
   void stop();  // idempotent
 
   std::string address() const { return link_->address(); }
+  // True while the trigger thread polls: its last poll began within `within` (for the
+  // watchdog). Any thread.
+  bool alive(std::chrono::steady_clock::duration within) const;
   nlohmann::json status() const;  // for /api/health
   std::string metrics() const;    // Prometheus lines
 
@@ -80,6 +84,7 @@ class PlcTrigger {
   std::atomic<bool> connected_{false};
   std::atomic<int> state_{0};
   std::atomic<long long> requests_{0};
+  std::atomic<std::chrono::steady_clock::rep> last_poll_{0};  // steady_clock ticks; 0: never polled
 };
 
 }  // namespace gaugeloop
