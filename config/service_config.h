@@ -34,6 +34,10 @@ struct HttpSettings {
   // Empty: the API is read-only, and every write is refused with 403. Otherwise a write needs
   // the header `Authorization: Bearer <token>` (401 without it or with another token).
   std::string token;
+  // Both set: HTTPS with this certificate chain and private key (PEM files); both empty: plain
+  // HTTP. The config reader checks they can be read.
+  std::filesystem::path tls_cert;
+  std::filesystem::path tls_key;
 };
 
 // The PLC trigger: the PLC's Modbus server and the handshake block on it (docs/service.md).

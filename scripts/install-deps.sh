@@ -16,7 +16,8 @@ packages=(
   nlohmann-json3-dev   # --json output
   libspdlog-dev libfmt-dev  # logging and formatting
   libmstch-dev       # Mustache rendering of NC program templates (brings libboost-dev headers)
-  libcpp-httplib-dev # the HTTP API of `gaugeloop serve`
+  libcpp-httplib-dev # the HTTP API of `gaugeloop serve` (built with OpenSSL: HTTPS)
+  libsystemd-dev     # sd_notify: readiness and the watchdog under systemd
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   sqlite3            # the CLI users query the database with; tests use it too
@@ -25,6 +26,8 @@ packages=(
   python3            # runs tests/layering's include check (and the pymodbus peer)
   python3-pymodbus   # an independent Modbus server: tests read a gauge served by it
   python3-serial python3-serial-asyncio  # pymodbus imports both even for TCP; only Recommended, so named here
+  openssl            # self-signed certificates for the HTTPS tests; `gaugeloop token new` needs none
+  curl               # an independent HTTP client: tests talk to the service with it
   locales            # a decimal-comma locale, to test that output ignores the C locale
   librsvg2-bin       # rsvg-convert: view a `gaugeloop runs plot` SVG as PNG; not needed to build or test
 )
