@@ -28,6 +28,8 @@
 #include "simulator/virtual_grinder.h"
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
+#include "tests/support/raw_http.h"
+#include "tests/support/service_process.h"
 #include "tests/support/temp_dir.h"
 
 // Last: httplib brings <resolv.h>, whose `res` macro breaks Eigen's headers.
@@ -38,64 +40,11 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using testing::raw_http;
+using testing::ServiceProcess;
 using testing::slurp;
 
 constexpr const char* kToken = "0123456789abcdef0123456789abcdef";
-
-// `gaugeloop serve --config F` as a child process; stdout read line by line, stderr to a file.
-class ServiceProcess {
- public:
-  ServiceProcess(const fs::path& config, const fs::path& log) {
-    // Everything the child needs, made before the fork.
-    const std::string bin = std::string(GAUGELOOP_BINARY_DIR) + "/bin/gaugeloop";
-    const std::string config_path = config.string();
-    const std::string log_path = log.string();
-    int out[2];
-    if (::pipe(out) != 0) return;
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      // Only async-signal-safe calls between fork and exec: the parent has other threads.
-      ::dup2(out[1], STDOUT_FILENO);
-      const int err = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (err >= 0) ::dup2(err, STDERR_FILENO);
-      ::close(out[0]);
-      ::execl(bin.c_str(), bin.c_str(), "serve", "--config", config_path.c_str(), static_cast<char*>(nullptr));
-      ::_exit(127);
-    }
-    ::close(out[1]);
-    stdout_ = ::fdopen(out[0], "r");
-  }
-  ~ServiceProcess() {
-    if (pid_ > 0 && !exited_) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-    if (stdout_ != nullptr) std::fclose(stdout_);
-  }
-
-  // The HTTP port from the "listening on http://HOST:PORT" line; 0 if the process ended first.
-  int port() {
-    char line[512];
-    while (stdout_ != nullptr && std::fgets(line, sizeof line, stdout_) != nullptr) {
-      int port = 0;
-      if (std::sscanf(line, "listening on http://127.0.0.1:%d", &port) == 1) return port;
-    }
-    return 0;
-  }
-  void signal(int sig) const { ::kill(pid_, sig); }
-  // Exit status, or -1 if killed by a signal.
-  int wait() {
-    int status = 0;
-    ::waitpid(pid_, &status, 0);
-    exited_ = true;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-
- private:
-  pid_t pid_ = -1;
-  std::FILE* stdout_ = nullptr;
-  bool exited_ = false;
-};
 
 bool has_code(const std::vector<StoredEvent>& events, const std::string& code) {
   for (const StoredEvent& e : events) {
@@ -146,35 +95,6 @@ class ServiceTest : public ::testing::Test {
 };
 
 httplib::Headers bearer(const std::string& token) { return {{"Authorization", "Bearer " + token}}; }
-
-// Sends `bytes` as they are to 127.0.0.1:`port` and returns the answer: its head and a body
-// of Content-Length bytes (the service keeps the connection open for the next request). For
-// requests no HTTP client library would send.
-std::string raw_http(int port, const std::string& bytes) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  if (fd < 0) return "";
-  const timeval guard{60, 0};  // a service that never answers fails the test instead of hanging it
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &guard, sizeof guard);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(static_cast<std::uint16_t>(port));
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  std::string answer;
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0 &&
-      ::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(bytes.size())) {
-    char buf[4096];
-    for (ssize_t n; (n = ::recv(fd, buf, sizeof buf, 0)) > 0;) {
-      answer.append(buf, static_cast<size_t>(n));
-      const size_t head_end = answer.find("\r\n\r\n");
-      if (head_end == std::string::npos) continue;
-      const size_t length_at = answer.find("Content-Length: ");
-      const size_t length = length_at < head_end ? std::stoul(answer.substr(length_at + 16)) : 0;
-      if (answer.size() >= head_end + 4 + length) break;
-    }
-  }
-  ::close(fd);
-  return answer;
-}
 
 // Polls health until `done` holds for its JSON (or the service is gone): state, not time.
 template <typename Pred>
