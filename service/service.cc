@@ -29,27 +29,29 @@ GaugeFactory modbus_gauge_factory() {
   return [](const ServiceConfig& c) -> std::unique_ptr<GaugeClient> { return std::make_unique<ModbusGauge>(c.gauge); };
 }
 
+// Every field is in every answer; one that does not apply to this run is null, never an
+// empty text or a 0 that reads as a figure: no table was built (a refused correction, an
+// inspection, a part the table in force did not grind), or none was pushed.
 json job_report_json(const JobReport& r) {
-  json j{{"run_id", r.run_id},
-         {"pushed", r.pushed()},
-         {"verdict", compensation_verdict_name(r.verdict)},
-         {"max_abs_error_um", r.analysis.max_abs_error_um},
-         {"rms_error_um", r.analysis.rms_error_um},
-         {"phase_error_deg", r.analysis.phase_error_deg},
-         {"base_circle_runout_um", r.analysis.base_circle_runout_um},
-         {"repeatability_um", r.analysis.repeatability_um},
-         {"correction_max_um", r.correction_max_um},
-         {"interpolation", r.interpolation},
-         {"table_blocks", r.table_blocks},
-         {"command_error_um", r.command_error_um}};
-  if (r.pushed()) {
-    j["nc_file"] = r.nc_file.string();
-    j["table_version"] = r.table_version;
-  } else {
-    j["not_pushed_reason"] = r.not_pushed_reason;
-    j["pending_id"] = r.pending_id ? json(*r.pending_id) : json(nullptr);
-  }
-  return j;
+  const bool built = !r.interpolation.empty();
+  const auto if_built = [built](const json& value) { return built ? value : json(nullptr); };
+  const auto if_pushed = [&r](const json& value) { return r.pushed() ? value : json(nullptr); };
+  return json{{"run_id", r.run_id},
+              {"pushed", r.pushed()},
+              {"verdict", compensation_verdict_name(r.verdict)},
+              {"max_abs_error_um", r.analysis.max_abs_error_um},
+              {"rms_error_um", r.analysis.rms_error_um},
+              {"phase_error_deg", r.analysis.phase_error_deg},
+              {"base_circle_runout_um", r.analysis.base_circle_runout_um},
+              {"repeatability_um", r.analysis.repeatability_um},
+              {"correction_max_um", r.correction_max_um},
+              {"interpolation", if_built(r.interpolation)},
+              {"table_blocks", if_built(r.table_blocks)},
+              {"command_error_um", if_built(r.command_error_um)},
+              {"nc_file", if_pushed(r.nc_file.string())},
+              {"table_version", if_pushed(r.table_version)},
+              {"not_pushed_reason", r.pushed() ? json(nullptr) : json(r.not_pushed_reason)},
+              {"pending_id", r.pending_id ? json(*r.pending_id) : json(nullptr)}};
 }
 
 Service::Service(ServiceConfig config, GaugeFactory gauge)

@@ -15,6 +15,8 @@
 #include <thread>
 #include <vector>
 
+#include "job/measure_job.h"
+#include "service/service.h"
 #include "storage/run_store.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
@@ -520,6 +522,43 @@ TEST_F(HttpApiTest, ABusyPortIsAnErrorNamingTheAddress) {
   ASSERT_FALSE(second.ok());
   EXPECT_EQ(second.error().code, ErrorCode::kIo);
   EXPECT_TRUE(has(second.error().message, "127.0.0.1:" + std::to_string(taken.port))) << second.error().message;
+}
+
+TEST(JobReportJson, WhatARefusedRunDidNotBuildOrPushIsNull) {
+  JobReport refused;
+  refused.run_id = 12;
+  refused.verdict = CompensationVerdict::kRefuse;
+  refused.analysis.max_abs_error_um = 130.0;
+  refused.correction_max_um = 125.0;
+  refused.not_pushed_reason = "correction 125.0 um exceeds the 100 um guard";
+  const json j = job_report_json(refused);
+  EXPECT_EQ(j["run_id"], 12);
+  EXPECT_EQ(j["pushed"], false);
+  EXPECT_EQ(j["verdict"], "refuse");
+  EXPECT_EQ(j["max_abs_error_um"], 130.0) << "measured: a figure";
+  EXPECT_EQ(j["correction_max_um"], 125.0) << "computed: the correction that was refused";
+  for (const char* field :
+       {"interpolation", "table_blocks", "command_error_um", "nc_file", "table_version", "pending_id"}) {
+    ASSERT_TRUE(j.contains(field)) << field << " in " << j.dump();
+    EXPECT_TRUE(j[field].is_null()) << field << " in " << j.dump();
+  }
+  EXPECT_EQ(j["not_pushed_reason"], "correction 125.0 um exceeds the 100 um guard");
+
+  JobReport pushed = refused;
+  pushed.verdict = CompensationVerdict::kApply;
+  pushed.not_pushed_reason.clear();
+  pushed.interpolation = "cspline";
+  pushed.table_blocks = 45;
+  pushed.command_error_um = 0.475;
+  pushed.nc_file = "/srv/nc/CAM_INTAKE_L1.SPF";
+  pushed.table_version = 3;
+  const json p = job_report_json(pushed);
+  EXPECT_EQ(p["interpolation"], "cspline");
+  EXPECT_EQ(p["table_blocks"], 45);
+  EXPECT_EQ(p["nc_file"], "/srv/nc/CAM_INTAKE_L1.SPF");
+  EXPECT_EQ(p["table_version"], 3);
+  EXPECT_TRUE(p["not_pushed_reason"].is_null()) << p.dump();
+  EXPECT_EQ(p.size(), j.size()) << "every field in every answer";
 }
 
 }  // namespace
