@@ -14,7 +14,9 @@
 #include <cstdio>
 #include <ctime>
 #include <exception>
+#include <fstream>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <regex>
@@ -79,6 +81,28 @@ int http_status_for(ErrorCode code) {
 }
 
 void send_error(httplib::Response& res, const Error& e) { send_error(res, http_status_for(e.code), e.message); }
+
+// Turns the answer already set into one after which the connection ends: for answers given
+// without reading the request's whole body. httplib 0.11 keeps a connection open whatever the
+// answer's Connection header says, and would read the unread body as the next request, a line
+// at a time with no bound on the line. A content provider that reports failure once it has
+// written the whole answer is the one way 0.11 offers to end the connection after an answer;
+// `Connection: close` tells the client.
+void close_after_answer(const httplib::Request& req, httplib::Response& res) {
+  if (req.get_header_value("Connection") != "close") res.set_header("Connection", "close");
+  auto text = std::make_shared<const std::string>(std::move(res.body));
+  res.body.clear();
+  std::string type = res.get_header_value("Content-Type");
+  if (text->empty()) {
+    // set_content_provider needs a length: an empty answer is one newline.
+    text = std::make_shared<const std::string>("\n");
+    type = "text/plain";
+  }
+  res.set_content_provider(text->size(), type, [text](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+    sink.write(text->data() + offset, length);
+    return false;  // ends the connection after the answer
+  });
+}
 
 Error bad_request(std::string message) { return make_error(ErrorCode::kInvalidInput, std::move(message)); }
 
@@ -167,21 +191,22 @@ Result<RunQuery> run_query(const Query& q, int default_limit) {
 Result<std::int64_t> path_id(const std::string& text, const std::string& what) {
   std::int64_t id = 0;
   const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), id);
-  if (ec != std::errc() || end != text.data() + text.size() || text.empty() || id < 1) {
-    return bad_request(what + " '" + text + "' is not a number; ids are whole numbers from 1");
-  }
-  return id;
+  const bool whole = !text.empty() && end == text.data() + text.size();
+  if (whole && ec == std::errc() && id >= 1) return id;
+  // A number, but 0, negative or beyond 64 bits.
+  if (whole) return bad_request(what + " " + text + " is out of range; ids are whole numbers from 1");
+  return bad_request(what + " '" + text + "' is not a number; ids are whole numbers from 1");
 }
 
 // ---- Request bodies ----
 
 // The body of a write: a JSON object with only the fields its endpoint knows.
-Result<json> body_object(const httplib::Request& req, const std::vector<std::string>& known, const char* example) {
+Result<json> body_object(const std::string& text, const std::vector<std::string>& known, const char* example) {
   const std::string hint = std::string("; send a JSON object such as ") + example;
-  if (req.body.empty()) return bad_request("the request body is empty" + hint);
+  if (text.empty()) return bad_request("the request body is empty" + hint);
   json body;
   try {
-    body = json::parse(req.body);
+    body = json::parse(text);
   } catch (const json::parse_error& e) {
     // what(): "[json.exception.parse_error.101] parse error at line 1, column 2: ..."
     std::string why = e.what();
@@ -224,6 +249,20 @@ Result<int> int_field(const json& body, const std::string& name, int min, int ma
                        std::to_string(max) + ", not " + it->dump(-1, ' ', false, json::error_handler_t::replace));
   }
   return static_cast<int>(it->get<double>());
+}
+
+bool iequals(std::string_view a, std::string_view b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
+         });
+}
+
+// `application/json` in any case, with or without parameters such as `; charset=utf-8`.
+bool is_json_media_type(std::string_view type) {
+  type = type.substr(0, type.find(';'));
+  while (!type.empty() && (type.back() == ' ' || type.back() == '\t')) type.remove_suffix(1);
+  while (!type.empty() && (type.front() == ' ' || type.front() == '\t')) type.remove_prefix(1);
+  return iequals(type, "application/json");
 }
 
 // Equal in time that depends only on the length of `expected`, so the answer's timing does not
@@ -367,24 +406,134 @@ Result<std::string> resolve_program(const RunStore& store, const std::string& pr
 // ---- The server ----
 
 struct HttpApi::Impl {
-  Impl(HttpSettings s, fs::path db, HttpWrites w, HttpStatus st)
-      : settings(std::move(s)), stores(std::move(db)), writes(std::move(w)), status(std::move(st)) {}
+  Impl(HttpSettings s, fs::path db, HttpWrites w, HttpStatus st, std::unique_ptr<httplib::Server> srv)
+      : settings(std::move(s)),
+        stores(std::move(db)),
+        writes(std::move(w)),
+        status(std::move(st)),
+        server(std::move(srv)) {}
 
   using Handler = std::function<void(const httplib::Request&, httplib::Response&)>;
+  // A write: the request and its body, read whole.
+  using WriteHandler = std::function<void(const httplib::Request&, const std::string& body, httplib::Response&)>;
 
-  // Registers a route behind the one boundary that turns any exception into a 500.
-  void route(const std::string& method, const std::string& pattern, Handler handler) {
-    routes.emplace_back(method, std::regex(pattern));
-    httplib::Server::Handler guarded = [this, handler = std::move(handler)](const httplib::Request& req,
-                                                                            httplib::Response& res) {
+  // Registers a read behind the one boundary that turns any exception into a 500.
+  void route(const std::string& pattern, Handler handler) {
+    routes.emplace_back("GET", std::regex(pattern));
+    server->Get(pattern, [handler = std::move(handler)](const httplib::Request& req, httplib::Response& res) {
       try {
         handler(req, res);
       } catch (...) {
         internal_error(req, res, std::current_exception());
       }
+    });
+  }
+
+  // Registers a write, behind the same boundary. Its body is read here as it arrives and never
+  // beyond kMaxBodyBytes, whatever its transfer encoding: httplib's own limit holds only for a
+  // body with a Content-Length. before_body has checked the token and the headers.
+  void route_write(const std::string& pattern, WriteHandler handler) {
+    routes.emplace_back("POST", std::regex(pattern));
+    server->Post(pattern, [handler = std::move(handler)](const httplib::Request& req, httplib::Response& res,
+                                                         const httplib::ContentReader& read) {
+      try {
+        std::string body;
+        bool too_large = false;
+        const bool whole = read([&](const char* data, std::size_t size) {
+          too_large = size > kMaxBodyBytes - body.size();
+          if (!too_large) body.append(data, size);
+          return !too_large;
+        });
+        if (!whole) {
+          send_error(res, too_large ? 413 : 400,
+                     too_large ? too_large_message()
+                               : "the request body ended before its announced length, or a chunk of it is malformed; "
+                                 "send the JSON whole");
+          return close_after_answer(req, res);
+        }
+        handler(req, body, res);
+      } catch (...) {
+        internal_error(req, res, std::current_exception());
+      }
+    });
+  }
+
+  static std::string too_large_message() {
+    return "the request body is larger than " + std::to_string(kMaxBodyBytes / 1024) +
+           " KiB; the API's bodies are small JSON objects (" + kDocs + ")";
+  }
+
+  // Whether `method` (HEAD as GET) has a route matching `path`.
+  bool has_route(const std::string& method, const std::string& path) const {
+    const std::string m = method == "HEAD" ? "GET" : method;
+    return std::any_of(routes.begin(), routes.end(),
+                       [&](const auto& r) { return r.first == m && std::regex_match(path, r.second); });
+  }
+
+  // Runs once the request's head is read and before any of its body: httplib reads the body of
+  // a POST, PUT, PATCH or DELETE whole before routing it (a chunked one, or one without a
+  // length, with no bound), and leaves a GET's body unread to be parsed as the next request. So
+  // a request with a body where none is taken is answered here; a write's token is checked
+  // before a byte of its body is read, then its framing, length and type. Every answer given
+  // here ends the connection, the body unread.
+  httplib::Server::HandlerResponse before_body(const httplib::Request& req, httplib::Response& res) const {
+    using httplib::Server;
+    const auto answered = [&] {
+      close_after_answer(req, res);
+      return Server::HandlerResponse::Handled;
     };
-    if (method == "GET") server.Get(pattern, std::move(guarded));
-    if (method == "POST") server.Post(pattern, std::move(guarded));
+    const auto refuse = [&](int code, const std::string& message) {
+      send_error(res, code, message);
+      return answered();
+    };
+    const bool chunked = req.has_header("Transfer-Encoding");
+    const bool sized = req.has_header("Content-Length");
+    const std::string length = req.get_header_value("Content-Length");
+    if (!(req.method == "POST" && has_route("POST", req.path))) {
+      const bool body_method = req.method == "POST" || req.method == "PUT" || req.method == "PATCH" ||
+                               req.method == "DELETE" || req.method == "PRI";
+      if (!body_method && !chunked && !(sized && length != "0")) return Server::HandlerResponse::Unhandled;
+      if (!has_route(req.method, req.path)) {
+        answer_no_route(req, res);
+        return answered();
+      }
+      return refuse(400, req.method + " " + req.path + " takes no request body; give its parameters in the query (" +
+                             kDocs + ")");
+    }
+    if (!authorized(req, res)) return answered();
+    if (chunked && sized) {
+      return refuse(400, "the request has both Transfer-Encoding and Content-Length; send one of them");
+    }
+    if (chunked && !iequals(req.get_header_value("Transfer-Encoding"), "chunked")) {
+      return refuse(501, "Transfer-Encoding '" + req.get_header_value("Transfer-Encoding") +
+                             "' is not supported; send the body with a Content-Length (or chunked)");
+    }
+    if (!chunked && !sized) {
+      return refuse(411, "POST " + req.path +
+                             " needs a Content-Length header (or Transfer-Encoding: chunked) to say where its body "
+                             "ends; send the JSON body with its length, as curl -d does");
+    }
+    if (sized) {
+      std::uint64_t bytes = 0;
+      const auto [end, ec] = std::from_chars(length.data(), length.data() + length.size(), bytes);
+      if (ec == std::errc::result_out_of_range || (ec == std::errc() && bytes > kMaxBodyBytes)) {
+        return refuse(413, too_large_message());
+      }
+      if (ec != std::errc() || end != length.data() + length.size()) {
+        return refuse(400, "Content-Length '" + length + "' is not a number of bytes");
+      }
+    }
+    if (const std::string coding = req.get_header_value("Content-Encoding");
+        !coding.empty() && !iequals(coding, "identity")) {
+      return refuse(415, "Content-Encoding '" + coding + "' is not taken; send the JSON body uncompressed");
+    }
+    if (!is_json_media_type(req.get_header_value("Content-Type"))) {
+      const std::string type = req.get_header_value("Content-Type");
+      return refuse(415, (type.empty() ? std::string("the request has no Content-Type")
+                                       : "Content-Type '" + type + "' is not JSON") +
+                             "; send the body as JSON with the header `Content-Type: application/json`");
+    }
+    return Server::HandlerResponse::Unhandled;
   }
 
   static void internal_error(const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) {
@@ -402,35 +551,34 @@ struct HttpApi::Impl {
   }
 
   // Every answer of 400 or more without a body (no route, a request httplib refused) gets one.
-  void fill_error(const httplib::Request& req, httplib::Response& res) {
-    if (!res.body.empty()) return;
-    if (res.status == 404) {
-      std::string allowed;
-      for (const auto& [method, pattern] : routes) {
-        if (method != req.method && std::regex_match(req.path, pattern)) allowed = method;
-      }
-      if (!allowed.empty()) {
-        res.set_header("Allow", allowed);
-        send_error(res, 405, req.method + " is not allowed on " + req.path + "; use " + allowed + " (" + kDocs + ")");
-        return;
-      }
-      send_error(res, 404,
-                 "no such endpoint: " + req.method + " " + req.path + "; the API is under /api/ and " + "/metrics (" +
-                     kDocs + ")");
-      return;
-    }
-    if (res.status == 413) {
-      send_error(res, 413, "the request body is larger than " + std::to_string(kMaxBodyBytes / 1024) + " KiB");
-      return;
-    }
+  void fill_error(const httplib::Request& req, httplib::Response& res) const {
+    if (!res.body.empty() || res.has_header("Content-Type")) return;  // ours, maybe as a content provider
+    if (res.status == 404) return answer_no_route(req, res);
+    if (res.status == 413) return send_error(res, 413, too_large_message());
     send_error(res, res.status, "the request was malformed (HTTP status " + std::to_string(res.status) + ")");
+  }
+
+  // 405 naming the method the path takes, or 404.
+  void answer_no_route(const httplib::Request& req, httplib::Response& res) const {
+    std::string allowed;
+    for (const auto& [method, pattern] : routes) {
+      if (method != req.method && std::regex_match(req.path, pattern)) allowed = method;
+    }
+    if (!allowed.empty()) {
+      res.set_header("Allow", allowed);
+      send_error(res, 405, req.method + " is not allowed on " + req.path + "; use " + allowed + " (" + kDocs + ")");
+      return;
+    }
+    send_error(res, 404,
+               "no such endpoint: " + req.method + " " + req.path + "; the API is under /api/ and " + "/metrics (" +
+                   kDocs + ")");
   }
 
   // ---- Reads ----
 
-  void health(const httplib::Request& req, httplib::Response& res) {
-    Result<Query> q = Query::of(req, {});
-    if (!q) return send_error(res, q.error());
+  // Takes no parameters and ignores any: a monitor's cache-busting `?t=...` must not turn
+  // "the service answers" into a 400.
+  void health(const httplib::Request&, httplib::Response& res) {
     json out = json::object();
     if (status.health) {
       json service = status.health();
@@ -629,7 +777,8 @@ struct HttpApi::Impl {
 
   // ---- Writes ----
 
-  // The token check every write passes first. False: the answer is already set.
+  // The token check every write passes first, before its body is read (before_body). False:
+  // the answer is already set.
   bool authorized(const httplib::Request& req, httplib::Response& res) const {
     const std::string expected = current_token();
     if (expected.empty()) {
@@ -641,10 +790,7 @@ struct HttpApi::Impl {
     const std::string header = req.get_header_value("Authorization");
     constexpr std::string_view kScheme = "Bearer ";
     const bool bearer =
-        header.size() >= kScheme.size() &&
-        std::equal(kScheme.begin(), kScheme.end(), header.begin(), [](char a, char b) {
-          return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
-        });
+        header.size() >= kScheme.size() && iequals(std::string_view(header).substr(0, kScheme.size()), kScheme);
     if (!bearer || !same_secret(std::string_view(header).substr(kScheme.size()), expected)) {
       res.set_header("WWW-Authenticate", "Bearer realm=\"gaugeloop\"");
       send_error(res, 401,
@@ -661,10 +807,9 @@ struct HttpApi::Impl {
     send_json(res, 200, *out);
   }
 
-  void measure(const httplib::Request& req, httplib::Response& res) {
-    if (!authorized(req, res)) return;
+  void measure(const httplib::Request&, const std::string& text, httplib::Response& res) {
     if (!writes.trigger_measure) return send_error(res, 501, "this service does not take measurement triggers");
-    Result<json> body = body_object(req, {"part", "lobe", "note"}, R"({"part": "intake_flat", "lobe": 1})");
+    Result<json> body = body_object(text, {"part", "lobe", "note"}, R"({"part": "intake_flat", "lobe": 1})");
     if (!body) return send_error(res, body.error());
     Result<std::string> part = string_field(*body, "part", true);
     if (!part) return send_error(res, part.error());
@@ -675,12 +820,11 @@ struct HttpApi::Impl {
     answer(res, writes.trigger_measure(*part, *lobe, *note));
   }
 
-  void approve(const httplib::Request& req, httplib::Response& res) {
-    if (!authorized(req, res)) return;
+  void approve(const httplib::Request& req, const std::string& text, httplib::Response& res) {
     if (!writes.approve) return send_error(res, 501, "this service does not approve tables");
     Result<std::int64_t> id = path_id(req.matches[1], "pending table id");
     if (!id) return send_error(res, id.error());
-    Result<json> body = body_object(req, {"by", "note"}, R"({"by": "anna", "note": "checked the lobe"})");
+    Result<json> body = body_object(text, {"by", "note"}, R"({"by": "anna", "note": "checked the lobe"})");
     if (!body) return send_error(res, body.error());
     Result<std::string> by = string_field(*body, "by", true);
     if (!by) return send_error(res, by.error());
@@ -689,11 +833,10 @@ struct HttpApi::Impl {
     answer(res, writes.approve(*id, *by, *note));
   }
 
-  void rollback(const httplib::Request& req, httplib::Response& res) {
-    if (!authorized(req, res)) return;
+  void rollback(const httplib::Request&, const std::string& text, httplib::Response& res) {
     if (!writes.rollback) return send_error(res, 501, "this service does not roll tables back");
     Result<json> body =
-        body_object(req, {"program", "version", "by"}, R"({"program": "CAM_INTAKE_L1", "version": 3, "by": "anna"})");
+        body_object(text, {"program", "version", "by"}, R"({"program": "CAM_INTAKE_L1", "version": 3, "by": "anna"})");
     if (!body) return send_error(res, body.error());
     Result<std::string> program = string_field(*body, "program", true);
     if (!program) return send_error(res, program.error());
@@ -732,7 +875,8 @@ struct HttpApi::Impl {
   const HttpWrites writes;
   const HttpStatus status;
   std::vector<std::pair<std::string, std::regex>> routes;  // for 405: the method a path takes
-  httplib::Server server;
+  // An httplib::SSLServer with [http] tls_cert and tls_key: one set of routes either way.
+  const std::unique_ptr<httplib::Server> server;
   int port = 0;
   std::thread listener;
   std::atomic<bool> listener_done{false};
@@ -749,7 +893,37 @@ void HttpApi::set_token(std::string token) {
   impl_->token = std::move(token);
 }
 
-bool HttpApi::alive() const { return impl_->server.is_running() && !impl_->listener_done; }
+bool HttpApi::alive() const { return impl_->server->is_running() && !impl_->listener_done; }
+
+namespace {
+
+// Plain HTTP, or HTTPS when the settings name a certificate and key. kInvalidInput naming the
+// files when they cannot be read or are not a PEM certificate and its key.
+Result<std::unique_ptr<httplib::Server>> make_server(const HttpSettings& settings) {
+  if (settings.tls_cert.empty() && settings.tls_key.empty()) return std::make_unique<httplib::Server>();
+  if (settings.tls_cert.empty() || settings.tls_key.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "[http] tls_cert and tls_key go together: give both for HTTPS, or neither for plain HTTP");
+  }
+  for (const auto& [key, file] : {std::pair{"tls_cert", settings.tls_cert}, std::pair{"tls_key", settings.tls_key}}) {
+    if (!std::ifstream(file)) {
+      return make_error(ErrorCode::kInvalidInput, std::string("cannot read the [http] ") + key + " file " +
+                                                      file.string() +
+                                                      ": check that it exists and that the service's user may read it");
+    }
+  }
+  auto server = std::make_unique<httplib::SSLServer>(settings.tls_cert.c_str(), settings.tls_key.c_str());
+  if (!server->is_valid()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "cannot serve HTTPS with the certificate " + settings.tls_cert.string() + " and the key " +
+                          settings.tls_key.string() +
+                          ": both must be PEM files, the key unencrypted and the one of the certificate "
+                          "([http] tls_cert, tls_key)");
+  }
+  return std::unique_ptr<httplib::Server>(std::move(server));
+}
+
+}  // namespace
 
 Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, std::filesystem::path db_path,
                                                 HttpWrites writes, HttpStatus status) {
@@ -757,39 +931,44 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
     return make_error(ErrorCode::kInvalidInput,
                       "HTTP port " + std::to_string(settings.port) + " is not a port; use 1 to 65535, or 0 for any");
   }
-  auto impl = std::make_unique<Impl>(settings, std::move(db_path), std::move(writes), std::move(status));
+  Result<std::unique_ptr<httplib::Server>> server = make_server(settings);
+  if (!server) return server.error();
+  auto impl =
+      std::make_unique<Impl>(settings, std::move(db_path), std::move(writes), std::move(status), std::move(*server));
   Impl& s = *impl;
   using R = const httplib::Request&;
   using W = httplib::Response&;
-  s.route("GET", "/api/health", [&s](R q, W a) { s.health(q, a); });
-  s.route("GET", "/api/runs", [&s](R q, W a) { s.list_runs(q, a); });
-  s.route("GET", "/api/runs/([^/]+)", [&s](R q, W a) { s.show_run(q, a); });
-  s.route("GET", "/api/runs/([^/]+)/export", [&s](R q, W a) { s.export_run(q, a); });
-  s.route("GET", "/api/trend", [&s](R q, W a) { s.trend(q, a); });
-  s.route("GET", "/api/events", [&s](R q, W a) { s.events(q, a); });
-  s.route("GET", "/api/nc/table", [&s](R q, W a) { s.nc_table(q, a); });
-  s.route("GET", "/api/nc/history", [&s](R q, W a) { s.nc_history(q, a); });
-  s.route("GET", "/api/nc/pending", [&s](R q, W a) { s.nc_pending(q, a); });
-  s.route("GET", "/metrics", [&s](R q, W a) { s.metrics(q, a); });
-  s.route("POST", "/api/measure", [&s](R q, W a) { s.measure(q, a); });
-  s.route("POST", "/api/nc/approve/([^/]+)", [&s](R q, W a) { s.approve(q, a); });
-  s.route("POST", "/api/nc/rollback", [&s](R q, W a) { s.rollback(q, a); });
-  s.server.set_error_handler([&s](R q, W a) { s.fill_error(q, a); });
-  s.server.set_exception_handler([](R q, W a, std::exception_ptr ep) { Impl::internal_error(q, a, std::move(ep)); });
-  s.server.set_payload_max_length(kMaxBodyBytes);
+  using B = const std::string&;
+  s.route("/api/health", [&s](R q, W a) { s.health(q, a); });
+  s.route("/api/runs", [&s](R q, W a) { s.list_runs(q, a); });
+  s.route("/api/runs/([^/]+)", [&s](R q, W a) { s.show_run(q, a); });
+  s.route("/api/runs/([^/]+)/export", [&s](R q, W a) { s.export_run(q, a); });
+  s.route("/api/trend", [&s](R q, W a) { s.trend(q, a); });
+  s.route("/api/events", [&s](R q, W a) { s.events(q, a); });
+  s.route("/api/nc/table", [&s](R q, W a) { s.nc_table(q, a); });
+  s.route("/api/nc/history", [&s](R q, W a) { s.nc_history(q, a); });
+  s.route("/api/nc/pending", [&s](R q, W a) { s.nc_pending(q, a); });
+  s.route("/metrics", [&s](R q, W a) { s.metrics(q, a); });
+  s.route_write("/api/measure", [&s](R q, B b, W a) { s.measure(q, b, a); });
+  s.route_write("/api/nc/approve/([^/]+)", [&s](R q, B b, W a) { s.approve(q, b, a); });
+  s.route_write("/api/nc/rollback", [&s](R q, B b, W a) { s.rollback(q, b, a); });
+  s.server->set_pre_routing_handler([&s](R q, W a) { return s.before_body(q, a); });
+  s.server->set_error_handler([&s](R q, W a) { s.fill_error(q, a); });
+  s.server->set_exception_handler([](R q, W a, std::exception_ptr ep) { Impl::internal_error(q, a, std::move(ep)); });
+  s.server->set_payload_max_length(kMaxBodyBytes);
   // httplib's default also sets SO_REUSEPORT, which lets a second service bind the same port and
   // take half the requests. SO_REUSEADDR alone still allows a restart while old connections
   // linger in TIME_WAIT.
-  s.server.set_socket_options([](socket_t sock) {
+  s.server->set_socket_options([](socket_t sock) {
     const int yes = 1;
     ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
   });
-  s.server.set_logger([](R q, const httplib::Response& a) {
+  s.server->set_logger([](R q, const httplib::Response& a) {
     spdlog::debug("http: {} {} from {} -> {}", q.method, q.path, q.remote_addr, a.status);
   });
 
-  const int port = settings.port == 0 ? s.server.bind_to_any_port(settings.host)
-                                      : (s.server.bind_to_port(settings.host, settings.port) ? settings.port : -1);
+  const int port = settings.port == 0 ? s.server->bind_to_any_port(settings.host)
+                                      : (s.server->bind_to_port(settings.host, settings.port) ? settings.port : -1);
   if (port < 0) {
     return make_error(ErrorCode::kIo, "cannot serve HTTP on " + settings.host + ":" + std::to_string(settings.port) +
                                           ": the port is in use or the host is not an address of this machine; "
@@ -799,7 +978,7 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
   s.listener = start_guarded_thread(
       "HTTP listener",
       [&s] {
-        s.server.listen_after_bind();
+        s.server->listen_after_bind();
         s.listener_done = true;
       },
       [&s](std::string_view name, std::string_view what) {
@@ -808,13 +987,13 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
       });
   // stop() before the listener runs would be lost (httplib only stops a running server), so
   // start() returns once it runs (or, should it fail at once, has ended).
-  while (!s.server.is_running() && !s.listener_done) std::this_thread::yield();
+  while (!s.server->is_running() && !s.listener_done) std::this_thread::yield();
   return std::unique_ptr<HttpApi>(new HttpApi(std::move(impl)));
 }
 
 void HttpApi::stop() {
   if (!impl_ || !impl_->listener.joinable()) return;
-  impl_->server.stop();
+  impl_->server->stop();
   impl_->listener.join();
 }
 

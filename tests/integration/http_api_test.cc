@@ -3,11 +3,12 @@
 #include "service/http_api.h"
 
 #include <gtest/gtest.h>
-#include <httplib.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -18,8 +19,13 @@
 #include "job/measure_job.h"
 #include "service/service.h"
 #include "storage/run_store.h"
+#include "tests/support/cli.h"
+#include "tests/support/raw_http.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
+
+// Last: httplib brings <resolv.h>, whose `res` macro breaks Eigen's headers.
+#include <httplib.h>
 
 namespace gaugeloop {
 namespace {
@@ -190,6 +196,15 @@ TEST_F(HttpApiTest, HealthMergesTheServiceStateAndSaysWhetherTheDatabaseIsThere)
   EXPECT_TRUE(has(a.j["writes"].get<std::string>(), "disabled")) << a.body;
 }
 
+TEST_F(HttpApiTest, HealthIgnoresItsQueryAndIsAlways200) {
+  start();
+  for (const char* query : {"?x=1", "?t=1700000000&t=2", "?lobe=abc"}) {
+    Answer a = get(std::string("/api/health") + query);
+    EXPECT_EQ(a.status, 200) << query << ": " << a.body;
+    EXPECT_TRUE(a.j.contains("version")) << a.body;
+  }
+}
+
 TEST_F(HttpApiTest, RunsFilterByPartLobeMachineTimeAndStatusLikeTheCli) {
   fill();
   start();
@@ -223,7 +238,21 @@ TEST_F(HttpApiTest, ShowIsTheRunAsRunsShowJsonAndAnUnknownRunIs404) {
   EXPECT_TRUE(has(error_of(get("/api/runs/999"), 404), "run 999 is not in run database")) << "names the run";
   EXPECT_TRUE(has(error_of(get("/api/runs/999"), 404), "GET /api/runs lists the ids"));
   EXPECT_TRUE(has(error_of(get("/api/runs/abc"), 400), "run id 'abc' is not a number"));
-  EXPECT_TRUE(has(error_of(get("/api/runs/-3"), 400), "run id '-3'"));
+  EXPECT_TRUE(has(error_of(get("/api/runs/-3"), 400), "run id -3 is out of range"));
+}
+
+TEST_F(HttpApiTest, IdsBelowOneAreOutOfRangeNotNotANumber) {
+  fill();
+  start("t", logging_writes());
+  for (const std::string id : {"-1", "0", "99999999999999999999"}) {
+    const std::string run = error_of(get("/api/runs/" + id), 400);
+    EXPECT_TRUE(has(run, "run id " + id + " is out of range; ids are whole numbers from 1")) << run;
+    EXPECT_FALSE(has(run, "not a number")) << run;
+    EXPECT_TRUE(has(error_of(get("/api/runs/" + id + "/export"), 400), "ids are whole numbers from 1"));
+    const std::string pending = error_of(post("/api/nc/approve/" + id, R"({"by": "anna"})", "t"), 400);
+    EXPECT_TRUE(has(pending, "pending table id " + id + " is out of range; ids are whole numbers from 1")) << pending;
+  }
+  EXPECT_TRUE(log_.all().empty());
 }
 
 TEST_F(HttpApiTest, ExportIsTheCsvOfRunsExport) {
@@ -445,6 +474,96 @@ TEST_F(HttpApiTest, MalformedBodiesAre400SayingWhatIsWrong) {
   EXPECT_EQ(get("/api/health").status, 200) << "still serving";
 }
 
+// The JSON error of a raw answer (head and body), after checking its status line.
+std::string raw_error(const std::string& answer, int status) {
+  EXPECT_EQ(answer.rfind("HTTP/1.1 " + std::to_string(status) + " ", 0), 0u) << answer;
+  const std::size_t body = answer.find("\r\n\r\n");
+  const json j = json::parse(body == std::string::npos ? "" : answer.substr(body + 4), nullptr, false);
+  EXPECT_TRUE(j.is_object() && j.contains("error")) << answer;
+  return j.is_object() ? j.value("error", std::string()) : std::string();
+}
+
+TEST_F(HttpApiTest, AWriteWithoutContentLengthIs411AndChunkedIsRead) {
+  start("t", logging_writes());
+  const std::string head =
+      "POST /api/measure HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer t\r\nContent-Type: application/json\r\n";
+  const std::string body = R"({"part": "intake", "lobe": 1})";
+  const std::string no_length = raw_error(testing::raw_http(api_->port(), head + "\r\n" + body), 411);
+  EXPECT_TRUE(has(no_length, "needs a Content-Length header (or Transfer-Encoding: chunked)")) << no_length;
+  EXPECT_TRUE(log_.all().empty());
+
+  char size[16];
+  std::snprintf(size, sizeof size, "%zx", body.size());
+  const std::string chunked = testing::raw_http(
+      api_->port(), head + "Transfer-Encoding: chunked\r\n\r\n" + size + "\r\n" + body + "\r\n0\r\n\r\n");
+  EXPECT_EQ(chunked.rfind("HTTP/1.1 200 ", 0), 0u) << chunked;
+  EXPECT_EQ(log_.all(), std::vector<std::string>{"measure intake 1 "});
+
+  const std::string big = std::string(70 * 1024, ' ');
+  std::snprintf(size, sizeof size, "%zx", big.size());
+  const std::string too_large = raw_error(testing::raw_http(api_->port(), head + "Transfer-Encoding: chunked\r\n\r\n" +
+                                                                              size + "\r\n" + big + "\r\n0\r\n\r\n"),
+                                          413);
+  EXPECT_TRUE(has(too_large, "larger than 64 KiB")) << too_large;
+  EXPECT_TRUE(has(raw_error(testing::raw_http(api_->port(), head + "Transfer-Encoding: gzip\r\n\r\n"), 501),
+                  "Transfer-Encoding 'gzip' is not supported"));
+  EXPECT_EQ(log_.all().size(), 1u);
+}
+
+TEST_F(HttpApiTest, AWriteThatIsNotJsonIs415) {
+  start("t", logging_writes());
+  const std::string body = R"({"part": "intake", "lobe": 1})";
+  httplib::Headers token{{"Authorization", "Bearer t"}};
+  const std::string plain = error_of(answer_of(client_->Post("/api/measure", token, body, "text/plain")), 415);
+  EXPECT_TRUE(has(plain, "Content-Type 'text/plain' is not JSON")) << plain;
+  EXPECT_TRUE(has(plain, "Content-Type: application/json")) << plain;
+  EXPECT_EQ(answer_of(client_->Post("/api/measure", token, body, "application/x-www-form-urlencoded")).status, 415);
+  EXPECT_EQ(answer_of(client_->Post("/api/measure", token, body, "multipart/form-data; boundary=x")).status, 415);
+  const std::string none =
+      raw_error(testing::raw_http(api_->port(),
+                                  "POST /api/measure HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer t\r\n"
+                                  "Content-Length: " +
+                                      std::to_string(body.size()) + "\r\n\r\n" + body),
+                415);
+  EXPECT_TRUE(has(none, "no Content-Type")) << none;
+  EXPECT_TRUE(log_.all().empty());
+  for (const char* type : {"application/json; charset=utf-8", "Application/JSON", "application/json ;charset=UTF-8"}) {
+    EXPECT_EQ(answer_of(client_->Post("/api/measure", token, body, type)).status, 200) << type;
+  }
+  EXPECT_EQ(log_.all().size(), 3u);
+}
+
+TEST_F(HttpApiTest, TheTokenIsCheckedBeforeTheBodyIsRead) {
+  start("t", logging_writes());
+  const std::string big(100 * 1024, ' ');
+  EXPECT_EQ(post("/api/measure", big).status, 401) << "not 413: nothing of the body was read";
+  EXPECT_EQ(answer_of(client_->Post("/api/measure", big, "text/plain")).status, 401) << "not 415";
+  EXPECT_EQ(post("/api/measure", big, "t").status, 413);
+  EXPECT_TRUE(log_.all().empty());
+}
+
+TEST_F(HttpApiTest, ABodyWhereNoneIsTakenIsRefusedUnread) {
+  fill();
+  start("t", logging_writes());
+  const std::string get = raw_error(
+      testing::raw_http(api_->port(), "GET /api/runs HTTP/1.1\r\nHost: x\r\nContent-Length: 4\r\n\r\nabcd"), 400);
+  EXPECT_TRUE(has(get, "GET /api/runs takes no request body")) << get;
+  EXPECT_EQ(raw_error(testing::raw_http(api_->port(),
+                                        "GET /api/runs HTTP/1.1\r\nHost: x\r\n"
+                                        "Transfer-Encoding: chunked\r\n\r\n4\r\nabcd\r\n0\r\n\r\n"),
+                      400)
+                .empty(),
+            false);
+  EXPECT_TRUE(has(raw_error(testing::raw_http(api_->port(),
+                                              "PUT /api/runs HTTP/1.1\r\nHost: x\r\n"
+                                              "Transfer-Encoding: chunked\r\n\r\n"),
+                            405),
+                  "use GET"));
+  EXPECT_TRUE(has(raw_error(testing::raw_http(api_->port(), "POST /api/nothing HTTP/1.1\r\nHost: x\r\n\r\n"), 404),
+                  "no such endpoint"));
+  EXPECT_EQ(listed("?limit=1"), (Ids{ids_[3]})) << "still serving";
+}
+
 TEST_F(HttpApiTest, UnknownPathsAre404AndWrongMethods405InJson) {
   start();
   EXPECT_TRUE(has(error_of(get("/api/nothing"), 404), "no such endpoint: GET /api/nothing"));
@@ -559,6 +678,90 @@ TEST(JobReportJson, WhatARefusedRunDidNotBuildOrPushIsNull) {
   EXPECT_EQ(p["table_version"], 3);
   EXPECT_TRUE(p["not_pushed_reason"].is_null()) << p.dump();
   EXPECT_EQ(p.size(), j.size()) << "every field in every answer";
+}
+
+// A self-signed certificate for 127.0.0.1 made with the openssl command, and the key.
+struct SelfSigned {
+  fs::path cert;
+  fs::path key;
+};
+
+SelfSigned make_certificate(const fs::path& dir) {
+  SelfSigned out{dir / "cert.pem", dir / "key.pem"};
+  const testing::CommandResult made = testing::run_shell(
+      "openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -subj /CN=localhost "
+      "-addext subjectAltName=IP:127.0.0.1,DNS:localhost -days 1 -keyout " +
+      out.key.string() + " -out " + out.cert.string());
+  EXPECT_EQ(made.exit_code, 0) << made.output;
+  return out;
+}
+
+TEST_F(HttpApiTest, WithACertificateAndKeyTheApiIsHttpsOnly) {
+  fill();
+  const SelfSigned tls = make_certificate(dir_);
+  HttpSettings settings;
+  settings.port = 0;
+  settings.tls_cert = tls.cert;
+  settings.tls_key = tls.key;
+  Result<std::unique_ptr<HttpApi>> api = HttpApi::start(settings, db(), {}, {});
+  ASSERT_TRUE(api.ok()) << api.error().message;
+  const std::string port = std::to_string((*api)->port());
+  EXPECT_TRUE((*api)->alive());
+
+  const testing::CommandResult https = testing::run_shell("curl -sS --max-time 60 --cacert " + tls.cert.string() +
+                                                          " https://127.0.0.1:" + port + "/api/health");
+  ASSERT_EQ(https.exit_code, 0) << https.output;
+  const json health = json::parse(https.output, nullptr, false);
+  EXPECT_EQ(health["database"]["available"], true) << https.output;
+  EXPECT_EQ(health["version"], GAUGELOOP_VERSION) << https.output;
+
+  const testing::CommandResult runs = testing::run_shell("curl -sS --max-time 60 --cacert " + tls.cert.string() +
+                                                         " 'https://127.0.0.1:" + port + "/api/runs?limit=1'");
+  ASSERT_EQ(runs.exit_code, 0) << runs.output;
+  EXPECT_EQ(json::parse(runs.output, nullptr, false)[0]["id"], ids_[3]) << runs.output;
+
+  const testing::CommandResult plain =
+      testing::run_shell("curl -sS --max-time 60 http://127.0.0.1:" + port + "/api/health");
+  EXPECT_NE(plain.exit_code, 0) << "plain HTTP to the HTTPS port: " << plain.output;
+  EXPECT_FALSE(has(plain.output, "\"version\"")) << plain.output;
+  const testing::CommandResult untrusted =
+      testing::run_shell("curl -sS --max-time 60 https://127.0.0.1:" + port + "/api/health");
+  EXPECT_NE(untrusted.exit_code, 0) << "a certificate curl was not told to trust: " << untrusted.output;
+  (*api)->stop();
+}
+
+TEST_F(HttpApiTest, AKeyOrCertificateThatCannotBeLoadedIsRefusedNamingTheFiles) {
+  const SelfSigned tls = make_certificate(dir_);
+  const fs::path garbage = dir_ / "garbage.pem";
+  std::ofstream(garbage) << "-----BEGIN PRIVATE KEY-----\nnot a key\n-----END PRIVATE KEY-----\n";
+  HttpSettings settings;
+  settings.port = 0;
+  settings.tls_cert = tls.cert;
+  settings.tls_key = garbage;
+  Result<std::unique_ptr<HttpApi>> bad_key = HttpApi::start(settings, db(), {}, {});
+  ASSERT_FALSE(bad_key.ok());
+  EXPECT_EQ(bad_key.error().code, ErrorCode::kInvalidInput);
+  EXPECT_TRUE(has(bad_key.error().message, garbage.string())) << bad_key.error().message;
+  EXPECT_TRUE(has(bad_key.error().message, tls.cert.string())) << bad_key.error().message;
+
+  settings.tls_cert = garbage;
+  settings.tls_key = tls.key;
+  Result<std::unique_ptr<HttpApi>> bad_cert = HttpApi::start(settings, db(), {}, {});
+  ASSERT_FALSE(bad_cert.ok());
+  EXPECT_TRUE(has(bad_cert.error().message, garbage.string())) << bad_cert.error().message;
+
+  settings.tls_cert = tls.cert;
+  settings.tls_key = dir_ / "missing.pem";
+  Result<std::unique_ptr<HttpApi>> missing = HttpApi::start(settings, db(), {}, {});
+  ASSERT_FALSE(missing.ok());
+  EXPECT_EQ(missing.error().code, ErrorCode::kInvalidInput);
+  EXPECT_TRUE(has(missing.error().message, "tls_key file " + (dir_ / "missing.pem").string()))
+      << missing.error().message;
+
+  settings.tls_key.clear();
+  Result<std::unique_ptr<HttpApi>> half = HttpApi::start(settings, db(), {}, {});
+  ASSERT_FALSE(half.ok());
+  EXPECT_TRUE(has(half.error().message, "tls_cert and tls_key go together")) << half.error().message;
 }
 
 }  // namespace
