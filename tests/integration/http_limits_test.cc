@@ -2,21 +2,17 @@
 // before it is buffered, whatever its transfer encoding, and a write without the token is
 // refused before a byte of its body is read. Measured on the process: its peak resident
 // memory (VmHWM) before and after.
-#include <arpa/inet.h>
 #include <gtest/gtest.h>
-#include <netinet/in.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
 
-#include <cerrno>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <string_view>
 
 #include "tests/support/cli.h"
+#include "tests/support/raw_http.h"
 #include "tests/support/service_process.h"
 #include "tests/support/temp_dir.h"
 
@@ -44,69 +40,30 @@ long status_kb(pid_t pid, const std::string& field) {
   return -1;
 }
 
-struct Streamed {
-  std::string answer;           // what the service answered before it closed the connection
-  std::uint64_t body_sent = 0;  // body bytes the socket took before the service closed it
-  bool whole_body_sent = false;
-};
-
-// Sends `head`, then a chunked body of `body_bytes` made on the fly (64 KiB chunks of one
-// letter, no line break anywhere), reading whatever the service answers meanwhile. The
-// service closing the connection (EPIPE or ECONNRESET on send) is the expected end: then the
-// rest of the answer is read and nothing more is sent.
-Streamed send_chunked(int port, const std::string& head, std::uint64_t body_bytes) {
-  Streamed out;
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  if (fd < 0) return out;
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(static_cast<std::uint16_t>(port));
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
-    ::close(fd);
-    return out;
-  }
+// `head`, then a chunked body of `body_bytes` made as it is sent (64 KiB chunks of one letter,
+// no line break anywhere), to the service until it closes the connection; what it answered.
+testing::RawExchange send_chunked(int port, const std::string& head, std::uint64_t body_bytes) {
   const std::string chunk = "10000\r\n" + std::string(64 * 1024, 'x') + "\r\n";
-  const std::string last = "0\r\n\r\n";
-  std::string pending = head;  // the head, then one chunk (or the last) at a time
-  std::size_t offset = 0;
-  bool sending = true;
-  for (;;) {
-    pollfd p{fd, static_cast<short>(POLLIN | (sending ? POLLOUT : 0)), 0};
-    // A guard, not a clock: a service that neither reads nor answers fails the test.
-    if (::poll(&p, 1, 60 * 1000) <= 0) break;
-    if ((p.revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
-      char buf[4096];
-      const ssize_t n = ::recv(fd, buf, sizeof buf, MSG_DONTWAIT);
-      if (n > 0) {
-        out.answer.append(buf, static_cast<std::size_t>(n));
-        continue;
-      }
-      if (n == 0 || (errno != EAGAIN && errno != EINTR)) break;  // closed, or reset after the answer
-    }
-    if (sending && (p.revents & POLLOUT) != 0) {
-      const ssize_t n = ::send(fd, pending.data() + offset, pending.size() - offset, MSG_NOSIGNAL | MSG_DONTWAIT);
-      if (n < 0) {
-        if (errno == EAGAIN || errno == EINTR) continue;
-        sending = false;  // EPIPE, ECONNRESET: the service closed the connection
-        continue;
-      }
-      offset += static_cast<std::size_t>(n);
-      if (offset < pending.size()) continue;
-      offset = 0;
-      if (pending == last) {
-        out.whole_body_sent = true;
-        sending = false;
-      } else if (out.body_sent >= body_bytes) {
-        pending = last;
-      } else {
-        out.body_sent += 64 * 1024;
-        pending = chunk;
-      }
-    }
-  }
-  ::close(fd);
-  return out;
+  std::uint64_t given = 0;
+  int step = 0;  // 0: the head; 1: the chunks, then the last one; 2: all given
+  return testing::raw_exchange(
+      port,
+      [&]() -> std::string_view {
+        if (step == 0) {
+          step = 1;
+          return head;
+        }
+        if (step == 1 && given < body_bytes) {
+          given += 64 * 1024;
+          return chunk;
+        }
+        if (step == 1) {
+          step = 2;
+          return "0\r\n\r\n";
+        }
+        return {};
+      },
+      /*until_closed=*/true);
 }
 
 class HttpApiLimitsTest : public ::testing::Test {
@@ -141,21 +98,23 @@ TEST_F(HttpApiLimitsTest, AHugeChunkedBodyCostsTheServiceUnder16MegabytesWithOrW
   const std::string post =
       "POST /api/measure HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
       "Transfer-Encoding: chunked\r\n";
-  const Streamed no_token = send_chunked(port, post + "\r\n", kHugeBodyBytes);
+  const testing::RawExchange no_token = send_chunked(port, post + "\r\n", kHugeBodyBytes);
   EXPECT_EQ(no_token.answer.rfind("HTTP/1.1 401", 0), 0u) << no_token.answer.substr(0, 400);
   EXPECT_NE(no_token.answer.find("Authorization: Bearer <token>"), std::string::npos) << no_token.answer;
-  EXPECT_FALSE(no_token.whole_body_sent) << "the service closes the connection instead of reading the body";
+  EXPECT_NE(no_token.answer.find("Connection: close"), std::string::npos) << no_token.answer;
+  EXPECT_FALSE(no_token.all_sent) << "the service closes the connection instead of reading the body";
 
-  const Streamed with_token = send_chunked(port, post + "Authorization: Bearer " + kToken + "\r\n\r\n", kHugeBodyBytes);
+  const testing::RawExchange with_token =
+      send_chunked(port, post + "Authorization: Bearer " + kToken + "\r\n\r\n", kHugeBodyBytes);
   EXPECT_EQ(with_token.answer.rfind("HTTP/1.1 413", 0), 0u) << with_token.answer.substr(0, 400);
   EXPECT_NE(with_token.answer.find("larger than 64 KiB"), std::string::npos) << with_token.answer;
-  EXPECT_FALSE(with_token.whole_body_sent);
+  EXPECT_FALSE(with_token.all_sent);
 
-  const Streamed get =
+  const testing::RawExchange get =
       send_chunked(port, "GET /api/runs HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n", kHugeBodyBytes);
   EXPECT_EQ(get.answer.rfind("HTTP/1.1 400", 0), 0u) << get.answer.substr(0, 400);
   EXPECT_NE(get.answer.find("takes no request body"), std::string::npos) << get.answer;
-  EXPECT_FALSE(get.whole_body_sent);
+  EXPECT_FALSE(get.all_sent);
 
   const long peak_after_kb = status_kb(service.pid(), "VmHWM");
   const long now_kb = status_kb(service.pid(), "VmRSS");
