@@ -714,7 +714,8 @@ TEST_F(HttpApiTest, WithACertificateAndKeyTheApiIsHttpsOnly) {
   settings.port = 0;
   settings.tls_cert = tls.cert;
   settings.tls_key = tls.key;
-  Result<std::unique_ptr<HttpApi>> api = HttpApi::start(settings, db(), {}, {});
+  settings.token = "s3cret-token";
+  Result<std::unique_ptr<HttpApi>> api = HttpApi::start(settings, db(), logging_writes(), {});
   ASSERT_TRUE(api.ok()) << api.error().message;
   const std::string port = std::to_string((*api)->port());
   EXPECT_TRUE((*api)->alive());
@@ -730,6 +731,13 @@ TEST_F(HttpApiTest, WithACertificateAndKeyTheApiIsHttpsOnly) {
                                                          " 'https://127.0.0.1:" + port + "/api/runs?limit=1'");
   ASSERT_EQ(runs.exit_code, 0) << runs.output;
   EXPECT_EQ(json::parse(runs.output, nullptr, false)[0]["id"], ids_[3]) << runs.output;
+  const testing::CommandResult write = testing::run_shell(
+      "curl -sS --max-time 60 --cacert " + tls.cert.string() + " -H 'Authorization: Bearer s3cret-token' " +
+      "-H 'Content-Type: application/json' -d '{\"part\": \"intake\", \"lobe\": 2}' https://127.0.0.1:" + port +
+      "/api/measure");
+  ASSERT_EQ(write.exit_code, 0) << write.output;
+  EXPECT_EQ(json::parse(write.output, nullptr, false)["queued"], true) << write.output;
+  EXPECT_EQ(log_.all(), std::vector<std::string>{"measure intake 2 "});
 
   const testing::CommandResult plain =
       testing::run_shell("curl -sS --max-time 60 http://127.0.0.1:" + port + "/api/health");
@@ -761,7 +769,14 @@ TEST_F(HttpApiTest, AKeyOrCertificateThatCannotBeLoadedIsRefusedNamingTheFiles) 
   ASSERT_FALSE(bad_cert.ok());
   EXPECT_TRUE(has(bad_cert.error().message, garbage.string())) << bad_cert.error().message;
 
+  fs::create_directory(dir_ / "other");
+  const SelfSigned other = make_certificate(dir_ / "other");
   settings.tls_cert = tls.cert;
+  settings.tls_key = other.key;
+  Result<std::unique_ptr<HttpApi>> not_its_key = HttpApi::start(settings, db(), {}, {});
+  ASSERT_FALSE(not_its_key.ok()) << "a key that is not the certificate's";
+  EXPECT_TRUE(has(not_its_key.error().message, other.key.string())) << not_its_key.error().message;
+
   settings.tls_key = dir_ / "missing.pem";
   Result<std::unique_ptr<HttpApi>> missing = HttpApi::start(settings, db(), {}, {});
   ASSERT_FALSE(missing.ok());
