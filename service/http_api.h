@@ -38,15 +38,19 @@ struct HttpStatus {
   std::function<std::string()> extra_metrics;
 };
 
-// cpp-httplib's server on a thread of its own (and its worker threads). Every request reads the
-// run database at db_path through a RunStore of its own (connections are pooled), so the API
-// never blocks the service writing runs; a missing database answers 503.
+// cpp-httplib's server on a thread of its own (and its worker threads): HTTPS when the settings
+// name tls_cert and tls_key, else plain HTTP. Every request reads the run database at db_path
+// through a RunStore of its own (connections are pooled), so the API never blocks the service
+// writing runs; a missing database answers 503. A request body is held only by a write, only
+// after the token was checked, and never beyond 64 KiB, whatever its transfer encoding.
 // Lifetime: the hooks are called until stop() returns; stop them after, not before.
 // Thread: start, port and stop from one thread.
 class HttpApi {
  public:
   // Binds host:port and starts serving before it returns. kIo naming the address when it
-  // cannot bind (in use, or not an address of this machine).
+  // cannot bind (in use, or not an address of this machine); kInvalidInput naming the files
+  // when only one of tls_cert and tls_key is set, or they cannot be read or loaded as a PEM
+  // certificate and its (unencrypted) key.
   static Result<std::unique_ptr<HttpApi>> start(const HttpSettings& settings, std::filesystem::path db_path,
                                                 HttpWrites writes, HttpStatus status);
 
