@@ -73,9 +73,12 @@ Result<StoreMetrics> RunStore::metrics_snapshot() const {
     if (!row.ok()) return row.error();
     if (!*row) break;
     const std::string table = counts->column<std::string>(0);
-    auto& by_value = table == "runs" ? out.runs_by_status : out.events_by_kind;
-    if (table == "runs" || table == "events")
-      by_value[counts->column<std::string>(1)] = counts->column<std::int64_t>(2);
+    const std::string value = counts->column<std::string>(1);
+    if (table == "runs") {
+      out.runs_by_status[value] = counts->column<std::int64_t>(2);
+    } else if (table == "events") {
+      out.events_by_kind[value] = counts->column<std::int64_t>(2);
+    }
   }
 
   Result<Statement> pending = Statement::prepare(conn, kPending, operation);

@@ -1,6 +1,7 @@
-// The /metrics text: valid Prometheus exposition (checked by a strict reader of the text
-// format, as promtool is not packaged here), names in base units, the build's identity, and a
-// log that does not grow with every scrape.
+// The /metrics text: valid Prometheus exposition, names in base units, the build's identity,
+// and a log that does not grow with every scrape. The exposition is checked by a strict reader
+// of the text format written here: promtool comes only with Debian's prometheus server
+// package, which is not among the project's dependencies.
 #include "service/metrics_text.h"
 // Before <httplib.h>: http_api.h brings Eigen, and httplib's <resolv.h> defines a macro `_res`
 // that Eigen uses as a parameter name.
