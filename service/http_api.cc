@@ -38,7 +38,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// Every list the API reads in full (metrics, program names) asks for this many rows.
+// Every list the API reads in full (program names) asks for this many rows.
 constexpr int kAll = INT_MAX;
 constexpr int kMaxLimit = 100000;
 constexpr int kMaxLobe = 1000;  // as `runs list --lobe`
@@ -757,15 +757,17 @@ struct HttpApi::Impl {
     std::string text;
     Result<StorePool::Lease> store = stores.acquire();
     Status read = store ? append_database_metrics(**store, text) : Status(store.error());
-    if (!read) {
+    if (read) {
+      database_log.note(DatabaseState::kUp);
+    } else {
       if (store) store->discard();
-      spdlog::warn("http: /metrics without the run database: {}", read.error().message);
+      // No file before the first run is normal: gaugeloop_database_up 0 says so, the log does not.
+      std::error_code ec;
+      const bool missing = !fs::exists(stores.path(), ec) && !ec;
+      database_log.note(missing ? DatabaseState::kMissing : DatabaseState::kFailed, read.error().message);
     }
-    text +=
-        "# HELP gaugeloop_database_up Whether the run database could be read for this scrape.\n"
-        "# TYPE gaugeloop_database_up gauge\n"
-        "gaugeloop_database_up " +
-        std::string(read ? "1" : "0") + "\n";
+    append_database_up(read.ok(), text);
+    append_build_info(text);
     if (status.extra_metrics) {
       std::string extra = status.extra_metrics();
       if (!extra.empty() && extra.back() != '\n') extra += '\n';
@@ -872,6 +874,7 @@ struct HttpApi::Impl {
   mutable std::mutex token_mutex;
   std::string token = settings.token;  // guarded by token_mutex; set_token replaces it
   StorePool stores;
+  DatabaseStateLog database_log;  // how /metrics last found the database
   const HttpWrites writes;
   const HttpStatus status;
   std::vector<std::pair<std::string, std::regex>> routes;  // for 405: the method a path takes

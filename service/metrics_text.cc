@@ -1,29 +1,37 @@
-// The Prometheus text of the run database's series.
+// The Prometheus text of the run database's series and of the build.
 #include "service/metrics_text.h"
 
-#include <climits>
-#include <cstdint>
+#include <spdlog/spdlog.h>
+
 #include <ctime>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <tuple>
-#include <vector>
 
 #include "core/utc_time.h"
 
 namespace gaugeloop {
 namespace {
 
-// Every list read in full asks for this many rows.
-constexpr int kAll = INT_MAX;
+// Micrometres in a metre: Prometheus asks for base units. Dividing (not multiplying by 1e-6,
+// which is not exact in binary) gives the double nearest the metres: 4 um prints as 4e-06.
+constexpr double kUmPerMetre = 1e6;
 
 std::string number(double v) {
   nlohmann::json j = v;
   return j.dump();  // shortest text that reads back exactly
 }
 
-std::string label_value(const std::string& v) { return prometheus_label_value(v); }
+void family(std::string& out, const char* name, const char* type, const char* help) {
+  out += "# HELP ";
+  out += name;
+  out += ' ';
+  out += help;
+  out += "\n# TYPE ";
+  out += name;
+  out += ' ';
+  out += type;
+  out += '\n';
+}
 
 }  // namespace
 
@@ -42,61 +50,71 @@ std::string prometheus_label_value(const std::string& v) {
   return out;
 }
 
-Status append_database_metrics(const RunStore& store, std::string& out) {
-  RunQuery rq;
-  rq.limit = kAll;
-  Result<std::vector<RunSummary>> runs = store.list_runs(rq);  // newest first
-  if (!runs) return runs.error();
-  EventQuery eq;
-  eq.limit = kAll;
-  Result<std::vector<StoredEvent>> events = store.list_events(eq);
-  if (!events) return events.error();
-  PendingQuery pq;
-  pq.limit = kAll;
-  pq.status = PendingStatus::kPending;
-  Result<std::vector<PendingTable>> pending = store.list_pending(pq);
-  if (!pending) return pending.error();
+void append_store_metrics(const StoreMetrics& m, std::string& out) {
+  family(out, "gaugeloop_runs_stored", "gauge", "Runs in the database, by status.");
+  for (const auto& [status, n] : m.runs_by_status) {
+    out += "gaugeloop_runs_stored{status=\"" + prometheus_label_value(status) + "\"} " + std::to_string(n) + "\n";
+  }
+  family(out, "gaugeloop_events_stored", "gauge",
+         "Faults, refusals and service steps (info) in the database, by kind.");
+  for (const auto& [kind, n] : m.events_by_kind) {
+    out += "gaugeloop_events_stored{kind=\"" + prometheus_label_value(kind) + "\"} " + std::to_string(n) + "\n";
+  }
+  family(out, "gaugeloop_pending_tables", "gauge", "NC tables waiting for approval.");
+  out += "gaugeloop_pending_tables " + std::to_string(m.pending_tables) + "\n";
 
-  std::map<std::string, std::int64_t> by_status{{"measured", 0}, {"pushed", 0}};
-  // The newest run of each machine, part and lobe (the list is newest first).
-  std::map<std::tuple<std::string, std::string, int>, const RunSummary*> last;
-  for (const RunSummary& r : *runs) {
-    ++by_status[r.status];
-    last.emplace(std::make_tuple(r.machine, r.part, r.lobe), &r);
-  }
-  std::map<std::string, std::int64_t> by_kind{{"fault", 0}, {"refusal", 0}, {"info", 0}};
-  for (const StoredEvent& e : *events) ++by_kind[std::string(event_kind_name(e.event.kind))];
-
-  std::string s;
-  s += "# HELP gaugeloop_runs_stored Runs in the database, by status.\n# TYPE gaugeloop_runs_stored gauge\n";
-  for (const auto& [st, n] : by_status) {
-    s += "gaugeloop_runs_stored{status=\"" + label_value(st) + "\"} " + std::to_string(n) + "\n";
-  }
-  s += "# HELP gaugeloop_events_stored Faults, refusals and service steps (info) in the database, by kind.\n"
-       "# TYPE gaugeloop_events_stored gauge\n";
-  for (const auto& [kind, n] : by_kind) {
-    s += "gaugeloop_events_stored{kind=\"" + label_value(kind) + "\"} " + std::to_string(n) + "\n";
-  }
-  s += "# HELP gaugeloop_pending_tables NC tables waiting for approval.\n# TYPE gaugeloop_pending_tables gauge\n";
-  s += "gaugeloop_pending_tables " + std::to_string(pending->size()) + "\n";
-  const auto labels = [](const RunSummary& r) {
-    return "{machine=\"" + label_value(r.machine) + "\",part=\"" + label_value(r.part) + "\",lobe=\"" +
-           std::to_string(r.lobe) + "\"}";
+  const auto labels = [](const LobeLastRun& r) {
+    return "{machine=\"" + prometheus_label_value(r.machine) + "\",part=\"" + prometheus_label_value(r.part) +
+           "\",lobe=\"" + std::to_string(r.lobe) + "\"}";
   };
-  s += "# HELP gaugeloop_last_run_max_abs_error_um Largest lift error of the newest run of each lobe (um, cam "
-       "frame).\n# TYPE gaugeloop_last_run_max_abs_error_um gauge\n";
-  for (const auto& [key, r] : last)
-    s += "gaugeloop_last_run_max_abs_error_um" + labels(*r) + " " + number(r->max_abs_error_um) + "\n";
-  s += "# HELP gaugeloop_last_run_id Id of the newest run of each lobe.\n# TYPE gaugeloop_last_run_id gauge\n";
-  for (const auto& [key, r] : last) s += "gaugeloop_last_run_id" + labels(*r) + " " + std::to_string(r->id) + "\n";
-  s += "# HELP gaugeloop_last_run_started_timestamp_seconds When the newest run of each lobe started.\n"
-       "# TYPE gaugeloop_last_run_started_timestamp_seconds gauge\n";
-  for (const auto& [key, r] : last) {
-    if (const std::optional<std::time_t> t = epoch_of_utc(r->started_utc)) {
-      s += "gaugeloop_last_run_started_timestamp_seconds" + labels(*r) + " " + std::to_string(*t) + "\n";
+  family(out, "gaugeloop_last_run_max_abs_error_meters", "gauge",
+         "Largest lift error of the newest run of each lobe (metres, cam frame).");
+  for (const LobeLastRun& r : m.last_runs) {
+    out +=
+        "gaugeloop_last_run_max_abs_error_meters" + labels(r) + " " + number(r.max_abs_error_um / kUmPerMetre) + "\n";
+  }
+  family(out, "gaugeloop_last_run_id", "gauge", "Id of the newest run of each lobe.");
+  for (const LobeLastRun& r : m.last_runs) {
+    out += "gaugeloop_last_run_id" + labels(r) + " " + std::to_string(r.run_id) + "\n";
+  }
+  family(out, "gaugeloop_last_run_started_timestamp_seconds", "gauge", "When the newest run of each lobe started.");
+  for (const LobeLastRun& r : m.last_runs) {
+    if (const std::optional<std::time_t> t = epoch_of_utc(r.started_utc)) {
+      out += "gaugeloop_last_run_started_timestamp_seconds" + labels(r) + " " + std::to_string(*t) + "\n";
     }
   }
-  out += s;
+}
+
+Status append_database_metrics(const RunStore& store, std::string& out) {
+  Result<StoreMetrics> m = store.metrics_snapshot();
+  if (!m) return m.error();
+  append_store_metrics(*m, out);
   return {};
 }
+
+void append_build_info(std::string& out) {
+  family(out, "gaugeloop_build_info", "gauge", "Always 1; the labels say which gaugeloop answers.");
+  out += "gaugeloop_build_info{version=\"" + prometheus_label_value(GAUGELOOP_VERSION) + "\"} 1\n";
+}
+
+void append_database_up(bool up, std::string& out) {
+  family(out, "gaugeloop_database_up", "gauge", "Whether the run database could be read for this scrape.");
+  out += up ? "gaugeloop_database_up 1\n" : "gaugeloop_database_up 0\n";
+}
+
+bool DatabaseStateLog::note(DatabaseState state, const std::string& error) {
+  const auto before = static_cast<DatabaseState>(last_.exchange(static_cast<int>(state)));
+  if (before == state) return false;
+  if (state == DatabaseState::kFailed) {
+    spdlog::warn("http: /metrics cannot read the run database: {} (logged again only after it was read)", error);
+    return true;
+  }
+  if (before == DatabaseState::kFailed) {
+    spdlog::info(state == DatabaseState::kUp ? "http: /metrics reads the run database again"
+                                             : "http: /metrics finds no run database file any more");
+    return true;
+  }
+  return false;
+}
+
 }  // namespace gaugeloop

@@ -514,8 +514,54 @@ ALTER TABLE runs ADD COLUMN ground_with_source TEXT
 ALTER TABLE runs ADD COLUMN inspection INTEGER NOT NULL DEFAULT 0 CHECK (inspection IN (0, 1));
 )sql";
 
-const std::array<Migration, 5>& all_migrations() {
-  static const std::array<Migration, 5> kMigrations{{
+// Version 6: what /metrics reads on every scrape, at a cost that does not grow with the history.
+//  - runs_by_lobe_started: the newest run of each machine, part and lobe is one index seek per
+//    lobe (RunStore::metrics_snapshot walks the index from lobe to lobe).
+//  - row_counts: runs by status and events by kind, kept by triggers in the transaction of the
+//    write that changes them. SQLite counts rows by reading them: counting 5,000,000 events by
+//    kind reads a whole index (about 0.25 s, docs/PERFORMANCE.md), too slow for a scrape.
+//    Invariant: every table counted here keeps its three triggers; a later migration that
+//    rebuilds runs or events must create them again (DROP TABLE drops them).
+constexpr std::string_view kSchemaV6 = R"sql(
+CREATE INDEX runs_by_lobe_started ON runs (machine, part, lobe, started_utc);
+
+CREATE TABLE row_counts (
+  table_name TEXT    NOT NULL,  -- 'runs', 'events'
+  value      TEXT    NOT NULL,  -- runs.status, events.kind
+  row_count  INTEGER NOT NULL,
+  PRIMARY KEY (table_name, value)
+) WITHOUT ROWID;
+INSERT INTO row_counts (table_name, value, row_count) SELECT 'runs', status, count(*) FROM runs GROUP BY status;
+INSERT INTO row_counts (table_name, value, row_count) SELECT 'events', kind, count(*) FROM events GROUP BY kind;
+
+CREATE TRIGGER runs_counted_on_insert AFTER INSERT ON runs BEGIN
+  INSERT INTO row_counts (table_name, value, row_count) VALUES ('runs', NEW.status, 1)
+    ON CONFLICT (table_name, value) DO UPDATE SET row_count = row_count + 1;
+END;
+CREATE TRIGGER runs_counted_on_delete AFTER DELETE ON runs BEGIN
+  UPDATE row_counts SET row_count = row_count - 1 WHERE table_name = 'runs' AND value = OLD.status;
+END;
+CREATE TRIGGER runs_counted_on_status AFTER UPDATE OF status ON runs WHEN OLD.status IS NOT NEW.status BEGIN
+  UPDATE row_counts SET row_count = row_count - 1 WHERE table_name = 'runs' AND value = OLD.status;
+  INSERT INTO row_counts (table_name, value, row_count) VALUES ('runs', NEW.status, 1)
+    ON CONFLICT (table_name, value) DO UPDATE SET row_count = row_count + 1;
+END;
+CREATE TRIGGER events_counted_on_insert AFTER INSERT ON events BEGIN
+  INSERT INTO row_counts (table_name, value, row_count) VALUES ('events', NEW.kind, 1)
+    ON CONFLICT (table_name, value) DO UPDATE SET row_count = row_count + 1;
+END;
+CREATE TRIGGER events_counted_on_delete AFTER DELETE ON events BEGIN
+  UPDATE row_counts SET row_count = row_count - 1 WHERE table_name = 'events' AND value = OLD.kind;
+END;
+CREATE TRIGGER events_counted_on_kind AFTER UPDATE OF kind ON events WHEN OLD.kind IS NOT NEW.kind BEGIN
+  UPDATE row_counts SET row_count = row_count - 1 WHERE table_name = 'events' AND value = OLD.kind;
+  INSERT INTO row_counts (table_name, value, row_count) VALUES ('events', NEW.kind, 1)
+    ON CONFLICT (table_name, value) DO UPDATE SET row_count = row_count + 1;
+END;
+)sql";
+
+const std::array<Migration, 6>& all_migrations() {
+  static const std::array<Migration, 6> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -535,6 +581,11 @@ const std::array<Migration, 5>& all_migrations() {
       {5,
        "nc_push_intents: the push journal; runs: the table version that ground the part, inspection runs",
        std::string(kSchemaV5),
+       nullptr,
+       {}},
+      {6,
+       "runs_by_lobe_started and row_counts (kept by triggers): what /metrics reads without reading the history",
+       std::string(kSchemaV6),
        nullptr,
        {}},
   }};

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -270,6 +271,27 @@ enum class IntegrityCheck {
            // O(rows log rows). `gaugeloop db check`, the service's start, every backup.
 };
 
+// The newest run (by started_utc, then id, as list_runs orders) of one machine, part and lobe.
+struct LobeLastRun {
+  std::string machine;
+  std::string part;
+  int lobe = 1;
+  std::int64_t run_id = 0;
+  std::string started_utc;
+  double max_abs_error_um = 0.0;
+};
+
+// What the service's /metrics shows of the database, read in one snapshot.
+struct StoreMetrics {
+  // Runs by status: "measured" and "pushed" always present (0 when none).
+  std::map<std::string, std::int64_t> runs_by_status;
+  // Events by event_kind_name(): "fault", "refusal" and "info" always present.
+  std::map<std::string, std::int64_t> events_by_kind;
+  std::int64_t pending_tables = 0;  // NC tables waiting for approval (status pending)
+  // One entry per machine, part and lobe ever measured, ordered by machine, part, then lobe.
+  std::vector<LobeLastRun> last_runs;
+};
+
 // What RunStore::open did to a file written by an older gaugeloop.
 struct SchemaUpgrade {
   int from_version = 0;          // the file's schema version before (>= 1)
@@ -435,6 +457,12 @@ class RunStore {
   // none was pushed yet.
   Result<std::optional<std::int64_t>> last_pushed_run(const std::string& machine, const std::string& part,
                                                       int lobe) const;
+
+  // The figures /metrics shows, in one read snapshot. Its cost does not grow with the history:
+  // the counts come from row_counts (kept by triggers), the pending tables from their partial
+  // index (at most one per NC file), the newest run of each lobe from one seek per lobe in
+  // runs_by_lobe_started. kStorage if SQLite refuses.
+  Result<StoreMetrics> metrics_snapshot() const;
 
   // One run, read in a single snapshot. kNotFound if absent.
   Result<StoredRun> load_run(std::int64_t run_id) const;

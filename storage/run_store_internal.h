@@ -73,4 +73,7 @@ Result<std::int64_t> approve_in_transaction(Connection& conn, std::int64_t pendi
                                             const std::string& by, const std::string& note,
                                             const std::string& operation);
 
+// The statements RunStore::metrics_snapshot runs, in order: tests check their query plans.
+std::vector<std::string_view> metrics_snapshot_queries();
+
 }  // namespace gaugeloop::storage_internal

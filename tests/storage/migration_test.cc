@@ -187,13 +187,26 @@ TEST(MigrationFromV1, StepsOneVersionAtATime) {
   EXPECT_EQ(raw.query_int("SELECT id FROM events WHERE kind = 'info'"), 8) << "AUTOINCREMENT goes on after 7";
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'events_by_time'"), 1);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'nc_push_intents'"), 0);
-  s = storage_internal::apply_migrations(conn);
+  s = storage_internal::apply_migrations_up_to(conn, 5);
   ASSERT_TRUE(s.ok()) << s.error().message;
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), 5);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'nc_push_intents'"), 1);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM pragma_table_info('runs') WHERE name IN "
                           "('ground_with_version', 'ground_with_source', 'inspection')"),
             3);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'row_counts'"), 0);
+  s = storage_internal::apply_migrations_up_to(conn, 6);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 6);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name IN ('row_counts', 'runs_by_lobe_started')"),
+            2);
+  EXPECT_EQ(raw.query_text("SELECT group_concat(value || '=' || row_count) FROM"
+                           " (SELECT * FROM row_counts WHERE table_name = 'events' ORDER BY value)"),
+            "fault=1,info=1")
+      << "the events already stored are counted";
+  s = storage_internal::apply_migrations(conn);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
 }
 
 }  // namespace
