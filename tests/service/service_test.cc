@@ -405,6 +405,69 @@ TEST_F(ServiceStateTest, NoPushStartsOnceTheServiceStops) {
   EXPECT_FALSE(service.wait_and_reserve().ok());
 }
 
+// SIGTERM while a run started over HTTP finishes, in the order service/daemon.cc stops: the
+// PLC is polled on and every request answered "not now" until that run has ended.
+TEST_F(ServiceStateTest, WhileStoppingEveryPlcRequestIsToldNotNowUntilTheLastRunHasEnded) {
+  RunHold hold;
+  Service service(config_, held_gauge(hold));
+  auto owned = std::make_unique<SharedPlc>();
+  SharedPlc& plc = *owned;
+  PlcTrigger trigger(service, fast_plc(), std::move(owned));
+  trigger.start();
+  ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return s.heartbeats.size() >= 2; }));
+
+  Result<nlohmann::json> http_run = make_error(ErrorCode::kInternal, "not run");
+  std::thread http([&] { http_run = service.measure("intake_flat", 1, "over HTTP"); });
+  ASSERT_TRUE(hold.wait_entered());
+
+  service.set_stopping();
+  std::atomic<bool> trigger_stopped{false};
+  std::thread stopper([&] {
+    trigger.stop();
+    trigger_stopped = true;
+    service.stop();
+  });
+  struct Joined {  // a failed assertion below still ends the run and both threads
+    std::function<void()> end;
+    ~Joined() { end(); }
+  } const joined{[&] {
+    hold.release();
+    if (http.joinable()) http.join();
+    if (stopper.joinable()) stopper.join();
+  }};
+  EXPECT_EQ(service.health()["state"], "stopping");
+
+  // A configured part and an unknown one: both "not now", at once, with the heartbeat going.
+  for (const std::uint16_t part : {std::uint16_t{1}, std::uint16_t{9}}) {
+    plc.request(part, 1);
+    ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return s.words.ack && s.words.fault; }))
+        << "part number " << part << ": no answer while stopping";
+    const SharedPlc::Seen answered = plc.seen();
+    EXPECT_EQ(answered.words.result_code, PlcResultCode::kNotNow) << "part number " << part;
+    EXPECT_FALSE(answered.words.done);
+    EXPECT_FALSE(answered.words.busy);
+    EXPECT_EQ(answered.words.run_id, 0u);
+    plc.clear();
+    ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return !s.words.ack && !s.words.fault; }));
+  }
+  const std::size_t before = plc.seen().heartbeats.size();
+  ASSERT_TRUE(plc.wait_until([before](const SharedPlc::Seen& s) { return polls_since(s, before) >= 5; }));
+  EXPECT_FALSE(trigger_stopped) << "the run started over HTTP still runs";
+
+  joined.end();
+  ASSERT_TRUE(http_run.ok()) << http_run.error().message;
+  EXPECT_TRUE((*http_run)["pushed"].get<bool>()) << http_run->dump();
+  expect_counted_every_poll(plc.seen().heartbeats);
+
+  // Both refusals are events, with the reason, written before stop() returned.
+  int refused = 0;
+  for (const StoredEvent& e : stored_events(db())) {
+    if (e.event.code == "plc request" && e.event.message.find("refused: the service is stopping") != std::string::npos)
+      ++refused;
+  }
+  EXPECT_EQ(refused, 2);
+}
+
 // Holds the run database with an exclusive lock from a second connection, as a backup or a
 // person's sqlite3 session would, until released.
 class DatabaseLock {
