@@ -144,8 +144,8 @@ class Service {
 
   nlohmann::json health() const;
   std::string metrics() const;  // Prometheus lines of the service's counters
-  // Counted once the reload's event is written (flush_events): whoever sees the count in
-  // /api/health finds the event stored.
+  // Counted after the reload's event is written (flush_events; unless the database holds it
+  // beyond kEventDrainLimit): whoever sees the count in /api/health finds the event stored.
   void count_reload(bool ok);
 
  private:

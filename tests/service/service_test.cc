@@ -520,7 +520,7 @@ TEST_F(ServiceStateTest, TheHeartbeatCountsEveryPollWhileTheDatabaseIsLocked) {
   const std::string before_release = utc_now();
 
   lock.release();
-  ASSERT_TRUE(service.flush_events());
+  ASSERT_TRUE(service.flush_events(kGenerous));
   trigger.stop();
   expect_counted_every_poll(plc.seen().heartbeats);
 
@@ -547,7 +547,7 @@ TEST_F(ServiceStateTest, AFullEventQueueDropsItsOldestAndCountsThem) {
     service.record_event(EventKind::kInfo, "step", "", 0, std::nullopt, std::to_string(i));
   }
   lock.release();
-  ASSERT_TRUE(service.flush_events());
+  ASSERT_TRUE(service.flush_events(kGenerous));
 
   std::vector<int> written;
   for (const StoredEvent& e : stored_events(db())) {
