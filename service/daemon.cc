@@ -178,9 +178,11 @@ Status run_service(const std::filesystem::path& config_path) {
       continue;
     }
     spdlog::info("{} received: letting the run in progress finish", sig == SIGTERM ? "SIGTERM" : "SIGINT");
-    service.set_stopping();
-    if (plc) plc->stop();  // after the run in progress, done or fault is written to the PLC
-    service.stop();
+    service.set_stopping();  // no new run or push; /api/health says "stopping"
+    // The PLC is polled on, and told "not now" (code 7) for every request, until the last
+    // run has ended, whoever started it, and the outcome of its own is in its registers.
+    if (plc) plc->stop();
+    service.stop();  // the run in progress if no PLC waited for it, then the events still waiting
     if (http) http->stop();
     spdlog::info("stopped");
     return {};

@@ -11,6 +11,10 @@ namespace gaugeloop {
 
 using nlohmann::json;
 
+namespace {
+constexpr const char* kStoppingMessage = "the service is stopping; no new run is started";
+}  // namespace
+
 PlcCycleOutcome plc_outcome(const Result<JobReport>& r, std::optional<std::int64_t> stored_run) {
   PlcCycleOutcome o;
   if (!r) {
@@ -64,6 +68,8 @@ std::optional<PlcCycleOutcome> ServiceCycleRunner::start(const PlcRequestWords& 
   const std::uint16_t part_number = request.part_number;
   const std::uint16_t lobe = request.lobe;
   const std::optional<int> ground_with = request.ground_with_version();
+  // Stopping comes first: every request is told "not now", whatever it asks for.
+  if (service_.stopping()) return PlcCycleOutcome{PlcResultCode::kNotNow, 0, 0, kStoppingMessage};
   const std::shared_ptr<const ServiceConfig> c = service_.config();
   Result<const ServicePart*> part = find_plc_part(*c, part_number, lobe);
   if (!part) return PlcCycleOutcome{PlcResultCode::kUnknownPart, 0, 0, part.error().message};
@@ -187,7 +193,10 @@ void PlcTrigger::loop() {
     connected_ = handshake_.connected();
     state_ = static_cast<int>(handshake_.state());
     std::unique_lock<std::mutex> lock(mutex_);
-    if (stop_ && handshake_.state() != PlcState::kBusy) {
+    // A stopping service may still finish a run started over HTTP: the PLC is answered
+    // "not now" (and sees the heartbeat) until it has ended.
+    const bool run_left = service_.stopping() && service_.run_in_progress();
+    if (stop_ && !run_left && handshake_.state() != PlcState::kBusy) {
       if (handshake_.outcome_delivered()) break;
       if (!handshake_.connected()) {
         spdlog::error("PLC at {}: stopping with the outcome of the last request undelivered (link down): {}", address(),

@@ -31,6 +31,7 @@ class ServiceCycleRunner final : public PlcCycleRunner {
   explicit ServiceCycleRunner(Service& service) : service_(service) {}
   ~ServiceCycleRunner() override;
 
+  // While the service stops: kNotNow at once, whatever the PLC asks for.
   std::optional<PlcCycleOutcome> start(const PlcRequestWords& request) override;
   std::optional<PlcCycleOutcome> poll() override;
 
@@ -44,10 +45,15 @@ class ServiceCycleRunner final : public PlcCycleRunner {
   std::optional<PlcCycleOutcome> outcome_;  // guarded by mutex_
 };
 
-// Polls the handshake block every poll interval on a thread of its own. stop() returns once
-// no cycle is in progress and its outcome is in the PLC's registers (or the link is down and
-// cannot carry it). An exception in a poll is recorded (Service::record_thread_fault) and
-// the trigger polls on after one interval.
+// Polls the handshake block every poll interval on a thread of its own. Its events go to the
+// service's event queue (Service::record_event): a busy database never holds a poll.
+// stop() returns once no cycle is in progress and its outcome is in the PLC's registers (or
+// the link is down and cannot carry it), and, when the service is stopping
+// (Service::set_stopping, to be called first), once no run of the service is in progress,
+// whoever started it (HTTP, PLC). Until then it polls on: the heartbeat counts and every
+// request is answered at once with fault, result code 7 (kNotNow), "the service is stopping".
+// An exception in a poll is recorded (Service::record_thread_fault) and the trigger polls on
+// after one interval.
 class PlcTrigger {
  public:
   // `plc`: the PLC's registers; by default a Modbus link built from `settings`.

@@ -4,14 +4,171 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <deque>
+#include <thread>
 #include <utility>
 
 #include "acquisition/modbus_gauge.h"
+#include "core/guarded_thread.h"
+#include "core/utc_time.h"
 #include "job/nc_push.h"
 
 namespace gaugeloop {
 
 using nlohmann::json;
+
+// The service's events written on a thread of their own, with one connection kept open, so
+// no thread that records one (the PLC trigger's above all) waits for the database.
+class EventWriter {
+ public:
+  EventWriter() {
+    thread_ = start_guarded_thread("event writer",
+                                   [this] {
+                                     // An exception while writing is logged and the writer goes on: the queue must
+                                     // drain.
+                                     while (!run_guarded(
+                                         "event writer", [this] { loop(); },
+                                         [](std::string_view name, std::string_view what) {
+                                           spdlog::error("the {} thread was ended by an exception: {}; it starts again",
+                                                         name, what);
+                                         })) {
+                                     }
+                                   },
+                                   {});
+  }
+  ~EventWriter() { stop(kEventDrainLimit); }
+
+  // Queued in order; the oldest dropped when full.
+  void push(std::filesystem::path db_path, EventRecord event) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stopped_) {
+      spdlog::error("event '{}' not recorded in the database: the service has stopped: {}", event.code, event.message);
+      return;
+    }
+    if (queue_.size() >= kEventQueueLimit) {
+      const EventRecord& oldest = queue_.front().event;
+      ++dropped_;
+      spdlog::error(
+          "event '{}' of {} dropped unwritten: the database {} is locked or refusing and {} events wait, the most "
+          "the service keeps; {} dropped so far",
+          oldest.code, oldest.at_utc, queue_.front().db_path.string(), queue_.size(), dropped_.load());
+      queue_.pop_front();
+      ++settled_;
+      written_.notify_all();
+    }
+    queue_.push_back({std::move(db_path), std::move(event)});
+    ++queued_;
+    wake_.notify_all();
+  }
+
+  bool flush(std::chrono::milliseconds within) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const std::uint64_t target = queued_;
+    return written_.wait_for(lock, within, [this, target] { return settled_ >= target; });
+  }
+
+  // Waits at most `within` for the queue to be written, then ends the writer (an attempt
+  // under way ends first) and logs what was lost. Idempotent.
+  void stop(std::chrono::milliseconds within) {
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      if (stopped_) return;
+      written_.wait_for(lock, within, [this] { return settled_ >= queued_; });
+      stopped_ = true;
+    }
+    wake_.notify_all();
+    if (thread_.joinable()) thread_.join();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!queue_.empty()) {
+      spdlog::error("stopping: {} events not recorded in the database {} ({}), the first '{}' of {}: {}", queue_.size(),
+                    queue_.front().db_path.string(), last_error_, queue_.front().event.code,
+                    queue_.front().event.at_utc, queue_.front().event.message);
+      settled_ += queue_.size();
+      queue_.clear();
+    }
+    written_.notify_all();
+  }
+
+  long long dropped() const { return dropped_; }
+
+ private:
+  struct Item {
+    std::filesystem::path db_path;
+    EventRecord event;
+  };
+
+  // Writes the oldest event until it is written (or refused for good), then the next. The
+  // event being written is out of the queue: a full queue drops only events still waiting.
+  void loop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      wake_.wait(lock, [this] { return stopped_ || !queue_.empty(); });
+      if (queue_.empty()) return;  // stopped with nothing left
+      Item item = std::move(queue_.front());
+      queue_.pop_front();
+      for (;;) {
+        lock.unlock();
+        const Status written = write(item);
+        lock.lock();
+        if (written.ok() || written.error().code != ErrorCode::kStorage) {
+          if (!written.ok()) {
+            spdlog::error("event '{}' not recorded in the database: {}", item.event.code, written.error().message);
+          }
+          if (failures_ > 0) {
+            spdlog::info("events written to the database {} again after {} failed attempts", item.db_path.string(),
+                         failures_);
+            failures_ = 0;
+          }
+          ++settled_;
+          written_.notify_all();
+          break;
+        }
+        // Busy or refusing: the same event again after a pause (the database's busy timeout
+        // has waited already), until stop() gives up, which finds it first in the queue.
+        last_error_ = written.error().message;
+        if (failures_++ == 0) {
+          spdlog::warn("events wait for the database: '{}' not written yet: {}; retrying", item.event.code,
+                       last_error_);
+        }
+        if (!stopped_) wake_.wait_for(lock, std::chrono::milliseconds(200), [this] { return stopped_; });
+        if (stopped_) {
+          queue_.push_front(std::move(item));
+          return;
+        }
+      }
+    }
+  }
+
+  Status write(const Item& item) {
+    if (!store_ || store_path_ != item.db_path) {
+      store_.reset();
+      Result<RunStore> opened = RunStore::open(item.db_path);
+      if (!opened) return opened.error();
+      store_.emplace(std::move(*opened));
+      store_path_ = item.db_path;
+    }
+    Result<std::int64_t> id = store_->record_event(item.event);
+    if (!id) {
+      if (id.error().code == ErrorCode::kStorage) store_.reset();  // opened again for the next attempt
+      return id.error();
+    }
+    return {};
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;     // the writer: an event queued, or stop
+  std::condition_variable written_;  // flush and stop: an event written or dropped
+  std::deque<Item> queue_;           // guarded by mutex_, oldest first
+  std::uint64_t queued_ = 0;         // guarded by mutex_: events ever queued
+  std::uint64_t settled_ = 0;        // guarded by mutex_: of those, written, refused or dropped
+  bool stopped_ = false;             // guarded by mutex_
+  std::string last_error_;           // guarded by mutex_
+  long long failures_ = 0;           // writer thread: failed attempts in a row
+  std::atomic<long long> dropped_{0};
+  std::optional<RunStore> store_;  // writer thread only
+  std::filesystem::path store_path_;
+  std::thread thread_;
+};
 
 RunReservation& RunReservation::operator=(RunReservation&& other) noexcept {
   if (this != &other) {
@@ -55,7 +212,11 @@ json job_report_json(const JobReport& r) {
 }
 
 Service::Service(ServiceConfig config, GaugeFactory gauge)
-    : gauge_factory_(std::move(gauge)), config_(std::make_shared<const ServiceConfig>(std::move(config))) {}
+    : gauge_factory_(std::move(gauge)),
+      config_(std::make_shared<const ServiceConfig>(std::move(config))),
+      events_(std::make_unique<EventWriter>()) {}
+
+Service::~Service() { stop(); }
 
 std::shared_ptr<const ServiceConfig> Service::config() const {
   std::lock_guard<std::mutex> lock(config_mutex_);
@@ -77,11 +238,17 @@ Result<RunReservation> Service::reserve_run() {
   return RunReservation(this);
 }
 
-RunReservation Service::wait_and_reserve() {
+Result<RunReservation> Service::wait_and_reserve() {
   std::unique_lock<std::mutex> lock(slot_mutex_);
-  slot_free_.wait(lock, [this] { return !slot_taken_; });
+  slot_free_.wait(lock, [this] { return stopping_ || !slot_taken_; });
+  if (stopping_) return make_error(ErrorCode::kRefused, "the service is stopping; nothing new is pushed");
   slot_taken_ = true;
   return RunReservation(this);
+}
+
+bool Service::run_in_progress() const {
+  std::lock_guard<std::mutex> lock(slot_mutex_);
+  return slot_taken_;
 }
 
 void Service::release_run() {
@@ -96,6 +263,7 @@ Result<json> Service::measure(const std::string& part_name, int lobe, const std:
   Result<RunReservation> reservation = reserve_run();
   if (!reservation) return reservation.error();
   Result<JobReport> report = run_reserved(std::move(*reservation), part_name, lobe, note);
+  if (!flush_events()) spdlog::warn("the run's events still wait for the database; they are written later");
   if (!report) return report.error();
   return job_report_json(*report);
 }
@@ -162,6 +330,7 @@ void Service::record_event(EventKind kind, const std::string& code, const std::s
 void Service::record_event(const ServiceConfig& c, EventKind kind, const std::string& code, const std::string& part,
                            int lobe, std::optional<std::int64_t> run_id, const std::string& message) const {
   EventRecord e;
+  e.at_utc = utc_now();  // when it happened, not when the database takes it
   e.kind = kind;
   e.code = code;
   e.machine = c.machine;
@@ -169,9 +338,14 @@ void Service::record_event(const ServiceConfig& c, EventKind kind, const std::st
   e.lobe = lobe;
   e.run_id = run_id;
   e.message = message;
-  Result<RunStore> store = RunStore::open(c.job.db_path);
-  Result<std::int64_t> id = store ? store->record_event(e) : Result<std::int64_t>(store.error());
-  if (!id) spdlog::error("event '{}' not recorded in the database: {}", code, id.error().message);
+  events_->push(c.job.db_path, std::move(e));
+}
+
+bool Service::flush_events(std::chrono::milliseconds within) const { return events_->flush(within); }
+
+void Service::count_reload(bool ok) {
+  if (!flush_events()) spdlog::warn("the reload's event still waits for the database; it is written later");
+  ok ? ++reloads_ : ++reload_failures_;
 }
 
 void Service::record_thread_fault(std::string_view thread_name, std::string_view what) const {
@@ -182,18 +356,26 @@ void Service::record_thread_fault(std::string_view thread_name, std::string_view
 }
 
 void Service::set_stopping() {
-  std::lock_guard<std::mutex> lock(slot_mutex_);
-  stopping_ = true;
+  {
+    std::lock_guard<std::mutex> lock(slot_mutex_);
+    stopping_ = true;
+  }
+  slot_free_.notify_all();  // a push waiting for the slot is refused now
 }
 
 void Service::stop() {
-  std::unique_lock<std::mutex> lock(slot_mutex_);
-  stopping_ = true;
-  slot_free_.wait(lock, [this] { return !slot_taken_; });
+  {
+    std::unique_lock<std::mutex> lock(slot_mutex_);
+    stopping_ = true;
+    slot_free_.notify_all();  // a push waiting for the slot is refused now
+    slot_free_.wait(lock, [this] { return !slot_taken_; });
+  }
+  events_->stop(kEventDrainLimit);
 }
 
 Result<json> Service::approve(std::int64_t pending_id, const std::string& by, const std::string& note) {
-  const RunReservation held = wait_and_reserve();  // one push at a time
+  const Result<RunReservation> held = wait_and_reserve();  // one push at a time
+  if (!held) return held.error();
   Result<RunStore> store = RunStore::open(config()->job.db_path);
   if (!store) return store.error();
   Result<PushOutcome> pushed = approve_pending(*store, pending_id, by, note, /*overwrite_edited=*/false);
@@ -207,7 +389,8 @@ Result<json> Service::approve(std::int64_t pending_id, const std::string& by, co
 }
 
 Result<json> Service::rollback(const std::string& program, int table_version, const std::string& by) {
-  const RunReservation held = wait_and_reserve();  // one push at a time
+  const Result<RunReservation> held = wait_and_reserve();  // one push at a time
+  if (!held) return held.error();
   const std::shared_ptr<const ServiceConfig> c = config();
   std::filesystem::path file(program);
   if (!file.has_parent_path()) {
@@ -259,6 +442,9 @@ std::string Service::metrics() const {
   m += "# HELP gaugeloop_service_thread_faults_total Threads of the service ended by an exception.\n";
   m += "# TYPE gaugeloop_service_thread_faults_total counter\n";
   m += "gaugeloop_service_thread_faults_total " + std::to_string(thread_faults_.load()) + "\n";
+  m += "# HELP gaugeloop_service_events_dropped_total Events dropped unwritten: the database held them too long.\n";
+  m += "# TYPE gaugeloop_service_events_dropped_total counter\n";
+  m += "gaugeloop_service_events_dropped_total " + std::to_string(events_->dropped()) + "\n";
   return m;
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
@@ -24,6 +25,7 @@
 namespace gaugeloop {
 
 class Service;
+class EventWriter;
 
 // The one run (or push) at a time, held: whoever holds it may run; it is released when the
 // holder ends it, on whichever thread (destruction, or moving it on to a worker thread and
@@ -54,9 +56,21 @@ GaugeFactory modbus_gauge_factory();
 // The JSON the HTTP API answers for a run it triggered (docs/http_api.md, POST /api/measure).
 nlohmann::json job_report_json(const JobReport& report);
 
+// How many events wait for the database at most: a database locked for long (a backup, a
+// person's `sqlite3` session) must not grow the service's memory. Beyond it the oldest waiting
+// event is dropped, counted and logged. A PLC cycle makes about eight events, so this holds a
+// few hundred cycles, far beyond a lock anyone holds on purpose.
+inline constexpr std::size_t kEventQueueLimit = 2000;
+// How long stop() waits for the waiting events to be written. An attempt that has begun may
+// take the database's busy timeout (5 s) more before the writer ends.
+inline constexpr std::chrono::seconds kEventDrainLimit{10};
+
 class Service {
  public:
   explicit Service(ServiceConfig config, GaugeFactory gauge = modbus_gauge_factory());
+  ~Service();  // stop()s: waits for the run in progress and writes the waiting events
+  Service(const Service&) = delete;
+  Service& operator=(const Service&) = delete;
 
   std::shared_ptr<const ServiceConfig> config() const;
   // Takes a checked configuration into use; a run in progress finishes with the old one.
@@ -68,10 +82,15 @@ class Service {
   // even if SIGTERM comes meanwhile.
   Result<RunReservation> reserve_run();
   // Waits for the run (or push) in progress, then reserves; for approvals and rollbacks,
-  // which are short and wait rather than fail.
-  RunReservation wait_and_reserve();
+  // which are short and wait rather than fail. Refused (kRefused) once the service stops,
+  // also for a caller that was waiting then.
+  Result<RunReservation> wait_and_reserve();
+  // True while a run or a push holds the one slot, whoever started it (HTTP, PLC). Any thread.
+  bool run_in_progress() const;
 
-  // One measurement run over HTTP: run_reserved's report as JSON (job_report_json).
+  // One measurement run over HTTP: run_reserved's report as JSON (job_report_json). Returns
+  // once the run's events are written too (flush_events), so the caller that is answered
+  // finds them in the database.
   Result<nlohmann::json> measure(const std::string& part_name, int lobe, const std::string& note);
 
   // One measurement run, end to end, on a reservation it ends. `stored_run`, when given,
@@ -90,20 +109,33 @@ class Service {
   // directory, or the NC file's path.
   Result<nlohmann::json> rollback(const std::string& program, int table_version, const std::string& by);
 
-  // Keeps a step of the service in the database (`gaugeloop events`); a database that refuses
-  // is logged, never fatal: the step itself was logged already.
+  // Keeps a step of the service in the database (`gaugeloop events`), without waiting for the
+  // database: the event is stamped now and queued; the service's event writer (a thread with
+  // one connection open) writes the events in the order they were recorded. A database that
+  // is busy is retried; one that refuses otherwise is logged, never fatal: the step itself was
+  // logged already. A full queue (kEventQueueLimit) drops its oldest event, counted and
+  // logged. After stop() an event is logged as not recorded. Any thread.
   void record_event(EventKind kind, const std::string& code, const std::string& part, int lobe,
                     std::optional<std::int64_t> run_id, const std::string& message) const;
   // With the configuration a run was started with (a reload meanwhile changes nothing of it).
   void record_event(const ServiceConfig& c, EventKind kind, const std::string& code, const std::string& part, int lobe,
                     std::optional<std::int64_t> run_id, const std::string& message) const;
 
+  // Waits until every event recorded before the call is written (or dropped), at most
+  // `within`; false when the database held them longer. For tests and for answers that must
+  // find their events stored.
+  bool flush_events(std::chrono::milliseconds within = kEventDrainLimit) const;
+
   // A thread of the service ended by an exception: logged, kept as a fault event, counted.
   void record_thread_fault(std::string_view thread_name, std::string_view what) const;
 
-  // No new run is reserved from now on.
+  // No new run or push is reserved from now on (reserve_run, wait_and_reserve refuse); a run
+  // in progress goes on. /api/health says "stopping" from here on. Any thread; idempotent.
   void set_stopping();
-  // Waits for a run in progress to end; no new run starts after this.
+  bool stopping() const { return stopping_; }
+  // set_stopping(), then waits for the run in progress to end, then for the waiting events
+  // to be written (at most kEventDrainLimit; what could not be written is logged). Events
+  // recorded after this are logged only. Idempotent.
   void stop();
 
   // What the PLC trigger adds to /api/health; null when there is no [plc]. Set before any
@@ -112,7 +144,9 @@ class Service {
 
   nlohmann::json health() const;
   std::string metrics() const;  // Prometheus lines of the service's counters
-  void count_reload(bool ok) { ok ? ++reloads_ : ++reload_failures_; }
+  // Counted after the reload's event is written (flush_events; unless the database holds it
+  // beyond kEventDrainLimit): whoever sees the count in /api/health finds the event stored.
+  void count_reload(bool ok);
 
  private:
   friend class RunReservation;
@@ -121,7 +155,7 @@ class Service {
   GaugeFactory gauge_factory_;
   mutable std::mutex config_mutex_;
   std::shared_ptr<const ServiceConfig> config_;
-  std::mutex slot_mutex_;
+  mutable std::mutex slot_mutex_;
   std::condition_variable slot_free_;
   bool slot_taken_ = false;  // guarded by slot_mutex_: for the length of a run or a push
   std::atomic<bool> measuring_{false};
@@ -133,6 +167,7 @@ class Service {
   std::atomic<long long> reload_failures_{0};
   mutable std::atomic<long long> thread_faults_{0};
   std::function<nlohmann::json()> plc_status_;
+  std::unique_ptr<EventWriter> events_;  // last: its thread ends first
 };
 
 }  // namespace gaugeloop

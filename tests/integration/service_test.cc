@@ -88,6 +88,16 @@ class ServiceTest : public ::testing::Test {
     return list.ok() ? *list : std::vector<StoredEvent>{};
   }
 
+  // The service writes its events on a thread of its own, after the step that made them: a
+  // test that saw the step waits for the event as it waits for the health answer.
+  bool wait_for_event(EventKind kind, const std::string& code) {
+    for (int i = 0; i < 20000; ++i) {
+      if (has_code(events(kind), code)) return true;
+      std::this_thread::yield();
+    }
+    return false;
+  }
+
   testing::TempDir tmp_;  // before everything that lives in it
   fs::path dir_;
   std::string config_text_;
@@ -419,6 +429,7 @@ TEST_F(PlcServiceTest, PlcRequestRunNcFileDoneWithTheRunIdThenCleared) {
 
   // Every step of the cycle, in order, in the database and in the log, the run named from
   // the moment it is stored.
+  ASSERT_TRUE(wait_for_event(EventKind::kInfo, "plc done")) << log();
   std::vector<StoredEvent> info = events(EventKind::kInfo);
   std::sort(info.begin(), info.end(), [](const StoredEvent& a, const StoredEvent& b) { return a.id < b.id; });
   std::vector<std::string> cycle;
@@ -546,7 +557,7 @@ TEST_F(PlcServiceTest, UnknownPartNumberIsAFaultAndNoRunAndALostLinkComesBack) {
   auto runs = store->list_runs({});
   ASSERT_TRUE(runs.ok());
   EXPECT_TRUE(runs->empty()) << "an unknown part number never starts a run";
-  EXPECT_TRUE(has_code(events(EventKind::kInfo), "plc fault")) << log();
+  EXPECT_TRUE(wait_for_event(EventKind::kInfo, "plc fault")) << log();
   service.signal(SIGTERM);
   EXPECT_EQ(service.wait(), 0) << log();
 }

@@ -1,20 +1,27 @@
 // The service's state without a process, a socket or a signal: the one run at a time, a run
-// measured from a scripted gauge through the real job and database, the PLC cycle runner, and
-// a thread ended by an exception.
+// measured from a scripted gauge through the real job and database, the PLC cycle runner and
+// trigger against PLC registers in memory, the event writer, and a thread ended by an
+// exception.
 #include "service/service.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <condition_variable>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <thread>
 
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
+#include "core/utc_time.h"
 #include "service/plc_trigger.h"
 #include "storage/run_store.h"
 #include "tests/acquisition/scripted_gauge.h"
@@ -24,6 +31,166 @@ namespace gaugeloop {
 namespace {
 
 namespace fs = std::filesystem;
+
+// How long a test waits for what another thread does before it fails: far beyond what any
+// step takes on a loaded machine; reached only when the step never comes.
+constexpr std::chrono::seconds kGenerous{60};
+
+// The PLC's registers in memory for the trigger's thread; the test plays the PLC from its
+// own thread and waits for what the service writes.
+class SharedPlc final : public PlcRegisters {
+ public:
+  struct Seen {
+    PlcServiceWords words;                  // written last
+    std::vector<std::uint16_t> heartbeats;  // every write's heartbeat, in order
+    int connects = 0;
+  };
+
+  Status connect() override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++seen_.connects;
+    up_ = true;
+    changed_.notify_all();
+    return {};
+  }
+  void disconnect() override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    up_ = false;
+  }
+  bool connected() const override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return up_;
+  }
+  Result<PlcRequestWords> read_request() override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (drop_next_read_) {
+      drop_next_read_ = false;
+      up_ = false;
+      return make_error(ErrorCode::kIo, "connection reset (scripted)");
+    }
+    return plc_;
+  }
+  Status write_service_words(const PlcServiceWords& words) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    seen_.words = words;
+    seen_.heartbeats.push_back(words.heartbeat);
+    changed_.notify_all();
+    return {};
+  }
+  std::string address() const override { return "scripted"; }
+
+  void request(std::uint16_t part, std::uint16_t lobe) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    plc_.part_number = part;
+    plc_.lobe = lobe;
+    plc_.request = plc_registers::kMeasureBit;
+  }
+  void clear() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    plc_.request = 0;
+  }
+  void drop_link() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    drop_next_read_ = true;
+  }
+
+  // True once `done(seen)` holds; false after kGenerous.
+  template <typename Pred>
+  bool wait_until(Pred done) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    return changed_.wait_for(lock, kGenerous, [&] { return done(seen_); });
+  }
+  Seen seen() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return seen_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  PlcRequestWords plc_;
+  Seen seen_;
+  bool up_ = false;
+  bool drop_next_read_ = false;
+};
+
+// Polls seen after `from` (an index into the heartbeats).
+std::size_t polls_since(const SharedPlc::Seen& s, std::size_t from) { return s.heartbeats.size() - from; }
+
+// Every poll wrote the heartbeat one on from the poll before: it never stood still.
+void expect_counted_every_poll(const std::vector<std::uint16_t>& heartbeats) {
+  for (std::size_t i = 1; i < heartbeats.size(); ++i) {
+    ASSERT_EQ(static_cast<std::uint16_t>(heartbeats[i] - heartbeats[i - 1]), 1) << "poll " << i;
+  }
+}
+
+// A run held in the gauge's connect until the test lets it go: a run in progress for as long
+// as the test needs one.
+class RunHold {
+ public:
+  void enter_and_wait() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    entered_ = true;
+    changed_.notify_all();
+    changed_.wait(lock, [this] { return released_; });
+  }
+  bool wait_entered() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    return changed_.wait_for(lock, kGenerous, [this] { return entered_; });
+  }
+  void release() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    released_ = true;
+    changed_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  bool entered_ = false;
+  bool released_ = false;
+};
+
+class HeldGauge final : public GaugeClient {
+ public:
+  HeldGauge(std::unique_ptr<GaugeClient> inner, RunHold& hold) : inner_(std::move(inner)), hold_(hold) {}
+  Status connect() override {
+    hold_.enter_and_wait();
+    return inner_->connect();
+  }
+  void disconnect() override { inner_->disconnect(); }
+  bool connected() const override { return inner_->connected(); }
+  Result<GaugeSnapshot> read_snapshot() override { return inner_->read_snapshot(); }
+  Result<LatchState> read_latch_state() override { return inner_->read_latch_state(); }
+  Result<std::vector<LatchedSample>> read_latched(int first_slot, int count) override {
+    return inner_->read_latched(first_slot, count);
+  }
+  std::string address() const override { return inner_->address(); }
+
+ private:
+  std::unique_ptr<GaugeClient> inner_;
+  RunHold& hold_;
+};
+
+PlcSettings fast_plc() {
+  PlcSettings s;
+  s.poll_interval = std::chrono::milliseconds(2);
+  return s;
+}
+
+// The events of the database, oldest first.
+std::vector<StoredEvent> stored_events(const fs::path& db) {
+  Result<RunStore> store = RunStore::open_read_only(db);
+  EXPECT_TRUE(store.ok()) << store.error().message;
+  if (!store) return {};
+  EventQuery q;
+  q.limit = 100000;
+  Result<std::vector<StoredEvent>> events = store->list_events(q);
+  EXPECT_TRUE(events.ok()) << events.error().message;
+  if (!events) return {};
+  std::sort(events->begin(), events->end(), [](const StoredEvent& a, const StoredEvent& b) { return a.id < b.id; });
+  return *events;
+}
 
 class ServiceStateTest : public ::testing::Test {
  protected:
@@ -62,6 +229,14 @@ class ServiceStateTest : public ::testing::Test {
       return g;
     };
   }
+
+  GaugeFactory held_gauge(RunHold& hold) {
+    return [&hold, good = design_gauge()](const ServiceConfig& c) -> std::unique_ptr<GaugeClient> {
+      return std::make_unique<HeldGauge>(good(c), hold);
+    };
+  }
+
+  fs::path db() const { return dir_ / "gaugeloop.sqlite"; }
 
   testing::TempDir tmp_;
   fs::path dir_;
@@ -200,6 +375,7 @@ TEST_F(ServiceStateTest, AnExceptionOnTheWorkerIsAFaultForThePlcAndTheServiceGoe
   EXPECT_NE(o->message.find("scripted failure"), std::string::npos) << o->message;
   EXPECT_EQ(service.health()["thread_faults"], 1);
   EXPECT_EQ(service.health()["state"], "idle") << "the measuring flag fell with the exception";
+  ASSERT_TRUE(service.flush_events());
 
   Result<RunStore> store = RunStore::open_read_only(dir_ / "gaugeloop.sqlite");
   ASSERT_TRUE(store.ok()) << store.error().message;
@@ -215,6 +391,176 @@ TEST_F(ServiceStateTest, AnExceptionOnTheWorkerIsAFaultForThePlcAndTheServiceGoe
   o = wait_for_outcome(runner);
   ASSERT_TRUE(o.has_value());
   EXPECT_EQ(o->code, PlcResultCode::kTablePushed) << o->message;
+}
+
+TEST_F(ServiceStateTest, NoPushStartsOnceTheServiceStops) {
+  Service service(config_, design_gauge());
+  service.set_stopping();
+  for (const Result<nlohmann::json>& r :
+       {service.approve(1, "anna", ""), service.rollback("CAM_INTAKE_L1", 1, "anna")}) {
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.error().code, ErrorCode::kRefused) << r.error().message;
+    EXPECT_NE(r.error().message.find("stopping"), std::string::npos) << r.error().message;
+  }
+  EXPECT_FALSE(service.wait_and_reserve().ok());
+}
+
+// SIGTERM while a run started over HTTP finishes, in the order service/daemon.cc stops: the
+// PLC is polled on and every request answered "not now" until that run has ended.
+TEST_F(ServiceStateTest, WhileStoppingEveryPlcRequestIsToldNotNowUntilTheLastRunHasEnded) {
+  RunHold hold;
+  Service service(config_, held_gauge(hold));
+  auto owned = std::make_unique<SharedPlc>();
+  SharedPlc& plc = *owned;
+  PlcTrigger trigger(service, fast_plc(), std::move(owned));
+  trigger.start();
+  ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return s.heartbeats.size() >= 2; }));
+
+  Result<nlohmann::json> http_run = make_error(ErrorCode::kInternal, "not run");
+  std::thread http([&] { http_run = service.measure("intake_flat", 1, "over HTTP"); });
+  ASSERT_TRUE(hold.wait_entered());
+
+  service.set_stopping();
+  std::atomic<bool> trigger_stopped{false};
+  std::thread stopper([&] {
+    trigger.stop();
+    trigger_stopped = true;
+    service.stop();
+  });
+  struct Joined {  // a failed assertion below still ends the run and both threads
+    std::function<void()> end;
+    ~Joined() { end(); }
+  } const joined{[&] {
+    hold.release();
+    if (http.joinable()) http.join();
+    if (stopper.joinable()) stopper.join();
+  }};
+  EXPECT_EQ(service.health()["state"], "stopping");
+
+  // A configured part and an unknown one: both "not now", at once, with the heartbeat going.
+  for (const std::uint16_t part : {std::uint16_t{1}, std::uint16_t{9}}) {
+    plc.request(part, 1);
+    ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return s.words.ack && s.words.fault; }))
+        << "part number " << part << ": no answer while stopping";
+    const SharedPlc::Seen answered = plc.seen();
+    EXPECT_EQ(answered.words.result_code, PlcResultCode::kNotNow) << "part number " << part;
+    EXPECT_FALSE(answered.words.done);
+    EXPECT_FALSE(answered.words.busy);
+    EXPECT_EQ(answered.words.run_id, 0u);
+    plc.clear();
+    ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return !s.words.ack && !s.words.fault; }));
+  }
+  const std::size_t before = plc.seen().heartbeats.size();
+  ASSERT_TRUE(plc.wait_until([before](const SharedPlc::Seen& s) { return polls_since(s, before) >= 5; }));
+  EXPECT_FALSE(trigger_stopped) << "the run started over HTTP still runs";
+
+  joined.end();
+  ASSERT_TRUE(http_run.ok()) << http_run.error().message;
+  EXPECT_TRUE((*http_run)["pushed"].get<bool>()) << http_run->dump();
+  expect_counted_every_poll(plc.seen().heartbeats);
+
+  // Both refusals are events, with the reason, written before stop() returned.
+  int refused = 0;
+  for (const StoredEvent& e : stored_events(db())) {
+    if (e.event.code == "plc request" && e.event.message.find("refused: the service is stopping") != std::string::npos)
+      ++refused;
+  }
+  EXPECT_EQ(refused, 2);
+}
+
+// Holds the run database with an exclusive lock from a second connection, as a backup or a
+// person's sqlite3 session would, until released.
+class DatabaseLock {
+ public:
+  explicit DatabaseLock(const fs::path& db) {
+    if (sqlite3_open(db.c_str(), &db_) == SQLITE_OK) {
+      locked_ = sqlite3_exec(db_, "BEGIN EXCLUSIVE", nullptr, nullptr, nullptr) == SQLITE_OK;
+    }
+  }
+  ~DatabaseLock() {
+    release();
+    sqlite3_close(db_);
+  }
+  bool locked() const { return locked_; }
+  void release() {
+    if (locked_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    locked_ = false;
+  }
+
+ private:
+  sqlite3* db_ = nullptr;
+  bool locked_ = false;
+};
+
+// The PLC's link lost and back, and a request refused, while the database is locked: the
+// trigger polls on, the heartbeat one on at every poll, and the events are written once the
+// lock is gone, in order, stamped when they happened.
+TEST_F(ServiceStateTest, TheHeartbeatCountsEveryPollWhileTheDatabaseIsLocked) {
+  Service service(config_, design_gauge());
+  service.record_event(EventKind::kInfo, "test", "", 0, std::nullopt, "the database made before the lock");
+  ASSERT_TRUE(service.flush_events());
+  auto owned = std::make_unique<SharedPlc>();
+  SharedPlc& plc = *owned;
+  PlcTrigger trigger(service, fast_plc(), std::move(owned));
+  trigger.start();
+  ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return s.heartbeats.size() >= 2; }));
+
+  DatabaseLock lock(db());
+  ASSERT_TRUE(lock.locked());
+  plc.drop_link();  // "plc link down", then "plc link up" after the reconnect backoff
+  ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return s.connects >= 2; }));
+  plc.request(9, 1);  // no such part: refused at once, "plc request", then "plc fault"
+  ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return s.words.ack && s.words.fault; }));
+  EXPECT_EQ(plc.seen().words.result_code, PlcResultCode::kUnknownPart);
+  plc.clear();
+  const std::size_t before = plc.seen().heartbeats.size();
+  ASSERT_TRUE(plc.wait_until([before](const SharedPlc::Seen& s) { return polls_since(s, before) >= 50; }))
+      << "the trigger stopped polling while the database was locked";
+  EXPECT_FALSE(service.flush_events(std::chrono::milliseconds(0))) << "the events wait for the lock";
+  const std::string before_release = utc_now();
+
+  lock.release();
+  ASSERT_TRUE(service.flush_events(kGenerous));
+  trigger.stop();
+  expect_counted_every_poll(plc.seen().heartbeats);
+
+  std::vector<std::string> codes;
+  for (const StoredEvent& e : stored_events(db())) {
+    if (e.event.code == "test") continue;
+    codes.push_back(e.event.code);
+    EXPECT_LE(e.event.at_utc, before_release) << e.event.code << ": stamped when written, not when it happened";
+  }
+  EXPECT_EQ(codes, (std::vector<std::string>{"plc link down", "plc link up", "plc request", "plc fault"}));
+  EXPECT_NE(service.metrics().find("gaugeloop_service_events_dropped_total 0\n"), std::string::npos);
+}
+
+// A database locked for longer than the queue holds: the oldest waiting events are dropped and
+// counted, memory stays bounded, and the newest are written in order once it is free.
+TEST_F(ServiceStateTest, AFullEventQueueDropsItsOldestAndCountsThem) {
+  Service service(config_, design_gauge());
+  service.record_event(EventKind::kInfo, "test", "", 0, std::nullopt, "the database made before the lock");
+  ASSERT_TRUE(service.flush_events());
+  DatabaseLock lock(db());
+  ASSERT_TRUE(lock.locked());
+  const int total = static_cast<int>(kEventQueueLimit) + 10;
+  for (int i = 0; i < total; ++i) {
+    service.record_event(EventKind::kInfo, "step", "", 0, std::nullopt, std::to_string(i));
+  }
+  lock.release();
+  ASSERT_TRUE(service.flush_events(kGenerous));
+
+  std::vector<int> written;
+  for (const StoredEvent& e : stored_events(db())) {
+    if (e.event.code == "step") written.push_back(std::stoi(e.event.message));
+  }
+  // The one being written when the queue filled (if the writer had taken one) is kept too.
+  ASSERT_GE(written.size(), kEventQueueLimit);
+  ASSERT_LE(written.size(), kEventQueueLimit + 1);
+  EXPECT_TRUE(std::is_sorted(written.begin(), written.end()));
+  EXPECT_EQ(written.back(), total - 1) << "the newest are kept";
+  const std::string dropped = std::to_string(total - static_cast<int>(written.size()));
+  EXPECT_NE(service.metrics().find("gaugeloop_service_events_dropped_total " + dropped + "\n"), std::string::npos)
+      << service.metrics();
 }
 
 }  // namespace
