@@ -70,5 +70,6 @@ void add_profile_commands(CLI::App& app, CommandAction& action);  // profile
 void add_nc_commands(CLI::App& app, CommandAction& action);       // nc ...
 void add_serve_commands(CLI::App& app, CommandAction& action);    // serve
 void add_db_commands(CLI::App& app, CommandAction& action);       // db ...
+void add_token_commands(CLI::App& app, CommandAction& action);    // token new
 
 }  // namespace gaugeloop

@@ -11,10 +11,10 @@
 
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/plc_link.h"
-#include "job/measure_job.h"
 #include "config/part_file.h"
 #include "core/lift_table.h"
 #include "core/result.h"
+#include "job/measure_job.h"
 
 namespace gaugeloop {
 
