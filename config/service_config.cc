@@ -509,6 +509,28 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   return c;
 }
 
+Result<ServiceDataPaths> read_service_data_paths(const fs::path& path) {
+  Result<std::string> text = read_text(path, "service config");
+  if (!text) return text.error();
+  const ConfigFile f{path.string(), path.parent_path()};
+  Result<toml::table> parsed = parse_toml(*text, f.source);
+  if (!parsed) return parsed.error();
+  TomlReader top(*parsed, f.source);
+  ServiceDataPaths paths{f.resolve("gaugeloop.sqlite"), f.resolve("nc")};
+  if (const toml::table* t = top.subtable("database")) {
+    TomlReader dr(*t, f.source, "database.");
+    paths.db_path = f.resolve(dr.text("path", "gaugeloop.sqlite"));
+    if (dr.error) return *dr.error;
+  }
+  if (const toml::table* t = top.subtable("nc")) {
+    TomlReader nr(*t, f.source, "nc.");
+    paths.nc_dir = f.resolve(nr.text("dir", "nc"));
+    if (nr.error) return *nr.error;
+  }
+  if (top.error) return *top.error;
+  return paths;
+}
+
 Result<const ServicePart*> find_plc_part(const ServiceConfig& config, int plc_part_number, int lobe) {
   std::string known;
   for (const ServicePart& p : config.parts) {

@@ -556,5 +556,26 @@ TEST_F(ServiceConfigTest, PartsAreFoundByNameOrPlcNumberAndLobe) {
   EXPECT_EQ(job.nc_dir, c->job.nc_dir);
 }
 
+// The query commands' --config reads only where the runs and NC programs are, as the service
+// does, and nothing else: a token file it cannot read does not stop `runs list`.
+TEST_F(ServiceConfigTest, TheDataPathsAloneAreReadForTheQueryCommands) {
+  const fs::path config =
+      dir_.write("etc/svc.toml", "[gauge]\n" + kIntake +
+                                     "[nc]\ndir = \"../out/nc\"\n[database]\n"
+                                     "path = \"/var/lib/x/runs-7.sqlite\"\n[http]\ntoken_file = \"absent\"\n");
+  auto paths = read_service_data_paths(config);
+  ASSERT_TRUE(paths.ok()) << paths.error().message;
+  EXPECT_EQ(paths->db_path, fs::path("/var/lib/x/runs-7.sqlite"));
+  EXPECT_EQ(paths->nc_dir, dir_.path() / "out" / "nc");
+  auto defaults = read_service_data_paths(dir_.write("etc/bare.toml", "[gauge]\n"));
+  ASSERT_TRUE(defaults.ok()) << defaults.error().message;
+  EXPECT_EQ(defaults->db_path, dir_.path() / "etc" / "gaugeloop.sqlite");
+  EXPECT_EQ(defaults->nc_dir, dir_.path() / "etc" / "nc");
+  EXPECT_TRUE(refused(read_service_data_paths(dir_.write("etc/bad.toml", "[database]\npath = 7\n")),
+                      (dir_.path() / "etc" / "bad.toml").string() + ":2: key `database.path`"));
+  EXPECT_TRUE(refused(read_service_data_paths(dir_.path() / "absent.toml"), ErrorCode::kNotFound,
+                      "service config " + (dir_.path() / "absent.toml").string() + ": no such file"));
+}
+
 }  // namespace
 }  // namespace gaugeloop
