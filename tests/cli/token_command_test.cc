@@ -74,5 +74,31 @@ TEST(TokenCommand, AnExistingFileIsKeptUnlessForced) {
   EXPECT_TRUE(has(r.output, "no-such-dir")) << r.output;
 }
 
+// The token the command makes is one the service takes; the same file opened to every user is
+// refused by `serve --check` and by `serve` itself, before it listens.
+TEST(TokenCommand, TheServiceTakesTheNewTokenAndRefusesItWhenOthersCanReadIt) {
+  testing::TempDir dir;
+  const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
+  const fs::path config =
+      dir.write("gaugeloop.toml", "[gauge]\n[[part]]\nfile = \"" + (examples / "intake_flat.toml").string() +
+                                      "\"\n[nc]\ntemplate = \"" + (examples / "sinumerik" / "cam_table.spf").string() +
+                                      "\"\n[http]\nport = 0\ntoken_file = \"token\"\n");
+  ASSERT_EQ(run_command("token new " + (dir / "token").string()).exit_code, 0);
+  CommandResult r = run_command("serve --check --config " + config.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+
+  fs::permissions(dir / "token", fs::perms::others_read, fs::perm_options::add);
+  const std::string refusal = config.string() + ":8: key `http.token_file`: HTTP token file " +
+                              (dir / "token").string() + " can be read by any user (mode 0604)";
+  r = run_command("serve --check --config " + config.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, refusal)) << r.output;
+  // A service that started would wait for a signal: the guard kills it, and the test fails.
+  r = run_shell("timeout -s KILL 120 " + testing::gaugeloop_binary() + " serve --config " + config.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, refusal)) << r.output;
+  EXPECT_FALSE(has(r.output, "listening on")) << r.output;
+}
+
 }  // namespace
 }  // namespace gaugeloop
