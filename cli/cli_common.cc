@@ -3,6 +3,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cstdlib>
+
 #include "cli/embedded_defaults.h"
 
 namespace gaugeloop {
@@ -33,9 +35,36 @@ int report_error(const Error& e) {
   return exit_code_for(e.code);
 }
 
+std::string default_data_dir() {
+  const char* env = std::getenv("GAUGELOOP_DATA_DIR");
+  return env != nullptr && *env != '\0' ? std::string(env) : std::string("gaugeloop-data");
+}
+
 void add_data_dir_option(CLI::App& cmd, DataPaths& paths) {
-  cmd.add_option("--data-dir", paths.data_dir, "Directory holding the run database gaugeloop.sqlite")
+  cmd.add_option("--data-dir", paths.data_dir,
+                 "Directory holding the run database gaugeloop.sqlite (default: $GAUGELOOP_DATA_DIR if set, else "
+                 "gaugeloop-data)")
       ->capture_default_str();
+}
+
+CLI::Option* add_data_options(CLI::App& cmd, DataPaths& paths) {
+  add_data_dir_option(cmd, paths);
+  // Read while parsing, so db() and nc() are plain paths afterwards; a validator's message
+  // fails the command line like any bad option.
+  CLI::Validator read_config(
+      [&paths](std::string& file) -> std::string {
+        Result<ServiceDataPaths> read = read_service_data_paths(file);
+        if (!read) return read.error().message;
+        paths.from_config = std::move(*read);
+        return {};
+      },
+      "FILE");
+  return cmd
+      .add_option("--config", paths.config,
+                  "The service's config (e.g. /etc/gaugeloop/gaugeloop.toml): its [database] path and [nc] dir, "
+                  "instead of --data-dir")
+      ->check(read_config)
+      ->excludes("--data-dir");
 }
 
 Result<LoadedPart> load_part(const std::string& part_path) {
@@ -56,17 +85,23 @@ Status require_database(const std::filesystem::path& db, std::string_view advice
 
 namespace {
 
-constexpr std::string_view kMakeOne = "run `gaugeloop demo` or `gaugeloop measure` first, or give --data-dir";
+std::string make_one(const DataPaths& paths) {
+  if (!paths.config.empty()) {
+    return "the service has stored no run yet, or [database] path in " + paths.config +
+           " is not the database it writes";
+  }
+  return "run `gaugeloop demo` or `gaugeloop measure` first, or give --data-dir or --config";
+}
 
 }  // namespace
 
 Result<RunStore> open_history(const DataPaths& paths) {
-  if (Status s = require_database(paths.db(), kMakeOne); !s) return s.error();
+  if (Status s = require_database(paths.db(), make_one(paths)); !s) return s.error();
   return RunStore::open(paths.db());
 }
 
 Result<RunStore> open_history_read_only(const DataPaths& paths) {
-  if (Status s = require_database(paths.db(), kMakeOne); !s) return s.error();
+  if (Status s = require_database(paths.db(), make_one(paths)); !s) return s.error();
   return RunStore::open_read_only(paths.db());
 }
 

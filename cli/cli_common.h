@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "config/part_file.h"
+#include "config/service_config.h"
 #include "core/lift_table.h"
 #include "core/result.h"
 #include "storage/run_store.h"
@@ -30,17 +31,35 @@ int exit_code_for(ErrorCode code);
 // Logs the message (stderr, one line) and returns the exit code for its error code.
 int report_error(const Error& e);
 
-// Where a run's files go unless flags say otherwise.
+// The data directory when no --data-dir is given: $GAUGELOOP_DATA_DIR if set and not empty,
+// else "gaugeloop-data" (relative to the working directory).
+std::string default_data_dir();
+
+// Where a run's files go unless flags say otherwise: the data directory, or the database and
+// NC directory of the service's config (--config).
 struct DataPaths {
-  std::string data_dir = "gaugeloop-data";
-  std::string nc_dir;  // empty: <data_dir>/nc
-  std::filesystem::path db() const { return std::filesystem::path(data_dir) / "gaugeloop.sqlite"; }
-  std::filesystem::path nc() const {
-    return nc_dir.empty() ? std::filesystem::path(data_dir) / "nc" : std::filesystem::path(nc_dir);
+  std::string data_dir = default_data_dir();
+  std::string nc_dir;            // --nc-dir; empty: the config's [nc] dir with --config, else <data_dir>/nc
+  std::string config;            // --config: the service's config file; empty: none given
+  ServiceDataPaths from_config;  // read from `config` while the command line is parsed
+  std::filesystem::path db() const {
+    return config.empty() ? std::filesystem::path(data_dir) / "gaugeloop.sqlite" : from_config.db_path;
   }
+  std::filesystem::path nc() const {
+    if (!nc_dir.empty()) return nc_dir;
+    return config.empty() ? std::filesystem::path(data_dir) / "nc" : from_config.nc_dir;
+  }
+  // "--config FILE" or "--data-dir DIR": what the user gave, for the hints in messages.
+  std::string where() const { return config.empty() ? "--data-dir " + data_dir : "--config " + config; }
 };
 
+// --data-dir, whose default is default_data_dir().
 void add_data_dir_option(CLI::App& cmd, DataPaths& paths);
+
+// --data-dir as above, and --config FILE instead of it: the database and NC directory the
+// service with that config uses (read_service_data_paths; a config that cannot be read fails
+// the command line, exit status 2). Returns the --config option, for more exclusions.
+CLI::Option* add_data_options(CLI::App& cmd, DataPaths& paths);
 
 // kNotFound "no run database at <db>; <advice>" unless the file exists.
 Status require_database(const std::filesystem::path& db, std::string_view advice);
@@ -70,5 +89,6 @@ void add_profile_commands(CLI::App& app, CommandAction& action);  // profile
 void add_nc_commands(CLI::App& app, CommandAction& action);       // nc ...
 void add_serve_commands(CLI::App& app, CommandAction& action);    // serve
 void add_db_commands(CLI::App& app, CommandAction& action);       // db ...
+void add_token_commands(CLI::App& app, CommandAction& action);    // token new
 
 }  // namespace gaugeloop

@@ -14,16 +14,17 @@ namespace fs = std::filesystem;
 
 struct DbOptions {
   DataPaths paths;
-  std::string db_file;  // --db: any database file, e.g. a backup; empty: <data-dir>/gaugeloop.sqlite
+  std::string db_file;  // --db: any database file, e.g. a backup; empty: as --data-dir or --config say
   fs::path db() const { return db_file.empty() ? paths.db() : fs::path(db_file); }
 };
 
 void add_db_options(CLI::App& cmd, DbOptions& o) {
-  add_data_dir_option(cmd, o.paths);
-  cmd.add_option("--db", o.db_file, "The database file itself, e.g. a backup (instead of --data-dir)");
+  CLI::Option* config = add_data_options(cmd, o.paths);
+  cmd.add_option("--db", o.db_file, "The database file itself, e.g. a backup (instead of --data-dir or --config)")
+      ->excludes(config);
 }
 
-Status require_db_file(const DbOptions& o) { return require_database(o.db(), "give --data-dir or --db"); }
+Status require_db_file(const DbOptions& o) { return require_database(o.db(), "give --data-dir, --config or --db"); }
 
 // ---- db check ----
 

@@ -14,13 +14,13 @@
 #include "acquisition/tcp_endpoint.h"
 #include "cli/cli_common.h"
 #include "cli/embedded_defaults.h"
-#include "config/gauge_config.h"
 #include "cli/grinding_loop.h"
-#include "job/measure_job.h"
+#include "config/gauge_config.h"
 #include "config/service_config.h"
-#include "report/svg_plot.h"
 #include "core/atomic_file.h"
 #include "core/text_file.h"
+#include "job/measure_job.h"
+#include "report/svg_plot.h"
 #include "simulator/gauge_simulator.h"
 #include "simulator/virtual_grinder.h"
 
@@ -533,7 +533,8 @@ void add_sim_command(CLI::App& app, CommandAction& action) {
                 "Grind each next part on the virtual grinder from the program in the NC directory whenever it "
                 "changes (from the design at first), so measuring the simulator closes the loop "
                 "(docs/virtual_grinder.md)");
-  sim->add_option("--data-dir", sim_grind->paths.data_dir, "With --grind: where the NC directory is [gaugeloop-data]")
+  sim->add_option("--data-dir", sim_grind->paths.data_dir,
+                  "With --grind: where the NC directory is [$GAUGELOOP_DATA_DIR, else gaugeloop-data]")
       ->capture_default_str();
   sim->add_option("--nc-dir", sim_grind->paths.nc_dir, "With --grind: the NC directory [<data-dir>/nc]");
   sim->add_option("--machine-seed", sim_grind->machine.seed, "With --grind: seed of the grinder's vibration")

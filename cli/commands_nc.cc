@@ -10,12 +10,12 @@
 #include <set>
 
 #include "cli/cli_common.h"
-#include "job/nc_push.h"
-#include "report/run_json.h"
+#include "core/number_text.h"
 #include "core/text_file.h"
+#include "job/nc_push.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
-#include "core/number_text.h"
+#include "report/run_json.h"
 
 namespace gaugeloop {
 namespace {
@@ -29,7 +29,7 @@ struct NcOptions {
 };
 
 void add_nc_options(CLI::App& cmd, NcOptions& o) {
-  add_data_dir_option(cmd, o.paths);
+  add_data_options(cmd, o.paths);
   cmd.add_option("--nc-dir", o.paths.nc_dir, "Directory the curve-table programs are written to [<data-dir>/nc]");
   cmd.add_option("--program", o.program,
                  "Program name, e.g. CAM_INTAKE_L1 (the file <nc-dir>/NAME.SPF) [the only program pushed]");
@@ -174,8 +174,8 @@ int cmd_diff(const DiffOptions& o) {
   for (const auto* p : {&pa, &pb}) {
     std::printf("  version %-4d run %lld, %s, %s, %zu points, pushed %s\n", p->table_version,
                 static_cast<long long>(p->run_id), p->reason.c_str(),
-                p->table.interpolation.empty() ? "-" : p->table.interpolation.c_str(), (p == &pa ? ta : tb)->points.size(),
-                p->pushed_utc.c_str());
+                p->table.interpolation.empty() ? "-" : p->table.interpolation.c_str(),
+                (p == &pa ? ta : tb)->points.size(), p->pushed_utc.c_str());
   }
   std::printf("  X(B) - X(A), as the NC interpolates each: largest %+.3f um at C%.2f, RMS %.3f um\n", worst_um, worst_c,
               rms_um);
@@ -325,7 +325,7 @@ int cmd_reject(const DecideOptions& o) {
 }
 
 void add_decide_options(CLI::App& cmd, DecideOptions& o) {
-  add_data_dir_option(cmd, o.paths);
+  add_data_options(cmd, o.paths);
   cmd.add_option("id", o.id, "Pending table id (see `nc pending`)")->required();
   cmd.add_option("--by", o.by, "Who decides [$USER]");
   cmd.add_option("--note", o.note, "Why, kept with the decision");
@@ -378,7 +378,7 @@ void add_nc_commands(CLI::App& app, CommandAction& action) {
       "Finish pushes that were interrupted (kill, power cut, full disk, locked database): a program the control "
       "holds is recorded as pushed, one it never got is abandoned, leftover temporary files are removed. Every "
       "push and measurement does this for its own program first.");
-  add_data_dir_option(*reconcile_cmd, reconcile->paths);
+  add_data_options(*reconcile_cmd, reconcile->paths);
   reconcile_cmd->callback([&action, reconcile] { action = [reconcile] { return cmd_reconcile(*reconcile); }; });
 
   auto pending = std::make_shared<PendingOptions>();

@@ -11,11 +11,11 @@
 #include <sstream>
 
 #include "cli/cli_common.h"
+#include "core/atomic_file.h"
+#include "core/number_text.h"
 #include "report/run_json.h"
 #include "report/svg_plot.h"
-#include "core/atomic_file.h"
 #include "storage/run_store.h"
-#include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
@@ -24,9 +24,7 @@ using nlohmann::json;
 
 // ---- Helpers shared by the commands ----
 
-std::string list_hint(const DataPaths& paths) {
-  return "`gaugeloop runs list --data-dir " + paths.data_dir + "` shows the ids";
-}
+std::string list_hint(const DataPaths& paths) { return "`gaugeloop runs list " + paths.where() + "` shows the ids"; }
 
 Result<StoredRun> load(const RunStore& store, std::int64_t id, const DataPaths& paths) {
   Result<StoredRun> run = store.load_run(id);
@@ -123,8 +121,8 @@ struct RunOptions {
 std::string frame_text(const StoredRun& r) {
   if (!r.geometry) return "not recorded with this run (revolutions stay in the machine frame)";
   const Part& g = *r.geometry;
-  return "C = " + std::string(g.rotation_sense > 0 ? "+" : "-") + "psi + " + format_fixed(g.c_offset_deg, 3) + " deg; probe " +
-         format_signed_fixed(g.probe_offset_deg, 3) + " deg of C from the wheel";
+  return "C = " + std::string(g.rotation_sense > 0 ? "+" : "-") + "psi + " + format_fixed(g.c_offset_deg, 3) +
+         " deg; probe " + format_signed_fixed(g.probe_offset_deg, 3) + " deg of C from the wheel";
 }
 
 std::vector<std::pair<int, double>> top_harmonics(const LobeAnalysis& a, std::size_t n) {
@@ -398,10 +396,11 @@ int cmd_plot(const PlotOptions& o) {
   p.spread_um = run->analysis.spread_um;
   if (!o.no_correction) p.correction_um = run->correction_um;
   if (o.tolerance_um > 0) p.tolerance_um = o.tolerance_um;
-  p.footer = "RMS " + format_fixed(s.rms_error_um, 2) + " \u00b5m \u00b7 peak to valley " + format_fixed(s.peak_to_valley_um, 2) +
-             " \u00b5m \u00b7 repeatability " + format_fixed(s.repeatability_um, 2) + " \u00b5m \u00b7 phase " +
-             opt(s.phase_error_deg, 3, true) + "\u00b0 \u00b7 runout " + opt(s.base_circle_runout_um, 2) +
-             " \u00b5m \u00b7 " + std::to_string(s.revolutions) + " revolutions \u00b7 " + o.paths.db().string();
+  p.footer = "RMS " + format_fixed(s.rms_error_um, 2) + " \u00b5m \u00b7 peak to valley " +
+             format_fixed(s.peak_to_valley_um, 2) + " \u00b5m \u00b7 repeatability " +
+             format_fixed(s.repeatability_um, 2) + " \u00b5m \u00b7 phase " + opt(s.phase_error_deg, 3, true) +
+             "\u00b0 \u00b7 runout " + opt(s.base_circle_runout_um, 2) + " \u00b5m \u00b7 " +
+             std::to_string(s.revolutions) + " revolutions \u00b7 " + o.paths.db().string();
   if (Status w = write_file_atomically(o.out, render_error_plot_svg(p)); !w) return report_error(w.error());
   std::printf("run %lld plotted to %s\n", static_cast<long long>(o.id), o.out.c_str());
   return kExitOk;
@@ -478,7 +477,7 @@ void add_time_options(CLI::App& cmd, std::string& since, std::string& until) {
 }
 
 void add_filter_options(CLI::App& cmd, ListOptions& o, bool lobe_required) {
-  add_data_dir_option(cmd, o.paths);
+  add_data_options(cmd, o.paths);
   CLI::Option* part = cmd.add_option("--part", o.query.part, "Only runs of this part");
   CLI::Option* lobe = cmd.add_option("--lobe", o.query.lobe, "Only runs of this lobe")->check(CLI::Range(1, 1000));
   if (lobe_required) {
@@ -508,7 +507,7 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
 
   auto show = std::make_shared<RunOptions>();
   CLI::App* show_cmd = runs->add_subcommand("show", "One run: summary, analysis, correction and NC pushes.");
-  add_data_dir_option(*show_cmd, show->paths);
+  add_data_options(*show_cmd, show->paths);
   show_cmd->add_option("id", show->id, "Run id (see `runs list`)")->required();
   show_cmd->add_flag("--json", show->json_out, "Print JSON");
   show_cmd->callback([&action, show] { action = [show] { return cmd_show(*show); }; });
@@ -516,7 +515,7 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   auto exp = std::make_shared<ExportOptions>();
   CLI::App* export_cmd = runs->add_subcommand(
       "export", "One run per cam degree as CSV: design, each revolution, mean, spread, error, correction.");
-  add_data_dir_option(*export_cmd, exp->paths);
+  add_data_options(*export_cmd, exp->paths);
   export_cmd->add_option("id", exp->id, "Run id (see `runs list`)")->required();
   export_cmd->add_option("--out", exp->out, "Write the CSV to this file instead of standard output");
   export_cmd->callback([&action, exp] { action = [exp] { return cmd_export(*exp); }; });
@@ -525,7 +524,7 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   CLI::App* compare_cmd = runs->add_subcommand("compare",
                                                "Two runs side by side: figures, per-degree differences, "
                                                "settings and the correction each was ground with.");
-  add_data_dir_option(*compare_cmd, cmp->paths);
+  add_data_options(*compare_cmd, cmp->paths);
   compare_cmd->add_option("a", cmp->a, "First run id")->required();
   compare_cmd->add_option("b", cmp->b, "Second run id")->required();
   compare_cmd->add_flag("--json", cmp->json_out, "Print JSON");
@@ -543,7 +542,7 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
 
   auto plot = std::make_shared<PlotOptions>();
   CLI::App* plot_cmd = runs->add_subcommand("plot", "SVG of one run's lift error per cam degree, polar and linear.");
-  add_data_dir_option(*plot_cmd, plot->paths);
+  add_data_options(*plot_cmd, plot->paths);
   plot_cmd->add_option("id", plot->id, "Run id (see `runs list`)")->required();
   plot_cmd->add_option("--out", plot->out, "SVG file to write, e.g. run12.svg")->required();
   plot_cmd->add_option("--tolerance-um", plot->tolerance_um, "Draw the band +-T um and mark degrees outside it")
@@ -554,7 +553,7 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   auto prune = std::make_shared<PruneOptions>();
   CLI::App* prune_cmd = runs->add_subcommand(
       "prune", "Delete raw samples of old runs; summaries, profiles, corrections, pushes and events stay.");
-  add_data_dir_option(*prune_cmd, prune->paths);
+  add_data_options(*prune_cmd, prune->paths);
   prune_cmd->add_option("--raw-older-than-days", prune->days, "Prune runs started more than N days ago")
       ->required()
       ->check(CLI::Range(0, 100000));
@@ -562,7 +561,7 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
 
   auto events = std::make_shared<EventOptions>();
   CLI::App* events_cmd = app.add_subcommand("events", "Faults, refusals and the service's steps (info), newest first.");
-  add_data_dir_option(*events_cmd, events->paths);
+  add_data_options(*events_cmd, events->paths);
   events_cmd->add_option("--kind", events->kind, "Only this kind")->check(CLI::IsMember({"fault", "refusal", "info"}));
   events_cmd->add_option("--machine", events->query.machine, "Only events on this machine");
   events_cmd->add_option("--part", events->query.part, "Only events about this part");

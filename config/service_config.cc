@@ -1,9 +1,13 @@
 // toml++ reading of the service configuration, every message with file, line and key.
 #include "config/service_config.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <set>
@@ -207,9 +211,110 @@ Status read_database_table(TomlReader& top, const ConfigFile& f, JobSettings& jo
   return {};
 }
 
-// The token read from [http] token_file: the file's text without trailing blanks, not empty.
+// A file holding a secret (the token, the TLS private key) that the service reads: nobody
+// but its owner and group may write it, nobody outside its group may read it, and its owner is
+// root or the user the service runs as, so no other account can swap in a token of its own.
+// The documented layout is root:gaugeloop 0640.
+Status check_secret_file(const TomlReader& r, std::string_view key, const fs::path& path, const std::string& what) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    const int err = errno;
+    return make_error(err == ENOENT ? ErrorCode::kNotFound : ErrorCode::kInvalidInput,
+                      r.where(key) + ": " + what + " " + path.string() + ": " + std::strerror(err));
+  }
+  char mode[8];
+  std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
+  const std::string fix = "; run `chmod 0640 " + path.string() + "; chown root:gaugeloop " + path.string() +
+                          "` (gaugeloop being the service's group)";
+  std::string wrong;
+  if ((st.st_mode & S_IWOTH) != 0) {
+    wrong = "can be written by any user";
+  } else if ((st.st_mode & S_IWGRP) != 0) {
+    wrong = "can be written by its group";
+  } else if ((st.st_mode & S_IROTH) != 0) {
+    wrong = "can be read by any user";
+  } else if ((st.st_mode & S_IXOTH) != 0) {
+    wrong = "gives any user access";
+  }
+  if (!wrong.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      r.where(key) + ": " + what + " " + path.string() + " " + wrong + " (mode " + mode + ")" + fix);
+  }
+  if (st.st_uid != 0 && st.st_uid != ::geteuid()) {
+    return make_error(ErrorCode::kInvalidInput, r.where(key) + ": " + what + " " + path.string() + " is owned by uid " +
+                                                    std::to_string(st.st_uid) +
+                                                    ", neither root nor the user this service runs as (uid " +
+                                                    std::to_string(::geteuid()) + "), who could replace it" + fix);
+  }
+  return {};
+}
+
+// How many bits an attacker must guess, estimated from the length and the character classes
+// used: hex (digits with a-f, or with A-F, and nothing else) counts 4 bits a character;
+// otherwise each class present adds its size to the alphabet (digits 10, lower 26, upper 26,
+// anything else 32) and each character counts log2 of that. An upper bound for a token a
+// person made up, exact for one drawn at random from that alphabet.
+double estimated_token_bits(std::string_view token) {
+  auto all = [token](auto in_class) { return std::all_of(token.begin(), token.end(), in_class); };
+  auto any = [token](auto in_class) { return std::any_of(token.begin(), token.end(), in_class); };
+  auto digit = [](char c) { return c >= '0' && c <= '9'; };
+  auto lower = [](char c) { return c >= 'a' && c <= 'z'; };
+  auto upper = [](char c) { return c >= 'A' && c <= 'Z'; };
+  auto other = [&](char c) { return !digit(c) && !lower(c) && !upper(c); };
+  auto hex_letter = [](char c) { return (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F'); };
+  const bool hex = any(hex_letter) && (all([&](char c) { return digit(c) || (c >= 'a' && c <= 'f'); }) ||
+                                       all([&](char c) { return digit(c) || (c >= 'A' && c <= 'F'); }));
+  const double alphabet = hex ? 16.0
+                              : (any(digit) ? 10.0 : 0.0) + (any(lower) ? 26.0 : 0.0) + (any(upper) ? 26.0 : 0.0) +
+                                    (any(other) ? 32.0 : 0.0);
+  return alphabet > 1.0 ? static_cast<double>(token.size()) * std::log2(alphabet) : 0.0;
+}
+
+// A token must be hard to guess: at least kMinTokenChars characters, at least
+// kMinTokenDistinctChars different ones (sixteen `a`, or `abab...`, are refused), and an
+// estimated kMinTokenBits bits (estimated_token_bits).
+constexpr size_t kMinTokenChars = 32;
+constexpr size_t kMinTokenDistinctChars = 8;
+constexpr double kMinTokenBits = 128.0;
+
+Status check_token_strength(const TomlReader& hr, std::string_view key, const std::string& token) {
+  const std::string advice = "; make one with `gaugeloop token new FILE` (256 random bits)";
+  if (token.size() < kMinTokenChars) {
+    return make_error(ErrorCode::kInvalidInput, hr.where(key) + ": the token has " + std::to_string(token.size()) +
+                                                    " characters, fewer than " + std::to_string(kMinTokenChars) +
+                                                    ": too easy to guess" + advice);
+  }
+  const std::set<char> distinct(token.begin(), token.end());
+  if (distinct.size() < kMinTokenDistinctChars) {
+    return make_error(ErrorCode::kInvalidInput,
+                      hr.where(key) + ": the token uses only " + std::to_string(distinct.size()) +
+                          " different characters (at least " + std::to_string(kMinTokenDistinctChars) +
+                          "): too easy to guess" + advice);
+  }
+  if (const double bits = estimated_token_bits(token); bits < kMinTokenBits) {
+    return make_error(ErrorCode::kInvalidInput, hr.where(key) + ": the token holds about " +
+                                                    std::to_string(static_cast<int>(bits)) + " bits, fewer than " +
+                                                    std::to_string(static_cast<int>(kMinTokenBits)) +
+                                                    ": too easy to guess; make it longer" + advice);
+  }
+  for (char c : token) {
+    if (static_cast<unsigned char>(c) <= ' ' || c == 0x7f) {
+      return make_error(ErrorCode::kInvalidInput,
+                        hr.where(key) +
+                            ": the token holds a blank or control character, which no HTTP client sends "
+                            "in an Authorization header" +
+                            advice);
+    }
+  }
+  return {};
+}
+
+// The token read from [http] token_file: the file checked (check_secret_file), its text
+// without trailing blanks, not empty.
 Result<std::string> read_token_file(const TomlReader& hr, const ConfigFile& f, const std::string& token_file) {
-  Result<std::string> text = read_text(f.resolve(token_file), "HTTP token file");
+  const fs::path path = f.resolve(token_file);
+  if (Status s = check_secret_file(hr, "token_file", path, "HTTP token file"); !s) return s.error();
+  Result<std::string> text = read_text(path, "HTTP token file");
   if (!text) return at_key(hr, "token_file", text.error());
   std::string token = *text;
   while (!token.empty() && (token.back() == '\n' || token.back() == '\r' || token.back() == ' ')) token.pop_back();
@@ -217,31 +322,64 @@ Result<std::string> read_token_file(const TomlReader& hr, const ConfigFile& f, c
   return token;
 }
 
-// [http]: address and token of the HTTP API; absent table, no API.
+// [http] tls_cert and tls_key: both or neither, each a readable regular file; the key is a
+// secret, checked like the token file.
+Status read_tls_keys(const TomlReader& hr, const ConfigFile& f, const std::string& cert, const std::string& key,
+                     HttpSettings& hs) {
+  if (cert.empty() != key.empty()) {
+    return make_error(ErrorCode::kInvalidInput, hr.where(cert.empty() ? "tls_key" : "tls_cert") +
+                                                    ": give both tls_cert and tls_key (PEM files) for HTTPS, or "
+                                                    "neither for plain HTTP");
+  }
+  if (cert.empty()) return {};
+  hs.tls_cert = f.resolve(cert);
+  hs.tls_key = f.resolve(key);
+  if (Status s = check_secret_file(hr, "tls_key", hs.tls_key, "TLS private key"); !s) return s;
+  Result<std::string> cert_text = read_regular_file(hs.tls_cert, "TLS certificate");
+  if (!cert_text) return at_key(hr, "tls_cert", cert_text.error());
+  Result<std::string> key_text = read_regular_file(hs.tls_key, "TLS private key");
+  if (!key_text) return at_key(hr, "tls_key", key_text.error());
+  return {};
+}
+
+// [http]: address, token and TLS files of the HTTP API; absent table, no API.
 Result<std::optional<HttpSettings>> read_http_table(TomlReader& top, const ConfigFile& f) {
   const toml::table* t = top.subtable("http");
   if (t == nullptr) return std::optional<HttpSettings>();
   TomlReader hr(*t, f.source, "http.");
-  hr.allow_only({"host", "port", "token", "token_file"});
+  hr.allow_only({"host", "port", "token", "token_file", "allow_inline_token", "tls_cert", "tls_key"});
   HttpSettings hs;
   hs.host = hr.text("host", "127.0.0.1");
   hs.port = static_cast<int>(hr.integer("port", 8080, 0, 65535));
   hs.token = hr.text("token", "");
+  const bool allow_inline = hr.flag("allow_inline_token", false);
   const std::string token_file = hr.text("token_file", "");
+  const std::string tls_cert = hr.text("tls_cert", "");
+  const std::string tls_key = hr.text("tls_key", "");
   if (hr.error) return *hr.error;
   if (!hs.token.empty() && !token_file.empty()) {
     return make_error(ErrorCode::kInvalidInput, hr.where("token_file") + ": give token or token_file, not both");
+  }
+  if (!hs.token.empty() && !allow_inline) {
+    return make_error(ErrorCode::kInvalidInput,
+                      hr.where("token") +
+                          ": a token written in the config is refused: the config is often readable by every user "
+                          "and copied around (backups, tickets, other machines). Put it in a file only root and the "
+                          "service's group can read (`gaugeloop token new /etc/gaugeloop/token`) and give "
+                          "`token_file = \"/etc/gaugeloop/token\"`; or, for a test bench, `allow_inline_token = "
+                          "true`");
   }
   if (!token_file.empty()) {
     Result<std::string> token = read_token_file(hr, f, token_file);
     if (!token) return token.error();
     hs.token = std::move(*token);
   }
-  if (!hs.token.empty() && hs.token.size() < 16) {
-    return make_error(ErrorCode::kInvalidInput,
-                      hr.where(token_file.empty() ? "token" : "token_file") +
-                          ": a token shorter than 16 characters is too easy to guess; use e.g. `openssl rand -hex 16`");
+  if (!hs.token.empty()) {
+    if (Status s = check_token_strength(hr, token_file.empty() ? "token" : "token_file", hs.token); !s) {
+      return s.error();
+    }
   }
+  if (Status s = read_tls_keys(hr, f, tls_cert, tls_key, hs); !s) return s.error();
   return std::optional<HttpSettings>(std::move(hs));
 }
 
@@ -369,6 +507,28 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   c.plc = std::move(*plc);
   if (Status s = read_part_entries(table, top, f, c); !s) return s.error();
   return c;
+}
+
+Result<ServiceDataPaths> read_service_data_paths(const fs::path& path) {
+  Result<std::string> text = read_text(path, "service config");
+  if (!text) return text.error();
+  const ConfigFile f{path.string(), path.parent_path()};
+  Result<toml::table> parsed = parse_toml(*text, f.source);
+  if (!parsed) return parsed.error();
+  TomlReader top(*parsed, f.source);
+  ServiceDataPaths paths{f.resolve("gaugeloop.sqlite"), f.resolve("nc")};
+  if (const toml::table* t = top.subtable("database")) {
+    TomlReader dr(*t, f.source, "database.");
+    paths.db_path = f.resolve(dr.text("path", "gaugeloop.sqlite"));
+    if (dr.error) return *dr.error;
+  }
+  if (const toml::table* t = top.subtable("nc")) {
+    TomlReader nr(*t, f.source, "nc.");
+    paths.nc_dir = f.resolve(nr.text("dir", "nc"));
+    if (nr.error) return *nr.error;
+  }
+  if (top.error) return *top.error;
+  return paths;
 }
 
 Result<const ServicePart*> find_plc_part(const ServiceConfig& config, int plc_part_number, int lobe) {

@@ -11,10 +11,10 @@
 
 #include "acquisition/modbus_gauge.h"
 #include "acquisition/plc_link.h"
-#include "job/measure_job.h"
 #include "config/part_file.h"
 #include "core/lift_table.h"
 #include "core/result.h"
+#include "job/measure_job.h"
 
 namespace gaugeloop {
 
@@ -64,6 +64,19 @@ struct ServiceConfig {
 // kNotFound for a missing file) name the file, the line and the key, and say what is allowed;
 // unknown keys are refused so a typo never falls back to a default silently.
 Result<ServiceConfig> read_service_config(const std::filesystem::path& path);
+
+// Where the service keeps its runs and writes its NC programs.
+struct ServiceDataPaths {
+  std::filesystem::path db_path;  // [database] path
+  std::filesystem::path nc_dir;   // [nc] dir
+};
+
+// Only [database] path and [nc] dir of the service's config, relative to its directory as the
+// service reads them, with their defaults: for the query commands' --config. Nothing else in
+// the file is read or checked, so it works for a user who may read the runs but could not
+// start the service (the token file and a writable database are the service's business).
+// Errors (kNotFound, kInvalidInput) name the file, the line and the key.
+Result<ServiceDataPaths> read_service_data_paths(const std::filesystem::path& path);
 
 // The part (name and lobe) among the configured ones; kNotFound listing them.
 Result<const ServicePart*> find_part(const ServiceConfig& config, const std::string& name, int lobe);

@@ -30,7 +30,7 @@ std::string atomic_temporary_prefix(const std::filesystem::path& path) {
 }
 
 Status write_file_atomically(const std::filesystem::path& path, std::string_view contents,
-                             const AtomicWriteObserver& observer) {
+                             const AtomicWriteObserver& observer, unsigned mode) {
   auto reached = [&observer](AtomicWriteStep step) {
     if (observer) observer(step);
   };
@@ -54,7 +54,7 @@ Status write_file_atomically(const std::filesystem::path& path, std::string_view
     }
     done += static_cast<size_t>(n);
   }
-  if (::fchmod(fd, 0644) != 0) return fail("cannot set permissions of", errno);
+  if (::fchmod(fd, static_cast<mode_t>(mode & 07777)) != 0) return fail("cannot set permissions of", errno);
   reached(AtomicWriteStep::kTemporaryWritten);
   if (::fsync(fd) != 0) return fail("cannot flush", errno);
   if (::close(fd) != 0) {

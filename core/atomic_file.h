@@ -26,9 +26,11 @@ using AtomicWriteObserver = std::function<void(AtomicWriteStep step)>;
 // After a crash at any point `path` holds either its old contents or the new ones; a crash
 // before the rename can leave the temporary file (remove_atomic_leftovers). The directory
 // must exist. Errors (kIo) name the path and the reason; on an error the temporary file is
-// removed. `observer`, if given, is called after each step.
+// removed. `observer`, if given, is called after each step. The file gets permission bits
+// `mode`; the temporary file is made owner-only (0600) and changed to `mode` before it is
+// renamed, so a secret written with mode 0600 is never readable by anyone else.
 Status write_file_atomically(const std::filesystem::path& path, std::string_view contents,
-                             const AtomicWriteObserver& observer = {});
+                             const AtomicWriteObserver& observer = {}, unsigned mode = 0644);
 
 // The directory `path` is in: its parent, or "." for a bare file name.
 std::filesystem::path directory_of(const std::filesystem::path& path);

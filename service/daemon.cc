@@ -80,8 +80,9 @@ struct StartedWith {
 };
 
 // SIGHUP: a configuration that reads and checks whole replaces the one in force; what needs a
-// restart ([plc], [http], the database path) is said, and the database path kept.
-void reload(Service& service, const std::filesystem::path& config_path, const StartedWith& started) {
+// restart ([plc], [http] but its token, the database path) is said, and the database path
+// kept. A new token is in force at once (`http`, if the API runs, gets it; `started` keeps it).
+void reload(Service& service, const std::filesystem::path& config_path, StartedWith& started, HttpApi* http) {
   Result<ServiceConfig> fresh = read_service_config(config_path);
   if (!fresh) {
     spdlog::error("reload refused, keeping the configuration in use: {}", fresh.error().message);
@@ -93,11 +94,17 @@ void reload(Service& service, const std::filesystem::path& config_path, const St
   if (plc_text(fresh->plc) != plc_text(started.plc)) {
     spdlog::warn("reload: [plc] changes take effect when the service restarts");
   }
-  const std::optional<HttpSettings>& was = started.http;
+  std::optional<HttpSettings>& was = started.http;
   if (fresh->http.has_value() != was.has_value() ||
-      (fresh->http &&
-       (fresh->http->host != was->host || fresh->http->port != was->port || fresh->http->token != was->token))) {
+      (fresh->http && (fresh->http->host != was->host || fresh->http->port != was->port ||
+                       fresh->http->tls_cert != was->tls_cert || fresh->http->tls_key != was->tls_key))) {
     spdlog::warn("reload: [http] changes take effect when the service restarts");
+  }
+  if (fresh->http && was && http != nullptr && fresh->http->token != was->token) {
+    // Never the token itself in the log: the journal is readable by more people than the file.
+    http->set_token(fresh->http->token);
+    was->token = fresh->http->token;
+    spdlog::info("reload: HTTP token replaced{}", was->token.empty() ? "; no token now, the API is read-only" : "");
   }
   if (fresh->job.db_path != started.db_path) {
     spdlog::warn("reload: [database] path changes take effect when the service restarts");
@@ -143,7 +150,7 @@ Status run_service(const std::filesystem::path& config_path) {
 
   Result<ServiceConfig> config = read_service_config(config_path);
   if (!config) return not_starting(config.error(), "configuration refused");
-  const StartedWith started{config->http, config->plc, config->job.db_path};
+  StartedWith started{config->http, config->plc, config->job.db_path};
   const std::optional<HttpSettings>& http_settings = started.http;
   const std::optional<PlcSettings>& plc_settings = started.plc;
   const std::filesystem::path& db_path = started.db_path;
@@ -174,7 +181,7 @@ Status run_service(const std::filesystem::path& config_path) {
     int sig = 0;
     if (sigwait(&signals, &sig) != 0) continue;
     if (sig == SIGHUP) {
-      reload(service, config_path, started);
+      reload(service, config_path, started, http.get());
       continue;
     }
     spdlog::info("{} received: letting the run in progress finish", sig == SIGTERM ? "SIGTERM" : "SIGINT");

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <string>
+
 namespace gaugeloop {
 namespace {
 
@@ -50,6 +53,33 @@ TEST(CliCommon, DataPathsDefaultUnderTheDataDirectory) {
   Status missing = require_database("/nonexistent/gaugeloop.sqlite", "run a demo first");
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.error().message, "no run database at /nonexistent/gaugeloop.sqlite; run a demo first");
+}
+
+// Flag beats environment beats built-in default: the environment is the default's source.
+TEST(CliCommon, TheDataDirectoryDefaultsToGaugeloopDataDirThenGaugeloopData) {
+  const char* was = std::getenv("GAUGELOOP_DATA_DIR");
+  const std::string saved = was != nullptr ? was : "";
+  ::setenv("GAUGELOOP_DATA_DIR", "/srv/runs", 1);
+  EXPECT_EQ(default_data_dir(), "/srv/runs");
+  EXPECT_EQ(DataPaths().db(), std::filesystem::path("/srv/runs/gaugeloop.sqlite"));
+  ::setenv("GAUGELOOP_DATA_DIR", "", 1);
+  EXPECT_EQ(default_data_dir(), "gaugeloop-data") << "set but empty counts as unset";
+  ::unsetenv("GAUGELOOP_DATA_DIR");
+  EXPECT_EQ(default_data_dir(), "gaugeloop-data");
+  if (was != nullptr) ::setenv("GAUGELOOP_DATA_DIR", saved.c_str(), 1);
+}
+
+// With --config the service's paths stand, whatever the data directory; --nc-dir still wins.
+TEST(CliCommon, TheServicesConfigGivesTheDatabaseAndNcDirectory) {
+  DataPaths p;
+  p.data_dir = "ignored";
+  p.config = "/etc/gaugeloop/gaugeloop.toml";
+  p.from_config = {"/var/lib/gaugeloop/runs-7.sqlite", "/var/lib/gaugeloop/nc"};
+  EXPECT_EQ(p.db(), std::filesystem::path("/var/lib/gaugeloop/runs-7.sqlite"));
+  EXPECT_EQ(p.nc(), std::filesystem::path("/var/lib/gaugeloop/nc"));
+  EXPECT_EQ(p.where(), "--config /etc/gaugeloop/gaugeloop.toml");
+  p.nc_dir = "/tmp/nc";
+  EXPECT_EQ(p.nc(), std::filesystem::path("/tmp/nc"));
 }
 
 }  // namespace

@@ -3,12 +3,14 @@
 #include "config/service_config.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <string>
 
-#include "tests/support/temp_dir.h"
 #include "tests/support/refused.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -24,6 +26,8 @@ const fs::path kExamples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
 const std::string kIntake = "[[part]]\nfile = \"parts/intake_flat.toml\"\n";
 const std::string kExhaust = "[[part]]\nfile = \"parts/exhaust_roller.toml\"\n";
 const std::string kNc = "[nc]\ntemplate = \"table.spf\"\n";
+// 64 hex characters, as `gaugeloop token new` writes: 256 bits.
+constexpr const char* kStrongToken = "9f86d081884c7d659a2feaa0c55ad015a3bf4f1b2b0b822cd15d6c15b0f00a08";
 
 class ServiceConfigTest : public ::testing::Test {
  protected:
@@ -35,6 +39,13 @@ class ServiceConfigTest : public ::testing::Test {
       fs::copy_file(kExamples / name, dir_.path() / "parts" / name);
     }
     fs::copy_file(kExamples / "sinumerik" / "cam_table.spf", dir_.path() / "table.spf");
+  }
+
+  // A file only its owner may read or write (0600, as `gaugeloop token new` makes it), or `mode`.
+  fs::path write_secret(const fs::path& relative, const std::string& text, mode_t mode = 0600) const {
+    const fs::path p = dir_.write(relative, text);
+    ::chmod(p.c_str(), mode);
+    return p;
   }
 
   Result<ServiceConfig> read(const std::string& text) { return read_service_config(dir_.write("svc.toml", text)); }
@@ -87,7 +98,7 @@ TEST_F(ServiceConfigTest, AMinimalFileTakesTheDocumentedDefaults) {
 
 TEST_F(ServiceConfigTest, AFullFileIsReadBackFieldByField) {
   dir_.write("gauge.toml", "[link]\nhost = \"127.0.0.1\"\nport = 1502\nunit_id = 9\n");
-  dir_.write("token", "0123456789abcdef0123\n");
+  write_secret("token", std::string(kStrongToken) + "\n");
   const std::string text = R"(machine = "grinder-7"
 [gauge]
 config = "gauge.toml"
@@ -184,7 +195,7 @@ poll_interval_ms = 50
   ASSERT_TRUE(c->http.has_value());
   EXPECT_EQ(c->http->host, "0.0.0.0");
   EXPECT_EQ(c->http->port, 9090);
-  EXPECT_EQ(c->http->token, "0123456789abcdef0123") << "the token file's line end is not part of the token";
+  EXPECT_EQ(c->http->token, kStrongToken) << "the token file's line end is not part of the token";
   ASSERT_TRUE(c->plc.has_value());
   EXPECT_EQ(c->plc->link.link.transport, ModbusTransport::kTcp);
   EXPECT_EQ(c->plc->link.link.host, "127.0.0.1");
@@ -206,7 +217,7 @@ TEST_F(ServiceConfigTest, TheExampleConfigReads) {
 // file's lift table is relative to the part file.
 TEST_F(ServiceConfigTest, RelativePathsAreResolvedAgainstTheConfigsDirectory) {
   dir_.write("etc/gauge.toml", "[link]\nport = 1602\n");
-  dir_.write("etc/keys/token", "fedcba9876543210fedc");
+  write_secret("etc/keys/token", kStrongToken);
   const fs::path config = dir_.write("etc/svc.toml", R"([gauge]
 config = "gauge.toml"
 [[part]]
@@ -229,7 +240,7 @@ token_file = "keys/token"
   EXPECT_EQ(c->job.nc_dir, dir_.path() / "etc" / "out" / "nc");
   EXPECT_EQ(c->job.nc_template_name, (dir_.path() / "table.spf").string());
   EXPECT_EQ(c->job.db_path, dir_.path() / "var" / "runs.sqlite");
-  EXPECT_EQ(c->http->token, "fedcba9876543210fedc");
+  EXPECT_EQ(c->http->token, kStrongToken);
 }
 
 TEST_F(ServiceConfigTest, AMissingFileIsNotFoundAndSaysCheckConfig) {
@@ -361,24 +372,136 @@ TEST_F(ServiceConfigTest, APlcLinkIsReadLikeAGaugeLink) {
 
 TEST_F(ServiceConfigTest, HttpTokensAreCheckedWhenRead) {
   const std::string ok = "[gauge]\n" + kIntake + kNc + "[http]\n";  // [http] on line 6
-  EXPECT_TRUE(refused(read(ok + "token = \"short\"\n"), ErrorCode::kInvalidInput,
-                      at(7, "http.token") + ": a token shorter than 16 characters is too easy to guess"));
-  dir_.write("token", "0123456789abcdef");
-  EXPECT_TRUE(refused(read(ok + "token = \"0123456789abcdef\"\ntoken_file = \"token\"\n"), ErrorCode::kInvalidInput,
+  write_secret("token", kStrongToken);
+  EXPECT_TRUE(refused(read(ok + "token = \"" + kStrongToken + "\"\ntoken_file = \"token\"\n"), ErrorCode::kInvalidInput,
                       at(8, "http.token_file") + ": give token or token_file, not both"));
-  dir_.write("blank", " \r\n\n");
+  write_secret("blank", " \r\n\n");
   EXPECT_TRUE(refused(read(ok + "token_file = \"blank\"\n"), ErrorCode::kInvalidInput,
                       at(7, "http.token_file") + ": the file is empty"));
-  dir_.write("short", "abc\n");
-  EXPECT_TRUE(refused(read(ok + "token_file = \"short\"\n"), ErrorCode::kInvalidInput,
-                      at(7, "http.token_file") + ": a token shorter than 16 characters"));
   EXPECT_TRUE(refused(read(ok + "token_file = \"absent\"\n"), ErrorCode::kNotFound,
-                      at(7, "http.token_file") + ": HTTP token file"));
+                      at(7, "http.token_file") + ": HTTP token file " + (dir_.path() / "absent").string()));
   auto readonly = read(ok + "port = 0\n");
   ASSERT_TRUE(readonly.ok()) << readonly.error().message;
   EXPECT_TRUE(readonly->http->token.empty());
   EXPECT_EQ(readonly->http->host, "127.0.0.1");
   EXPECT_EQ(readonly->http->port, 0);
+  auto good = read(ok + "token_file = \"token\"\n");
+  ASSERT_TRUE(good.ok()) << good.error().message;
+  EXPECT_EQ(good->http->token, kStrongToken);
+}
+
+// The documented layout, root:gaugeloop 0640, and the owner-only 0600 are taken; any mode that
+// lets another user read the token, or anyone but the owner write it, is refused at its key,
+// saying what is wrong and the commands that fix it.
+TEST_F(ServiceConfigTest, ATokenFileOthersCanReadOrWriteIsRefused) {
+  const std::string ok = "[gauge]\n" + kIntake + kNc + "[http]\ntoken_file = \"token\"\n";  // line 7
+  const std::string file = (dir_.path() / "token").string();
+  const std::string fix = "run `chmod 0640 " + file + "; chown root:gaugeloop " + file + "`";
+  for (mode_t mode : {0600, 0640, 0400, 0440}) {
+    write_secret("token", kStrongToken, mode);
+    auto c = read(ok);
+    EXPECT_TRUE(c.ok()) << std::oct << mode << ": " << c.error().message;
+  }
+  const struct {
+    mode_t mode;
+    const char* wrong;
+  } kRefused[] = {{0644, "can be read by any user (mode 0644)"},    {0604, "can be read by any user (mode 0604)"},
+                  {0601, "gives any user access (mode 0601)"},      {0660, "can be written by its group (mode 0660)"},
+                  {0602, "can be written by any user (mode 0602)"}, {0666, "can be written by any user (mode 0666)"}};
+  for (const auto& r : kRefused) {
+    write_secret("token", kStrongToken, r.mode);
+    auto c = read(ok);
+    EXPECT_TRUE(refused(c, at(7, "http.token_file") + ": HTTP token file " + file + " " + r.wrong))
+        << std::oct << r.mode;
+    EXPECT_TRUE(refused(c, fix)) << std::oct << r.mode;
+  }
+}
+
+// Another account owning the file could replace the token with one it knows.
+TEST_F(ServiceConfigTest, ATokenFileOwnedBySomeoneElseIsRefused) {
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root to give the file to another user";
+  const fs::path token = write_secret("token", kStrongToken, 0640);
+  ASSERT_EQ(::chown(token.c_str(), 4242, 0), 0);
+  auto c = read("[gauge]\n" + kIntake + kNc + "[http]\ntoken_file = \"token\"\n");
+  EXPECT_TRUE(refused(c, at(7, "http.token_file") + ": HTTP token file " + token.string() +
+                             " is owned by uid 4242, neither root nor the user this service runs as (uid 0)"));
+  EXPECT_TRUE(refused(c, "chown root:gaugeloop " + token.string()));
+}
+
+TEST_F(ServiceConfigTest, AnInlineTokenIsRefusedUnlessAllowed) {
+  const std::string ok = "[gauge]\n" + kIntake + kNc + "[http]\n";  // [http] on line 6
+  const std::string inline_token = "token = \"" + std::string(kStrongToken) + "\"\n";
+  auto refused_inline = read(ok + inline_token);
+  EXPECT_TRUE(refused(refused_inline, at(7, "http.token") + ": a token written in the config is refused: the config "
+                                                            "is often readable by every user and copied around"));
+  EXPECT_TRUE(refused(refused_inline, "`gaugeloop token new /etc/gaugeloop/token`"));
+  EXPECT_TRUE(refused(refused_inline, "token_file = \"/etc/gaugeloop/token\""));
+  auto allowed = read(ok + "allow_inline_token = true\n" + inline_token);
+  ASSERT_TRUE(allowed.ok()) << allowed.error().message;
+  EXPECT_EQ(allowed->http->token, kStrongToken);
+  EXPECT_TRUE(refused(read(ok + "allow_inline_token = true\ntoken = \"aaaaaaaaaaaaaaaa\"\n"),
+                      at(8, "http.token") + ": the token has 16 characters, fewer than 32: too easy to guess"));
+}
+
+// Length, variety and the estimate of bits each refuse what the others let through.
+TEST_F(ServiceConfigTest, WeakTokensAreRefused) {
+  const std::string ok = "[gauge]\n" + kIntake + kNc + "[http]\ntoken_file = \"token\"\n";  // line 7
+  const std::string key = at(7, "http.token_file");
+  const struct {
+    std::string token;
+    std::string why;
+  } kWeak[] = {
+      {"aaaaaaaaaaaaaaaa", ": the token has 16 characters, fewer than 32: too easy to guess"},
+      {"s3cret-token", ": the token has 12 characters, fewer than 32"},
+      {std::string(64, 'a'), ": the token uses only 1 different characters (at least 8): too easy to guess"},
+      {"abababababababababababababababababababab", ": the token uses only 2 different characters"},
+      // Letters and digits in one case only: 36 symbols, 5.2 bits a character, 124 bits.
+      {"qwertyuiopasdfghjklzxcvbnm1234", ": the token has 30 characters"},
+      {"0123456789012345678901234567890", ": the token has 31 characters"},
+      // 33 digits: 3.3 bits each, 109 bits.
+      {"012345678901234567890123456789012", ": the token holds about 109 bits, fewer than 128: too easy to guess"},
+      {"0123456789abcdef0123456789abcd f", ": the token holds a blank or control character"},
+  };
+  for (const auto& w : kWeak) {
+    write_secret("token", w.token);
+    auto c = read(ok);
+    EXPECT_TRUE(refused(c, key + w.why)) << w.token;
+    EXPECT_TRUE(refused(c, "`gaugeloop token new FILE`")) << w.token;
+  }
+  // 32 hex characters: 128 bits, the least taken; 43 base64url characters: 258 bits.
+  for (const char* strong : {"0f1e2d3c4b5a69788796a5b4c3d2e1f0", "q8V3nX_2rT-kL0pZ9mW4bY7cJ1dH6fG5sA3eU8iO2uQ"}) {
+    write_secret("token", strong);
+    auto c = read(ok);
+    ASSERT_TRUE(c.ok()) << strong << ": " << c.error().message;
+    EXPECT_EQ(c->http->token, strong);
+  }
+}
+
+// HTTPS needs both files; each must be there, and the private key is a secret like the token.
+TEST_F(ServiceConfigTest, TlsFilesAreReadRelativeToTheConfigAndTheKeyIsChecked) {
+  const std::string ok = "[gauge]\n" + kIntake + kNc + "[http]\n";  // [http] on line 6
+  dir_.write("tls/cert.pem", "-----BEGIN CERTIFICATE-----\n");
+  write_secret("tls/key.pem", "-----BEGIN PRIVATE KEY-----\n", 0640);
+  auto c = read(ok + "tls_cert = \"tls/cert.pem\"\ntls_key = \"tls/key.pem\"\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->http->tls_cert, dir_.path() / "tls" / "cert.pem");
+  EXPECT_EQ(c->http->tls_key, dir_.path() / "tls" / "key.pem");
+  auto plain = read(ok);
+  ASSERT_TRUE(plain.ok()) << plain.error().message;
+  EXPECT_TRUE(plain->http->tls_cert.empty());
+  EXPECT_TRUE(plain->http->tls_key.empty());
+
+  EXPECT_TRUE(refused(read(ok + "tls_cert = \"tls/cert.pem\"\n"),
+                      at(7, "http.tls_cert") + ": give both tls_cert and tls_key (PEM files) for HTTPS"));
+  EXPECT_TRUE(refused(read(ok + "tls_key = \"tls/key.pem\"\n"), at(7, "http.tls_key") + ": give both"));
+  EXPECT_TRUE(refused(read(ok + "tls_cert = \"tls/absent.pem\"\ntls_key = \"tls/key.pem\"\n"), ErrorCode::kNotFound,
+                      at(7, "http.tls_cert") + ": TLS certificate"));
+  EXPECT_TRUE(refused(read(ok + "tls_cert = \"tls/cert.pem\"\ntls_key = \"tls/absent.pem\"\n"), ErrorCode::kNotFound,
+                      at(8, "http.tls_key") + ": TLS private key"));
+  write_secret("tls/key.pem", "-----BEGIN PRIVATE KEY-----\n", 0644);
+  EXPECT_TRUE(refused(read(ok + "tls_cert = \"tls/cert.pem\"\ntls_key = \"tls/key.pem\"\n"),
+                      at(8, "http.tls_key") + ": TLS private key " + (dir_.path() / "tls" / "key.pem").string() +
+                          " can be read by any user (mode 0644)"));
 }
 
 // A file where the NC directory or the database's directory should be: refused at load.
@@ -431,6 +554,27 @@ TEST_F(ServiceConfigTest, PartsAreFoundByNameOrPlcNumberAndLobe) {
   EXPECT_EQ(job.design.lift_mm.size(), (*exhaust)->design.lift_mm.size());
   EXPECT_EQ(job.db_path, c->job.db_path);
   EXPECT_EQ(job.nc_dir, c->job.nc_dir);
+}
+
+// The query commands' --config reads only where the runs and NC programs are, as the service
+// does, and nothing else: a token file it cannot read does not stop `runs list`.
+TEST_F(ServiceConfigTest, TheDataPathsAloneAreReadForTheQueryCommands) {
+  const fs::path config =
+      dir_.write("etc/svc.toml", "[gauge]\n" + kIntake +
+                                     "[nc]\ndir = \"../out/nc\"\n[database]\n"
+                                     "path = \"/var/lib/x/runs-7.sqlite\"\n[http]\ntoken_file = \"absent\"\n");
+  auto paths = read_service_data_paths(config);
+  ASSERT_TRUE(paths.ok()) << paths.error().message;
+  EXPECT_EQ(paths->db_path, fs::path("/var/lib/x/runs-7.sqlite"));
+  EXPECT_EQ(paths->nc_dir, dir_.path() / "out" / "nc");
+  auto defaults = read_service_data_paths(dir_.write("etc/bare.toml", "[gauge]\n"));
+  ASSERT_TRUE(defaults.ok()) << defaults.error().message;
+  EXPECT_EQ(defaults->db_path, dir_.path() / "etc" / "gaugeloop.sqlite");
+  EXPECT_EQ(defaults->nc_dir, dir_.path() / "etc" / "nc");
+  EXPECT_TRUE(refused(read_service_data_paths(dir_.write("etc/bad.toml", "[database]\npath = 7\n")),
+                      (dir_.path() / "etc" / "bad.toml").string() + ":2: key `database.path`"));
+  EXPECT_TRUE(refused(read_service_data_paths(dir_.path() / "absent.toml"), ErrorCode::kNotFound,
+                      "service config " + (dir_.path() / "absent.toml").string() + ": no such file"));
 }
 
 }  // namespace

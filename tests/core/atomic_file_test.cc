@@ -2,11 +2,13 @@
 #include "core/atomic_file.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "core/part.h"
 #include "tests/support/temp_dir.h"
@@ -38,6 +40,32 @@ TEST_F(AtomicFileTest, ReplacesContentsAndLeavesNoTemporaryFile) {
   int entries = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir_)) ++entries;
   EXPECT_EQ(entries, 1);
+}
+
+// A secret written 0600 is owner-only from the temporary file on, whatever the umask.
+TEST_F(AtomicFileTest, AModeIsGivenFromTheTemporaryFileOn) {
+  const fs::path f = dir_ / "token";
+  const mode_t umask_was = ::umask(0);
+  std::vector<unsigned> seen;
+  Status s = write_file_atomically(
+      f, "secret\n",
+      [&](AtomicWriteStep step) {
+        if (step != AtomicWriteStep::kTemporaryWritten) return;
+        for (const auto& e : fs::directory_iterator(dir_)) {
+          struct stat st {};
+          if (::stat(e.path().c_str(), &st) == 0) seen.push_back(st.st_mode & 07777);
+        }
+      },
+      0600);
+  ::umask(umask_was);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(seen, std::vector<unsigned>{0600u});
+  struct stat st {};
+  ASSERT_EQ(::stat(f.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0600u);
+  ASSERT_TRUE(write_file_atomically(dir_ / "CAM.SPF", "x").ok());
+  ASSERT_EQ(::stat((dir_ / "CAM.SPF").c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0644u) << "the default stays what NC programs had";
 }
 
 TEST_F(AtomicFileTest, MissingDirectoryFailsWithThePath) {

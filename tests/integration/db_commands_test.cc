@@ -125,6 +125,28 @@ TEST_F(DbCommandsTest, CheckSaysASoundDatabaseIsSound) {
   EXPECT_TRUE(has(r.output, "database " + db_.string() + " is sound (schema version ")) << r.output;
 }
 
+// The database the service's config names, whatever its file name; --db names a file itself,
+// so it does not go with --config.
+TEST_F(DbCommandsTest, CheckAndBackupTakeTheServicesConfig) {
+  const fs::path renamed = dir_ / "data" / "runs-7.sqlite";
+  fs::rename(db_, renamed);
+  const fs::path config = tmp_.write("gaugeloop.toml", "[database]\npath = \"data/runs-7.sqlite\"\n");
+  CommandResult r = run_command("db check --config " + config.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "database " + renamed.string() + " is sound")) << r.output;
+  const fs::path copy = dir_ / "copy" / "gaugeloop.sqlite";
+  fs::create_directories(copy.parent_path());
+  r = run_command("db backup " + copy.string() + " --config " + config.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(listed(copy.parent_path()).size(), 2u);
+  r = run_command("db check --config " + config.string() + " --db " + renamed.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "--config excludes --db")) << r.output;
+  r = run_command("db check --config " + config.string() + data_);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "--data-dir excludes --config")) << r.output;
+}
+
 TEST_F(DbCommandsTest, ADamagedDatabaseIsRefusedByCheckAndByTheServiceAtStart) {
   ASSERT_TRUE(testing::damage_runs_table(db_));
   ASSERT_NE(testing::sqlite_text(db_, "PRAGMA integrity_check"), "ok") << "the damage did not show";

@@ -122,6 +122,66 @@ TEST_F(RunsCommandsTest, NoDatabaseIsBadInputAndCreatesNone) {
   EXPECT_FALSE(fs::exists(empty));
 }
 
+// The service's config names the database (here not gaugeloop.sqlite) and the NC directory:
+// `--config` reads them as the service does, relative to the config, and nothing else of it.
+TEST_F(RunsCommandsTest, QueriesReadTheServicesDatabaseThroughItsConfig) {
+  fs::create_directories(dir_ / "var");
+  fs::rename(dir_ / "gaugeloop.sqlite", dir_ / "var" / "runs-7.sqlite");
+  const fs::path config = tmp_.write("etc/gaugeloop.toml",
+                                     "[gauge]\nconfig = \"absent.toml\"\n[database]\n"
+                                     "path = \"../var/runs-7.sqlite\"\n[http]\n"
+                                     "token_file = \"unreadable\"\n");
+  const std::string with_config = " --config " + config.string();
+  CommandResult r = run_command("runs list --json" + with_config);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(nlohmann::json::parse(r.output).size(), 4u) << r.output;
+  for (const std::string cmd : {"runs show 1", "runs export 1", "runs compare 1 2", "runs trend --part intake --lobe 1",
+                                "events", "nc history", "nc pending"}) {
+    r = run_command(cmd + with_config);
+    EXPECT_EQ(r.exit_code, 0) << cmd << ": " << r.output;
+  }
+  r = run_command("runs show 42" + with_config);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "run 42 is not in run database " + (dir_ / "var" / "runs-7.sqlite").string())) << r.output;
+  EXPECT_TRUE(has(r.output, "`gaugeloop runs list --config " + config.string() + "` shows the ids")) << r.output;
+
+  r = run_command("runs list" + with_config + data_);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "--data-dir excludes --config")) << r.output;
+  r = run_command("runs list --config " + (dir_ / "absent.toml").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, (dir_ / "absent.toml").string())) << r.output;
+  const fs::path fresh = tmp_.write("etc/fresh.toml", "[database]\npath = \"never.sqlite\"\n");
+  r = run_command("runs list --config " + fresh.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "no run database at " + (dir_ / "etc" / "never.sqlite").string() +
+                                "; the service has stored no run yet, or [database] path in " + fresh.string()))
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "etc" / "never.sqlite"));
+}
+
+// GAUGELOOP_DATA_DIR is the default of --data-dir: the flag beats it, it beats gaugeloop-data.
+TEST_F(RunsCommandsTest, GaugeloopDataDirIsTheDefaultDataDirectory) {
+  const std::string bin = testing::gaugeloop_binary();
+  CommandResult r = testing::run_shell("cd " + dir_.string() + " && GAUGELOOP_DATA_DIR=" + dir_.string() + " " + bin +
+                                       " runs list --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(nlohmann::json::parse(r.output).size(), 4u) << r.output;
+  r = testing::run_shell("GAUGELOOP_DATA_DIR=" + (dir_ / "elsewhere").string() + " " + bin + " runs list --json" +
+                         data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(nlohmann::json::parse(r.output).size(), 4u) << "the flag beats the variable: " << r.output;
+  r = testing::run_shell("GAUGELOOP_DATA_DIR=" + (dir_ / "elsewhere").string() + " " + bin + " events");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "no run database at " + (dir_ / "elsewhere" / "gaugeloop.sqlite").string())) << r.output;
+  r = testing::run_shell("cd " + dir_.string() + " && env -u GAUGELOOP_DATA_DIR " + bin + " runs list");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r.output, "no run database at gaugeloop-data/gaugeloop.sqlite")) << r.output;
+  r = run_command("runs list --help");
+  EXPECT_TRUE(has(r.output, "$GAUGELOOP_DATA_DIR")) << r.output;
+  EXPECT_TRUE(has(r.output, "--config")) << r.output;
+}
+
 // Under systemd, stderr is the journal's stream (JOURNAL_STREAM names its device and inode):
 // each line then starts with its syslog priority, so `journalctl -p` filters by level.
 // Anywhere else, the plain level.

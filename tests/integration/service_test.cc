@@ -1,7 +1,8 @@
 // The real service process (`gaugeloop serve`) against the simulators over loopback: a run
 // requested over HTTP, or by the PLC through the Modbus handshake, ends in a stored run and an
-// NC file; the HTTP API answers; a broken config on SIGHUP keeps the old one running; SIGTERM
-// mid-run stores the whole run, leaves a whole table, completes the handshake and exits 0.
+// NC file; the HTTP API answers; a broken config on SIGHUP keeps the old one running, a new
+// token is in force after SIGHUP; SIGTERM mid-run stores the whole run, leaves a whole table,
+// completes the handshake and exits 0.
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -71,8 +72,15 @@ class ServiceTest : public ::testing::Test {
     config_text_ = "machine = \"grinder-7\"\n[gauge]\nconfig = \"gauge.toml\"\n[[part]]\nfile = \"" +
                    (examples / "intake_flat.toml").string() + "\"\n[nc]\ndir = \"nc\"\ntemplate = \"" +
                    (examples / "sinumerik" / "cam_table.spf").string() +
-                   "\"\n[database]\npath = \"runs.sqlite\"\n[http]\nport = 0\ntoken = \"" + kToken + "\"\n";
+                   "\"\n[database]\npath = \"runs.sqlite\"\n[http]\nport = 0\ntoken_file = \"token\"\n";
     std::ofstream(dir_ / "gaugeloop.toml") << config_text_;
+    write_token(kToken);
+  }
+
+  // The token file, readable by its owner only, as the service insists.
+  void write_token(const std::string& token) const {
+    std::ofstream(dir_ / "token") << token << "\n";
+    fs::permissions(dir_ / "token", fs::perms::owner_read | fs::perms::owner_write);
   }
 
   std::string log() const { return slurp(dir_ / "serve.log"); }
@@ -253,6 +261,35 @@ TEST_F(ServiceTest, BrokenConfigOnReloadKeepsTheOldOneRunning) {
   std::ofstream(dir_ / "gaugeloop.toml") << config_text_;
   service.signal(SIGHUP);
   ASSERT_TRUE(wait_for_health(cli, [](const json& h) { return h["config_reloads"] == 1; })) << log();
+  service.signal(SIGTERM);
+  EXPECT_EQ(service.wait(), 0) << log();
+}
+
+// A new token in the token file is in force after SIGHUP, without a restart: the old one is
+// refused from then on. Approving a pending table that does not exist answers 404 once past the
+// token check, 401 before it, and measures nothing.
+TEST_F(ServiceTest, SighupReplacesTheTokenWithoutARestart) {
+  ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
+  const int port = service.port();
+  ASSERT_GT(port, 0) << log();
+  httplib::Client cli("127.0.0.1", port);
+  cli.set_read_timeout(120, 0);
+  auto approve_with = [&cli](const std::string& token) {
+    auto r = cli.Post("/api/nc/approve/99", bearer(token), R"({"by": "anna"})", "application/json");
+    return r ? r->status : -1;
+  };
+  const std::string token_b = "d41d8cd98f00b204e9800998ecf8427e0cc175b9c0f1b6a831c399e269772661";
+  EXPECT_EQ(approve_with(kToken), 404) << log();
+  EXPECT_EQ(approve_with(token_b), 401) << log();
+
+  write_token(token_b);
+  service.signal(SIGHUP);
+  ASSERT_TRUE(wait_for_health(cli, [](const json& h) { return h["config_reloads"] == 1; })) << log();
+  EXPECT_EQ(approve_with(kToken), 401) << log();
+  EXPECT_EQ(approve_with(token_b), 404) << log();
+  EXPECT_NE(log().find("token replaced"), std::string::npos) << log();
+  EXPECT_EQ(log().find("[http] changes take effect when the service restarts"), std::string::npos) << log();
+  EXPECT_EQ(log().find(token_b), std::string::npos) << "the token is never logged: " << log();
   service.signal(SIGTERM);
   EXPECT_EQ(service.wait(), 0) << log();
 }
