@@ -77,7 +77,10 @@ class HttpApiLimitsTest : public ::testing::Test {
         << "machine = \"grinder-7\"\n[gauge]\nconfig = \"gauge.toml\"\n[[part]]\nfile = \""
         << (examples / "intake_flat.toml").string() << "\"\n[nc]\ndir = \"nc\"\ntemplate = \""
         << (examples / "sinumerik" / "cam_table.spf").string()
-        << "\"\n[database]\npath = \"runs.sqlite\"\n[http]\nport = 0\ntoken = \"" << kToken << "\"\n";
+        << "\"\n[database]\npath = \"runs.sqlite\"\n[http]\nport = 0\ntoken_file = \"token\"\n";
+    // Readable by its owner only, as the service insists of a token file.
+    std::ofstream(dir_ / "token") << kToken << "\n";
+    fs::permissions(dir_ / "token", fs::perms::owner_read | fs::perms::owner_write);
   }
 
   std::string log() const { return slurp(dir_ / "serve.log"); }
