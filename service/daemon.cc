@@ -13,6 +13,7 @@
 #include "service/http_api.h"
 #include "service/plc_trigger.h"
 #include "service/service.h"
+#include "service/systemd_notify.h"
 #include "storage/db_maintenance.h"
 
 namespace gaugeloop {
@@ -176,15 +177,23 @@ Status run_service(const std::filesystem::path& config_path) {
     plc->start();
   }
   if (!http && !plc) spdlog::warn("no [http] and no [plc] table: nothing can trigger a run but `gaugeloop measure`");
+  notify_started(http.get(), plc.get());
+  // After the PLC trigger and the HTTP API it watches; destroyed before them.
+  std::unique_ptr<Watchdog> watchdog = start_service_watchdog(http.get(), plc.get(), plc_settings);
 
   for (;;) {
     int sig = 0;
     if (sigwait(&signals, &sig) != 0) continue;
     if (sig == SIGHUP) {
+      notify_reloading();
       reload(service, config_path, started, http.get());
+      notify_started(http.get(), plc.get());  // the file taken or refused, the service runs on
       continue;
     }
     spdlog::info("{} received: letting the run in progress finish", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    notify_stopping();
+    // systemd times the stop from here (TimeoutStopSec), no longer the watchdog.
+    watchdog.reset();
     service.set_stopping();  // no new run or push; /api/health says "stopping"
     // The PLC is polled on, and told "not now" (code 7) for every request, until the last
     // run has ended, whoever started it, and the outcome of its own is in its registers.

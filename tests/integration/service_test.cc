@@ -9,6 +9,7 @@
 #include <netinet/in.h>
 #include <signal.h>
 #include <sys/socket.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -368,6 +369,85 @@ class PlcServiceTest : public ServiceTest {
   static constexpr std::chrono::milliseconds kGenerous{120000};  // a run under sanitizers, with margin
   std::unique_ptr<PlcSimulator> plc_;
 };
+
+// systemd's end of sd_notify(3): a datagram socket in a directory of its own (a socket's path
+// is at most 107 bytes; a test's own directory name can be long).
+class NotifySocket {
+ public:
+  NotifySocket() : dir_("notify") {
+    path_ = (dir_.path() / "s").string();
+    fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", path_.c_str());
+    bound_ = ::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
+    const timeval guard{120, 0};  // a service that never says fails the test instead of hanging it
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &guard, sizeof guard);
+  }
+  ~NotifySocket() { ::close(fd_); }
+  bool bound() const { return bound_; }
+  std::string env() const { return "NOTIFY_SOCKET=" + path_; }
+  // The next message; empty after the guard's two minutes without one.
+  std::string next() const {
+    char buf[4096];
+    const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+    return n > 0 ? std::string(buf, static_cast<size_t>(n)) : std::string();
+  }
+  // The next message that tells a state (READY=1, RELOADING=1, STOPPING=1), past what the
+  // watchdog's thread sends at any time: feeds, and a STATUS= line alone when it stops or
+  // starts feeding again (a loaded machine may hold the PLC trigger's first poll).
+  std::string next_state() const {
+    for (std::string m = next();; m = next()) {
+      if (m.empty() || !from_watchdog(m)) return m;
+    }
+  }
+  // True at the next feed; false at a state message first, or the guard's timeout.
+  bool fed() const {
+    for (std::string m = next();; m = next()) {
+      if (m == "WATCHDOG=1") return true;
+      if (m.empty() || !from_watchdog(m)) return false;
+    }
+  }
+
+ private:
+  static bool from_watchdog(const std::string& m) {
+    return m == "WATCHDOG=1" || (m.rfind("STATUS=", 0) == 0 && m.find('\n') == std::string::npos);
+  }
+
+  testing::TempDir dir_;  // before the socket in it
+  std::string path_;
+  int fd_ = -1;
+  bool bound_ = false;
+};
+
+bool has_line(const std::string& message, const std::string& line) {
+  return ("\n" + message + "\n").find("\n" + line + "\n") != std::string::npos;
+}
+
+// Started by systemd (NOTIFY_SOCKET, WATCHDOG_USEC as systemd sets them for Type=notify and
+// WatchdogSec=), the service says READY=1 once the HTTP API and the PLC trigger are started,
+// feeds the watchdog while they live, says RELOADING=1 and READY=1 around a SIGHUP, and
+// STOPPING=1 on SIGTERM.
+TEST_F(PlcServiceTest, TellsSystemdReadyFeedsTheWatchdogAndSaysStopping) {
+  NotifySocket systemd;
+  ASSERT_TRUE(systemd.bound());
+  // A feed every 200 ms: a few while the test looks, none needed in time (nothing watches).
+  ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log", {systemd.env(), "WATCHDOG_USEC=400000"});
+  const std::string ready = systemd.next();
+  ASSERT_TRUE(has_line(ready, "READY=1")) << ready << "\n" << log();
+  EXPECT_NE(ready.find("STATUS=waiting for requests: HTTP API on port"), std::string::npos) << ready;
+  EXPECT_NE(ready.find("PLC trigger at tcp:127.0.0.1:"), std::string::npos) << ready;
+  EXPECT_TRUE(systemd.fed()) << log();
+  EXPECT_TRUE(systemd.fed()) << log();
+
+  service.signal(SIGHUP);
+  EXPECT_TRUE(has_line(systemd.next_state(), "RELOADING=1")) << log();
+  EXPECT_TRUE(has_line(systemd.next_state(), "READY=1")) << log();
+
+  service.signal(SIGTERM);
+  EXPECT_TRUE(has_line(systemd.next_state(), "STOPPING=1")) << log();
+  EXPECT_EQ(service.wait(), 0) << log();
+}
 
 // Word 12 says which table ground the part: the design while version 1 is in force is an
 // older part (stored, nothing pushed, result code 2); version 1 builds on it and pushes.

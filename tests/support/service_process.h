@@ -10,17 +10,24 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace gaugeloop::testing {
 
 // stdout read line by line, stderr to a file; killed (SIGKILL) at the end unless waited for.
+// `env`: NAME=VALUE entries the child sees before (so instead of) this process's environment.
 class ServiceProcess {
  public:
-  ServiceProcess(const std::filesystem::path& config, const std::filesystem::path& log) {
+  ServiceProcess(const std::filesystem::path& config, const std::filesystem::path& log,
+                 std::vector<std::string> env = {}) {
     // Everything the child needs, made before the fork.
     const std::string bin = std::string(GAUGELOOP_BINARY_DIR) + "/bin/gaugeloop";
     const std::string config_path = config.string();
     const std::string log_path = log.string();
+    std::vector<char*> envp;
+    for (std::string& e : env) envp.push_back(e.data());
+    for (char** e = environ; *e != nullptr; ++e) envp.push_back(*e);
+    envp.push_back(nullptr);
     int out[2];
     if (::pipe(out) != 0) return;
     pid_ = ::fork();
@@ -30,7 +37,8 @@ class ServiceProcess {
       const int err = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
       if (err >= 0) ::dup2(err, STDERR_FILENO);
       ::close(out[0]);
-      ::execl(bin.c_str(), bin.c_str(), "serve", "--config", config_path.c_str(), static_cast<char*>(nullptr));
+      ::execle(bin.c_str(), bin.c_str(), "serve", "--config", config_path.c_str(), static_cast<char*>(nullptr),
+               envp.data());
       ::_exit(127);
     }
     ::close(out[1]);
