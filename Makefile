@@ -10,11 +10,11 @@ CMAKE_GEN := -G Ninja
 # run in the normal build only: under a sanitizer's slowdown they test the machine, not the code.
 REALTIME_TESTS := ^(LiveLink\.|PymodbusPeer\.|SimulatorFaults/LiveOutageTest\.)
 # The tests of the service's threads (HTTP server, PLC trigger and handshake, the run) and of
-# the guard every thread starts through, the ones ThreadSanitizer runs.
-TSAN_TESTS := ^(GuardedThread|PlcHandshakeTest|PlcServiceWords|PlcServiceTest|HttpApiTest|ServiceTest|ServiceStateTest|ServiceConfigFile)\.
-TSAN_TARGETS := core_test service_unit_test service_integration_test gaugeloop
+# the guard every thread starts through, and the systemd watchdog's: the ones ThreadSanitizer runs.
+TSAN_TESTS := ^(GuardedThread|PlcHandshakeTest|PlcServiceWords|PlcServiceTest|HttpApiTest|ServiceTest|ServiceStateTest|ServiceConfigFile|ServiceWatchdog|ServiceNotifyEnv)\.
+TSAN_TARGETS := core_test service_unit_test service_integration_test packaging_test gaugeloop
 
-.PHONY: all deps configure build build-asan build-tsan demo test test-normal test-asan test-tsan bench clean
+.PHONY: all deps configure build build-asan build-tsan demo test test-normal test-asan test-tsan package test-package bench clean
 
 all: build
 
@@ -55,9 +55,21 @@ test-tsan: build-tsan
 	cd $(TSAN_DIR) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
 	  ctest --output-on-failure -j $(JOBS) --no-tests=error -R '$(TSAN_TESTS)'
 
+# The Debian package, from the Release build: only the binary is built (test-normal has built
+# it already), then cpack: $(BUILD_DIR)/gaugeloop_<version>_<arch>.deb.
+package: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target gaugeloop
+	rm -f $(BUILD_DIR)/gaugeloop_*.deb
+	cd $(BUILD_DIR) && cpack -G DEB
+
+# Installs the package on this machine with dpkg -i (as root: the CI), checks it, then removes
+# and purges it. Refuses a machine where gaugeloop is installed (packaging/test_package.sh).
+test-package: package
+	packaging/test_package.sh $(BUILD_DIR)
+
 # Every test in a normal build and under AddressSanitizer + UndefinedBehaviorSanitizer (less the
-# real-time ones); the service's threads under ThreadSanitizer.
-test: test-normal test-asan test-tsan
+# real-time ones); the service's threads under ThreadSanitizer; the package installed.
+test: test-normal test-asan test-tsan test-package
 
 # Every benchmark, one after the other (figures: docs/PERFORMANCE.md). Run on a quiet machine.
 bench: build
