@@ -513,9 +513,13 @@ TEST_F(ServiceStateTest, TheHeartbeatCountsEveryPollWhileTheDatabaseIsLocked) {
   ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return s.words.ack && s.words.fault; }));
   EXPECT_EQ(plc.seen().words.result_code, PlcResultCode::kUnknownPart);
   plc.clear();
+  // Held for 10 s, twice SQLite's busy timeout, so the writer's own wait for the lock runs out
+  // and it retries, while the trigger polls on: a condition of the test, not a wait for an event.
   const std::size_t before = plc.seen().heartbeats.size();
-  ASSERT_TRUE(plc.wait_until([before](const SharedPlc::Seen& s) { return polls_since(s, before) >= 50; }))
-      << "the trigger stopped polling while the database was locked";
+  const auto held_until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  ASSERT_TRUE(plc.wait_until([before, held_until](const SharedPlc::Seen& s) {
+    return polls_since(s, before) >= 50 && std::chrono::steady_clock::now() >= held_until;
+  })) << "the trigger stopped polling while the database was locked";
   EXPECT_FALSE(service.flush_events(std::chrono::milliseconds(0))) << "the events wait for the lock";
   const std::string before_release = utc_now();
 
