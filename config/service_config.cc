@@ -41,7 +41,7 @@ Error at_key(const TomlReader& r, std::string_view key, const Error& e) {
 // The service creates and writes files in `dir` (the database, NC programs): the directory, or
 // the nearest one above it that exists (the rest is created), must be a directory this user
 // may write. Caught at load, not at the first run: under the systemd unit /etc is read-only
-// (ProtectSystem=full), so a path left relative to a config in /etc/gaugeloop fails there.
+// (ProtectSystem=strict), so a path left relative to a config in /etc/gaugeloop fails there.
 Status check_writable_dir(const fs::path& dir, const std::string& what) {
   fs::path at = dir;
   std::error_code ec;

@@ -66,9 +66,10 @@ Result<std::unique_ptr<HttpApi>> start_http(Service& service, PlcTrigger* plc, c
   Result<std::unique_ptr<HttpApi>> started = HttpApi::start(settings, db_path, writes, status);
   if (!started) return not_starting(started.error(), "HTTP API not started");
   // One line on stdout for whoever started us (tests, scripts) to find the port.
-  std::printf("listening on http://%s:%d\n", settings.host.c_str(), (*started)->port());
+  const char* const scheme = settings.tls_cert.empty() ? "http" : "https";
+  std::printf("listening on %s://%s:%d\n", scheme, settings.host.c_str(), (*started)->port());
   std::fflush(stdout);
-  spdlog::info("HTTP API on http://{}:{} ({})", settings.host, (*started)->port(),
+  spdlog::info("HTTP API on {}://{}:{} ({})", scheme, settings.host, (*started)->port(),
                settings.token.empty() ? "read-only: no token configured" : "writes need the token");
   return started;
 }

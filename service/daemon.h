@@ -1,7 +1,9 @@
 // The service's life cycle as a process: read and check the configuration, check the database
 // and finish interrupted pushes, start the PLC trigger and the HTTP API, then wait for signals:
-// SIGHUP reloads the configuration, SIGTERM or SIGINT let the run in progress finish, answer
-// the PLC, and stop. docs/service.md.
+// SIGHUP reloads the configuration (and the HTTP token), SIGTERM or SIGINT let the run in
+// progress finish, answer the PLC, and stop. Under systemd it says when it is ready, reloading
+// and stopping, and feeds the watchdog while the PLC trigger and the HTTP API are alive
+// (service/systemd_notify.h). docs/service.md.
 #pragma once
 
 #include <filesystem>

@@ -54,12 +54,15 @@ class ServiceProcess {
   ServiceProcess(const ServiceProcess&) = delete;
   ServiceProcess& operator=(const ServiceProcess&) = delete;
 
-  // The HTTP port from the "listening on http://HOST:PORT" line; 0 if the process ended first.
+  // The HTTP port from the "listening on http://HOST:PORT" (or https) line; 0 if the process ended first.
   int port() {
     char line[512];
     while (stdout_ != nullptr && std::fgets(line, sizeof line, stdout_) != nullptr) {
       int port = 0;
-      if (std::sscanf(line, "listening on http://127.0.0.1:%d", &port) == 1) return port;
+      if (std::sscanf(line, "listening on http://127.0.0.1:%d", &port) == 1 ||
+          std::sscanf(line, "listening on https://127.0.0.1:%d", &port) == 1) {
+        return port;
+      }
     }
     return 0;
   }
