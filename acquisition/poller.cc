@@ -63,10 +63,14 @@ Poller::Poller(GaugeClient& gauge, PollerSettings settings, Clock& clock)
 
 Result<MeasuredRun> Poller::measure() {
   if (Status s = validate(settings_); !s) return s.error();
-  // Pacing sleeps are short; the default 50 us timer slack would stretch them.
+  // Pacing sleeps are short; the default 50 us timer slack would stretch them. The thread's
+  // own slack is given back after the run: the thread may go on to other work.
+  const int slack_before_ns = ::prctl(PR_GET_TIMERSLACK, 0UL, 0UL, 0UL, 0UL);
   ::prctl(PR_SET_TIMERSLACK, 1000UL, 0UL, 0UL, 0UL);
   const CollectorContext context{gauge_, settings_, clock_, on_revolution_};
-  return settings_.mode == SamplingMode::kLive ? collect_live(context) : collect_latched(context);
+  Result<MeasuredRun> run = settings_.mode == SamplingMode::kLive ? collect_live(context) : collect_latched(context);
+  if (slack_before_ns > 0) ::prctl(PR_SET_TIMERSLACK, static_cast<unsigned long>(slack_before_ns), 0UL, 0UL, 0UL);
+  return run;
 }
 
 }  // namespace gaugeloop

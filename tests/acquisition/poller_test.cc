@@ -2,6 +2,7 @@
 #include "acquisition/poller.h"
 
 #include <gtest/gtest.h>
+#include <sys/prctl.h>
 
 #include "scripted_gauge.h"
 
@@ -53,6 +54,17 @@ TEST(Poller, CollectsCompleteRevolutionsFromTheNextBoundary) {
           << "degree " << d;
     }
   }
+}
+
+// A run narrows the thread's timer slack for its pacing sleeps and gives the thread its own
+// back after: the service's worker thread goes on to other work.
+TEST(Poller, GivesTheThreadItsTimerSlackBack) {
+  constexpr unsigned long kOwnSlackNs = 77000;
+  ASSERT_EQ(::prctl(PR_SET_TIMERSLACK, kOwnSlackNs, 0UL, 0UL, 0UL), 0);
+  ScriptedGauge g;
+  Poller p(g, fast_settings());
+  ASSERT_TRUE(p.measure().ok());
+  EXPECT_EQ(::prctl(PR_GET_TIMERSLACK, 0UL, 0UL, 0UL, 0UL), static_cast<int>(kOwnSlackNs));
 }
 
 TEST(Poller, UnwrapsTheRevolutionCounterAcrossItsWrap) {
