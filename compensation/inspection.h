@@ -23,7 +23,8 @@ struct InspectionSettings {
 
 // Velocity and acceleration error, cam frame, index = whole cam degree: the first and
 // second derivative of the smoothed lift error with respect to cam angle. The largest
-// magnitudes are given with the degree where they occur (signed values, first such degree).
+// magnitudes are given with the degree where they occur (among equal extremes, the one that
+// rounding makes largest).
 struct ErrorDerivatives {
   DegreeTable velocity_error_mm_per_deg{};
   DegreeTable acceleration_error_mm_per_deg2{};
