@@ -264,6 +264,36 @@ std::optional<double> best_rotation_deg(const DegreeTable& mean_mm, const BaseCi
 
 }  // namespace
 
+std::string base_circle_window_text(const AnalysisSettings& settings) {
+  const double center = settings.base_circle_center_deg;
+  const double half = settings.base_circle_half_width_deg;
+  return format_fixed(center - half, 1) + " to " + format_fixed(center + half, 1) + " deg";
+}
+
+Result<std::vector<size_t>> base_circle_window_degrees(const AnalysisSettings& settings, std::string_view who) {
+  const double center = settings.base_circle_center_deg;
+  const double half = settings.base_circle_half_width_deg;
+  if (!std::isfinite(center) || !std::isfinite(half) || half <= 0.0 || half >= 180.0) {
+    return make_error(ErrorCode::kInvalidInput, std::string(who) + ": base-circle window centre " +
+                                                    format_fixed(center, 3) + " deg, half width " +
+                                                    format_fixed(half, 3) +
+                                                    " deg; give a finite centre and a half width in (0, 180) deg");
+  }
+  std::vector<size_t> degrees;
+  for (size_t d = 0; d < kDegrees; ++d) {
+    double offset = std::fmod(static_cast<double>(d) - center, 360.0);
+    if (offset > 180.0) offset -= 360.0;
+    if (offset < -180.0) offset += 360.0;
+    if (std::abs(offset) <= half + 1e-9) degrees.push_back(d);
+  }
+  if (degrees.empty()) {
+    return make_error(ErrorCode::kInvalidInput, std::string(who) + ": the base-circle window " +
+                                                    base_circle_window_text(settings) +
+                                                    " holds no whole cam degree; widen base_circle_half_width_deg");
+  }
+  return degrees;
+}
+
 Result<LobeAnalysis> analyse_lobe(const MeasuredRun& run, const DegreeTable& design_lift_mm, const Part& part,
                                   const AnalysisSettings& settings) {
   return analyse_lobe(run, DesignReading::interpolating(design_lift_mm), part, settings);
@@ -302,29 +332,12 @@ Result<LobeAnalysis> analyse_lobe(const MeasuredRun& run, const DesignReading& d
                         "analysis: the design lift at cam degree " + std::to_string(d) + " is NaN or infinite");
     }
   }
-  const double center = settings.base_circle_center_deg;
-  const double half = settings.base_circle_half_width_deg;
-  if (!std::isfinite(center) || !std::isfinite(half) || half <= 0.0 || half >= 180.0) {
-    return make_error(ErrorCode::kInvalidInput, "analysis: base-circle window centre " + format_fixed(center, 3) +
-                                                    " deg, half width " + format_fixed(half, 3) +
-                                                    " deg; give a finite centre and a half width in (0, 180) deg");
-  }
+  Result<std::vector<size_t>> window = base_circle_window_degrees(settings, "analysis");
+  if (!window) return window.error();
   std::vector<bool> in_window(kDegrees, false);
-  int window_count = 0;
-  for (size_t d = 0; d < kDegrees; ++d) {
-    double offset = std::fmod(static_cast<double>(d) - center, 360.0);
-    if (offset > 180.0) offset -= 360.0;
-    if (offset < -180.0) offset += 360.0;
-    if (std::abs(offset) <= half + 1e-9) {
-      in_window[d] = true;
-      ++window_count;
-    }
-  }
-  const std::string window_text = format_fixed(center - half, 1) + " to " + format_fixed(center + half, 1) + " deg";
-  if (window_count == 0) {
-    return make_error(ErrorCode::kInvalidInput, "analysis: the base-circle window " + window_text +
-                                                    " holds no whole cam degree; widen base_circle_half_width_deg");
-  }
+  for (size_t d : *window) in_window[d] = true;
+  const int window_count = static_cast<int>(window->size());
+  const std::string window_text = base_circle_window_text(settings);
   std::vector<bool> off_base(kDegrees, false);
   bool any_off = false;
   double worst_mm = 0.0;

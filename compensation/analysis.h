@@ -2,6 +2,9 @@
 #pragma once
 
 #include <array>
+#include <string>
+#include <string_view>
+#include <vector>
 
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
@@ -16,6 +19,13 @@ struct AnalysisSettings {
   double base_circle_center_deg = 180.0;
   double base_circle_half_width_deg = 30.0;  // window = centre +- half width, whole degrees
 };
+
+// The whole cam degrees of the base-circle window (centre +- half width, wrapping through 0),
+// in increasing order. kInvalidInput, starting with `who`, for a centre or half width that is
+// not finite or a half width not in (0, 180) deg, or a window holding no whole degree.
+Result<std::vector<size_t>> base_circle_window_degrees(const AnalysisSettings& settings, std::string_view who);
+// "150.0 to 210.0 deg": the window as messages name it.
+std::string base_circle_window_text(const AnalysisSettings& settings);
 
 // Analyses one run against the design.
 //  - run: samples indexed by MACHINE degree C (gauge reading, mm, not zeroed).

@@ -70,26 +70,15 @@ size_t largest_abs(const DegreeTable& values) {
   return worst;
 }
 
-// The whole cam degrees within centre +- half width, wrapped, as analyse_lobe selects them.
+// The base-circle window's degrees, as analyse_lobe selects them; at least three, the fewest a mean and an eccentricity
+// leave a residue of.
 Result<std::vector<size_t>> window_degrees(const AnalysisSettings& window) {
-  const double center = window.base_circle_center_deg;
-  const double half = window.base_circle_half_width_deg;
-  const std::string text =
-      "base-circle window centre " + format_fixed(center, 3) + " deg, half width " + format_fixed(half, 3) + " deg";
-  if (!std::isfinite(center) || !std::isfinite(half) || half <= 0.0 || half >= 180.0) {
+  Result<std::vector<size_t>> degrees = base_circle_window_degrees(window, "inspection");
+  if (!degrees) return degrees.error();
+  if (degrees->size() < static_cast<size_t>(kMinRoundnessDegrees)) {
     return make_error(ErrorCode::kInvalidInput,
-                      "inspection: " + text + "; give a finite centre and a half width in (0, 180) deg");
-  }
-  std::vector<size_t> degrees;
-  for (size_t d = 0; d < kDegrees; ++d) {
-    double offset = std::fmod(static_cast<double>(d) - center, 360.0);
-    if (offset > 180.0) offset -= 360.0;
-    if (offset < -180.0) offset += 360.0;
-    if (std::abs(offset) <= half + 1e-9) degrees.push_back(d);
-  }
-  if (degrees.size() < static_cast<size_t>(kMinRoundnessDegrees)) {
-    return make_error(ErrorCode::kInvalidInput,
-                      "inspection: the " + text + " holds " + std::to_string(degrees.size()) +
+                      "inspection: the base-circle window " + base_circle_window_text(window) + " holds " +
+                          std::to_string(degrees->size()) +
                           " whole cam degrees, fewer than 3; widen base_circle_half_width_deg");
   }
   return degrees;
