@@ -211,6 +211,7 @@ struct ExportOptions {
   DataPaths paths;
   std::int64_t id = 0;
   std::string out;  // empty: stdout
+  bool comments = false;
 };
 
 int cmd_export(const ExportOptions& o) {
@@ -218,7 +219,7 @@ int cmd_export(const ExportOptions& o) {
   if (!store) return report_error(store.error());
   Result<StoredRun> run = load(*store, o.id, o.paths);
   if (!run) return report_error(run.error());
-  const std::string csv = run_csv(*run);
+  const std::string csv = run_csv(*run, o.comments);
   if (o.out.empty()) {
     std::fwrite(csv.data(), 1, csv.size(), stdout);
     return kExitOk;
@@ -514,10 +515,15 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
 
   auto exp = std::make_shared<ExportOptions>();
   CLI::App* export_cmd = runs->add_subcommand(
-      "export", "One run per cam degree as CSV: design, each revolution, mean, spread, error, correction.");
+      "export",
+      "One run per cam degree as CSV (RFC 4180): design, each revolution, mean, spread, error, correction, the "
+      "run's identity.");
   add_data_options(*export_cmd, exp->paths);
   export_cmd->add_option("id", exp->id, "Run id (see `runs list`)")->required();
   export_cmd->add_option("--out", exp->out, "Write the CSV to this file instead of standard output");
+  export_cmd->add_flag("--comments", exp->comments,
+                       "Put '#' lines saying the run, frame and units before the header (spreadsheets read them "
+                       "as data rows)");
   export_cmd->callback([&action, exp] { action = [exp] { return cmd_export(*exp); }; });
 
   auto cmp = std::make_shared<CompareOptions>();

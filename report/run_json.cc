@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <locale>
 #include <sstream>
 
 namespace gaugeloop {
@@ -150,42 +151,80 @@ json event_json(const StoredEvent& e) {
           {"message", e.event.message}};
 }
 
-std::string run_csv(const StoredRun& r) {
-  const RunSummary& s = r.summary;
-  std::ostringstream o;
-  o << "# gaugeloop run " << s.id << ": " << s.part << " lobe " << s.lobe << " on " << s.machine << ", started "
-    << s.started_utc << ", status " << s.status << "\n";
-  o << "# One row per cam degree (cam frame: 0 at the nose, counter-clockwise).\n";
-  o << "# design_lift_mm, mean_lift_mm, spread_um, error_um, correction_um: cam frame. mean is zeroed on the base "
-       "circle (gauge reading minus zero_offset_mm "
-    << format_fixed(r.analysis.zero_offset_mm, 6) << "); error = mean - design; spread = standard deviation across "
-    << "revolutions.\n";
-  const bool cam_frame_raw = r.geometry.has_value();
-  if (!s.raw_pruned_utc.empty()) {
-    o << "# Raw revolutions were pruned on " << s.raw_pruned_utc << ": no revN columns.\n";
-  } else if (cam_frame_raw) {
-    const Part& g = *r.geometry;
-    o << "# revN_lift_mm: raw gauge reading of revolution N (mm, not zeroed), mapped to the CAM frame with the "
-         "run's frame: C = "
-      << (g.rotation_sense > 0 ? "+" : "-") << "beta + " << format_fixed(g.c_offset_deg + g.probe_offset_deg, 3)
-      << " deg (c0 + probe offset); linearly interpolated between machine degrees when that is not whole.\n";
-  } else {
-    o << "# revN_at_machine_deg_lift_mm: raw gauge reading of revolution N (mm, not zeroed) in the MACHINE frame: "
-         "row k holds the reading at C = k deg, NOT at cam degree k. This run did not record its frame mapping.\n";
+namespace {
+
+// One CSV field as RFC 4180 wants it: quoted when it holds a comma, a quote, CR or LF, with
+// its quotes doubled; as it is otherwise.
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"') out += '"';
+    out += c;
   }
+  out += '"';
+  return out;
+}
+
+}  // namespace
+
+std::string run_csv(const StoredRun& r, bool comments) {
+  const RunSummary& s = r.summary;
+  // Spreadsheets and CSV readers expect CRLF (RFC 4180); the comment lines end the same way.
+  constexpr const char* kEol = "\r\n";
+  std::ostringstream o;
+  // Integers through a stream would take the global locale's digit grouping ("1.234").
+  o.imbue(std::locale::classic());
+  const bool cam_frame_raw = r.geometry.has_value();
+  const bool pruned = !s.raw_pruned_utc.empty();
+  if (comments) {
+    o << "# gaugeloop run " << s.id << ": " << s.part << " lobe " << s.lobe << " on " << s.machine << ", started "
+      << s.started_utc << ", status " << s.status << kEol;
+    o << "# One row per cam degree (cam frame: 0 at the nose, counter-clockwise)." << kEol;
+    o << "# design_lift_mm, mean_lift_mm, spread_um, error_um, correction_um: cam frame. mean is zeroed on the base "
+         "circle (gauge reading minus zero_offset_mm "
+      << format_fixed(r.analysis.zero_offset_mm, 6) << "); error = mean - design; spread = standard deviation across "
+      << "revolutions." << kEol;
+    if (pruned) {
+      o << "# Raw revolutions were pruned on " << s.raw_pruned_utc << ": the revN columns are empty." << kEol;
+    } else if (cam_frame_raw) {
+      const Part& g = *r.geometry;
+      o << "# revN_lift_mm: raw gauge reading of revolution N (mm, not zeroed), mapped to the CAM frame with the "
+           "run's frame: C = "
+        << (g.rotation_sense > 0 ? "+" : "-") << "beta + " << format_fixed(g.c_offset_deg + g.probe_offset_deg, 3)
+        << " deg (c0 + probe offset); linearly interpolated between machine degrees when that is not whole." << kEol;
+    } else {
+      o << "# revN_at_machine_deg_lift_mm: raw gauge reading of revolution N (mm, not zeroed) in the MACHINE frame: "
+           "row k holds the reading at C = k deg, NOT at cam degree k. This run did not record its frame mapping."
+        << kEol;
+    }
+  }
+  // The columns come from what the run recorded, not from what is still stored: a pruned run
+  // keeps its revolution columns, empty, so a sheet built on one export reads the next.
+  const std::size_t rev_columns = std::max(r.revolutions.size(), static_cast<std::size_t>(std::max(s.revolutions, 0)));
   o << "cam_deg,design_lift_mm";
-  for (std::size_t i = 0; i < r.revolutions.size(); ++i) {
+  for (std::size_t i = 0; i < rev_columns; ++i) {
     o << ",rev" << (i + 1) << (cam_frame_raw ? "_lift_mm" : "_at_machine_deg_lift_mm");
   }
-  o << ",mean_lift_mm,spread_um,error_um,correction_um\n";
+  o << ",mean_lift_mm,spread_um,error_um,correction_um,run_id,machine,part,lobe,started_utc,note" << kEol;
+  // The run's identity on every row: exports of several runs can be pasted into one sheet.
+  std::ostringstream id;
+  id.imbue(std::locale::classic());
+  id << s.id << "," << csv_field(s.machine) << "," << csv_field(s.part) << "," << s.lobe << ","
+     << csv_field(s.started_utc) << "," << csv_field(s.note);
+  const std::string identity = id.str();
   for (int d = 0; d < kDegreesPerRevolution; ++d) {
     const auto k = static_cast<std::size_t>(d);
     o << d << "," << format_fixed(r.analysis.design_lift_mm[k], 7);
-    for (const RevolutionSamples& rev : r.revolutions) {
-      o << "," << format_fixed(cam_frame_raw ? raw_at_cam_deg(rev, *r.geometry, d) : rev.lift_mm[k], 7);
+    for (std::size_t i = 0; i < rev_columns; ++i) {
+      o << ",";
+      if (i >= r.revolutions.size()) continue;  // pruned: an empty field
+      const RevolutionSamples& rev = r.revolutions[i];
+      o << format_fixed(cam_frame_raw ? raw_at_cam_deg(rev, *r.geometry, d) : rev.lift_mm[k], 7);
     }
     o << "," << format_fixed(r.analysis.mean_lift_mm[k], 7) << "," << format_fixed(r.analysis.spread_um[k], 4) << ","
-      << format_fixed(r.analysis.error_um[k], 4) << "," << format_fixed(r.correction_um[k], 4) << "\n";
+      << format_fixed(r.analysis.error_um[k], 4) << "," << format_fixed(r.correction_um[k], 4) << "," << identity
+      << kEol;
   }
   return o.str();
 }

@@ -33,11 +33,15 @@ nlohmann::json pending_table_json(const PendingTable& table);
 // One row of `events --json`; lobe and run_id are null when the event is not about one.
 nlohmann::json event_json(const StoredEvent& event);
 
-// `runs export`: one row per cam degree (design, each raw revolution, mean, spread, error,
-// correction), with '#' comment lines saying the frame and units. Raw revolutions are put in
-// the cam frame when the run recorded its frame mapping, else kept in the machine frame and the
-// columns say so; a pruned run has no revolution columns.
-std::string run_csv(const StoredRun& run);
+// `runs export`: RFC 4180 CSV, CRLF line ends, the header on the first line. One row per cam
+// degree: design, each raw revolution, mean, spread, error, correction, then the run's identity
+// (run_id, machine, part, lobe, started_utc, note) repeated on every row. Numbers are written
+// with a decimal point whatever the locale; text fields are quoted when they need it. Raw
+// revolutions are put in the cam frame when the run recorded its frame mapping, else kept in the
+// machine frame and the columns say so. The columns do not depend on pruning: a pruned run keeps
+// one revN column per recorded revolution, with empty fields. `comments` puts '#' lines saying
+// the run, the frame and the units before the header (a spreadsheet reads them as data rows).
+std::string run_csv(const StoredRun& run, bool comments = false);
 
 // A time bound given by a person, UTC: "2026-11-22", "2026-11-22T08:30" or
 // "2026-11-22T08:30:00Z" (a space for the T is fine). A bound covers its whole unit, so an

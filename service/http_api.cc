@@ -633,15 +633,17 @@ struct HttpApi::Impl {
   }
 
   void export_run(const httplib::Request& req, httplib::Response& res) {
-    Result<Query> q = Query::of(req, {});
+    Result<Query> q = Query::of(req, {"comments"});
     if (!q) return send_error(res, q.error());
+    Result<bool> comments = q->flag("comments");
+    if (!comments) return send_error(res, comments.error());
     Result<StorePool::Lease> store = stores.acquire();
     if (!store) return send_error(res, store.error());
     Result<StoredRun> run = load_run(**store, req.matches[1]);
     if (!run) return fail_with_store(res, *store, run.error());
     res.status = 200;
     res.set_header("Content-Disposition", "inline; filename=\"run" + std::to_string(run->summary.id) + ".csv\"");
-    res.set_content(run_csv(*run), "text/csv; charset=utf-8");
+    res.set_content(run_csv(*run, *comments), "text/csv; charset=utf-8");
   }
 
   void trend(const httplib::Request& req, httplib::Response& res) {

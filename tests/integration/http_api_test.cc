@@ -261,12 +261,17 @@ TEST_F(HttpApiTest, ExportIsTheCsvOfRunsExport) {
   Answer a = get("/api/runs/" + std::to_string(ids_[1]) + "/export");
   ASSERT_EQ(a.status, 200) << a.body;
   EXPECT_TRUE(has(a.content_type, "text/csv")) << a.content_type;
-  EXPECT_TRUE(has(a.body, "# gaugeloop run " + std::to_string(ids_[1]) + ": intake lobe 1 on g1")) << a.body;
-  EXPECT_TRUE(has(a.body,
-                  "\ncam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,"
-                  "error_um,correction_um\n"))
+  EXPECT_EQ(a.body.rfind("cam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,"
+                         "error_um,correction_um,run_id,machine,part,lobe,started_utc,note\r\n",
+                         0),
+            0u)
       << a.body.substr(0, 800);
-  EXPECT_TRUE(has(a.body, "\n359,")) << "one row per cam degree";
+  EXPECT_TRUE(has(a.body, "\r\n359,")) << "one row per cam degree";
+  Answer c = get("/api/runs/" + std::to_string(ids_[1]) + "/export?comments=true");
+  ASSERT_EQ(c.status, 200) << c.body;
+  EXPECT_EQ(c.body.rfind("# gaugeloop run " + std::to_string(ids_[1]) + ": intake lobe 1 on g1", 0), 0u) << c.body;
+  EXPECT_TRUE(has(c.body, "\r\n" + a.body)) << "the same CSV after the '#' lines";
+  EXPECT_TRUE(has(error_of(get("/api/runs/1/export?comment=true"), 400), "it takes comments"));
   EXPECT_EQ(get("/api/runs/999/export").status, 404);
 }
 

@@ -10,12 +10,14 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
+#include "tests/support/csv_reader.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
 
@@ -218,39 +220,42 @@ TEST_F(RunsCommandsTest, ShowGivesSummaryAnalysisCorrectionAndPushes) {
 TEST_F(RunsCommandsTest, ExportMapsRevolutionsToTheCamFrameWhenTheFrameIsKnown) {
   CommandResult r = run_command("runs export " + std::to_string(ids_[0]) + data_);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  std::istringstream in(r.output);
-  std::string line, header;
-  std::vector<std::string> rows;
-  while (std::getline(in, line)) {
-    if (line.rfind("#", 0) == 0) continue;
-    if (header.empty()) {
-      header = line;
-    } else {
-      rows.push_back(line);
-    }
-  }
-  EXPECT_EQ(header,
-            "cam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,error_um,"
-            "correction_um");
-  ASSERT_EQ(rows.size(), 360u);
-  EXPECT_TRUE(has(r.output, "mapped to the CAM frame")) << r.output.substr(0, 600);
+  std::optional<std::vector<testing::CsvRecord>> rows = testing::read_csv(r.output);
+  ASSERT_TRUE(rows.has_value()) << "not RFC 4180 CSV:\n" << r.output.substr(0, 600);
+  ASSERT_EQ(rows->size(), 361u);
+  EXPECT_EQ((*rows)[0], (testing::CsvRecord{"cam_deg", "design_lift_mm", "rev1_lift_mm", "rev2_lift_mm", "rev3_lift_mm",
+                                            "mean_lift_mm", "spread_um", "error_um", "correction_um", "run_id",
+                                            "machine", "part", "lobe", "started_utc", "note"}));
+  for (const testing::CsvRecord& row : *rows) ASSERT_EQ(row.size(), 15u);
   // c0 = 10, sense +1, probe 0: cam degree 5 was read at machine degree 15.
-  std::istringstream row5(rows[5]);
-  std::vector<double> v;
-  for (std::string cell; std::getline(row5, cell, ',');) v.push_back(std::stod(cell));
-  ASSERT_EQ(v.size(), 9u);
-  EXPECT_EQ(v[0], 5);
-  EXPECT_NEAR(v[2], raw_mm(0, 15), 1e-7);
-  EXPECT_NEAR(v[4], raw_mm(2, 15), 1e-7);
-  EXPECT_NEAR(v[7], 12.0 * std::sin(5 * 0.0174533), 1e-4);
+  const testing::CsvRecord& row5 = (*rows)[6];
+  EXPECT_EQ(row5[0], "5");
+  EXPECT_NEAR(std::stod(row5[2]), raw_mm(0, 15), 1e-7);
+  EXPECT_NEAR(std::stod(row5[4]), raw_mm(2, 15), 1e-7);
+  EXPECT_NEAR(std::stod(row5[7]), 12.0 * std::sin(5 * 0.0174533), 1e-4);
+  EXPECT_EQ(row5[9], std::to_string(ids_[0]));
+  EXPECT_EQ(row5[11], "intake");
+  r = run_command("runs export --comments " + std::to_string(ids_[0]) + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.rfind("# gaugeloop run " + std::to_string(ids_[0]) + ": intake lobe 1 on g1", 0), 0u)
+      << r.output.substr(0, 600);
+  EXPECT_TRUE(has(r.output, "mapped to the CAM frame")) << r.output.substr(0, 600);
+  EXPECT_TRUE(has(r.output, ".\r\ncam_deg,design_lift_mm,")) << "the header after the '#' lines";
 }
 
 TEST_F(RunsCommandsTest, ExportSaysWhenRevolutionsStayInTheMachineFrame) {
-  CommandResult r = run_command("runs export " + std::to_string(ids_[3]) + data_);
+  CommandResult r = run_command("runs export --comments " + std::to_string(ids_[3]) + data_);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(has(r.output, "MACHINE frame: row k holds the reading at C = k deg")) << r.output.substr(0, 800);
   EXPECT_TRUE(has(r.output, "rev1_at_machine_deg_lift_mm")) << r.output.substr(0, 800);
-  EXPECT_TRUE(has(r.output, "\n15,0.5000000,1.0150000,")) << "machine degree 15 on row 15";
+  EXPECT_TRUE(has(r.output, "\r\n15,0.5000000,1.0150000,")) << "machine degree 15 on row 15";
+}
+
+TEST_F(RunsCommandsTest, ExportToAFileIsTheSameCsv) {
+  const fs::path csv = dir_ / "run1.csv";
+  CommandResult r = run_command("runs export " + std::to_string(ids_[0]) + " --out " + csv.string() + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(testing::slurp(csv), run_command("runs export " + std::to_string(ids_[0]) + data_).output);
 }
 
 TEST_F(RunsCommandsTest, CompareShowsChangesAndTheSettingsThatDiffer) {
@@ -302,10 +307,14 @@ TEST_F(RunsCommandsTest, PruneDropsOldRawSamplesAndKeepsTheSummary) {
   CommandResult r = run_command("runs prune --raw-older-than-days 0" + data_);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(has(r.output, "pruned the raw samples of 4 runs")) << r.output;
-  r = run_command("runs export " + std::to_string(ids_[0]) + data_);
+  r = run_command("runs export --comments " + std::to_string(ids_[0]) + data_);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(has(r.output, "Raw revolutions were pruned")) << r.output.substr(0, 800);
-  EXPECT_TRUE(has(r.output, "cam_deg,design_lift_mm,mean_lift_mm,")) << r.output.substr(0, 800);
+  // The same columns as before pruning, the revolutions' fields empty.
+  EXPECT_TRUE(has(r.output,
+                  "\r\ncam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,"
+                  "error_um,correction_um,run_id,machine,part,lobe,started_utc,note\r\n0,0.5000000,,,,0.5000000,"))
+      << r.output.substr(0, 1200);
   const nlohmann::json j = json_of("runs show --json " + std::to_string(ids_[0]));
   EXPECT_EQ(j["max_abs_error_um"], 12.0);
   EXPECT_FALSE(j["raw_pruned_utc"].is_null());
