@@ -138,10 +138,10 @@ struct JobReport {
 // Runs the job. Everything that can be checked without the gauge is checked before the first
 // poll, so bad input costs no measurement: the geometry, the template, the names (part and
 // program: 1 to 64 letters, digits, '_' or '-'), the serial and operator (check_run_identity),
-// the NC directory (writable: a probe file is
-// made and removed), the database (sound, writable, not locked), room on both file systems for a run
-// and a program, and the table version the part was ground with. Interrupted pushes of the NC
-// file are reconciled first (reconcile_pushes). Nothing is stored unless a complete run was
+// the NC directory (writable: a probe file is made and removed), the database (sound,
+// writable, not locked), room on both file systems for a run and a program, and the table
+// version the part was ground with. Interrupted pushes of the NC file are reconciled first
+// (reconcile_pushes). Nothing is stored unless a complete run was
 // measured and analysed; the NC file is pushed (push_program) after the run is stored. A
 // correction that compensation holds or refuses (decide_correction), that the geometry
 // refuses, or that would be built on a table that did not grind the part, is not an error:
