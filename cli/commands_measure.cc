@@ -23,6 +23,7 @@
 #include "report/svg_plot.h"
 #include "simulator/gauge_simulator.h"
 #include "simulator/virtual_grinder.h"
+#include "storage/run_store.h"
 
 namespace gaugeloop {
 namespace {
@@ -112,7 +113,15 @@ struct MeasureOptions {
   std::string gauge_config;        // measure only
   std::optional<int> ground_with;  // measure only: the table version that ground the part
   bool inspect = false;            // measure only
+  std::string serial;              // measure only: the part's serial number
+  std::string operator_name;       // measure only: who measures
 };
+
+// --serial and --operator, checked before anything is read, naming the option at fault.
+Status check_identity_options(const MeasureOptions& o) {
+  if (Status s = check_run_identity("--serial", o.serial); !s) return s;
+  return check_run_identity("--operator", o.operator_name);
+}
 
 void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
   add_data_dir_option(cmd, o.paths);
@@ -155,6 +164,7 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
 
 // The job settings of the options, for `lp`.
 Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions& o, bool build_on_table_in_force) {
+  if (Status ids = check_identity_options(o); !ids) return ids.error();
   std::string template_name;
   Result<std::string> tmpl = load_template(o.template_path, template_name);
   if (!tmpl) return tmpl.error();
@@ -179,6 +189,8 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
   js.require_approval = o.require_approval;
   js.machine = o.machine;
   js.note = o.note;
+  js.serial = o.serial;
+  js.operator_name = o.operator_name;
   js.build_on_table_in_force = build_on_table_in_force;
   js.ground_with_version = o.ground_with;
   js.ground_with_source = "option";
@@ -332,6 +344,7 @@ struct ServiceMeasureOptions {
 };
 
 int cmd_measure_as_service(const ServiceMeasureOptions& so, const MeasureOptions& by_hand) {
+  if (Status ids = check_identity_options(by_hand); !ids) return report_error(ids.error());
   Result<ServiceConfig> config = read_service_config(so.config_path);
   if (!config) return report_error(config.error());
   if (so.part_name.empty() || so.lobe == 0) {
@@ -342,6 +355,8 @@ int cmd_measure_as_service(const ServiceMeasureOptions& so, const MeasureOptions
   if (!part) return report_error(part.error());
   JobSettings js = job_for(*config, **part);
   js.note = by_hand.note;
+  js.serial = by_hand.serial;
+  js.operator_name = by_hand.operator_name;
   js.ground_with_version = by_hand.ground_with;
   js.ground_with_source = "option";
   js.inspect = by_hand.inspect;
@@ -571,11 +586,17 @@ void add_measure_command(CLI::App& app, CommandAction& action) {
       ->check(CLI::Range(0, 65534));
   measure->add_flag("--inspect", measure_opts->inspect,
                     "Measure, analyse and store only: the correction in force and the NC program are untouched");
+  measure->add_option("--serial", measure_opts->serial,
+                      "Serial number of the measured part, stored with the run (free text, at most 64 characters; "
+                      "`runs list --serial` finds it)");
+  measure->add_option("--operator", measure_opts->operator_name,
+                      "Who measures, stored with the run (free text, at most 64 characters)");
   auto as_service = std::make_shared<ServiceMeasureOptions>();
   CLI::Option* config = measure->add_option(
       "--config", as_service->config_path,
       "The service's config (TOML, docs/service.md): measure as `gaugeloop serve` does, with its gauge, settings, "
-      "database and NC directory; with --part-name and --lobe, and only --note, --ground-with, --inspect");
+      "database and NC directory; with --part-name and --lobe, and only --note, --serial, --operator, "
+      "--ground-with, --inspect");
   measure->add_option("--part-name", as_service->part_name, "With --config: the part's name")->needs(config);
   measure->add_option("--lobe", as_service->lobe, "With --config: the lobe number")->needs(config);
   measure->callback([&action, measure, measure_opts, gauge_address, as_service] {
@@ -584,7 +605,7 @@ void add_measure_command(CLI::App& app, CommandAction& action) {
       for (const CLI::Option* o : measure->get_options()) {
         const std::string name = o->get_name();
         if (o->count() == 0 || name == "--config" || name == "--part-name" || name == "--lobe" || name == "--note" ||
-            name == "--ground-with" || name == "--inspect")
+            name == "--serial" || name == "--operator" || name == "--ground-with" || name == "--inspect")
           continue;
         action = [name] {
           return report_error(

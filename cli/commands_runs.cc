@@ -98,12 +98,13 @@ int cmd_list(const ListOptions& o) {
     print_runs_json(*runs);
     return kExitOk;
   }
-  std::printf("%6s  %-20s  %-10s  %-24s %4s  %4s  %8s  %8s  %8s  %8s  %s\n", "run", "started (UTC)", "machine", "part",
-              "lobe", "revs", "max um", "rms um", "rep um", "phase", "status");
+  std::printf("%6s  %-20s  %-10s  %-24s %4s  %-16s  %4s  %8s  %8s  %8s  %8s  %s\n", "run", "started (UTC)", "machine",
+              "part", "lobe", "serial", "revs", "max um", "rms um", "rep um", "phase", "status");
   for (const RunSummary& r : *runs) {
-    std::printf("%6lld  %-20s  %-10s  %-24s %4d  %4d  %8.2f  %8.2f  %8.2f  %8s  %s%s\n", static_cast<long long>(r.id),
-                r.started_utc.c_str(), r.machine.c_str(), r.part.c_str(), r.lobe, r.revolutions, r.max_abs_error_um,
-                r.rms_error_um, r.repeatability_um, opt(r.phase_error_deg, 3, true).c_str(), r.status.c_str(),
+    std::printf("%6lld  %-20s  %-10s  %-24s %4d  %-16s  %4d  %8.2f  %8.2f  %8.2f  %8s  %s%s\n",
+                static_cast<long long>(r.id), r.started_utc.c_str(), r.machine.c_str(), r.part.c_str(), r.lobe,
+                r.serial.empty() ? "-" : r.serial.c_str(), r.revolutions, r.max_abs_error_um, r.rms_error_um,
+                r.repeatability_um, opt(r.phase_error_deg, 3, true).c_str(), r.status.c_str(),
                 r.raw_pruned_utc.empty() ? "" : " (raw pruned)");
   }
   if (runs->empty()) std::printf("(no runs match)\n");
@@ -157,6 +158,8 @@ int cmd_show(const RunOptions& o) {
               s.machine.c_str(), s.status.c_str());
   std::printf("  started           %s, finished %s\n", s.started_utc.c_str(), r.finished_utc.c_str());
   std::printf("  gauge             %s\n", r.gauge.c_str());
+  std::printf("  serial            %s\n", s.serial.empty() ? "not given" : s.serial.c_str());
+  std::printf("  operator          %s\n", s.operator_name.empty() ? "not given" : s.operator_name.c_str());
   if (!s.note.empty()) std::printf("  note              %s\n", s.note.c_str());
   std::printf("  revolutions       %d (%lld discarded, %lld reconnects, %lld polls)%s\n", s.revolutions,
               static_cast<long long>(r.discarded_revolutions), static_cast<long long>(r.reconnects),
@@ -499,6 +502,8 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   auto list = std::make_shared<ListOptions>();
   CLI::App* list_cmd = runs->add_subcommand("list", "List runs, newest first.");
   add_filter_options(*list_cmd, *list, false);
+  list_cmd->add_option("--serial", list->query.serial,
+                       "Only runs of the part with this serial number (matched exactly, case and all)");
   list_cmd->add_option("--status", list->query.status, "Only runs with this status")
       ->check(CLI::IsMember({"measured", "pushed"}));
   list_cmd->add_option("--limit", list->query.limit, "Most runs to show")

@@ -351,6 +351,8 @@ std::filesystem::path keep_unstored_measurement(const RunRecord& r, const JobSet
   j["started_utc"] = r.started_utc;
   j["finished_utc"] = r.finished_utc;
   j["note"] = r.note;
+  j["serial"] = r.serial;
+  j["operator"] = r.operator_name;
   j["frame"] = "machine degrees of C, lift in mm";
   nlohmann::json revs = nlohmann::json::array();
   for (const RevolutionSamples& rev : r.measured.revolutions) {
@@ -399,6 +401,8 @@ Result<Prepared> check_names_and_prepare(const JobSettings& s) {
   if (Status n = check_name(s.part.name, "part name"); !n) return n.error();
   if (Status n = check_name(s.nc_program, "NC program name"); !n) return n.error();
   if (Status n = check_name(s.machine, "machine name"); !n) return n.error();
+  if (Status n = check_run_identity("serial", s.serial); !n) return n.error();
+  if (Status n = check_run_identity("operator", s.operator_name); !n) return n.error();
   return prepare(s);
 }
 
@@ -505,6 +509,8 @@ class JobRun {
     record_.lobe = s_.part.lobe;
     record_.gauge = gauge_.address();
     record_.note = s_.note;
+    record_.serial = s_.serial;
+    record_.operator_name = s_.operator_name;
     record_.measured = std::move(*measured);
     record_.correction_in_force_run = ground_.run_id();
     record_.geometry = s_.part;

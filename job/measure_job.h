@@ -68,6 +68,10 @@ struct JobSettings {
   int table_number = 1;  // CTABDEF table number
   std::string machine = "grinder-1";
   std::string note;
+  // The measured part's serial number and who measured it, stored with the run; empty: not
+  // given. Free text, checked before the gauge is read (check_run_identity, storage/run_store.h).
+  std::string serial;
+  std::string operator_name;
   // True (measuring a part the machine ground): the new correction builds on the correction
   // of the table that ground the part (ground_with), by default the table in force, that of
   // the last run of this machine, part and lobe whose table was pushed.
@@ -133,10 +137,11 @@ struct JobReport {
 
 // Runs the job. Everything that can be checked without the gauge is checked before the first
 // poll, so bad input costs no measurement: the geometry, the template, the names (part and
-// program: 1 to 64 letters, digits, '_' or '-'), the NC directory (writable: a probe file is
-// made and removed), the database (sound, writable, not locked), room on both file systems for a run
-// and a program, and the table version the part was ground with. Interrupted pushes of the NC
-// file are reconciled first (reconcile_pushes). Nothing is stored unless a complete run was
+// program: 1 to 64 letters, digits, '_' or '-'), the serial and operator (check_run_identity),
+// the NC directory (writable: a probe file is made and removed), the database (sound,
+// writable, not locked), room on both file systems for a run and a program, and the table
+// version the part was ground with. Interrupted pushes of the NC file are reconciled first
+// (reconcile_pushes). Nothing is stored unless a complete run was
 // measured and analysed; the NC file is pushed (push_program) after the run is stored. A
 // correction that compensation holds or refuses (decide_correction), that the geometry
 // refuses, or that would be built on a table that did not grind the part, is not an error:

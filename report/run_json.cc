@@ -59,6 +59,8 @@ json run_summary_json(const RunSummary& r) {
           {"phase_error_deg", opt_json(r.phase_error_deg)},
           {"base_circle_runout_um", opt_json(r.base_circle_runout_um)},
           {"settings_hash", text_or_null(r.settings_hash)},
+          {"serial", text_or_null(r.serial)},
+          {"operator", text_or_null(r.operator_name)},
           {"note", r.note},
           {"nc_file", r.nc_file},
           {"raw_pruned_utc", text_or_null(r.raw_pruned_utc)}};

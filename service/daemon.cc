@@ -51,8 +51,9 @@ Status prepare_database(const std::filesystem::path& db_path) {
 Result<std::unique_ptr<HttpApi>> start_http(Service& service, PlcTrigger* plc, const HttpSettings& settings,
                                             const std::filesystem::path& db_path) {
   HttpWrites writes;
-  writes.trigger_measure = [&service](const std::string& part, int lobe, const std::string& note) {
-    return service.measure(part, lobe, note);
+  writes.trigger_measure = [&service](const std::string& part, int lobe, const std::string& note,
+                                      const std::string& serial, const std::string& operator_name) {
+    return service.measure(part, lobe, note, serial, operator_name);
   };
   writes.approve = [&service](std::int64_t id, const std::string& by, const std::string& note) {
     return service.approve(id, by, note);

@@ -596,10 +596,11 @@ struct HttpApi::Impl {
   }
 
   void list_runs(const httplib::Request& req, httplib::Response& res) {
-    Result<Query> q = Query::of(req, {"part", "lobe", "machine", "since", "until", "status", "limit"});
+    Result<Query> q = Query::of(req, {"part", "lobe", "machine", "serial", "since", "until", "status", "limit"});
     if (!q) return send_error(res, q.error());
     Result<RunQuery> rq = run_query(*q, 50);
     if (!rq) return send_error(res, rq.error());
+    rq->serial = q->text("serial");  // matched exactly
     Result<std::string> st = q->choice("status", {"measured", "pushed"});
     if (!st) return send_error(res, st.error());
     rq->status = *st;
@@ -813,7 +814,8 @@ struct HttpApi::Impl {
 
   void measure(const httplib::Request&, const std::string& text, httplib::Response& res) {
     if (!writes.trigger_measure) return send_error(res, 501, "this service does not take measurement triggers");
-    Result<json> body = body_object(text, {"part", "lobe", "note"}, R"({"part": "intake_flat", "lobe": 1})");
+    Result<json> body = body_object(text, {"part", "lobe", "note", "serial", "operator"},
+                                    R"({"part": "intake_flat", "lobe": 1, "serial": "A123", "operator": "anna"})");
     if (!body) return send_error(res, body.error());
     Result<std::string> part = string_field(*body, "part", true);
     if (!part) return send_error(res, part.error());
@@ -821,7 +823,14 @@ struct HttpApi::Impl {
     if (!lobe) return send_error(res, lobe.error());
     Result<std::string> note = string_field(*body, "note", false);
     if (!note) return send_error(res, note.error());
-    answer(res, writes.trigger_measure(*part, *lobe, *note));
+    // Empty or null: not given. Checked here so a bad one is a 400 before the run is queued.
+    Result<std::string> serial = string_field(*body, "serial", false);
+    if (!serial) return send_error(res, serial.error());
+    if (Status s = check_run_identity("`serial`", *serial); !s) return send_error(res, s.error());
+    Result<std::string> operator_name = string_field(*body, "operator", false);
+    if (!operator_name) return send_error(res, operator_name.error());
+    if (Status s = check_run_identity("`operator`", *operator_name); !s) return send_error(res, s.error());
+    answer(res, writes.trigger_measure(*part, *lobe, *note, *serial, *operator_name));
   }
 
   void approve(const httplib::Request& req, const std::string& text, httplib::Response& res) {

@@ -20,9 +20,12 @@ namespace gaugeloop {
 // kRefused 409 (e.g. a measurement already running, a table no longer pending), kStorage and
 // kIo 503, a gauge error 502, anything else 500. An empty hook answers 501.
 // Thread: called on the API's worker threads, possibly several at once; only after the token
-// was checked and the body parsed (part, program and by not empty; lobe and version >= 1).
+// was checked and the body parsed (part, program and by not empty; lobe and version >= 1;
+// serial and operator empty or checked by check_run_identity).
 struct HttpWrites {
-  std::function<Result<nlohmann::json>(const std::string& part, int lobe, const std::string& note)> trigger_measure;
+  std::function<Result<nlohmann::json>(const std::string& part, int lobe, const std::string& note,
+                                       const std::string& serial, const std::string& operator_name)>
+      trigger_measure;
   std::function<Result<nlohmann::json>(std::int64_t pending_id, const std::string& by, const std::string& note)>
       approve;
   // `program` as the client gave it: a program name (CAM_INTAKE_L1) or an NC file path.

@@ -560,8 +560,19 @@ CREATE TRIGGER events_counted_on_kind AFTER UPDATE OF kind ON events WHEN OLD.ki
 END;
 )sql";
 
-const std::array<Migration, 6>& all_migrations() {
-  static const std::array<Migration, 6> kMigrations{{
+// Version 7: which part was measured and who measured it, for a report a quality engineer
+// signs. Free text as the shop writes it (at most 64 characters, no control characters:
+// check_run_identity); NULL: not given, and for every run stored before version 7.
+// runs_by_serial: `runs list --serial` and GET /api/runs?serial= find a part's runs by one
+// index seek, whatever the history.
+constexpr std::string_view kSchemaV7 = R"sql(
+ALTER TABLE runs ADD COLUMN serial TEXT CHECK (serial IS NULL OR length(serial) BETWEEN 1 AND 64);
+ALTER TABLE runs ADD COLUMN operator TEXT CHECK (operator IS NULL OR length(operator) BETWEEN 1 AND 64);
+CREATE INDEX runs_by_serial ON runs (serial, started_utc) WHERE serial IS NOT NULL;
+)sql";
+
+const std::array<Migration, 7>& all_migrations() {
+  static const std::array<Migration, 7> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -588,6 +599,7 @@ const std::array<Migration, 6>& all_migrations() {
        std::string(kSchemaV6),
        nullptr,
        {}},
+      {7, "runs: the part's serial number and the operator who measured it", std::string(kSchemaV7), nullptr, {}},
   }};
   return kMigrations;
 }

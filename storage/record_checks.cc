@@ -41,6 +41,8 @@ Status check_identity(const RunRecord& run) {
   if (run.machine.empty()) return run_refused("the machine name is empty");
   if (run.part.empty()) return run_refused("the part name is empty");
   if (run.lobe < 1) return run_refused("lobe " + std::to_string(run.lobe) + " is not 1 or more");
+  if (Status s = check_run_identity("serial", run.serial); !s.ok()) return run_refused(s.error().message);
+  if (Status s = check_run_identity("operator", run.operator_name); !s.ok()) return run_refused(s.error().message);
   return {};
 }
 
@@ -196,3 +198,47 @@ Error bad_bound(std::string_view what, const std::string& value) {
 bool is_time_bound(std::string_view s) { return s.empty() || is_utc_timestamp(s); }
 
 }  // namespace gaugeloop::storage_internal
+
+namespace gaugeloop {
+
+Status check_run_identity(std::string_view what, std::string_view value) {
+  constexpr std::size_t kMaxCharacters = 64;
+  std::size_t characters = 0;
+  for (std::size_t i = 0; i < value.size();) {
+    const auto lead = static_cast<unsigned char>(value[i]);
+    // The length of the UTF-8 sequence and the smallest code point it may carry (shorter
+    // forms of the same character are not valid UTF-8).
+    const std::size_t length = lead < 0x80           ? 1
+                               : (lead >> 5) == 0x6  ? 2
+                               : (lead >> 4) == 0xE  ? 3
+                               : (lead >> 3) == 0x1E ? 4
+                                                     : 0;
+    char32_t cp = length == 1 ? lead : length == 2 ? (lead & 0x1Fu) : length == 3 ? (lead & 0x0Fu) : (lead & 0x07u);
+    bool valid = length != 0 && i + length <= value.size();
+    for (std::size_t k = 1; valid && k < length; ++k) {
+      const auto c = static_cast<unsigned char>(value[i + k]);
+      valid = (c >> 6) == 0x2;
+      cp = (cp << 6) | (c & 0x3Fu);
+    }
+    const char32_t smallest = length == 2 ? 0x80 : length == 3 ? 0x800 : length == 4 ? 0x10000 : 0;
+    if (!valid || cp < smallest || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) {
+      return make_error(ErrorCode::kInvalidInput, std::string(what) + " is not valid UTF-8 at byte " +
+                                                      std::to_string(i + 1) + "; write it as plain text");
+    }
+    if (cp < 0x20 || (cp >= 0x7F && cp <= 0x9F)) {
+      return make_error(ErrorCode::kInvalidInput, std::string(what) + " has a control character at character " +
+                                                      std::to_string(characters + 1) +
+                                                      " (tab, new line...); write it on one line of plain text");
+    }
+    ++characters;
+    i += length;
+  }
+  if (characters > kMaxCharacters) {
+    return make_error(ErrorCode::kInvalidInput, std::string(what) + " is " + std::to_string(characters) +
+                                                    " characters long; at most " + std::to_string(kMaxCharacters) +
+                                                    " are kept, shorten it");
+  }
+  return {};
+}
+
+}  // namespace gaugeloop

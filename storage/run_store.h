@@ -24,13 +24,17 @@ struct Connection;  // SQLite connection; defined in storage/sqlite_db.h, never 
 // Timestamps are ISO 8601 UTC to the second, exactly "YYYY-MM-DDTHH:MM:SSZ", so that text
 // order is time order.
 struct RunRecord {
-  std::string started_utc;    // "2026-11-22T02:34:44Z"
-  std::string finished_utc;   // not earlier than started_utc
-  std::string machine;        // e.g. "grinder-1"; not empty
-  std::string part;           // part name; not empty
-  int lobe = 1;               // 1-based
-  std::string gauge;          // gauge address, e.g. "tcp:127.0.0.1:1502"
-  std::string note;           // operator note, may be empty
+  std::string started_utc;   // "2026-11-22T02:34:44Z"
+  std::string finished_utc;  // not earlier than started_utc
+  std::string machine;       // e.g. "grinder-1"; not empty
+  std::string part;          // part name; not empty
+  int lobe = 1;              // 1-based
+  std::string gauge;         // gauge address, e.g. "tcp:127.0.0.1:1502"
+  std::string note;          // operator note, may be empty
+  // The measured part's serial number and the operator who measured it: free text, at most
+  // 64 characters, no control characters (check_run_identity). Empty: not given (NULL).
+  std::string serial;
+  std::string operator_name;
   MeasuredRun measured;       // raw revolutions: >= 3, machine frame, amplifier revolution
                               // numbers strictly increasing, every value finite
   LobeAnalysis analysis;      // cam frame per-degree tables and summary figures, all finite
@@ -62,6 +66,11 @@ struct RunRecord {
 // cryptographic hash; it tells settings apart, it does not guard them.
 std::string settings_hash(std::string_view text);
 
+// A serial number or operator name as a run keeps it: empty (not given), or 1 to 64
+// characters of valid UTF-8 without control characters. kInvalidInput naming `what` (the
+// option or field the value came from, e.g. "--serial") and what to change otherwise.
+Status check_run_identity(std::string_view what, std::string_view value);
+
 // One row of the run list.
 struct RunSummary {
   std::int64_t id = 0;
@@ -83,6 +92,8 @@ struct RunSummary {
   std::string settings_hash;   // empty: not recorded
   std::string note;            // operator note
   std::string raw_pruned_utc;  // when prune removed the raw samples; empty: still stored
+  std::string serial;          // the part's serial number; empty: not given (or before schema 7)
+  std::string operator_name;   // who measured; empty: not given (or before schema 7)
 };
 
 // What a curve table is, as kept with each push, pending table and push journal entry.
@@ -223,6 +234,7 @@ struct RunQuery {
   std::string part;       // exact part name; empty = any part
   int lobe = 0;           // 0 = any lobe
   std::string machine;    // exact machine name; empty = any
+  std::string serial;     // exact serial number (no wildcards, case counts); empty = any
   std::string status;     // "measured" or "pushed"; empty = any
   std::string since_utc;  // started at or after; empty = no bound
   std::string until_utc;  // started before (exclusive); empty = no bound

@@ -33,14 +33,14 @@ INSERT INTO runs (started_utc, finished_utc, machine, part, lobe, gauge, note, s
                   repeatability_um, nc_file, correction_in_force_run, settings_hash,
                   phase_error_deg, base_circle_runout_um, harmonic_amplitude_um,
                   rotation_sense, c_offset_deg, probe_offset_deg, ground_with_version,
-                  ground_with_source, inspection)
+                  ground_with_source, inspection, serial, operator)
 VALUES (:started_utc, :finished_utc, :machine, :part, :lobe, :gauge, :note, 'measured',
         :revolutions, :degrees_captured, :polls, :reconnects, :discarded_revolutions,
         :zero_offset_mm, :max_abs_error_um, :rms_error_um, :peak_to_valley_um,
         :repeatability_um, NULL, :correction_in_force_run, :settings_hash,
         :phase_error_deg, :base_circle_runout_um, :harmonic_amplitude_um,
         :rotation_sense, :c_offset_deg, :probe_offset_deg, :ground_with_version,
-        :ground_with_source, :inspection))sql";
+        :ground_with_source, :inspection, :serial, :operator))sql";
 
 constexpr std::string_view kInsertRaw = R"sql(
 INSERT INTO run_raw (run_id, amplifier_revolutions, lift) VALUES (?1, ?2, ?3))sql";
@@ -60,12 +60,13 @@ UPDATE lobes SET rotation_sense = :rotation_sense, c_offset_deg = :c_offset_deg,
                  probe_offset_deg = :probe_offset_deg
 WHERE part = :part AND lobe = :lobe)sql";
 
-// Columns 0..18, read by read_summary() and (zero_offset_mm) read_summary_of_run().
+// Columns 0..20, read by read_summary() and (zero_offset_mm) read_summary_of_run().
 constexpr std::string_view kSummaryColumns =
     "r.id, r.started_utc, r.machine, r.part, r.lobe, r.status, r.revolutions, r.degrees_captured, "
     "r.max_abs_error_um, r.rms_error_um, r.repeatability_um, r.nc_file, r.phase_error_deg, "
-    "r.base_circle_runout_um, r.peak_to_valley_um, r.settings_hash, r.note, r.raw_pruned_utc, r.zero_offset_mm";
-constexpr int kZeroOffsetColumn = 18;
+    "r.base_circle_runout_um, r.peak_to_valley_um, r.settings_hash, r.note, r.raw_pruned_utc, r.serial, "
+    "r.operator, r.zero_offset_mm";
+constexpr int kZeroOffsetColumn = 20;
 
 std::string select_summaries(std::string_view rest) {
   return "SELECT " + std::string(kSummaryColumns) + " FROM runs AS r" + std::string(rest);
@@ -202,6 +203,8 @@ Result<std::int64_t> insert_run_row(Connection& conn, const RunRecord& run, cons
   ins->bind(":ground_with_version", run.ground_with_version);
   ins->bind(":ground_with_source", text_or_null(run.ground_with_source));
   ins->bind(":inspection", run.inspection ? 1 : 0);
+  ins->bind(":serial", text_or_null(run.serial));
+  ins->bind(":operator", text_or_null(run.operator_name));
   if (Status s = ins->run(); !s.ok()) return s.error();
   return conn.last_insert_rowid();
 }
@@ -284,6 +287,8 @@ RunSummary read_summary(const Statement& s) {
   r.settings_hash = s.column<std::string>(15);
   r.note = s.column<std::string>(16);
   r.raw_pruned_utc = s.column<std::string>(17);
+  r.serial = s.column<std::string>(18);  // NULL reads as ""
+  r.operator_name = s.column<std::string>(19);
   return r;
 }
 
@@ -472,6 +477,7 @@ Result<storage_internal::WhereClause> run_filter(const RunQuery& q) {
   if (!q.part.empty()) where.add("r.part =", q.part);
   if (q.lobe > 0) where.add_literal("r.lobe = " + std::to_string(q.lobe));
   if (!q.machine.empty()) where.add("r.machine =", q.machine);
+  if (!q.serial.empty()) where.add("r.serial =", q.serial);
   if (!q.status.empty()) where.add("r.status =", q.status);
   if (!q.since_utc.empty()) where.add("r.started_utc >=", q.since_utc);
   if (!q.until_utc.empty()) where.add("r.started_utc <", q.until_utc);

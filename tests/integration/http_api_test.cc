@@ -115,8 +115,11 @@ class HttpApiTest : public ::testing::Test {
   // Hooks that log their arguments and answer {"ok": true}.
   HttpWrites logging_writes() {
     HttpWrites w;
-    w.trigger_measure = [this](const std::string& part, int lobe, const std::string& note) -> Result<json> {
-      log_.add("measure " + part + " " + std::to_string(lobe) + " " + note);
+    w.trigger_measure = [this](const std::string& part, int lobe, const std::string& note, const std::string& serial,
+                               const std::string& operator_name) -> Result<json> {
+      log_.add("measure " + part + " " + std::to_string(lobe) + " " + note +
+               (serial.empty() ? "" : " serial=" + serial) +
+               (operator_name.empty() ? "" : " operator=" + operator_name));
       return json{{"queued", true}};
     };
     w.approve = [this](std::int64_t id, const std::string& by, const std::string& note) -> Result<json> {
@@ -221,6 +224,51 @@ TEST_F(HttpApiTest, RunsFilterByPartLobeMachineTimeAndStatusLikeTheCli) {
   EXPECT_EQ(a.j[0]["max_abs_error_um"], 30.0);
   EXPECT_EQ(a.j[0]["phase_error_deg"], 0.25);
   EXPECT_TRUE(a.j[0]["settings_hash"].is_null());
+}
+
+TEST_F(HttpApiTest, RunsFilterBySerialExactlyAndShowSerialAndOperatorOrNull) {
+  fill();
+  Result<RunStore> store = RunStore::open(db());
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  RunRecord marked = record("intake", 1, "g1", "2020-11-23T08:00:00Z", 5.0);
+  marked.serial = "CS 0042/7";
+  marked.operator_name = "anna";
+  const std::int64_t id = *store->insert_run(marked);
+  marked.serial = "CS 0042/70";
+  marked.started_utc = marked.finished_utc = "2020-11-23T09:00:00Z";
+  ASSERT_TRUE(store->insert_run(marked).ok());
+  start();
+  Answer a = get("/api/runs?serial=CS%200042%2F7");
+  ASSERT_EQ(a.status, 200) << a.body;
+  ASSERT_EQ(a.j.size(), 1u) << a.body;
+  EXPECT_EQ(a.j[0]["id"], id);
+  EXPECT_EQ(a.j[0]["serial"], "CS 0042/7");
+  EXPECT_EQ(a.j[0]["operator"], "anna");
+  EXPECT_EQ(listed("?serial=cs%200042%2F7"), Ids{}) << "exact: case counts";
+  Answer old = get("/api/runs/" + std::to_string(ids_[0]));
+  ASSERT_EQ(old.status, 200) << old.body;
+  EXPECT_TRUE(old.j.contains("serial") && old.j["serial"].is_null()) << old.body;
+  EXPECT_TRUE(old.j.contains("operator") && old.j["operator"].is_null()) << old.body;
+}
+
+TEST_F(HttpApiTest, MeasurePassesSerialAndOperatorAndRefusesBadOnesWith400) {
+  start("t", logging_writes());
+  Answer ok = post("/api/measure", R"({"part": "intake", "lobe": 1, "serial": "CS-0042", "operator": "anna"})", "t");
+  ASSERT_EQ(ok.status, 200) << ok.body;
+  EXPECT_EQ(post("/api/measure", R"({"part": "intake", "lobe": 1, "serial": "", "operator": null})", "t").status, 200);
+  EXPECT_EQ(log_.all(),
+            (std::vector<std::string>{"measure intake 1  serial=CS-0042 operator=anna", "measure intake 1 "}));
+
+  const std::string long_serial = std::string(65, '7');
+  EXPECT_TRUE(has(
+      error_of(post("/api/measure", R"({"part": "intake", "lobe": 1, "serial": ")" + long_serial + R"("})", "t"), 400),
+      "`serial` is 65 characters long; at most 64"));
+  EXPECT_TRUE(
+      has(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1, "operator": "anna\nbert"})", "t"), 400),
+          "`operator` has a control character"));
+  EXPECT_TRUE(has(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1, "serial": 42})", "t"), 400),
+                  "`serial` must be a string, not number"));
+  EXPECT_EQ(log_.all().size(), 2u) << "a refused request queues no run";
 }
 
 TEST_F(HttpApiTest, ShowIsTheRunAsRunsShowJsonAndAnUnknownRunIs404) {
@@ -428,7 +476,8 @@ TEST_F(HttpApiTest, WritesNeedTheConfiguredTokenAndPassTheirArgumentsToTheHooks)
 
 TEST_F(HttpApiTest, HookErrorsChooseTheStatusAndKeepTheirMessage) {
   HttpWrites w;
-  w.trigger_measure = [](const std::string&, int, const std::string&) -> Result<json> {
+  w.trigger_measure = [](const std::string&, int, const std::string&, const std::string&,
+                         const std::string&) -> Result<json> {
     return make_error(ErrorCode::kRefused, "a measurement of intake lobe 1 is running; try again when it is done");
   };
   w.approve = [](std::int64_t, const std::string&, const std::string&) -> Result<json> {

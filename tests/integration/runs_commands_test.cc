@@ -15,6 +15,9 @@
 #include <string>
 #include <vector>
 
+#include "config/part_file.h"
+#include "core/lift_table.h"
+#include "simulator/gauge_simulator.h"
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
 #include "tests/support/csv_reader.h"
@@ -95,6 +98,67 @@ TEST_F(RunsCommandsTest, ListFiltersByPartLobeMachineTimeAndStatus) {
   ASSERT_EQ(text.exit_code, 0) << text.output;
   EXPECT_TRUE(has(text.output, "30.00")) << text.output;
   EXPECT_FALSE(has(text.output, "12.00")) << text.output;
+}
+
+TEST_F(RunsCommandsTest, ListBySerialFindsOnlyThatPartsRunsAndShowsTheSerial) {
+  {
+    Result<RunStore> store = RunStore::open(dir_ / "gaugeloop.sqlite");
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    RunRecord marked = record("intake", 1, "g1", "2020-11-23T08:00:00Z", 5.0);
+    marked.serial = "CS-0042";
+    marked.operator_name = "anna";
+    ids_.push_back(*store->insert_run(marked));
+    marked.serial = "CS-00421";
+    marked.started_utc = marked.finished_utc = "2020-11-23T09:00:00Z";
+    ids_.push_back(*store->insert_run(marked));
+  }
+  EXPECT_EQ(listed("--serial CS-0042"), (Ids{ids_[4]}));
+  EXPECT_EQ(listed("--serial cs-0042"), Ids{}) << "matched exactly, case and all";
+  CommandResult text = run_command("runs list" + data_);
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_TRUE(has(text.output, "serial")) << text.output;
+  EXPECT_TRUE(has(text.output, " CS-00421 ")) << text.output;
+  CommandResult show = run_command("runs show " + std::to_string(ids_[4]) + data_);
+  ASSERT_EQ(show.exit_code, 0) << show.output;
+  EXPECT_TRUE(has(show.output, "serial            CS-0042\n")) << show.output;
+  EXPECT_TRUE(has(show.output, "operator          anna\n")) << show.output;
+  const nlohmann::json old = json_of("runs show --json " + std::to_string(ids_[0]));
+  EXPECT_TRUE(old.contains("serial") && old["serial"].is_null()) << old.dump();
+  EXPECT_TRUE(old.contains("operator") && old["operator"].is_null()) << old.dump();
+}
+
+// `measure --serial --operator`: the real binary against the simulated gauge stores both.
+TEST_F(RunsCommandsTest, MeasureStoresTheSerialAndOperatorAndRefusesBadOnesBeforeTheGauge) {
+  const fs::path part = fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml";
+  Result<PartFile> pf = read_part_file(part);
+  ASSERT_TRUE(pf.ok()) << pf.error().message;
+  Result<LiftTable> design = read_lift_table_csv(pf->part.lift_table);
+  ASSERT_TRUE(design.ok()) << design.error().message;
+  SimulatorSettings ss;
+  ss.time_scale = 4.0;  // the run takes about a second
+  auto sim = GaugeSimulator::start(pf->part, *design, ss);
+  ASSERT_TRUE(sim.ok()) << sim.error().message;
+  const fs::path fresh = dir_ / "measured";
+  const std::string measure = "measure --gauge 127.0.0.1:" + std::to_string((*sim)->port()) + " --part " +
+                              part.string() + " --data-dir " + fresh.string();
+
+  CommandResult bad = run_command(measure + " --serial " + std::string(65, 'S'));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_TRUE(has(bad.output, "--serial is 65 characters long; at most 64")) << bad.output;
+  bad = run_command(measure + " --operator \"$(printf 'anna\\tbert')\"");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_TRUE(has(bad.output, "--operator has a control character at character 5")) << bad.output;
+  EXPECT_FALSE(fs::exists(fresh / "gaugeloop.sqlite")) << "refused before anything was opened";
+
+  CommandResult r = run_command(measure + " --serial 'CS 0042' --operator 'Anna K.'");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  Result<RunStore> store = RunStore::open(fresh / "gaugeloop.sqlite");
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  Result<std::vector<RunSummary>> runs = store->list_runs({});
+  ASSERT_TRUE(runs.ok()) << runs.error().message;
+  ASSERT_EQ(runs->size(), 1u);
+  EXPECT_EQ((*runs)[0].serial, "CS 0042");
+  EXPECT_EQ((*runs)[0].operator_name, "Anna K.");
 }
 
 TEST_F(RunsCommandsTest, BadTimeIsBadInputSayingWhatToWrite) {

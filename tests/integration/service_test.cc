@@ -212,7 +212,8 @@ TEST_F(ServiceTest, RequestRunNcFileAndTheHttpApi) {
 // and NC directory as a run the service makes; options the config sets are refused beside it.
 TEST_F(ServiceTest, MeasureByHandWithTheServiceConfig) {
   const std::string config = " --config " + (dir_ / "gaugeloop.toml").string();
-  testing::CommandResult r = testing::run_command("measure" + config + " --part-name intake_flat --lobe 1 --note hand");
+  testing::CommandResult r = testing::run_command(
+      "measure" + config + " --part-name intake_flat --lobe 1 --note hand --serial CS-7 --operator anna");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("run 1: intake_flat lobe 1 on grinder-7"), std::string::npos) << r.output;
   auto store = RunStore::open(dir_ / "runs.sqlite");
@@ -222,6 +223,8 @@ TEST_F(ServiceTest, MeasureByHandWithTheServiceConfig) {
   ASSERT_EQ(runs->size(), 1u);
   EXPECT_EQ((*runs)[0].machine, "grinder-7");
   EXPECT_EQ((*runs)[0].note, "hand");
+  EXPECT_EQ((*runs)[0].serial, "CS-7");
+  EXPECT_EQ((*runs)[0].operator_name, "anna");
   EXPECT_TRUE(fs::exists(dir_ / "nc" / "CAM_INTAKE_L1.SPF"));
 
   r = testing::run_command("measure" + config + " --part-name intake_flat --lobe 1 --data-dir " + dir_.string());

@@ -32,6 +32,8 @@ const std::set<std::string> kSummaryKeys = {"id",
                                             "phase_error_deg",
                                             "base_circle_runout_um",
                                             "settings_hash",
+                                            "serial",
+                                            "operator",
                                             "note",
                                             "nc_file",
                                             "raw_pruned_utc"};
@@ -187,7 +189,7 @@ TEST_F(RunJsonTest, WhatARunDidNotRecordIsNull) {
 
   const json j = run_detail_json(load(id));
   for (const char* key : {"settings_hash", "settings", "frame", "correction_in_force_run", "ground_with_version",
-                          "ground_with_source", "raw_pruned_utc"}) {
+                          "ground_with_source", "raw_pruned_utc", "serial", "operator"}) {
     EXPECT_TRUE(j[key].is_null()) << key << " = " << j[key];
   }
   ASSERT_EQ(j["nc_pushes"].size(), 1u);

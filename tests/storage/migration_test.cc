@@ -204,9 +204,57 @@ TEST(MigrationFromV1, StepsOneVersionAtATime) {
                            " (SELECT * FROM row_counts WHERE table_name = 'events' ORDER BY value)"),
             "fault=1,info=1")
       << "the events already stored are counted";
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM pragma_table_info('runs') WHERE name IN ('serial', 'operator')"), 0);
+  s = storage_internal::apply_migrations_up_to(conn, 7);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 7);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM pragma_table_info('runs') WHERE name IN ('serial', 'operator')"), 2);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'runs_by_serial'"), 1);
   s = storage_internal::apply_migrations(conn);
   ASSERT_TRUE(s.ok()) << s.error().message;
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
+}
+
+// A database of version 6 holding a run: opening it copies the file, then adds serial and
+// operator; the old run reads them as not given and a new run stores them.
+TEST(MigrationFromV6, OldRunsHaveNoSerialAndNewRunsKeepTheirs) {
+  TempDir dir;
+  std::filesystem::create_directories(db_in(dir).parent_path());
+  {
+    storage_internal::Connection conn;
+    conn.path = db_in(dir);
+    ASSERT_EQ(sqlite3_open(db_in(dir).c_str(), &conn.db), SQLITE_OK);
+    ASSERT_TRUE(storage_internal::apply_migrations_up_to(conn, 6).ok());
+    ASSERT_EQ(sqlite3_exec(conn.db,
+                           "INSERT INTO runs (id, started_utc, finished_utc, machine, part, lobe, gauge, revolutions,"
+                           " degrees_captured, zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um,"
+                           " repeatability_um) VALUES (5, '2026-11-21T08:00:00Z', '2026-11-21T08:00:09Z', 'g1',"
+                           " 'intake', 1, 'tcp:127.0.0.1:1502', 3, 1080, 2.0, 12.0, 5.0, 20.0, 0.5)",
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+  }
+  Result<RunStore> store = RunStore::open(db_in(dir));
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  ASSERT_TRUE(store->schema_upgrade().has_value()) << "upgraded without a backup";
+  EXPECT_EQ(store->schema_upgrade()->from_version, 6);
+  EXPECT_EQ(RawDb(store->schema_upgrade()->backup).query_int("PRAGMA user_version"), 6) << "the file as it was";
+  RawDb raw(db_in(dir));
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 7);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM runs WHERE id = 5 AND serial IS NULL AND operator IS NULL"), 1);
+
+  RunRecord marked = testing::make_record("intake", "2026-11-22T08:00:00Z");
+  marked.serial = "CS-0042";
+  marked.operator_name = "anna";
+  Result<std::int64_t> id = store->insert_run(marked);
+  ASSERT_TRUE(id.ok()) << id.error().message;
+  Result<std::vector<RunSummary>> runs = store->list_runs({});
+  ASSERT_TRUE(runs.ok()) << runs.error().message;
+  ASSERT_EQ(runs->size(), 2u);
+  EXPECT_EQ((*runs)[0].serial, "CS-0042");
+  EXPECT_EQ((*runs)[0].operator_name, "anna");
+  EXPECT_EQ((*runs)[1].id, 5);
+  EXPECT_EQ((*runs)[1].serial, "");
+  EXPECT_EQ((*runs)[1].operator_name, "");
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include "storage/run_store.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <cmath>
 #include <limits>
@@ -170,6 +171,97 @@ TEST_F(RunStoreTest, ListByPartFiltersOtherParts) {
   }());
   ASSERT_TRUE(runs.ok()) << runs.error().message;
   EXPECT_TRUE(runs->empty());
+}
+
+TEST_F(RunStoreTest, SerialAndOperatorComeBackAndEmptyIsStoredAsNull) {
+  RunRecord marked = make_record("intake", "2026-11-22T01:00:00Z");
+  marked.serial = "CS-2026-0042 \u00e9";  // free text, not only ASCII
+  marked.operator_name = "Anna K.";
+  const std::int64_t id = insert_ok(store(), marked);
+  const std::int64_t bare = insert_ok(store(), make_record("intake", "2026-11-22T02:00:00Z"));
+
+  Result<StoredRun> loaded = store().load_run(id);
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  EXPECT_EQ(loaded->summary.serial, "CS-2026-0042 \u00e9");
+  EXPECT_EQ(loaded->summary.operator_name, "Anna K.");
+  loaded = store().load_run(bare);
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  EXPECT_EQ(loaded->summary.serial, "");
+  EXPECT_EQ(loaded->summary.operator_name, "");
+  RawDb raw(db_in(dir_));
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM runs WHERE serial IS NULL AND operator IS NULL AND id = " +
+                          std::to_string(bare)),
+            1)
+      << "not given is NULL, not an empty text";
+}
+
+TEST_F(RunStoreTest, ListBySerialMatchesExactly) {
+  RunRecord a = make_record("intake", "2026-11-22T01:00:00Z");
+  a.serial = "CS-42";
+  const std::int64_t id = insert_ok(store(), a);
+  RunRecord b = make_record("intake", "2026-11-22T02:00:00Z");
+  b.serial = "CS-420";
+  insert_ok(store(), b);
+  RunRecord c = make_record("intake", "2026-11-22T03:00:00Z");
+  c.serial = "cs-42";
+  insert_ok(store(), c);
+  insert_ok(store(), make_record("intake", "2026-11-22T04:00:00Z"));
+
+  RunQuery q;
+  q.serial = "CS-42";
+  Result<std::vector<RunSummary>> runs = store().list_runs(q);
+  ASSERT_TRUE(runs.ok()) << runs.error().message;
+  ASSERT_EQ(runs->size(), 1u) << "neither a longer serial nor another case matches";
+  EXPECT_EQ((*runs)[0].id, id);
+  EXPECT_EQ((*runs)[0].serial, "CS-42");
+  // A part's runs are one index seek away, however long the history.
+  sqlite3* handle = nullptr;
+  ASSERT_EQ(sqlite3_open(db_in(dir_).c_str(), &handle), SQLITE_OK);
+  sqlite3_stmt* st = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(handle,
+                               "EXPLAIN QUERY PLAN SELECT id FROM runs AS r WHERE r.serial = 'CS-42' "
+                               "ORDER BY r.started_utc DESC, r.id DESC",
+                               -1, &st, nullptr),
+            SQLITE_OK);
+  std::string plan;
+  while (sqlite3_step(st) == SQLITE_ROW)
+    plan += reinterpret_cast<const char*>(sqlite3_column_text(st, 3)) + std::string("\n");
+  sqlite3_finalize(st);
+  sqlite3_close(handle);
+  EXPECT_NE(plan.find("runs_by_serial"), std::string::npos) << plan;
+}
+
+TEST_F(RunStoreTest, SerialAndOperatorOverSixtyFourCharactersOrWithControlsAreRefused) {
+  RunRecord r = make_record("intake", "2026-11-22T01:00:00Z");
+  r.serial = std::string(64, 'S');
+  r.operator_name = std::string(32, 'O') + std::string(32, 'o');
+  insert_ok(store(), r);
+  r.serial = std::string(65, 'S');
+  Result<std::int64_t> id = store().insert_run(r);
+  ASSERT_FALSE(id.ok());
+  EXPECT_EQ(id.error().code, ErrorCode::kInvalidInput);
+  EXPECT_NE(id.error().message.find("serial is 65 characters long; at most 64"), std::string::npos)
+      << id.error().message;
+  r.serial = "ok";
+  r.operator_name = "anna\tbert";
+  id = store().insert_run(r);
+  ASSERT_FALSE(id.ok());
+  EXPECT_NE(id.error().message.find("operator has a control character at character 5"), std::string::npos)
+      << id.error().message;
+  EXPECT_EQ(RawDb(db_in(dir_)).counts().runs, 1);
+
+  // Characters, not bytes: 64 two-byte letters are 64 characters.
+  std::string umlauts;
+  for (int i = 0; i < 64; ++i) umlauts += "\u00fc";
+  EXPECT_TRUE(check_run_identity("--serial", umlauts).ok());
+  EXPECT_FALSE(check_run_identity("--serial", umlauts + "u").ok());
+  Status bad = check_run_identity("--serial", std::string("A\xff"));
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("--serial is not valid UTF-8 at byte 2"), std::string::npos)
+      << bad.error().message;
+  EXPECT_FALSE(check_run_identity("--operator", "anna\x7f").ok()) << "DEL is a control character";
+  EXPECT_FALSE(check_run_identity("--operator", "anna\u0085").ok()) << "so is NEL";
+  EXPECT_TRUE(check_run_identity("--operator", "").ok()) << "empty: not given";
 }
 
 TEST_F(RunStoreTest, ListKeepsToTheLimit) {
