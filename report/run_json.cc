@@ -208,12 +208,14 @@ std::string run_csv(const StoredRun& r, bool comments) {
   for (std::size_t i = 0; i < rev_columns; ++i) {
     o << ",rev" << (i + 1) << (cam_frame_raw ? "_lift_mm" : "_at_machine_deg_lift_mm");
   }
-  o << ",mean_lift_mm,spread_um,error_um,correction_um,run_id,machine,part,lobe,started_utc,note" << kEol;
+  o << ",mean_lift_mm,spread_um,error_um,correction_um,run_id,machine,part,lobe,started_utc,serial,operator,note"
+    << kEol;
   // The run's identity on every row: exports of several runs can be pasted into one sheet.
   std::ostringstream id;
   id.imbue(std::locale::classic());
   id << s.id << "," << csv_field(s.machine) << "," << csv_field(s.part) << "," << s.lobe << ","
-     << csv_field(s.started_utc) << "," << csv_field(s.note);
+     << csv_field(s.started_utc) << "," << csv_field(s.serial) << "," << csv_field(s.operator_name) << ","
+     << csv_field(s.note);
   const std::string identity = id.str();
   for (int d = 0; d < kDegreesPerRevolution; ++d) {
     const auto k = static_cast<std::size_t>(d);

@@ -289,8 +289,8 @@ TEST_F(RunsCommandsTest, ExportMapsRevolutionsToTheCamFrameWhenTheFrameIsKnown) 
   ASSERT_EQ(rows->size(), 361u);
   EXPECT_EQ((*rows)[0], (testing::CsvRecord{"cam_deg", "design_lift_mm", "rev1_lift_mm", "rev2_lift_mm", "rev3_lift_mm",
                                             "mean_lift_mm", "spread_um", "error_um", "correction_um", "run_id",
-                                            "machine", "part", "lobe", "started_utc", "note"}));
-  for (const testing::CsvRecord& row : *rows) ASSERT_EQ(row.size(), 15u);
+                                            "machine", "part", "lobe", "started_utc", "serial", "operator", "note"}));
+  for (const testing::CsvRecord& row : *rows) ASSERT_EQ(row.size(), 17u);
   // c0 = 10, sense +1, probe 0: cam degree 5 was read at machine degree 15.
   const testing::CsvRecord& row5 = (*rows)[6];
   EXPECT_EQ(row5[0], "5");
@@ -375,9 +375,10 @@ TEST_F(RunsCommandsTest, PruneDropsOldRawSamplesAndKeepsTheSummary) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(has(r.output, "Raw revolutions were pruned")) << r.output.substr(0, 800);
   // The same columns as before pruning, the revolutions' fields empty.
-  EXPECT_TRUE(has(r.output,
-                  "\r\ncam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,"
-                  "error_um,correction_um,run_id,machine,part,lobe,started_utc,note\r\n0,0.5000000,,,,0.5000000,"))
+  EXPECT_TRUE(has(
+      r.output,
+      "\r\ncam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,"
+      "error_um,correction_um,run_id,machine,part,lobe,started_utc,serial,operator,note\r\n0,0.5000000,,,,0.5000000,"))
       << r.output.substr(0, 1200);
   const nlohmann::json j = json_of("runs show --json " + std::to_string(ids_[0]));
   EXPECT_EQ(j["max_abs_error_um"], 12.0);

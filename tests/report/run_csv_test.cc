@@ -80,6 +80,8 @@ TEST(CsvReader, KnowsTheRfc) {
 TEST_F(RunCsvTest, TheHeaderIsTheFirstLineAndANoteRoundTrips) {
   RunRecord record = testing::sample_run("intake_flat", 1, "grinder-1", "2026-11-22T02:34:44Z", 5.0);
   record.note = "re-ground, \"nose\" chipped\r\nsee sheet 4";
+  record.serial = "CS-00421, shaft 2";
+  record.operator_name = "Anna";
   const std::int64_t id = insert(record);
   const std::string csv = run_csv(load(id));
   ASSERT_EQ(csv.rfind("cam_deg,", 0), 0u) << csv.substr(0, 300);
@@ -87,11 +89,13 @@ TEST_F(RunCsvTest, TheHeaderIsTheFirstLineAndANoteRoundTrips) {
   ASSERT_EQ(rows.size(), 361u);
   EXPECT_EQ(rows[0], (CsvRecord{"cam_deg", "design_lift_mm", "rev1_lift_mm", "rev2_lift_mm", "rev3_lift_mm",
                                 "mean_lift_mm", "spread_um", "error_um", "correction_um", "run_id", "machine", "part",
-                                "lobe", "started_utc", "note"}));
+                                "lobe", "started_utc", "serial", "operator", "note"}));
   for (std::size_t d = 0; d < 360; ++d) {
     const CsvRecord& row = rows[d + 1];
     ASSERT_EQ(row[0], std::to_string(d));
     EXPECT_EQ(row[column(rows[0], "note")], record.note) << "cam degree " << d;
+    EXPECT_EQ(row[column(rows[0], "serial")], record.serial);
+    EXPECT_EQ(row[column(rows[0], "operator")], "Anna");
     EXPECT_EQ(row[column(rows[0], "run_id")], std::to_string(id));
     EXPECT_EQ(row[column(rows[0], "part")], "intake_flat");
   }
