@@ -417,7 +417,8 @@ std::string render_loop_plot_svg(const LoopPlot& p) {
                  : (kConvLeft + kConvRight) / 2;
   };
   const auto cy_of = [&](double um) { return kBottom - um * cy; };
-  add_text(svg, {(kConvLeft + kConvRight) / 2, 104, "Largest lift error per part (um)", 14, "middle", kTextColour, "bold"});
+  add_text(svg,
+           {(kConvLeft + kConvRight) / 2, 104, "Largest lift error per part (um)", 14, "middle", kTextColour, "bold"});
   const double cstep = nice_step(top);
   for (double e = 0.0; e <= top + 1e-9; e += cstep) {
     add_line(svg, kConvLeft, cy_of(e), kConvRight, cy_of(e), kGridColour, 0.8);

@@ -13,9 +13,9 @@
 
 #include "report/run_json.h"
 #include "storage/run_store.h"
+#include "tests/report/stored_run_test.h"
 #include "tests/support/csv_reader.h"
 #include "tests/support/sample_runs.h"
-#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -23,26 +23,8 @@ namespace {
 using testing::CsvRecord;
 using testing::read_csv;
 
-class RunCsvTest : public ::testing::Test {
+class RunCsvTest : public testing::StoredRunTest {
  protected:
-  void SetUp() override {
-    auto store = RunStore::open(dir_.path() / "runs.sqlite");
-    ASSERT_TRUE(store.ok()) << store.error().message;
-    store_.emplace(std::move(*store));
-  }
-
-  std::int64_t insert(const RunRecord& record) {
-    auto id = store_->insert_run(record);
-    EXPECT_TRUE(id.ok()) << id.error().message;
-    return id.ok() ? *id : 0;
-  }
-
-  StoredRun load(std::int64_t id) {
-    auto run = store_->load_run(id);
-    EXPECT_TRUE(run.ok()) << run.error().message;
-    return run.ok() ? *run : StoredRun{};
-  }
-
   // The records of the export, checked to be RFC 4180 and rectangular.
   std::vector<CsvRecord> records_of(const std::string& csv) {
     std::optional<std::vector<CsvRecord>> records = read_csv(csv);
@@ -54,9 +36,6 @@ class RunCsvTest : public ::testing::Test {
     }
     return *records;
   }
-
-  testing::TempDir dir_;
-  std::optional<RunStore> store_;
 };
 
 std::size_t column(const CsvRecord& header, const std::string& name) {

@@ -8,8 +8,8 @@
 #include <string>
 
 #include "storage/run_store.h"
+#include "tests/report/stored_run_test.h"
 #include "tests/support/sample_runs.h"
-#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -86,29 +86,7 @@ void expect_units_in_names(const json& j, const std::string& key = "") {
   }
 }
 
-class RunJsonTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    auto store = RunStore::open(dir_.path() / "runs.sqlite");
-    ASSERT_TRUE(store.ok()) << store.error().message;
-    store_.emplace(std::move(*store));
-  }
-
-  std::int64_t insert(const RunRecord& record) {
-    auto id = store_->insert_run(record);
-    EXPECT_TRUE(id.ok()) << id.error().message;
-    return id.ok() ? *id : 0;
-  }
-
-  StoredRun load(std::int64_t id) {
-    auto run = store_->load_run(id);
-    EXPECT_TRUE(run.ok()) << run.error().message;
-    return run.ok() ? *run : StoredRun{};
-  }
-
-  testing::TempDir dir_;
-  std::optional<RunStore> store_;
-};
+using RunJsonTest = testing::StoredRunTest;
 
 TEST_F(RunJsonTest, AStoredRunHasEveryDocumentedKeyAndItsFigures) {
   RunRecord record = testing::sample_run("intake_flat", 1, "grinder-1", "2026-11-22T02:34:44Z", 5.0);
