@@ -92,6 +92,8 @@ void print_runs_json(const std::vector<RunSummary>& runs) {
 }
 
 int cmd_list(const ListOptions& o) {
+  // A serial no run can have (too long, a control character) would only find nothing.
+  if (Status s = check_run_identity("--serial", o.query.serial); !s) return report_error(s.error());
   Result<std::vector<RunSummary>> runs = selected_runs(o, &RunStore::list_runs);
   if (!runs) return report_error(runs.error());
   if (o.json_out) {

@@ -114,6 +114,9 @@ TEST_F(RunsCommandsTest, ListBySerialFindsOnlyThatPartsRunsAndShowsTheSerial) {
   }
   EXPECT_EQ(listed("--serial CS-0042"), (Ids{ids_[4]}));
   EXPECT_EQ(listed("--serial cs-0042"), Ids{}) << "matched exactly, case and all";
+  CommandResult too_long = run_command("runs list --serial " + std::string(65, 'S') + data_);
+  EXPECT_EQ(too_long.exit_code, 2) << too_long.output;
+  EXPECT_TRUE(has(too_long.output, "--serial is 65 characters long; at most 64")) << too_long.output;
   CommandResult text = run_command("runs list" + data_);
   ASSERT_EQ(text.exit_code, 0) << text.output;
   EXPECT_TRUE(has(text.output, "serial")) << text.output;
