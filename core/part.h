@@ -6,6 +6,8 @@
 #include <string>
 #include <string_view>
 
+#include "core/tolerance.h"
+
 namespace gaugeloop {
 
 enum class FollowerKind {
@@ -27,6 +29,8 @@ struct Part {
   double c_offset_deg = 0.0;  // c0: the C angle of the lobe nose
   // The gauge probe sits this far (machine degrees) from the wheel contact, in the sense of C.
   double probe_offset_deg = 0.0;
+  // What the lobe is judged against ([tolerance] in the part file); none: nothing judged.
+  LobeTolerances tolerances;
 };
 
 std::string_view follower_kind_name(FollowerKind kind);

@@ -46,6 +46,16 @@ struct LobeAnalysis {
   double phase_error_deg = 0.0;                    // lobe rotation that best explains the error, least squares
   double base_circle_runout_um = 0.0;              // total indicator reading of the base circle
   std::array<double, 31> harmonic_amplitude_um{};  // |error| harmonics 0..30 (Eigen FFT)
+  // The lift error after removing the best-fit phase (phase_error_deg), the profile error a
+  // cam inspection report shows, and its figures; equal to error_um for a round design.
+  DegreeTable residual_error_um{};
+  double max_abs_residual_um = 0.0;
+  double rms_residual_um = 0.0;
+  double peak_to_valley_residual_um = 0.0;
+  // The base circle over the base-circle window: peak to valley as a dial reads it, and
+  // roundness (peak to valley after the least-squares circle).
+  double dial_runout_um = 0.0;
+  double roundness_um = 0.0;
 };
 
 }  // namespace gaugeloop

@@ -13,6 +13,7 @@
 #include "core/part.h"
 #include "core/result.h"
 #include "core/run.h"
+#include "core/tolerance.h"
 
 namespace gaugeloop {
 
@@ -60,6 +61,12 @@ struct RunRecord {
   // updates the lobes catalogue; `runs export` uses it to put revolutions in the cam frame.
   // name and lobe are ignored (the record's own part and lobe count).
   std::optional<Part> geometry;
+  // The run's characteristics against the part's tolerances (judge_lobe), keys unique, every
+  // figure and limit finite; and the run's verdict (combined_verdict of theirs).
+  std::vector<Characteristic> characteristics;
+  Verdict verdict = Verdict::kNotJudged;
+  // Which lift error the lift, velocity and acceleration characteristics judged.
+  LiftErrorReference lift_error_reference = LiftErrorReference::kBestFit;
 };
 
 // 16 lower-case hex digits of the 64-bit FNV-1a hash of `text`: names a settings text. Not a
@@ -94,6 +101,7 @@ struct RunSummary {
   std::string raw_pruned_utc;  // when prune removed the raw samples; empty: still stored
   std::string serial;          // the part's serial number; empty: not given (or before schema 7)
   std::string operator_name;   // who measured; empty: not given (or before schema 7)
+  Verdict verdict = Verdict::kNotJudged;  // not judged for runs stored before schema 8
 };
 
 // What a curve table is, as kept with each push, pending table and push journal entry.
@@ -226,6 +234,15 @@ struct StoredRun {
   // Only follower, radii, rotation_sense, c_offset_deg and probe_offset_deg are filled.
   std::optional<Part> geometry;
   std::vector<NcPush> pushes;  // oldest first, without program_text
+  // As RunRecord; empty for runs stored before schema 8. The verdict is summary.verdict.
+  std::vector<Characteristic> characteristics;
+  LiftErrorReference lift_error_reference = LiftErrorReference::kBestFit;
+};
+
+// A run's summary and its characteristics, for SPC, the AQDEF export and shafts.
+struct RunCharacteristics {
+  RunSummary run;
+  std::vector<Characteristic> characteristics;  // in the order stored
 };
 
 // Filters for list_runs and trend. Times are ISO 8601 UTC, "YYYY-MM-DDTHH:MM:SSZ".
@@ -235,6 +252,7 @@ struct RunQuery {
   int lobe = 0;           // 0 = any lobe
   std::string machine;    // exact machine name; empty = any
   std::string serial;     // exact serial number (no wildcards, case counts); empty = any
+  std::optional<Verdict> verdict;  // the run's verdict; empty = any
   std::string status;     // "measured" or "pushed"; empty = any
   std::string since_utc;  // started at or after; empty = no bound
   std::string until_utc;  // started before (exclusive); empty = no bound
@@ -456,6 +474,9 @@ class RunStore {
   // The same filters, oldest first: the runs of a lobe over time (q.limit: the newest that
   // many, still returned oldest first).
   Result<std::vector<RunSummary>> trend(const RunQuery& q) const;
+
+  // The runs trend() returns (oldest first), each with its characteristics.
+  Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q) const;
 
   // Deletes the raw samples of runs started before `cutoff_utc` (exclusive), keeping every
   // summary, profile, correction, push and event, and marks those runs pruned at `now_utc`.

@@ -505,6 +505,14 @@ Result<std::vector<RunSummary>> RunStore::list_runs(const RunQuery& q) const { r
 
 Result<std::vector<RunSummary>> RunStore::trend(const RunQuery& q) const { return query_runs(*conn_, q, true); }
 
+Result<std::vector<RunCharacteristics>> RunStore::characteristics(const RunQuery& q) const {
+  Result<std::vector<RunSummary>> runs = query_runs(*conn_, q, true);
+  if (!runs) return runs.error();
+  std::vector<RunCharacteristics> out;
+  for (RunSummary& r : *runs) out.push_back({std::move(r), {}});
+  return out;  // TODO(schema 8): read run_characteristics
+}
+
 Result<std::optional<std::int64_t>> RunStore::last_pushed_run(const std::string& machine, const std::string& part,
                                                               int lobe) const {
   Result<Statement> q = Statement::prepare(*conn_,

@@ -1,0 +1,120 @@
+// Names of zones and verdicts, and the verdict of a figure against its limits.
+#include "core/tolerance.h"
+
+namespace gaugeloop {
+
+std::string_view lobe_zone_name(LobeZone zone) {
+  switch (zone) {
+    case LobeZone::kBaseCircle:
+      return "base_circle";
+    case LobeZone::kOpeningRamp:
+      return "opening_ramp";
+    case LobeZone::kOpeningFlank:
+      return "opening_flank";
+    case LobeZone::kNose:
+      return "nose";
+    case LobeZone::kClosingFlank:
+      return "closing_flank";
+    case LobeZone::kClosingRamp:
+      return "closing_ramp";
+  }
+  return "base_circle";
+}
+
+std::string_view lobe_zone_title(LobeZone zone) {
+  switch (zone) {
+    case LobeZone::kBaseCircle:
+      return "base circle";
+    case LobeZone::kOpeningRamp:
+      return "opening ramp";
+    case LobeZone::kOpeningFlank:
+      return "opening flank";
+    case LobeZone::kNose:
+      return "nose";
+    case LobeZone::kClosingFlank:
+      return "closing flank";
+    case LobeZone::kClosingRamp:
+      return "closing ramp";
+  }
+  return "base circle";
+}
+
+std::optional<LobeZone> lobe_zone_from_name(std::string_view name) {
+  for (LobeZone z : kLobeZones) {
+    if (lobe_zone_name(z) == name) return z;
+  }
+  return std::nullopt;
+}
+
+std::string_view lift_error_reference_name(LiftErrorReference reference) {
+  return reference == LiftErrorReference::kNominal ? "nominal" : "best_fit";
+}
+
+std::string_view verdict_name(Verdict verdict) {
+  switch (verdict) {
+    case Verdict::kIn:
+      return "in";
+    case Verdict::kOut:
+      return "out";
+    case Verdict::kNotJudged:
+      return "not_judged";
+  }
+  return "not_judged";
+}
+
+std::optional<Verdict> verdict_from_name(std::string_view name) {
+  for (Verdict v : {Verdict::kNotJudged, Verdict::kIn, Verdict::kOut}) {
+    if (verdict_name(v) == name) return v;
+  }
+  return std::nullopt;
+}
+
+Verdict combined_verdict(const std::vector<Verdict>& verdicts) {
+  Verdict out = Verdict::kNotJudged;
+  for (Verdict v : verdicts) {
+    if (v == Verdict::kOut) return Verdict::kOut;
+    if (v == Verdict::kIn) out = Verdict::kIn;
+  }
+  return out;
+}
+
+Verdict judge(double min, double max, const Limits& limits) {
+  if (!limits.any()) return Verdict::kNotJudged;
+  // Written so that a NaN figure is out, never in.
+  if (limits.lower && !(min >= *limits.lower)) return Verdict::kOut;
+  if (limits.upper && !(max <= *limits.upper)) return Verdict::kOut;
+  return Verdict::kIn;
+}
+
+std::string characteristic_title(std::string_view key) {
+  std::string_view base = key;
+  std::string_view zone;
+  if (const size_t dot = key.find('.'); dot != std::string_view::npos) {
+    base = key.substr(0, dot);
+    zone = key.substr(dot + 1);
+  }
+  std::string title;
+  if (base == "lift_error") {
+    title = "Lift error";
+  } else if (base == "velocity_error") {
+    title = "Velocity error";
+  } else if (base == "acceleration_error") {
+    title = "Acceleration error";
+  } else if (key == "phase") {
+    return "Phase (timing) error";
+  } else if (key == "base_circle_runout") {
+    return "Base circle runout (dial)";
+  } else if (key == "base_circle_runout_h1") {
+    return "Base circle runout (1st harmonic)";
+  } else if (key == "roundness") {
+    return "Base circle roundness";
+  } else {
+    return std::string(key);
+  }
+  if (zone.empty()) return title + ", whole turn";
+  const std::optional<LobeZone> z = lobe_zone_from_name(zone);
+  if (!z) return std::string(key);
+  return title + ", " + std::string(lobe_zone_title(*z));
+}
+
+}  // namespace gaugeloop
