@@ -18,6 +18,8 @@ packages=(
   libmstch-dev       # Mustache rendering of NC program templates (brings libboost-dev headers)
   libcpp-httplib-dev # the HTTP API of `gaugeloop serve` (built with OpenSSL: HTTPS)
   libsystemd-dev     # sd_notify: readiness and the watchdog under systemd
+  libcairo2-dev      # the cam report and trend charts: one drawing code for PDF, SVG and PNG
+  fonts-dejavu-core  # the font the reports are drawn with
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   sqlite3            # the CLI users query the database with; tests use it too
