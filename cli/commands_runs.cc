@@ -61,6 +61,7 @@ struct ListOptions {
   DataPaths paths;
   RunQuery query;
   std::string since, until;
+  std::string verdict;  // --verdict; empty: any
   bool json_out = false;
 };
 
@@ -72,6 +73,7 @@ Result<RunQuery> resolved(const ListOptions& o) {
   if (!until) return until.error();
   q.since_utc = *since;
   q.until_utc = *until;
+  if (!o.verdict.empty()) q.verdict = verdict_from_name(o.verdict);
   return q;
 }
 
@@ -100,20 +102,54 @@ int cmd_list(const ListOptions& o) {
     print_runs_json(*runs);
     return kExitOk;
   }
-  std::printf("%6s  %-20s  %-10s  %-24s %4s  %-16s  %4s  %8s  %8s  %8s  %8s  %s\n", "run", "started (UTC)", "machine",
-              "part", "lobe", "serial", "revs", "max um", "rms um", "rep um", "phase", "status");
+  std::printf("%6s  %-20s  %-10s  %-24s %4s  %-16s  %4s  %8s  %8s  %8s  %8s  %-10s  %s\n", "run", "started (UTC)",
+              "machine", "part", "lobe", "serial", "revs", "max um", "rms um", "rep um", "phase", "verdict", "status");
   for (const RunSummary& r : *runs) {
-    std::printf("%6lld  %-20s  %-10s  %-24s %4d  %-16s  %4d  %8.2f  %8.2f  %8.2f  %8s  %s%s\n",
+    std::printf("%6lld  %-20s  %-10s  %-24s %4d  %-16s  %4d  %8.2f  %8.2f  %8.2f  %8s  %-10s  %s%s\n",
                 static_cast<long long>(r.id), r.started_utc.c_str(), r.machine.c_str(), r.part.c_str(), r.lobe,
                 r.serial.empty() ? "-" : r.serial.c_str(), r.revolutions, r.max_abs_error_um, r.rms_error_um,
-                r.repeatability_um, opt(r.phase_error_deg, 3, true).c_str(), r.status.c_str(),
-                r.raw_pruned_utc.empty() ? "" : " (raw pruned)");
+                r.repeatability_um, opt(r.phase_error_deg, 3, true).c_str(), verdict_name(r.verdict).data(),
+                r.status.c_str(), r.raw_pruned_utc.empty() ? "" : " (raw pruned)");
   }
   if (runs->empty()) std::printf("(no runs match)\n");
   return kExitOk;
 }
 
 // ---- runs show ----
+
+// "-10.000 .. 10.000", "<= 8.000", ">= -1.000" or "-": a tolerance as the table shows it.
+std::string limits_text(const Limits& l, int decimals) {
+  if (l.lower && l.upper) return format_fixed(*l.lower, decimals) + " .. " + format_fixed(*l.upper, decimals);
+  if (l.upper) return "<= " + format_fixed(*l.upper, decimals);
+  if (l.lower) return ">= " + format_fixed(*l.lower, decimals);
+  return "-";
+}
+
+// Decimals that show a figure in its unit to about 1 nm of lift.
+int decimals_for(const std::string& unit) {
+  if (unit == "mm/deg" || unit == "mm/deg^2") return 6;
+  if (unit == "deg") return 4;
+  return 2;
+}
+
+void print_characteristics(const StoredRun& r) {
+  std::printf(
+      "tolerances        %s (lift error judged %s)\n", verdict_name(r.summary.verdict).data(),
+      r.lift_error_reference == LiftErrorReference::kNominal ? "at the nominal timing" : "after the best-fit phase");
+  if (r.characteristics.empty()) {
+    std::printf("  not judged: no characteristics recorded with this run\n");
+    return;
+  }
+  std::printf("  %-40s %14s %14s  %-24s %-9s %s\n", "characteristic", "value", "range", "limits", "unit", "verdict");
+  for (const Characteristic& c : r.characteristics) {
+    const int d = decimals_for(c.unit);
+    std::string title = characteristic_title(c.key);
+    if (c.from_deg && c.to_deg) title += " (" + std::to_string(*c.from_deg) + ".." + std::to_string(*c.to_deg) + ")";
+    const std::string range = c.min == c.max ? "" : format_fixed(c.max - c.min, d);
+    std::printf("  %-40s %14s %14s  %-24s %-9s %s\n", title.c_str(), format_fixed(c.value, d).c_str(), range.c_str(),
+                limits_text(c.limits, d).c_str(), c.unit.c_str(), verdict_name(c.verdict).data());
+  }
+}
 
 struct RunOptions {
   DataPaths paths;
@@ -196,6 +232,7 @@ int cmd_show(const RunOptions& o) {
                                                    : "assumed: the table in force");
   }
   if (r.inspection) std::printf("  inspection        measured to inspect: the correction in force, unchanged\n");
+  print_characteristics(r);
   if (r.pushes.empty()) std::printf("  NC pushes         none\n");
   for (const NcPush& p : r.pushes) {
     std::string detail = ", version " + std::to_string(p.table_version);
@@ -508,6 +545,8 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
                        "Only runs of the part with this serial number (matched exactly, case and all)");
   list_cmd->add_option("--status", list->query.status, "Only runs with this status")
       ->check(CLI::IsMember({"measured", "pushed"}));
+  list_cmd->add_option("--verdict", list->verdict, "Only runs with this verdict against their tolerances")
+      ->check(CLI::IsMember({"in", "out", "not_judged"}));
   list_cmd->add_option("--limit", list->query.limit, "Most runs to show")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
