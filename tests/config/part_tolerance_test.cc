@@ -290,5 +290,39 @@ TEST(PartTolerance, SettingsTextOfLimitsSetByHand) {
             "tolerance.zone.nose.angle_deg = 0 12.5\n");
 }
 
+// The sample parts carry a shop's tolerances, zones by design lift on the intake and by cam
+// angle on the exhaust, and the intake from the finer table is judged as the intake.
+TEST(PartTolerance, TheSamplePartsCarryTolerances) {
+  const std::string examples = std::string(GAUGELOOP_SOURCE_DIR) + "/examples/";
+  auto intake = read_part_file(examples + "intake_flat.toml");
+  auto half = read_part_file(examples + "intake_flat_half_degree.toml");
+  auto exhaust = read_part_file(examples + "exhaust_roller.toml");
+  ASSERT_TRUE(intake.ok()) << intake.error().message;
+  ASSERT_TRUE(half.ok()) << half.error().message;
+  ASSERT_TRUE(exhaust.ok()) << exhaust.error().message;
+
+  for (const PartFile* pf : {&*intake, &*exhaust}) {
+    const LobeTolerances& t = pf->part.tolerances;
+    SCOPED_TRACE(pf->part.name);
+    EXPECT_EQ(t.lift_error_reference, LiftErrorReference::kBestFit);
+    EXPECT_TRUE(t.lift_error_um.any());
+    EXPECT_TRUE(t.velocity_error_mm_per_deg.any());
+    EXPECT_TRUE(t.phase_deg.any());
+    EXPECT_TRUE(t.base_circle_runout_um.upper.has_value());
+    EXPECT_TRUE(t.roundness_um.upper.has_value());
+    ASSERT_EQ(t.zones.size(), kLobeZones.size()) << "every zone of the lobe";
+    for (const ZoneTolerance& z : t.zones) {
+      EXPECT_EQ(z.by_lift, pf == &*intake) << lobe_zone_name(z.zone);
+      EXPECT_TRUE(z.lift_error_um.any()) << lobe_zone_name(z.zone);
+    }
+  }
+  EXPECT_EQ(intake->part.tolerances.zones.front().zone, LobeZone::kBaseCircle);
+  EXPECT_EQ(intake->part.tolerances.zones.front().lift_error_um.upper, 10.0) << "the base circle tighter";
+
+  const std::string intake_settings = tolerances_settings_text(intake->part.tolerances);
+  EXPECT_EQ(tolerances_settings_text(half->part.tolerances), intake_settings) << "the same lobe, judged alike";
+  EXPECT_NE(tolerances_settings_text(exhaust->part.tolerances), intake_settings);
+}
+
 }  // namespace
 }  // namespace gaugeloop
