@@ -4,8 +4,12 @@
 
 #include <string>
 
+#include "compensation/flat_probe.h"
+#include "compensation/judgement.h"
+#include "compensation/periodic_spline.h"
 #include "config/part_file.h"
 #include "config/tolerance_settings.h"
+#include "core/lift_table.h"
 #include "tests/support/refused.h"
 
 namespace gaugeloop {
@@ -322,6 +326,51 @@ TEST(PartTolerance, TheSamplePartsCarryTolerances) {
   const std::string intake_settings = tolerances_settings_text(intake->part.tolerances);
   EXPECT_EQ(tolerances_settings_text(half->part.tolerances), intake_settings) << "the same lobe, judged alike";
   EXPECT_NE(tolerances_settings_text(exhaust->part.tolerances), intake_settings);
+}
+
+// The samples' zones placed on their designs' flat-probe reading as a run is judged: every
+// zone is one arc, no degree is in two, and together they go round the whole lobe, in the
+// order the follower meets them.
+TEST(PartTolerance, TheSampleZonesCoverTheirLobesWithoutOverlap) {
+  struct Expected {
+    const char* part;
+    int base_from_deg, base_to_deg, nose_from_deg, nose_to_deg;
+  };
+  const Expected samples[] = {
+      {"intake_flat", 82, -82, -14, 14},
+      {"intake_flat_half_degree", 82, -82, -14, 14},
+      {"exhaust_roller", 66, -66, -15, 15},
+  };
+  for (const Expected& e : samples) {
+    SCOPED_TRACE(e.part);
+    auto pf = read_part_file(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/" + e.part + ".toml");
+    ASSERT_TRUE(pf.ok()) << pf.error().message;
+    auto table = read_lift_table_csv(pf->part.lift_table);
+    ASSERT_TRUE(table.ok()) << table.error().message;
+    auto lift = PeriodicSpline::fit(table->angle_deg, table->lift_mm);
+    ASSERT_TRUE(lift.ok()) << lift.error().message;
+    auto reading = flat_probe_reading(*lift, pf->part);
+    ASSERT_TRUE(reading.ok()) << reading.error().message;
+    auto arcs = zone_arcs(pf->part.tolerances, *reading);
+    ASSERT_TRUE(arcs.ok()) << arcs.error().message;
+    ASSERT_EQ(arcs->size(), kLobeZones.size());
+    size_t degrees = 0;
+    for (size_t i = 0; i < arcs->size(); ++i) {
+      const ZoneArc& arc = (*arcs)[i];
+      EXPECT_EQ(arc.zone, kLobeZones[i]);
+      degrees += arc.degrees.size();
+      // Each arc ends the degree before the next one starts: no gap between zones.
+      const ZoneArc& next = (*arcs)[(i + 1) % arcs->size()];
+      EXPECT_EQ((next.from_deg - arc.to_deg + 360) % 360, 1)
+          << lobe_zone_name(arc.zone) << " ends at " << arc.to_deg << ", " << lobe_zone_name(next.zone) << " starts at "
+          << next.from_deg;
+    }
+    EXPECT_EQ(degrees, 360u) << "every degree of the turn in one zone";
+    EXPECT_EQ((*arcs)[0].from_deg, e.base_from_deg);
+    EXPECT_EQ((*arcs)[0].to_deg, e.base_to_deg);
+    EXPECT_EQ((*arcs)[3].from_deg, e.nose_from_deg);
+    EXPECT_EQ((*arcs)[3].to_deg, e.nose_to_deg);
+  }
 }
 
 }  // namespace
