@@ -232,19 +232,19 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
       return x.part == r->run.part && x.lobe == r->run.lobe;
     });
     const std::string time = *dfq_time(r->run.started_utc);
-    // In the block's characteristic order, so the file reads the same whatever order the
-    // run stored them in.
-    std::vector<std::pair<const DfqCharacteristicDef*, const Characteristic*>> values;
+    // Every characteristic of the block, in its order: Q-DAS lines up the n-th values of a
+    // block's characteristics as one part, so a characteristic the run lacks gets a
+    // placeholder (K0002 255, not shown or counted) rather than no value.
+    std::map<std::string, const Characteristic*> of_key;
     for (const Characteristic& c : r->characteristics) {
-      if (!wanted(c, options)) continue;
-      values.emplace_back(&b.characteristics[b.index_of_key.at(c.key)], &c);
+      if (wanted(c, options)) of_key.emplace(c.key, &c);
     }
-    std::sort(values.begin(), values.end(),
-              [](const auto& x, const auto& y) { return x.first->number < y.first->number; });
-    for (const auto& [def, c] : values) {
-      const int i = def->number;
-      out.add("K0001", i, format_fixed(c->value, decimals_for_unit(def->unit)));
-      out.add("K0002", i, "0");
+    for (const DfqCharacteristicDef& def : b.characteristics) {
+      const int i = def.number;
+      const auto found = of_key.find(def.key);
+      const bool measured = found != of_key.end();
+      out.add("K0001", i, format_fixed(measured ? found->second->value : 0.0, decimals_for_unit(def.unit)));
+      out.add("K0002", i, measured ? "0" : "255");
       out.add("K0004", i, time);
       out.add("K0006", i, std::to_string(r->run.id));
       if (!r->run.operator_name.empty()) out.add("K0008", i, r->run.operator_name);

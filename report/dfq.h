@@ -41,7 +41,8 @@ std::vector<Characteristic> harmonic_characteristics(const LobeAnalysis& analysi
 // roundness and harmonics without a lower limit get the natural lower boundary 0.
 // Per run and characteristic it has: K0001 value, K0002 0 (valid), K0004 started_utc as
 // DD.MM.YYYY/HH:MM:SS (UTC), K0006 the run id, K0008 operator, K0010 machine, K0014 serial
-// (the last three only when not empty). A run lacking a characteristic writes no value for it.
+// (the last three only when not empty). A run lacking one of its block's characteristics
+// writes a placeholder for it: K0001 0, K0002 255.
 //
 // ASCII only, CRLF line ends, numbers with a '.' whatever the locale.
 // kInvalidInput (naming the run and the field) for: no runs, a block without any

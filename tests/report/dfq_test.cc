@@ -181,11 +181,18 @@ TEST(DfqRoundTrip, EveryFieldWrittenReadsBack) {
   EXPECT_EQ(file.characteristics[3].fields.at("K2111"), "0.2000");
   EXPECT_EQ(file.characteristics[4].fields.at("K2110"), "0.100");
 
-  // Values: run 3 has all five, run 4 only lift_error and phase.
-  ASSERT_EQ(file.characteristics[0].values.size(), 2u);
-  ASSERT_EQ(file.characteristics[1].values.size(), 1u);
-  ASSERT_EQ(file.characteristics[3].values.size(), 2u);
-  ASSERT_EQ(file.characteristics[4].values.size(), 1u);
+  // Values: run 3 has all five, run 4 only lift_error and phase; its other three are
+  // placeholders, so the n-th values of every characteristic are the n-th run's.
+  for (const auto& c : file.characteristics) ASSERT_EQ(c.values.size(), 2u) << c.fields.at("K2001");
+  for (std::size_t i : {1u, 2u, 4u}) {
+    const auto& placeholder = file.characteristics[i].values[1].fields;
+    EXPECT_EQ(placeholder.at("K0002"), "255");
+    EXPECT_EQ(placeholder.at("K0001"), format_fixed(0.0, std::stoi(decimals[i])));
+    EXPECT_EQ(placeholder.at("K0006"), "4");
+    EXPECT_EQ(placeholder.at("K0004"), "22.11.2026/03:00:00");
+  }
+  EXPECT_EQ(file.characteristics[0].values[1].fields.at("K0002"), "0");
+  EXPECT_EQ(file.characteristics[0].values[1].fields.at("K0001"), "1.000");
   const auto& first = file.characteristics[1].values[0].fields;
   EXPECT_EQ(first.at("K0001"), "0.000123");
   EXPECT_EQ(first.at("K0002"), "0");
@@ -254,7 +261,7 @@ TEST(DfqRoundTrip, OnePartBlockPerPartAndLobeNumberedAcrossTheFile) {
   EXPECT_EQ(file.parts[1].characteristics, std::vector<int>({2, 3}));
   ASSERT_EQ(file.characteristics[0].values.size(), 2u);
   EXPECT_EQ(file.characteristics[0].values[1].fields.at("K0014"), "SH-10");
-  ASSERT_EQ(file.characteristics[1].values.size(), 1u);
+  ASSERT_EQ(file.characteristics[1].values.size(), 1u) << "a block's values are its own runs'";
   EXPECT_EQ(file.characteristics[1].values[0].fields.at("K0010"), "grinder-2");
   EXPECT_EQ(file.characteristics[2].fields.at("K2120"), "1") << "roundness has a natural lower boundary";
 }
