@@ -8,6 +8,7 @@
 #include <string>
 
 #include "cli/cli_common.h"
+#include "report/dfq.h"
 
 namespace gaugeloop {
 
@@ -20,7 +21,7 @@ struct DfqExportRequest {
   std::string serial;
   std::string since, until;
   int harmonics = 0;
-  std::string operation = "cam grinding";
+  std::string operation = DfqOptions{}.operation;
 };
 
 // Adds --format and the DFQ selection options (--run, --part, --lobe, --machine, --serial,

@@ -526,11 +526,11 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   CLI::App* export_cmd = runs->add_subcommand(
       "export",
       "One run per cam degree as CSV (RFC 4180): design, each revolution, mean, spread, error, correction, the "
-      "run's identity.");
+      "run's identity. --format dfq: the characteristics of runs as an AQDEF (Q-DAS) file.");
   add_data_options(*export_cmd, exp->paths);
   export_cmd->add_option("id", exp->id, "Run id (see `runs list`); --format dfq also takes a selection");
   auto dfq = add_dfq_export_options(*export_cmd);
-  export_cmd->add_option("--out", exp->out, "Write the CSV to this file instead of standard output");
+  export_cmd->add_option("--out", exp->out, "Write the CSV (or DFQ) to this file instead of standard output");
   export_cmd->add_flag("--comments", exp->comments,
                        "Put '#' lines saying the run, frame and units before the header (spreadsheets read them "
                        "as data rows)");

@@ -53,9 +53,9 @@ Status check_text(std::string_view text, std::string_view field, std::size_t max
     if (c < 0x20 || c > 0x7e) {
       return make_error(ErrorCode::kInvalidInput,
                         where + ": " + std::string(field) + " \"" + std::string(text) +
-                            "\" has a character outside printable ASCII; the DFQ file is ASCII, so a Q-DAS "
-                            "system reads every field as written. Export runs without it (--since/--until, "
-                            "--serial) or correct the name where it is set");
+                            "\" has a character outside printable ASCII, which the DFQ file (ASCII) cannot carry "
+                            "unchanged, and a transliterated name would no longer match its part; leave the run "
+                            "out of the selection (--since/--until)");
     }
   }
   if (text.size() > max_length) {
