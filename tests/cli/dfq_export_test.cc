@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/tolerance.h"
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
 #include "tests/support/dfq_reader.h"
@@ -113,6 +115,64 @@ TEST_F(DfqExportCommand, RefusesAnEmptyOrUnclearSelection) {
   CommandResult missing = run_command("runs export 999 --format dfq" + data_);
   EXPECT_EQ(missing.exit_code, 2) << missing.output;
   EXPECT_TRUE(has(missing.output, "runs list")) << missing.output;
+}
+
+Characteristic stored_characteristic(std::string key, std::string unit, double value, std::optional<double> lower,
+                                     std::optional<double> upper) {
+  Characteristic c;
+  c.key = std::move(key);
+  c.unit = std::move(unit);
+  c.value = value;
+  c.min = value;
+  c.max = value;
+  c.limits.lower = lower;
+  c.limits.upper = upper;
+  c.verdict = judge(value, value, c.limits);
+  return c;
+}
+
+// End to end once the run database keeps characteristics; skipped where it does not yet.
+TEST(DfqExportStoredCharacteristics, ARangeOfRunsWithTheirCharacteristics) {
+  testing::TempDir tmp;
+  std::vector<std::int64_t> ids;
+  {
+    Result<RunStore> store = RunStore::open(tmp.path() / "gaugeloop.sqlite");
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    RunRecord first = testing::sample_run("intake", 1, "g1", "2026-11-20T08:00:00Z", 5.0);
+    first.characteristics = {stored_characteristic("lift_error.nose", "um", 3.25, -10.0, 10.0),
+                             stored_characteristic("phase", "deg", 0.125, -0.2, 0.2),
+                             stored_characteristic("base_circle_runout", "um", 1.5, std::nullopt, 5.0)};
+    RunRecord second = testing::sample_run("intake", 1, "g1", "2026-11-21T08:00:00Z", 5.0);
+    second.characteristics = {stored_characteristic("phase", "deg", -0.25, -0.2, 0.2),
+                              stored_characteristic("base_circle_runout", "um", 0.75, std::nullopt, 5.0)};
+    for (RunRecord* r : {&first, &second}) {
+      std::vector<Verdict> verdicts;
+      for (const Characteristic& c : r->characteristics) verdicts.push_back(c.verdict);
+      r->verdict = combined_verdict(verdicts);
+      Result<std::int64_t> id = store->insert_run(*r);
+      ASSERT_TRUE(id.ok()) << id.error().message;
+      ids.push_back(*id);
+    }
+    Result<StoredRun> back = store->load_run(ids[0]);
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    if (back->characteristics.empty()) GTEST_SKIP() << "this run database does not keep characteristics yet";
+  }
+  const fs::path out = tmp.path() / "intake.dfq";
+  CommandResult r = run_command("runs export --format dfq --part intake --lobe 1 --since 2026-11-20 --out " +
+                                out.string() + " --data-dir " + tmp.path().string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  Result<DfqFile> file = read_dfq(testing::slurp(out));
+  ASSERT_TRUE(file.ok()) << file.error().message;
+  ASSERT_EQ(file->total_characteristics, 3);
+  EXPECT_EQ(file->characteristics[0].fields.at("K2001"), "lift_error.nose");
+  EXPECT_EQ(file->characteristics[1].fields.at("K2001"), "phase");
+  EXPECT_EQ(file->characteristics[1].fields.at("K2110"), "-0.2000");
+  EXPECT_EQ(file->characteristics[2].fields.at("K2120"), "1");
+  for (const auto& c : file->characteristics) ASSERT_EQ(c.values.size(), 2u);
+  EXPECT_EQ(file->characteristics[0].values[0].fields.at("K0001"), "3.250");
+  EXPECT_EQ(file->characteristics[0].values[1].fields.at("K0002"), "255");
+  EXPECT_EQ(file->characteristics[1].values[1].fields.at("K0001"), "-0.2500");
+  EXPECT_EQ(file->characteristics[2].values[1].fields.at("K0006"), std::to_string(ids[1]));
 }
 
 }  // namespace
