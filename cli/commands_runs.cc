@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "cli/cli_common.h"
+#include "cli/commands_dfq.h"
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "report/run_json.h"
@@ -257,6 +258,7 @@ struct ExportOptions {
 };
 
 int cmd_export(const ExportOptions& o) {
+  if (o.id == 0) return report_error(make_error(ErrorCode::kInvalidInput, "give the run id to export as CSV"));
   Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<StoredRun> run = load(*store, o.id, o.paths);
@@ -563,14 +565,21 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   CLI::App* export_cmd = runs->add_subcommand(
       "export",
       "One run per cam degree as CSV (RFC 4180): design, each revolution, mean, spread, error, correction, the "
-      "run's identity.");
+      "run's identity. --format dfq: the characteristics of runs as an AQDEF (Q-DAS) file.");
   add_data_options(*export_cmd, exp->paths);
-  export_cmd->add_option("id", exp->id, "Run id (see `runs list`)")->required();
-  export_cmd->add_option("--out", exp->out, "Write the CSV to this file instead of standard output");
+  export_cmd->add_option("id", exp->id, "Run id (see `runs list`); --format dfq also takes a selection");
+  auto dfq = add_dfq_export_options(*export_cmd);
+  export_cmd->add_option("--out", exp->out, "Write the CSV (or DFQ) to this file instead of standard output");
   export_cmd->add_flag("--comments", exp->comments,
                        "Put '#' lines saying the run, frame and units before the header (spreadsheets read them "
                        "as data rows)");
-  export_cmd->callback([&action, exp] { action = [exp] { return cmd_export(*exp); }; });
+  export_cmd->callback([&action, exp, dfq] {
+    action = [exp, dfq] {
+      if (wants_dfq(*dfq)) return cmd_export_dfq(*dfq, exp->paths, exp->id, exp->out);
+      if (int refused = refuse_dfq_options_for_csv(*dfq); refused != kExitOk) return refused;
+      return cmd_export(*exp);
+    };
+  });
 
   auto cmp = std::make_shared<CompareOptions>();
   CLI::App* compare_cmd = runs->add_subcommand("compare",
