@@ -219,6 +219,21 @@ double legend_entry(cairo_t* cr, double x, double y, chart::Rgb colour, const st
   return x + 13 + chart::text(cr, x + 13, y, label, 6.5) + 8;
 }
 
+// The lift error the report charts as judged: the one the run names, except a best-fit table
+// of zeros beside a raw error that is not (a run stored before the best-fit error was kept),
+// where the raw error is all there is.
+bool best_fit_missing(const StoredRun& run) {
+  const auto zero = [](const DegreeTable& t) {
+    return std::all_of(t.begin(), t.end(), [](double v) { return v == 0.0; });
+  };
+  return run.lift_error_reference == LiftErrorReference::kBestFit && zero(run.analysis.residual_error_um) &&
+         !zero(run.analysis.error_um);
+}
+
+const DegreeTable& charted_lift_error_um(const StoredRun& run) {
+  return best_fit_missing(run) ? run.analysis.error_um : judged_lift_error_um(run.analysis, run.lift_error_reference);
+}
+
 struct ReportData {
   const StoredRun* run = nullptr;
   DegreeCurve judged_um, raw_um, velocity_um_per_deg, acceleration_um_per_deg2;
@@ -234,7 +249,7 @@ Frame lift_frame(const ReportData& d) {
 ReportData report_data(const StoredRun& run, const ErrorDerivatives& derivatives) {
   ReportData d;
   d.run = &run;
-  d.judged_um = nose_centred(judged_lift_error_um(run.analysis, run.lift_error_reference), 1.0);
+  d.judged_um = nose_centred(charted_lift_error_um(run), 1.0);
   d.raw_um = nose_centred(run.analysis.error_um, 1.0);
   // Velocity and acceleration are charted in um per degree: in mm their ticks would need five
   // or six decimals.
@@ -302,8 +317,9 @@ void draw_lift_chart(cairo_t* cr, const ReportData& d) {
   const bool best_fit = d.run->lift_error_reference == LiftErrorReference::kBestFit;
   draw_band(cr, f, d.lift_limits, 1.0);
   chart::draw_axes(cr, f, cam_angle_ticks(), kCamAngleTitle, "lift error, \u00b5m",
-                   best_fit ? "Lift error after best-fit phase (judged), \u00b5m"
-                            : "Lift error at nominal timing (judged), \u00b5m");
+                   best_fit_missing(*d.run) ? "Lift error at nominal timing (no best fit), \u00b5m"
+                   : best_fit               ? "Lift error after best-fit phase (judged), \u00b5m"
+                                            : "Lift error at nominal timing (judged), \u00b5m");
   draw_curve(cr, f, d.raw_um, chart::kFaint, 0.8);
   draw_curve(cr, f, d.judged_um, chart::kCurve, 1.5);
   const int out = mark_out_of_tolerance(cr, f, d.judged_um, d.lift_limits, 1.0);
@@ -336,10 +352,16 @@ void draw_polar(cairo_t* cr, const ReportData& d) {
   chart::text(cr, kTableLeft, kLiftBox.top - 5, "Polar view of the judged lift error", 8, Align::kLeft, true);
   double biggest = 0.0;
   for (double v : d.judged_um.value) biggest = std::max(biggest, std::abs(v));
-  // Two rings either side of the base circle hold the largest error.
-  const std::vector<double> ticks = chart::nice_ticks(0.0, std::max(biggest, 0.1) / 2.0 * 1.0001, 1);
-  double step_um = ticks.size() >= 2 ? ticks[1] : std::max(biggest, 0.1) / 2.0;
-  if (step_um * 2 < biggest) step_um *= 2;
+  // Two rings either side of the base circle hold the largest error: a ring step of 1, 2 or 5
+  // times a power of ten, at least half the largest error.
+  const double half = std::max(biggest, 0.1) / 2.0;
+  double step_um = std::pow(10.0, std::floor(std::log10(half)));
+  for (double m : {1.0, 2.0, 5.0, 10.0}) {
+    if (m * std::pow(10.0, std::floor(std::log10(half))) >= half * 0.9999) {
+      step_um = m * std::pow(10.0, std::floor(std::log10(half)));
+      break;
+    }
+  }
   const double pt_per_um = kPolarRingStep / step_um;
   cairo_set_line_width(cr, 0.5);
   for (int ring = -2; ring <= 2; ++ring) {
@@ -471,7 +493,7 @@ void draw_table(cairo_t* cr, const StoredRun& run) {
 
 void draw_footer(cairo_t* cr, const StoredRun& run) {
   const LobeAnalysis& a = run.analysis;
-  const bool best_fit = run.lift_error_reference == LiftErrorReference::kBestFit;
+  const bool best_fit = run.lift_error_reference == LiftErrorReference::kBestFit && !best_fit_missing(run);
   const double y = kReportHeightPt - 22;
   chart::set_colour(cr, chart::kGrid);
   cairo_set_line_width(cr, 0.8);
@@ -480,26 +502,36 @@ void draw_footer(cairo_t* cr, const StoredRun& run) {
   cairo_stroke(cr);
   chart::set_colour(cr, chart::kInk);
   const std::string judged =
-      best_fit ? "judged: lift error after the best-fit phase (" + format_signed_fixed(a.phase_error_deg, 3) +
-                     " deg removed), RMS " + format_fixed(a.rms_residual_um, 2) + " \u00b5m, peak to valley " +
-                     format_fixed(a.peak_to_valley_residual_um, 2) + " \u00b5m"
-               : "judged: lift error at nominal timing, RMS " + format_fixed(a.rms_error_um, 2) +
-                     " \u00b5m, peak to valley " + format_fixed(a.peak_to_valley_um, 2) + " \u00b5m";
-  chart::text(cr, kMargin, y,
-              judged + " \u00b7 repeatability " + format_fixed(a.repeatability_um, 2) +
-                  " \u00b5m \u00b7 velocity and acceleration from harmonics 1\u201330",
+      best_fit
+          ? "judged: lift error after the best-fit phase (" + format_signed_fixed(a.phase_error_deg, 3) +
+                " deg removed), RMS " + format_fixed(a.rms_residual_um, 2) + " \u00b5m, peak to valley " +
+                format_fixed(a.peak_to_valley_residual_um, 2) + " \u00b5m"
+          : std::string(best_fit_missing(run) ? "charted: lift error at nominal timing (the run kept no best-fit error)"
+                                              : "judged: lift error at nominal timing") +
+                ", RMS " + format_fixed(a.rms_error_um, 2) + " \u00b5m, peak to valley " +
+                format_fixed(a.peak_to_valley_um, 2) + " \u00b5m";
+  chart::text(cr, kMargin, y, judged + " \u00b7 repeatability " + format_fixed(a.repeatability_um, 2) + " \u00b5m",
               6.5);
-  chart::text(cr, kMargin, y + 10, "gaugeloop \u00b7 cam frame, nose at 0 \u00b7 gauge " + run.gauge, 6.5);
+  chart::text(cr, kMargin, y + 10,
+              "velocity and acceleration error from harmonics 1\u201330 of it \u00b7 cam frame, nose at 0 \u00b7 "
+              "gauge " +
+                  run.gauge + " \u00b7 gaugeloop",
+              6.5);
   chart::text(cr, kReportWidthPt - kMargin, y + 6, "Checked by ____________________   Date ____________", 8,
               Align::kRight);
 }
 
 }  // namespace
 
+Status check_page_file_name(const std::filesystem::path& out) {
+  if (Result<chart::PageFormat> format = chart::page_format_for(out); !format) return format.error();
+  return {};
+}
+
 ChartPlacement cam_report_lift_chart(const StoredRun& run) {
   ReportData d;
   d.run = &run;
-  d.judged_um = nose_centred(judged_lift_error_um(run.analysis, run.lift_error_reference), 1.0);
+  d.judged_um = nose_centred(charted_lift_error_um(run), 1.0);
   d.raw_um = nose_centred(run.analysis.error_um, 1.0);
   d.lift_limits = limits_per_degree(run.characteristics, "lift_error");
   const Frame f = lift_frame(d);
@@ -508,8 +540,7 @@ ChartPlacement cam_report_lift_chart(const StoredRun& run) {
 
 Status write_cam_report(const StoredRun& run, const std::filesystem::path& out) {
   if (Result<chart::PageFormat> format = chart::page_format_for(out); !format) return format.error();
-  Result<ErrorDerivatives> derivatives =
-      error_derivatives(judged_lift_error_um(run.analysis, run.lift_error_reference));
+  Result<ErrorDerivatives> derivatives = error_derivatives(charted_lift_error_um(run));
   if (!derivatives) {
     return make_error(derivatives.error().code, "cannot draw the report of run " + std::to_string(run.summary.id) +
                                                     " to " + out.string() + ": " + derivatives.error().message);

@@ -18,6 +18,10 @@ inline constexpr double kReportWidthPt = 841.89;
 inline constexpr double kReportHeightPt = 595.28;
 inline constexpr double kReportPngPixelsPerPoint = 2.0;
 
+// kInvalidInput naming `out` and the formats unless its extension is .pdf, .svg or .png (any
+// case): what write_cam_report and write_trend_plot check first.
+Status check_page_file_name(const std::filesystem::path& out);
+
 // Writes the cam report of `run` to `out`: PDF, SVG or PNG by its extension (any case).
 // The lift error charted and judged is the one run.lift_error_reference names (best fit:
 // analysis.residual_error_um, nominal: analysis.error_um), nose-centred over -180..180 cam

@@ -285,6 +285,22 @@ TEST(CamReport, NominalReferenceChartsTheRawError) {
   EXPECT_TRUE(png.near_pt(c.x_pt(-90), c.y_pt(raw), kCurveColour, 3, 40)) << raw;
 }
 
+// A run stored before the best-fit error was kept has a best-fit table of zeros: the report
+// charts the raw error rather than a flat line.
+TEST(CamReport, RunWithoutBestFitErrorChartsTheRawError) {
+  StoredRun run = out_of_tolerance_run();
+  run.analysis.residual_error_um.fill(0.0);
+  testing::TempDir dir;
+  const fs::path out = dir / "old.png";
+  ASSERT_TRUE(write_cam_report(run, out).ok());
+  Png png(out);
+  const ChartPlacement c = cam_report_lift_chart(run);
+  for (int x : {-100, 5, 100}) {
+    const double raw = run.analysis.error_um[index_of(x)];
+    EXPECT_TRUE(png.near_pt(c.x_pt(x), c.y_pt(raw), kCurveColour, 3, 40)) << x << " deg, " << raw << " um";
+  }
+}
+
 TEST(CamReport, AnotherExtensionIsRefusedAndNothingWritten) {
   testing::TempDir dir;
   const fs::path out = dir / "run42.jpg";
