@@ -427,16 +427,28 @@ void draw_harmonics(cairo_t* cr, const StoredRun& run) {
   cairo_fill(cr);
 }
 
+// A characteristic's title as the table's first column holds it: "Acceleration error" always
+// shortened to "Accel. error" (alike on every row), "1st harmonic" to "H1" where it would be cut.
+std::string table_title(cairo_t* cr, const std::string& key, double size_pt, double width_pt) {
+  std::string title = characteristic_title(key);
+  const auto shorten = [&title](const std::string& from, const std::string& to) {
+    if (const std::size_t at = title.find(from); at != std::string::npos) title.replace(at, from.size(), to);
+  };
+  shorten("Acceleration error", "Accel. error");
+  if (chart::text_width(cr, title, size_pt) > width_pt) shorten("1st harmonic", "H1");
+  return chart::fit_text(cr, title, size_pt, width_pt);
+}
+
 void draw_table(cairo_t* cr, const StoredRun& run) {
   const std::vector<Characteristic>& cs = run.characteristics;
   const double right = kReportWidthPt - kMargin;
   // Column positions: title and unit left-aligned, figures right-aligned, limits centred.
   const double unit_x = kTableLeft + 99;
-  const double value_r = kTableLeft + 158;
-  const double min_r = kTableLeft + 192;
-  const double max_r = kTableLeft + 226;
-  const double limits_c = kTableLeft + 253;
-  const double verdict_x = kTableLeft + 283;
+  const double value_r = kTableLeft + 164;
+  const double min_r = kTableLeft + 199;
+  const double max_r = kTableLeft + 234;
+  const double limits_c = kTableLeft + 261;
+  const double verdict_x = kTableLeft + 287;
   chart::set_colour(cr, chart::kInk);
   chart::text(cr, kTableLeft, kTableTop - 12, "Characteristics", 8, Align::kLeft, true);
   double y = kTableTop;
@@ -471,8 +483,7 @@ void draw_table(cairo_t* cr, const StoredRun& run) {
       cairo_fill(cr);
     }
     chart::set_colour(cr, chart::kInk);
-    chart::text(cr, kTableLeft, y, chart::fit_text(cr, characteristic_title(c.key), size, unit_x - kTableLeft - 3),
-                size);
+    chart::text(cr, kTableLeft, y, table_title(cr, c.key, size, unit_x - kTableLeft - 3), size);
     chart::text(cr, unit_x, y, display_unit(c.unit), size);
     chart::text(cr, value_r, y, format_fixed(c.value, dec), size, Align::kRight);
     chart::text(cr, min_r, y, format_fixed(c.min, dec), size, Align::kRight);
