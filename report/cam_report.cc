@@ -270,7 +270,8 @@ void draw_header(cairo_t* cr, const StoredRun& run) {
   const RunSummary& s = run.summary;
   chart::set_colour(cr, chart::kInk);
   chart::text(cr, kMargin, 30, "Cam inspection report", 15, Align::kLeft, true);
-  chart::text(cr, kMargin + 190, 30, s.part + " \u00b7 lobe " + std::to_string(s.lobe), 12, Align::kLeft);
+  chart::text(cr, kMargin + 190, 30, chart::fit_text(cr, s.part, 12, 330) + " \u00b7 lobe " + std::to_string(s.lobe),
+              12, Align::kLeft);
 
   // The verdict, in colour, at the top right.
   const Verdict v = s.verdict;
@@ -292,7 +293,9 @@ void draw_header(cairo_t* cr, const StoredRun& run) {
       chart::set_colour(cr, chart::kNotJudged);
       x += chart::text(cr, x, y, label + " ", 7.5);
       chart::set_colour(cr, chart::kInk);
-      const std::string shown = chart::fit_text(cr, value.empty() ? "\u2013" : value, 8, 190, true);
+      // Five values share a line of the page: none may push the next off it.
+      const double widest = label == "Note" ? 360.0 : 130.0;
+      const std::string shown = chart::fit_text(cr, value.empty() ? "\u2013" : value, 8, widest, true);
       x += chart::text(cr, x, y, shown, 8, Align::kLeft, true) + 16;
     }
   };

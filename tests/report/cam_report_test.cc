@@ -255,6 +255,29 @@ TEST(CamReport, LiftChartShowsTheZoneBandsAndTheErrorCurve) {
   EXPECT_FALSE(png.near_pt(c.x_pt(5), c.y_pt(-judged_um(5)), kCurveColour, 3, 40));
 }
 
+// Identity at its longest (64 characters each) is cut to fit, never pushed off the page.
+TEST(CamReport, LongIdentityStaysOnThePage) {
+  StoredRun run = out_of_tolerance_run();
+  run.summary.part = std::string(64, 'P');
+  run.summary.serial = std::string(64, 'S');
+  run.summary.operator_name = std::string(64, 'O');
+  run.summary.machine = std::string(64, 'M');
+  run.summary.note = std::string(200, 'N');
+  testing::TempDir dir;
+  const fs::path out = dir / "long.png";
+  ASSERT_TRUE(write_cam_report(run, out).ok());
+  keep_picture(out);
+  Png png(out);
+  ASSERT_TRUE(png.ok());
+  // The right margin (the last 20 points) stays white over the identity lines.
+  for (int y = static_cast<int>(40 * kReportPngPixelsPerPoint); y < static_cast<int>(66 * kReportPngPixelsPerPoint);
+       ++y) {
+    for (int x = png.width() - static_cast<int>(20 * kReportPngPixelsPerPoint); x < png.width(); ++x) {
+      ASSERT_TRUE(Png::close(png.at_px(x, y), kWhite, 6)) << "ink at " << x << "," << y;
+    }
+  }
+}
+
 TEST(CamReport, RunWithoutCharacteristicsHasNoBand) {
   testing::TempDir dir;
   StoredRun run = out_of_tolerance_run();
