@@ -635,12 +635,19 @@ Status write_trend_plot(const std::vector<RunCharacteristics>& runs, const std::
     const double dash[] = {5.0, 3.0};
     cairo_set_dash(cr, dash, 2, 0);
     chart::set_colour(cr, chart::kOut);
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const auto x = static_cast<double>(i);
-      for (const std::optional<double>& l : {points[i].c->limits.lower, points[i].c->limits.upper}) {
-        if (!l) continue;
-        cairo_move_to(cr, f.px(x - 0.5), f.py(*l));
-        cairo_line_to(cr, f.px(x + 0.5), f.py(*l));
+    // One dashed line per stretch of runs with the same limit, so that the dashes run on.
+    for (const bool upper : {false, true}) {
+      const auto limit_of = [&](std::size_t i) {
+        return upper ? points[i].c->limits.upper : points[i].c->limits.lower;
+      };
+      for (std::size_t i = 0; i < points.size();) {
+        std::size_t end = i + 1;
+        while (end < points.size() && limit_of(end) == limit_of(i)) ++end;
+        if (const std::optional<double> l = limit_of(i)) {
+          cairo_move_to(cr, f.px(static_cast<double>(i) - 0.5), f.py(*l));
+          cairo_line_to(cr, f.px(static_cast<double>(end) - 0.5), f.py(*l));
+        }
+        i = end;
       }
     }
     cairo_stroke(cr);
