@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
 #include <optional>
 #include <set>
 
@@ -16,6 +15,8 @@
 
 namespace gaugeloop {
 namespace {
+
+static_assert(kReportPngPixelsPerPoint == chart::kPngPixelsPerPoint);
 
 using chart::Align;
 using chart::Box;
@@ -246,18 +247,21 @@ Frame lift_frame(const ReportData& d) {
   return f;
 }
 
-ReportData report_data(const StoredRun& run, const ErrorDerivatives& derivatives) {
+// The charts' data; the derivatives' only with `derivatives`.
+ReportData report_data(const StoredRun& run, const ErrorDerivatives* derivatives) {
   ReportData d;
   d.run = &run;
   d.judged_um = nose_centred(charted_lift_error_um(run), 1.0);
   d.raw_um = nose_centred(run.analysis.error_um, 1.0);
-  // Velocity and acceleration are charted in um per degree: in mm their ticks would need five
-  // or six decimals.
-  d.velocity_um_per_deg = nose_centred(derivatives.velocity_error_mm_per_deg, 1000.0);
-  d.acceleration_um_per_deg2 = nose_centred(derivatives.acceleration_error_mm_per_deg2, 1000.0);
   d.lift_limits = limits_per_degree(run.characteristics, "lift_error");
-  d.velocity_limits = limits_per_degree(run.characteristics, "velocity_error");
-  d.acceleration_limits = limits_per_degree(run.characteristics, "acceleration_error");
+  if (derivatives != nullptr) {
+    // Velocity and acceleration are charted in um per degree: in mm their ticks would need
+    // five or six decimals.
+    d.velocity_um_per_deg = nose_centred(derivatives->velocity_error_mm_per_deg, 1000.0);
+    d.acceleration_um_per_deg2 = nose_centred(derivatives->acceleration_error_mm_per_deg2, 1000.0);
+    d.velocity_limits = limits_per_degree(run.characteristics, "velocity_error");
+    d.acceleration_limits = limits_per_degree(run.characteristics, "acceleration_error");
+  }
   return d;
 }
 
@@ -543,12 +547,7 @@ Status check_page_file_name(const std::filesystem::path& out) {
 }
 
 ChartPlacement cam_report_lift_chart(const StoredRun& run) {
-  ReportData d;
-  d.run = &run;
-  d.judged_um = nose_centred(charted_lift_error_um(run), 1.0);
-  d.raw_um = nose_centred(run.analysis.error_um, 1.0);
-  d.lift_limits = limits_per_degree(run.characteristics, "lift_error");
-  const Frame f = lift_frame(d);
+  const Frame f = lift_frame(report_data(run, nullptr));
   return {f.box.left, f.box.top, f.box.width, f.box.height, f.x_min, f.x_max, f.y_min, f.y_max};
 }
 
@@ -559,7 +558,7 @@ Status write_cam_report(const StoredRun& run, const std::filesystem::path& out) 
     return make_error(derivatives.error().code, "cannot draw the report of run " + std::to_string(run.summary.id) +
                                                     " to " + out.string() + ": " + derivatives.error().message);
   }
-  const ReportData d = report_data(run, *derivatives);
+  const ReportData d = report_data(run, &*derivatives);
   return chart::write_page(out, kReportWidthPt, kReportHeightPt, [&](cairo_t* cr) {
     draw_header(cr, run);
     draw_lift_chart(cr, d);

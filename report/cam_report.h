@@ -13,7 +13,7 @@
 
 namespace gaugeloop {
 
-// The report's page: A4 landscape, points. A PNG has 2 pixels per point (1684 x 1190).
+// The report's page: A4 landscape, points. A PNG has 2 pixels per point (1684 x 1191).
 inline constexpr double kReportWidthPt = 841.89;
 inline constexpr double kReportHeightPt = 595.28;
 inline constexpr double kReportPngPixelsPerPoint = 2.0;

@@ -21,7 +21,7 @@ enum class PageFormat { kPdf, kSvg, kPng };
 // .pdf, .svg or .png (any case); kInvalidInput naming the file and the three allowed otherwise.
 Result<PageFormat> page_format_for(const std::filesystem::path& out);
 
-// A PNG has this many pixels per point of the page: 2 makes an A4 page 1684 x 1190 pixels,
+// A PNG has this many pixels per point of the page: 2 makes an A4 page 1684 x 1191 pixels,
 // small text (7 pt) still 14 pixels high.
 inline constexpr double kPngPixelsPerPoint = 2.0;
 
