@@ -397,25 +397,33 @@ TEST(TrendPlot, WritesEachFormat) {
   EXPECT_EQ(files_in(dir.path()), 3u);
 }
 
-// Out-of-tolerance runs are drawn in red where their value is; in-tolerance ones in blue.
+// Pixels of a colour in a PNG.
+int count_colour(const Png& png, Png::Rgb want, int tol) {
+  int n = 0;
+  for (int y = 0; y < png.height(); ++y) {
+    for (int x = 0; x < png.width(); ++x) n += Png::close(png.at_px(x, y), want, tol) ? 1 : 0;
+  }
+  return n;
+}
+
+// Out-of-tolerance runs are drawn as red points: the same runs all judged in tolerance show
+// the red limit lines only.
 TEST(TrendPlot, MarksRunsOutOfTolerance) {
   testing::TempDir dir;
-  const fs::path out = dir / "t.png";
-  ASSERT_TRUE(write_trend_plot(trend_runs(), "lift_error", out).ok());
-  keep_picture(out);
-  Png png(out);
-  ASSERT_TRUE(png.ok());
-  int red = 0;
-  int blue = 0;
-  for (int y = 0; y < png.height(); ++y) {
-    for (int x = 0; x < png.width(); ++x) {
-      const Png::Rgb p = png.at_px(x, y);
-      if (Png::close(p, {204, 26, 26}, 10)) ++red;
-      if (Png::close(p, kCurveColour, 10)) ++blue;
-    }
-  }
-  EXPECT_GT(red, 100) << "out-of-tolerance markers and limit lines";
-  EXPECT_GT(blue, 100);
+  std::vector<RunCharacteristics> runs = trend_runs();
+  ASSERT_TRUE(write_trend_plot(runs, "lift_error", dir / "out.png").ok());
+  keep_picture(dir / "out.png");
+  for (RunCharacteristics& r : runs) r.characteristics[0].verdict = Verdict::kIn;
+  ASSERT_TRUE(write_trend_plot(runs, "lift_error", dir / "in.png").ok());
+  const Png with_out(dir / "out.png");
+  const Png all_in(dir / "in.png");
+  ASSERT_TRUE(with_out.ok() && all_in.ok());
+  constexpr Png::Rgb kRed{204, 26, 26};  // kOut 0.80 0.10 0.10
+  const int red_lines = count_colour(all_in, kRed, 10);
+  EXPECT_GT(red_lines, 500) << "the limits are drawn";
+  // Three runs out (values 12.1, 13.0, 13.9 um), each a disc of 4 pt (8 px) radius.
+  EXPECT_GT(count_colour(with_out, kRed, 10), red_lines + 3 * 150);
+  EXPECT_GT(count_colour(all_in, kCurveColour, 10), count_colour(with_out, kCurveColour, 10));
 }
 
 TEST(TrendPlot, AnUnknownKeyListsTheKeysPresent) {
