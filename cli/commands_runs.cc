@@ -12,6 +12,7 @@
 
 #include "cli/cli_common.h"
 #include "cli/commands_dfq.h"
+#include "cli/commands_report.h"
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "report/run_json.h"
@@ -64,6 +65,8 @@ struct ListOptions {
   std::string since, until;
   std::string verdict;  // --verdict; empty: any
   bool json_out = false;
+  std::string plot;                           // trend: draw to this file instead of printing
+  std::string characteristic = "lift_error";  // trend --plot: which characteristic
 };
 
 Result<RunQuery> resolved(const ListOptions& o) {
@@ -387,6 +390,10 @@ int cmd_compare(const CompareOptions& o) {
 // ---- runs trend ----
 
 int cmd_trend(const ListOptions& o) {
+  if (!o.plot.empty()) {
+    Result<RunQuery> q = resolved(o);
+    return q ? cmd_trend_plot(o.paths, *q, o.plot, o.characteristic) : report_error(q.error());
+  }
   Result<std::vector<RunSummary>> runs = selected_runs(o, &RunStore::trend);
   if (!runs) return report_error(runs.error());
   if (o.json_out) {
@@ -599,7 +606,14 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   trend_cmd->add_option("--limit", trend->query.limit, "At most the newest this many runs")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
+  CLI::Option* trend_plot =
+      trend_cmd->add_option("--plot", trend->plot, "Draw the characteristic over the runs to this .svg, .pdf or .png");
+  trend_cmd->add_option("--characteristic", trend->characteristic, "With --plot: the characteristic's key")
+      ->capture_default_str()
+      ->needs(trend_plot);
   trend_cmd->callback([&action, trend] { action = [trend] { return cmd_trend(*trend); }; });
+
+  add_report_commands(runs, action);
 
   auto plot = std::make_shared<PlotOptions>();
   CLI::App* plot_cmd = runs->add_subcommand("plot", "SVG of one run's lift error per cam degree, polar and linear.");
