@@ -43,6 +43,23 @@ Result<std::string> load_template(const std::string& path, std::string& name) {
   return std::string(without_utf8_bom(*text));
 }
 
+// "out: lift_error.nose, phase (25 characteristics, 18 judged)", "in (...)", or "not judged
+// (no tolerances in the part file)".
+std::string tolerance_text(const JobReport& r) {
+  int judged = 0;
+  std::string out_keys;
+  for (const Characteristic& c : r.characteristics) {
+    if (c.verdict == Verdict::kNotJudged) continue;
+    ++judged;
+    if (c.verdict == Verdict::kOut) out_keys += (out_keys.empty() ? "" : ", ") + c.key;
+  }
+  if (judged == 0) return "not judged (no tolerances in the part file)";
+  std::string text = std::string(verdict_name(r.tolerance_verdict));
+  if (!out_keys.empty()) text += ": " + out_keys;
+  return text + " (" + std::to_string(judged) + " of " + std::to_string(r.characteristics.size()) +
+         " characteristics judged; `gaugeloop runs show " + std::to_string(r.run_id) + "` lists them)";
+}
+
 void print_report(const JobReport& r, const Part& part, const std::string& machine) {
   const auto& a = r.analysis;
   const int revs = static_cast<int>(r.measured.revolutions.size());
@@ -58,6 +75,7 @@ void print_report(const JobReport& r, const Part& part, const std::string& machi
   std::printf("  repeatability     %.2f um (largest per-degree standard deviation)\n", a.repeatability_um);
   std::printf("  phase             %+.3f deg (timing; corrected through the lift)\n", a.phase_error_deg);
   std::printf("  runout            %.2f um (base circle, total indicator reading)\n", a.base_circle_runout_um);
+  std::printf("  tolerances        %s\n", tolerance_text(r).c_str());
   if (!r.ground_with_source.empty()) {
     const std::string table =
         r.ground_with_version ? "table version " + std::to_string(*r.ground_with_version) : "the design (no table)";
@@ -254,7 +272,8 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
   std::printf("gauge: simulator at %.0f rpm x %.0f, noise %.1f um RMS, %d revolutions %s; database %s\n\n",
               sim_settings.speed_rpm, sim_settings.time_scale, sim_settings.noise_rms_um, o.revolutions, o.mode.c_str(),
               ls.job.db_path.string().c_str());
-  std::printf("part  ground from              run  max um  RMS um  phase deg  runout um | true max  floor  table\n");
+  std::printf(
+      "part  ground from              run  max um  RMS um  phase deg  runout um  verdict | true max  floor  table\n");
   std::fflush(stdout);
   Result<std::vector<LoopIteration>> loop = run_grinding_loop(ls, [](const LoopIteration& it) {
     const LobeAnalysis& a = it.job.analysis;
@@ -263,9 +282,10 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
             ? "v" + std::to_string(it.job.table_version) + ", " + std::to_string(it.job.table_blocks) + " blocks"
             : "not pushed (" + std::string(compensation_verdict_name(it.job.verdict)) +
                   "): " + it.job.not_pushed_reason;
-    std::printf("%4d  %-22s %5lld  %6.2f  %6.2f  %+9.4f  %9.2f | %8.2f  %5.2f  %s\n", it.iteration,
+    std::printf("%4d  %-22s %5lld  %6.2f  %6.2f  %+9.4f  %9.2f  %-7s | %8.2f  %5.2f  %s\n", it.iteration,
                 it.ground_from.c_str(), static_cast<long long>(it.job.run_id), a.max_abs_error_um, a.rms_error_um,
-                a.phase_error_deg, a.base_circle_runout_um, it.part.max_abs_um, it.floor.max_abs_um, table.c_str());
+                a.phase_error_deg, a.base_circle_runout_um, std::string(verdict_name(it.job.tolerance_verdict)).c_str(),
+                it.part.max_abs_um, it.floor.max_abs_um, table.c_str());
     std::fflush(stdout);
   });
   if (!loop) return report_error(loop.error());

@@ -144,13 +144,13 @@ void print_characteristics(const StoredRun& r) {
     std::printf("  not judged: no characteristics recorded with this run\n");
     return;
   }
-  std::printf("  %-40s %14s %14s  %-24s %-9s %s\n", "characteristic", "value", "range", "limits", "unit", "verdict");
+  std::printf("  %-46s %14s %14s  %-24s %-9s %s\n", "characteristic", "value", "range", "limits", "unit", "verdict");
   for (const Characteristic& c : r.characteristics) {
     const int d = decimals_for(c.unit);
     std::string title = characteristic_title(c.key);
     if (c.from_deg && c.to_deg) title += " (" + std::to_string(*c.from_deg) + ".." + std::to_string(*c.to_deg) + ")";
     const std::string range = c.min == c.max ? "" : format_fixed(c.max - c.min, d);
-    std::printf("  %-40s %14s %14s  %-24s %-9s %s\n", title.c_str(), format_fixed(c.value, d).c_str(), range.c_str(),
+    std::printf("  %-46s %14s %14s  %-24s %-9s %s\n", title.c_str(), format_fixed(c.value, d).c_str(), range.c_str(),
                 limits_text(c.limits, d).c_str(), c.unit.c_str(), verdict_name(c.verdict).data());
   }
 }

@@ -24,6 +24,7 @@
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "job/nc_push.h"
+#include "job/tolerance_settings.h"
 #include "nc_out/table_guards.h"
 #include "nc_out/table_program.h"
 #include "report/run_json.h"
@@ -130,6 +131,7 @@ std::string settings_text(const JobSettings& s) {
   line("nc.work_speed_rpm", num(s.axis_limits.speed_rpm));
   line("nc.require_approval", s.require_approval ? "true" : "false");
   line("nc.table_number", std::to_string(s.table_number));
+  out += tolerances_settings_text(s.part.tolerances);
   return out;
 }
 

@@ -12,6 +12,7 @@
 #include "core/guarded_thread.h"
 #include "core/utc_time.h"
 #include "job/nc_push.h"
+#include "report/run_json.h"
 
 namespace gaugeloop {
 
@@ -208,7 +209,9 @@ json job_report_json(const JobReport& r) {
               {"nc_file", if_pushed(r.nc_file.string())},
               {"table_version", if_pushed(r.table_version)},
               {"not_pushed_reason", r.pushed() ? json(nullptr) : json(r.not_pushed_reason)},
-              {"pending_id", r.pending_id ? json(*r.pending_id) : json(nullptr)}};
+              {"pending_id", r.pending_id ? json(*r.pending_id) : json(nullptr)},
+              {"tolerance_verdict", verdict_name(r.tolerance_verdict)},
+              {"characteristics", characteristics_json(r.characteristics)}};
 }
 
 Service::Service(ServiceConfig config, GaugeFactory gauge)

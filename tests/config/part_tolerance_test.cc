@@ -8,7 +8,7 @@
 #include "compensation/judgement.h"
 #include "compensation/periodic_spline.h"
 #include "config/part_file.h"
-#include "config/tolerance_settings.h"
+#include "job/tolerance_settings.h"
 #include "core/lift_table.h"
 #include "tests/support/refused.h"
 
@@ -321,7 +321,7 @@ TEST(PartTolerance, TheSamplePartsCarryTolerances) {
     }
   }
   EXPECT_EQ(intake->part.tolerances.zones.front().zone, LobeZone::kBaseCircle);
-  EXPECT_EQ(intake->part.tolerances.zones.front().lift_error_um.upper, 10.0) << "the base circle tighter";
+  EXPECT_EQ(intake->part.tolerances.zones.front().lift_error_um.upper, 5.0) << "the base circle tighter";
 
   const std::string intake_settings = tolerances_settings_text(intake->part.tolerances);
   EXPECT_EQ(tolerances_settings_text(half->part.tolerances), intake_settings) << "the same lobe, judged alike";

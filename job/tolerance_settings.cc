@@ -1,5 +1,5 @@
 // Canonical settings lines of a lobe's tolerances.
-#include "config/tolerance_settings.h"
+#include "job/tolerance_settings.h"
 
 #include <algorithm>
 #include <charconv>

@@ -19,8 +19,6 @@ namespace gaugeloop {
 // Whole-turn keys first, then the zones in the order the follower meets them. Limits not
 // given have no line, and tolerances that judge nothing give "" (so a part without
 // [tolerance] keeps the settings it had before tolerances existed).
-// Depends on core only, so it can move as it is to the layer that writes a run's settings
-// (job/ makes them and cannot include config/).
 std::string tolerances_settings_text(const LobeTolerances& tolerances);
 
 }  // namespace gaugeloop
