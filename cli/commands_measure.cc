@@ -20,6 +20,7 @@
 #include "core/atomic_file.h"
 #include "core/text_file.h"
 #include "job/measure_job.h"
+#include "report/cam_report.h"
 #include "report/svg_plot.h"
 #include "simulator/gauge_simulator.h"
 #include "simulator/virtual_grinder.h"
@@ -226,6 +227,21 @@ int run_job(GaugeClient& gauge, const LoadedPart& lp, const MeasureOptions& o, b
   return report->pushed() || report->inspection ? kExitOk : kExitNotPushed;
 }
 
+// The cam report of the demo's last run, as a quality engineer files it: <data-dir>/report.pdf.
+// A report that cannot be written is said, and the demo's outcome stands.
+void write_demo_report(const MeasureOptions& o, std::int64_t run_id) {
+  const std::filesystem::path pdf = std::filesystem::path(o.paths.data_dir) / "report.pdf";
+  Result<RunStore> store = open_history_read_only(o.paths);
+  Result<StoredRun> run = store ? store->load_run(run_id) : Result<StoredRun>(store.error());
+  Status written = run ? write_cam_report(*run, pdf) : Status(run.error());
+  if (!written) {
+    std::printf("report: not written: %s\n", written.error().message.c_str());
+    return;
+  }
+  std::printf("report: %s (run %lld; `gaugeloop runs report ID --out F.pdf|.svg|.png` for any run)\n",
+              pdf.string().c_str(), static_cast<long long>(run_id));
+}
+
 int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {
   Result<LoadedPart> lp = load_part(o.part_path);
   if (!lp) return report_error(lp.error());
@@ -241,7 +257,17 @@ int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {
   ms.port = (*sim)->port();
   ms.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
   ModbusGauge gauge(ms);
-  return run_job(gauge, *lp, o, /*build_on_table_in_force=*/false);
+  const int status = run_job(gauge, *lp, o, /*build_on_table_in_force=*/false);
+  if (status == kExitOk || status == kExitNotPushed) {
+    if (Result<RunStore> store = open_history_read_only(o.paths)) {
+      RunQuery newest;
+      newest.limit = 1;
+      if (Result<std::vector<RunSummary>> runs = store->list_runs(newest); runs && !runs->empty()) {
+        write_demo_report(o, runs->front().id);
+      }
+    }
+  }
+  return status;
 }
 
 // demo --iterations: the loop on the virtual grinder (docs/virtual_grinder.md).
@@ -327,6 +353,7 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
       lo.plot_path.empty() ? std::filesystem::path(o.paths.data_dir) / "loop.svg" : std::filesystem::path(lo.plot_path);
   if (Status w = write_file_atomically(svg_path, render_loop_plot_svg(plot)); !w) return report_error(w.error());
   std::printf("plot: %s\n", svg_path.string().c_str());
+  write_demo_report(o, loop->back().job.run_id);
   return std::all_of(loop->begin(), loop->end(), [](const LoopIteration& it) { return it.job.pushed(); })
              ? kExitOk
              : kExitNotPushed;

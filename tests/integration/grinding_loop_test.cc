@@ -199,8 +199,20 @@ TEST_F(GrindingLoopTest, DemoIterationsPrintsEveryPartAndPlotsThemOnOneSheet) {
   size_t polylines = 0;
   for (size_t at = text.find("<polyline"); at != std::string::npos; at = text.find("<polyline", at + 1)) ++polylines;
   EXPECT_EQ(polylines, 3u + 3u);
+  // The sample part's tolerances judge every part: the one ground from the design (15 um of
+  // form error against +-5 um on the base circle and +-10 um on the flanks) is out, the
+  // compensated ones (about 2 um) are in; the last one's cam report is written as a PDF.
+  EXPECT_NE(r.output.find("  out     | "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("  in      | "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("report: " + (dir_ / "report.pdf").string() + " (run 3;"), std::string::npos) << r.output;
+  EXPECT_EQ(testing::slurp(dir_ / "report.pdf").rfind("%PDF-", 0), 0u);
   r = testing::run_command("runs show 3 --data-dir " + dir_.string());
   EXPECT_NE(r.output.find("virtual grinder part 2, ground from CAM_INTAKE_L1.SPF v2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("tolerances        in (lift error judged after the best-fit phase)"), std::string::npos)
+      << r.output;
+  r = testing::run_command("runs list --verdict out --data-dir " + dir_.string());
+  EXPECT_NE(r.output.find("\n     1  "), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("\n     2  "), std::string::npos) << r.output;
 
   r = testing::run_command("demo --iterations 2 --servo-hz -3" + data);
   EXPECT_EQ(r.exit_code, 2) << r.output;
