@@ -1,0 +1,139 @@
+// SPC figures over stored characteristics.
+#include "report/spc.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace gaugeloop {
+namespace {
+
+bool same_limits(const Limits& a, const Limits& b) { return a.lower == b.lower && a.upper == b.upper; }
+
+// The values of one key, and the newest characteristic that carried it.
+struct Gathered {
+  std::vector<double> values;
+  const Characteristic* newest = nullptr;
+  std::int64_t newest_run = 0;
+  bool limits_changed = false;
+  int out_count = 0;
+  int judged_count = 0;
+};
+
+void add_capability(SpcFigure& f) {
+  if (f.n < 2) {
+    f.not_computed = "1 run: no spread, so no s, Cp or Cpk";
+    return;
+  }
+  const double s = *f.sd;
+  if (s == 0.0) {
+    f.not_computed = "no spread (s = 0): no Cp or Cpk";
+    return;
+  }
+  const std::optional<double>& lsl = f.limits.lower;
+  const std::optional<double>& usl = f.limits.upper;
+  if (!lsl && !usl) {
+    f.not_computed = "no limits: no Cp or Cpk";
+    return;
+  }
+  std::optional<double> cp, cpk;
+  if (lsl && usl) {
+    cp = (*usl - *lsl) / (6.0 * s);
+    cpk = std::min(*usl - f.mean, f.mean - *lsl) / (3.0 * s);
+    f.cpk_side = "both";
+  } else if (usl) {
+    cpk = (*usl - f.mean) / (3.0 * s);
+    f.cpk_side = "upper";
+  } else {
+    cpk = (f.mean - *lsl) / (3.0 * s);
+    f.cpk_side = "lower";
+  }
+  // A spread tiny against the limits can overflow a double; such a ratio is left out.
+  if (cp && std::isfinite(*cp)) f.cp = cp;
+  if (std::isfinite(*cpk)) {
+    f.cpk = cpk;
+  } else {
+    f.cpk_side.clear();
+  }
+  if ((cp && !f.cp) || !f.cpk) {
+    f.not_computed = "spread too small against the limits for a finite Cp or Cpk";
+  } else if (!f.cp) {
+    f.not_computed = "one limit only: Cpk is the " + std::string(usl ? "upper (CPU)" : "lower (CPL)") + " index, no Cp";
+  }
+}
+
+}  // namespace
+
+std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs) {
+  std::vector<std::string> order;
+  std::map<std::string, Gathered> by_key;
+  for (const RunCharacteristics& run : runs) {
+    for (const Characteristic& c : run.characteristics) {
+      auto [it, inserted] = by_key.try_emplace(c.key);
+      Gathered& g = it->second;
+      if (inserted) order.push_back(c.key);
+      if (g.newest != nullptr && !same_limits(g.newest->limits, c.limits)) g.limits_changed = true;
+      g.values.push_back(c.value);
+      g.newest = &c;
+      g.newest_run = run.run.id;
+      if (c.verdict != Verdict::kNotJudged) ++g.judged_count;
+      if (c.verdict == Verdict::kOut) ++g.out_count;
+    }
+  }
+  std::vector<SpcFigure> out;
+  out.reserve(order.size());
+  for (const std::string& key : order) {
+    const Gathered& g = by_key.at(key);
+    SpcFigure f;
+    f.key = key;
+    f.unit = g.newest->unit;
+    f.n = static_cast<int>(g.values.size());
+    f.limits = g.newest->limits;
+    f.limits_from_run = g.newest_run;
+    f.limits_changed = g.limits_changed;
+    f.out_count = g.out_count;
+    f.judged_count = g.judged_count;
+    double sum = 0.0;
+    for (double v : g.values) sum += v;
+    f.mean = sum / f.n;
+    if (f.n >= 2) {
+      // Equal values give exactly 0 here (the mean of equal values can differ from them in the
+      // last bit, so the deviations are not summed for them).
+      const bool all_equal =
+          std::all_of(g.values.begin(), g.values.end(), [&](double v) { return v == g.values.front(); });
+      if (all_equal) {
+        f.mean = g.values.front();
+        f.sd = 0.0;
+      } else {
+        double squares = 0.0;
+        for (double v : g.values) squares += (v - f.mean) * (v - f.mean);
+        f.sd = std::sqrt(squares / (f.n - 1));
+      }
+    }
+    add_capability(f);
+    out.push_back(std::move(f));
+  }
+  return out;
+}
+
+nlohmann::json spc_figure_json(const SpcFigure& f) {
+  auto number = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
+  return {{"key", f.key},
+          {"title", characteristic_title(f.key)},
+          {"unit", f.unit},
+          {"n", f.n},
+          {"mean", f.mean},
+          {"sd", number(f.sd)},
+          {"lsl", number(f.limits.lower)},
+          {"usl", number(f.limits.upper)},
+          {"limits_from_run", f.limits_from_run},
+          {"limits_changed", f.limits_changed},
+          {"cp", number(f.cp)},
+          {"cpk", number(f.cpk)},
+          {"cpk_side", f.cpk_side.empty() ? nlohmann::json() : nlohmann::json(f.cpk_side)},
+          {"out", f.out_count},
+          {"judged", f.judged_count},
+          {"note", f.not_computed}};
+}
+
+}  // namespace gaugeloop
