@@ -2,6 +2,9 @@
 #include "report/shaft.h"
 
 #include <cmath>
+#include <cstdio>
+
+#include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
@@ -11,6 +14,8 @@ double wrap_deg_360(double degrees) {
   if (d < 0.0) d += 360.0;
   return d >= 360.0 ? 0.0 : d;
 }
+
+std::string or_dash(const std::optional<double>& v) { return v ? format_signed_fixed(*v, 3) : "-"; }
 
 nlohmann::json optional_json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(); }
 
@@ -99,6 +104,30 @@ Result<ShaftRecord> load_shaft_record(const RunStore& store, const ShaftLayout& 
     runs.emplace_back(std::move(*run));
   }
   return shaft_record(layout, serial, runs);
+}
+
+std::string shaft_record_text(const ShaftRecord& record) {
+  const ShaftLayout& s = record.layout;
+  std::string out = "shaft \"" + s.name + "\", serial " + record.serial +
+                    ": reference at C = " + format_fixed(s.reference_c_deg, 3) + " deg, index tolerance " +
+                    (s.index_tolerance_deg ? "+-" + format_fixed(*s.index_tolerance_deg, 3) + " deg" : "none") +
+                    (s.lobes.empty() ? "" : ", datum lobe " + std::to_string(s.lobes.front().lobe)) + "\n";
+  char line[512];
+  std::snprintf(line, sizeof line, "%4s  %-20s  %6s  %-20s  %-12s  %9s  %9s  %9s  %s\n", "lobe", "part", "run",
+                "started (UTC)", "verdict", "phase deg", "index deg", "to datum", "index");
+  out += line;
+  for (const ShaftLobeRecord& r : record.lobes) {
+    std::snprintf(line, sizeof line, "%4d  %-20s  %6s  %-20s  %-12s  %9s  %9s  %9s  %s\n", r.lobe.lobe,
+                  r.lobe.part.c_str(), r.run ? std::to_string(r.run->id).c_str() : "-",
+                  r.run ? r.run->started_utc.c_str() : "-", r.verdict.c_str(), or_dash(r.phase_deg).c_str(),
+                  or_dash(r.index_error_deg).c_str(), or_dash(r.relative_error_deg).c_str(), r.index_verdict.c_str());
+    out += line;
+  }
+  out += "shaft verdict: " + record.verdict + "\n";
+  for (const ShaftLobeRecord& r : record.lobes) {
+    if (!r.note.empty()) out += "lobe " + std::to_string(r.lobe.lobe) + ": " + r.note + "\n";
+  }
+  return out;
 }
 
 nlohmann::json shaft_record_json(const ShaftRecord& record) {

@@ -93,4 +93,10 @@ Result<ShaftRecord> load_shaft_record(const RunStore& store, const ShaftLayout& 
 // `runs shaft --json`: the record with null for what is not given.
 nlohmann::json shaft_record_json(const ShaftRecord& record);
 
+// `runs shaft --shaft FILE`: a heading naming the shaft, serial, reference, tolerance and datum;
+// one row per lobe (lobe, part, run id, started, verdict, phase, index error, relative to the
+// datum, index verdict; "-" for what is not given); the shaft verdict; a line per lobe whose
+// index is not given, saying why.
+std::string shaft_record_text(const ShaftRecord& record);
+
 }  // namespace gaugeloop

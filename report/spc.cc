@@ -3,7 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
+
+#include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
@@ -62,6 +65,19 @@ void add_capability(SpcFigure& f) {
   }
 }
 
+int decimals_for(const std::string& unit) {
+  if (unit == "um") return 2;
+  if (unit == "deg") return 3;
+  if (unit == "mm/deg") return 6;
+  if (unit == "mm/deg^2") return 7;
+  return 4;
+}
+
+std::string or_dash(const std::optional<double>& v, int decimals, bool with_sign) {
+  if (!v) return "-";
+  return with_sign ? format_signed_fixed(*v, decimals) : format_fixed(*v, decimals);
+}
+
 }  // namespace
 
 std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs) {
@@ -112,6 +128,37 @@ std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs) 
     }
     add_capability(f);
     out.push_back(std::move(f));
+  }
+  return out;
+}
+
+std::string spc_table_text(const std::vector<SpcFigure>& figures) {
+  std::size_t title_width = std::string("characteristic").size();
+  for (const SpcFigure& f : figures) title_width = std::max(title_width, characteristic_title(f.key).size());
+  const int w = static_cast<int>(title_width);
+  std::string out;
+  char line[512];
+  std::snprintf(line, sizeof line, "%-*s  %-8s  %4s  %12s  %12s  %12s  %12s  %6s  %9s  %s\n", w, "characteristic",
+                "unit", "n", "mean", "s", "LSL", "USL", "Cp", "Cpk", "out/judged");
+  out += line;
+  for (const SpcFigure& f : figures) {
+    const int d = decimals_for(f.unit);
+    std::string cpk = or_dash(f.cpk, 2, false);
+    if (f.cpk_side == "upper") cpk += " (U)";
+    if (f.cpk_side == "lower") cpk += " (L)";
+    std::snprintf(line, sizeof line, "%-*s  %-8s  %4d  %12s  %12s  %12s  %12s  %6s  %9s  %d/%d\n", w,
+                  characteristic_title(f.key).c_str(), f.unit.c_str(), f.n, format_signed_fixed(f.mean, d).c_str(),
+                  or_dash(f.sd, d, false).c_str(), or_dash(f.limits.lower, d, true).c_str(),
+                  or_dash(f.limits.upper, d, true).c_str(), or_dash(f.cp, 2, false).c_str(), cpk.c_str(), f.out_count,
+                  f.judged_count);
+    out += line;
+  }
+  for (const SpcFigure& f : figures) {
+    if (f.limits_changed) {
+      out += characteristic_title(f.key) + ": the limits changed over these runs; shown are those of run " +
+             std::to_string(f.limits_from_run) + " (the newest), each run was judged against its own\n";
+    }
+    if (!f.not_computed.empty()) out += characteristic_title(f.key) + ": " + f.not_computed + "\n";
   }
   return out;
 }

@@ -148,6 +148,17 @@ TEST(ShaftRecord, JsonCarriesNullsForWhatIsNotGiven) {
   EXPECT_EQ(j["lobes"][1]["verdict"], "not_measured");
 }
 
+TEST(ShaftRecord, TextHasARowPerLobeAndTheVerdict) {
+  const std::string text =
+      shaft_record_text(shaft_record(two_lobes(), "CS-7", {lobe_run(11, 1, 30.0, 1, 0.2), std::nullopt}));
+  EXPECT_NE(text.find("serial CS-7"), std::string::npos) << text;
+  EXPECT_NE(text.find("index tolerance +-0.500 deg, datum lobe 1"), std::string::npos) << text;
+  EXPECT_NE(text.find("in               +0.200     +0.200     +0.000  in"), std::string::npos) << text;
+  EXPECT_NE(text.find("not_measured"), std::string::npos) << text;
+  EXPECT_NE(text.find("shaft verdict: incomplete"), std::string::npos) << text;
+  EXPECT_NE(text.find("lobe 2: no run of this part, lobe and serial"), std::string::npos) << text;
+}
+
 class ShaftStoreTest : public testing::StoredRunTest {};
 
 TEST_F(ShaftStoreTest, TakesTheNewestRunOfEachLobeWithThatSerial) {

@@ -208,6 +208,21 @@ TEST(Spc, JsonHasEveryKeyAndNullsForWhatIsNotGiven) {
   EXPECT_TRUE(j["cpk"].is_null());
 }
 
+TEST(Spc, TableHasARowPerCharacteristicAndSaysWhatIsMissing) {
+  // Lift error 1, 2, 3 um against -5..+5 (s = 1, Cp = 10 / 6 = 1.67, Cpk = min(3, 7) / 3 =
+  // 1.00); runout 2 um once against an upper limit of 10.
+  const std::string text = spc_table_text(spc_figures(
+      {run(1, {make("lift_error", 1, both(-5, 5), Verdict::kIn), make("base_circle_runout", 2, Limits{{}, 10.0})}),
+       run(2, {make("lift_error", 2, both(-5, 5), Verdict::kIn)}),
+       run(3, {make("lift_error", 3, both(-5, 5), Verdict::kIn)})}));
+  EXPECT_NE(text.find("Lift error, whole turn"), std::string::npos) << text;
+  EXPECT_NE(text.find("+2.00          1.00         -5.00         +5.00    1.67       1.00  0/3"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("Base circle runout (dial)"), std::string::npos) << text;
+  EXPECT_NE(text.find("+10.00       -          -  0/0"), std::string::npos) << text;
+  EXPECT_NE(text.find("Base circle runout (dial): 1 run"), std::string::npos) << text;
+}
+
 TEST(Spc, NoRunsNoFigures) { EXPECT_TRUE(spc_figures({}).empty()); }
 
 }  // namespace
