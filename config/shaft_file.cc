@@ -19,7 +19,8 @@ Error at_key(const TomlReader& r, std::string_view key, const Error& e) {
 }
 
 // A part file grinds its nose at C = c_offset_deg; the shaft wants it at reference + angle.
-// A difference is not refused (the part file may serve another shaft too), but said.
+// A difference is not refused (the part file may serve another shaft too), but said. Runs
+// keep the frame mapping they were measured with, so a record read later is not affected.
 void note_offset_mismatch(const ShaftLayout& layout, const ShaftLobe& lobe, const Part& part,
                           std::vector<std::string>& notes) {
   const double wanted_c = layout.reference_c_deg + lobe.angle_deg;
@@ -28,8 +29,8 @@ void note_offset_mismatch(const ShaftLayout& layout, const ShaftLobe& lobe, cons
   notes.push_back("lobe " + std::to_string(lobe.lobe) + " (" + lobe.part_file.filename().string() +
                   "): the part file grinds the nose at C = " + format_fixed(part.c_offset_deg, 3) +
                   " deg, the shaft places it at C = " + format_fixed(wanted_c, 3) +
-                  " deg; its runs will show an index error of about " + format_signed_fixed(difference, 3) +
-                  " deg unless the part file's c_offset_deg is " + format_fixed(wanted_c, 3));
+                  " deg; a lobe ground with this part file stands " + format_signed_fixed(difference, 3) +
+                  " deg off (index error) unless its c_offset_deg is " + format_fixed(wanted_c, 3));
 }
 
 }  // namespace
