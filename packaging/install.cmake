@@ -15,6 +15,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR
 set(GAUGELOOP_DOCS
   PERFORMANCE.md acquisition.md architecture.md building.md compensation.md gauge.md http_api.md nc_output.md
   parts.md service.md simulator.md storage.md virtual_grinder.md)
+list(APPEND GAUGELOOP_DOCS spc_and_shafts.md)
 list(TRANSFORM GAUGELOOP_DOCS PREPEND ${PROJECT_SOURCE_DIR}/docs/)
 install(FILES ${GAUGELOOP_DOCS} DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
 # The service's example config and what its relative paths name (gauge config, parts and
@@ -23,6 +24,7 @@ install(FILES ${GAUGELOOP_DOCS} DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
 set(GAUGELOOP_EXAMPLES
   exhaust_roller.csv exhaust_roller.toml intake_flat.csv intake_flat.toml intake_flat_half_degree.csv
   intake_flat_half_degree.toml)
+list(APPEND GAUGELOOP_EXAMPLES camshaft.toml)  # names intake_flat.toml and exhaust_roller.toml
 list(TRANSFORM GAUGELOOP_EXAMPLES PREPEND ${PROJECT_SOURCE_DIR}/examples/)
 install(FILES ${GAUGELOOP_EXAMPLES} DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples)
 install(FILES ${PROJECT_SOURCE_DIR}/examples/gauges/simulator.toml ${PROJECT_SOURCE_DIR}/examples/gauges/other_amplifier.toml
