@@ -109,9 +109,9 @@ std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs) 
     f.limits_changed = g.limits_changed;
     f.out_count = g.out_count;
     f.judged_count = g.judged_count;
-    double sum = 0.0;
-    for (double v : g.values) sum += v;
-    f.mean = sum / f.n;
+    // A running mean: the sum of many values near the largest double would overflow.
+    f.mean = 0.0;
+    for (std::size_t i = 0; i < g.values.size(); ++i) f.mean += (g.values[i] - f.mean) / static_cast<double>(i + 1);
     if (f.n >= 2) {
       // Equal values give exactly 0 here (the mean of equal values can differ from them in the
       // last bit, so the deviations are not summed for them).
@@ -126,7 +126,12 @@ std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs) 
         f.sd = std::sqrt(squares / (f.n - 1));
       }
     }
-    add_capability(f);
+    if (f.sd && !std::isfinite(*f.sd)) {
+      f.sd.reset();
+      f.not_computed = "values too far apart for a finite s: no s, Cp or Cpk";
+    } else {
+      add_capability(f);
+    }
     out.push_back(std::move(f));
   }
   return out;

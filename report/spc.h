@@ -19,8 +19,9 @@ struct SpcFigure {
   std::string unit;  // as the newest run that has the key stored it
   int n = 0;         // runs that have the key (>= 1)
   double mean = 0.0;
-  // Sample standard deviation (divisor n - 1). Empty when n < 2; 0 when every value is the
-  // same (then Cp and Cpk are not given: a process without spread has no capability ratio).
+  // Sample standard deviation (divisor n - 1). Empty when n < 2 (or the values are too far
+  // apart for a finite s); 0 when every value is the same (then Cp and Cpk are not given: a
+  // process without spread has no capability ratio).
   std::optional<double> sd;
   // The limits of the newest run that has the key; limits_changed: some older run of the
   // selection had other limits (its verdicts were given against those).

@@ -223,6 +223,16 @@ TEST(Spc, TableHasARowPerCharacteristicAndSaysWhatIsMissing) {
   EXPECT_NE(text.find("Base circle runout (dial): 1 run"), std::string::npos) << text;
 }
 
+TEST(Spc, HugeValuesGiveAFiniteMeanAndNoInfiniteS) {
+  // 1.5e308 and -1.5e308: their sum is fine, but 1.5e308 twice would overflow a plain sum, and
+  // the squared deviations overflow whatever the order.
+  const std::vector<SpcFigure> same =
+      spc_figures({run(1, {make("lift_error", 1.5e308)}), run(2, {make("lift_error", 1.7e308)})});
+  EXPECT_NEAR(figure(same, "lift_error").mean, 1.6e308, 1e294);
+  EXPECT_FALSE(figure(same, "lift_error").sd.has_value());
+  EXPECT_NE(figure(same, "lift_error").not_computed.find("finite s"), std::string::npos);
+}
+
 TEST(Spc, NoRunsNoFigures) { EXPECT_TRUE(spc_figures({}).empty()); }
 
 }  // namespace
