@@ -158,6 +158,7 @@ std::string spc_table_text(const std::vector<SpcFigure>& figures) {
                   f.judged_count);
     out += line;
   }
+  if (!figures.empty()) out += "LSL, USL: the limits of the newest run that has the characteristic\n";
   for (const SpcFigure& f : figures) {
     if (f.limits_changed) {
       out += characteristic_title(f.key) + ": the limits changed over these runs; shown are those of run " +

@@ -221,6 +221,7 @@ TEST(Spc, TableHasARowPerCharacteristicAndSaysWhatIsMissing) {
   EXPECT_NE(text.find("Base circle runout (dial)"), std::string::npos) << text;
   EXPECT_NE(text.find("+10.00       -          -  0/0"), std::string::npos) << text;
   EXPECT_NE(text.find("Base circle runout (dial): 1 run"), std::string::npos) << text;
+  EXPECT_NE(text.find("LSL, USL: the limits of the newest run"), std::string::npos) << text;
 }
 
 TEST(Spc, HugeValuesGiveAFiniteMeanAndNoInfiniteS) {
