@@ -1,6 +1,7 @@
 // The PLC's handshake block over libmodbus (modbus_context.cc makes the calls).
 #include "acquisition/plc_link.h"
 
+#include <algorithm>
 #include <array>
 #include <utility>
 
@@ -37,7 +38,8 @@ void ModbusPlcLink::disconnect() { ctx_->close(); }
 bool ModbusPlcLink::connected() const { return ctx_->is_open(); }
 
 Result<PlcRequestWords> ModbusPlcLink::read_request() {
-  // The whole block in one request: the PLC's words are 0-2 and 12.
+  // The whole block in one request, so part, lobe, serial and operator are from one moment:
+  // the PLC's words are 0-2 and 12-36.
   std::array<std::uint16_t, plc_registers::kBlockWords> regs{};
   if (Status s = ctx_->read_registers(RegisterTable::kHolding, settings_.base_address, plc_registers::kBlockWords,
                                       regs.data());
@@ -49,6 +51,8 @@ Result<PlcRequestWords> ModbusPlcLink::read_request() {
   w.part_number = regs[plc_registers::kPartNumber];
   w.lobe = regs[plc_registers::kLobe];
   w.ground_with = regs[plc_registers::kGroundWith];
+  std::copy_n(regs.begin() + plc_registers::kSerialFirst, plc_registers::kSerialWords, w.serial.begin());
+  std::copy_n(regs.begin() + plc_registers::kOperatorFirst, plc_registers::kOperatorWords, w.operator_name.begin());
   return w;
 }
 

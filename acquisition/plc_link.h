@@ -21,7 +21,7 @@ class PlcRegisters {
   virtual Status connect() = 0;
   virtual void disconnect() = 0;
   virtual bool connected() const = 0;
-  // Words 0..2 in one read.
+  // The PLC's words (0..2, 12..36) in one read of the whole block.
   virtual Result<PlcRequestWords> read_request() = 0;
   // Words 3..11 in one write (function 16), so the PLC never sees done before the result.
   virtual Status write_service_words(const PlcServiceWords& words) = 0;
@@ -31,7 +31,7 @@ class PlcRegisters {
 struct PlcLinkSettings {
   // Transport, TCP host and port or serial line, unit id, response timeout; `map` unused.
   ModbusSettings link;
-  int base_address = 0;  // holding register of word 0 (the request); the block is 13 words
+  int base_address = 0;  // holding register of word 0 (the request); the block is 37 words
 };
 
 // Owns one libmodbus context. Not thread-safe: one thread polls the PLC.

@@ -12,6 +12,8 @@
 
 #include "cli/cli_common.h"
 #include "cli/commands_spc.h"
+#include "cli/commands_dfq.h"
+#include "cli/commands_report.h"
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "report/run_json.h"
@@ -62,7 +64,10 @@ struct ListOptions {
   DataPaths paths;
   RunQuery query;
   std::string since, until;
+  std::string verdict;  // --verdict; empty: any
   bool json_out = false;
+  std::string plot;                           // trend: draw to this file instead of printing
+  std::string characteristic = "lift_error";  // trend --plot: which characteristic
 };
 
 Result<RunQuery> resolved(const ListOptions& o) {
@@ -73,6 +78,7 @@ Result<RunQuery> resolved(const ListOptions& o) {
   if (!until) return until.error();
   q.since_utc = *since;
   q.until_utc = *until;
+  if (!o.verdict.empty()) q.verdict = verdict_from_name(o.verdict);
   return q;
 }
 
@@ -101,20 +107,54 @@ int cmd_list(const ListOptions& o) {
     print_runs_json(*runs);
     return kExitOk;
   }
-  std::printf("%6s  %-20s  %-10s  %-24s %4s  %-16s  %4s  %8s  %8s  %8s  %8s  %s\n", "run", "started (UTC)", "machine",
-              "part", "lobe", "serial", "revs", "max um", "rms um", "rep um", "phase", "status");
+  std::printf("%6s  %-20s  %-10s  %-24s %4s  %-16s  %4s  %8s  %8s  %8s  %8s  %-10s  %s\n", "run", "started (UTC)",
+              "machine", "part", "lobe", "serial", "revs", "max um", "rms um", "rep um", "phase", "verdict", "status");
   for (const RunSummary& r : *runs) {
-    std::printf("%6lld  %-20s  %-10s  %-24s %4d  %-16s  %4d  %8.2f  %8.2f  %8.2f  %8s  %s%s\n",
+    std::printf("%6lld  %-20s  %-10s  %-24s %4d  %-16s  %4d  %8.2f  %8.2f  %8.2f  %8s  %-10s  %s%s\n",
                 static_cast<long long>(r.id), r.started_utc.c_str(), r.machine.c_str(), r.part.c_str(), r.lobe,
                 r.serial.empty() ? "-" : r.serial.c_str(), r.revolutions, r.max_abs_error_um, r.rms_error_um,
-                r.repeatability_um, opt(r.phase_error_deg, 3, true).c_str(), r.status.c_str(),
-                r.raw_pruned_utc.empty() ? "" : " (raw pruned)");
+                r.repeatability_um, opt(r.phase_error_deg, 3, true).c_str(), verdict_name(r.verdict).data(),
+                r.status.c_str(), r.raw_pruned_utc.empty() ? "" : " (raw pruned)");
   }
   if (runs->empty()) std::printf("(no runs match)\n");
   return kExitOk;
 }
 
 // ---- runs show ----
+
+// "-10.000 .. 10.000", "<= 8.000", ">= -1.000" or "-": a tolerance as the table shows it.
+std::string limits_text(const Limits& l, int decimals) {
+  if (l.lower && l.upper) return format_fixed(*l.lower, decimals) + " .. " + format_fixed(*l.upper, decimals);
+  if (l.upper) return "<= " + format_fixed(*l.upper, decimals);
+  if (l.lower) return ">= " + format_fixed(*l.lower, decimals);
+  return "-";
+}
+
+// Decimals that show a figure in its unit to about 1 nm of lift.
+int decimals_for(const std::string& unit) {
+  if (unit == "mm/deg" || unit == "mm/deg^2") return 6;
+  if (unit == "deg") return 4;
+  return 2;
+}
+
+void print_characteristics(const StoredRun& r) {
+  std::printf(
+      "tolerances        %s (lift error judged %s)\n", verdict_name(r.summary.verdict).data(),
+      r.lift_error_reference == LiftErrorReference::kNominal ? "at the nominal timing" : "after the best-fit phase");
+  if (r.characteristics.empty()) {
+    std::printf("  not judged: no characteristics recorded with this run\n");
+    return;
+  }
+  std::printf("  %-40s %14s %14s  %-24s %-9s %s\n", "characteristic", "value", "range", "limits", "unit", "verdict");
+  for (const Characteristic& c : r.characteristics) {
+    const int d = decimals_for(c.unit);
+    std::string title = characteristic_title(c.key);
+    if (c.from_deg && c.to_deg) title += " (" + std::to_string(*c.from_deg) + ".." + std::to_string(*c.to_deg) + ")";
+    const std::string range = c.min == c.max ? "" : format_fixed(c.max - c.min, d);
+    std::printf("  %-40s %14s %14s  %-24s %-9s %s\n", title.c_str(), format_fixed(c.value, d).c_str(), range.c_str(),
+                limits_text(c.limits, d).c_str(), c.unit.c_str(), verdict_name(c.verdict).data());
+  }
+}
 
 struct RunOptions {
   DataPaths paths;
@@ -197,6 +237,7 @@ int cmd_show(const RunOptions& o) {
                                                    : "assumed: the table in force");
   }
   if (r.inspection) std::printf("  inspection        measured to inspect: the correction in force, unchanged\n");
+  print_characteristics(r);
   if (r.pushes.empty()) std::printf("  NC pushes         none\n");
   for (const NcPush& p : r.pushes) {
     std::string detail = ", version " + std::to_string(p.table_version);
@@ -221,6 +262,7 @@ struct ExportOptions {
 };
 
 int cmd_export(const ExportOptions& o) {
+  if (o.id == 0) return report_error(make_error(ErrorCode::kInvalidInput, "give the run id to export as CSV"));
   Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<StoredRun> run = load(*store, o.id, o.paths);
@@ -349,6 +391,10 @@ int cmd_compare(const CompareOptions& o) {
 // ---- runs trend ----
 
 int cmd_trend(const ListOptions& o) {
+  if (!o.plot.empty()) {
+    Result<RunQuery> q = resolved(o);
+    return q ? cmd_trend_plot(o.paths, *q, o.plot, o.characteristic) : report_error(q.error());
+  }
   Result<std::vector<RunSummary>> runs = selected_runs(o, &RunStore::trend);
   if (!runs) return report_error(runs.error());
   if (o.json_out) {
@@ -509,6 +555,8 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
                        "Only runs of the part with this serial number (matched exactly, case and all)");
   list_cmd->add_option("--status", list->query.status, "Only runs with this status")
       ->check(CLI::IsMember({"measured", "pushed"}));
+  list_cmd->add_option("--verdict", list->verdict, "Only runs with this verdict against their tolerances")
+      ->check(CLI::IsMember({"in", "out", "not_judged"}));
   list_cmd->add_option("--limit", list->query.limit, "Most runs to show")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
@@ -525,14 +573,21 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   CLI::App* export_cmd = runs->add_subcommand(
       "export",
       "One run per cam degree as CSV (RFC 4180): design, each revolution, mean, spread, error, correction, the "
-      "run's identity.");
+      "run's identity. --format dfq: the characteristics of runs as an AQDEF (Q-DAS) file.");
   add_data_options(*export_cmd, exp->paths);
-  export_cmd->add_option("id", exp->id, "Run id (see `runs list`)")->required();
-  export_cmd->add_option("--out", exp->out, "Write the CSV to this file instead of standard output");
+  export_cmd->add_option("id", exp->id, "Run id (see `runs list`); --format dfq also takes a selection");
+  auto dfq = add_dfq_export_options(*export_cmd);
+  export_cmd->add_option("--out", exp->out, "Write the CSV (or DFQ) to this file instead of standard output");
   export_cmd->add_flag("--comments", exp->comments,
                        "Put '#' lines saying the run, frame and units before the header (spreadsheets read them "
                        "as data rows)");
-  export_cmd->callback([&action, exp] { action = [exp] { return cmd_export(*exp); }; });
+  export_cmd->callback([&action, exp, dfq] {
+    action = [exp, dfq] {
+      if (wants_dfq(*dfq)) return cmd_export_dfq(*dfq, exp->paths, exp->id, exp->out);
+      if (int refused = refuse_dfq_options_for_csv(*dfq); refused != kExitOk) return refused;
+      return cmd_export(*exp);
+    };
+  });
 
   auto cmp = std::make_shared<CompareOptions>();
   CLI::App* compare_cmd = runs->add_subcommand("compare",
@@ -552,7 +607,14 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   trend_cmd->add_option("--limit", trend->query.limit, "At most the newest this many runs")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
+  CLI::Option* trend_plot =
+      trend_cmd->add_option("--plot", trend->plot, "Draw the characteristic over the runs to this .svg, .pdf or .png");
+  trend_cmd->add_option("--characteristic", trend->characteristic, "With --plot: the characteristic's key")
+      ->capture_default_str()
+      ->needs(trend_plot);
   trend_cmd->callback([&action, trend] { action = [trend] { return cmd_trend(*trend); }; });
+
+  add_report_commands(runs, action);
 
   auto plot = std::make_shared<PlotOptions>();
   CLI::App* plot_cmd = runs->add_subcommand("plot", "SVG of one run's lift error per cam degree, polar and linear.");

@@ -15,6 +15,7 @@
 #include <Eigen/Dense>
 #include <unsupported/Eigen/FFT>
 
+#include "compensation/inspection.h"
 #include "compensation/message_text.h"
 
 namespace gaugeloop {
@@ -299,6 +300,31 @@ Result<LobeAnalysis> analyse_lobe(const MeasuredRun& run, const DegreeTable& des
   return analyse_lobe(run, DesignReading::interpolating(design_lift_mm), part, settings);
 }
 
+namespace {
+
+// The lift error left after turning the design by phi: (mean(theta) - design(theta - phi)).
+PhaseFit residual_after_rotation(const DegreeTable& mean_lift_mm, const DesignReading& design, double phi) {
+  PhaseFit fit;
+  fit.phase_error_deg = phi;
+  double squares = 0.0;
+  double lowest = std::numeric_limits<double>::infinity();
+  double highest = -std::numeric_limits<double>::infinity();
+  for (int d = 0; d < kDegreesPerRevolution; ++d) {
+    const size_t i = static_cast<size_t>(d);
+    const double r = (mean_lift_mm[i] - design.at(d - phi)) * 1000.0;
+    fit.residual_error_um[i] = r;
+    fit.max_abs_residual_um = std::max(fit.max_abs_residual_um, std::abs(r));
+    squares += r * r;
+    lowest = std::min(lowest, r);
+    highest = std::max(highest, r);
+  }
+  fit.rms_residual_um = std::sqrt(squares / kDegreesPerRevolution);
+  fit.peak_to_valley_residual_um = highest - lowest;
+  return fit;
+}
+
+}  // namespace
+
 Result<LobeAnalysis> analyse_lobe(const MeasuredRun& run, const DesignReading& design, const Part& part,
                                   const AnalysisSettings& settings) {
   const DegreeTable& design_lift_mm = design.table();
@@ -403,6 +429,16 @@ Result<LobeAnalysis> analyse_lobe(const MeasuredRun& run, const DesignReading& d
   // A round design has no timing to report: 0.
   a.phase_error_deg = best_rotation_deg(a.mean_lift_mm, base, design).value_or(0.0);
   a.harmonic_amplitude_um = harmonic_amplitudes_um(a.error_um);
+  const PhaseFit fit = residual_after_rotation(a.mean_lift_mm, design, a.phase_error_deg);
+  a.residual_error_um = fit.residual_error_um;
+  a.max_abs_residual_um = fit.max_abs_residual_um;
+  a.rms_residual_um = fit.rms_residual_um;
+  a.peak_to_valley_residual_um = fit.peak_to_valley_residual_um;
+  // A window of fewer than 3 whole degrees has no roundness to tell: both stay 0.
+  if (Result<BaseCircleInspection> circle = inspect_base_circle(a.error_um, settings)) {
+    a.dial_runout_um = circle->dial_runout_um;
+    a.roundness_um = circle->roundness_um;
+  }
   return a;
 }
 
@@ -424,23 +460,7 @@ Result<PhaseFit> fit_phase_error(const LobeAnalysis& analysis, const DesignReadi
                                                " deg accepted; check the clamping, c_offset_deg "
                                                "and probe_offset_deg before compensating");
   }
-  PhaseFit fit;
-  fit.phase_error_deg = *phi;
-  double squares = 0.0;
-  double lowest = std::numeric_limits<double>::infinity();
-  double highest = -std::numeric_limits<double>::infinity();
-  for (int d = 0; d < kDegreesPerRevolution; ++d) {
-    const size_t i = static_cast<size_t>(d);
-    const double r = (analysis.mean_lift_mm[i] - design.at(d - *phi)) * 1000.0;
-    fit.residual_error_um[i] = r;
-    fit.max_abs_residual_um = std::max(fit.max_abs_residual_um, std::abs(r));
-    squares += r * r;
-    lowest = std::min(lowest, r);
-    highest = std::max(highest, r);
-  }
-  fit.rms_residual_um = std::sqrt(squares / kDegreesPerRevolution);
-  fit.peak_to_valley_residual_um = highest - lowest;
-  return fit;
+  return residual_after_rotation(analysis.mean_lift_mm, design, *phi);
 }
 
 BaseCircleRunout fit_base_circle_runout(const DegreeTable& error_um, const DegreeTable& design_lift_mm) {

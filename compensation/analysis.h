@@ -48,7 +48,11 @@ std::string base_circle_window_text(const AnalysisSettings& settings);
 //  - phase_error_deg: the rotation of the lobe, least squares (fit_phase_error);
 //  - base_circle_runout_um: total indicator reading of the base circle, 2 e for an
 //    eccentricity e (fit_base_circle_runout);
-//  - harmonic_amplitude_um[k]: amplitude of harmonic k of error_um (harmonic_amplitudes_um).
+//  - harmonic_amplitude_um[k]: amplitude of harmonic k of error_um (harmonic_amplitudes_um);
+//  - residual_error_um and its max, RMS and peak to valley: the lift error after turning the
+//    design by phase_error_deg (fit_phase_error's residual, without its limit on the phase);
+//  - dial_runout_um, roundness_um: inspect_base_circle over the base-circle window of
+//    `settings` (0 for a window of fewer than 3 whole degrees).
 // Errors (kInvalidInput): fewer than 3 revolutions; a non-finite sample or design value;
 // a window that is not in (0, 180) deg wide or holds no whole degree; a window where the
 // design lift is not on the base circle (|design| > 1 um), naming the degrees.

@@ -30,14 +30,19 @@ Result<std::vector<ZoneArc>> zone_arcs(const LobeTolerances& tolerances, const D
 const DegreeTable& judged_lift_error_um(const LobeAnalysis& analysis, LiftErrorReference reference);
 
 struct LobeJudgement {
-  std::vector<Characteristic> characteristics;  // in the key order core/tolerance.h lists
+  // In this order: lift_error, then lift_error.<zone> for each zone (in LobeZone order),
+  // velocity_error and its zones, acceleration_error and its zones, phase,
+  // base_circle_runout, base_circle_runout_h1, roundness.
+  std::vector<Characteristic> characteristics;
   Verdict verdict = Verdict::kNotJudged;
 };
 
 // Every characteristic of the run, judged where the tolerances give limits: whole-turn lift,
 // velocity and acceleration error of the judged table (derivatives by error_derivatives with
 // `settings`), the same per zone, phase, base-circle runout (dial and first harmonic) and
-// roundness. Errors: those of zone_arcs and error_derivatives.
+// roundness. Every figure is given, judged or not (so SPC sees the same keys on every run);
+// base_circle_runout_h1 is never judged (the dial figure is). Errors: those of zone_arcs and
+// error_derivatives.
 Result<LobeJudgement> judge_lobe(const LobeAnalysis& analysis, const LobeTolerances& tolerances,
                                  const InspectionSettings& settings = {});
 

@@ -2,6 +2,8 @@
 #include "config/part_file.h"
 
 #include <cctype>
+#include <cmath>
+#include <sstream>
 
 #include "config/toml_reader.h"
 #include "core/text_file.h"
@@ -17,6 +19,189 @@ bool valid_program_name(const std::string& name) {
   return true;
 }
 
+std::string number_text(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+// "file:line" of a node (the file alone when toml++ gives no line).
+std::string at(std::string_view source, const toml::node& node) {
+  const auto line = node.source().begin.line;
+  return std::string(source) + (line > 0 ? ":" + std::to_string(line) : std::string());
+}
+
+// The two numbers of a `[first, second]` array, or why not. Only the shape is checked here.
+std::optional<std::pair<double, double>> number_pair(TomlReader& r, std::string_view key, const toml::array& a,
+                                                     std::string_view what) {
+  if (a.size() != 2) {
+    r.fail(r.where(key) + ": expected " + std::string(what) + ", two numbers; got " + std::to_string(a.size()));
+    return std::nullopt;
+  }
+  const auto first = a[0].value<double>();
+  const auto second = a[1].value<double>();
+  if (!first || !second || !a[0].is_number() || !a[1].is_number() || !std::isfinite(*first) ||
+      !std::isfinite(*second)) {
+    r.fail(r.where(key) + ": expected " + std::string(what) + ", two finite numbers");
+    return std::nullopt;
+  }
+  return std::pair{*first, *second};
+}
+
+// A tolerance that may be one-sided or not: a number x > 0 means [-x, x]; `[lower, upper]`
+// gives both limits, lower < upper. Absent: no limits (not judged).
+Limits symmetric_or_range(TomlReader& r, const toml::table& table, std::string_view key) {
+  const toml::node* n = table.get(key);
+  if (n == nullptr) return {};
+  const std::string allowed = "; give a number x > 0 for [-x, x], or [lower, upper] with lower < upper";
+  if (const toml::array* a = n->as_array()) {
+    auto pair = number_pair(r, key, *a, "[lower, upper]");
+    if (!pair) return {};
+    if (pair->first >= pair->second) {
+      r.fail(r.where(key) + ": lower limit " + number_text(pair->first) + " is not below upper limit " +
+             number_text(pair->second) + allowed);
+      return {};
+    }
+    return Limits{pair->first, pair->second};
+  }
+  const auto v = n->value<double>();
+  if (!n->is_number() || !v || !std::isfinite(*v)) {
+    r.fail(r.where(key) + ": expected a number" + allowed);
+    return {};
+  }
+  if (*v <= 0.0) {
+    r.fail(r.where(key) + ": " + number_text(*v) + " is not a tolerance" + allowed);
+    return {};
+  }
+  return Limits{-*v, *v};
+}
+
+// A figure that only has an upper limit (a runout, a roundness): one number > 0.
+Limits upper_only(TomlReader& r, const toml::table& table, std::string_view key) {
+  const toml::node* n = table.get(key);
+  if (n == nullptr) return {};
+  const std::string allowed = "; it has an upper limit only: give one number > 0, e.g. " + std::string(key) + " = 8.0";
+  if (n->is_array()) {
+    r.fail(r.where(key) + ": [lower, upper] is not allowed here" + allowed);
+    return {};
+  }
+  const auto v = n->value<double>();
+  if (!n->is_number() || !v || !std::isfinite(*v)) {
+    r.fail(r.where(key) + ": expected a number" + allowed);
+    return {};
+  }
+  if (*v <= 0.0) {
+    r.fail(r.where(key) + ": " + number_text(*v) + " is not a limit" + allowed);
+    return {};
+  }
+  return Limits{std::nullopt, *v};
+}
+
+// One [[tolerance.zone]]: which zone, where it is (by cam angle or by design lift) and its
+// limits. Overlaps and zones that hold no degree depend on the design and are checked when
+// the run is judged; here only what the file alone can tell.
+std::optional<ZoneTolerance> read_zone(const toml::table& table, std::string_view source, TomlReader& outer) {
+  TomlReader r(table, source, "tolerance.zone.");
+  r.allow_only(
+      {"zone", "angle_deg", "lift_mm", "lift_error_um", "velocity_error_mm_per_deg", "acceleration_error_mm_per_deg2"});
+  ZoneTolerance z;
+  if (!r.has("zone")) {
+    r.fail(at(source, table) + ": [[tolerance.zone]] without key `tolerance.zone.zone`; name the zone: " +
+           "base_circle, opening_ramp, opening_flank, nose, closing_flank or closing_ramp");
+  } else {
+    const std::string name =
+        r.choice("zone", std::nullopt,
+                 {"base_circle", "opening_ramp", "opening_flank", "nose", "closing_flank", "closing_ramp"});
+    if (auto zone = lobe_zone_from_name(name)) z.zone = *zone;
+  }
+  const bool by_angle = r.has("angle_deg");
+  z.by_lift = r.has("lift_mm");
+  if (by_angle == z.by_lift) {
+    r.fail((by_angle ? r.where("lift_mm") : at(source, table) + ": [[tolerance.zone]]") +
+           ": give exactly one of angle_deg = [from, to] (cam degrees) or lift_mm = [from, to] (design lift)");
+  }
+  if (by_angle) {
+    const toml::array* a = table.get("angle_deg")->as_array();
+    if (a == nullptr) {
+      r.fail(r.where("angle_deg") +
+             ": expected [from, to], the arc from the first angle up to the second, in "
+             "cam degrees with the nose at 0, each in [-360, 360]");
+    } else if (auto pair = number_pair(r, "angle_deg", *a, "[from, to] in cam degrees")) {
+      for (double deg : {pair->first, pair->second}) {
+        if (deg < -360.0 || deg > 360.0) {
+          r.fail(r.where("angle_deg") + ": " + number_text(deg) + " is out of range; angles are in [-360, 360]");
+        }
+      }
+      z.from_deg = pair->first;
+      z.to_deg = pair->second;
+    }
+  }
+  if (z.by_lift) {
+    const toml::array* a = table.get("lift_mm")->as_array();
+    if (a == nullptr) {
+      r.fail(r.where("lift_mm") + ": expected [from, to], the design lift in mm from `from` (included) up to `to`");
+    } else if (auto pair = number_pair(r, "lift_mm", *a, "[from, to] in mm of design lift")) {
+      if (pair->first < 0.0 || pair->first >= pair->second) {
+        r.fail(r.where("lift_mm") + ": [" + number_text(pair->first) + ", " + number_text(pair->second) +
+               "] is not a lift band; allowed 0 <= from < to");
+      }
+      z.from_lift_mm = pair->first;
+      z.to_lift_mm = pair->second;
+    }
+  }
+  z.lift_error_um = symmetric_or_range(r, table, "lift_error_um");
+  z.velocity_error_mm_per_deg = symmetric_or_range(r, table, "velocity_error_mm_per_deg");
+  z.acceleration_error_mm_per_deg2 = symmetric_or_range(r, table, "acceleration_error_mm_per_deg2");
+  if (r.error) {
+    outer.fail(r.error->message);
+    return std::nullopt;
+  }
+  return z;
+}
+
+// [tolerance]: absent means nothing is judged.
+LobeTolerances read_tolerances(TomlReader& top, std::string_view source) {
+  LobeTolerances t;
+  const toml::table* table = top.subtable("tolerance");
+  if (table == nullptr) return t;
+  TomlReader r(*table, source, "tolerance.");
+  r.allow_only({"lift_error", "lift_error_um", "velocity_error_mm_per_deg", "acceleration_error_mm_per_deg2",
+                "phase_deg", "base_circle_runout_um", "roundness_um", "zone"});
+  const std::string reference = r.choice("lift_error", "best_fit", {"best_fit", "nominal"});
+  t.lift_error_reference = reference == "nominal" ? LiftErrorReference::kNominal : LiftErrorReference::kBestFit;
+  t.lift_error_um = symmetric_or_range(r, *table, "lift_error_um");
+  t.velocity_error_mm_per_deg = symmetric_or_range(r, *table, "velocity_error_mm_per_deg");
+  t.acceleration_error_mm_per_deg2 = symmetric_or_range(r, *table, "acceleration_error_mm_per_deg2");
+  t.phase_deg = symmetric_or_range(r, *table, "phase_deg");
+  t.base_circle_runout_um = upper_only(r, *table, "base_circle_runout_um");
+  t.roundness_um = upper_only(r, *table, "roundness_um");
+  if (const toml::node* zones = table->get("zone")) {
+    const toml::array* list = zones->as_array();
+    if (list == nullptr || !list->is_array_of_tables()) {
+      r.fail(r.where("zone") + ": expected [[tolerance.zone]] tables, one per zone");
+    } else {
+      std::vector<std::string> first_at;  // "file:line" of each zone read, by index into t.zones
+      for (const toml::node& node : *list) {
+        const toml::table& zt = *node.as_table();
+        std::optional<ZoneTolerance> z = read_zone(zt, source, r);
+        if (!z) break;
+        for (size_t i = 0; i < t.zones.size(); ++i) {
+          if (t.zones[i].zone == z->zone) {
+            r.fail(at(source, *zt.get("zone")) + ": key `tolerance.zone.zone`: zone `" +
+                   std::string(lobe_zone_name(z->zone)) + "` is given twice (first at " + first_at[i] +
+                   "); one [[tolerance.zone]] per zone");
+          }
+        }
+        if (r.error) break;
+        t.zones.push_back(*z);
+        first_at.push_back(at(source, *zt.get("zone")));
+      }
+    }
+  }
+  if (r.error) top.fail(r.error->message);
+  return t;
+}
+
 }  // namespace
 
 Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_name,
@@ -26,7 +211,7 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
   const toml::table& table = *parsed;
   TomlReader r(table, source_name);
   r.allow_only({"name", "lobe", "lift_table", "follower", "follower_radius_mm", "base_circle_radius_mm",
-                "wheel_radius_mm", "rotation_sense", "c_offset_deg", "probe_offset_deg", "nc_program"});
+                "wheel_radius_mm", "rotation_sense", "c_offset_deg", "probe_offset_deg", "nc_program", "tolerance"});
   PartFile out;
   Part& p = out.part;
   p.name = r.text("name", std::nullopt);
@@ -54,6 +239,7 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
     r.fail(r.where("nc_program") + ": `" + out.nc_program +
            "` is not a valid NC program name; use up to 24 letters, digits and '_', starting with a letter");
   }
+  p.tolerances = read_tolerances(r, source_name);
   if (r.error) return *r.error;
   const std::filesystem::path lt(table_path);
   p.lift_table = lt.is_absolute() ? lt : base_dir / lt;

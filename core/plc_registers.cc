@@ -1,5 +1,8 @@
-// Names of the PLC handshake's result codes, as the log and the docs say them.
+// Names of the PLC handshake's result codes, as the log and the docs say them; the words
+// in the block as the PLC and the service write them.
 #include "core/plc_registers.h"
+
+#include <cstdio>
 
 namespace gaugeloop {
 
@@ -23,8 +26,51 @@ std::string_view plc_result_name(PlcResultCode code) {
       return "busy or stopping";
     case PlcResultCode::kOtherFault:
       return "other fault";
+    case PlcResultCode::kBadIdentity:
+      return "bad serial number or operator";
   }
   return "unknown result code";
+}
+
+Status encode_plc_text(std::string_view text, std::span<std::uint16_t> words) {
+  if (text.size() > 2 * words.size()) {
+    return make_error(ErrorCode::kInvalidInput, "'" + std::string(text) + "' has " + std::to_string(text.size()) +
+                                                    " characters; the PLC's " + std::to_string(words.size()) +
+                                                    " words hold " + std::to_string(2 * words.size()));
+  }
+  auto byte = [&text](std::size_t at) -> unsigned {
+    return at < text.size() ? static_cast<unsigned char>(text[at]) : 0u;
+  };
+  for (std::size_t i = 0; i < words.size(); ++i) {
+    words[i] = static_cast<std::uint16_t>((byte(2 * i) << 8) | byte(2 * i + 1));
+  }
+  return {};
+}
+
+Result<std::string> decode_plc_text(std::span<const std::uint16_t> words, int first_word, int base_address,
+                                    std::string_view what) {
+  std::string text;
+  text.reserve(2 * words.size());
+  for (std::size_t at = 0; at < 2 * words.size(); ++at) {
+    const unsigned w = words[at / 2];
+    const bool high = at % 2 == 0;
+    const unsigned byte = high ? (w >> 8) : (w & 0xffu);
+    if (byte == 0) break;
+    if (byte < 0x20 || byte > 0x7e) {
+      const int word = first_word + static_cast<int>(at / 2);
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%02X", byte);
+      return make_error(ErrorCode::kInvalidInput,
+                        "PLC " + std::string(what) + ": word " + std::to_string(word) + " (holding register " +
+                            std::to_string(base_address + word) + "), " + (high ? "high" : "low") + " byte, is " + hex +
+                            ", not printable ASCII (0x20 to 0x7E); the PLC program must write text there, "
+                            "ended by a NUL byte, or 0 in every word when there is none");
+    }
+    text.push_back(static_cast<char>(byte));
+  }
+  const std::size_t first = text.find_first_not_of(' ');
+  if (first == std::string::npos) return std::string();
+  return text.substr(first, text.find_last_not_of(' ') - first + 1);
 }
 
 std::array<std::uint16_t, plc_registers::kServiceWords> encode_service_words(const PlcServiceWords& w) {

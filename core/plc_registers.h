@@ -6,13 +6,17 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
+#include <string>
 #include <string_view>
+
+#include "core/result.h"
 
 namespace gaugeloop {
 
 // Offsets from the configured base address, in the PLC's holding registers (function 03 to
-// read, 16 to write). Words 0-2 and 12 are the PLC's; 3-11 the service's, written in one
-// request. The service reads words 0-12 in one request.
+// read, 16 to write). Words 0-2 and 12-36 are the PLC's; 3-11 the service's, written in one
+// request. The service reads the whole block, words 0-36, in one request.
 namespace plc_registers {
 inline constexpr int kRequest = 0;        // PLC: bit 0 = measure; a rising edge is one request
 inline constexpr int kPartNumber = 1;     // PLC: uint16, the [[part]] plc_part_number
@@ -31,10 +35,23 @@ inline constexpr int kTableVersion = 11;  // service: table version pushed, 0 wh
 // asked), 1..65534 = that version, 65535 = ground from the design (no table).
 inline constexpr int kGroundWith = 12;
 inline constexpr std::uint16_t kGroundWithDesign = 0xFFFF;
-inline constexpr int kPlcWords = 3;  // words 0..2
+// PLC: the part's serial number and the operator, ASCII text two characters a word, the first
+// in the high byte (an S7 Array of Char, or a STRING's characters without its two length
+// bytes, maps onto the registers so: S7 memory is big-endian). The text ends at the first NUL
+// byte or with the last word; all words 0: not given. 32 characters hold the serial numbers
+// of part marking (DataMatrix serials run 10-25) with room; 16 an operator's badge number or
+// short name. Set with the part and lobe numbers, before the request rises.
+inline constexpr int kSerialFirst = 13;
+inline constexpr int kSerialWords = 16;  // words 13..28, 32 characters
+inline constexpr int kOperatorFirst = kSerialFirst + kSerialWords;
+inline constexpr int kOperatorWords = 8;  // words 29..36, 16 characters
+inline constexpr int kPlcWords = 3;       // words 0..2
 inline constexpr int kServiceFirst = kHeartbeat;
-inline constexpr int kServiceWords = 9;  // words 3..11
-inline constexpr int kBlockWords = 13;
+inline constexpr int kServiceWords = 9;                              // words 3..11
+inline constexpr int kBlockWords = kOperatorFirst + kOperatorWords;  // 37
+// One read (function 03) carries at most 125 registers: the block is read in one request so
+// the PLC's words are always from one moment.
+static_assert(kBlockWords <= 125, "the handshake block must fit one Modbus read");
 inline constexpr std::uint16_t kMeasureBit = 0x0001;
 }  // namespace plc_registers
 
@@ -50,14 +67,17 @@ enum class PlcResultCode : std::uint16_t {
   kNcFault = 6,       // the NC program could not be written
   kNotNow = 7,        // another run in progress (HTTP, by hand) or the service stopping
   kOtherFault = 8,    // anything else: the service log and `gaugeloop events` say what
+  kBadIdentity = 9,   // the serial number or operator words hold a byte that is not text; nothing measured
 };
 
-// The PLC's words (0-2), as read.
+// The PLC's words (0-2, 12-36), as read.
 struct PlcRequestWords {
   std::uint16_t request = 0;
   std::uint16_t part_number = 0;
   std::uint16_t lobe = 0;
-  std::uint16_t ground_with = 0;  // word 12, as read
+  std::uint16_t ground_with = 0;                                             // word 12, as read
+  std::array<std::uint16_t, plc_registers::kSerialWords> serial{};           // words 13..28, as read
+  std::array<std::uint16_t, plc_registers::kOperatorWords> operator_name{};  // words 29..36, as read
   bool measure() const { return (request & plc_registers::kMeasureBit) != 0; }
   // The table version that ground the part: empty when not said (0), 0 for the design.
   std::optional<int> ground_with_version() const {
@@ -79,6 +99,20 @@ struct PlcServiceWords {
   std::uint16_t table_version = 0;
   bool operator==(const PlcServiceWords&) const = default;
 };
+
+// Text as the PLC writes it into `words`: two bytes a word, the first in the high byte, the
+// rest NUL. Bytes are taken as they are (a test may write a control byte). kInvalidInput when
+// the text has more bytes than the words hold (2 a word).
+Status encode_plc_text(std::string_view text, std::span<std::uint16_t> words);
+
+// The text the PLC wrote into `words` (see kSerialFirst): up to the first NUL byte, spaces
+// at either end trimmed (an S7 Char array is often padded with spaces); empty when the words
+// are all 0 or spaces. Bytes after the first NUL are not read. kInvalidInput when a byte
+// before it is not printable ASCII (0x20..0x7E), naming `what` ("serial number"), the word
+// (its offset `first_word` + i and its holding register `base_address` + offset), which
+// byte (high, low) and its value.
+Result<std::string> decode_plc_text(std::span<const std::uint16_t> words, int first_word, int base_address,
+                                    std::string_view what);
 
 // Words 3..11 in register order (run id high word first); decode is the inverse.
 std::array<std::uint16_t, plc_registers::kServiceWords> encode_service_words(const PlcServiceWords& w);

@@ -17,6 +17,7 @@
 #include <system_error>
 
 #include "compensation/flat_probe.h"
+#include "compensation/judgement.h"
 #include "compensation/periodic_spline.h"
 #include "compensation/table_evidence.h"
 #include "compensation/wheel_path.h"
@@ -175,6 +176,10 @@ Result<Prepared> prepare(const JobSettings& s) {
   if (!design_table) return in_step("the design", design_table.error());
   Result<DesignReading> design_reading = DesignReading::of_lobe(*design, s.part);
   if (!design_reading) return in_step("flat-probe reading", design_reading.error());
+  // Zones that do not fit this lobe are a mistake in the part file: found before measuring.
+  if (Result<std::vector<ZoneArc>> zones = zone_arcs(s.part.tolerances, design_reading->table()); !zones) {
+    return in_step("part " + s.part.name + " tolerances", zones.error());
+  }
   if (auto r = render_table_program(s.nc_template, s.nc_template_name, template_values(s), design_table->table, {});
       !r) {
     return r.error();
@@ -534,6 +539,7 @@ class JobRun {
                          format_fixed(a.rms_error_um, 2) + " um, phase " + format_fixed(a.phase_error_deg, 4) +
                          " deg, runout " + format_fixed(a.base_circle_runout_um, 2) + " um, repeatability " +
                          format_fixed(a.repeatability_um, 2) + " um");
+    judge();
     if (!s_.inspect) {
       const int revolutions = static_cast<int>(record_.measured.revolutions.size());
       Result<std::string> why = why_not_built_on(store_, ground_, a, revolutions, s_, evidence_);
@@ -554,6 +560,30 @@ class JobRun {
     }
     step("compensated", compensated_text(*decision));
     return {};
+  }
+
+  // The run's characteristics and verdict against the part's tolerances. A judgement that
+  // fails (prepare checked the zones, so only a bug gets here) leaves the run not judged
+  // rather than losing the measurement; the step says why.
+  void judge() {
+    record_.lift_error_reference = s_.part.tolerances.lift_error_reference;
+    Result<LobeJudgement> j = judge_lobe(record_.analysis, s_.part.tolerances);
+    if (!j) {
+      step("judged", "not judged: " + j.error().message);
+      return;
+    }
+    record_.characteristics = std::move(j->characteristics);
+    record_.verdict = j->verdict;
+    int judged = 0;
+    std::string out_keys;
+    for (const Characteristic& c : record_.characteristics) {
+      if (c.verdict == Verdict::kNotJudged) continue;
+      ++judged;
+      if (c.verdict == Verdict::kOut) out_keys += (out_keys.empty() ? "" : ", ") + c.key;
+    }
+    step("judged", std::string(verdict_name(record_.verdict)) + ": " + std::to_string(judged) + " of " +
+                       std::to_string(record_.characteristics.size()) + " characteristics judged" +
+                       (out_keys.empty() ? std::string() : "; out: " + out_keys));
   }
 
   // A table the geometry or the axis guards refuse (a concave flank the wheel no longer fits,
@@ -598,6 +628,8 @@ class JobRun {
     report_.run_id = *run_id;
     report_.measured = record_.measured;
     report_.analysis = record_.analysis;
+    report_.characteristics = record_.characteristics;
+    report_.tolerance_verdict = record_.verdict;
     report_.verdict = verdict_;
     report_.correction_max_um = correction_max_um_;
     report_.correction_in_force_run = ground_.run_id();

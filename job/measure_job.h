@@ -17,6 +17,7 @@
 #include "core/part.h"
 #include "core/result.h"
 #include "core/run.h"
+#include "core/tolerance.h"
 #include "job/nc_files.h"
 #include "nc_out/table_guards.h"
 #include "nc_out/table_writer.h"
@@ -112,6 +113,9 @@ struct JobReport {
   std::int64_t run_id = 0;
   MeasuredRun measured;
   LobeAnalysis analysis;
+  // The run against its lobe's tolerances (judge_lobe), as stored.
+  std::vector<Characteristic> characteristics;
+  Verdict tolerance_verdict = Verdict::kNotJudged;
   std::optional<std::int64_t> correction_in_force_run;  // whose correction was built on
   // The table that ground the part: its version (empty: the design), who said so ("plc",
   // "option", "assumed") and, when assumed, what the part's error said about it.

@@ -14,10 +14,11 @@ install(FILES ${PROJECT_SOURCE_DIR}/packaging/tmpfiles.conf DESTINATION lib/tmpf
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
 set(GAUGELOOP_DOCS
   PERFORMANCE.md acquisition.md architecture.md building.md compensation.md gauge.md http_api.md nc_output.md
-  parts.md service.md simulator.md storage.md virtual_grinder.md)
+  parts.md reports.md service.md simulator.md storage.md virtual_grinder.md)
 list(APPEND GAUGELOOP_DOCS spc_and_shafts.md)
 list(TRANSFORM GAUGELOOP_DOCS PREPEND ${PROJECT_SOURCE_DIR}/docs/)
 install(FILES ${GAUGELOOP_DOCS} DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
+install(FILES ${PROJECT_SOURCE_DIR}/docs/img/cam_report.png DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs/img)
 # The service's example config and what its relative paths name (gauge config, parts and
 # their lift tables, the NC template), so `serve --check` passes on it as installed. Listed,
 # not the folder: a run from the source tree leaves databases and NC files in it.

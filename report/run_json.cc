@@ -61,6 +61,7 @@ json run_summary_json(const RunSummary& r) {
           {"settings_hash", text_or_null(r.settings_hash)},
           {"serial", text_or_null(r.serial)},
           {"operator", text_or_null(r.operator_name)},
+          {"verdict", verdict_name(r.verdict)},
           {"note", r.note},
           {"nc_file", r.nc_file},
           {"raw_pruned_utc", text_or_null(r.raw_pruned_utc)}};
@@ -97,7 +98,34 @@ json run_detail_json(const StoredRun& r) {
   json pushes = json::array();
   for (const NcPush& p : r.pushes) pushes.push_back(nc_push_json(p));
   j["nc_pushes"] = pushes;
+  j["lift_error_reference"] = lift_error_reference_name(r.lift_error_reference);
+  j["max_abs_residual_um"] = a.max_abs_residual_um;
+  j["rms_residual_um"] = a.rms_residual_um;
+  j["peak_to_valley_residual_um"] = a.peak_to_valley_residual_um;
+  j["dial_runout_um"] = a.dial_runout_um;
+  j["roundness_um"] = a.roundness_um;
+  j["characteristics"] = characteristics_json(r.characteristics);
   return j;
+}
+
+json characteristic_json(const Characteristic& c) {
+  return {{"key", c.key},
+          {"title", characteristic_title(c.key)},
+          {"unit", c.unit},
+          {"value", c.value},
+          {"min", c.min},
+          {"max", c.max},
+          {"lower_limit", opt_json(c.limits.lower)},
+          {"upper_limit", opt_json(c.limits.upper)},
+          {"verdict", verdict_name(c.verdict)},
+          {"from_deg", opt_json(c.from_deg)},
+          {"to_deg", opt_json(c.to_deg)}};
+}
+
+json characteristics_json(const std::vector<Characteristic>& characteristics) {
+  json out = json::array();
+  for (const Characteristic& c : characteristics) out.push_back(characteristic_json(c));
+  return out;
 }
 
 namespace {

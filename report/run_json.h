@@ -23,6 +23,11 @@ nlohmann::json run_summary_json(const RunSummary& run);
 // the frame mapping (null if not recorded) and every push of the run (nc_push_json, oldest first).
 nlohmann::json run_detail_json(const StoredRun& run);
 
+// One characteristic of a run against its tolerances: key, title, unit, value, min, max,
+// lower_limit and upper_limit (null: none), verdict, from_deg and to_deg (null: not a zone).
+nlohmann::json characteristic_json(const Characteristic& c);
+nlohmann::json characteristics_json(const std::vector<Characteristic>& characteristics);
+
 // One NC push as `nc history --json` and `runs show --json` list it, without the program text.
 // Figures not recorded (pushes made by older versions) are null.
 nlohmann::json nc_push_json(const NcPush& push);

@@ -596,7 +596,8 @@ struct HttpApi::Impl {
   }
 
   void list_runs(const httplib::Request& req, httplib::Response& res) {
-    Result<Query> q = Query::of(req, {"part", "lobe", "machine", "serial", "since", "until", "status", "limit"});
+    Result<Query> q =
+        Query::of(req, {"part", "lobe", "machine", "serial", "since", "until", "status", "verdict", "limit"});
     if (!q) return send_error(res, q.error());
     Result<RunQuery> rq = run_query(*q, 50);
     if (!rq) return send_error(res, rq.error());
@@ -604,6 +605,9 @@ struct HttpApi::Impl {
     Result<std::string> st = q->choice("status", {"measured", "pushed"});
     if (!st) return send_error(res, st.error());
     rq->status = *st;
+    Result<std::string> verdict = q->choice("verdict", {"in", "out", "not_judged"});
+    if (!verdict) return send_error(res, verdict.error());
+    if (!verdict->empty()) rq->verdict = verdict_from_name(*verdict);
     with_store(res, [&](RunStore& store) -> Result<json> {
       Result<std::vector<RunSummary>> runs = store.list_runs(*rq);
       if (!runs) return runs.error();

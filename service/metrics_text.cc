@@ -60,6 +60,11 @@ void append_store_metrics(const StoreMetrics& m, std::string& out) {
   for (const auto& [kind, n] : m.events_by_kind) {
     out += "gaugeloop_events_stored{kind=\"" + prometheus_label_value(kind) + "\"} " + std::to_string(n) + "\n";
   }
+  family(out, "gaugeloop_runs_by_verdict", "gauge",
+         "Runs in the database by verdict against their lobe's tolerances (in, out, not_judged).");
+  for (const auto& [verdict, n] : m.runs_by_verdict) {
+    out += "gaugeloop_runs_by_verdict{verdict=\"" + prometheus_label_value(verdict) + "\"} " + std::to_string(n) + "\n";
+  }
   family(out, "gaugeloop_pending_tables", "gauge", "NC tables waiting for approval.");
   out += "gaugeloop_pending_tables " + std::to_string(m.pending_tables) + "\n";
 
@@ -72,6 +77,12 @@ void append_store_metrics(const StoreMetrics& m, std::string& out) {
   for (const LobeLastRun& r : m.last_runs) {
     out +=
         "gaugeloop_last_run_max_abs_error_meters" + labels(r) + " " + number(r.max_abs_error_um / kUmPerMetre) + "\n";
+  }
+  family(out, "gaugeloop_last_run_out_of_tolerance", "gauge",
+         "1 when the newest run of each lobe is out of tolerance, 0 when in; absent when not judged.");
+  for (const LobeLastRun& r : m.last_runs) {
+    if (r.verdict == Verdict::kNotJudged) continue;
+    out += "gaugeloop_last_run_out_of_tolerance" + labels(r) + (r.verdict == Verdict::kOut ? " 1\n" : " 0\n");
   }
   family(out, "gaugeloop_last_run_id", "gauge", "Id of the newest run of each lobe.");
   for (const LobeLastRun& r : m.last_runs) {

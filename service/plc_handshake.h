@@ -30,9 +30,10 @@ struct PlcCycleOutcome {
 class PlcCycleRunner {
  public:
   virtual ~PlcCycleRunner() = default;
-  // Starts a cycle for the PLC's words (part and lobe numbers, the table that ground the part)
-  // and returns at once: nullopt when it runs, or the outcome at once when no run is started
-  // (unknown part or lobe, another run in progress, the service stopping).
+  // Starts a cycle for the PLC's words (part and lobe numbers, the table that ground the part,
+  // serial number and operator) and returns at once: nullopt when it runs, or the outcome at
+  // once when no run is started (unknown part or lobe, serial number or operator not text,
+  // another run in progress, the service stopping).
   virtual std::optional<PlcCycleOutcome> start(const PlcRequestWords& request) = 0;
   // The outcome once the cycle started last has ended; nullopt while it runs. Called until it
   // returns a value, once per poll.

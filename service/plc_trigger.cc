@@ -58,6 +58,27 @@ PlcCycleOutcome plc_outcome(const Result<JobReport>& r, std::optional<std::int64
   return o;
 }
 
+Result<PlcIdentity> plc_identity(const PlcRequestWords& request, int base_address) {
+  namespace r = plc_registers;
+  PlcIdentity who;
+  Result<std::string> serial = decode_plc_text(request.serial, r::kSerialFirst, base_address, "serial number");
+  if (!serial) return serial.error();
+  Result<std::string> operator_name =
+      decode_plc_text(request.operator_name, r::kOperatorFirst, base_address, "operator");
+  if (!operator_name) return operator_name.error();
+  // The run store's rule, as the CLI and the HTTP API apply it: the decoded text passes it
+  // today (printable ASCII, 32 characters at most) and stays held to it should it change.
+  const std::string serial_words = "serial number (words " + std::to_string(r::kSerialFirst) + "-" +
+                                   std::to_string(r::kSerialFirst + r::kSerialWords - 1) + ")";
+  if (Status s = check_run_identity("the PLC's " + serial_words, *serial); !s) return s.error();
+  const std::string operator_words = "operator (words " + std::to_string(r::kOperatorFirst) + "-" +
+                                     std::to_string(r::kOperatorFirst + r::kOperatorWords - 1) + ")";
+  if (Status s = check_run_identity("the PLC's " + operator_words, *operator_name); !s) return s.error();
+  who.serial = std::move(*serial);
+  who.operator_name = std::move(*operator_name);
+  return who;
+}
+
 // ---- ServiceCycleRunner ----
 
 ServiceCycleRunner::~ServiceCycleRunner() {
@@ -73,6 +94,8 @@ std::optional<PlcCycleOutcome> ServiceCycleRunner::start(const PlcRequestWords& 
   const std::shared_ptr<const ServiceConfig> c = service_.config();
   Result<const ServicePart*> part = find_plc_part(*c, part_number, lobe);
   if (!part) return PlcCycleOutcome{PlcResultCode::kUnknownPart, 0, 0, part.error().message};
+  Result<PlcIdentity> identity = plc_identity(request, base_address_);
+  if (!identity) return PlcCycleOutcome{PlcResultCode::kBadIdentity, 0, 0, identity.error().message};
   Result<RunReservation> reservation = service_.reserve_run();
   if (!reservation) return PlcCycleOutcome{PlcResultCode::kNotNow, 0, 0, reservation.error().message};
   if (worker_.joinable()) worker_.join();
@@ -86,9 +109,10 @@ std::optional<PlcCycleOutcome> ServiceCycleRunner::start(const PlcRequestWords& 
   auto held = std::make_shared<RunReservation>(std::move(*reservation));
   worker_ = start_guarded_thread(
       "measuring",
-      [this, held, name, lobe, note, ground_with] {
+      [this, held, name, lobe, note, ground_with, who = std::move(*identity)] {
         std::optional<std::int64_t> stored_run;
-        Result<JobReport> report = service_.run_reserved(std::move(*held), name, lobe, note, &stored_run, ground_with);
+        Result<JobReport> report = service_.run_reserved(std::move(*held), name, lobe, note, &stored_run, ground_with,
+                                                         who.serial, who.operator_name);
         finish(plc_outcome(report, stored_run));
       },
       [this, held](std::string_view thread_name, std::string_view what) {
@@ -122,7 +146,7 @@ PlcTrigger::PlcTrigger(Service& service, PlcSettings settings, std::unique_ptr<P
     : service_(service),
       settings_(std::move(settings)),
       link_(plc ? std::move(plc) : std::make_unique<ModbusPlcLink>(settings_.link)),
-      runner_(service_),
+      runner_(service_, settings_.link.base_address),
       handshake_(*link_, runner_) {}
 
 PlcTrigger::~PlcTrigger() { stop(); }

@@ -24,14 +24,28 @@ namespace gaugeloop {
 // id if it was stored, which a failure after that (the push) still reports.
 PlcCycleOutcome plc_outcome(const Result<JobReport>& report, std::optional<std::int64_t> stored_run);
 
+// The serial number and operator a PLC request carries (words 13-36), as the run keeps them:
+// decode_plc_text's text, checked by check_run_identity like the CLI's options. Empty: not
+// given. kInvalidInput naming the word, its holding register (`base_address` + word) and the
+// byte at fault otherwise.
+struct PlcIdentity {
+  std::string serial;
+  std::string operator_name;
+};
+Result<PlcIdentity> plc_identity(const PlcRequestWords& request, int base_address);
+
 // Runs a PLC request's cycle on a worker thread, so the handshake keeps polling (and the
 // heartbeat counting) while the lobe is measured. Used by the PLC trigger's thread only.
 class ServiceCycleRunner final : public PlcCycleRunner {
  public:
-  explicit ServiceCycleRunner(Service& service) : service_(service) {}
+  // `base_address`: the block's first holding register ([plc] base_address), for messages.
+  explicit ServiceCycleRunner(Service& service, int base_address = 0)
+      : service_(service), base_address_(base_address) {}
   ~ServiceCycleRunner() override;
 
-  // While the service stops: kNotNow at once, whatever the PLC asks for.
+  // While the service stops: kNotNow at once, whatever the PLC asks for. Then at once: an
+  // unknown part or lobe (kUnknownPart), serial number or operator words that are not text
+  // (kBadIdentity, plc_identity), another run in progress (kNotNow).
   std::optional<PlcCycleOutcome> start(const PlcRequestWords& request) override;
   std::optional<PlcCycleOutcome> poll() override;
 
@@ -39,6 +53,7 @@ class ServiceCycleRunner final : public PlcCycleRunner {
   void finish(PlcCycleOutcome outcome);
 
   Service& service_;
+  const int base_address_;
   std::thread worker_;
   std::mutex mutex_;
   bool finished_ = false;                   // guarded by mutex_

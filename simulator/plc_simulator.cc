@@ -26,7 +26,8 @@ PlcSimulator::PlcSimulator(PlcSimulatorSettings settings) : settings_(std::move(
 Result<std::unique_ptr<PlcSimulator>> PlcSimulator::start(const PlcSimulatorSettings& settings) {
   if (settings.base_address < 0 || settings.base_address > 65536 - r::kBlockWords) {
     return make_error(ErrorCode::kInvalidInput, "PLC simulator base_address " + std::to_string(settings.base_address) +
-                                                    " leaves no room for the 12-word block; use 0 to 65524");
+                                                    " leaves no room for the " + std::to_string(r::kBlockWords) +
+                                                    "-word block; use 0 to " + std::to_string(65536 - r::kBlockWords));
   }
   std::unique_ptr<PlcSimulator> sim(new PlcSimulator(settings));
   // Framing only (the sockets are the listener's); the protocol-independent backend: IPv4 or IPv6.
@@ -105,6 +106,17 @@ void PlcSimulator::request(std::uint16_t part_number, std::uint16_t lobe, std::u
   mapping_->tab_registers[r::kRequest] |= r::kMeasureBit;
 }
 
+Status PlcSimulator::set_identity(std::string_view serial, std::string_view operator_name) {
+  std::array<std::uint16_t, r::kSerialWords> serial_words{};
+  std::array<std::uint16_t, r::kOperatorWords> operator_words{};
+  if (Status s = encode_plc_text(serial, serial_words); !s) return s;
+  if (Status s = encode_plc_text(operator_name, operator_words); !s) return s;
+  std::lock_guard lock(mutex_);
+  std::copy(serial_words.begin(), serial_words.end(), mapping_->tab_registers + r::kSerialFirst);
+  std::copy(operator_words.begin(), operator_words.end(), mapping_->tab_registers + r::kOperatorFirst);
+  return {};
+}
+
 void PlcSimulator::clear_request() {
   std::lock_guard lock(mutex_);
   mapping_->tab_registers[r::kRequest] &= static_cast<std::uint16_t>(~r::kMeasureBit);
@@ -117,6 +129,8 @@ PlcRequestWords PlcSimulator::plc_words() const {
   w.part_number = mapping_->tab_registers[r::kPartNumber];
   w.lobe = mapping_->tab_registers[r::kLobe];
   w.ground_with = mapping_->tab_registers[r::kGroundWith];
+  std::copy_n(mapping_->tab_registers + r::kSerialFirst, r::kSerialWords, w.serial.begin());
+  std::copy_n(mapping_->tab_registers + r::kOperatorFirst, r::kOperatorWords, w.operator_name.begin());
   return w;
 }
 

@@ -11,6 +11,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <thread>
 
 #include "core/plc_registers.h"
@@ -28,8 +29,8 @@ struct PlcSimulatorSettings {
   int unit_id = 1;       // answered whatever the request's unit id (as most PLCs do over TCP)
 };
 
-// Serves holding registers base_address .. base_address + 11 (and nothing else: other
-// addresses get exception 2, illegal data address) on its own thread from start() until
+// Serves the block's holding registers, base_address .. base_address + 36 (and nothing else:
+// other addresses get exception 2, illegal data address) on its own thread from start() until
 // stop() or destruction. Thread-safe: every method may be called from any thread. Each write
 // by a client wakes the waiters, so tests wait on state, never on time.
 class PlcSimulator {
@@ -47,6 +48,12 @@ class PlcSimulator {
   // PLC program sets them in order).
   // `ground_with`: word 12, the table version that ground the part (plc_registers.h).
   void request(std::uint16_t part_number, std::uint16_t lobe, std::uint16_t ground_with = 0);
+  // Words 13-36: the serial number and the operator as the PLC writes them (encode_plc_text:
+  // two bytes a word, high byte first, NUL after the text; "" zeroes the words). The bytes go
+  // as they are, so a test can write one the service must refuse. kInvalidInput, nothing
+  // written, when a text is longer than its words hold (32 and 16 characters). Set them
+  // before request(), as a PLC program does.
+  Status set_identity(std::string_view serial, std::string_view operator_name);
   void clear_request();
   PlcRequestWords plc_words() const;
   // The service's words as last written.

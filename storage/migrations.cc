@@ -571,8 +571,70 @@ ALTER TABLE runs ADD COLUMN operator TEXT CHECK (operator IS NULL OR length(oper
 CREATE INDEX runs_by_serial ON runs (serial, started_utc) WHERE serial IS NOT NULL;
 )sql";
 
-const std::array<Migration, 7>& all_migrations() {
-  static const std::array<Migration, 7> kMigrations{{
+// Version 8: what a quality engineer signs. Every run judged against its lobe's tolerances:
+//  - runs.verdict ('in', 'out', 'not_judged'; NULL for runs stored before version 8, read as
+//    not judged) and which lift error was judged (lift_error_reference);
+//  - the profile error after the best-fit phase (run_tables.residual_error, a degree BLOB like
+//    error, and its figures), the base circle as a dial reads it and its roundness;
+//  - run_characteristics: one row per characteristic (core/tolerance.h names the keys), in
+//    the order judged, with its limits (NULL: none) and verdict;
+//  - row_counts 'verdicts': runs by verdict for /metrics, kept by triggers as runs by status.
+constexpr std::string_view kSchemaV8 = R"sql(
+ALTER TABLE runs ADD COLUMN verdict TEXT CHECK (verdict IS NULL OR verdict IN ('in', 'out', 'not_judged'));
+ALTER TABLE runs ADD COLUMN lift_error_reference TEXT
+  CHECK (lift_error_reference IS NULL OR lift_error_reference IN ('best_fit', 'nominal'));
+ALTER TABLE runs ADD COLUMN max_abs_residual_um REAL;
+ALTER TABLE runs ADD COLUMN rms_residual_um REAL;
+ALTER TABLE runs ADD COLUMN peak_to_valley_residual_um REAL;
+ALTER TABLE runs ADD COLUMN dial_runout_um REAL;
+ALTER TABLE runs ADD COLUMN roundness_um REAL;
+ALTER TABLE run_tables ADD COLUMN residual_error BLOB;
+
+CREATE TABLE run_characteristics (
+  run_id      INTEGER NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
+  position    INTEGER NOT NULL CHECK (position >= 0),  -- order within the run
+  key         TEXT    NOT NULL CHECK (length(key) BETWEEN 1 AND 64),
+  unit        TEXT    NOT NULL,
+  value       REAL    NOT NULL,
+  min_value   REAL    NOT NULL,
+  max_value   REAL    NOT NULL,
+  lower_limit REAL,     -- NULL: no lower limit
+  upper_limit REAL,     -- NULL: no upper limit
+  verdict     TEXT    NOT NULL CHECK (verdict IN ('in', 'out', 'not_judged')),
+  from_deg    INTEGER,  -- a zone's arc, cam frame, nose at 0; NULL for whole-turn figures
+  to_deg      INTEGER,
+  PRIMARY KEY (run_id, key)
+) WITHOUT ROWID;
+
+-- The view SQL users read: one row per characteristic with its run's identity.
+CREATE VIEW run_verdicts (run_id, started_utc, machine, part, lobe, serial, key, unit, value,
+                          lower_limit, upper_limit, verdict) AS
+  SELECT r.id, r.started_utc, r.machine, r.part, r.lobe, r.serial, c.key, c.unit, c.value,
+         c.lower_limit, c.upper_limit, c.verdict
+  FROM run_characteristics AS c JOIN runs AS r ON r.id = c.run_id;
+
+INSERT INTO row_counts (table_name, value, row_count)
+  SELECT 'verdicts', 'not_judged', count(*) FROM runs;
+CREATE TRIGGER runs_verdict_counted_on_insert AFTER INSERT ON runs BEGIN
+  INSERT INTO row_counts (table_name, value, row_count) VALUES ('verdicts', coalesce(NEW.verdict, 'not_judged'), 1)
+    ON CONFLICT (table_name, value) DO UPDATE SET row_count = row_count + 1;
+END;
+CREATE TRIGGER runs_verdict_counted_on_delete AFTER DELETE ON runs BEGIN
+  UPDATE row_counts SET row_count = row_count - 1
+    WHERE table_name = 'verdicts' AND value = coalesce(OLD.verdict, 'not_judged');
+END;
+CREATE TRIGGER runs_verdict_counted_on_update AFTER UPDATE OF verdict ON runs
+  WHEN coalesce(OLD.verdict, 'not_judged') IS NOT coalesce(NEW.verdict, 'not_judged') BEGIN
+  UPDATE row_counts SET row_count = row_count - 1
+    WHERE table_name = 'verdicts' AND value = coalesce(OLD.verdict, 'not_judged');
+  INSERT INTO row_counts (table_name, value, row_count) VALUES ('verdicts', coalesce(NEW.verdict, 'not_judged'), 1)
+    ON CONFLICT (table_name, value) DO UPDATE SET row_count = row_count + 1;
+END;
+CREATE INDEX runs_by_verdict ON runs (verdict, started_utc) WHERE verdict IS NOT NULL;
+)sql";
+
+const std::array<Migration, 8>& all_migrations() {
+  static const std::array<Migration, 8> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -600,6 +662,12 @@ const std::array<Migration, 7>& all_migrations() {
        nullptr,
        {}},
       {7, "runs: the part's serial number and the operator who measured it", std::string(kSchemaV7), nullptr, {}},
+      {8,
+       "runs judged against their tolerances: run_characteristics, verdicts, the best-fit profile error, dial "
+       "runout and roundness",
+       std::string(kSchemaV8),
+       nullptr,
+       {}},
   }};
   return kMigrations;
 }

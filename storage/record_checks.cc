@@ -4,6 +4,7 @@
 #include <climits>
 #include <cmath>
 #include <cstddef>
+#include <set>
 #include <utility>
 
 #include "core/utc_time.h"
@@ -77,7 +78,7 @@ Status check_analysis(const LobeAnalysis& a, const DegreeTable& correction_um) {
   const std::pair<const DegreeTable*, std::string_view> tables[] = {
       {&a.design_lift_mm, "run_profile.design_lift_mm"}, {&a.mean_lift_mm, "run_profile.mean_lift_mm"},
       {&a.spread_um, "run_profile.spread_um"},           {&a.error_um, "run_profile.error_um"},
-      {&correction_um, "run_profile.correction_um"},
+      {&correction_um, "run_profile.correction_um"},     {&a.residual_error_um, "run_tables.residual_error_um"},
   };
   for (const auto& [table, column] : tables) {
     Status ok = check_table(*table, column, "cam");
@@ -86,7 +87,9 @@ Status check_analysis(const LobeAnalysis& a, const DegreeTable& correction_um) {
   const std::pair<double, std::string_view> figures[] = {
       {a.zero_offset_mm, "runs.zero_offset_mm"},     {a.max_abs_error_um, "runs.max_abs_error_um"},
       {a.rms_error_um, "runs.rms_error_um"},         {a.peak_to_valley_um, "runs.peak_to_valley_um"},
-      {a.repeatability_um, "runs.repeatability_um"},
+      {a.repeatability_um, "runs.repeatability_um"}, {a.max_abs_residual_um, "runs.max_abs_residual_um"},
+      {a.rms_residual_um, "runs.rms_residual_um"},   {a.peak_to_valley_residual_um, "runs.peak_to_valley_residual_um"},
+      {a.dial_runout_um, "runs.dial_runout_um"},     {a.roundness_um, "runs.roundness_um"},
   };
   for (const auto& [value, column] : figures) {
     Status ok = check_figure(value, column);
@@ -140,11 +143,31 @@ std::string describe_non_finite(double value) {
 
 // The non-finite checks matter beyond tidiness: SQLite binds a NaN double as NULL, and a
 // per-degree BLOB holds integers only.
+Status check_characteristics(const std::vector<Characteristic>& characteristics) {
+  std::set<std::string_view> keys;
+  for (const Characteristic& c : characteristics) {
+    if (c.key.empty() || c.key.size() > 64) {
+      return run_refused("a characteristic's key '" + c.key + "' is empty or longer than 64 characters");
+    }
+    if (!keys.insert(c.key).second) return run_refused("characteristic " + c.key + " is given twice");
+    const std::string column = "run_characteristics." + c.key;
+    for (double v : {c.value, c.min, c.max}) {
+      if (Status ok = check_figure(v, column); !ok.ok()) return ok;
+    }
+    for (const std::optional<double>& limit : {c.limits.lower, c.limits.upper}) {
+      if (!limit) continue;
+      if (Status ok = check_figure(*limit, column + " limit"); !ok.ok()) return ok;
+    }
+  }
+  return {};
+}
+
 Status check_run_record(const RunRecord& run) {
   if (Status s = check_identity(run); !s.ok()) return s;
   if (Status s = check_measured(run.measured); !s.ok()) return s;
   if (Status s = check_analysis(run.analysis, run.correction_um); !s.ok()) return s;
   if (Status s = check_ground_with(run); !s.ok()) return s;
+  if (Status s = check_characteristics(run.characteristics); !s.ok()) return s;
   if (run.geometry) return check_geometry(*run.geometry);
   return {};
 }

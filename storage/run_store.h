@@ -96,11 +96,11 @@ struct RunSummary {
   std::optional<double> phase_error_deg;
   std::optional<double> base_circle_runout_um;
   double peak_to_valley_um = 0.0;
-  std::string settings_hash;   // empty: not recorded
-  std::string note;            // operator note
-  std::string raw_pruned_utc;  // when prune removed the raw samples; empty: still stored
-  std::string serial;          // the part's serial number; empty: not given (or before schema 7)
-  std::string operator_name;   // who measured; empty: not given (or before schema 7)
+  std::string settings_hash;              // empty: not recorded
+  std::string note;                       // operator note
+  std::string raw_pruned_utc;             // when prune removed the raw samples; empty: still stored
+  std::string serial;                     // the part's serial number; empty: not given (or before schema 7)
+  std::string operator_name;              // who measured; empty: not given (or before schema 7)
   Verdict verdict = Verdict::kNotJudged;  // not judged for runs stored before schema 8
 };
 
@@ -247,15 +247,15 @@ struct RunCharacteristics {
 
 // Filters for list_runs and trend. Times are ISO 8601 UTC, "YYYY-MM-DDTHH:MM:SSZ".
 struct RunQuery {
-  int limit = 50;         // at most this many runs; must be >= 1
-  std::string part;       // exact part name; empty = any part
-  int lobe = 0;           // 0 = any lobe
-  std::string machine;    // exact machine name; empty = any
-  std::string serial;     // exact serial number (no wildcards, case counts); empty = any
+  int limit = 50;                  // at most this many runs; must be >= 1
+  std::string part;                // exact part name; empty = any part
+  int lobe = 0;                    // 0 = any lobe
+  std::string machine;             // exact machine name; empty = any
+  std::string serial;              // exact serial number (no wildcards, case counts); empty = any
   std::optional<Verdict> verdict;  // the run's verdict; empty = any
-  std::string status;     // "measured" or "pushed"; empty = any
-  std::string since_utc;  // started at or after; empty = no bound
-  std::string until_utc;  // started before (exclusive); empty = no bound
+  std::string status;              // "measured" or "pushed"; empty = any
+  std::string since_utc;           // started at or after; empty = no bound
+  std::string until_utc;           // started before (exclusive); empty = no bound
 };
 
 enum class EventKind {
@@ -309,6 +309,7 @@ struct LobeLastRun {
   std::int64_t run_id = 0;
   std::string started_utc;
   double max_abs_error_um = 0.0;
+  Verdict verdict = Verdict::kNotJudged;
 };
 
 // What the service's /metrics shows of the database, read in one snapshot.
@@ -317,6 +318,9 @@ struct StoreMetrics {
   std::map<std::string, std::int64_t> runs_by_status;
   // Events by event_kind_name(): "fault", "refusal" and "info" always present.
   std::map<std::string, std::int64_t> events_by_kind;
+  // Runs by verdict_name(): "in", "out" and "not_judged" always present; runs stored before
+  // schema 8 count as not judged.
+  std::map<std::string, std::int64_t> runs_by_verdict;
   std::int64_t pending_tables = 0;  // NC tables waiting for approval (status pending)
   // One entry per machine, part and lobe ever measured, ordered by machine, part, then lobe.
   std::vector<LobeLastRun> last_runs;

@@ -45,7 +45,7 @@ WITH RECURSIVE newest (id) AS (
       ORDER BY r.machine DESC, r.part DESC, r.lobe DESC, r.started_utc DESC, r.id DESC LIMIT 1))
   FROM newest AS n JOIN runs AS p ON p.id = n.id
 )
-SELECT r.machine, r.part, r.lobe, r.id, r.started_utc, r.max_abs_error_um
+SELECT r.machine, r.part, r.lobe, r.id, r.started_utc, r.max_abs_error_um, r.verdict
 FROM newest AS n JOIN runs AS r ON r.id = n.id
 ORDER BY r.machine, r.part, r.lobe)sql";
 
@@ -65,6 +65,8 @@ Result<StoreMetrics> RunStore::metrics_snapshot() const {
   for (EventKind kind : {EventKind::kFault, EventKind::kRefusal, EventKind::kInfo}) {
     out.events_by_kind[std::string(event_kind_name(kind))] = 0;
   }
+  for (Verdict v : {Verdict::kIn, Verdict::kOut, Verdict::kNotJudged})
+    out.runs_by_verdict[std::string(verdict_name(v))] = 0;
 
   Result<Statement> counts = Statement::prepare(conn, kCounts, operation);
   if (!counts.ok()) return counts.error();
@@ -78,6 +80,8 @@ Result<StoreMetrics> RunStore::metrics_snapshot() const {
       out.runs_by_status[value] = counts->column<std::int64_t>(2);
     } else if (table == "events") {
       out.events_by_kind[value] = counts->column<std::int64_t>(2);
+    } else if (table == "verdicts") {
+      out.runs_by_verdict[value] = counts->column<std::int64_t>(2);
     }
   }
 
@@ -97,6 +101,7 @@ Result<StoreMetrics> RunStore::metrics_snapshot() const {
     r.run_id = s.column<std::int64_t>(3);
     r.started_utc = s.column<std::string>(4);
     r.max_abs_error_um = s.column<double>(5);
+    r.verdict = verdict_from_name(s.column<std::string>(6)).value_or(Verdict::kNotJudged);
     return r;
   });
   if (!last_runs.ok()) return last_runs.error();

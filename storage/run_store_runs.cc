@@ -33,21 +33,34 @@ INSERT INTO runs (started_utc, finished_utc, machine, part, lobe, gauge, note, s
                   repeatability_um, nc_file, correction_in_force_run, settings_hash,
                   phase_error_deg, base_circle_runout_um, harmonic_amplitude_um,
                   rotation_sense, c_offset_deg, probe_offset_deg, ground_with_version,
-                  ground_with_source, inspection, serial, operator)
+                  ground_with_source, inspection, serial, operator, verdict, lift_error_reference,
+                  max_abs_residual_um, rms_residual_um, peak_to_valley_residual_um, dial_runout_um,
+                  roundness_um)
 VALUES (:started_utc, :finished_utc, :machine, :part, :lobe, :gauge, :note, 'measured',
         :revolutions, :degrees_captured, :polls, :reconnects, :discarded_revolutions,
         :zero_offset_mm, :max_abs_error_um, :rms_error_um, :peak_to_valley_um,
         :repeatability_um, NULL, :correction_in_force_run, :settings_hash,
         :phase_error_deg, :base_circle_runout_um, :harmonic_amplitude_um,
         :rotation_sense, :c_offset_deg, :probe_offset_deg, :ground_with_version,
-        :ground_with_source, :inspection, :serial, :operator))sql";
+        :ground_with_source, :inspection, :serial, :operator, :verdict, :lift_error_reference,
+        :max_abs_residual_um, :rms_residual_um, :peak_to_valley_residual_um, :dial_runout_um,
+        :roundness_um))sql";
 
 constexpr std::string_view kInsertRaw = R"sql(
 INSERT INTO run_raw (run_id, amplifier_revolutions, lift) VALUES (?1, ?2, ?3))sql";
 
 constexpr std::string_view kInsertTables = R"sql(
-INSERT INTO run_tables (run_id, design_lift, mean_lift, spread, error, correction)
-VALUES (?1, ?2, ?3, ?4, ?5, ?6))sql";
+INSERT INTO run_tables (run_id, design_lift, mean_lift, spread, error, correction, residual_error)
+VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7))sql";
+
+constexpr std::string_view kInsertCharacteristic = R"sql(
+INSERT INTO run_characteristics (run_id, position, key, unit, value, min_value, max_value,
+                                 lower_limit, upper_limit, verdict, from_deg, to_deg)
+VALUES (:run_id, :position, :key, :unit, :value, :min_value, :max_value,
+        :lower_limit, :upper_limit, :verdict, :from_deg, :to_deg))sql";
+
+constexpr std::string_view kCharacteristicColumns =
+    "key, unit, value, min_value, max_value, lower_limit, upper_limit, verdict, from_deg, to_deg";
 
 // The catalogue row exists (the runs trigger made it); a run that knows the geometry updates it.
 constexpr std::string_view kUpdatePart = R"sql(
@@ -65,8 +78,9 @@ constexpr std::string_view kSummaryColumns =
     "r.id, r.started_utc, r.machine, r.part, r.lobe, r.status, r.revolutions, r.degrees_captured, "
     "r.max_abs_error_um, r.rms_error_um, r.repeatability_um, r.nc_file, r.phase_error_deg, "
     "r.base_circle_runout_um, r.peak_to_valley_um, r.settings_hash, r.note, r.raw_pruned_utc, r.serial, "
-    "r.operator, r.zero_offset_mm";
+    "r.operator, r.zero_offset_mm, r.verdict";
 constexpr int kZeroOffsetColumn = 20;
+constexpr int kVerdictColumn = 21;
 
 std::string select_summaries(std::string_view rest) {
   return "SELECT " + std::string(kSummaryColumns) + " FROM runs AS r" + std::string(rest);
@@ -76,7 +90,9 @@ constexpr std::string_view kLoadDetails = R"sql(
 SELECT r.finished_utc, r.gauge, r.polls, r.reconnects, r.discarded_revolutions,
        r.correction_in_force_run, s.text, r.harmonic_amplitude_um, r.rotation_sense, r.c_offset_deg,
        r.probe_offset_deg, p.follower, p.follower_radius_mm, p.base_circle_radius_mm, p.wheel_radius_mm,
-       r.ground_with_version, r.ground_with_source, r.inspection
+       r.ground_with_version, r.ground_with_source, r.inspection, r.lift_error_reference,
+       r.max_abs_residual_um, r.rms_residual_um, r.peak_to_valley_residual_um, r.dial_runout_um,
+       r.roundness_um
 FROM runs AS r
 LEFT JOIN settings AS s ON s.hash = r.settings_hash
 LEFT JOIN parts AS p ON p.name = r.part
@@ -117,7 +133,7 @@ std::string exact_number(double v) {
 struct EncodedRun {
   std::string lift;                   // every revolution's lift_mm, one BLOB
   std::string amplifier;              // JSON array of the amplifier's revolution counts
-  std::array<std::string, 5> tables;  // design, mean, spread, error, correction BLOBs
+  std::array<std::string, 6> tables;  // design, mean, spread, error, correction, residual BLOBs
   std::string harmonics;              // JSON array
   std::string settings_hash;          // empty: no settings recorded
 };
@@ -135,16 +151,17 @@ Result<EncodedRun> encode(const RunRecord& run) {
   }
   e.amplifier += "]";
   const LobeAnalysis& a = run.analysis;
-  const std::array<std::pair<const DegreeTable*, double>, 5> tables = {{
+  const std::array<std::pair<const DegreeTable*, double>, 6> tables = {{
       {&a.design_lift_mm, kCountsPerMm},
       {&a.mean_lift_mm, kCountsPerMm},
       {&a.spread_um, kCountsPerUm},
       {&a.error_um, kCountsPerUm},
       {&run.correction_um, kCountsPerUm},
+      {&a.residual_error_um, kCountsPerUm},
   }};
-  static constexpr std::array<std::string_view, 5> kTableNames = {"design_lift_mm (cam frame)",
-                                                                  "mean_lift_mm (cam frame)", "spread_um (cam frame)",
-                                                                  "error_um (cam frame)", "correction_um (cam frame)"};
+  static constexpr std::array<std::string_view, 6> kTableNames = {
+      "design_lift_mm (cam frame)", "mean_lift_mm (cam frame)",  "spread_um (cam frame)",
+      "error_um (cam frame)",       "correction_um (cam frame)", "residual_error_um (cam frame)"};
   for (std::size_t i = 0; i < tables.size(); ++i) {
     Status s = storage_internal::append_degree_blob(*tables[i].first, tables[i].second, kTableNames[i], e.tables[i]);
     if (!s.ok()) return storage_internal::run_refused(s.error().message);
@@ -205,6 +222,13 @@ Result<std::int64_t> insert_run_row(Connection& conn, const RunRecord& run, cons
   ins->bind(":inspection", run.inspection ? 1 : 0);
   ins->bind(":serial", text_or_null(run.serial));
   ins->bind(":operator", text_or_null(run.operator_name));
+  ins->bind(":verdict", verdict_name(run.verdict));
+  ins->bind(":lift_error_reference", lift_error_reference_name(run.lift_error_reference));
+  ins->bind(":max_abs_residual_um", a.max_abs_residual_um);
+  ins->bind(":rms_residual_um", a.rms_residual_um);
+  ins->bind(":peak_to_valley_residual_um", a.peak_to_valley_residual_um);
+  ins->bind(":dial_runout_um", a.dial_runout_um);
+  ins->bind(":roundness_um", a.roundness_um);
   if (Status s = ins->run(); !s.ok()) return s.error();
   return conn.last_insert_rowid();
 }
@@ -236,8 +260,34 @@ Status insert_degree_rows(Connection& conn, std::int64_t run_id, const EncodedRu
   if (Status s = raw->run(); !s.ok()) return s;
   Result<Statement> tab = Statement::prepare(conn, kInsertTables, operation);
   if (!tab.ok()) return tab.error();
-  tab->bind_all(run_id, Blob{e.tables[0]}, Blob{e.tables[1]}, Blob{e.tables[2]}, Blob{e.tables[3]}, Blob{e.tables[4]});
+  tab->bind_all(run_id, Blob{e.tables[0]}, Blob{e.tables[1]}, Blob{e.tables[2]}, Blob{e.tables[3]}, Blob{e.tables[4]},
+                Blob{e.tables[5]});
   return tab->run();
+}
+
+Status insert_characteristics(Connection& conn, std::int64_t run_id, const RunRecord& run,
+                              const std::string& operation) {
+  if (run.characteristics.empty()) return {};
+  Result<Statement> ins = Statement::prepare(conn, kInsertCharacteristic, operation);
+  if (!ins.ok()) return ins.error();
+  for (std::size_t i = 0; i < run.characteristics.size(); ++i) {
+    const Characteristic& c = run.characteristics[i];
+    ins->reset();
+    ins->bind(":run_id", run_id);
+    ins->bind(":position", static_cast<std::int64_t>(i));
+    ins->bind(":key", c.key);
+    ins->bind(":unit", c.unit);
+    ins->bind(":value", c.value);
+    ins->bind(":min_value", c.min);
+    ins->bind(":max_value", c.max);
+    ins->bind(":lower_limit", c.limits.lower);
+    ins->bind(":upper_limit", c.limits.upper);
+    ins->bind(":verdict", verdict_name(c.verdict));
+    ins->bind(":from_deg", c.from_deg);
+    ins->bind(":to_deg", c.to_deg);
+    if (Status s = ins->run(); !s.ok()) return s;
+  }
+  return {};
 }
 
 }  // namespace
@@ -259,6 +309,7 @@ Result<std::int64_t> RunStore::insert_run(const RunRecord& run) {
     if (Status s = update_catalogue(conn, run, *run.geometry, operation); !s.ok()) return s.error();
   }
   if (Status s = insert_degree_rows(conn, *run_id, *encoded, operation); !s.ok()) return s.error();
+  if (Status s = insert_characteristics(conn, *run_id, run, operation); !s.ok()) return s.error();
   if (Status s = tx->commit(); !s.ok()) return s.error();
   return run_id;
 }
@@ -289,7 +340,37 @@ RunSummary read_summary(const Statement& s) {
   r.raw_pruned_utc = s.column<std::string>(17);
   r.serial = s.column<std::string>(18);  // NULL reads as ""
   r.operator_name = s.column<std::string>(19);
+  // NULL (before schema 8) reads as not judged.
+  r.verdict = verdict_from_name(s.column<std::string>(kVerdictColumn)).value_or(Verdict::kNotJudged);
   return r;
+}
+
+Characteristic read_characteristic(const Statement& s) {
+  Characteristic c;
+  c.key = s.column<std::string>(0);
+  c.unit = s.column<std::string>(1);
+  c.value = s.column<double>(2);
+  c.min = s.column<double>(3);
+  c.max = s.column<double>(4);
+  c.limits.lower = s.column<std::optional<double>>(5);
+  c.limits.upper = s.column<std::optional<double>>(6);
+  c.verdict = verdict_from_name(s.column<std::string>(7)).value_or(Verdict::kNotJudged);
+  c.from_deg = s.column<std::optional<int>>(8);
+  c.to_deg = s.column<std::optional<int>>(9);
+  return c;
+}
+
+Result<std::vector<Characteristic>> characteristics_of(Statement& q, std::int64_t run_id) {
+  q.reset();
+  q.bind(":run_id", run_id);
+  return q.collect(read_characteristic);
+}
+
+Result<Statement> prepare_characteristics(Connection& conn, const std::string& operation) {
+  return Statement::prepare(conn,
+                            "SELECT " + std::string(kCharacteristicColumns) +
+                                " FROM run_characteristics WHERE run_id = :run_id ORDER BY position",
+                            operation);
 }
 
 // The runs row: the summary and the analysis's figures.
@@ -357,6 +438,23 @@ Status read_details(Connection& conn, std::int64_t run_id, StoredRun& out, const
   out.ground_with_version = q->column<std::optional<int>>(15);
   out.ground_with_source = q->column<std::string>(16);
   out.inspection = q->column<bool>(17);
+  out.lift_error_reference =
+      q->column<std::string>(18) == "nominal" ? LiftErrorReference::kNominal : LiftErrorReference::kBestFit;
+  LobeAnalysis& a = out.analysis;
+  a.max_abs_residual_um = q->column<std::optional<double>>(19).value_or(0.0);
+  a.rms_residual_um = q->column<std::optional<double>>(20).value_or(0.0);
+  a.peak_to_valley_residual_um = q->column<std::optional<double>>(21).value_or(0.0);
+  a.dial_runout_um = q->column<std::optional<double>>(22).value_or(0.0);
+  a.roundness_um = q->column<std::optional<double>>(23).value_or(0.0);
+  return {};
+}
+
+Status read_characteristics(Connection& conn, std::int64_t run_id, StoredRun& out, const std::string& operation) {
+  Result<Statement> q = prepare_characteristics(conn, operation);
+  if (!q.ok()) return q.error();
+  Result<std::vector<Characteristic>> c = characteristics_of(*q, run_id);
+  if (!c.ok()) return c.error();
+  out.characteristics = std::move(*c);
   return {};
 }
 
@@ -399,7 +497,8 @@ Status read_raw(Connection& conn, std::int64_t run_id, StoredRun& out, const std
 // The per-degree profile and correction (cam frame).
 Status read_profile(Connection& conn, std::int64_t run_id, StoredRun& out, const std::string& operation) {
   Result<Statement> q = Statement::prepare(
-      conn, "SELECT design_lift, mean_lift, spread, error, correction FROM run_tables WHERE run_id = :run_id",
+      conn,
+      "SELECT design_lift, mean_lift, spread, error, correction, residual_error FROM run_tables WHERE run_id = :run_id",
       operation);
   if (!q.ok()) return q.error();
   q->bind(":run_id", run_id);
@@ -418,6 +517,12 @@ Status read_profile(Connection& conn, std::int64_t run_id, StoredRun& out, const
         storage_internal::read_degree_blob(q->column_blob(static_cast<int>(i)), 0, tables[i].second);
     if (!t.ok()) return damaged_run(conn, run_id, "profile column " + std::to_string(i) + ": " + t.error().message);
     *tables[i].first = *t;
+  }
+  // Runs stored before schema 8 have no residual: it stays 0.
+  if (!q->column_is_null(5)) {
+    Result<DegreeTable> t = storage_internal::read_degree_blob(q->column_blob(5), 0, kCountsPerUm);
+    if (!t.ok()) return damaged_run(conn, run_id, "residual_error: " + t.error().message);
+    out.analysis.residual_error_um = *t;
   }
   return {};
 }
@@ -445,7 +550,7 @@ Result<StoredRun> RunStore::load_run(std::int64_t run_id) const {
   Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kRead, operation);
   if (!tx.ok()) return tx.error();
   StoredRun out;
-  for (auto read : {read_summary_of_run, read_details, read_raw, read_profile, read_pushes_of}) {
+  for (auto read : {read_summary_of_run, read_details, read_raw, read_profile, read_pushes_of, read_characteristics}) {
     if (Status s = read(conn, run_id, out, operation); !s.ok()) return s.error();
   }
   if (Status s = tx->commit(); !s.ok()) return s.error();
@@ -478,6 +583,8 @@ Result<storage_internal::WhereClause> run_filter(const RunQuery& q) {
   if (q.lobe > 0) where.add_literal("r.lobe = " + std::to_string(q.lobe));
   if (!q.machine.empty()) where.add("r.machine =", q.machine);
   if (!q.serial.empty()) where.add("r.serial =", q.serial);
+  // Runs stored before schema 8 (NULL) are not judged.
+  if (q.verdict) where.add("coalesce(r.verdict, 'not_judged') =", std::string(verdict_name(*q.verdict)));
   if (!q.status.empty()) where.add("r.status =", q.status);
   if (!q.since_utc.empty()) where.add("r.started_utc >=", q.since_utc);
   if (!q.until_utc.empty()) where.add("r.started_utc <", q.until_utc);
@@ -506,11 +613,22 @@ Result<std::vector<RunSummary>> RunStore::list_runs(const RunQuery& q) const { r
 Result<std::vector<RunSummary>> RunStore::trend(const RunQuery& q) const { return query_runs(*conn_, q, true); }
 
 Result<std::vector<RunCharacteristics>> RunStore::characteristics(const RunQuery& q) const {
-  Result<std::vector<RunSummary>> runs = query_runs(*conn_, q, true);
+  Connection& conn = *conn_;
+  const std::string operation = "read the characteristics of the runs";
+  Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kRead, operation);
+  if (!tx.ok()) return tx.error();
+  Result<std::vector<RunSummary>> runs = query_runs(conn, q, true);
   if (!runs) return runs.error();
+  Result<Statement> each = prepare_characteristics(conn, operation);
+  if (!each.ok()) return each.error();
   std::vector<RunCharacteristics> out;
-  for (RunSummary& r : *runs) out.push_back({std::move(r), {}});
-  return out;  // TODO(schema 8): read run_characteristics
+  for (RunSummary& r : *runs) {
+    Result<std::vector<Characteristic>> c = characteristics_of(*each, r.id);
+    if (!c.ok()) return c.error();
+    out.push_back({std::move(r), std::move(*c)});
+  }
+  if (Status s = tx->commit(); !s.ok()) return s.error();
+  return out;
 }
 
 Result<std::optional<std::int64_t>> RunStore::last_pushed_run(const std::string& machine, const std::string& part,

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <string>
+
 #include "simulator/plc_simulator.h"
 
 namespace gaugeloop {
@@ -66,6 +69,103 @@ TEST_F(PlcLinkTest, ReadsThePlcsWordsAndWritesTheServicesAtTheBaseAddress) {
   EXPECT_FALSE(req->measure());
 }
 
+TEST_F(PlcLinkTest, CarriesTheSerialNumberAndOperatorInTheSameRead) {
+  ModbusPlcLink link(settings());
+  ASSERT_TRUE(link.connect().ok());
+  ASSERT_TRUE(sim_->set_identity("CAM-2026-000417", "anna").ok());
+  sim_->request(7, 2);
+  Result<PlcRequestWords> req = link.read_request();
+  ASSERT_TRUE(req.ok()) << req.error().message;
+  EXPECT_EQ(req->part_number, 7);
+  // High byte first: 'C' (0x43) then 'A' (0x41), as an S7 Char array lies in the registers.
+  EXPECT_EQ(req->serial[0], 0x4341);
+  EXPECT_EQ(req->serial[7], 0x3700) << "15 characters: the last word ends with the NUL";
+  EXPECT_EQ(req->serial[8], 0);
+  EXPECT_EQ(req->operator_name[0], 0x616e);  // "an"
+  Result<std::string> serial = decode_plc_text(req->serial, plc_registers::kSerialFirst, 400, "serial number");
+  ASSERT_TRUE(serial.ok()) << serial.error().message;
+  EXPECT_EQ(*serial, "CAM-2026-000417");
+  Result<std::string> who = decode_plc_text(req->operator_name, plc_registers::kOperatorFirst, 400, "operator");
+  ASSERT_TRUE(who.ok()) << who.error().message;
+  EXPECT_EQ(*who, "anna");
+  EXPECT_EQ(sim_->service_writes(), 0) << "the PLC's words are only read";
+}
+
+TEST_F(PlcLinkTest, AThirtyTwoCharacterSerialFillsEveryWordAndComesBackWhole) {
+  const std::string serial = "0123456789ABCDEFGHIJKLMNOPQRSTUV";
+  ASSERT_EQ(serial.size(), 32u);
+  const std::string operator_name = "badge-1234567890";
+  ASSERT_EQ(operator_name.size(), 16u);
+  ASSERT_TRUE(sim_->set_identity(serial, operator_name).ok());
+  ModbusPlcLink link(settings());
+  ASSERT_TRUE(link.connect().ok());
+  Result<PlcRequestWords> req = link.read_request();
+  ASSERT_TRUE(req.ok()) << req.error().message;
+  for (std::uint16_t w : req->serial) {
+    EXPECT_NE(w >> 8, 0) << "no NUL anywhere";
+    EXPECT_NE(w & 0xff, 0) << "no NUL anywhere";
+  }
+  EXPECT_EQ(req->serial.back(), ('U' << 8) | 'V') << "no terminator: the last word holds text";
+  EXPECT_EQ(req->operator_name.back(), ('9' << 8) | '0');
+  Result<std::string> back = decode_plc_text(req->serial, plc_registers::kSerialFirst, 400, "serial number");
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(*back, serial);
+  Result<std::string> who = decode_plc_text(req->operator_name, plc_registers::kOperatorFirst, 400, "operator");
+  ASSERT_TRUE(who.ok()) << who.error().message;
+  EXPECT_EQ(*who, operator_name);
+
+  Status longer = sim_->set_identity(serial + "W", "");
+  ASSERT_FALSE(longer.ok());
+  EXPECT_NE(longer.error().message.find("33 characters"), std::string::npos) << longer.error().message;
+  EXPECT_EQ(sim_->plc_words().serial.back(), ('U' << 8) | 'V') << "nothing written";
+}
+
+TEST_F(PlcLinkTest, AllZeroIdentityWordsAreNoSerialAndNoOperator) {
+  ModbusPlcLink link(settings());
+  ASSERT_TRUE(link.connect().ok());
+  ASSERT_TRUE(sim_->set_identity("A123", "anna").ok());
+  ASSERT_TRUE(sim_->set_identity("", "").ok());
+  Result<PlcRequestWords> req = link.read_request();
+  ASSERT_TRUE(req.ok()) << req.error().message;
+  for (std::uint16_t w : req->serial) EXPECT_EQ(w, 0);
+  for (std::uint16_t w : req->operator_name) EXPECT_EQ(w, 0);
+  Result<std::string> serial = decode_plc_text(req->serial, plc_registers::kSerialFirst, 400, "serial number");
+  ASSERT_TRUE(serial.ok()) << serial.error().message;
+  EXPECT_EQ(*serial, "");
+}
+
+// The text rules, without a link.
+TEST(PlcText, EndsAtTheFirstNulAndTrimsSpacePadding) {
+  std::array<std::uint16_t, 4> words{};
+  ASSERT_TRUE(encode_plc_text("  A1 2  ", words).ok());
+  EXPECT_EQ(*decode_plc_text(words, 13, 0, "serial number"), "A1 2") << "inner spaces stay";
+  words = {('A' << 8) | 'B', 'C' << 8, ('\x01' << 8) | 0xff, 0x0707};  // stale bytes after the NUL
+  Result<std::string> t = decode_plc_text(words, 13, 0, "serial number");
+  ASSERT_TRUE(t.ok()) << "bytes after the NUL are not read: " << t.error().message;
+  EXPECT_EQ(*t, "ABC");
+  words = {0x2020, 0x2020, 0, 0};
+  EXPECT_EQ(*decode_plc_text(words, 13, 0, "serial number"), "") << "spaces only: not given";
+}
+
+TEST(PlcText, AByteThatIsNotPrintableAsciiNamesTheWordRegisterAndByte) {
+  struct Case {
+    std::array<std::uint16_t, 3> words;
+    const char* where;
+  };
+  const Case cases[] = {
+      {{('A' << 8) | 'B', ('C' << 8) | 0x09, 0}, "word 14 (holding register 1014), low byte, is 0x09"},  // tab
+      {{('A' << 8) | 'B', 0xC384, 0}, "word 14 (holding register 1014), high byte, is 0xC3"},            // UTF-8 Ä
+      {{0x7f41, 0, 0}, "word 13 (holding register 1013), high byte, is 0x7F"},                           // DEL
+  };
+  for (const Case& c : cases) {
+    Result<std::string> t = decode_plc_text(c.words, 13, 1000, "serial number");
+    ASSERT_FALSE(t.ok()) << c.where;
+    EXPECT_EQ(t.error().code, ErrorCode::kInvalidInput);
+    EXPECT_NE(t.error().message.find("PLC serial number: " + std::string(c.where)), std::string::npos)
+        << t.error().message;
+  }
+}
+
 TEST_F(PlcLinkTest, AWrongBaseAddressIsAnExceptionThatNamesTheKey) {
   ModbusPlcLink link(settings(0));
   ASSERT_TRUE(link.connect().ok());
@@ -73,7 +173,8 @@ TEST_F(PlcLinkTest, AWrongBaseAddressIsAnExceptionThatNamesTheKey) {
   ASSERT_FALSE(req.ok());
   EXPECT_EQ(req.error().code, ErrorCode::kInvalidInput);
   EXPECT_NE(req.error().message.find("base_address"), std::string::npos) << req.error().message;
-  EXPECT_NE(req.error().message.find("0..12"), std::string::npos) << req.error().message;
+  EXPECT_NE(req.error().message.find("0..36"), std::string::npos)
+      << "the whole block in one read: " << req.error().message;
   EXPECT_TRUE(link.connected()) << "an exception reply leaves the link usable";
 }
 

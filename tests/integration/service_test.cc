@@ -560,7 +560,7 @@ TEST_F(PlcServiceTest, PlcRequestRunNcFileDoneWithTheRunIdThenCleared) {
       EXPECT_EQ(e.event.run_id, std::optional<std::int64_t>(out->run_id)) << e.event.code;
     }
   }
-  EXPECT_EQ(cycle, (std::vector<std::string>{"plc request", "acquired", "analysed", "compensated", "stored",
+  EXPECT_EQ(cycle, (std::vector<std::string>{"plc request", "acquired", "analysed", "judged", "compensated", "stored",
                                              "table pushed", "plc done"}))
       << log();
   for (const char* line : {"part intake_flat lobe 1: acquired: 3 revolutions", "compensated: apply: largest correction",

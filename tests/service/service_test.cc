@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <condition_variable>
 #include <filesystem>
@@ -17,6 +18,8 @@
 #include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <string>
+#include <string_view>
 #include <thread>
 
 #include "compensation/flat_probe.h"
@@ -88,6 +91,11 @@ class SharedPlc final : public PlcRegisters {
   void clear() {
     std::lock_guard<std::mutex> lock(mutex_);
     plc_.request = 0;
+  }
+  // Words 13-28 as the PLC program left them.
+  void serial_words(const std::array<std::uint16_t, plc_registers::kSerialWords>& words) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    plc_.serial = words;
   }
   void drop_link() {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -358,6 +366,65 @@ TEST_F(ServiceStateTest, APlcRequestForAPartNotConfiguredIsAnsweredAtOnce) {
   EXPECT_EQ(gauges_made_, 0);
 }
 
+// The serial number and operator as a PLC program writes them (words 13-36).
+PlcRequestWords plc_request(std::string_view serial, std::string_view operator_name) {
+  PlcRequestWords request;
+  request.part_number = 1;
+  request.lobe = 1;
+  request.request = plc_registers::kMeasureBit;
+  EXPECT_TRUE(encode_plc_text(serial, request.serial).ok());
+  EXPECT_TRUE(encode_plc_text(operator_name, request.operator_name).ok());
+  return request;
+}
+
+TEST_F(ServiceStateTest, APlcRunKeepsTheSerialNumberAndOperatorThePlcWrote) {
+  Service service(config_, design_gauge());
+  ServiceCycleRunner runner(service);
+  const std::string full_serial = "0123456789ABCDEFGHIJKLMNOPQRSTUV";  // 32: no NUL in the words
+  ASSERT_FALSE(runner.start(plc_request(full_serial, "anna")).has_value());
+  const std::optional<PlcCycleOutcome> first = wait_for_outcome(runner);
+  ASSERT_TRUE(first.has_value());
+  ASSERT_EQ(first->code, PlcResultCode::kTablePushed) << first->message;
+  // All words 0: neither given.
+  ASSERT_FALSE(runner.start(plc_request("", "")).has_value());
+  const std::optional<PlcCycleOutcome> second = wait_for_outcome(runner);
+  ASSERT_TRUE(second.has_value());
+  ASSERT_EQ(second->code, PlcResultCode::kTablePushed) << second->message;
+
+  Result<RunStore> store = RunStore::open_read_only(db());
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  Result<StoredRun> with = store->load_run(first->run_id);
+  ASSERT_TRUE(with.ok()) << with.error().message;
+  EXPECT_EQ(with->summary.serial, full_serial);
+  EXPECT_EQ(with->summary.operator_name, "anna");
+  Result<StoredRun> without = store->load_run(second->run_id);
+  ASSERT_TRUE(without.ok()) << without.error().message;
+  EXPECT_EQ(without->summary.serial, "");
+  EXPECT_EQ(without->summary.operator_name, "");
+  RunQuery by_serial;
+  by_serial.serial = full_serial;
+  Result<std::vector<RunSummary>> found = store->list_runs(by_serial);
+  ASSERT_TRUE(found.ok()) << found.error().message;
+  ASSERT_EQ(found->size(), 1u) << "`runs list --serial` finds the PLC's run";
+  EXPECT_EQ(found->front().id, first->run_id);
+}
+
+TEST_F(ServiceStateTest, APlcOperatorThatIsNotTextIsRefusedAtOnce) {
+  Service service(config_, design_gauge());
+  ServiceCycleRunner runner(service, 2000);
+  // "anna" and the CR LF a badge reader ends its line with: words 29, 30, then 31.
+  PlcRequestWords request = plc_request("A123", "anna");
+  request.operator_name[2] = 0x0d0a;
+  const std::optional<PlcCycleOutcome> o = runner.start(request);
+  ASSERT_TRUE(o.has_value()) << "refused before a run starts";
+  EXPECT_EQ(o->code, PlcResultCode::kBadIdentity);
+  EXPECT_FALSE(plc_result_is_done(o->code)) << "answered with fault";
+  EXPECT_NE(o->message.find("PLC operator: word 31 (holding register 2031), high byte, is 0x0D"), std::string::npos)
+      << o->message;
+  EXPECT_EQ(gauges_made_, 0);
+  EXPECT_TRUE(service.reserve_run().ok()) << "no run reserved";
+}
+
 TEST_F(ServiceStateTest, AnExceptionOnTheWorkerIsAFaultForThePlcAndTheServiceGoesOn) {
   int calls = 0;
   Service service(config_, [&calls, good = design_gauge()](const ServiceConfig& c) -> std::unique_ptr<GaugeClient> {
@@ -466,6 +533,63 @@ TEST_F(ServiceStateTest, WhileStoppingEveryPlcRequestIsToldNotNowUntilTheLastRun
       ++refused;
   }
   EXPECT_EQ(refused, 2);
+}
+
+// A serial number with a byte that is not text, through the trigger as the PLC sees it:
+// fault with result code 9, an event naming the register and the byte, nothing measured.
+TEST_F(ServiceStateTest, APlcSerialWithAControlOrNonAsciiByteIsAFaultNamingTheRegister) {
+  Service service(config_, design_gauge());
+  auto owned = std::make_unique<SharedPlc>();
+  SharedPlc& plc = *owned;
+  PlcSettings settings = fast_plc();
+  settings.link.base_address = 1000;
+  PlcTrigger trigger(service, settings, std::move(owned));
+  trigger.start();
+  // Seen low first: a request already high when the trigger starts is not a new one.
+  ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return s.heartbeats.size() >= 2; }));
+  struct Case {
+    std::uint16_t word_15;  // the serial's third word: characters 5 and 6
+    std::string named;
+  };
+  const Case cases[] = {
+      {('C' << 8) | 0x07, "word 15 (holding register 1015), low byte, is 0x07"},  // BEL
+      {0xE94B, "word 15 (holding register 1015), high byte, is 0xE9"},            // Latin-1 e acute
+  };
+  for (const Case& c : cases) {
+    std::array<std::uint16_t, plc_registers::kSerialWords> words{};
+    words[0] = ('S' << 8) | 'N';
+    words[1] = ('-' << 8) | '4';
+    words[2] = c.word_15;
+    words[3] = ('7' << 8) | '7';
+    plc.serial_words(words);
+    plc.request(1, 1);
+    ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return s.words.ack && (s.words.fault || s.words.done); }))
+        << c.named;
+    const SharedPlc::Seen answered = plc.seen();
+    EXPECT_TRUE(answered.words.fault) << c.named;
+    EXPECT_EQ(answered.words.result_code, PlcResultCode::kBadIdentity) << c.named;
+    EXPECT_EQ(answered.words.run_id, 0u);
+    plc.clear();
+    ASSERT_TRUE(plc.wait_until([](const SharedPlc::Seen& s) { return !s.words.ack && !s.words.fault; }));
+  }
+  trigger.stop();
+  ASSERT_TRUE(service.flush_events(kGenerous));
+  EXPECT_EQ(gauges_made_, 0) << "nothing measured";
+
+  std::vector<std::string> refusals;
+  for (const StoredEvent& e : stored_events(db())) {
+    if (e.event.code == "plc request" && e.event.message.find("refused") != std::string::npos)
+      refusals.push_back(e.event.message);
+  }
+  ASSERT_EQ(refusals.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_NE(refusals[i].find("PLC serial number: " + cases[i].named), std::string::npos) << refusals[i];
+  }
+  Result<RunStore> store = RunStore::open_read_only(db());
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  Result<std::vector<RunSummary>> runs = store->list_runs(RunQuery{});
+  ASSERT_TRUE(runs.ok()) << runs.error().message;
+  EXPECT_TRUE(runs->empty()) << "no run stored";
 }
 
 // Holds the run database with an exclusive lock from a second connection, as a backup or a

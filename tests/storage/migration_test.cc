@@ -1,9 +1,11 @@
 // Upgrading a database written by schema version 1 (`gaugeloop demo` before the compact tables): the
 // data survives, the version-1 names still read the same columns, damage stops the upgrade.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstddef>
+#include <map>
 #include <string>
 
 #include "storage/migrations.h"
@@ -239,7 +241,7 @@ TEST(MigrationFromV6, OldRunsHaveNoSerialAndNewRunsKeepTheirs) {
   EXPECT_EQ(store->schema_upgrade()->from_version, 6);
   EXPECT_EQ(RawDb(store->schema_upgrade()->backup).query_int("PRAGMA user_version"), 6) << "the file as it was";
   RawDb raw(db_in(dir));
-  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 7);
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM runs WHERE id = 5 AND serial IS NULL AND operator IS NULL"), 1);
 
   RunRecord marked = testing::make_record("intake", "2026-11-22T08:00:00Z");
@@ -255,6 +257,140 @@ TEST(MigrationFromV6, OldRunsHaveNoSerialAndNewRunsKeepTheirs) {
   EXPECT_EQ((*runs)[1].id, 5);
   EXPECT_EQ((*runs)[1].serial, "");
   EXPECT_EQ((*runs)[1].operator_name, "");
+}
+
+// A run judged against its tolerances, as judge_lobe leaves it: a zone figure, a single figure
+// with an upper limit only, and one not judged.
+RunRecord judged_record(const std::string& started_utc, Verdict nose_verdict) {
+  RunRecord r = testing::make_record("intake", started_utc);
+  Characteristic nose;
+  nose.key = "lift_error.nose";
+  nose.unit = "um";
+  nose.value = nose_verdict == Verdict::kOut ? 12.5 : 3.25;
+  nose.min = -1.5;
+  nose.max = nose.value;
+  nose.limits = {-10.0, 10.0};
+  nose.verdict = nose_verdict;
+  nose.from_deg = -14;
+  nose.to_deg = 14;
+  Characteristic runout;
+  runout.key = "base_circle_runout";
+  runout.unit = "um";
+  runout.value = runout.min = runout.max = 2.0;
+  runout.limits = {std::nullopt, 8.0};
+  runout.verdict = Verdict::kIn;
+  Characteristic h1;
+  h1.key = "base_circle_runout_h1";
+  h1.unit = "um";
+  h1.value = h1.min = h1.max = 4.0;
+  r.characteristics = {nose, runout, h1};
+  r.verdict = combined_verdict({nose.verdict, runout.verdict, h1.verdict});
+  r.lift_error_reference = LiftErrorReference::kNominal;
+  r.analysis.residual_error_um[17] = -2.5;
+  r.analysis.max_abs_residual_um = 2.5;
+  r.analysis.dial_runout_um = 2.0;
+  r.analysis.roundness_um = 0.75;
+  return r;
+}
+
+TEST(MigrationFromV7, OldRunsAreNotJudgedAndNewRunsKeepTheirCharacteristics) {
+  TempDir dir;
+  std::filesystem::create_directories(db_in(dir).parent_path());
+  {
+    storage_internal::Connection conn;
+    conn.path = db_in(dir);
+    ASSERT_EQ(sqlite3_open(db_in(dir).c_str(), &conn.db), SQLITE_OK);
+    ASSERT_TRUE(storage_internal::apply_migrations_up_to(conn, 7).ok());
+    ASSERT_EQ(sqlite3_exec(conn.db,
+                           "INSERT INTO runs (id, started_utc, finished_utc, machine, part, lobe, gauge, revolutions,"
+                           " degrees_captured, zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um,"
+                           " repeatability_um) VALUES (5, '2026-11-21T08:00:00Z', '2026-11-21T08:00:09Z', 'g1',"
+                           " 'intake', 1, 'tcp:127.0.0.1:1502', 3, 1080, 2.0, 12.0, 5.0, 20.0, 0.5)",
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+  }
+  Result<RunStore> store = RunStore::open(db_in(dir));
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  ASSERT_TRUE(store->schema_upgrade().has_value());
+  EXPECT_EQ(store->schema_upgrade()->from_version, 7);
+
+  Result<std::int64_t> out_id = store->insert_run(judged_record("2026-11-22T08:00:00Z", Verdict::kOut));
+  ASSERT_TRUE(out_id.ok()) << out_id.error().message;
+  Result<std::int64_t> in_id = store->insert_run(judged_record("2026-11-22T09:00:00Z", Verdict::kIn));
+  ASSERT_TRUE(in_id.ok()) << in_id.error().message;
+
+  // Read back whole, in the order stored, limits absent where none were given.
+  Result<StoredRun> out = store->load_run(*out_id);
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  EXPECT_EQ(out->summary.verdict, Verdict::kOut);
+  EXPECT_EQ(out->lift_error_reference, LiftErrorReference::kNominal);
+  ASSERT_EQ(out->characteristics.size(), 3u);
+  const Characteristic& nose = out->characteristics[0];
+  EXPECT_EQ(nose.key, "lift_error.nose");
+  EXPECT_EQ(nose.value, 12.5);
+  EXPECT_EQ(nose.min, -1.5);
+  EXPECT_EQ(nose.limits.lower, -10.0);
+  EXPECT_EQ(nose.limits.upper, 10.0);
+  EXPECT_EQ(nose.verdict, Verdict::kOut);
+  EXPECT_EQ(nose.from_deg, -14);
+  EXPECT_EQ(nose.to_deg, 14);
+  EXPECT_FALSE(out->characteristics[1].limits.lower.has_value());
+  EXPECT_EQ(out->characteristics[1].limits.upper, 8.0);
+  EXPECT_FALSE(out->characteristics[2].limits.any());
+  EXPECT_FALSE(out->characteristics[2].from_deg.has_value());
+  EXPECT_NEAR(out->analysis.residual_error_um[17], -2.5, 5e-5);
+  EXPECT_EQ(out->analysis.max_abs_residual_um, 2.5);
+  EXPECT_EQ(out->analysis.roundness_um, 0.75);
+
+  // Filters and the characteristics of a selection, oldest first.
+  RunQuery q;
+  q.verdict = Verdict::kOut;
+  Result<std::vector<RunSummary>> outs = store->list_runs(q);
+  ASSERT_TRUE(outs.ok());
+  ASSERT_EQ(outs->size(), 1u);
+  EXPECT_EQ((*outs)[0].id, *out_id);
+  q.verdict = Verdict::kNotJudged;
+  outs = store->list_runs(q);
+  ASSERT_TRUE(outs.ok());
+  ASSERT_EQ(outs->size(), 1u);
+  EXPECT_EQ((*outs)[0].id, 5);
+  Result<std::vector<RunCharacteristics>> all = store->characteristics({});
+  ASSERT_TRUE(all.ok()) << all.error().message;
+  ASSERT_EQ(all->size(), 3u);
+  // The run stored before: not judged, no characteristics.
+  EXPECT_EQ((*all)[0].run.id, 5);
+  EXPECT_EQ((*all)[0].run.verdict, Verdict::kNotJudged);
+  EXPECT_TRUE((*all)[0].characteristics.empty());
+  EXPECT_EQ((*all)[1].run.id, *out_id);
+  EXPECT_EQ((*all)[2].characteristics[0].value, 3.25);
+
+  // /metrics counts them by verdict, the run from before as not judged.
+  Result<StoreMetrics> m = store->metrics_snapshot();
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  EXPECT_EQ(m->runs_by_verdict, (std::map<std::string, std::int64_t>{{"in", 1}, {"not_judged", 1}, {"out", 1}}));
+  ASSERT_EQ(m->last_runs.size(), 2u);  // g1's old run and the newer of the two judged ones
+  for (const LobeLastRun& last : m->last_runs) {
+    EXPECT_EQ(last.verdict, last.run_id == 5 ? Verdict::kNotJudged : Verdict::kIn) << last.run_id;
+  }
+}
+
+TEST(Characteristics, ARunWithANonFiniteOrRepeatedCharacteristicIsRefusedAndNothingWritten) {
+  TempDir dir;
+  Result<RunStore> store = RunStore::open(db_in(dir));
+  ASSERT_TRUE(store.ok());
+  RunRecord bad = judged_record("2026-11-22T08:00:00Z", Verdict::kIn);
+  bad.characteristics[1].limits.upper = std::nan("");
+  Result<std::int64_t> id = store->insert_run(bad);
+  ASSERT_FALSE(id.ok());
+  EXPECT_THAT(id.error().message, ::testing::HasSubstr("base_circle_runout"));
+  bad = judged_record("2026-11-22T08:00:00Z", Verdict::kIn);
+  bad.characteristics[2].key = bad.characteristics[0].key;
+  id = store->insert_run(bad);
+  ASSERT_FALSE(id.ok());
+  EXPECT_THAT(id.error().message, ::testing::HasSubstr("given twice"));
+  Result<std::vector<RunSummary>> runs = store->list_runs({});
+  ASSERT_TRUE(runs.ok());
+  EXPECT_TRUE(runs->empty());
 }
 
 }  // namespace

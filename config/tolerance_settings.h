@@ -1,0 +1,26 @@
+// The tolerances a run is judged against, as canonical settings lines, so that two runs
+// judged alike show the same settings (and settings hash) and `runs compare` shows a change
+// of tolerance like any other setting.
+#pragma once
+
+#include <string>
+
+#include "core/tolerance.h"
+
+namespace gaugeloop {
+
+// One "key = value" line per limit given, in a fixed order whatever the order in the file:
+//   tolerance.lift_error = best_fit
+//   tolerance.lift_error_um = -20 20
+//   tolerance.base_circle_runout_um = none 8
+//   tolerance.zone.opening_flank.angle_deg = -70 -20     (or .lift_mm = 0.3 7.5)
+//   tolerance.zone.opening_flank.lift_error_um = -12 12
+// A limit is "lower upper", an absent bound "none", numbers in their shortest exact form.
+// Whole-turn keys first, then the zones in the order the follower meets them. Limits not
+// given have no line, and tolerances that judge nothing give "" (so a part without
+// [tolerance] keeps the settings it had before tolerances existed).
+// Depends on core only, so it can move as it is to the layer that writes a run's settings
+// (job/ makes them and cannot include config/).
+std::string tolerances_settings_text(const LobeTolerances& tolerances);
+
+}  // namespace gaugeloop

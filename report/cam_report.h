@@ -1,0 +1,63 @@
+// The cam report a quality engineer files (one page: identity, lift, velocity and acceleration
+// error with their tolerance bands, polar view, harmonics, characteristics and verdicts) and
+// the trend plot of one characteristic over the runs of a lobe. Drawn with cairo; PDF, SVG or
+// PNG by the file's extension.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/result.h"
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+
+// The report's page: A4 landscape, points. A PNG has 2 pixels per point (1684 x 1191).
+inline constexpr double kReportWidthPt = 841.89;
+inline constexpr double kReportHeightPt = 595.28;
+inline constexpr double kReportPngPixelsPerPoint = 2.0;
+
+// kInvalidInput naming `out` and the formats unless its extension is .pdf, .svg or .png (any
+// case): what write_cam_report and write_trend_plot check first.
+Status check_page_file_name(const std::filesystem::path& out);
+
+// Writes the cam report of `run` to `out`: PDF, SVG or PNG by its extension (any case).
+// The lift error charted and judged is the one run.lift_error_reference names (best fit:
+// analysis.residual_error_um, nominal: analysis.error_um), nose-centred over -180..180 cam
+// degrees (cam frame index d is drawn at d up to 180 and at d - 360 above), the raw lift
+// error (error_um) faint behind it; velocity and acceleration error are its derivatives
+// (error_derivatives). Tolerance bands come from run.characteristics: a zone's band from
+// "<figure>.<zone>" over its from_deg..to_deg, the whole-turn "<figure>" limits elsewhere; a
+// run without characteristics gets no bands and its table says it was not judged.
+// The file is written atomically: it holds the whole page or is left as it was.
+// Errors: kInvalidInput naming the file for another extension; kIo naming the file if it
+// cannot be written (no such directory, no permission); kInvalidInput for an analysis
+// holding a non-finite value.
+Status write_cam_report(const StoredRun& run, const std::filesystem::path& out);
+
+// Where the report draws the lift error chart, for checking a rendered page: the plot area
+// (points from the page's top left, y down) and the ranges it shows (x: cam degrees
+// -180..180, y: lift error in um, upwards).
+struct ChartPlacement {
+  double left_pt = 0.0, top_pt = 0.0, width_pt = 0.0, height_pt = 0.0;
+  double x_min = 0.0, x_max = 0.0, y_min = 0.0, y_max = 0.0;
+  double x_pt(double x) const { return left_pt + (x - x_min) / (x_max - x_min) * width_pt; }
+  double y_pt(double y) const { return top_pt + height_pt - (y - y_min) / (y_max - y_min) * height_pt; }
+};
+ChartPlacement cam_report_lift_chart(const StoredRun& run);
+
+// The trend page: 297 x 167 mm landscape, points.
+inline constexpr double kTrendWidthPt = 841.89;
+inline constexpr double kTrendHeightPt = 473.0;
+
+// Writes the plot of characteristic `key` over `runs` (oldest first, as
+// RunStore::characteristics returns them) to `out` (PDF, SVG or PNG by its extension): its
+// value per run in run order (run ids and dates on the x axis) with its limits as lines and
+// the runs out of tolerance marked. Runs without the key are left out.
+// Errors: kNotFound if no run has the key (the message lists the keys the runs have) or
+// there are no runs; kInvalidInput for another extension; kIo if the file cannot be written.
+Status write_trend_plot(const std::vector<RunCharacteristics>& runs, const std::string& key,
+                        const std::filesystem::path& out);
+
+}  // namespace gaugeloop
