@@ -41,6 +41,15 @@ class ShaftCommandsTest : public ::testing::Test {
     exhaust.serial = "CS-1";
     exhaust.analysis.phase_error_deg = -0.1;
     exhaust.geometry->c_offset_deg = 120.0;
+    // The exhaust lobe's runout out of its limit: the lobe, and so the shaft, is out.
+    Characteristic runout;
+    runout.key = "base_circle_runout";
+    runout.unit = "um";
+    runout.value = runout.min = runout.max = 12.0;
+    runout.limits.upper = 10.0;
+    runout.verdict = Verdict::kOut;
+    exhaust.characteristics = {runout};
+    exhaust.verdict = Verdict::kOut;
     ids_.push_back(*store->insert_run(exhaust));
     RunRecord other = testing::sample_run("intake_flat", 1, "g1", "2020-11-20T09:00:00Z", 4.0);
     other.serial = "CS-2";
@@ -78,6 +87,8 @@ TEST_F(ShaftCommandsTest, ShaftRecordAsJson) {
   EXPECT_NEAR(j["lobes"][1]["index_error_deg"].get<double>(), -0.1, 1e-9);
   EXPECT_NEAR(j["lobes"][1]["relative_error_deg"].get<double>(), -0.35, 1e-9);
   EXPECT_EQ(j["lobes"][1]["index_verdict"], "in");
+  EXPECT_EQ(j["lobes"][0]["verdict"], "not_judged");
+  EXPECT_EQ(j["lobes"][1]["verdict"], "out") << "the run's stored verdict";
   EXPECT_EQ(j["verdict"], "out");
   // The sample part files grind their noses at C = 0, not where this shaft wants them.
   EXPECT_EQ(j["notes"].size(), 2u);
@@ -149,6 +160,44 @@ TEST_F(ShaftCommandsTest, SpcSelectsTheLobesRuns) {
   CommandResult since = run_command("runs spc --part intake_flat --lobe 1 --since 2020-11-20T08:30" + data_);
   ASSERT_EQ(since.exit_code, 0) << since.output;
   EXPECT_TRUE(has(since.output, "1 run, 2020-11-20T09:00:00Z to 2020-11-20T09:00:00Z")) << since.output;
+}
+
+TEST_F(ShaftCommandsTest, SpcFromStoredCharacteristics) {
+  // Lift error 1, 2, 3 um against -5..+5 over three runs of exhaust lobe 2 (the third out by
+  // its own verdict): mean 2, s = sqrt((1 + 0 + 1) / 2) = 1, Cp = 10 / 6 = 1.667,
+  // Cpk = min(5 - 2, 2 + 5) / 3 = 1.0.
+  Result<RunStore> store = RunStore::open(tmp_.path() / "gaugeloop.sqlite");
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  for (int i = 1; i <= 3; ++i) {
+    RunRecord r = testing::sample_run("spc_part", 2, "g1", "2020-11-2" + std::to_string(i) + "T08:00:00Z", 4.0);
+    Characteristic c;
+    c.key = "lift_error";
+    c.unit = "um";
+    c.value = c.min = c.max = i;
+    c.limits = Limits{-5.0, 5.0};
+    c.verdict = i == 3 ? Verdict::kOut : Verdict::kIn;
+    r.characteristics = {c};
+    r.verdict = c.verdict;
+    ASSERT_TRUE(store->insert_run(r).ok());
+  }
+  CommandResult r = run_command("runs spc --part spc_part --lobe 2 --json" + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output, nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << r.output;
+  ASSERT_EQ(j["characteristics"].size(), 1u) << r.output;
+  const nlohmann::json& f = j["characteristics"][0];
+  EXPECT_EQ(f["key"], "lift_error");
+  EXPECT_EQ(f["n"], 3);
+  EXPECT_NEAR(f["mean"].get<double>(), 2.0, 1e-12);
+  EXPECT_NEAR(f["sd"].get<double>(), 1.0, 1e-12);
+  EXPECT_NEAR(f["cp"].get<double>(), 10.0 / 6.0, 1e-12);
+  EXPECT_NEAR(f["cpk"].get<double>(), 1.0, 1e-12);
+  EXPECT_EQ(f["out"], 1);
+  EXPECT_EQ(f["judged"], 3);
+  CommandResult text = run_command("runs spc --part spc_part --lobe 2" + data_);
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_TRUE(has(text.output, "Lift error, whole turn")) << text.output;
+  EXPECT_TRUE(has(text.output, "1.67       1.00  1/3")) << text.output;
 }
 
 }  // namespace
