@@ -11,9 +11,9 @@
 #include <sstream>
 
 #include "cli/cli_common.h"
-#include "cli/commands_spc.h"
 #include "cli/commands_dfq.h"
 #include "cli/commands_report.h"
+#include "cli/commands_spc.h"
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "report/run_json.h"
