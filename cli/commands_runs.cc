@@ -13,6 +13,7 @@
 #include "cli/cli_common.h"
 #include "cli/commands_dfq.h"
 #include "cli/commands_report.h"
+#include "cli/commands_spc.h"
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "report/run_json.h"
@@ -633,6 +634,8 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
       ->required()
       ->check(CLI::Range(0, 100000));
   prune_cmd->callback([&action, prune] { action = [prune] { return cmd_prune(*prune); }; });
+
+  add_spc_commands(runs, action);
 
   auto events = std::make_shared<EventOptions>();
   CLI::App* events_cmd = app.add_subcommand("events", "Faults, refusals and the service's steps (info), newest first.");

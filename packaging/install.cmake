@@ -13,8 +13,8 @@ install(FILES ${PROJECT_SOURCE_DIR}/packaging/tmpfiles.conf DESTINATION lib/tmpf
 # The docs as in the source tree, so their links hold: README.md, docs/*.md, examples/ beside.
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
 set(GAUGELOOP_DOCS
-  PERFORMANCE.md acquisition.md architecture.md building.md compensation.md gauge.md http_api.md nc_output.md
-  parts.md reports.md service.md simulator.md storage.md virtual_grinder.md)
+  PERFORMANCE.md acquisition.md aqdef.md architecture.md building.md compensation.md gauge.md http_api.md
+  nc_output.md parts.md reports.md service.md simulator.md spc_and_shafts.md storage.md virtual_grinder.md)
 list(TRANSFORM GAUGELOOP_DOCS PREPEND ${PROJECT_SOURCE_DIR}/docs/)
 install(FILES ${GAUGELOOP_DOCS} DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
 install(FILES ${PROJECT_SOURCE_DIR}/docs/img/cam_report.png DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs/img)
@@ -24,6 +24,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/docs/img/cam_report.png DESTINATION ${CMAKE_
 set(GAUGELOOP_EXAMPLES
   exhaust_roller.csv exhaust_roller.toml intake_flat.csv intake_flat.toml intake_flat_half_degree.csv
   intake_flat_half_degree.toml)
+list(APPEND GAUGELOOP_EXAMPLES camshaft.toml)  # names intake_flat.toml and exhaust_roller.toml
 list(TRANSFORM GAUGELOOP_EXAMPLES PREPEND ${PROJECT_SOURCE_DIR}/examples/)
 install(FILES ${GAUGELOOP_EXAMPLES} DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples)
 install(FILES ${PROJECT_SOURCE_DIR}/examples/gauges/simulator.toml ${PROJECT_SOURCE_DIR}/examples/gauges/other_amplifier.toml

@@ -1,0 +1,204 @@
+// `runs shaft` and `runs spc` as a user runs them: the real binary on a database filled through
+// RunStore and a shaft file naming the sample parts.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "storage/run_store.h"
+#include "tests/support/cli.h"
+#include "tests/support/sample_runs.h"
+#include "tests/support/temp_dir.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CommandResult;
+using testing::run_command;
+
+bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+
+class ShaftCommandsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const fs::path dir = tmp_.path();
+    Result<RunStore> store = RunStore::open(dir / "gaugeloop.sqlite");
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    // Serial CS-1: intake lobe 1 (sample_run: c0 10, phase +0.25) and exhaust lobe 2 ground
+    // at c0 120 with phase -0.1. An older intake run of CS-1 and one of another serial must
+    // not count.
+    RunRecord old_intake = testing::sample_run("intake_flat", 1, "g1", "2020-11-20T07:00:00Z", 9.0);
+    old_intake.serial = "CS-1";
+    old_intake.analysis.phase_error_deg = 3.0;
+    ids_.push_back(*store->insert_run(old_intake));
+    RunRecord intake = testing::sample_run("intake_flat", 1, "g1", "2020-11-20T08:00:00Z", 4.0);
+    intake.serial = "CS-1";
+    ids_.push_back(*store->insert_run(intake));
+    RunRecord exhaust = testing::sample_run("exhaust_roller", 2, "g1", "2020-11-20T08:10:00Z", 5.0);
+    exhaust.serial = "CS-1";
+    exhaust.analysis.phase_error_deg = -0.1;
+    exhaust.geometry->c_offset_deg = 120.0;
+    // The exhaust lobe's runout out of its limit: the lobe, and so the shaft, is out.
+    Characteristic runout;
+    runout.key = "base_circle_runout";
+    runout.unit = "um";
+    runout.value = runout.min = runout.max = 12.0;
+    runout.limits.upper = 10.0;
+    runout.verdict = Verdict::kOut;
+    exhaust.characteristics = {runout};
+    exhaust.verdict = Verdict::kOut;
+    ids_.push_back(*store->insert_run(exhaust));
+    RunRecord other = testing::sample_run("intake_flat", 1, "g1", "2020-11-20T09:00:00Z", 4.0);
+    other.serial = "CS-2";
+    ids_.push_back(*store->insert_run(other));
+    data_ = " --data-dir " + dir.string();
+
+    // The shaft's reference at C = 10: lobe 1 nominal at 10, lobe 2 at 120.
+    const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
+    shaft_ = dir / "shaft.toml";
+    std::ofstream(shaft_) << "name = \"test shaft\"\nreference_c_deg = 10\nindex_tolerance_deg = 0.2\n"
+                          << "[[lobe]]\npart = \"" << (examples / "intake_flat.toml").string() << "\"\nangle_deg = 0\n"
+                          << "[[lobe]]\npart = \"" << (examples / "exhaust_roller.toml").string()
+                          << "\"\nangle_deg = 110\n";
+  }
+
+  testing::TempDir tmp_;
+  std::vector<std::int64_t> ids_;
+  std::string data_;
+  fs::path shaft_;
+};
+
+TEST_F(ShaftCommandsTest, ShaftRecordAsJson) {
+  // Lobe 1: nose at 10 + 0.25, index +0.25, out of +-0.2. Lobe 2: 120 - 0.1, index -0.1, in;
+  // relative to lobe 1: -0.35. The shaft is out.
+  CommandResult r = run_command("runs shaft CS-1 --json --shaft " + shaft_.string() + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output, nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << r.output;
+  EXPECT_EQ(j["serial"], "CS-1");
+  ASSERT_EQ(j["lobes"].size(), 2u);
+  EXPECT_EQ(j["lobes"][0]["run_id"], ids_[1]) << "the newest run of the lobe with that serial";
+  EXPECT_NEAR(j["lobes"][0]["index_error_deg"].get<double>(), 0.25, 1e-9);
+  EXPECT_EQ(j["lobes"][0]["index_verdict"], "out");
+  EXPECT_EQ(j["lobes"][1]["run_id"], ids_[2]);
+  EXPECT_NEAR(j["lobes"][1]["index_error_deg"].get<double>(), -0.1, 1e-9);
+  EXPECT_NEAR(j["lobes"][1]["relative_error_deg"].get<double>(), -0.35, 1e-9);
+  EXPECT_EQ(j["lobes"][1]["index_verdict"], "in");
+  EXPECT_EQ(j["lobes"][0]["verdict"], "not_judged");
+  EXPECT_EQ(j["lobes"][1]["verdict"], "out") << "the run's stored verdict";
+  EXPECT_EQ(j["verdict"], "out");
+  // The sample part files grind their noses at C = 0, not where this shaft wants them.
+  EXPECT_EQ(j["notes"].size(), 2u);
+}
+
+TEST_F(ShaftCommandsTest, ShaftRecordAsATable) {
+  CommandResult r = run_command("runs shaft CS-1 --shaft " + shaft_.string() + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "shaft \"test shaft\", serial CS-1")) << r.output;
+  EXPECT_TRUE(has(r.output, "exhaust_roller")) << r.output;
+  EXPECT_TRUE(has(r.output, "+0.250     +0.000  out")) << r.output;
+  EXPECT_TRUE(has(r.output, "-0.100     -0.350  in")) << r.output;
+  EXPECT_TRUE(has(r.output, "shaft verdict: out")) << r.output;
+  EXPECT_TRUE(has(r.output, "note: lobe 2 (exhaust_roller.toml)")) << r.output;
+}
+
+TEST_F(ShaftCommandsTest, WithoutAShaftFileListsTheSerialsRunsByLobe) {
+  CommandResult r = run_command("runs shaft CS-1" + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "serial CS-1, by lobe")) << r.output;
+  const std::size_t newest = r.output.find(std::to_string(ids_[1]) + "  2020-11-20T08:00:00Z");
+  const std::size_t older = r.output.find(std::to_string(ids_[0]) + "  2020-11-20T07:00:00Z");
+  const std::size_t lobe2 = r.output.find(std::to_string(ids_[2]) + "  2020-11-20T08:10:00Z");
+  ASSERT_NE(newest, std::string::npos) << r.output;
+  ASSERT_NE(older, std::string::npos) << r.output;
+  ASSERT_NE(lobe2, std::string::npos) << r.output;
+  EXPECT_LT(newest, older);
+  EXPECT_LT(older, lobe2);
+  EXPECT_TRUE(has(r.output, "(older)")) << r.output;
+  EXPECT_FALSE(has(r.output, "2020-11-20T09:00:00Z")) << "another serial's run: " << r.output;
+
+  CommandResult j = run_command("runs shaft CS-1 --json" + data_);
+  ASSERT_EQ(j.exit_code, 0) << j.output;
+  EXPECT_EQ(nlohmann::json::parse(j.output)["runs"].size(), 3u);
+}
+
+TEST_F(ShaftCommandsTest, ABadShaftFileOrSerialIsRefused) {
+  CommandResult missing = run_command("runs shaft CS-1 --shaft " + (tmp_.path() / "none.toml").string() + data_);
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_TRUE(has(missing.output, "none.toml")) << missing.output;
+  std::ofstream(tmp_.path() / "bad.toml") << "name = \"x\"\nspeed = 3\n";
+  CommandResult bad = run_command("runs shaft CS-1 --shaft " + (tmp_.path() / "bad.toml").string() + data_);
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_TRUE(has(bad.output, "bad.toml:2: key `speed`")) << bad.output;
+  CommandResult long_serial = run_command("runs shaft " + std::string(65, 'x') + data_);
+  EXPECT_EQ(long_serial.exit_code, 2) << long_serial.output;
+}
+
+TEST_F(ShaftCommandsTest, SpcSelectsTheLobesRuns) {
+  // The runs are selected as `runs trend` selects them; their characteristics come from the
+  // store (none are stored on these made-up runs).
+  CommandResult r = run_command("runs spc --part intake_flat --lobe 1 --json" + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output, nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << r.output;
+  EXPECT_EQ(j["runs"], 3);
+  EXPECT_EQ(j["first_started_utc"], "2020-11-20T07:00:00Z");
+  EXPECT_EQ(j["last_started_utc"], "2020-11-20T09:00:00Z");
+  EXPECT_TRUE(j["characteristics"].is_array());
+  EXPECT_EQ(run_command("runs spc --part intake_flat --lobe 1 --last 2 --json" + data_).output.find("\"runs\": 2") !=
+                std::string::npos,
+            true);
+
+  CommandResult none = run_command("runs spc --part nothing --lobe 1" + data_);
+  ASSERT_EQ(none.exit_code, 0) << none.output;
+  EXPECT_TRUE(has(none.output, "(no runs of nothing lobe 1 match")) << none.output;
+  CommandResult no_part = run_command("runs spc --lobe 1" + data_);
+  EXPECT_EQ(no_part.exit_code, 2) << no_part.output;
+  CommandResult since = run_command("runs spc --part intake_flat --lobe 1 --since 2020-11-20T08:30" + data_);
+  ASSERT_EQ(since.exit_code, 0) << since.output;
+  EXPECT_TRUE(has(since.output, "1 run, 2020-11-20T09:00:00Z to 2020-11-20T09:00:00Z")) << since.output;
+}
+
+TEST_F(ShaftCommandsTest, SpcFromStoredCharacteristics) {
+  // Lift error 1, 2, 3 um against -5..+5 over three runs of exhaust lobe 2 (the third out by
+  // its own verdict): mean 2, s = sqrt((1 + 0 + 1) / 2) = 1, Cp = 10 / 6 = 1.667,
+  // Cpk = min(5 - 2, 2 + 5) / 3 = 1.0.
+  Result<RunStore> store = RunStore::open(tmp_.path() / "gaugeloop.sqlite");
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  for (int i = 1; i <= 3; ++i) {
+    RunRecord r = testing::sample_run("spc_part", 2, "g1", "2020-11-2" + std::to_string(i) + "T08:00:00Z", 4.0);
+    Characteristic c;
+    c.key = "lift_error";
+    c.unit = "um";
+    c.value = c.min = c.max = i;
+    c.limits = Limits{-5.0, 5.0};
+    c.verdict = i == 3 ? Verdict::kOut : Verdict::kIn;
+    r.characteristics = {c};
+    r.verdict = c.verdict;
+    ASSERT_TRUE(store->insert_run(r).ok());
+  }
+  CommandResult r = run_command("runs spc --part spc_part --lobe 2 --json" + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output, nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << r.output;
+  ASSERT_EQ(j["characteristics"].size(), 1u) << r.output;
+  const nlohmann::json& f = j["characteristics"][0];
+  EXPECT_EQ(f["key"], "lift_error");
+  EXPECT_EQ(f["n"], 3);
+  EXPECT_NEAR(f["mean"].get<double>(), 2.0, 1e-12);
+  EXPECT_NEAR(f["sd"].get<double>(), 1.0, 1e-12);
+  EXPECT_NEAR(f["cp"].get<double>(), 10.0 / 6.0, 1e-12);
+  EXPECT_NEAR(f["cpk"].get<double>(), 1.0, 1e-12);
+  EXPECT_EQ(f["out"], 1);
+  EXPECT_EQ(f["judged"], 3);
+  CommandResult text = run_command("runs spc --part spc_part --lobe 2" + data_);
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_TRUE(has(text.output, "Lift error, whole turn")) << text.output;
+  EXPECT_TRUE(has(text.output, "1.67       1.00  1/3")) << text.output;
+}
+
+}  // namespace
+}  // namespace gaugeloop
