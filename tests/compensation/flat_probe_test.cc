@@ -97,13 +97,16 @@ TEST(GroundLobeReading, RoundTripReturnsTheDesignReadingOfEverySampleLobe) {
 }
 
 TEST(ExampleLobes, EveryExampleIsListed) {
-  // A new sample lobe in examples/ must join testing::example_lobes(), so the round trip and
-  // the derivative checks cover it.
+  // A new sample lobe in examples/ (a part file beside its lift table, <name>.toml and
+  // <name>.csv; a shaft file has no table) must join testing::example_lobes(), so the round
+  // trip and the derivative checks cover it.
   std::set<std::string> listed;
   for (const testing::ExampleLobe& lobe : testing::example_lobes()) listed.insert(lobe.name);
   int found = 0;
   for (const auto& entry : std::filesystem::directory_iterator(std::string(GAUGELOOP_SOURCE_DIR) + "/examples")) {
     if (entry.path().extension() != ".toml") continue;
+    std::filesystem::path table = entry.path();
+    if (!std::filesystem::exists(table.replace_extension(".csv"))) continue;
     ++found;
     EXPECT_TRUE(listed.count(entry.path().stem().string()) == 1)
         << entry.path() << " is not in testing::example_lobes() (tests/compensation/test_lobes.h)";
