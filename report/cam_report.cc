@@ -509,6 +509,22 @@ void draw_table(cairo_t* cr, const StoredRun& run) {
   }
 }
 
+// The noise the derivatives carry, from the gauge noise the revolutions show: the RMS over the
+// turn of the per-degree spread across revolutions, averaged over the run's revolutions
+// (derivative_noise_rms). Empty when it cannot be said (fewer than 2 revolutions stored).
+// Charted in um per degree, as the charts are.
+std::string derivative_noise_text(const StoredRun& run) {
+  const LobeAnalysis& a = run.analysis;
+  double squares = 0.0;
+  for (double s : a.spread_um) squares += s * s;
+  const double noise_um = std::sqrt(squares / kDegreesPerRevolution);
+  Result<double> velocity = derivative_noise_rms(noise_um, run.summary.revolutions, 1);
+  Result<double> acceleration = derivative_noise_rms(noise_um, run.summary.revolutions, 2);
+  if (run.summary.revolutions < 2 || !velocity || !acceleration) return "";
+  return ", noise " + format_fixed(*velocity * 1000.0, 3) + " \u00b5m/deg, " + format_fixed(*acceleration * 1000.0, 4) +
+         " \u00b5m/deg\u00b2 RMS";
+}
+
 void draw_footer(cairo_t* cr, const StoredRun& run) {
   const LobeAnalysis& a = run.analysis;
   const bool best_fit = run.lift_error_reference == LiftErrorReference::kBestFit && !best_fit_missing(run);
@@ -531,9 +547,8 @@ void draw_footer(cairo_t* cr, const StoredRun& run) {
   chart::text(cr, kMargin, y, judged + " \u00b7 repeatability " + format_fixed(a.repeatability_um, 2) + " \u00b5m",
               6.5);
   chart::text(cr, kMargin, y + 10,
-              "velocity and acceleration error from harmonics 1\u201330 of it \u00b7 cam frame, nose at 0 \u00b7 "
-              "gauge " +
-                  run.gauge + " \u00b7 gaugeloop",
+              "velocity, acceleration: harmonics 1\u201330" + derivative_noise_text(run) + " \u00b7 gauge " +
+                  run.gauge,
               6.5);
   chart::text(cr, kReportWidthPt - kMargin, y + 6, "Checked by ____________________   Date ____________", 8,
               Align::kRight);
