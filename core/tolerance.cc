@@ -108,6 +108,9 @@ std::string characteristic_title(std::string_view key) {
     return "Base circle runout (1st harmonic)";
   } else if (key == "roundness") {
     return "Base circle roundness";
+  } else if (base == "harmonic" && !zone.empty() &&
+             zone.find_first_not_of("0123456789") == std::string_view::npos) {
+    return "Lift error, harmonic " + std::string(zone);
   } else {
     return std::string(key);
   }

@@ -113,7 +113,9 @@ struct Characteristic {
 Verdict judge(double min, double max, const Limits& limits);
 
 // "Lift error, opening flank", "Phase (timing) error"...: a key as a report or a DFQ
-// description (K2002) writes it. An unknown key comes back as it is.
+// description (K2002) writes it; "harmonic.<k>" (the amplitude of harmonic k of the lift
+// error, an export's extra characteristic) is "Lift error, harmonic k". An unknown key comes
+// back as it is.
 std::string characteristic_title(std::string_view key);
 
 }  // namespace gaugeloop

@@ -215,9 +215,7 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
         natural_lower = true;
       }
       out.add("K2001", d.number, d.key);
-      out.add("K2002", d.number,
-              is_harmonic(d.key) ? "Lift error, harmonic " + std::to_string(harmonic_order(d.key))
-                                 : characteristic_title(d.key));
+      out.add("K2002", d.number, characteristic_title(d.key));
       out.add("K2022", d.number, std::to_string(decimals));
       out.add("K2101", d.number, format_fixed(0.0, decimals));
       if (lower) out.add("K2110", d.number, format_fixed(*lower, decimals));

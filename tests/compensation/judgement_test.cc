@@ -279,6 +279,8 @@ TEST(Verdicts, ANanFigureIsOutAndOneJudgedInMakesARunIn) {
   EXPECT_EQ(combined_verdict({}), Verdict::kNotJudged);
   EXPECT_EQ(characteristic_title("lift_error.opening_flank"), "Lift error, opening flank");
   EXPECT_EQ(characteristic_title("velocity_error"), "Velocity error, whole turn");
+  EXPECT_EQ(characteristic_title("harmonic.3"), "Lift error, harmonic 3");
+  EXPECT_EQ(characteristic_title("harmonic.x"), "harmonic.x");
 }
 
 }  // namespace
