@@ -46,12 +46,7 @@ Result<std::vector<RunCharacteristics>> selected(const RunStore& store, const Df
   q.lobe = r.lobe;
   q.machine = r.machine;
   q.serial = r.serial;
-  Result<std::string> since = time_bound(r.since, false, "--since");
-  if (!since) return since.error();
-  Result<std::string> until = time_bound(r.until, true, "--until");
-  if (!until) return until.error();
-  q.since_utc = *since;
-  q.until_utc = *until;
+  if (Status t = set_time_bounds(r.since, r.until, q.since_utc, q.until_utc); !t) return t.error();
   Result<std::vector<RunCharacteristics>> runs = store.characteristics(q);
   if (!runs) return runs.error();
   if (runs->empty()) {

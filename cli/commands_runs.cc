@@ -72,12 +72,7 @@ struct ListOptions {
 
 Result<RunQuery> resolved(const ListOptions& o) {
   RunQuery q = o.query;
-  Result<std::string> since = time_bound(o.since, false, "--since");
-  if (!since) return since.error();
-  Result<std::string> until = time_bound(o.until, true, "--until");
-  if (!until) return until.error();
-  q.since_utc = *since;
-  q.until_utc = *until;
+  if (Status t = set_time_bounds(o.since, o.until, q.since_utc, q.until_utc); !t) return t.error();
   if (!o.verdict.empty()) q.verdict = verdict_from_name(o.verdict);
   return q;
 }
@@ -494,12 +489,7 @@ int cmd_events(const EventOptions& o) {
   if (o.kind == "fault") q.kind = EventKind::kFault;
   if (o.kind == "refusal") q.kind = EventKind::kRefusal;
   if (o.kind == "info") q.kind = EventKind::kInfo;
-  Result<std::string> since = time_bound(o.since, false, "--since");
-  if (!since) return report_error(since.error());
-  Result<std::string> until = time_bound(o.until, true, "--until");
-  if (!until) return report_error(until.error());
-  q.since_utc = *since;
-  q.until_utc = *until;
+  if (Status t = set_time_bounds(o.since, o.until, q.since_utc, q.until_utc); !t) return report_error(t.error());
   Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<std::vector<StoredEvent>> events = store->list_events(q);

@@ -33,12 +33,7 @@ struct SpcOptions {
 
 int cmd_spc(const SpcOptions& o) {
   RunQuery q = o.query;
-  Result<std::string> since = time_bound(o.since, false, "--since");
-  if (!since) return report_error(since.error());
-  Result<std::string> until = time_bound(o.until, true, "--until");
-  if (!until) return report_error(until.error());
-  q.since_utc = *since;
-  q.until_utc = *until;
+  if (Status t = set_time_bounds(o.since, o.until, q.since_utc, q.until_utc); !t) return report_error(t.error());
   Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
   Result<std::vector<RunCharacteristics>> runs = store->characteristics(q);

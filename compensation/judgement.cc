@@ -67,16 +67,6 @@ Characteristic figure(std::string key, std::string unit, const DegreeTable& tabl
   return c;
 }
 
-Characteristic single(std::string key, std::string unit, double value, const Limits& limits) {
-  Characteristic c;
-  c.key = std::move(key);
-  c.unit = std::move(unit);
-  c.value = c.min = c.max = value;
-  c.limits = limits;
-  c.verdict = judge(value, value, limits);
-  return c;
-}
-
 }  // namespace
 
 const DegreeTable& judged_lift_error_um(const LobeAnalysis& analysis, LiftErrorReference reference) {
@@ -169,11 +159,13 @@ Result<LobeJudgement> judge_lobe(const LobeAnalysis& analysis, const LobeToleran
       out.characteristics.push_back(std::move(c));
     }
   }
-  out.characteristics.push_back(single("phase", "deg", analysis.phase_error_deg, tolerances.phase_deg));
+  out.characteristics.push_back(single_characteristic("phase", "deg", analysis.phase_error_deg, tolerances.phase_deg));
   out.characteristics.push_back(
-      single("base_circle_runout", "um", analysis.dial_runout_um, tolerances.base_circle_runout_um));
-  out.characteristics.push_back(single("base_circle_runout_h1", "um", analysis.base_circle_runout_um, Limits{}));
-  out.characteristics.push_back(single("roundness", "um", analysis.roundness_um, tolerances.roundness_um));
+      single_characteristic("base_circle_runout", "um", analysis.dial_runout_um, tolerances.base_circle_runout_um));
+  out.characteristics.push_back(
+      single_characteristic("base_circle_runout_h1", "um", analysis.base_circle_runout_um, Limits{}));
+  out.characteristics.push_back(
+      single_characteristic("roundness", "um", analysis.roundness_um, tolerances.roundness_um));
   std::vector<Verdict> verdicts;
   for (const Characteristic& c : out.characteristics) verdicts.push_back(c.verdict);
   out.verdict = combined_verdict(verdicts);

@@ -1,6 +1,8 @@
 // Names of zones and verdicts, and the verdict of a figure against its limits.
 #include "core/tolerance.h"
 
+#include <utility>
+
 namespace gaugeloop {
 
 std::string_view lobe_zone_name(LobeZone zone) {
@@ -86,6 +88,16 @@ Verdict judge(double min, double max, const Limits& limits) {
   return Verdict::kIn;
 }
 
+Characteristic single_characteristic(std::string key, std::string unit, double value, const Limits& limits) {
+  Characteristic c;
+  c.key = std::move(key);
+  c.unit = std::move(unit);
+  c.value = c.min = c.max = value;
+  c.limits = limits;
+  c.verdict = judge(value, value, limits);
+  return c;
+}
+
 std::string characteristic_title(std::string_view key) {
   std::string_view base = key;
   std::string_view zone;
@@ -108,8 +120,7 @@ std::string characteristic_title(std::string_view key) {
     return "Base circle runout (1st harmonic)";
   } else if (key == "roundness") {
     return "Base circle roundness";
-  } else if (base == "harmonic" && !zone.empty() &&
-             zone.find_first_not_of("0123456789") == std::string_view::npos) {
+  } else if (base == "harmonic" && !zone.empty() && zone.find_first_not_of("0123456789") == std::string_view::npos) {
     return "Lift error, harmonic " + std::string(zone);
   } else {
     return std::string(key);

@@ -112,6 +112,9 @@ struct Characteristic {
 // The verdict of figures [min, max] against limits: kNotJudged without limits.
 Verdict judge(double min, double max, const Limits& limits);
 
+// A single figure (min = max = value) judged against `limits`.
+Characteristic single_characteristic(std::string key, std::string unit, double value, const Limits& limits);
+
 // "Lift error, opening flank", "Phase (timing) error"...: a key as a report or a DFQ
 // description (K2002) writes it; "harmonic.<k>" (the amplitude of harmonic k of the lift
 // error, an export's extra characteristic) is "Lift error, harmonic k". An unknown key comes

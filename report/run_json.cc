@@ -301,4 +301,15 @@ Result<std::string> time_bound(const std::string& text, bool until, std::string_
   return format_utc(until ? at + unit : at);
 }
 
+Status set_time_bounds(const std::string& since, const std::string& until, std::string& since_utc,
+                       std::string& until_utc) {
+  Result<std::string> from = time_bound(since, false, "--since");
+  if (!from) return from.error();
+  Result<std::string> to = time_bound(until, true, "--until");
+  if (!to) return to.error();
+  since_utc = *from;
+  until_utc = *to;
+  return {};
+}
+
 }  // namespace gaugeloop

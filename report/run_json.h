@@ -55,4 +55,9 @@ std::string run_csv(const StoredRun& run, bool comments = false);
 // kInvalidInput naming `name` (e.g. "--since") and saying what to write.
 Result<std::string> time_bound(const std::string& text, bool until, std::string_view name);
 
+// A command's --since and --until (time_bound) into a query's since_utc and until_utc; the
+// first that is not a time is the error, and nothing is set then.
+Status set_time_bounds(const std::string& since, const std::string& until, std::string& since_utc,
+                       std::string& until_utc);
+
 }  // namespace gaugeloop

@@ -119,16 +119,7 @@ TEST_F(DfqExportCommand, RefusesAnEmptyOrUnclearSelection) {
 
 Characteristic stored_characteristic(std::string key, std::string unit, double value, std::optional<double> lower,
                                      std::optional<double> upper) {
-  Characteristic c;
-  c.key = std::move(key);
-  c.unit = std::move(unit);
-  c.value = value;
-  c.min = value;
-  c.max = value;
-  c.limits.lower = lower;
-  c.limits.upper = upper;
-  c.verdict = judge(value, value, c.limits);
-  return c;
+  return single_characteristic(std::move(key), std::move(unit), value, Limits{lower, upper});
 }
 
 // End to end once the run database keeps characteristics; skipped where it does not yet.

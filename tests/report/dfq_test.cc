@@ -25,16 +25,7 @@ using testing::read_dfq;
 
 Characteristic characteristic(std::string key, std::string unit, double value, std::optional<double> lower,
                               std::optional<double> upper) {
-  Characteristic c;
-  c.key = std::move(key);
-  c.unit = std::move(unit);
-  c.value = value;
-  c.min = value;
-  c.max = value;
-  c.limits.lower = lower;
-  c.limits.upper = upper;
-  c.verdict = judge(value, value, c.limits);
-  return c;
+  return single_characteristic(std::move(key), std::move(unit), value, Limits{lower, upper});
 }
 
 RunCharacteristics run(std::int64_t id, std::string started_utc, std::string serial, std::string operator_name,
