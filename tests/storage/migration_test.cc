@@ -217,24 +217,28 @@ TEST(MigrationFromV1, StepsOneVersionAtATime) {
   EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
 }
 
+// A database migrated only up to `version`, holding one run (id 5, machine g1, part intake,
+// lobe 1) as that version stored it: its summary row only.
+void write_old_database_with_run_5(const std::filesystem::path& db, int version) {
+  std::filesystem::create_directories(db.parent_path());
+  storage_internal::Connection conn;
+  conn.path = db;
+  ASSERT_EQ(sqlite3_open(db.c_str(), &conn.db), SQLITE_OK);
+  ASSERT_TRUE(storage_internal::apply_migrations_up_to(conn, version).ok());
+  ASSERT_EQ(sqlite3_exec(conn.db,
+                         "INSERT INTO runs (id, started_utc, finished_utc, machine, part, lobe, gauge, revolutions,"
+                         " degrees_captured, zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um,"
+                         " repeatability_um) VALUES (5, '2026-11-21T08:00:00Z', '2026-11-21T08:00:09Z', 'g1',"
+                         " 'intake', 1, 'tcp:127.0.0.1:1502', 3, 1080, 2.0, 12.0, 5.0, 20.0, 0.5)",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+}
+
 // A database of version 6 holding a run: opening it copies the file, then adds serial and
 // operator; the old run reads them as not given and a new run stores them.
 TEST(MigrationFromV6, OldRunsHaveNoSerialAndNewRunsKeepTheirs) {
   TempDir dir;
-  std::filesystem::create_directories(db_in(dir).parent_path());
-  {
-    storage_internal::Connection conn;
-    conn.path = db_in(dir);
-    ASSERT_EQ(sqlite3_open(db_in(dir).c_str(), &conn.db), SQLITE_OK);
-    ASSERT_TRUE(storage_internal::apply_migrations_up_to(conn, 6).ok());
-    ASSERT_EQ(sqlite3_exec(conn.db,
-                           "INSERT INTO runs (id, started_utc, finished_utc, machine, part, lobe, gauge, revolutions,"
-                           " degrees_captured, zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um,"
-                           " repeatability_um) VALUES (5, '2026-11-21T08:00:00Z', '2026-11-21T08:00:09Z', 'g1',"
-                           " 'intake', 1, 'tcp:127.0.0.1:1502', 3, 1080, 2.0, 12.0, 5.0, 20.0, 0.5)",
-                           nullptr, nullptr, nullptr),
-              SQLITE_OK);
-  }
+  ASSERT_NO_FATAL_FAILURE(write_old_database_with_run_5(db_in(dir), 6));
   Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
   ASSERT_TRUE(store->schema_upgrade().has_value()) << "upgraded without a backup";
@@ -295,20 +299,7 @@ RunRecord judged_record(const std::string& started_utc, Verdict nose_verdict) {
 
 TEST(MigrationFromV7, OldRunsAreNotJudgedAndNewRunsKeepTheirCharacteristics) {
   TempDir dir;
-  std::filesystem::create_directories(db_in(dir).parent_path());
-  {
-    storage_internal::Connection conn;
-    conn.path = db_in(dir);
-    ASSERT_EQ(sqlite3_open(db_in(dir).c_str(), &conn.db), SQLITE_OK);
-    ASSERT_TRUE(storage_internal::apply_migrations_up_to(conn, 7).ok());
-    ASSERT_EQ(sqlite3_exec(conn.db,
-                           "INSERT INTO runs (id, started_utc, finished_utc, machine, part, lobe, gauge, revolutions,"
-                           " degrees_captured, zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um,"
-                           " repeatability_um) VALUES (5, '2026-11-21T08:00:00Z', '2026-11-21T08:00:09Z', 'g1',"
-                           " 'intake', 1, 'tcp:127.0.0.1:1502', 3, 1080, 2.0, 12.0, 5.0, 20.0, 0.5)",
-                           nullptr, nullptr, nullptr),
-              SQLITE_OK);
-  }
+  ASSERT_NO_FATAL_FAILURE(write_old_database_with_run_5(db_in(dir), 7));
   Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_TRUE(store.ok()) << store.error().message;
   ASSERT_TRUE(store->schema_upgrade().has_value());
