@@ -125,13 +125,6 @@ std::string limits_text(const Limits& l, int decimals) {
   return "-";
 }
 
-// Decimals that show a figure in its unit to about 1 nm of lift.
-int decimals_for(const std::string& unit) {
-  if (unit == "mm/deg" || unit == "mm/deg^2") return 6;
-  if (unit == "deg") return 4;
-  return 2;
-}
-
 void print_characteristics(const StoredRun& r) {
   std::printf(
       "tolerances        %s (lift error judged %s)\n", verdict_name(r.summary.verdict).data(),
@@ -142,7 +135,7 @@ void print_characteristics(const StoredRun& r) {
   }
   std::printf("  %-46s %14s %14s  %-24s %-9s %s\n", "characteristic", "value", "range", "limits", "unit", "verdict");
   for (const Characteristic& c : r.characteristics) {
-    const int d = decimals_for(c.unit);
+    const int d = figure_decimals(c.unit);
     std::string title = characteristic_title(c.key);
     if (c.from_deg && c.to_deg) title += " (" + std::to_string(*c.from_deg) + ".." + std::to_string(*c.to_deg) + ")";
     const std::string range = c.min == c.max ? "" : format_fixed(c.max - c.min, d);

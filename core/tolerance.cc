@@ -88,6 +88,14 @@ Verdict judge(double min, double max, const Limits& limits) {
   return Verdict::kIn;
 }
 
+int figure_decimals(std::string_view unit) {
+  if (unit == "um") return 2;
+  if (unit == "deg") return 4;
+  if (unit == "mm/deg") return 6;
+  if (unit == "mm/deg^2") return 7;
+  return 4;
+}
+
 Characteristic single_characteristic(std::string key, std::string unit, double value, const Limits& limits) {
   Characteristic c;
   c.key = std::move(key);

@@ -112,6 +112,11 @@ struct Characteristic {
 // The verdict of figures [min, max] against limits: kNotJudged without limits.
 Verdict judge(double min, double max, const Limits& limits);
 
+// Decimals a figure in `unit` is printed with in text (runs show, runs spc): about 1 nm of
+// lift. um 2, deg 4, mm/deg 6, mm/deg^2 7, anything else 4. The cam report's table (its
+// page width) and the AQDEF export (K2022) choose their own.
+int figure_decimals(std::string_view unit);
+
 // A single figure (min = max = value) judged against `limits`.
 Characteristic single_characteristic(std::string key, std::string unit, double value, const Limits& limits);
 

@@ -48,6 +48,7 @@ std::string display_unit(const std::string& unit) {
   return unit;
 }
 
+// Fewer than figure_decimals for the rates: the table's columns on the page.
 int decimals_for_unit(const std::string& unit) {
   if (unit == "um") return 2;
   if (unit == "deg") return 3;
@@ -547,8 +548,7 @@ void draw_footer(cairo_t* cr, const StoredRun& run) {
   chart::text(cr, kMargin, y, judged + " \u00b7 repeatability " + format_fixed(a.repeatability_um, 2) + " \u00b5m",
               6.5);
   chart::text(cr, kMargin, y + 10,
-              "velocity, acceleration: harmonics 1\u201330" + derivative_noise_text(run) + " \u00b7 gauge " +
-                  run.gauge,
+              "velocity, acceleration: harmonics 1\u201330" + derivative_noise_text(run) + " \u00b7 gauge " + run.gauge,
               6.5);
   chart::text(cr, kReportWidthPt - kMargin, y + 6, "Checked by ____________________   Date ____________", 8,
               Align::kRight);

@@ -65,14 +65,6 @@ void add_capability(SpcFigure& f) {
   }
 }
 
-int decimals_for(const std::string& unit) {
-  if (unit == "um") return 2;
-  if (unit == "deg") return 3;
-  if (unit == "mm/deg") return 6;
-  if (unit == "mm/deg^2") return 7;
-  return 4;
-}
-
 std::string or_dash(const std::optional<double>& v, int decimals, bool with_sign) {
   if (!v) return "-";
   return with_sign ? format_signed_fixed(*v, decimals) : format_fixed(*v, decimals);
@@ -147,7 +139,7 @@ std::string spc_table_text(const std::vector<SpcFigure>& figures) {
                 "unit", "n", "mean", "s", "LSL", "USL", "Cp", "Cpk", "out/judged");
   out += line;
   for (const SpcFigure& f : figures) {
-    const int d = decimals_for(f.unit);
+    const int d = figure_decimals(f.unit);
     std::string cpk = or_dash(f.cpk, 2, false);
     if (f.cpk_side == "upper") cpk += " (U)";
     if (f.cpk_side == "lower") cpk += " (L)";

@@ -54,7 +54,7 @@ nlohmann::json spc_figure_json(const SpcFigure& figure);
 // The figures as `runs spc` prints them: one row per characteristic (title, unit, n, mean, s,
 // LSL, USL, Cp, Cpk, out/judged; "-" for what is not given, Cpk marked (U) or (L) when one-sided),
 // a line saying whose limits these are, then a line for each figure whose limits changed or whose ratios are missing,
-// saying why. Figures in um with 2 decimals, deg with 3, mm/deg with 6, mm/deg^2 with 7.
+// saying why. Figures with figure_decimals (core/tolerance.h).
 std::string spc_table_text(const std::vector<SpcFigure>& figures);
 
 }  // namespace gaugeloop
