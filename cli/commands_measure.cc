@@ -248,9 +248,10 @@ int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {
   auto sim = GaugeSimulator::start(lp->file.part, lp->design, sim_settings);
   if (!sim) return report_error(sim.error());
   std::printf(
-      "simulator: %s lobe %d turning at %.0f rpm on 127.0.0.1:%d (form error %.1f um peak, noise %.1f um RMS)\n",
+      "simulator: %s lobe %d turning at %.0f rpm on 127.0.0.1:%d (form error %.1f um peak, noise %.1f um RMS, seed "
+      "%llu)\n",
       lp->file.part.name.c_str(), lp->file.part.lobe, sim_settings.speed_rpm, (*sim)->port(),
-      sim_settings.lobe_error_peak_um, sim_settings.noise_rms_um);
+      sim_settings.lobe_error_peak_um, sim_settings.noise_rms_um, static_cast<unsigned long long>(sim_settings.seed));
   std::printf("measuring %d revolutions in %s mode...\n", o.revolutions, o.mode.c_str());
   std::fflush(stdout);
   ModbusSettings ms;
@@ -295,8 +296,9 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
       lp->file.part.name.c_str(), lp->file.part.lobe, m.work_speed_rpm, m.servo_bandwidth_hz, m.servo_damping,
       m.velocity_feed_forward, m.geometric_once_um, m.geometric_twice_um, m.drift_um_per_part, m.vibration_rms_um,
       m.vibration_min_harmonic, m.vibration_max_harmonic, static_cast<unsigned long long>(m.seed));
-  std::printf("gauge: simulator at %.0f rpm x %.0f, noise %.1f um RMS, %d revolutions %s; database %s\n\n",
-              sim_settings.speed_rpm, sim_settings.time_scale, sim_settings.noise_rms_um, o.revolutions, o.mode.c_str(),
+  std::printf("gauge: simulator at %.0f rpm x %.0f, noise %.1f um RMS (seed %llu), %d revolutions %s; database %s\n\n",
+              sim_settings.speed_rpm, sim_settings.time_scale, sim_settings.noise_rms_um,
+              static_cast<unsigned long long>(sim_settings.seed), o.revolutions, o.mode.c_str(),
               ls.job.db_path.string().c_str());
   std::printf(
       "part  ground from              run  max um  RMS um  phase deg  runout um  verdict | true max  floor  table\n");
@@ -497,6 +499,8 @@ int cmd_sim(const std::string& part_path, const SimulatorSettings& settings, con
         lp->file.part.name.c_str(), lp->file.part.lobe, settings.speed_rpm, settings.rtu_device.c_str(),
         settings.rtu_baud, settings.unit_id);
   }
+  std::printf("gauge noise %.1f um RMS, seed %llu (--seed repeats it)\n", settings.noise_rms_um,
+              static_cast<unsigned long long>(settings.seed));
   std::fflush(stdout);
   int sig = 0;
   if (grinder) {
@@ -511,12 +515,13 @@ int cmd_sim(const std::string& part_path, const SimulatorSettings& settings, con
   return kExitOk;
 }
 
-void add_simulator_options(CLI::App& cmd, SimulatorSettings& s) {
+// `seed_help`: where the noise seed comes from when --seed is not given.
+void add_simulator_options(CLI::App& cmd, SimulatorSettings& s, const std::string& seed_help) {
   cmd.add_option("--speed-rpm", s.speed_rpm, "Work spindle speed")->capture_default_str();
   cmd.add_option("--lobe-error-um", s.lobe_error_peak_um, "Peak of the repeatable form error of the simulated lobe")
       ->capture_default_str();
   cmd.add_option("--noise-um", s.noise_rms_um, "Gauge noise, RMS")->capture_default_str();
-  cmd.add_option("--seed", s.seed, "Seed of the gauge noise, for a repeatable run [from the clock]");
+  cmd.add_option("--seed", s.seed, "Seed of the gauge noise " + seed_help);
 }
 
 // A fresh noise seed per start unless --seed gave one: real gauge noise does not repeat.
@@ -535,7 +540,7 @@ void add_demo_command(CLI::App& app, CommandAction& action) {
       "store the run and write the corrected curve table. Needs no files.");
   add_measure_options(*demo, *demo_opts);
   demo->add_option("--part", demo_opts->part_path, "Part file to simulate and measure [built-in intake_flat]");
-  add_simulator_options(*demo, *demo_sim);
+  add_simulator_options(*demo, *demo_sim, "[1: the demo repeats; give another for other noise]");
   demo->add_option("--time-scale", demo_sim->time_scale, "Simulated seconds per real second")->capture_default_str();
   auto loop = std::make_shared<LoopOptions>();
   MachineErrorModel& m = loop->machine;
@@ -560,7 +565,6 @@ void add_demo_command(CLI::App& app, CommandAction& action) {
       ->capture_default_str();
   demo->add_option("--machine-seed", m.seed, "Grinding: seed of the vibration")->capture_default_str();
   demo->callback([&action, demo, demo_opts, demo_sim, loop] {
-    seed_from_clock_unless_given(*demo, *demo_sim);
     if (loop->iterations > 0) {
       action = [demo_opts, demo_sim, loop] { return cmd_demo_loop(*demo_opts, *demo_sim, *loop); };
       return;
@@ -583,7 +587,7 @@ void add_sim_command(CLI::App& app, CommandAction& action) {
       ->capture_default_str();
   sim->add_option("--unit-id", sim_settings->unit_id, "RTU unit id the simulator answers to")->capture_default_str();
   sim->add_option("--part", *sim_part, "Part file to simulate [built-in intake_flat]");
-  add_simulator_options(*sim, *sim_settings);
+  add_simulator_options(*sim, *sim_settings, "[from the clock: real gauge noise does not repeat]");
   sim->add_option("--time-scale", sim_settings->time_scale, "Simulated seconds per real second")->capture_default_str();
   auto fault_specs = std::make_shared<std::vector<std::string>>();
   sim->add_option("--fault", *fault_specs,
