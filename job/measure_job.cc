@@ -192,13 +192,15 @@ Result<Prepared> prepare(const JobSettings& s) {
   if (Result<std::vector<ZoneArc>> zones = zone_arcs(s.part.tolerances, design_reading->table()); !zones) {
     return in_step("part " + s.part.name + " tolerances", zones.error());
   }
-  TableProvenance design_provenance;
-  design_provenance.table_version = 1;
-  design_provenance.table_numbers = s.table_numbers;
-  Result<std::string> program = render_table_program(s.nc_template, s.nc_template_name, template_values(s),
-                                                     design_table->table, design_provenance);
-  if (!program) return program.error();
-  if (!s.nc_main_template.empty()) {
+  // Versions 1 and 2: both table numbers, so a template naming a fixed one is refused now.
+  for (int version : {1, 2}) {
+    TableProvenance provenance;
+    provenance.table_version = version;
+    provenance.table_numbers = s.table_numbers;
+    Result<std::string> program =
+        render_table_program(s.nc_template, s.nc_template_name, template_values(s), design_table->table, provenance);
+    if (!program) return program.error();
+    if (s.nc_main_template.empty()) continue;
     if (Result<std::string> m = render_main_for_table(main_source(s, ""), s.nc_dir / (s.nc_program + ".SPF"), *program);
         !m) {
       return m.error();

@@ -250,6 +250,30 @@ TEST_F(NcPushTest, DesignBeyondTheSlideLimitIsRefusedBeforeMeasuring) {
   EXPECT_FALSE(fs::exists(nc_file()));
 }
 
+// A main program template that is wrong for either table number, or names a placeholder
+// nobody fills, costs no measurement and writes nothing.
+TEST_F(NcPushTest, AMainTemplateWrongForEitherNumberIsRefusedBeforeMeasuring) {
+  JobSettings js = job_settings();
+  js.nc_main_template_name = "/etc/gaugeloop/cam_main.mpf";
+  const std::string shipped(embedded::kNcMainTemplate);
+  const std::string coupled = "EGON(X,\"FINE\",C,{{table_number}},0)";
+  ASSERT_NE(shipped.find(coupled), std::string::npos);
+  std::string fixed = shipped;
+  fixed.replace(fixed.find(coupled), coupled.size(), "EGON(X,\"FINE\",C,1,0)");
+  for (const auto& [tmpl, expected] : {std::pair{fixed, std::string("couples curve table 1 at line 11, not table 2")},
+                                       std::pair{shipped + "; {{wheel_speed}}\n", std::string("wheel_speed")}}) {
+    js.nc_main_template = tmpl;
+    auto report = measure(js);
+    ASSERT_FALSE(report.ok());
+    EXPECT_EQ(report.error().code, ErrorCode::kInvalidInput);
+    EXPECT_NE(report.error().message.find(expected), std::string::npos) << report.error().message;
+    EXPECT_NE(report.error().message.find("/etc/gaugeloop/cam_main.mpf"), std::string::npos) << report.error().message;
+  }
+  EXPECT_EQ(sim_->requests_served(), 0) << "no gauge request was made";
+  EXPECT_FALSE(fs::exists(nc_file()));
+  EXPECT_FALSE(fs::exists(dir_ / "nc" / (part_.nc_program + "_MAIN.MPF")));
+}
+
 // A directory where the NC program goes would fail the push after the run is stored (the
 // control's share set up wrongly): refused before any measurement, naming the path.
 TEST_F(NcPushTest, DirectoryInThePlaceOfTheProgramIsRefusedBeforeMeasuring) {
