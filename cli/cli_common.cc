@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "cli/embedded_defaults.h"
+#include "core/text_file.h"
 
 namespace gaugeloop {
 
@@ -65,6 +66,21 @@ CLI::Option* add_data_options(CLI::App& cmd, DataPaths& paths) {
                   "instead of --data-dir")
       ->check(read_config)
       ->excludes("--data-dir");
+}
+
+Result<std::string> load_main_template(const std::string& path, std::string& name) {
+  if (path.empty()) {
+    name = "embedded:cam_main.mpf";
+    return std::string(embedded::kNcMainTemplate);
+  }
+  Result<std::string> text = read_regular_file(path, "NC main program template");
+  if (!text) {
+    Error e = text.error();
+    e.message += " (--main-template)";
+    return e;
+  }
+  name = path;
+  return std::string(without_utf8_bom(*text));
 }
 
 Result<LoadedPart> load_part(const std::string& part_path) {

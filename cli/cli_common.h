@@ -79,6 +79,10 @@ struct LoadedPart {
 
 Result<LoadedPart> load_part(const std::string& part_path);
 
+// The main program's template from `path` (`--main-template`), or (empty path) the embedded
+// examples/sinumerik/cam_main.mpf; `name` is set for messages.
+Result<std::string> load_main_template(const std::string& path, std::string& name);
+
 // The command the user chose, run after parsing; returns the exit code.
 using CommandAction = std::function<int()>;
 

@@ -119,6 +119,7 @@ struct MeasureOptions {
   DataPaths paths;
   std::string part_path;
   std::string template_path;
+  std::string main_template_path;
   int revolutions = 3;
   double table_step_deg = 1.0;
   std::string table = "auto";
@@ -146,6 +147,9 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
   add_data_dir_option(cmd, o.paths);
   cmd.add_option("--nc-dir", o.paths.nc_dir, "Directory the curve-table program is written to [<data-dir>/nc]");
   cmd.add_option("--template", o.template_path, "NC template with {{placeholders}} [built-in Sinumerik 840D table]");
+  cmd.add_option("--main-template", o.main_template_path,
+                 "Main program template, written beside the table as <program>_MAIN.MPF coupling it "
+                 "[built-in Sinumerik 840D main program]");
   cmd.add_option("--revolutions", o.revolutions, "Complete revolutions to average (at least 3)")
       ->capture_default_str()
       ->check(CLI::Range(3, 100));
@@ -198,6 +202,9 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
   js.nc_dir = o.paths.nc();
   js.nc_template = std::move(*tmpl);
   js.nc_template_name = template_name;
+  Result<std::string> main_tmpl = load_main_template(o.main_template_path, js.nc_main_template_name);
+  if (!main_tmpl) return main_tmpl.error();
+  js.nc_main_template = std::move(*main_tmpl);
   js.table_step_deg = o.table_step_deg;
   js.table_kind = o.table == "linear"            ? TableKind::kLinear
                   : o.table == "spline"          ? TableKind::kSpline

@@ -193,14 +193,30 @@ int cmd_diff(const DiffOptions& o) {
 struct RollbackOptions : NcOptions {
   int version = 0;
   std::string by;
+  std::string main_template_path;
 };
+
+constexpr const char* kMainTemplateHelp =
+    "Main program template, rewritten beside the table as <program>_MAIN.MPF to couple the table just written "
+    "[built-in Sinumerik 840D main program]";
+
+// The main program's template as the option names it; its part and lobe are the run's.
+Result<MainProgramSource> main_source(const std::string& path) {
+  MainProgramSource m;
+  Result<std::string> text = load_main_template(path, m.template_name);
+  if (!text) return text.error();
+  m.template_text = std::move(*text);
+  return m;
+}
 
 int cmd_rollback(const RollbackOptions& o) {
   Result<RunStore> store = open_history(o.paths);
   if (!store) return report_error(store.error());
   Result<std::string> file = resolve_program(*store, o);
   if (!file) return report_error(file.error());
-  Result<PushOutcome> pushed = rollback_to_version(*store, *file, o.version, person(o.by));
+  Result<MainProgramSource> main = main_source(o.main_template_path);
+  if (!main) return report_error(main.error());
+  Result<PushOutcome> pushed = rollback_to_version(*store, *file, o.version, person(o.by), *main);
   if (!pushed) return report_error(pushed.error());
   std::printf("%s: table version %d written, the table of version %d (run %lld); it is now the table in force\n",
               file->c_str(), pushed->table_version, o.version, static_cast<long long>(pushed->run_id));
@@ -301,13 +317,16 @@ struct DecideOptions {
   std::string by;
   std::string note;
   bool overwrite_edited = false;
+  std::string main_template_path;  // approve only
 };
 
 int cmd_approve(const DecideOptions& o) {
   Result<RunStore> store = open_history(o.paths);
   if (!store) return report_error(store.error());
   const std::string by = person(o.by);
-  Result<PushOutcome> pushed = approve_pending(*store, o.id, by, o.note, o.overwrite_edited);
+  Result<MainProgramSource> main = main_source(o.main_template_path);
+  if (!main) return report_error(main.error());
+  Result<PushOutcome> pushed = approve_pending(*store, o.id, by, o.note, o.overwrite_edited, *main);
   if (!pushed) return report_error(pushed.error());
   std::printf("%s: table version %d written from run %lld (pending table %lld, approved by %s)%s\n",
               pushed->nc_file.c_str(), pushed->table_version, static_cast<long long>(pushed->run_id),
@@ -364,6 +383,7 @@ void add_nc_commands(CLI::App& app, CommandAction& action) {
   add_nc_options(*rollback_cmd, *rollback);
   rollback_cmd->add_option("version", rollback->version, "Table version to restore (see `nc history`)")->required();
   rollback_cmd->add_option("--by", rollback->by, "Who rolls back [$USER]");
+  rollback_cmd->add_option("--main-template", rollback->main_template_path, kMainTemplateHelp);
   rollback_cmd->callback([&action, rollback] { action = [rollback] { return cmd_rollback(*rollback); }; });
 
   auto check = std::make_shared<NcOptions>();
@@ -396,6 +416,7 @@ void add_nc_commands(CLI::App& app, CommandAction& action) {
   CLI::App* approve_cmd =
       nc->add_subcommand("approve", "Write a pending table to the control (atomically) and record who approved it.");
   add_decide_options(*approve_cmd, *approve);
+  approve_cmd->add_option("--main-template", approve->main_template_path, kMainTemplateHelp);
   approve_cmd->add_flag("--overwrite-edited", approve->overwrite_edited,
                         "Overwrite the program even if it was edited by hand since the last push");
   approve_cmd->callback([&action, approve] { action = [approve] { return cmd_approve(*approve); }; });

@@ -1,13 +1,14 @@
-// The sample part, its lift table and the NC template, built into the binary so that
-// `gaugeloop demo` and `gaugeloop sim` need no files.
+// The sample part, its lift table and the NC templates (table and main program), built into
+// the binary so that `gaugeloop demo` and `gaugeloop sim` need no files.
 #pragma once
 
 #include <string_view>
 
 namespace gaugeloop::embedded {
 
-extern const std::string_view kDemoPartToml;  // examples/intake_flat.toml
-extern const std::string_view kDemoLiftCsv;   // examples/intake_flat.csv
-extern const std::string_view kNcTemplate;    // examples/sinumerik/cam_table.spf
+extern const std::string_view kDemoPartToml;    // examples/intake_flat.toml
+extern const std::string_view kDemoLiftCsv;     // examples/intake_flat.csv
+extern const std::string_view kNcTemplate;      // examples/sinumerik/cam_table.spf
+extern const std::string_view kNcMainTemplate;  // examples/sinumerik/cam_main.mpf
 
 }  // namespace gaugeloop::embedded

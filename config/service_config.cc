@@ -152,7 +152,6 @@ void read_nc_table_keys(TomlReader& nr, JobSettings& job) {
   job.table_choice.max_step_deg = nr.number("max_segment_deg", 10.0, 0.0, 90.0, true);
   job.table_choice.allow_spline = nr.flag("allow_spline", true);
   job.require_approval = nr.flag("require_approval", false);
-  job.table_number = static_cast<int>(nr.integer("table_number", 1, 1, 999));
   AxisLimits& l = job.axis_limits;
   l.x_min_mm = nr.number("x_min_mm", l.x_min_mm, -1000.0, 1000.0);
   l.x_max_mm = nr.number("x_max_mm", l.x_max_mm, -1000.0, 1000.0);
@@ -162,19 +161,70 @@ void read_nc_table_keys(TomlReader& nr, JobSettings& job) {
   l.speed_rpm = nr.number("work_speed_rpm", l.speed_rpm, 0.0, 3000.0, true);
 }
 
-// [nc]: the output directory (writable), the template (required, read now) and the table keys.
+// table_numbers = [A, B]: two distinct numbers 1..999. The older single table_number = N is
+// read as [N, N + 1], the pair it would have been written as; both at once are refused.
+void read_table_numbers(TomlReader& nr, const toml::table& t, JobSettings& job) {
+  if (nr.has("table_number") && nr.has("table_numbers")) {
+    nr.fail(nr.where("table_number") + ": give table_numbers = [A, B] alone; table_number is its older form");
+    return;
+  }
+  if (nr.has("table_number")) {
+    const long long n = nr.integer("table_number", 1, 1, 998);
+    if (nr.error) {
+      nr.error->message +=
+          " (998 at most: it is read as table_numbers = [N, N + 1]; write table_numbers to choose both)";
+      return;
+    }
+    job.table_numbers = {static_cast<int>(n), static_cast<int>(n + 1)};
+    return;
+  }
+  const toml::node* node = t.get("table_numbers");
+  if (node == nullptr) return;
+  const std::string expected = ": expected two distinct whole numbers 1..999, e.g. table_numbers = [1, 2]";
+  const toml::array* a = node->as_array();
+  if (a == nullptr || a->size() != 2) {
+    nr.fail(nr.where("table_numbers") + expected);
+    return;
+  }
+  TableNumbers numbers{0, 0};
+  for (std::size_t i = 0; i < 2; ++i) {
+    const std::optional<std::int64_t> v = a->get(i)->value_exact<std::int64_t>();
+    if (!v || *v < 1 || *v > 999) {
+      nr.fail(nr.where("table_numbers") + expected);
+      return;
+    }
+    numbers[i] = static_cast<int>(*v);
+  }
+  if (numbers[0] == numbers[1]) {
+    nr.fail(nr.where("table_numbers") + ": the two numbers are both " + std::to_string(numbers[0]) +
+            "; they must differ, so a new table never redefines the one coupled");
+    return;
+  }
+  job.table_numbers = numbers;
+}
+
+// [nc]: the output directory (writable), the template (required, read now), the main
+// program's template (optional, read now) and the table keys.
 Status read_nc_table(TomlReader& top, const ConfigFile& f, JobSettings& job) {
   std::string template_path;
   job.nc_dir = f.resolve("nc");
   if (const toml::table* t = top.subtable("nc")) {
     TomlReader nr(*t, f.source, "nc.");
     nr.allow_only({"dir", "template", "table", "table_step_deg", "command_error_um", "max_segment_deg", "allow_spline",
-                   "require_approval", "table_number", "x_min_mm", "x_max_mm", "x_velocity_max_mm_per_s",
-                   "x_acceleration_max_mm_per_s2", "work_speed_rpm"});
+                   "require_approval", "table_number", "table_numbers", "main_template", "x_min_mm", "x_max_mm",
+                   "x_velocity_max_mm_per_s", "x_acceleration_max_mm_per_s2", "work_speed_rpm"});
     job.nc_dir = f.resolve(nr.text("dir", "nc"));
     template_path = nr.text("template", "");
+    const std::string main_path = nr.text("main_template", "");
     read_nc_table_keys(nr, job);
+    read_table_numbers(nr, *t, job);
     if (nr.error) return *nr.error;
+    if (!main_path.empty()) {
+      Result<std::string> text = read_text(f.resolve(main_path), "NC main program template");
+      if (!text) return at_key(nr, "main_template", text.error());
+      job.nc_main_template = std::move(*text);
+      job.nc_main_template_name = f.resolve(main_path).string();
+    }
     if (!(job.axis_limits.x_min_mm < job.axis_limits.x_max_mm)) {
       return make_error(ErrorCode::kInvalidInput, nr.where("x_max_mm") + ": must be above x_min_mm");
     }

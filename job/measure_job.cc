@@ -90,7 +90,16 @@ std::map<std::string, std::string> template_values(const JobSettings& s) {
           {"run_id", "0"},
           {"created_utc", ""},
           {"correction_max_um", "0"},
-          {"table_number", std::to_string(s.table_number)}};
+          {"table_number", std::to_string(s.table_numbers[0])}};
+}
+
+// The main program's template and the part it grinds, for push_program.
+MainProgramSource main_source(const JobSettings& s, const std::string& created_utc) {
+  MainProgramSource m = main_program_source(s);
+  m.part = s.part.name;
+  m.lobe = s.part.lobe;
+  m.created_utc = created_utc;
+  return m;
 }
 
 // The settings a run was made with, one "key = value" a line in a fixed order, so that
@@ -130,7 +139,8 @@ std::string settings_text(const JobSettings& s) {
   line("nc.x_acceleration_max_mm_per_s2", num(s.axis_limits.x_acceleration_max_mm_per_s2));
   line("nc.work_speed_rpm", num(s.axis_limits.speed_rpm));
   line("nc.require_approval", s.require_approval ? "true" : "false");
-  line("nc.table_number", std::to_string(s.table_number));
+  line("nc.table_numbers", std::to_string(s.table_numbers[0]) + " " + std::to_string(s.table_numbers[1]));
+  line("nc.main_template", s.nc_main_template_name);
   out += tolerances_settings_text(s.part.tolerances);
   return out;
 }
@@ -182,9 +192,19 @@ Result<Prepared> prepare(const JobSettings& s) {
   if (Result<std::vector<ZoneArc>> zones = zone_arcs(s.part.tolerances, design_reading->table()); !zones) {
     return in_step("part " + s.part.name + " tolerances", zones.error());
   }
-  if (auto r = render_table_program(s.nc_template, s.nc_template_name, template_values(s), design_table->table, {});
-      !r) {
-    return r.error();
+  // Versions 1 and 2: both table numbers, so a template naming a fixed one is refused now.
+  for (int version : {1, 2}) {
+    TableProvenance provenance;
+    provenance.table_version = version;
+    provenance.table_numbers = s.table_numbers;
+    Result<std::string> program =
+        render_table_program(s.nc_template, s.nc_template_name, template_values(s), design_table->table, provenance);
+    if (!program) return program.error();
+    if (s.nc_main_template.empty()) continue;
+    if (Result<std::string> m = render_main_for_table(main_source(s, ""), s.nc_dir / (s.nc_program + ".SPF"), *program);
+        !m) {
+      return m.error();
+    }
   }
   return Prepared{std::move(*design), std::move(*design_reading)};
 }
@@ -381,6 +401,13 @@ std::filesystem::path keep_unstored_measurement(const RunRecord& r, const JobSet
 }
 
 }  // namespace
+
+MainProgramSource main_program_source(const JobSettings& settings) {
+  MainProgramSource m;
+  m.template_text = settings.nc_main_template;
+  m.template_name = settings.nc_main_template_name;
+  return m;
+}
 
 Status check_name(std::string_view name, std::string_view what) {
   if (name.empty() || name.size() > 64) {
@@ -654,8 +681,11 @@ class JobRun {
     values["run_id"] = std::to_string(report_.run_id);
     values["created_utc"] = finished_utc_;
     values["correction_max_um"] = format_fixed(correction_max_um_, 1);
-    return render_table_program(s_.nc_template, s_.nc_template_name, values, built_->table,
-                                {report_.run_id, static_cast<std::int64_t>(table_version)});
+    TableProvenance provenance;
+    provenance.run_id = report_.run_id;
+    provenance.table_version = table_version;
+    provenance.table_numbers = s_.table_numbers;
+    return render_table_program(s_.nc_template, s_.nc_template_name, values, built_->table, provenance);
   }
 
   // What the push or the pending table records of the table built.
@@ -699,6 +729,7 @@ class JobRun {
     if (s_.require_approval) return keep("approval required", CompensationVerdict::kApply, "table not pushed");
     PushOptions options;
     options.files = s_.nc_files.get();
+    options.main = main_source(s_, finished_utc_);
     Result<PushCompletion> version = push_program(
         store_, nc_file_, push_facts(), [this](int table_version) { return render(table_version); }, options);
     if (!version) {

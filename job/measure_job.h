@@ -19,7 +19,9 @@
 #include "core/run.h"
 #include "core/tolerance.h"
 #include "job/nc_files.h"
+#include "job/nc_push.h"
 #include "nc_out/table_guards.h"
+#include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
 
 namespace gaugeloop {
@@ -58,6 +60,10 @@ struct JobSettings {
   std::filesystem::path nc_dir;
   std::string nc_template;       // template text
   std::string nc_template_name;  // for messages
+  // The main program's template (nc_out/main_program.h), written after each table as
+  // <nc_dir>/<nc_program>_MAIN.MPF coupling the table just written; empty: no main program.
+  std::string nc_main_template;
+  std::string nc_main_template_name;  // for messages
   TableKind table_kind = TableKind::kAuto;
   double table_step_deg = 1.0;       // C step of a linear or spline table
   TableChoiceSettings table_choice;  // command position error bound (0.5 um), widest segment, CSPLINE allowed
@@ -66,7 +72,9 @@ struct JobSettings {
   AxisLimits axis_limits{-0.5, 20.0, 300.0, 20000.0, 60.0};
   // True: a table compensation applies is kept as pending until `gaugeloop nc approve`.
   bool require_approval = false;
-  int table_number = 1;  // CTABDEF table number
+  // The two CTABDEF numbers the tables alternate between: table version v goes to
+  // table_numbers[(v - 1) % 2] (table_number_for_version, nc_out/table_program.h). Distinct, 1..999.
+  TableNumbers table_numbers{1, 2};
   std::string machine = "grinder-1";
   std::string note;
   // The measured part's serial number and who measured it, stored with the run; empty: not
@@ -158,6 +166,10 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& setting
 // The checks run_measure_job makes before the first poll that need neither the database nor
 // the NC directory: for a service validating its configuration before it takes it into use.
 Status check_job_settings(const JobSettings& settings);
+
+// The main program's template of `settings`, for an approval or a rollback (the part and lobe
+// left to the run's): empty when the settings have none.
+MainProgramSource main_program_source(const JobSettings& settings);
 
 // A part, machine or program name: 1 to 64 ASCII letters, digits, '_' or '-'. kInvalidInput
 // naming `what` and the offending character's position otherwise.

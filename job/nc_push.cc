@@ -1,7 +1,12 @@
 // The push: hand-edit check, table version, atomic write, record.
 #include "job/nc_push.h"
 
+#include <cstdio>
+#include <map>
+
 #include "core/atomic_file.h"
+#include "core/utc_time.h"
+#include "nc_out/main_program.h"
 #include "nc_out/table_program.h"
 
 namespace gaugeloop {
@@ -76,6 +81,52 @@ Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::pa
   return {};
 }
 
+namespace {
+
+// `program` with the value of its `key` header line (`; gaugeloop key: value`) set to `value`;
+// unchanged when it has no such line.
+std::string with_header_value(std::string_view program, std::string_view key, const std::string& value) {
+  const std::string prefix = "; gaugeloop " + std::string(key) + ": ";
+  const std::size_t at = program.find(prefix);
+  if (at == std::string_view::npos || (at > 0 && program[at - 1] != '\n')) return std::string(program);
+  const std::size_t from = at + prefix.size();
+  std::size_t end = program.find('\n', from);
+  if (end == std::string_view::npos) end = program.size();
+  if (end > from && program[end - 1] == '\r') --end;  // keep a carriage return
+  return std::string(program.substr(0, from)) + value + std::string(program.substr(end));
+}
+
+// The table numbers a program's header names (`; gaugeloop table_numbers: A B`), if any.
+std::optional<TableNumbers> header_table_numbers(std::string_view program) {
+  constexpr std::string_view kNumbers = "; gaugeloop table_numbers: ";
+  const std::size_t at = program.find(kNumbers);
+  if (at == std::string_view::npos || (at > 0 && program[at - 1] != '\n')) return std::nullopt;
+  TableNumbers n{0, 0};
+  const std::string line(program.substr(at + kNumbers.size(), program.find('\n', at) - at - kNumbers.size()));
+  if (std::sscanf(line.c_str(), "%d %d", &n[0], &n[1]) != 2) return std::nullopt;
+  return n;
+}
+
+// `program` with CTABDEF's table number (its third argument) set to `number`; the table body
+// and so its checksum are untouched.
+Result<std::string> with_ctabdef_number(const std::string& program, int number) {
+  Result<ParsedTable> t = parse_table_program(program, "the program");
+  if (!t) return t.error();
+  std::size_t begin = 0;
+  for (int line = 1; line < t->ctabdef_line; ++line) begin = program.find('\n', begin) + 1;
+  const std::size_t open = program.find('(', begin);
+  const std::size_t first = program.find(',', open);
+  const std::size_t second = program.find(',', first + 1);
+  const std::size_t third = program.find_first_of(",)", second + 1);
+  if (open == std::string::npos || first == std::string::npos || second == std::string::npos ||
+      third == std::string::npos) {
+    return make_error(ErrorCode::kInvalidInput, "the program's CTABDEF has no table number to set");
+  }
+  return program.substr(0, second + 1) + std::to_string(number) + program.substr(third);
+}
+
+}  // namespace
+
 Result<std::string> with_table_version(std::string_view program, int table_version) {
   const std::size_t at = program.find(kVersionLine);
   if (at == std::string_view::npos || (at > 0 && program[at - 1] != '\n')) {
@@ -83,15 +134,14 @@ Result<std::string> with_table_version(std::string_view program, int table_versi
                       "the program has no `; gaugeloop table_version:` header line; its template needs "
                       "{{table_header}} (docs/nc_output.md)");
   }
-  const std::size_t value = at + kVersionLine.size();
-  std::size_t end = program.find('\n', value);
-  if (end == std::string_view::npos) end = program.size();
-  std::string out(program.substr(0, value));
-  out += std::to_string(table_version);
-  // Keep a carriage return if the line had one.
-  if (end > value && program[end - 1] == '\r') out += '\r';
-  out += program.substr(end);
-  return out;
+  std::string out = with_header_value(program, "table_version", std::to_string(table_version));
+  // A table that alternates goes to the number of its new version; one written before the
+  // header named its numbers keeps its number.
+  const std::optional<TableNumbers> numbers = header_table_numbers(out);
+  if (!numbers) return out;
+  const int number = table_number_for_version(*numbers, table_version);
+  out = with_header_value(out, "table_number", std::to_string(number));
+  return with_ctabdef_number(out, number);
 }
 
 std::string_view push_step_name(PushStep step) {
@@ -104,6 +154,8 @@ std::string_view push_step_name(PushStep step) {
       return "temporary file flushed";
     case PushStep::kRenamed:
       return "renamed into place";
+    case PushStep::kMainWritten:
+      return "main program written";
     case PushStep::kRecorded:
       return "recorded";
   }
@@ -185,6 +237,54 @@ Result<ReconcileReport> reconcile_all_pushes(RunStore& store) {
   return total;
 }
 
+std::filesystem::path main_program_path(const std::filesystem::path& nc_file) {
+  return nc_file.parent_path() / (nc_file.stem().string() + "_MAIN.MPF");
+}
+
+Result<std::string> render_main_for_table(const MainProgramSource& source, const std::filesystem::path& nc_file,
+                                          std::string_view table_program) {
+  Result<ParsedTable> t = parse_table_program(table_program, nc_file.string());
+  if (!t) return t.error();
+  std::map<std::string, std::string> values = {
+      {"program_name", nc_file.stem().string()},
+      {"part", source.part},
+      {"lobe", std::to_string(source.lobe)},
+      {"version", GAUGELOOP_VERSION},
+      {"run_id", header_value(*t, "run_id")},
+      {"created_utc", source.created_utc.empty() ? utc_now() : source.created_utc},
+      {"table_version", header_value(*t, "table_version")},
+      {"table_number", std::to_string(t->table_number)},
+      {"point_count", std::to_string(t->points.size())},
+      {"interpolation", std::string(interpolation_name(t->interpolation))}};
+  return render_main_program(source.template_text, source.template_name, values);
+}
+
+namespace {
+
+// Before a table goes to `number`: a main program on the control that couples `number` (its
+// write after the last table failed or was cut short) is rewritten for the table last pushed,
+// whose number differs, so the table a coupling may hold is not the one redefined. Nothing is
+// done when there is no main program, it couples another table, or nothing was pushed before.
+Status repoint_stale_main(const RunStore& store, const std::filesystem::path& nc_file, const MainProgramSource& main,
+                          int number, NcFiles& files) {
+  const std::filesystem::path main_file = main_program_path(nc_file);
+  Result<std::optional<std::string>> on_disk = files.read_program(main_file);
+  if (!on_disk) return on_disk.error();
+  if (!*on_disk) return {};
+  Result<int> coupled = coupled_table_number(**on_disk, main_file.string());
+  if (!coupled || *coupled != number) return {};
+  Result<std::optional<NcPush>> last = store.last_push(nc_file.string());
+  if (!last) return last.error();
+  if (!*last || !(**last).program_text) return {};
+  Result<std::string> text = render_main_for_table(main, nc_file, *(**last).program_text);
+  if (!text) return text.error();
+  Result<int> last_number = coupled_table_number(*text, main_file.string());
+  if (!last_number || *last_number == number) return {};
+  return files.write_program(main_file, *text, {});
+}
+
+}  // namespace
+
 Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path& nc_file, const PushFacts& facts,
                                     const RenderForVersion& render, const PushOptions& options) {
   auto reached = [&options](PushStep step) {
@@ -201,6 +301,18 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   if (!version) return version.error();
   Result<std::string> program = render(*version);
   if (!program) return program.error();
+  const bool with_main = !options.main.template_text.empty();
+  const std::filesystem::path main_file = main_program_path(nc_file);
+  std::string main_text;
+  int number = 0;
+  if (with_main) {
+    Result<std::string> m = render_main_for_table(options.main, nc_file, *program);
+    if (!m) return m.error();
+    main_text = std::move(*m);
+    Result<int> n = coupled_table_number(main_text, main_file.string());
+    if (!n) return n.error();
+    number = *n;
+  }
   const std::string what = "run " + std::to_string(facts.run_id) + ": table version " + std::to_string(*version);
   auto not_pushed = [&what](Error e) {
     e.message = what + " was not pushed (the program on the control is unchanged): " + e.message;
@@ -217,6 +329,14 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   intent.pending_id = facts.pending_id;
   intent.approved_by = facts.approved_by;
   intent.note = facts.note;
+  if (with_main) {
+    if (Status r = repoint_stale_main(store, nc_file, options.main, number, files); !r) {
+      Error e = r.error();
+      e.message = "main program " + main_file.string() + " couples table " + std::to_string(number) +
+                  ", the number the new table goes to, and could not be pointed at the table in force: " + e.message;
+      return not_pushed(e);
+    }
+  }
   Result<std::int64_t> intent_id = store.begin_push(intent);
   if (!intent_id) return not_pushed(intent_id.error());
   reached(PushStep::kIntentRecorded);
@@ -237,7 +357,24 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
     (void)store.abandon_push(*intent_id, "the write failed: " + written.error().message);
     return not_pushed(written.error());
   }
-  Result<PushCompletion> done = store.complete_push(*intent_id, "written");
+  Status main_written;
+  if (with_main) {
+    main_written = files.write_program(main_file, main_text, {});
+    if (main_written) reached(PushStep::kMainWritten);
+  }
+  Result<PushCompletion> done = store.complete_push(
+      *intent_id, main_written ? "written" : "written; the main program was not: " + main_written.error().message);
+  if (done && !main_written) {
+    // The table is on the control and recorded; the main program still couples the previous
+    // table, which the new one did not redefine (another number), so the machine grinds with
+    // the table it had until a push writes the main program.
+    Error e = main_written.error();
+    e.message = what + " was written to " + nc_file.string() + " and recorded, but the main program " +
+                main_file.string() + " was not written (" + e.message +
+                "); it still couples the previous table, which is unchanged. Push again (or `gaugeloop nc "
+                "rollback`) once the NC directory takes writes";
+    return e;
+  }
   if (!done) {
     Error e = done.error();
     e.message = what + " was written to " + nc_file.string() +
@@ -250,8 +387,22 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   return done;
 }
 
+namespace {
+
+// `main` with the part and lobe of run `run_id` where it leaves them open.
+Result<MainProgramSource> main_for_run(const RunStore& store, std::int64_t run_id, MainProgramSource main) {
+  if (main.template_text.empty() || (!main.part.empty() && main.lobe != 0)) return main;
+  Result<StoredRun> run = store.load_run(run_id);
+  if (!run) return run.error();
+  if (main.part.empty()) main.part = run->summary.part;
+  if (main.lobe == 0) main.lobe = run->summary.lobe;
+  return main;
+}
+
+}  // namespace
+
 Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, const std::string& by,
-                                    const std::string& note, bool overwrite_edited) {
+                                    const std::string& note, bool overwrite_edited, const MainProgramSource& main) {
   Result<PendingTable> t = store.load_pending(pending_id);
   if (!t) return t.error();
   if (t->status != PendingStatus::kPending) {
@@ -272,6 +423,9 @@ Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, co
   const std::string& text = t->program_text;
   PushOptions options;
   options.overwrite_edited = overwrite_edited;
+  Result<MainProgramSource> m = main_for_run(store, t->run_id, main);
+  if (!m) return m.error();
+  options.main = std::move(*m);
   Result<PushCompletion> pushed = push_program(
       store, t->nc_file, facts, [&text](int version) { return with_table_version(text, version); }, options);
   if (!pushed) return pushed.error();
@@ -281,7 +435,7 @@ Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, co
 }
 
 Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_file, int table_version,
-                                        const std::string& by) {
+                                        const std::string& by, const MainProgramSource& main) {
   Result<NcPush> old = store.load_push(nc_file, table_version);
   if (!old) return old.error();
   if (!old->program_text) {
@@ -294,8 +448,12 @@ Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_f
   facts.reason = "rollback to version " + std::to_string(table_version) + " by " + by;
   facts.table = old->table;
   const std::string& text = *old->program_text;
-  Result<PushCompletion> pushed =
-      push_program(store, nc_file, facts, [&text](int version) { return with_table_version(text, version); });
+  PushOptions options;
+  Result<MainProgramSource> m = main_for_run(store, old->run_id, main);
+  if (!m) return m.error();
+  options.main = std::move(*m);
+  Result<PushCompletion> pushed = push_program(
+      store, nc_file, facts, [&text](int version) { return with_table_version(text, version); }, options);
   if (!pushed) return pushed.error();
   return PushOutcome{nc_file, pushed->table_version, old->run_id, true};
 }

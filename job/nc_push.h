@@ -40,8 +40,30 @@ struct PushFacts {
   std::string note;
 };
 
-// Renders a program for a table version (the header carries it).
+// Renders a program for a table version (the header carries it, and the table number that
+// version goes to: table_number_for_version, nc_out/table_program.h).
 using RenderForVersion = std::function<Result<std::string>(int table_version)>;
+
+// The main program beside a table program: <stem>_MAIN.MPF in the same directory (CAM.SPF ->
+// CAM_MAIN.MPF).
+std::filesystem::path main_program_path(const std::filesystem::path& nc_file);
+
+// Where the main program comes from: its template and what the table program does not say.
+struct MainProgramSource {
+  std::string template_text;  // empty: no main program is written
+  std::string template_name;  // for messages
+  std::string part;           // empty: the run's (approve_pending, rollback_to_version)
+  int lobe = 0;               // 0: the run's
+  std::string created_utc;    // empty: now
+};
+
+// The main program for `table_program` (version and table number set, as pushed to
+// `nc_file`), rendered with render_main_program (nc_out/main_program.h): program_name is
+// nc_file's stem; run_id, table_version, table_number, point_count and interpolation are the
+// table program's. kInvalidInput for a table program that does not parse or a template that
+// does not render.
+Result<std::string> render_main_for_table(const MainProgramSource& source, const std::filesystem::path& nc_file,
+                                          std::string_view table_program);
 
 // The steps of a push, in order; a test seam to interrupt one between any two.
 enum class PushStep {
@@ -49,6 +71,7 @@ enum class PushStep {
   kTemporaryWritten,  // the temporary file beside the program is written, not flushed
   kFlushed,           // ... flushed to disk, not renamed
   kRenamed,           // the control holds the new program; the push is not yet recorded
+  kMainWritten,       // ... and the main program coupling its table (only with a main program)
   kRecorded,          // the push is recorded and the intent completed
 };
 std::string_view push_step_name(PushStep step);
@@ -57,14 +80,25 @@ struct PushOptions {
   bool overwrite_edited = false;  // a person approved overwriting a program edited by hand
   std::function<void(PushStep step)> observer;
   NcFiles* files = nullptr;  // null: the real NC directory (real_nc_files)
+  // Written after the table, beside it (main_program_path), coupling the table just written;
+  // empty template: none.
+  MainProgramSource main;
 };
 
 // The push as one recoverable step. Under the NC directory's lock (DirectoryLock, so one
 // push at a time): reconcile_pushes for the file, check_not_edited_by_hand (skipped with
 // overwrite_edited), take the next table version and render; record the intent with the
 // program in the journal (RunStore::begin_push); write the file atomically (temporary file,
-// fsync, rename: the control sees the old program or the new one, never a mixture); then
-// complete the intent, recording the push (and an approval's decision) in one transaction.
+// fsync, rename: the control sees the old program or the new one, never a mixture); with a
+// main program, write it the same way after the table; then complete the intent, recording
+// the push (and an approval's decision) in one transaction.
+// The main program is rendered before anything is written (its errors refuse the push). A
+// main program left coupling the number the new table goes to (its write failed or was
+// interrupted after an earlier table) is first rewritten for the table last pushed, so the
+// table a coupling may hold is never the one redefined (docs/nc_output.md). A main program
+// that cannot be written after the table was: the push is recorded (the control holds the
+// table) and the write's error returned, saying the main program still couples the previous
+// table.
 // Interrupted anywhere (kill, power cut, disk full, database locked), the next push or
 // reconcile_pushes finds the intent and the file and records or abandons it: the history
 // never misses a program the control holds. Errors: the check's kRefused; render's errors;
@@ -105,19 +139,22 @@ struct PushOutcome {
 // `gaugeloop nc approve` and POST /api/nc/approve: pushes pending table `pending_id` (still
 // pending: else kRefused naming its status) and records the push and the approval by `by`
 // in one transaction. A hand-edited program is overwritten only with `overwrite_edited`.
+// With a main program template in `main`, the main program is rewritten to couple it.
 Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, const std::string& by,
-                                    const std::string& note, bool overwrite_edited);
+                                    const std::string& note, bool overwrite_edited, const MainProgramSource& main = {});
 
 // `gaugeloop nc rollback` and POST /api/nc/rollback: pushes the program of `table_version`
 // of `nc_file` again, as a new version (header updated, body untouched); its run becomes the
 // one in force. kNotFound for a version never pushed or pushed without its text.
 Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_file, int table_version,
-                                        const std::string& by);
+                                        const std::string& by, const MainProgramSource& main = {});
 
 // `program` with its `; gaugeloop table_version: N` header line set to `table_version`, for
 // a program rendered before its version was known (a pending table) or re-pushed (a
-// rollback). The table body, and so its checksum, is untouched. kInvalidInput if the
-// program has no such line.
+// rollback); a program whose header names its table_numbers also gets the number of that
+// version (header line and CTABDEF), so approvals and rollbacks alternate like any push. The
+// table body, and so its checksum, is untouched. kInvalidInput if the program has no such
+// line.
 Result<std::string> with_table_version(std::string_view program, int table_version);
 
 }  // namespace gaugeloop

@@ -96,6 +96,10 @@ std::string table_body_checksum(std::string_view body) {
   return buf;
 }
 
+int table_number_for_version(const TableNumbers& numbers, std::int64_t table_version) {
+  return table_version <= 0 ? numbers[0] : numbers[static_cast<std::size_t>((table_version - 1) % 2)];
+}
+
 std::string render_table_header(const CurveTable& table, const TableProvenance& provenance, std::string_view body) {
   std::string out;
   auto line = [&](std::string_view key, const std::string& value) {
@@ -107,6 +111,11 @@ std::string render_table_header(const CurveTable& table, const TableProvenance& 
   };
   line("run_id", std::to_string(provenance.run_id));
   line("table_version", std::to_string(provenance.table_version));
+  if (provenance.table_numbers[0] != 0) {
+    line("table_number", std::to_string(table_number_for_version(provenance.table_numbers, provenance.table_version)));
+    line("table_numbers",
+         std::to_string(provenance.table_numbers[0]) + " " + std::to_string(provenance.table_numbers[1]));
+  }
   line("interpolation", std::string(interpolation_name(table.interpolation)));
   line("point_count", std::to_string(table.points.size()));
   line("block_count", std::to_string(table.block_count()));
@@ -128,6 +137,9 @@ Result<std::string> render_table_program(std::string_view template_text, std::st
   values["block_count"] = std::to_string(table.block_count());
   values["interpolation"] = std::string(interpolation_name(table.interpolation));
   values["command_error_um"] = format_fixed(table.error.max_abs_um, 3);
+  const bool numbered = provenance.table_numbers[0] != 0;
+  const int number = table_number_for_version(provenance.table_numbers, provenance.table_version);
+  if (numbered) values["table_number"] = std::to_string(number);
   Result<std::string> program = render_nc_template(template_text, template_name, values);
   if (!program) return program.error();
   // Read back what would be pushed: it must be the table we meant, checksum and all.
@@ -145,6 +157,10 @@ Result<std::string> render_table_program(std::string_view template_text, std::st
     return refuse(s.error().message);
   }
   if (back->interpolation != table.interpolation) return refuse("interpolation differs");
+  if (numbered && back->table_number != number) {
+    return refuse("CTABDEF names table " + std::to_string(back->table_number) + ", not table " +
+                  std::to_string(number) + "; write CTABDEF(X,C,{{table_number}},1)");
+  }
   return program;
 }
 

@@ -4,9 +4,9 @@
 // Frame and units as curve_table.h: C in degrees (leading axis), X in mm (following axis).
 //
 // Header: comment lines `; gaugeloop <key>: <value>` that the template places with
-// {{table_header}}. Keys: run_id, table_version, interpolation (linear | cspline),
-// point_count, block_count, command_error_um, command_error_at_c_deg, writer,
-// body_checksum_fnv1a64.
+// {{table_header}}. Keys: run_id, table_version, table_number and table_numbers (when the
+// table's pair of numbers is known), interpolation (linear | cspline), point_count,
+// block_count, command_error_um, command_error_at_c_deg, writer, body_checksum_fnv1a64.
 //
 // Checksum: 64-bit FNV-1a (offset basis 14695981039346656037, prime 1099511628211) over the
 // bytes of the table body, i.e. the lines strictly between the CTABDEF line and the CTABEND
@@ -18,6 +18,7 @@
 // kRefused for a table edited by hand (checksum or points), naming the file and line.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -33,10 +34,20 @@ namespace gaugeloop {
 // FNV-1a 64 of `body` with every '\r' skipped, 16 lower-case hex digits.
 std::string table_body_checksum(std::string_view body);
 
+// The two CTABDEF numbers a program's tables alternate between (docs/nc_output.md): the table
+// of version v goes to numbers[(v - 1) % 2], so the next version never redefines the table
+// the main program couples now. Version 0 (a pending table, its version not yet known) takes
+// numbers[0]; its push sets the number with the version.
+using TableNumbers = std::array<int, 2>;
+int table_number_for_version(const TableNumbers& numbers, std::int64_t table_version);
+
 // Where a table comes from, for the header.
 struct TableProvenance {
   std::int64_t run_id = 0;
   std::int64_t table_version = 0;  // the push's version, counted by storage
+  // {0, 0}: not known (the header has no table_number lines, {{table_number}} is the
+  // caller's). Otherwise {{table_number}} is table_number_for_version and the header names it.
+  TableNumbers table_numbers{0, 0};
 };
 
 // The header comment block for `table` whose rendered body is `body`; lines joined with
@@ -44,7 +55,8 @@ struct TableProvenance {
 std::string render_table_header(const CurveTable& table, const TableProvenance& provenance, std::string_view body);
 
 // Renders the user's table template with `values` plus the table's own placeholders:
-// table_blocks, table_header, point_count, block_count, interpolation, command_error_um.
+// table_blocks, table_header, point_count, block_count, interpolation, command_error_um, and
+// table_number when provenance.table_numbers is known (the CTABDEF read back must name it).
 // Then reads the result back (parse_table_program) and refuses (kInvalidInput, naming the
 // template) unless it gives exactly table.points, the interpolation and a matching checksum,
 // so a template that puts text inside the table or leaves {{table_blocks}} out never ships.

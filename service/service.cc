@@ -386,7 +386,8 @@ Result<json> Service::approve(std::int64_t pending_id, const std::string& by, co
   if (!held) return held.error();
   Result<RunStore> store = RunStore::open(config()->job.db_path);
   if (!store) return store.error();
-  Result<PushOutcome> pushed = approve_pending(*store, pending_id, by, note, /*overwrite_edited=*/false);
+  Result<PushOutcome> pushed =
+      approve_pending(*store, pending_id, by, note, /*overwrite_edited=*/false, main_program_source(config()->job));
   if (!pushed) return pushed.error();
   spdlog::info("pending table {} approved by {}: table version {} of run {} pushed to {}", pending_id, by,
                pushed->table_version, pushed->run_id, pushed->nc_file);
@@ -408,8 +409,8 @@ Result<json> Service::rollback(const std::string& program, int table_version, co
   }
   Result<RunStore> store = RunStore::open(c->job.db_path);
   if (!store) return store.error();
-  Result<PushOutcome> pushed =
-      rollback_to_version(*store, std::filesystem::absolute(file).lexically_normal().string(), table_version, by);
+  Result<PushOutcome> pushed = rollback_to_version(*store, std::filesystem::absolute(file).lexically_normal().string(),
+                                                   table_version, by, main_program_source(c->job));
   if (!pushed) return pushed.error();
   spdlog::info("rollback by {}: {} table version {} is the table of version {} (run {})", by, pushed->nc_file,
                pushed->table_version, table_version, pushed->run_id);

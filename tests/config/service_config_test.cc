@@ -83,7 +83,8 @@ TEST_F(ServiceConfigTest, AMinimalFileTakesTheDocumentedDefaults) {
   EXPECT_EQ(c->job.table_choice.max_step_deg, 10.0);
   EXPECT_TRUE(c->job.table_choice.allow_spline);
   EXPECT_FALSE(c->job.require_approval);
-  EXPECT_EQ(c->job.table_number, 1);
+  EXPECT_EQ(c->job.table_numbers, (TableNumbers{1, 2}));
+  EXPECT_TRUE(c->job.nc_main_template.empty()) << "no main program unless one is named";
   EXPECT_EQ(c->job.axis_limits.x_min_mm, -0.5);
   EXPECT_EQ(c->job.axis_limits.x_max_mm, 20.0);
   EXPECT_EQ(c->job.axis_limits.x_velocity_max_mm_per_s, 300.0);
@@ -185,7 +186,7 @@ poll_interval_ms = 50
   EXPECT_EQ(c->job.table_choice.max_step_deg, 5.0);
   EXPECT_FALSE(c->job.table_choice.allow_spline);
   EXPECT_TRUE(c->job.require_approval);
-  EXPECT_EQ(c->job.table_number, 7);
+  EXPECT_EQ(c->job.table_numbers, (TableNumbers{7, 8})) << "the older single number N is read as [N, N + 1]";
   EXPECT_EQ(c->job.axis_limits.x_min_mm, -1.0);
   EXPECT_EQ(c->job.axis_limits.x_max_mm, 25.0);
   EXPECT_EQ(c->job.axis_limits.x_velocity_max_mm_per_s, 250.0);
@@ -294,6 +295,32 @@ TEST_F(ServiceConfigTest, AnUnknownKeyIsRefusedListingTheKnownOnes) {
                       at(7, "database.file") + ": unknown key; known keys: path"));
 }
 
+TEST_F(ServiceConfigTest, TheTablesAlternateBetweenTwoDistinctNumbers) {
+  const std::string ok = "[gauge]\n" + kIntake + kNc;  // 5 lines
+  auto c = read(ok + "table_numbers = [5, 3]\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->job.table_numbers, (TableNumbers{5, 3}));
+  EXPECT_TRUE(refused(read(ok + "table_numbers = [4, 4]\n"), ErrorCode::kInvalidInput,
+                      at(6, "nc.table_numbers") + ": the two numbers are both 4; they must differ"));
+  for (const char* bad : {"[1]", "[1, 2, 3]", "[0, 2]", "[1, 1000]", "[1.5, 2]", "3"}) {
+    EXPECT_TRUE(refused(read(ok + "table_numbers = " + bad + "\n"), ErrorCode::kInvalidInput,
+                        at(6, "nc.table_numbers") + ": expected two distinct whole numbers 1..999"))
+        << bad;
+  }
+  EXPECT_TRUE(refused(read(ok + "table_number = 1\ntable_numbers = [1, 2]\n"), ErrorCode::kInvalidInput,
+                      at(6, "nc.table_number") + ": give table_numbers = [A, B] alone"));
+}
+
+TEST_F(ServiceConfigTest, TheMainProgramTemplateIsReadWhenNamed) {
+  dir_.write("main.mpf", "N10 {{program_name}}\nN20 EGON(X,\"FINE\",C,{{table_number}},0)\nM30\n");
+  auto c = read("[gauge]\n" + kIntake + kNc + "main_template = \"main.mpf\"\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->job.nc_main_template_name, (dir_.path() / "main.mpf").string());
+  EXPECT_NE(c->job.nc_main_template.find("EGON"), std::string::npos);
+  EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "main_template = \"absent.mpf\"\n"), ErrorCode::kNotFound,
+                      at(6, "nc.main_template")));
+}
+
 TEST_F(ServiceConfigTest, AValueOutOfRangeSaysWhatIsAllowed) {
   const std::string ok = "[gauge]\n" + kIntake + kNc;  // 5 lines
   EXPECT_TRUE(refused(read(ok + "[compensation]\ngain = 3.0\n"), ErrorCode::kInvalidInput,
@@ -305,7 +332,7 @@ TEST_F(ServiceConfigTest, AValueOutOfRangeSaysWhatIsAllowed) {
   EXPECT_TRUE(refused(read(ok + "[analysis]\nbase_circle_center_deg = 361\n"), ErrorCode::kInvalidInput,
                       at(7, "analysis.base_circle_center_deg") + ": 361 is out of range; allowed [0, 360]"));
   EXPECT_TRUE(refused(read(ok + "table_number = 1000\n"), ErrorCode::kInvalidInput,
-                      at(6, "nc.table_number") + ": 1000 is out of range; allowed [1, 999]"));
+                      at(6, "nc.table_number") + ": 1000 is out of range; allowed [1, 998]"));
   EXPECT_TRUE(refused(read(ok + "x_min_mm = 5\nx_max_mm = 5\n"), ErrorCode::kInvalidInput,
                       at(7, "nc.x_max_mm") + ": must be above x_min_mm"));
   EXPECT_TRUE(refused(read(ok + "table = \"cubic\"\n"), ErrorCode::kInvalidInput,

@@ -125,6 +125,34 @@ TEST_F(NcPushTest, VersionsHistoryDiffAndRollback) {
 
 // A table edited on the control is reported, never overwritten silently: the next run is
 // stored and its table waits; approving it needs --overwrite-edited.
+// Measured runs write the table to numbers 1, 2, 1 and, after each, the main program coupling
+// the one just written; `nc rollback` (a new version) alternates and rewrites it too.
+TEST_F(NcPushTest, EachPushWritesTheTableToTheOtherNumberAndTheMainProgramCouplingIt) {
+  JobSettings js = job_settings();
+  js.nc_main_template = std::string(embedded::kNcMainTemplate);
+  js.nc_main_template_name = "cam_main.mpf";
+  const fs::path main_file = dir_ / "nc" / (part_.nc_program + "_MAIN.MPF");
+  for (int version = 1; version <= 3; ++version) {
+    auto r = measure(ground_with_table_in_force(js));
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    ASSERT_TRUE(r->pushed()) << r->not_pushed_reason;
+    ASSERT_EQ(r->table_version, version);
+    const std::string n = version % 2 == 1 ? "1" : "2";
+    const std::string table = slurp(nc_file());
+    const std::string main = slurp(main_file);
+    EXPECT_NE(table.find("CTABDEF(X,C," + n + ",1)"), std::string::npos) << "version " << version;
+    EXPECT_NE(main.find("\nN10 " + part_.nc_program + " "), std::string::npos) << main;
+    EXPECT_NE(main.find("EGON(X,\"FINE\",C," + n + ",0)"), std::string::npos) << main;
+    EXPECT_NE(main.find("run " + std::to_string(r->run_id)), std::string::npos) << main;
+    EXPECT_EQ(table.find("{{"), std::string::npos);
+    EXPECT_EQ(main.find("{{"), std::string::npos) << main;
+  }
+  CommandResult back = run_command("nc rollback 2 --by ben " + data());
+  ASSERT_EQ(back.exit_code, 0) << back.output;
+  EXPECT_NE(slurp(nc_file()).find("CTABDEF(X,C,2,1)"), std::string::npos) << "version 4 goes to number 2";
+  EXPECT_NE(slurp(main_file).find("EGON(X,\"FINE\",C,2,0)"), std::string::npos) << slurp(main_file);
+}
+
 TEST_F(NcPushTest, TableEditedByHandIsReportedAndKept) {
   auto first = measure();
   ASSERT_TRUE(first.ok()) << first.error().message;
@@ -220,6 +248,30 @@ TEST_F(NcPushTest, DesignBeyondTheSlideLimitIsRefusedBeforeMeasuring) {
   EXPECT_NE(report.error().message.find("C"), std::string::npos) << report.error().message;
   EXPECT_EQ(sim_->requests_served(), 0) << "no gauge request was made";
   EXPECT_FALSE(fs::exists(nc_file()));
+}
+
+// A main program template that is wrong for either table number, or names a placeholder
+// nobody fills, costs no measurement and writes nothing.
+TEST_F(NcPushTest, AMainTemplateWrongForEitherNumberIsRefusedBeforeMeasuring) {
+  JobSettings js = job_settings();
+  js.nc_main_template_name = "/etc/gaugeloop/cam_main.mpf";
+  const std::string shipped(embedded::kNcMainTemplate);
+  const std::string coupled = "EGON(X,\"FINE\",C,{{table_number}},0)";
+  ASSERT_NE(shipped.find(coupled), std::string::npos);
+  std::string fixed = shipped;
+  fixed.replace(fixed.find(coupled), coupled.size(), "EGON(X,\"FINE\",C,1,0)");
+  for (const auto& [tmpl, expected] : {std::pair{fixed, std::string("couples curve table 1 at line 11, not table 2")},
+                                       std::pair{shipped + "; {{wheel_speed}}\n", std::string("wheel_speed")}}) {
+    js.nc_main_template = tmpl;
+    auto report = measure(js);
+    ASSERT_FALSE(report.ok());
+    EXPECT_EQ(report.error().code, ErrorCode::kInvalidInput);
+    EXPECT_NE(report.error().message.find(expected), std::string::npos) << report.error().message;
+    EXPECT_NE(report.error().message.find("/etc/gaugeloop/cam_main.mpf"), std::string::npos) << report.error().message;
+  }
+  EXPECT_EQ(sim_->requests_served(), 0) << "no gauge request was made";
+  EXPECT_FALSE(fs::exists(nc_file()));
+  EXPECT_FALSE(fs::exists(dir_ / "nc" / (part_.nc_program + "_MAIN.MPF")));
 }
 
 // A directory where the NC program goes would fail the push after the run is stored (the

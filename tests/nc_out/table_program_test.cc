@@ -199,6 +199,7 @@ TEST(TableProgram, TheExampleTemplatesRenderWithTheDocumentedPlaceholders) {
       std::map<std::string, std::string> main_values = values;
       main_values["point_count"] = "91";
       main_values["interpolation"] = "cspline";
+      main_values["table_version"] = "7";
       Result<std::string> r = render_nc_template(ss.str(), file, main_values);
       ASSERT_TRUE(r.ok()) << r.error().message;
       EXPECT_THAT(*r, HasSubstr("N10 CAM_INTAKE_L1 "));

@@ -14,8 +14,9 @@
 
 namespace gaugeloop::testing {
 
-// The program of program CAM_TEST for `run` and `version`, on a path whose stroke is `stroke_mm`.
-inline Result<std::string> program_for(std::int64_t run, int version, double stroke_mm) {
+// The program of program CAM_TEST for `run` and `version`, on a path whose stroke is `stroke_mm`;
+// with `numbers` set, the table goes to the number of its version and the header names both.
+inline Result<std::string> program_for(std::int64_t run, int version, double stroke_mm, TableNumbers numbers = {0, 0}) {
   SampledPath p;
   p.c_step_deg = 0.01;
   constexpr double kRad = std::numbers::pi / 180.0;
@@ -38,7 +39,8 @@ inline Result<std::string> program_for(std::int64_t run, int version, double str
                                                {"created_utc", ""},
                                                {"correction_max_um", "0"},
                                                {"table_number", "1"}};
-  return render_table_program(*nc_template, "cam_table.spf", values, *table, {run, version});
+  TableProvenance provenance{run, version, numbers};
+  return render_table_program(*nc_template, "cam_table.spf", values, *table, provenance);
 }
 
 }  // namespace gaugeloop::testing

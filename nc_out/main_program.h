@@ -1,0 +1,31 @@
+// The main program (.MPF) that loads the curve table and couples the wheel infeed to it,
+// rendered from the user's template beside each table.
+//
+// Placeholders (docs/nc_output.md): program_name (the table subprogram it calls), part, lobe,
+// version (gaugeloop's), run_id, created_utc, table_version, table_number (the table the
+// subprogram just defined, the one to couple), point_count, interpolation. Any other, or one
+// left unfilled, is refused as for the table (render_nc_template).
+#pragma once
+
+#include <map>
+#include <string>
+#include <string_view>
+
+#include "core/result.h"
+
+namespace gaugeloop {
+
+// Renders `template_text` with `values` (which must hold "program_name" and "table_number"),
+// then reads the result back: it must call the subprogram program_name (a block whose first
+// word, after an optional block number, is that name) and couple through table_number (an
+// EGON(following axis, block change, leading axis, table, 0) or LEADON(following axis, leading
+// axis, table) naming it), and every coupling it makes must name that table, so a template
+// that couples a fixed number never ships. kInvalidInput naming the template otherwise.
+Result<std::string> render_main_program(std::string_view template_text, std::string_view template_name,
+                                        const std::map<std::string, std::string>& values);
+
+// The table number the first EGON or LEADON of `program` couples through; kInvalidInput
+// naming `file_name` and the line if it has none or it cannot be read.
+Result<int> coupled_table_number(std::string_view program, std::string_view file_name);
+
+}  // namespace gaugeloop

@@ -1,0 +1,224 @@
+// The main program beside the table: every push writes the table to the other of two table
+// numbers and then the main program coupling it; read back from the NC directory. A main
+// program that could not be written leaves the machine coupling the previous table, which
+// the new one did not redefine.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <map>
+
+#include "core/text_file.h"
+#include "job/nc_push.h"
+#include "nc_out/main_program.h"
+#include "nc_out/table_program.h"
+#include "storage/run_store.h"
+#include "tests/support/sample_runs.h"
+#include "tests/support/store_test.h"
+#include "tests/support/table_program.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The real NC directory, except that writing the main program fails while `fail_main` is set.
+class MainWriteFails final : public NcFiles {
+ public:
+  bool fail_main = false;
+  Result<DirectoryLock> lock_directory(const fs::path& dir) override { return real_nc_files().lock_directory(dir); }
+  bool is_directory(const fs::path& dir) override { return real_nc_files().is_directory(dir); }
+  Result<std::optional<std::string>> read_program(const fs::path& path) override {
+    return real_nc_files().read_program(path);
+  }
+  Status write_program(const fs::path& path, std::string_view contents, const AtomicWriteObserver& observer) override {
+    if (fail_main && path.filename().string().ends_with("_MAIN.MPF")) {
+      return Error{ErrorCode::kIo, "No space left on device (scripted)"};
+    }
+    return real_nc_files().write_program(path, contents, observer);
+  }
+  Result<int> remove_leftovers(const fs::path& path) override { return real_nc_files().remove_leftovers(path); }
+};
+
+class MainProgramPushTest : public testing::StoreTest {
+ protected:
+  void SetUp() override {
+    StoreTest::SetUp();
+    if (HasFatalFailure()) return;
+    fs::create_directories(dir_ / "nc");
+    Result<std::int64_t> id =
+        store_->insert_run(testing::sample_run("intake", 1, "grinder-1", "2026-12-01T08:00:00Z", 5.0));
+    ASSERT_TRUE(id.ok()) << id.error().message;
+    run_ = *id;
+    Result<std::string> tmpl =
+        read_regular_file(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/sinumerik/cam_main.mpf", "main template");
+    ASSERT_TRUE(tmpl.ok()) << tmpl.error().message;
+    main_.template_text = *tmpl;
+    main_.template_name = "cam_main.mpf";
+    main_.part = "intake";
+    main_.lobe = 1;
+    main_.created_utc = "2026-12-01T08:05:00Z";
+  }
+
+  fs::path nc_file() const { return dir_ / "nc" / "CAM_TEST.SPF"; }
+  fs::path main_file() const { return dir_ / "nc" / "CAM_TEST_MAIN.MPF"; }
+
+  Result<PushCompletion> push(NcFiles& files, const std::function<void(PushStep)>& observer = {}) {
+    PushFacts facts;
+    facts.run_id = run_;
+    facts.reason = "run " + std::to_string(run_);
+    PushOptions options;
+    options.files = &files;
+    options.main = main_;
+    options.observer = observer;
+    return push_program(
+        *store_, nc_file(), facts,
+        [this](int version) {
+          return testing::program_for(run_, version, 1.0 + version, {1, 2});
+        },
+        options);
+  }
+
+  // The CTABDEF number of the table on the control.
+  int table_on_control() {
+    Result<std::string> text = read_regular_file(nc_file(), "table");
+    EXPECT_TRUE(text.ok());
+    if (!text.ok()) return -1;
+    Result<ParsedTable> t = parse_table_program(*text, nc_file().string());
+    EXPECT_TRUE(t.ok()) << t.error().message;
+    return t.ok() ? t->table_number : -1;
+  }
+
+  // The table number the main program on the control couples.
+  int coupled() {
+    Result<std::string> text = read_regular_file(main_file(), "main program");
+    EXPECT_TRUE(text.ok());
+    if (!text.ok()) return -1;
+    Result<int> n = coupled_table_number(*text, main_file().string());
+    EXPECT_TRUE(n.ok()) << n.error().message;
+    return n.ok() ? *n : -1;
+  }
+
+  std::int64_t run_ = 0;
+  MainProgramSource main_;
+};
+
+TEST_F(MainProgramPushTest, ThreePushesAlternateTheTableNumberAndTheMainProgramCouplesTheOneJustWritten) {
+  MainWriteFails files;
+  const int expected[] = {0, 1, 2, 1};
+  for (int version = 1; version <= 3; ++version) {
+    Result<PushCompletion> r = push(files);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    ASSERT_EQ(r->table_version, version);
+    const std::string table = *read_regular_file(nc_file(), "table");
+    const std::string main = *read_regular_file(main_file(), "main program");
+    EXPECT_EQ(table_on_control(), expected[version]) << "version " << version;
+    EXPECT_NE(table.find("; gaugeloop table_number: " + std::to_string(expected[version]) + "\n"), std::string::npos);
+    EXPECT_EQ(coupled(), expected[version]) << "version " << version << ":\n" << main;
+    EXPECT_NE(main.find("\nN10 CAM_TEST "), std::string::npos) << "the main program calls the table:\n" << main;
+    EXPECT_NE(main.find("EGON(X,\"FINE\",C," + std::to_string(expected[version]) + ",0)"), std::string::npos);
+    EXPECT_NE(main.find("table version " + std::to_string(version) + " of run"), std::string::npos) << main;
+    EXPECT_EQ(table.find("{{"), std::string::npos) << table;
+    EXPECT_EQ(main.find("{{"), std::string::npos) << main;
+    // What the history keeps of the version is the table, not the main program.
+    Result<NcPush> stored = store_->load_push(nc_file().string(), version);
+    ASSERT_TRUE(stored.ok()) << stored.error().message;
+    EXPECT_EQ(*stored->program_text, table);
+  }
+}
+
+TEST_F(MainProgramPushTest, AMainTemplateWithAnUnknownPlaceholderIsRefusedBeforeAnythingIsWritten) {
+  MainWriteFails files;
+  main_.template_text += "; {{wheel_speed}}\n";
+  main_.template_name = "/etc/gaugeloop/cam_main.mpf";
+  Result<PushCompletion> r = push(files);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::kInvalidInput);
+  EXPECT_NE(r.error().message.find("wheel_speed"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("/etc/gaugeloop/cam_main.mpf"), std::string::npos) << r.error().message;
+  EXPECT_FALSE(fs::exists(nc_file()));
+  EXPECT_FALSE(fs::exists(main_file()));
+  Result<std::optional<NcPush>> last = store_->last_push(nc_file().string());
+  ASSERT_TRUE(last.ok());
+  EXPECT_FALSE(last->has_value()) << "nothing recorded";
+  Result<std::vector<PushIntent>> open = store_->open_push_intents();
+  ASSERT_TRUE(open.ok());
+  EXPECT_TRUE(open->empty());
+}
+
+TEST_F(MainProgramPushTest, AMainProgramNotWrittenLeavesTheCouplingOnTheTableTheNewOneDidNotRedefine) {
+  MainWriteFails files;
+  ASSERT_TRUE(push(files).ok());  // version 1: table 1, coupled
+  ASSERT_EQ(coupled(), 1);
+
+  files.fail_main = true;
+  Result<PushCompletion> second = push(files);
+  ASSERT_FALSE(second.ok()) << "the push fails as a failed table write does";
+  EXPECT_EQ(second.error().code, ErrorCode::kIo);
+  EXPECT_NE(second.error().message.find("still couples the previous table"), std::string::npos)
+      << second.error().message;
+  // The control: the new table defines number 2; the main program still calls the subprogram
+  // and couples number 1, which running the new subprogram does not redefine.
+  EXPECT_EQ(table_on_control(), 2);
+  EXPECT_EQ(coupled(), 1);
+  Result<std::optional<NcPush>> last = store_->last_push(nc_file().string());
+  ASSERT_TRUE(last.ok());
+  ASSERT_TRUE(last->has_value());
+  EXPECT_EQ((**last).table_version, 2) << "the table on the control is recorded";
+  Result<std::vector<PushIntent>> open = store_->open_push_intents();
+  ASSERT_TRUE(open.ok());
+  EXPECT_TRUE(open->empty());
+
+  // The next push goes to number 1, which the stale main program couples: the main program is
+  // first pointed at table 2 (the table in force), so table 1 is never redefined while coupled.
+  files.fail_main = false;
+  int coupled_when_the_table_was_written = 0;
+  Result<PushCompletion> third = push(files, [&](PushStep step) {
+    if (step == PushStep::kTemporaryWritten) coupled_when_the_table_was_written = coupled();
+  });
+  ASSERT_TRUE(third.ok()) << third.error().message;
+  EXPECT_EQ(third->table_version, 3);
+  EXPECT_EQ(coupled_when_the_table_was_written, 2);
+  EXPECT_EQ(table_on_control(), 1);
+  EXPECT_EQ(coupled(), 1);
+}
+
+TEST_F(MainProgramPushTest, ARollbackIsANewVersionAndAlternatesToo) {
+  MainWriteFails files;
+  ASSERT_TRUE(push(files).ok());  // version 1, table 1
+  ASSERT_TRUE(push(files).ok());  // version 2, table 2
+  const std::string v2 = *read_regular_file(nc_file(), "table");
+  Result<PushOutcome> back = rollback_to_version(*store_, nc_file().string(), 2, "anna", main_);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->table_version, 3);
+  EXPECT_EQ(table_on_control(), 1) << "version 3 goes to number 1, not onto the coupled table 2";
+  EXPECT_EQ(coupled(), 1);
+  // The points are version 2's: only the header and the CTABDEF number changed.
+  Result<ParsedTable> now = parse_table_program(*read_regular_file(nc_file(), "table"), "now");
+  Result<ParsedTable> then = parse_table_program(v2, "v2");
+  ASSERT_TRUE(now.ok() && then.ok());
+  EXPECT_EQ(now->body_checksum, then->body_checksum);
+  EXPECT_EQ(now->header["table_version"], "3");
+  EXPECT_EQ(now->header["table_number"], "1");
+}
+
+TEST(WithTableVersion, SetsTheNumberOfTheVersionWhenTheHeaderNamesThePair) {
+  Result<std::string> p = testing::program_for(9, 0, 1.0, {4, 5});
+  ASSERT_TRUE(p.ok()) << p.error().message;
+  for (int version : {1, 2, 3}) {
+    Result<std::string> v = with_table_version(*p, version);
+    ASSERT_TRUE(v.ok()) << v.error().message;
+    Result<ParsedTable> t = parse_table_program(*v, "v");
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    EXPECT_EQ(t->table_number, version % 2 == 1 ? 4 : 5);
+    EXPECT_TRUE(verify_table_checksum(*t, "v").ok());
+  }
+  // A program written before the header named its numbers keeps its number.
+  Result<std::string> old = testing::program_for(9, 1, 1.0);
+  ASSERT_TRUE(old.ok());
+  Result<std::string> v = with_table_version(*old, 2);
+  ASSERT_TRUE(v.ok());
+  EXPECT_EQ(parse_table_program(*v, "v")->table_number, 1);
+}
+
+}  // namespace
+}  // namespace gaugeloop

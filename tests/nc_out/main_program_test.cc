@@ -1,0 +1,108 @@
+// The main program: rendered from the shipped template with every placeholder filled, refused
+// when it would couple another table than the one its subprogram defines; and the table
+// numbers alternating with the version.
+#include "nc_out/main_program.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "nc_out/table_program.h"
+#include "tests/nc_out/analytic_path.h"
+
+namespace gaugeloop {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::string shipped_main_template() {
+  std::ifstream in(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/sinumerik/cam_main.mpf");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::map<std::string, std::string> main_values(const std::string& table_number) {
+  return {{"program_name", "CAM_INTAKE_L1"},
+          {"part", "intake_flat"},
+          {"lobe", "1"},
+          {"version", "0.1.0"},
+          {"run_id", "42"},
+          {"created_utc", "2026-12-01T10:00:00Z"},
+          {"table_version", "3"},
+          {"table_number", table_number},
+          {"point_count", "91"},
+          {"interpolation", "cspline"}};
+}
+
+TEST(MainProgram, TheShippedTemplateFillsEveryPlaceholderAndCouplesTheTableNamed) {
+  Result<std::string> r = render_main_program(shipped_main_template(), "cam_main.mpf", main_values("2"));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->find("{{"), std::string::npos) << *r;
+  EXPECT_THAT(*r, HasSubstr("N10 CAM_INTAKE_L1 "));
+  EXPECT_THAT(*r, HasSubstr("EGON(X,\"FINE\",C,2,0)"));
+  EXPECT_THAT(*r, HasSubstr("table version 3 of run 42"));
+  Result<int> coupled = coupled_table_number(*r, "CAM_INTAKE_L1_MAIN.MPF");
+  ASSERT_TRUE(coupled.ok()) << coupled.error().message;
+  EXPECT_EQ(*coupled, 2);
+}
+
+TEST(MainProgram, AnUnknownPlaceholderIsRefusedNamingItAndTheTemplate) {
+  const std::string text = shipped_main_template() + "; {{tabel_number}}\n";
+  Result<std::string> r = render_main_program(text, "/etc/gaugeloop/cam_main.mpf", main_values("1"));
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::kInvalidInput);
+  EXPECT_THAT(r.error().message, HasSubstr("tabel_number"));
+  EXPECT_THAT(r.error().message, HasSubstr("/etc/gaugeloop/cam_main.mpf"));
+}
+
+TEST(MainProgram, ATemplateCouplingAFixedTableIsRefused) {
+  const std::string text = "N10 {{program_name}}\nN20 EGON(X,\"FINE\",C,1,0)\nM30\n";
+  Result<std::string> r = render_main_program(text, "fixed.mpf", main_values("2"));
+  ASSERT_FALSE(r.ok());
+  EXPECT_THAT(r.error().message, HasSubstr("couples curve table 1 at line 2, not table 2"));
+  EXPECT_TRUE(render_main_program(text, "fixed.mpf", main_values("1")).ok());
+}
+
+TEST(MainProgram, ATemplateThatDoesNotCallTheTableOrCouplesNothingIsRefused) {
+  Result<std::string> no_call =
+      render_main_program("N20 EGON(X,\"FINE\",C,{{table_number}},0)\nM30\n", "a.mpf", main_values("1"));
+  ASSERT_FALSE(no_call.ok());
+  EXPECT_THAT(no_call.error().message, HasSubstr("does not call the table subprogram CAM_INTAKE_L1"));
+  Result<std::string> no_coupling = render_main_program("N10 {{program_name}}\nM30\n", "b.mpf", main_values("1"));
+  ASSERT_FALSE(no_coupling.ok());
+  EXPECT_THAT(no_coupling.error().message, HasSubstr("couples no curve table"));
+}
+
+TEST(TableNumbers, ConsecutiveVersionsAlternateAndTheHeaderNamesTheNumber) {
+  Result<CurveTable> t = write_linear_table(testing::analytic_path(4.0, 0.7), 2.0);
+  ASSERT_TRUE(t.ok());
+  const std::string tmpl = "{{table_header}}\nCTABDEF(X,C,{{table_number}},1)\n{{table_blocks}}\nCTABEND\nM17\n";
+  const int expected[] = {0, 7, 12, 7, 12};
+  for (int version = 1; version <= 4; ++version) {
+    EXPECT_EQ(table_number_for_version({7, 12}, version), expected[version]);
+    Result<std::string> p = render_table_program(tmpl, "t.spf", {}, *t, {5, version, {7, 12}});
+    ASSERT_TRUE(p.ok()) << p.error().message;
+    Result<ParsedTable> back = parse_table_program(*p, "t.spf");
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    EXPECT_EQ(back->table_number, expected[version]) << "version " << version;
+    EXPECT_EQ(back->header["table_number"], std::to_string(expected[version]));
+    EXPECT_EQ(back->header["table_numbers"], "7 12");
+  }
+  EXPECT_EQ(table_number_for_version({7, 12}, 0), 7) << "a pending table, its version not yet known";
+}
+
+TEST(TableNumbers, ATableTemplateWithAFixedNumberIsRefusedWhenTheTablesAlternate) {
+  Result<CurveTable> t = write_linear_table(testing::analytic_path(4.0, 0.7), 2.0);
+  ASSERT_TRUE(t.ok());
+  const std::string tmpl = "{{table_header}}\nCTABDEF(X,C,1,1)\n{{table_blocks}}\nCTABEND\nM17\n";
+  EXPECT_TRUE(render_table_program(tmpl, "fixed.spf", {}, *t, {5, 1, {1, 2}}).ok());
+  Result<std::string> second = render_table_program(tmpl, "fixed.spf", {}, *t, {5, 2, {1, 2}});
+  ASSERT_FALSE(second.ok());
+  EXPECT_THAT(second.error().message, HasSubstr("CTABDEF names table 1, not table 2"));
+}
+
+}  // namespace
+}  // namespace gaugeloop
