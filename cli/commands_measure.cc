@@ -19,6 +19,7 @@
 #include "config/service_config.h"
 #include "core/atomic_file.h"
 #include "core/text_file.h"
+#include "core/verdict_text.h"
 #include "job/measure_job.h"
 #include "report/cam_report.h"
 #include "report/svg_plot.h"
@@ -44,21 +45,10 @@ Result<std::string> load_template(const std::string& path, std::string& name) {
   return std::string(without_utf8_bom(*text));
 }
 
-// "out: lift_error.nose, phase (25 characteristics, 18 judged)", "in (...)", or "not judged
-// (no tolerances in the part file)".
+// The run's verdict_summary and where its characteristics are listed.
 std::string tolerance_text(const JobReport& r) {
-  int judged = 0;
-  std::string out_keys;
-  for (const Characteristic& c : r.characteristics) {
-    if (c.verdict == Verdict::kNotJudged) continue;
-    ++judged;
-    if (c.verdict == Verdict::kOut) out_keys += (out_keys.empty() ? "" : ", ") + c.key;
-  }
-  if (judged == 0) return "not judged (no tolerances in the part file)";
-  std::string text = std::string(verdict_name(r.tolerance_verdict));
-  if (!out_keys.empty()) text += ": " + out_keys;
-  return text + " (" + std::to_string(judged) + " of " + std::to_string(r.characteristics.size()) +
-         " characteristics judged; `gaugeloop runs show " + std::to_string(r.run_id) + "` lists them)";
+  return verdict_summary(r.tolerance_verdict, r.characteristics) + "; `gaugeloop runs show " +
+         std::to_string(r.run_id) + "` lists them";
 }
 
 void print_report(const JobReport& r, const Part& part, const std::string& machine) {

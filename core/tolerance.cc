@@ -1,5 +1,6 @@
 // Names of zones and verdicts, and the verdict of a figure against its limits.
 #include "core/tolerance.h"
+#include "core/verdict_text.h"
 
 #include <utility>
 
@@ -86,6 +87,21 @@ Verdict judge(double min, double max, const Limits& limits) {
   if (limits.lower && !(min >= *limits.lower)) return Verdict::kOut;
   if (limits.upper && !(max <= *limits.upper)) return Verdict::kOut;
   return Verdict::kIn;
+}
+
+std::string verdict_summary(Verdict verdict, const std::vector<Characteristic>& characteristics) {
+  int judged = 0;
+  std::string out_keys;
+  for (const Characteristic& c : characteristics) {
+    if (c.verdict == Verdict::kNotJudged) continue;
+    ++judged;
+    if (c.verdict == Verdict::kOut) out_keys += (out_keys.empty() ? "" : ", ") + c.key;
+  }
+  if (judged == 0) return "not judged (no limits given)";
+  std::string text(verdict_name(verdict));
+  if (!out_keys.empty()) text += ": " + out_keys;
+  return text + " (" + std::to_string(judged) + " of " + std::to_string(characteristics.size()) +
+         " characteristics judged)";
 }
 
 int figure_decimals(std::string_view unit) {

@@ -23,6 +23,7 @@
 #include "compensation/wheel_path.h"
 #include "core/atomic_file.h"
 #include "core/number_text.h"
+#include "core/verdict_text.h"
 #include "job/nc_push.h"
 #include "job/tolerance_settings.h"
 #include "nc_out/table_guards.h"
@@ -603,16 +604,7 @@ class JobRun {
     }
     record_.characteristics = std::move(j->characteristics);
     record_.verdict = j->verdict;
-    int judged = 0;
-    std::string out_keys;
-    for (const Characteristic& c : record_.characteristics) {
-      if (c.verdict == Verdict::kNotJudged) continue;
-      ++judged;
-      if (c.verdict == Verdict::kOut) out_keys += (out_keys.empty() ? "" : ", ") + c.key;
-    }
-    step("judged", std::string(verdict_name(record_.verdict)) + ": " + std::to_string(judged) + " of " +
-                       std::to_string(record_.characteristics.size()) + " characteristics judged" +
-                       (out_keys.empty() ? std::string() : "; out: " + out_keys));
+    step("judged", verdict_summary(record_.verdict, record_.characteristics));
   }
 
   // A table the geometry or the axis guards refuse (a concave flank the wheel no longer fits,

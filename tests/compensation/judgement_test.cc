@@ -11,6 +11,7 @@
 
 #include "compensation/analysis.h"
 #include "compensation/flat_probe.h"
+#include "core/verdict_text.h"
 #include "test_lobes.h"
 
 namespace gaugeloop {
@@ -280,6 +281,12 @@ TEST(Verdicts, ANanFigureIsOutAndOneJudgedInMakesARunIn) {
   EXPECT_EQ(characteristic_title("lift_error.opening_flank"), "Lift error, opening flank");
   EXPECT_EQ(characteristic_title("velocity_error"), "Velocity error, whole turn");
   EXPECT_EQ(characteristic_title("harmonic.3"), "Lift error, harmonic 3");
+  Characteristic nose = single_characteristic("lift_error.nose", "um", 12.0, Limits{-10.0, 10.0});
+  Characteristic phase = single_characteristic("phase", "deg", 0.1, Limits{-0.25, 0.25});
+  Characteristic h1 = single_characteristic("base_circle_runout_h1", "um", 3.0, Limits{});
+  EXPECT_EQ(verdict_summary(Verdict::kOut, {nose, phase, h1}), "out: lift_error.nose (2 of 3 characteristics judged)");
+  EXPECT_EQ(verdict_summary(Verdict::kIn, {phase, h1}), "in (1 of 2 characteristics judged)");
+  EXPECT_EQ(verdict_summary(Verdict::kNotJudged, {h1}), "not judged (no limits given)");
   EXPECT_EQ(characteristic_title("harmonic.x"), "harmonic.x");
 }
 

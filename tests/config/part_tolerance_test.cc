@@ -8,8 +8,8 @@
 #include "compensation/judgement.h"
 #include "compensation/periodic_spline.h"
 #include "config/part_file.h"
-#include "job/tolerance_settings.h"
 #include "core/lift_table.h"
+#include "job/tolerance_settings.h"
 #include "tests/support/refused.h"
 
 namespace gaugeloop {

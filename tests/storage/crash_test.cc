@@ -241,7 +241,8 @@ TEST(CrashSafety, KilledAtFiftyMomentsTheDatabaseHoldsWholeRunsOnly) {
           << "iteration " << i << ", version " << version;
       ASSERT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'nc_pushes_v3'"), 0)
           << "iteration " << i << ", version " << version;
-      ASSERT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'nc_push_intents'"), version >= 5 ? 1 : 0)
+      ASSERT_EQ(raw.query_int("SELECT count(*) FROM sqlite_schema WHERE name = 'nc_push_intents'"),
+                version >= 5 ? 1 : 0)
           << "iteration " << i << ", version " << version;
       continue;
     }
