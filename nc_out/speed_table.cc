@@ -298,7 +298,7 @@ std::string render_speed_blocks(const std::vector<SpeedBlock>& blocks, const Spe
   for (size_t k = 0; k < blocks.size(); ++k) {
     const double end = round_to(blocks[k].c_end_deg, format.c_decimals);
     if (k > 0) out += '\n';
-    if (k == 0) out += "G1 G94 FLIN ";
+    if (k == 0) out += "G1 G64 G94 FLIN ";
     out += "C=IC(" + format_fixed(end - last, format.c_decimals) + ") F" +
            format_fixed(blocks[k].feed_deg_per_min, format.feed_decimals);
     last = end;
@@ -371,6 +371,7 @@ Result<ParsedSpeedProgram> parse_speed_program(std::string_view text, std::strin
   };
   ParsedSpeedProgram p;
   bool g1 = false;
+  bool g64 = false;
   bool g94 = false;
   bool flin = false;
   bool ended = false;
@@ -406,6 +407,8 @@ Result<ParsedSpeedProgram> parse_speed_program(std::string_view text, std::strin
       if (w == 0 && u.size() > 1 && u[0] == 'N' && std::isdigit(static_cast<unsigned char>(u[1]))) continue;
       if (u == "G1" || u == "G01") {
         g1 = true;
+      } else if (u == "G64") {
+        g64 = true;
       } else if (u == "G94") {
         g94 = true;
       } else if (u == "FLIN") {
@@ -422,7 +425,7 @@ Result<ParsedSpeedProgram> parse_speed_program(std::string_view text, std::strin
         if (!feed || *feed <= 0.0) return fail(i, "'" + std::string(words[w]) + "' is not a positive feed");
       } else {
         return fail(i, "'" + std::string(words[w]) +
-                           "' is not part of a speed profile (G1 G94 FLIN C=IC(..) F..): gaugeloop cannot say what "
+                           "' is not part of a speed profile (G1 G64 G94 FLIN C=IC(..) F..): gaugeloop cannot say what "
                            "the control would make of it");
       }
     }
@@ -430,7 +433,7 @@ Result<ParsedSpeedProgram> parse_speed_program(std::string_view text, std::strin
     if (!increment || !feed) {
       return fail(i, "every speed block needs C=IC(..) and F..; gaugeloop writes both on each block");
     }
-    if (!g1 || !g94 || !flin) return fail(i, "the first speed block must set G1 G94 FLIN");
+    if (!g1 || !g64 || !g94 || !flin) return fail(i, "the first speed block must set G1 G64 G94 FLIN");
     if (!first_block) first_block = i;
     c_end += *increment;
     p.blocks.push_back({c_end, *feed});

@@ -6,11 +6,12 @@
 // rpm, feeds in deg/min (G94 with C the only axis of the feed: F = 360 * rpm).
 //
 // Form (docs/nc_output.md, "Variable work speed on the control"): blocks
-//   G1 G94 FLIN C=IC(5.000) F21600.0
+//   G1 G64 G94 FLIN C=IC(5.000) F21600.0
 //   C=IC(5.000) F18000.0
 //   ...
-// Each block turns C by its increment; with FLIN the control takes the feed linearly over the
-// block's path from the feed at its start (the previous block's F) to its own F. So the speed
+// G64 (continuous-path mode) so that C does not stop at block ends. Each block turns C by its
+// increment; with FLIN the control takes the feed linearly over the block's path from the
+// feed at its start (the previous block's F) to its own F. So the speed
 // the control runs is piecewise linear in C through the blocks' end points; over a turn, the
 // first block starts from the last block's F (the speed at C360 is the speed at C0), which
 // holds for every turn but the first, whose first block starts from the speed C had.
@@ -93,7 +94,7 @@ Result<SpeedProfileError> speed_profile_error(const WorkSpeedProgram& program, c
 Result<SpeedProfile> write_speed_profile(const WorkSpeedProgram& program, const SpeedProfileSettings& settings = {},
                                          const SpeedProfileFormat& format = {});
 
-// The blocks as NC text: the first carries G1 G94 FLIN, each block C=IC(increment) F(feed),
+// The blocks as NC text: the first carries G1 G64 G94 FLIN, each block C=IC(increment) F(feed),
 // increments the differences of the rounded end positions (so they add up to 360 exactly).
 // Blocks separated by newlines, none after the last.
 std::string render_speed_blocks(const std::vector<SpeedBlock>& blocks, const SpeedProfileFormat& format = {});
@@ -126,8 +127,8 @@ struct ParsedSpeedProgram {
 };
 
 // Parses a speed subprogram: comment lines, blank lines, the feed blocks (an optional block
-// number, G1, G94, FLIN, C=IC(value), F value or F=value; every block needs C and F; G1, G94
-// and FLIN set by the first), then M17 or RET. Anything else is refused with its line: gaugeloop
+// number, G1, G64, G94, FLIN, C=IC(value), F value or F=value; every block needs C and F; G1,
+// G64, G94 and FLIN set by the first), then M17 or RET. Anything else is refused with its line: gaugeloop
 // cannot say what the control would make of it. The increments must add up to 360 (0.0005 deg).
 Result<ParsedSpeedProgram> parse_speed_program(std::string_view text, std::string_view file_name);
 

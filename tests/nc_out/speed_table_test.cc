@@ -70,7 +70,7 @@ TEST(SpeedTable, AConstantProgramGivesAConstantFeed) {
   EXPECT_NEAR(profile->error.max_timing_error_deg, 0.0, 1e-9);
   EXPECT_NEAR(profile->error.turn_time_s, 1.0, 1e-12);  // one turn at 60 rpm
   const std::string blocks = render_speed_blocks(profile->blocks);
-  EXPECT_THAT(blocks, HasSubstr("G1 G94 FLIN C=IC(30.000) F21600.0\nC=IC(30.000) F21600.0\n"));
+  EXPECT_THAT(blocks, HasSubstr("G1 G64 G94 FLIN C=IC(30.000) F21600.0\nC=IC(30.000) F21600.0\n"));
 }
 
 TEST(SpeedTable, ASlowFlankReadsBackWithinTheBound) {
@@ -198,7 +198,7 @@ TEST(SpeedTable, AHandEditIsRefusedOnReadBack) {
 TEST(SpeedTable, ReadBackRefusesWhatItCannotModelWithTheLine) {
   const std::string text =
       "; gaugeloop body_checksum_fnv1a64: 0\n"
-      "G1 G94 FLIN C=IC(180.000) F21600.0\n"
+      "G1 G64 G94 FLIN C=IC(180.000) F21600.0\n"
       "G91 C=IC(180.000) F21600.0\n"
       "M17\n";
   Result<ParsedSpeedProgram> r = parse_speed_program(text, "CAM_SPEED.SPF");
@@ -207,13 +207,13 @@ TEST(SpeedTable, ReadBackRefusesWhatItCannotModelWithTheLine) {
   EXPECT_THAT(r.error().message, HasSubstr("'G91'"));
 
   Result<ParsedSpeedProgram> short_turn =
-      parse_speed_program("G1 G94 FLIN C=IC(180.000) F21600.0\nC=IC(179.000) F21600.0\nM17\n", "CAM_SPEED.SPF");
+      parse_speed_program("G1 G64 G94 FLIN C=IC(180.000) F21600.0\nC=IC(179.000) F21600.0\nM17\n", "CAM_SPEED.SPF");
   ASSERT_FALSE(short_turn.ok());
   EXPECT_THAT(short_turn.error().message, HasSubstr("359.0000 deg"));
 
   Result<ParsedSpeedProgram> no_flin = parse_speed_program("G1 G94 C=IC(360.000) F21600.0\nM17\n", "CAM_SPEED.SPF");
   ASSERT_FALSE(no_flin.ok());
-  EXPECT_THAT(no_flin.error().message, HasSubstr("G1 G94 FLIN"));
+  EXPECT_THAT(no_flin.error().message, HasSubstr("G1 G64 G94 FLIN"));
 }
 
 TEST(SpeedTable, ATemplateThatBreaksTheBlocksIsRefused) {
