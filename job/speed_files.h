@@ -20,9 +20,9 @@ std::filesystem::path speed_program_path(const std::filesystem::path& nc_file);
 
 // Writes `speed_program` (render_speed_program's text) to speed_program_path(nc_file) under
 // the NC directory's lock, atomically (the control sees the old file or the new one), then
-// reads it back from the directory: it must parse with its checksum and its blocks must be
-// the ones given. kInvalidInput for a text that is not a gaugeloop speed program (nothing is
-// written); kIo for a lock, write or read that failed; kRefused if what was read back differs.
+// reads it back from the directory: it must be byte for byte the text given. kInvalidInput for a text that is not a
+// gaugeloop speed program (nothing is written); kIo for a lock, write or read that failed; kRefused if what was read
+// back differs.
 Status write_speed_program(const std::filesystem::path& nc_file, std::string_view speed_program,
                            NcFiles& files = real_nc_files());
 
