@@ -106,6 +106,22 @@ Result<int> coupled_table_number(std::string_view program, std::string_view file
                     std::string(file_name) + ": no EGON or LEADON couples the infeed to a curve table");
 }
 
+std::string speed_program_name(std::string_view program_name) { return std::string(program_name) + "_SPEED"; }
+
+Status check_main_calls_speed_program(std::string_view program, std::string_view file_name,
+                                      std::string_view speed_subprogram) {
+  for (const std::string_view line : lines_of(program)) {
+    const std::string_view code = code_of(line);
+    if (upper(code.substr(0, code.find_first_of(" \t("))) == upper(speed_subprogram)) return {};
+  }
+  return make_error(ErrorCode::kInvalidInput, std::string(file_name) +
+                                                  ": the main program does not call the speed "
+                                                  "subprogram " +
+                                                  std::string(speed_subprogram) +
+                                                  "; with a speed program on, use a main template that calls "
+                                                  "{{program_name}}_SPEED (examples/sinumerik/cam_main_speed.mpf)");
+}
+
 Result<std::string> render_main_program(std::string_view template_text, std::string_view template_name,
                                         const std::map<std::string, std::string>& values) {
   Result<std::string> program = render_nc_template(template_text, template_name, values);

@@ -24,6 +24,18 @@ namespace gaugeloop {
 Result<std::string> render_main_program(std::string_view template_text, std::string_view template_name,
                                         const std::map<std::string, std::string>& values);
 
+// The speed subprogram of a table subprogram: <program_name>_SPEED (CAM -> CAM_SPEED), the
+// file the main program calls for one turn of C at the programmed work speed
+// (nc_out/speed_table.h). A main program template names it as {{program_name}}_SPEED.
+std::string speed_program_name(std::string_view program_name);
+
+// Refuses (kInvalidInput, naming `file_name`) a rendered main program with no block that calls
+// `speed_subprogram` (its first word, after an optional block number, with or without a
+// repetition such as `P10`): with a speed program on, a main program that ignores it grinds at
+// one speed unannounced.
+Status check_main_calls_speed_program(std::string_view program, std::string_view file_name,
+                                      std::string_view speed_subprogram);
+
 // The table number the first EGON or LEADON of `program` couples through; kInvalidInput
 // naming `file_name` and the line if it has none or it cannot be read.
 Result<int> coupled_table_number(std::string_view program, std::string_view file_name);

@@ -1,0 +1,73 @@
+// Writing the speed subprogram beside the table and reading it back.
+#include "job/speed_files.h"
+
+#include "nc_out/main_program.h"
+
+namespace gaugeloop {
+
+std::filesystem::path speed_program_path(const std::filesystem::path& nc_file) {
+  return nc_file.parent_path() / (speed_program_name(nc_file.stem().string()) + ".SPF");
+}
+
+Status write_speed_program(const std::filesystem::path& nc_file, std::string_view speed_program, NcFiles& files) {
+  const std::filesystem::path path = speed_program_path(nc_file);
+  Result<ParsedSpeedProgram> meant = parse_speed_program(speed_program, path.string());
+  if (!meant) return meant.error();
+  if (Status s = verify_speed_checksum(*meant, path.string()); !s) {
+    return make_error(ErrorCode::kInvalidInput, s.error().message);
+  }
+  Result<DirectoryLock> lock = files.lock_directory(path.parent_path());
+  if (!lock) return lock.error();
+  if (Result<int> removed = files.remove_leftovers(path); !removed) return removed.error();
+  if (Status s = files.write_program(path, speed_program, {}); !s) {
+    return make_error(s.error().code, path.string() + ": the speed program was not written (" + s.error().message +
+                                          "); the one on the control, if any, stays");
+  }
+  Result<std::optional<std::string>> back = files.read_program(path);
+  if (!back) return back.error();
+  if (!*back || **back != speed_program) {
+    return make_error(ErrorCode::kRefused, path.string() +
+                                               ": the speed program read back differs from the one written; check "
+                                               "the NC directory (a share that rewrites files?) and push again");
+  }
+  return {};
+}
+
+Result<ParsedSpeedProgram> read_speed_program(const std::filesystem::path& nc_file, NcFiles& files) {
+  const std::filesystem::path path = speed_program_path(nc_file);
+  Result<std::optional<std::string>> text = files.read_program(path);
+  if (!text) return text.error();
+  if (!*text) return make_error(ErrorCode::kNotFound, path.string() + ": no speed program on the control");
+  Result<ParsedSpeedProgram> parsed = parse_speed_program(**text, path.string());
+  if (!parsed) return parsed.error();
+  if (Status s = verify_speed_checksum(*parsed, path.string()); !s) return s.error();
+  return parsed;
+}
+
+Result<PushCompletion> push_program_with_speed(RunStore& store, const std::filesystem::path& nc_file,
+                                               const PushFacts& facts, const RenderForVersion& render,
+                                               std::string_view speed_program, const PushOptions& options) {
+  NcFiles& files = options.files ? *options.files : real_nc_files();
+  const std::filesystem::path speed_path = speed_program_path(nc_file);
+  Result<ParsedSpeedProgram> parsed = parse_speed_program(speed_program, speed_path.string());
+  if (!parsed) return parsed.error();
+  if (Status s = verify_speed_checksum(*parsed, speed_path.string()); !s) {
+    return make_error(ErrorCode::kInvalidInput, s.error().message);
+  }
+  if (!options.main.template_text.empty()) {
+    // Which version comes next does not change what the main program calls: version 1 will do.
+    Result<std::string> table = render(1);
+    if (!table) return table.error();
+    Result<std::string> main = render_main_for_table(options.main, nc_file, *table);
+    if (!main) return main.error();
+    if (Status s = check_main_calls_speed_program(*main, options.main.template_name,
+                                                  speed_program_name(nc_file.stem().string()));
+        !s) {
+      return s.error();
+    }
+  }
+  if (Status s = write_speed_program(nc_file, speed_program, files); !s) return s.error();
+  return push_program(store, nc_file, facts, render, options);
+}
+
+}  // namespace gaugeloop

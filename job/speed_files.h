@@ -1,0 +1,45 @@
+// The speed subprogram beside a table program: where it lives, writing it with the table, and
+// reading it back from the NC directory (docs/nc_output.md, "Variable work speed on the
+// control").
+#pragma once
+
+#include <filesystem>
+#include <string_view>
+
+#include "core/result.h"
+#include "job/nc_files.h"
+#include "job/nc_push.h"
+#include "nc_out/speed_table.h"
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+
+// <stem>_SPEED.SPF in the table program's directory (CAM.SPF -> CAM_SPEED.SPF): the name the
+// main program calls, speed_program_name(stem) (nc_out/main_program.h).
+std::filesystem::path speed_program_path(const std::filesystem::path& nc_file);
+
+// Writes `speed_program` (render_speed_program's text) to speed_program_path(nc_file) under
+// the NC directory's lock, atomically (the control sees the old file or the new one), then
+// reads it back from the directory: it must be byte for byte the text given. kInvalidInput for a text that is not a
+// gaugeloop speed program (nothing is written); kIo for a lock, write or read that failed; kRefused if what was read
+// back differs.
+Status write_speed_program(const std::filesystem::path& nc_file, std::string_view speed_program,
+                           NcFiles& files = real_nc_files());
+
+// The speed program beside `nc_file`, parsed and its checksum verified. kNotFound if there is
+// none; the errors of parse_speed_program and verify_speed_checksum, naming the file.
+Result<ParsedSpeedProgram> read_speed_program(const std::filesystem::path& nc_file, NcFiles& files = real_nc_files());
+
+// push_program with a speed program: before anything is written, checks that `speed_program`
+// is a gaugeloop speed program and that the main program (options.main, if a template is set)
+// calls the speed subprogram; then writes the speed file (write_speed_program), then pushes the
+// table and the main program as push_program does. The speed file goes first so that a main
+// program calling it never finds it missing. Stopped between the two, the control holds the new
+// speed and the previous table: the X table follows C by position, so the form is the previous
+// table's, ground at the new speed. The speed file is not in the push history: it is written
+// anew on every push. Errors: as push_program, and as write_speed_program ("not pushed").
+Result<PushCompletion> push_program_with_speed(RunStore& store, const std::filesystem::path& nc_file,
+                                               const PushFacts& facts, const RenderForVersion& render,
+                                               std::string_view speed_program, const PushOptions& options = {});
+
+}  // namespace gaugeloop

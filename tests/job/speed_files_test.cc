@@ -1,0 +1,208 @@
+// The speed subprogram beside the table: a push with a speed program writes the speed file,
+// the table and the main program into the NC directory, and all three read back: the table
+// numbers alternate, the main program couples the one just written and calls the speed
+// subprogram, and the speed the control will run is the program's within the bound.
+#include "job/speed_files.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <numbers>
+
+#include "core/text_file.h"
+#include "nc_out/main_program.h"
+#include "nc_out/table_program.h"
+#include "tests/support/sample_runs.h"
+#include "tests/support/store_test.h"
+#include "tests/support/table_program.h"
+
+namespace gaugeloop {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+// 30 rpm on the base circle, 10 rpm over C 60..300 with 40 deg cosine ramps.
+WorkSpeedProgram slow_flank_program() {
+  WorkSpeedProgram p;
+  p.c_step_deg = 1.0;
+  for (int k = 0; k < 360; ++k) {
+    const double c = k;
+    double share = 0.0;
+    if (c >= 100.0 && c <= 260.0) {
+      share = 1.0;
+    } else if (c > 60.0 && c < 100.0) {
+      share = 0.5 * (1.0 - std::cos(std::numbers::pi * (c - 60.0) / 40.0));
+    } else if (c > 260.0 && c < 300.0) {
+      share = 0.5 * (1.0 + std::cos(std::numbers::pi * (c - 260.0) / 40.0));
+    }
+    p.speed_rpm.push_back(30.0 - 20.0 * share);
+  }
+  return p;
+}
+
+// The real NC directory, except that writing the speed file fails while `fail_speed` is set.
+class SpeedWriteFails final : public NcFiles {
+ public:
+  bool fail_speed = false;
+  Result<DirectoryLock> lock_directory(const fs::path& dir) override { return real_nc_files().lock_directory(dir); }
+  bool is_directory(const fs::path& dir) override { return real_nc_files().is_directory(dir); }
+  Result<std::optional<std::string>> read_program(const fs::path& path) override {
+    return real_nc_files().read_program(path);
+  }
+  Status write_program(const fs::path& path, std::string_view contents, const AtomicWriteObserver& observer) override {
+    if (fail_speed && path.filename().string().ends_with("_SPEED.SPF")) {
+      return Error{ErrorCode::kIo, "No space left on device (scripted)"};
+    }
+    return real_nc_files().write_program(path, contents, observer);
+  }
+  Result<int> remove_leftovers(const fs::path& path) override { return real_nc_files().remove_leftovers(path); }
+};
+
+class SpeedFilesTest : public testing::StoreTest {
+ protected:
+  void SetUp() override {
+    StoreTest::SetUp();
+    if (HasFatalFailure()) return;
+    fs::create_directories(dir_ / "nc");
+    Result<std::int64_t> id =
+        store_->insert_run(testing::sample_run("intake", 1, "grinder-1", "2026-12-01T08:00:00Z", 5.0));
+    ASSERT_TRUE(id.ok()) << id.error().message;
+    run_ = *id;
+    Result<std::string> tmpl = read_regular_file(
+        std::string(GAUGELOOP_SOURCE_DIR) + "/examples/sinumerik/cam_main_speed.mpf", "main template");
+    ASSERT_TRUE(tmpl.ok()) << tmpl.error().message;
+    main_.template_text = *tmpl;
+    main_.template_name = "cam_main_speed.mpf";
+    main_.part = "intake";
+    main_.lobe = 1;
+    main_.created_utc = "2026-12-01T08:05:00Z";
+
+    Result<SpeedProfile> profile = write_speed_profile(program_);
+    ASSERT_TRUE(profile.ok()) << profile.error().message;
+    Result<std::string> speed_tmpl =
+        read_regular_file(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/sinumerik/cam_speed.spf", "speed template");
+    ASSERT_TRUE(speed_tmpl.ok()) << speed_tmpl.error().message;
+    const std::map<std::string, std::string> values = {{"program_name", "CAM_TEST"},
+                                                       {"part", "intake"},
+                                                       {"lobe", "1"},
+                                                       {"version", "test"},
+                                                       {"run_id", std::to_string(run_)},
+                                                       {"created_utc", "2026-12-01T08:05:00Z"}};
+    Result<std::string> speed = render_speed_program(*speed_tmpl, "cam_speed.spf", values, *profile, {run_, 0});
+    ASSERT_TRUE(speed.ok()) << speed.error().message;
+    speed_text_ = *speed;
+  }
+
+  fs::path nc_file() const { return dir_ / "nc" / "CAM_TEST.SPF"; }
+  fs::path main_file() const { return dir_ / "nc" / "CAM_TEST_MAIN.MPF"; }
+  fs::path speed_file() const { return dir_ / "nc" / "CAM_TEST_SPEED.SPF"; }
+
+  Result<PushCompletion> push(NcFiles& files) {
+    PushFacts facts;
+    facts.run_id = run_;
+    facts.reason = "run " + std::to_string(run_);
+    PushOptions options;
+    options.files = &files;
+    options.main = main_;
+    return push_program_with_speed(
+        *store_, nc_file(), facts,
+        [this](int version) {
+          return testing::program_for(run_, version, 1.0 + version, {1, 2});
+        },
+        speed_text_, options);
+  }
+
+  std::int64_t run_ = 0;
+  MainProgramSource main_;
+  WorkSpeedProgram program_ = slow_flank_program();
+  std::string speed_text_;
+};
+
+TEST_F(SpeedFilesTest, TableSpeedAndMainProgramAreWrittenAndReadBack) {
+  SpeedWriteFails files;
+  const int expected[] = {0, 1, 2, 1};
+  for (int version = 1; version <= 3; ++version) {
+    Result<PushCompletion> r = push(files);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    ASSERT_EQ(r->table_version, version);
+    EXPECT_EQ(speed_program_path(nc_file()), speed_file());
+
+    const std::string table = *read_regular_file(nc_file(), "table");
+    Result<ParsedTable> t = parse_table_program(table, nc_file().string());
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    EXPECT_EQ(t->table_number, expected[version]);
+    EXPECT_TRUE(verify_table_checksum(*t, nc_file().string()).ok());
+
+    const std::string main = *read_regular_file(main_file(), "main program");
+    EXPECT_EQ(main.find("{{"), std::string::npos) << main;
+    EXPECT_EQ(*coupled_table_number(main, main_file().string()), expected[version]) << main;
+    EXPECT_TRUE(check_main_calls_speed_program(main, main_file().string(), "CAM_TEST_SPEED").ok()) << main;
+    EXPECT_THAT(main, HasSubstr("\nN10 CAM_TEST "));
+    EXPECT_THAT(main, HasSubstr("\nN60 CAM_TEST_SPEED P10"));
+
+    const std::string speed = *read_regular_file(speed_file(), "speed program");
+    EXPECT_EQ(speed, speed_text_);
+    EXPECT_EQ(speed.find("{{"), std::string::npos) << speed;
+    Result<ParsedSpeedProgram> parsed = read_speed_program(nc_file(), files);
+    ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+    Result<SpeedProfileError> e = check_speed_program(speed, speed_file().string(), program_, 1.0);
+    ASSERT_TRUE(e.ok()) << e.error().message;
+    EXPECT_LE(e->max_speed_error_percent, 1.0);
+    EXPECT_GT(e->turn_time_s, 2.0 * 2.0) << "the slow flanks take more than twice the 2 s of 30 rpm";
+  }
+}
+
+TEST_F(SpeedFilesTest, AMainTemplateThatIgnoresTheSpeedIsRefusedBeforeAnythingIsWritten) {
+  SpeedWriteFails files;
+  main_.template_text = *read_regular_file(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/sinumerik/cam_main.mpf",
+                                           "constant-speed main template");
+  main_.template_name = "cam_main.mpf";
+  Result<PushCompletion> r = push(files);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::kInvalidInput);
+  EXPECT_THAT(r.error().message, HasSubstr("CAM_TEST_SPEED"));
+  EXPECT_FALSE(fs::exists(speed_file()));
+  EXPECT_FALSE(fs::exists(nc_file()));
+  EXPECT_FALSE(fs::exists(main_file()));
+}
+
+TEST_F(SpeedFilesTest, ASpeedFileNotWrittenLeavesTheTableInForceUntouched) {
+  SpeedWriteFails files;
+  ASSERT_TRUE(push(files).ok());  // version 1
+  const std::string table_before = *read_regular_file(nc_file(), "table");
+  files.fail_speed = true;
+  Result<PushCompletion> r = push(files);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::kIo);
+  EXPECT_THAT(r.error().message, HasSubstr("speed program was not written"));
+  EXPECT_EQ(*read_regular_file(nc_file(), "table"), table_before) << "no table pushed without its speed";
+  Result<std::optional<NcPush>> last = store_->last_push(nc_file().string());
+  ASSERT_TRUE(last.ok());
+  ASSERT_TRUE(last->has_value());
+  EXPECT_EQ((**last).table_version, 1);
+}
+
+TEST_F(SpeedFilesTest, AHandEditedSpeedFileIsReportedOnReadBack) {
+  SpeedWriteFails files;
+  ASSERT_TRUE(write_speed_program(nc_file(), speed_text_, files).ok());
+  std::string edited = speed_text_;
+  const size_t at = edited.find("F10800.0");
+  ASSERT_NE(at, std::string::npos) << edited;
+  edited.replace(at, 8, "F12000.0");
+  ASSERT_TRUE(write_file_atomically(speed_file(), edited).ok());
+  Result<ParsedSpeedProgram> back = read_speed_program(nc_file(), files);
+  ASSERT_FALSE(back.ok());
+  EXPECT_EQ(back.error().code, ErrorCode::kRefused);
+  EXPECT_THAT(back.error().message, HasSubstr("CAM_TEST_SPEED.SPF"));
+  // And a text that is not a speed program is never written.
+  Status s = write_speed_program(nc_file(), "G1 C=IC(360) F100\nM17\n", files);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().code, ErrorCode::kInvalidInput);
+}
+
+}  // namespace
+}  // namespace gaugeloop
