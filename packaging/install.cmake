@@ -31,6 +31,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/examples/gauges/simulator.toml ${PROJECT_SOU
         DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples/gauges)
 install(FILES ${PROJECT_SOURCE_DIR}/examples/service/gaugeloop.toml DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples/service)
 install(FILES ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_main.mpf ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_table.spf
+              ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_main_speed.mpf ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_speed.spf
         DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples/sinumerik)
 
 # The unit names the binary by its installed path. The prefix is known for certain only when
