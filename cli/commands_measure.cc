@@ -277,16 +277,18 @@ struct LoopOptions {
   int iterations = 0;     // 0: one run on the simulator's built-in form error
   std::string plot_path;  // empty: <data-dir>/loop.svg
   MachineErrorModel machine;
-  // --speed-program: the loop at constant speed, then again at a work speed program holding
-  // lobe_speed_mm_per_min on the lobe, base_speed_rpm (unset: the work speed) on the base circle.
+  // --speed-program: the loop at constant speed, then again at a work speed program: the part
+  // file's [speed], else lobe_speed_mm_per_min on the lobe (2000 unset) and base_speed_rpm
+  // (the work speed unset) on the base circle; the flags override the part file.
   bool speed_program = false;
-  double lobe_speed_mm_per_min = WorkSpeedSettings{}.lobe_speed_mm_per_min;
+  std::optional<double> lobe_speed_mm_per_min;
   std::optional<double> base_speed_rpm;
 };
 
 // The speed program for the demo's part, within the job's slide limits, and the surface it
 // leaves against the constant speed.
 struct DemoSpeedPlan {
+  WorkSpeedSettings settings;
   WorkSpeedPlan plan;
   SurfaceFinish program_finish;
   SurfaceFinish constant_finish;
@@ -298,8 +300,10 @@ Result<DemoSpeedPlan> demo_speed_plan(const LoadedPart& lp, const JobSettings& j
   Result<MachinePath> path = compute_machine_path(*lift, lp.file.part, 0.5);
   if (!path) return path.error();
   WorkSpeedSettings ws;
-  ws.base_speed_rpm = lo.base_speed_rpm.value_or(lo.machine.work_speed_rpm);
-  ws.lobe_speed_mm_per_min = lo.lobe_speed_mm_per_min;
+  ws.base_speed_rpm = lo.machine.work_speed_rpm;
+  if (lp.file.speed) ws = *lp.file.speed;
+  if (lo.base_speed_rpm) ws.base_speed_rpm = *lo.base_speed_rpm;
+  if (lo.lobe_speed_mm_per_min) ws.lobe_speed_mm_per_min = *lo.lobe_speed_mm_per_min;
   ws.x_velocity_max_mm_per_s = job.axis_limits.x_velocity_max_mm_per_s;
   ws.x_acceleration_max_mm_per_s2 = job.axis_limits.x_acceleration_max_mm_per_s2;
   Result<WorkSpeedPlan> plan = plan_work_speed(*path, lp.file.part, ws);
@@ -309,6 +313,7 @@ Result<DemoSpeedPlan> demo_speed_plan(const LoadedPart& lp, const JobSettings& j
       grinding_point_speed_mm_per_min(*path, lp.file.part, lo.machine.work_speed_rpm);
   const RoughnessModel roughness = paper_roughness_model();
   DemoSpeedPlan d;
+  d.settings = ws;
   d.program_finish = surface_finish(*path, plan->grinding_point_speed_mm_per_min, roughness);
   d.constant_finish = surface_finish(*path, constant_speed, roughness);
   d.plan = std::move(*plan);
@@ -365,7 +370,7 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
     constant_last = constant->back();
     ls.machine.speed_program = speed->plan.program;
     std::printf("\nat the speed program, %.0f mm/min on the lobe, %.0f rpm on the base circle:\n",
-                lo.lobe_speed_mm_per_min, lo.base_speed_rpm.value_or(m.work_speed_rpm));
+                speed->settings.lobe_speed_mm_per_min, speed->settings.base_speed_rpm);
   }
   std::printf("%s", header);
   std::fflush(stdout);
@@ -637,11 +642,10 @@ void add_demo_command(CLI::App& app, CommandAction& action) {
       "grinding-point speed on the lobe; prints cycle time, flank Ra and form error of both "
       "(docs/variable_speed.md)");
   demo->add_option("--lobe-speed-mm-per-min", loop->lobe_speed_mm_per_min,
-                   "Speed program: grinding-point speed held on the lobe")
-      ->capture_default_str()
-      ->check(CLI::Range(1.0, 1e6));
+                   "Speed program: grinding-point speed held on the lobe [the part file's [speed], else 2000]")
+      ->check(CLI::Range(1.0, 1e5));
   demo->add_option("--base-speed-rpm", loop->base_speed_rpm,
-                   "Speed program: work speed on the base circle [the work speed]")
+                   "Speed program: work speed on the base circle [the part file's [speed], else the work speed]")
       ->check(CLI::Range(1.0, 1000.0));
   demo->callback([&action, demo, demo_opts, demo_sim, loop] {
     if (loop->speed_program && loop->iterations == 0) loop->iterations = 1;

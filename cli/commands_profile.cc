@@ -29,7 +29,7 @@ struct ProfileOptions {
   // --speed-program: C slowed on the lobe to hold this grinding-point speed, --speed-rpm (or
   // the default base speed) on the base circle.
   bool speed_program = false;
-  double lobe_speed_mm_per_min = WorkSpeedSettings{}.lobe_speed_mm_per_min;
+  std::optional<double> lobe_speed_mm_per_min;  // unset: the part file's [speed], else 2000
 };
 
 // One row whichever the frame: the angle (psi or C), X, and its derivatives along that angle.
@@ -93,6 +93,7 @@ int cmd_profile(const ProfileOptions& o) {
   // In time, C turns at 6 n deg/s; from the cam frame dX/dC = s dX/dpsi.
   const double sense = machine ? 1.0 : static_cast<double>(part.rotation_sense);
   std::optional<WorkSpeedPlan> plan;
+  WorkSpeedSettings plan_settings;
   if (o.speed_program) {
     // The program is planned on the rows' own angle: its limits hold either way round the
     // turn, so the cam frame's rows get the same speeds as the machine frame's.
@@ -103,9 +104,10 @@ int cmd_profile(const ProfileOptions& o) {
       on_rows.dx_dc_mm_per_deg.push_back(r.dx_mm_per_deg);
       on_rows.d2x_dc2_mm_per_deg2.push_back(r.d2x_mm_per_deg2);
     }
-    WorkSpeedSettings ws;
+    WorkSpeedSettings ws = loaded->file.speed.value_or(WorkSpeedSettings{});
     if (o.speed_rpm) ws.base_speed_rpm = std::abs(*o.speed_rpm);
-    ws.lobe_speed_mm_per_min = o.lobe_speed_mm_per_min;
+    if (o.lobe_speed_mm_per_min) ws.lobe_speed_mm_per_min = *o.lobe_speed_mm_per_min;
+    plan_settings = ws;
     Result<WorkSpeedPlan> planned = plan_work_speed(on_rows, part, ws);
     if (!planned) return report_error(in_part(o.part_path, planned.error()));
     plan = std::move(*planned);
@@ -166,8 +168,8 @@ int cmd_profile(const ProfileOptions& o) {
     }
     nlohmann::ordered_json program(nullptr);
     if (plan) {
-      program = {{"lobe_speed_mm_per_min", o.lobe_speed_mm_per_min},
-                 {"base_speed_rpm", o.speed_rpm ? std::abs(*o.speed_rpm) : WorkSpeedSettings{}.base_speed_rpm},
+      program = {{"lobe_speed_mm_per_min", plan_settings.lobe_speed_mm_per_min},
+                 {"base_speed_rpm", plan_settings.base_speed_rpm},
                  {"cycle_time_s", plan->cycle_time_s},
                  {"constant_cycle_time_s", plan->constant_cycle_time_s}};
     }
@@ -224,15 +226,15 @@ void add_profile_commands(CLI::App& app, CommandAction& action) {
   cmd->add_option("--speed-rpm", o->speed_rpm,
                   "Work spindle speed, C turning up (negative: down); adds v_mm_per_s, a_mm_per_s2 and "
                   "grinding_point_speed_mm_per_min (the contact point along the lobe surface). With "
-                  "--speed-program: the speed on the base circle [60]");
+                  "--speed-program: the speed on the base circle [the part file's [speed], else 60]");
   cmd->add_flag("--speed-program", o->speed_program,
                 "At a work speed program (docs/variable_speed.md): C slowed on the lobe to hold "
-                "--lobe-speed-mm-per-min there, within 3600 deg/s^2 of C and the slide's 300 mm/s and "
-                "20000 mm/s^2; adds c_speed_rpm, and v, a and the grinding-point speed at that speed");
+                "--lobe-speed-mm-per-min there, within the part file's [speed] (else 3600 deg/s^2 of C) and the "
+                "slide's 300 mm/s and 20000 mm/s^2; adds c_speed_rpm, and v, a and the grinding-point speed at "
+                "that speed");
   cmd->add_option("--lobe-speed-mm-per-min", o->lobe_speed_mm_per_min,
-                  "Speed program: grinding-point speed held on the lobe")
-      ->capture_default_str()
-      ->check(CLI::Range(1.0, 1e6));
+                  "Speed program: grinding-point speed held on the lobe [the part file's [speed], else 2000]")
+      ->check(CLI::Range(1.0, 1e5));
   cmd->callback([&action, o] { action = [o] { return cmd_profile(*o); }; });
 }
 

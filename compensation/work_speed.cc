@@ -75,7 +75,7 @@ Result<std::vector<double>> grinding_point_speed_mm_per_min(const MachinePath& p
 Status validate(const WorkSpeedSettings& s) {
   for (const Status& st :
        {in_range(s.base_speed_rpm, 0.0, 1000.0, "base_speed_rpm", " rpm"),
-        in_range(s.lobe_speed_mm_per_min, 0.0, 1e6, "lobe_speed_mm_per_min", " mm/min"),
+        in_range(s.lobe_speed_mm_per_min, 0.0, 1e5, "lobe_speed_mm_per_min", " mm/min"),
         in_range(s.lobe_threshold_mm, 0.0, 10.0, "lobe_threshold_mm", " mm"),
         in_range(s.c_acceleration_max_deg_per_s2, 0.0, 1e7, "c_acceleration_max_deg_per_s2", " deg/s^2"),
         in_range(s.x_velocity_max_mm_per_s, 0.0, 1e6, "x_velocity_max_mm_per_s", " mm/s"),

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "tests/support/cli.h"
+#include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
@@ -96,6 +97,30 @@ TEST(ProfileSpeed, JsonCarriesTheProgramAndItsCycleTime) {
   // The base circle is now the fastest: 6786 mm/min at 60 rpm.
   EXPECT_NEAR(j["peak_abs"]["grinding_point_speed_mm_per_min"].get<double>(), largest, 1e-9);
   EXPECT_NEAR(largest, kBaseCircleAt60RpmMmPerMin, 1.0);
+}
+
+// The part file's [speed] is the program's default; the flags override it.
+TEST(ProfileSpeed, ThePartFilesSpeedSectionIsTheDefault) {
+  testing::TempDir dir("profile-speed");
+  const std::string source = std::string(GAUGELOOP_SOURCE_DIR) + "/examples/";
+  std::string text = testing::slurp(source + "intake_flat.toml");
+  text.replace(text.find("intake_flat.csv"), 15, source + "intake_flat.csv");
+  const auto part = dir.write("slow.toml", text + "\n[speed]\nlobe_speed_mm_per_min = 1500\nbase_speed_rpm = 30\n");
+  auto run = [&](const std::string& args) {
+    return run_shell(testing::gaugeloop_binary() + " profile --part " + part.string() +
+                     " --step-deg 1 --format json --speed-program " + args + " 2>&1");
+  };
+  CommandResult r = run("");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["speed_program"]["lobe_speed_mm_per_min"], 1500.0);
+  EXPECT_EQ(j["speed_program"]["base_speed_rpm"], 30.0);
+  EXPECT_DOUBLE_EQ(j["speed_program"]["constant_cycle_time_s"].get<double>(), 2.0);
+  r = run("--lobe-speed-mm-per-min 2500 --speed-rpm 45");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["speed_program"]["lobe_speed_mm_per_min"], 2500.0);
+  EXPECT_EQ(j["speed_program"]["base_speed_rpm"], 45.0);
 }
 
 }  // namespace
