@@ -129,9 +129,10 @@ int cmd_profile(const ProfileOptions& o) {
     for (Row& r : rows) {
       r.v_mm_per_s = slide_velocity_mm_per_s(sense * r.dx_mm_per_deg, *o.speed_rpm);
       r.a_mm_per_s2 = slide_acceleration_mm_per_s2(r.d2x_mm_per_deg2, *o.speed_rpm);
-      r.grinding_point_speed_mm_per_min = contact_arc_mm_per_deg(r.x_mm, r.dx_mm_per_deg, r.d2x_mm_per_deg2,
-                                                                 part.base_circle_radius_mm, part.wheel_radius_mm) *
-                                          360.0 * std::abs(*o.speed_rpm);
+      r.grinding_point_speed_mm_per_min =
+          grinding_point_speed_mm_per_min(contact_arc_mm_per_deg(r.x_mm, r.dx_mm_per_deg, r.d2x_mm_per_deg2,
+                                                                 part.base_circle_radius_mm, part.wheel_radius_mm),
+                                          *o.speed_rpm);
     }
   }
   const bool timed = o.speed_rpm || o.speed_program;

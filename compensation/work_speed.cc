@@ -50,9 +50,10 @@ double contact_arc_mm_per_deg(double x_mm, double dx_mm_per_deg, double d2x_mm_p
 std::vector<double> grinding_point_speed_mm_per_min(const MachinePath& path, const Part& part, double speed_rpm) {
   std::vector<double> v(path.x_mm.size());
   for (size_t k = 0; k < v.size(); ++k) {
-    v[k] = contact_arc_mm_per_deg(path.x_mm[k], path.dx_dc_mm_per_deg[k], path.d2x_dc2_mm_per_deg2[k],
-                                  part.base_circle_radius_mm, part.wheel_radius_mm) *
-           360.0 * std::abs(speed_rpm);
+    v[k] = grinding_point_speed_mm_per_min(
+        contact_arc_mm_per_deg(path.x_mm[k], path.dx_dc_mm_per_deg[k], path.d2x_dc2_mm_per_deg2[k],
+                               part.base_circle_radius_mm, part.wheel_radius_mm),
+        speed_rpm);
   }
   return v;
 }

@@ -32,6 +32,11 @@ namespace gaugeloop {
 double contact_arc_mm_per_deg(double x_mm, double dx_mm_per_deg, double d2x_mm_per_deg2, double base_radius_mm,
                               double wheel_radius_mm);
 
+// v_w in mm/min from ds/dpsi (mm/deg) at n rpm: C turns 360 |n| degrees a minute.
+inline double grinding_point_speed_mm_per_min(double contact_arc_mm_per_deg, double speed_rpm) {
+  return contact_arc_mm_per_deg * 360.0 * (speed_rpm < 0.0 ? -speed_rpm : speed_rpm);
+}
+
 // The grinding-point speed at every row of `path` with C at the constant `speed_rpm`, mm/min.
 std::vector<double> grinding_point_speed_mm_per_min(const MachinePath& path, const Part& part, double speed_rpm);
 

@@ -92,7 +92,9 @@ std::vector<double> servo_response(const std::vector<double>& commanded_mm, cons
     t[j + 1] = t[j] + kGridStepDeg * 0.5 * (1.0 / w[j] + 1.0 / w[(j + 1) % kGridRows]);
   }
   const double period_s = t[kGridRows];
-  // Enough time samples that the fastest stretch is sampled at least as finely in C as the grid.
+  // Enough time samples that the fastest stretch is sampled about as finely in C as the grid
+  // (the slowest to fastest ratio per row, at most 8: beyond that the fast stretch is the base
+  // circle, where X barely moves).
   const auto [w_min, w_max] = std::minmax_element(w.begin(), w.end());
   const int per_row = std::clamp(static_cast<int>(std::ceil(*w_max / *w_min - 1e-9)), 1, 8);
   const int samples = kGridRows * per_row;
