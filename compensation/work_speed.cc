@@ -15,7 +15,7 @@ constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 Status in_range(double value, double lo, double hi, const char* key, const char* unit) {
   if (std::isfinite(value) && value > lo && value <= hi) return {};
   std::ostringstream msg;
-  msg << "speed program: [speed] " << key << " = " << value << " is outside (" << lo << ", " << hi << "]" << unit
+  msg << "speed program: " << key << " = " << value << " is outside (" << lo << ", " << hi << "]" << unit
       << "; set it in that range";
   return make_error(ErrorCode::kInvalidInput, msg.str());
 }
@@ -75,12 +75,12 @@ Result<std::vector<double>> grinding_point_speed_mm_per_min(const MachinePath& p
 
 Status validate(const WorkSpeedSettings& s) {
   for (const Status& st :
-       {in_range(s.base_speed_rpm, 0.0, 1000.0, "base_speed_rpm", " rpm"),
-        in_range(s.lobe_speed_mm_per_min, 0.0, 1e5, "lobe_speed_mm_per_min", " mm/min"),
-        in_range(s.lobe_threshold_mm, 0.0, 10.0, "lobe_threshold_mm", " mm"),
-        in_range(s.c_acceleration_max_deg_per_s2, 0.0, 1e7, "c_acceleration_max_deg_per_s2", " deg/s^2"),
-        in_range(s.x_velocity_max_mm_per_s, 0.0, 1e6, "x_velocity_max_mm_per_s", " mm/s"),
-        in_range(s.x_acceleration_max_mm_per_s2, 0.0, 1e8, "x_acceleration_max_mm_per_s2", " mm/s^2")}) {
+       {in_range(s.base_speed_rpm, 0.0, 1000.0, "[speed] base_speed_rpm", " rpm"),
+        in_range(s.lobe_speed_mm_per_min, 0.0, 1e5, "[speed] lobe_speed_mm_per_min", " mm/min"),
+        in_range(s.lobe_threshold_mm, 0.0, 10.0, "[speed] lobe_threshold_mm", " mm"),
+        in_range(s.c_acceleration_max_deg_per_s2, 0.0, 1e7, "[speed] c_acceleration_max_deg_per_s2", " deg/s^2"),
+        in_range(s.x_velocity_max_mm_per_s, 0.0, 1e6, "[nc] x_velocity_max_mm_per_s", " mm/s"),
+        in_range(s.x_acceleration_max_mm_per_s2, 0.0, 1e8, "[nc] x_acceleration_max_mm_per_s2", " mm/s^2")}) {
     if (!st) return st;
   }
   return {};

@@ -45,8 +45,9 @@ std::vector<double> grinding_point_speed_mm_per_min(const MachinePath& path, con
 Result<std::vector<double>> grinding_point_speed_mm_per_min(const MachinePath& path, const Part& part,
                                                             const WorkSpeedProgram& program);
 
-// What the speed program is asked to do. Names in messages are the keys of a `[speed]`
-// section, as the settings are documented (docs/variable_speed.md).
+// What the speed program is asked to do. Messages name the keys as the files have them: the
+// part file's `[speed]` for the lobe's settings, the service's `[nc]` for the slide's limits
+// (docs/variable_speed.md).
 struct WorkSpeedSettings {
   // C speed on the base circle, and the most C ever turns: the program only slows down.
   double base_speed_rpm = 60.0;
