@@ -39,11 +39,17 @@ TEST(ContactArc, OnTheBaseCircleTheContactPointRunsAtTheBaseRadius) {
 
 // The eccentric disc: the contact point is rc u(phi) from the disc's centre, with
 // phi = psi + asin(e sin psi / Rw), Rw = rc + rw, so ds/dpsi = rc (1 + e cos psi / sqrt(Rw^2 - e^2 sin^2 psi)).
-TEST(ContactArc, MatchesTheEccentricDiscsClosedForm) {
+// Any follower: the roller's lift table describes the same disc, so the same surface speed.
+class ContactArcOfTheDisc : public ::testing::TestWithParam<double> {};
+
+TEST_P(ContactArcOfTheDisc, MatchesTheEccentricDiscsClosedForm) {
   const Disc disc{20.0, 5.0};
   const double rw = 200.0;
-  const Part part = make_part(FollowerKind::kFlat, disc.base_circle_mm(), 0.0, rw);
-  const PeriodicSpline lift = testing::spline_sampled([&](double d) { return disc.flat_lift_mm(d); }, 0.1);
+  const double rr = GetParam();
+  const Part part = rr > 0.0 ? make_part(FollowerKind::kRoller, disc.base_circle_mm(), rr, rw)
+                             : make_part(FollowerKind::kFlat, disc.base_circle_mm(), 0.0, rw);
+  const PeriodicSpline lift = testing::spline_sampled(
+      [&](double d) { return rr > 0.0 ? disc.roller_lift_mm(d, rr) : disc.flat_lift_mm(d); }, 0.1);
   Result<MachinePath> path = compute_machine_path(lift, part, 0.5);
   ASSERT_TRUE(path.ok()) << path.error().message;
   const double big_r = disc.rc_mm + rw;
@@ -59,6 +65,8 @@ TEST(ContactArc, MatchesTheEccentricDiscsClosedForm) {
   // The path is exact to ~1e-8 mm/deg^2 in X''; times rw that is a few 1e-6 mm/rad.
   EXPECT_LT(worst, 1e-4);
 }
+
+INSTANTIATE_TEST_SUITE_P(FlatAndRoller, ContactArcOfTheDisc, ::testing::Values(0.0, 8.0));
 
 TEST(WorkSpeedPlan, HoldsTheTargetOnTheLobeAndTheBaseSpeedOnTheBaseCircle) {
   const MachinePath path = intake_path(0.5);
