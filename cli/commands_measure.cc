@@ -15,6 +15,9 @@
 #include "cli/cli_common.h"
 #include "cli/embedded_defaults.h"
 #include "cli/grinding_loop.h"
+#include "compensation/periodic_spline.h"
+#include "compensation/wheel_path.h"
+#include "compensation/work_speed.h"
 #include "config/gauge_config.h"
 #include "config/service_config.h"
 #include "core/atomic_file.h"
@@ -24,6 +27,7 @@
 #include "report/cam_report.h"
 #include "report/svg_plot.h"
 #include "simulator/gauge_simulator.h"
+#include "simulator/surface_roughness.h"
 #include "simulator/virtual_grinder.h"
 #include "storage/run_store.h"
 
@@ -273,7 +277,48 @@ struct LoopOptions {
   int iterations = 0;     // 0: one run on the simulator's built-in form error
   std::string plot_path;  // empty: <data-dir>/loop.svg
   MachineErrorModel machine;
+  // --speed-program: the loop at constant speed, then again at a work speed program: the part
+  // file's [speed], else lobe_speed_mm_per_min on the lobe (2000 unset) and base_speed_rpm
+  // (the work speed unset) on the base circle; the flags override the part file.
+  bool speed_program = false;
+  std::optional<double> lobe_speed_mm_per_min;
+  std::optional<double> base_speed_rpm;
 };
+
+// The speed program for the demo's part, within the job's slide limits, and the surface it
+// leaves against the constant speed.
+struct DemoSpeedPlan {
+  WorkSpeedSettings settings;
+  WorkSpeedPlan plan;
+  SurfaceFinish program_finish;
+  SurfaceFinish constant_finish;
+};
+
+Result<DemoSpeedPlan> demo_speed_plan(const LoadedPart& lp, const JobSettings& job, const LoopOptions& lo) {
+  Result<PeriodicSpline> lift = PeriodicSpline::fit(lp.design.angle_deg, lp.design.lift_mm);
+  if (!lift) return lift.error();
+  Result<MachinePath> path = compute_machine_path(*lift, lp.file.part, 0.5);
+  if (!path) return path.error();
+  WorkSpeedSettings ws;
+  ws.base_speed_rpm = lo.machine.work_speed_rpm;
+  if (lp.file.speed) ws = *lp.file.speed;
+  if (lo.base_speed_rpm) ws.base_speed_rpm = *lo.base_speed_rpm;
+  if (lo.lobe_speed_mm_per_min) ws.lobe_speed_mm_per_min = *lo.lobe_speed_mm_per_min;
+  ws.x_velocity_max_mm_per_s = job.axis_limits.x_velocity_max_mm_per_s;
+  ws.x_acceleration_max_mm_per_s2 = job.axis_limits.x_acceleration_max_mm_per_s2;
+  Result<WorkSpeedPlan> plan = plan_work_speed(*path, lp.file.part, ws);
+  if (!plan) return plan.error();
+  // The comparison is against the constant speed the machine grinds at, not the base speed.
+  const std::vector<double> constant_speed =
+      grinding_point_speed_mm_per_min(*path, lp.file.part, lo.machine.work_speed_rpm);
+  const RoughnessModel roughness = paper_roughness_model();
+  DemoSpeedPlan d;
+  d.settings = ws;
+  d.program_finish = surface_finish(*path, plan->grinding_point_speed_mm_per_min, roughness);
+  d.constant_finish = surface_finish(*path, constant_speed, roughness);
+  d.plan = std::move(*plan);
+  return d;
+}
 
 int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings, const LoopOptions& lo) {
   Result<LoadedPart> lp = load_part(o.part_path);
@@ -297,10 +342,7 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
               sim_settings.speed_rpm, sim_settings.time_scale, sim_settings.noise_rms_um,
               static_cast<unsigned long long>(sim_settings.seed), o.revolutions, o.mode.c_str(),
               ls.job.db_path.string().c_str());
-  std::printf(
-      "part  ground from              run  max um  RMS um  phase deg  runout um  verdict | true max  floor  table\n");
-  std::fflush(stdout);
-  Result<std::vector<LoopIteration>> loop = run_grinding_loop(ls, [](const LoopIteration& it) {
+  auto print_part = [](const LoopIteration& it) {
     const LobeAnalysis& a = it.job.analysis;
     const std::string table =
         it.job.pushed()
@@ -312,7 +354,27 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
                 a.phase_error_deg, a.base_circle_runout_um, std::string(verdict_name(it.job.tolerance_verdict)).c_str(),
                 it.part.max_abs_um, it.floor.max_abs_um, table.c_str());
     std::fflush(stdout);
-  });
+  };
+  const char* header =
+      "part  ground from              run  max um  RMS um  phase deg  runout um  verdict | true max  floor  table\n";
+  std::optional<DemoSpeedPlan> speed;
+  std::optional<LoopIteration> constant_last;
+  if (lo.speed_program) {
+    Result<DemoSpeedPlan> planned = demo_speed_plan(*lp, ls.job, lo);
+    if (!planned) return report_error(planned.error());
+    speed = std::move(*planned);
+    std::printf("at constant speed, %.0f rpm:\n%s", m.work_speed_rpm, header);
+    std::fflush(stdout);
+    Result<std::vector<LoopIteration>> constant = run_grinding_loop(ls, print_part);
+    if (!constant) return report_error(constant.error());
+    constant_last = constant->back();
+    ls.machine.speed_program = speed->plan.program;
+    std::printf("\nat the speed program, %.0f mm/min on the lobe, %.0f rpm on the base circle:\n",
+                speed->settings.lobe_speed_mm_per_min, speed->settings.base_speed_rpm);
+  }
+  std::printf("%s", header);
+  std::fflush(stdout);
+  Result<std::vector<LoopIteration>> loop = run_grinding_loop(ls, print_part);
   if (!loop) return report_error(loop.error());
   const LoopIteration& first = loop->front();
   const LoopIteration& last = loop->back();
@@ -324,6 +386,19 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
       ", %.2f um after %d; the part as ground: %.2f um, floor %.2f um (a perfect table under the same "
       "vibration)\n",
       last.job.analysis.max_abs_error_um, last.iteration, last.part.max_abs_um, last.floor.max_abs_um);
+  if (speed) {
+    const WorkSpeedPlan& p = speed->plan;
+    std::printf("speed program: cycle time %.3f s against %.3f s at constant speed\n", p.cycle_time_s,
+                60.0 / m.work_speed_rpm);
+    std::printf(
+        "speed program: flank Ra %.2f um against %.2f um at constant speed (largest on the flanks, "
+        "Ra against h_eq calibrated on 8000 -> 2000 mm/min giving 3.2 -> 0.775 um)\n",
+        speed->program_finish.flank_ra_um, speed->constant_finish.flank_ra_um);
+    std::printf(
+        "speed program: form error %.2f um against %.2f um at constant speed (true max of the last part; "
+        "floor %.2f um)\n",
+        last.part.max_abs_um, constant_last->part.max_abs_um, last.floor.max_abs_um);
+  }
 
   LoopPlot plot;
   plot.title = "Grinding loop \u00b7 " + lp->file.part.name + " lobe " + std::to_string(lp->file.part.lobe) +
@@ -561,7 +636,19 @@ void add_demo_command(CLI::App& app, CommandAction& action) {
   demo->add_option("--vibration-um", m.vibration_rms_um, "Grinding: random vibration, RMS on the ground lift")
       ->capture_default_str();
   demo->add_option("--machine-seed", m.seed, "Grinding: seed of the vibration")->capture_default_str();
+  demo->add_flag(
+      "--speed-program", loop->speed_program,
+      "Grind the loop (--iterations, 1 if not given) at constant speed, then at a work speed program that holds the "
+      "grinding-point speed on the lobe; prints cycle time, flank Ra and form error of both "
+      "(docs/variable_speed.md)");
+  demo->add_option("--lobe-speed-mm-per-min", loop->lobe_speed_mm_per_min,
+                   "Speed program: grinding-point speed held on the lobe [the part file's [speed], else 2000]")
+      ->check(CLI::Range(1.0, 1e5));
+  demo->add_option("--base-speed-rpm", loop->base_speed_rpm,
+                   "Speed program: work speed on the base circle [the part file's [speed], else the work speed]")
+      ->check(CLI::Range(1.0, 1000.0));
   demo->callback([&action, demo, demo_opts, demo_sim, loop] {
+    if (loop->speed_program && loop->iterations == 0) loop->iterations = 1;
     if (loop->iterations > 0) {
       action = [demo_opts, demo_sim, loop] { return cmd_demo_loop(*demo_opts, *demo_sim, *loop); };
       return;

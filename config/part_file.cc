@@ -202,6 +202,22 @@ LobeTolerances read_tolerances(TomlReader& top, std::string_view source) {
   return t;
 }
 
+// [speed]: absent means one work speed. Ranges as validate(WorkSpeedSettings).
+std::optional<WorkSpeedSettings> read_speed(TomlReader& top, std::string_view source) {
+  const toml::table* table = top.subtable("speed");
+  if (table == nullptr) return std::nullopt;
+  TomlReader r(*table, source, "speed.");
+  r.allow_only({"base_speed_rpm", "lobe_speed_mm_per_min", "lobe_threshold_mm", "c_acceleration_max_deg_per_s2"});
+  WorkSpeedSettings s;
+  s.base_speed_rpm = r.number("base_speed_rpm", s.base_speed_rpm, 0.0, 1000.0, true);
+  s.lobe_speed_mm_per_min = r.number("lobe_speed_mm_per_min", std::nullopt, 0.0, 1e5, true);
+  s.lobe_threshold_mm = r.number("lobe_threshold_mm", s.lobe_threshold_mm, 0.0, 10.0, true);
+  s.c_acceleration_max_deg_per_s2 =
+      r.number("c_acceleration_max_deg_per_s2", s.c_acceleration_max_deg_per_s2, 0.0, 1e7, true);
+  if (r.error) top.fail(r.error->message);
+  return s;
+}
+
 }  // namespace
 
 Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_name,
@@ -211,7 +227,8 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
   const toml::table& table = *parsed;
   TomlReader r(table, source_name);
   r.allow_only({"name", "lobe", "lift_table", "follower", "follower_radius_mm", "base_circle_radius_mm",
-                "wheel_radius_mm", "rotation_sense", "c_offset_deg", "probe_offset_deg", "nc_program", "tolerance"});
+                "wheel_radius_mm", "rotation_sense", "c_offset_deg", "probe_offset_deg", "nc_program", "tolerance",
+                "speed"});
   PartFile out;
   Part& p = out.part;
   p.name = r.text("name", std::nullopt);
@@ -240,6 +257,7 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
            "` is not a valid NC program name; use up to 24 letters, digits and '_', starting with a letter");
   }
   p.tolerances = read_tolerances(r, source_name);
+  out.speed = read_speed(r, source_name);
   if (r.error) return *r.error;
   const std::filesystem::path lt(table_path);
   p.lift_table = lt.is_absolute() ? lt : base_dir / lt;

@@ -2,9 +2,11 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
+#include "compensation/work_speed.h"
 #include "core/part.h"
 #include "core/result.h"
 
@@ -14,6 +16,10 @@ namespace gaugeloop {
 struct PartFile {
   Part part;
   std::string nc_program;  // subprogram name, letters, digits and '_', starting with a letter
+  // [speed]: the work speed program this lobe is ground at (docs/variable_speed.md), absent
+  // for one speed. Its keys: base_speed_rpm, lobe_speed_mm_per_min, lobe_threshold_mm,
+  // c_acceleration_max_deg_per_s2; the slide's limits are the machine's ([nc] of the service).
+  std::optional<WorkSpeedSettings> speed;
 };
 
 // Parses part TOML. `source_name` is used in messages; a relative `lift_table` is resolved

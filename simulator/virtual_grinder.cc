@@ -28,15 +28,16 @@ using seeded::unit_uniform;
 double deg_to_rad(double deg) { return deg * std::numbers::pi / 180.0; }
 
 // The followed path of a linear axis with the servo's transfer function, in periodic steady
-// state: each harmonic k of the turn is multiplied by H(i k w_turn).
-std::vector<double> servo_response(const std::vector<double>& commanded_mm, const MachineErrorModel& m) {
-  if (m.servo_bandwidth_hz == 0.0) return commanded_mm;
+// state: each harmonic k of a period of `period_s` seconds, sampled uniformly in time, is
+// multiplied by H(i k 2 pi / period_s).
+std::vector<double> periodic_response(const std::vector<double>& commanded_mm, double period_s,
+                                      const MachineErrorModel& m) {
   const auto n = static_cast<int>(commanded_mm.size());
   Eigen::FFT<double> fft;
   std::vector<std::complex<double>> spectrum;
   fft.fwd(spectrum, commanded_mm);
   const double w = 2.0 * std::numbers::pi * m.servo_bandwidth_hz;
-  const double w_turn = 2.0 * std::numbers::pi * m.work_speed_rpm / 60.0;  // rad/s of the first harmonic
+  const double w_turn = 2.0 * std::numbers::pi / period_s;  // rad/s of the first harmonic
   for (int bin = 0; bin < n; ++bin) {
     const int k = bin <= n / 2 ? bin : bin - n;
     const std::complex<double> s(0.0, k * w_turn);
@@ -46,6 +47,74 @@ std::vector<double> servo_response(const std::vector<double>& commanded_mm, cons
   }
   std::vector<double> followed;
   fft.inv(followed, spectrum);
+  return followed;
+}
+
+// Periodic cubic (Catmull-Rom) interpolation of `y`, sampled at 0, 1, .., n - 1, at position u
+// (in samples, any real): exact at the samples, so a grid that falls on them reproduces them.
+double periodic_cubic(const std::vector<double>& y, double u) {
+  const auto n = static_cast<long>(y.size());
+  const double fl = std::floor(u);
+  const double f = u - fl;
+  const long i = static_cast<long>(fl);
+  auto at = [&](long j) { return y[static_cast<size_t>(((j % n) + n) % n)]; };
+  const double p0 = at(i - 1), p1 = at(i), p2 = at(i + 1), p3 = at(i + 2);
+  return p1 + 0.5 * f * (p2 - p0 + f * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3 + f * (3.0 * (p1 - p2) + p3 - p0)));
+}
+
+// The program's C speed at each row of the grid, deg/s, interpolated linearly between its rows.
+std::vector<double> omega_on_grid_deg_per_s(const WorkSpeedProgram& p) {
+  const auto rows = static_cast<long>(p.speed_rpm.size());
+  std::vector<double> w(kGridRows);
+  for (int k = 0; k < kGridRows; ++k) {
+    const double u = k * kGridStepDeg / p.c_step_deg;
+    const double fl = std::floor(u + 1e-9);
+    const double f = std::max(0.0, u - fl);
+    const long i = static_cast<long>(fl) % rows;
+    const double n =
+        (1.0 - f) * p.speed_rpm[static_cast<size_t>(i)] + f * p.speed_rpm[static_cast<size_t>((i + 1) % rows)];
+    w[static_cast<size_t>(k)] = 6.0 * n;
+  }
+  return w;
+}
+
+// The followed path on the C grid. At a constant speed the C grid is a uniform time grid; under
+// a program, X(C) is resampled onto a uniform time grid (the time of each C row from the
+// trapezoid rule over dC / omega, inverted piecewise linearly), the response applied there and
+// the error brought back to the C rows, both ways by periodic cubics.
+std::vector<double> servo_response(const std::vector<double>& commanded_mm, const MachineErrorModel& m) {
+  if (m.servo_bandwidth_hz == 0.0) return commanded_mm;
+  if (!m.speed_program) return periodic_response(commanded_mm, 60.0 / m.work_speed_rpm, m);
+  const std::vector<double> w = omega_on_grid_deg_per_s(*m.speed_program);
+  std::vector<double> t(kGridRows + 1, 0.0);  // time at each C row, and at the end of the turn
+  for (int k = 0; k < kGridRows; ++k) {
+    const auto j = static_cast<size_t>(k);
+    t[j + 1] = t[j] + kGridStepDeg * 0.5 * (1.0 / w[j] + 1.0 / w[(j + 1) % kGridRows]);
+  }
+  const double period_s = t[kGridRows];
+  // Enough time samples that the fastest stretch is sampled about as finely in C as the grid
+  // (the slowest to fastest ratio per row, at most 8: beyond that the fast stretch is the base
+  // circle, where X barely moves).
+  const auto [w_min, w_max] = std::minmax_element(w.begin(), w.end());
+  const int per_row = std::clamp(static_cast<int>(std::ceil(*w_max / *w_min - 1e-9)), 1, 8);
+  const int samples = kGridRows * per_row;
+  const double dt = period_s / samples;
+  std::vector<double> x_in_time(static_cast<size_t>(samples));
+  size_t seg = 0;
+  for (int i = 0; i < samples; ++i) {
+    const double ti = i * dt;
+    while (seg + 1 < static_cast<size_t>(kGridRows) && t[seg + 1] <= ti) ++seg;
+    const double f = (ti - t[seg]) / (t[seg + 1] - t[seg]);
+    x_in_time[static_cast<size_t>(i)] = periodic_cubic(commanded_mm, static_cast<double>(seg) + f);
+  }
+  const std::vector<double> followed_in_time = periodic_response(x_in_time, period_s, m);
+  std::vector<double> error_in_time(x_in_time.size());
+  for (size_t i = 0; i < error_in_time.size(); ++i) error_in_time[i] = followed_in_time[i] - x_in_time[i];
+  std::vector<double> followed(commanded_mm.size());
+  for (int k = 0; k < kGridRows; ++k) {
+    const auto j = static_cast<size_t>(k);
+    followed[j] = commanded_mm[j] + periodic_cubic(error_in_time, t[j] / dt);
+  }
   return followed;
 }
 
@@ -91,6 +160,23 @@ Status validate(const MachineErrorModel& m) {
                           in_range(m.drift_um_per_part, -100.0, 100.0, "drift_um_per_part", " um"),
                           in_range(m.vibration_rms_um, 0.0, 100.0, "vibration_rms_um", " um")}) {
     if (!s) return s;
+  }
+  if (m.speed_program) {
+    const WorkSpeedProgram& p = *m.speed_program;
+    const double rows = 360.0 / p.c_step_deg;
+    if (!(std::isfinite(rows) && p.c_step_deg > 0.0 && std::abs(rows - std::round(rows)) < 1e-9 &&
+          p.speed_rpm.size() == static_cast<size_t>(std::lround(rows)))) {
+      return make_error(ErrorCode::kInvalidInput,
+                        "machine error model: the work speed program has " + std::to_string(p.speed_rpm.size()) +
+                            " speeds at " + std::to_string(p.c_step_deg) +
+                            " deg; it needs one speed per step over a turn, the step dividing 360");
+    }
+    for (size_t k = 0; k < p.speed_rpm.size(); ++k) {
+      if (Status s = in_range(p.speed_rpm[k], 1.0, 1000.0, "work speed program speed_rpm", " rpm"); !s) {
+        return make_error(ErrorCode::kInvalidInput, s.error().message + " at C " +
+                                                        std::to_string(static_cast<double>(k) * p.c_step_deg) + " deg");
+      }
+    }
   }
   if (m.vibration_min_harmonic < 1 || m.vibration_max_harmonic > kGridRows / 2 - 1 ||
       m.vibration_min_harmonic > m.vibration_max_harmonic) {

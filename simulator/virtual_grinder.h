@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,7 @@
 #include "core/part.h"
 #include "core/result.h"
 #include "core/run.h"
+#include "core/work_speed.h"
 
 namespace gaugeloop {
 
@@ -32,6 +34,16 @@ struct MachineErrorModel {
   // The work spindle speed while grinding: the servo error follows X's velocity and
   // acceleration in time, so it grows with the speed.
   double work_speed_rpm = 60.0;
+  // A work speed program instead (compensation's plan_work_speed): C turns at the program's
+  // speed at each C position and work_speed_rpm is not used. The servo then acts in time: the
+  // commanded X(C) is resampled onto a uniform grid of time over the turn (the turn's period
+  // from dt = dC / omega), the response below is applied per harmonic of that period, and the
+  // error is mapped back to the C grid. So the servo error follows the speed: a slow flank
+  // lags less, and a faster base circle costs little since X barely moves there. A constant
+  // program grinds the same part as work_speed_rpm at that speed. Speeds in [1, 1000] rpm,
+  // c_step_deg dividing 360; the program is interpolated linearly between its rows. The other
+  // terms stay functions of C.
+  std::optional<WorkSpeedProgram> speed_program;
   // Servo lag of the infeed axis: a position loop of natural frequency servo_bandwidth_hz and
   // damping servo_damping with velocity feed-forward: actual/commanded =
   // (w^2 + 2 z w f s) / (s^2 + 2 z w s + w^2), w = 2 pi servo_bandwidth_hz, f the feed-forward

@@ -99,6 +99,25 @@ TEST(PartFile, RefusesMistakesNamingFileLineAndKey) {
   EXPECT_TRUE(refused(parse(bad), "part.toml:6: key `wheel_radius_mm`: expected a number"));
 }
 
+TEST(PartFile, ReadsTheSpeedProgramSectionAndRefusesItsMistakes) {
+  auto none = parse(flat_part());
+  ASSERT_TRUE(none.ok()) << none.error().message;
+  EXPECT_FALSE(none->speed.has_value());
+  auto pf = parse(flat_part("[speed]\nlobe_speed_mm_per_min = 2500\nbase_speed_rpm = 90\n"));
+  ASSERT_TRUE(pf.ok()) << pf.error().message;
+  ASSERT_TRUE(pf->speed.has_value());
+  EXPECT_EQ(pf->speed->lobe_speed_mm_per_min, 2500.0);
+  EXPECT_EQ(pf->speed->base_speed_rpm, 90.0);
+  EXPECT_EQ(pf->speed->lobe_threshold_mm, WorkSpeedSettings{}.lobe_threshold_mm);
+  EXPECT_EQ(pf->speed->c_acceleration_max_deg_per_s2, WorkSpeedSettings{}.c_acceleration_max_deg_per_s2);
+  EXPECT_TRUE(refused(parse(flat_part("[speed]\nbase_speed_rpm = 90\n")),
+                      "part.toml: key `speed.lobe_speed_mm_per_min` is missing"));
+  EXPECT_TRUE(refused(parse(flat_part("[speed]\nlobe_speed_mm_per_min = 0\n")),
+                      "part.toml:10: key `speed.lobe_speed_mm_per_min`: 0 is out of range; allowed (0, 100000]"));
+  EXPECT_TRUE(refused(parse(flat_part("[speed]\nlobe_speed_mm_per_min = 2000\nx_velocity_max_mm_per_s = 9\n")),
+                      "part.toml:11: key `speed.x_velocity_max_mm_per_s`: unknown key"));
+}
+
 TEST(PartFile, RefusesAnInvalidNcProgramName) {
   for (const char* name : {"1CAM", "CAM-1", "", "A234567890123456789012345"}) {
     std::string text = flat_part();

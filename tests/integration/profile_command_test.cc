@@ -129,11 +129,13 @@ TEST_F(ProfileCommandTest, AddsSlideVelocityAndAccelerationAtAWorkSpeed) {
       run_command("profile --part " + example("exhaust_roller.toml") + " --step-deg 1 --speed-rpm 60", false);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Csv csv = parse_csv(r.output);
-  EXPECT_EQ(csv.header, "psi_deg,x_mm,dx_dpsi_mm_per_deg,d2x_dpsi2_mm_per_deg2,v_mm_per_s,a_mm_per_s2");
+  EXPECT_EQ(csv.header,
+            "psi_deg,x_mm,dx_dpsi_mm_per_deg,d2x_dpsi2_mm_per_deg2,v_mm_per_s,a_mm_per_s2,"
+            "grinding_point_speed_mm_per_min");
   ASSERT_EQ(csv.rows.size(), 360u);
   double peak_a = 0.0;
   for (const std::vector<double>& row : csv.rows) {
-    ASSERT_EQ(row.size(), 6u);
+    ASSERT_EQ(row.size(), 7u);
     EXPECT_NEAR(row[4], 360.0 * row[2], 1e-9 * std::max(1.0, std::abs(row[4])));
     EXPECT_NEAR(row[5], 129600.0 * row[3], 1e-9 * std::max(1.0, std::abs(row[5])));
     peak_a = std::max(peak_a, std::abs(row[5]));

@@ -11,6 +11,8 @@
 
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
+#include "compensation/wheel_path.h"
+#include "compensation/work_speed.h"
 #include "simulator/gauge_simulator.h"
 #include "tests/support/intake_simulator.h"
 #include "tests/support/temp_dir.h"
@@ -157,6 +159,75 @@ TEST_F(VirtualGrinderTest, BadModelIsRefusedNamingTheTerm) {
   Status s = validate(m);
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.error().message.find("vibration harmonics 200..100"), std::string::npos) << s.error().message;
+}
+
+// A constant program is the constant speed: the same part to well under a nanometre, every
+// term on, at the default speed and another.
+TEST_F(VirtualGrinderTest, AConstantSpeedProgramGrindsTheSamePartAsThatSpeed) {
+  for (double rpm : {60.0, 90.0}) {
+    MachineErrorModel constant;
+    constant.work_speed_rpm = rpm;
+    Result<GroundPart> a = grind_part(part_, path_, constant, 2);
+    MachineErrorModel programmed = constant;
+    programmed.work_speed_rpm = 5.0;  // not used under a program
+    programmed.speed_program = WorkSpeedProgram{1.0, std::vector<double>(360, rpm)};
+    Result<GroundPart> b = grind_part(part_, path_, programmed, 2);
+    ASSERT_TRUE(a.ok() && b.ok());
+    double worst_mm = 0.0;
+    for (size_t k = 0; k < a->followed_x_mm.size(); ++k) {
+      worst_mm = std::max(worst_mm, std::abs(a->followed_x_mm[k] - b->followed_x_mm[k]));
+    }
+    EXPECT_LT(worst_mm, 1e-9) << rpm << " rpm";
+    EXPECT_NEAR(a->largest_servo_error_um, b->largest_servo_error_um, 1e-6);
+  }
+}
+
+// Under a program the servo acts in time: slowing the lobe to hold 2000 mm/min there lags
+// less than the constant speed of the base circle, and a base circle twice as fast costs
+// nothing at the nose, where the lag is largest, since X barely moves on the base circle.
+TEST_F(VirtualGrinderTest, TheServoErrorFollowsTheSpeedProgram) {
+  Result<PeriodicSpline> lift = PeriodicSpline::fit(design_.angle_deg, design_.lift_mm);
+  ASSERT_TRUE(lift.ok());
+  Result<MachinePath> machine = compute_machine_path(*lift, part_, 1.0);
+  ASSERT_TRUE(machine.ok());
+  MachineErrorModel m = no_errors();
+  m.servo_bandwidth_hz = MachineErrorModel{}.servo_bandwidth_hz;
+  grind(m);
+  const double constant_um = last_.largest_servo_error_um;
+  const TrueLiftError constant_part = true_lift_error(last_.reading_mm, design_reading_);
+
+  WorkSpeedSettings s;
+  Result<WorkSpeedPlan> plan = plan_work_speed(*machine, part_, s);
+  ASSERT_TRUE(plan.ok()) << plan.error().message;
+  m.speed_program = plan->program;
+  const TrueLiftError slow_part = grind(m);
+  const double slow_um = last_.largest_servo_error_um;
+
+  s.base_speed_rpm = 120.0;
+  plan = plan_work_speed(*machine, part_, s);
+  ASSERT_TRUE(plan.ok()) << plan.error().message;
+  m.speed_program = plan->program;
+  const TrueLiftError fast_base_part = grind(m);
+  const double fast_base_um = last_.largest_servo_error_um;
+  std::printf(
+      "servo error %.2f um at 60 rpm, %.2f um under the program, %.2f um with a 120 rpm base circle; "
+      "parts %.2f, %.2f, %.2f um\n",
+      constant_um, slow_um, fast_base_um, constant_part.max_abs_um, slow_part.max_abs_um, fast_base_part.max_abs_um);
+  // The largest lag is at the nose, where the program turns at about 50 rpm: (50 / 60)^2 = 0.69.
+  EXPECT_LT(slow_um, 0.8 * constant_um);
+  EXPECT_LT(slow_part.max_abs_um, 0.8 * constant_part.max_abs_um);
+  EXPECT_LT(fast_base_part.max_abs_um, 1.05 * slow_part.max_abs_um);
+}
+
+TEST_F(VirtualGrinderTest, ABadSpeedProgramIsRefused) {
+  MachineErrorModel m;
+  m.speed_program = WorkSpeedProgram{1.0, std::vector<double>(359, 60.0)};
+  EXPECT_NE(validate(m).error().message.find("359 speeds"), std::string::npos);
+  m.speed_program = WorkSpeedProgram{1.0, std::vector<double>(360, 60.0)};
+  m.speed_program->speed_rpm[90] = 0.0;
+  Status s = validate(m);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("at C 90"), std::string::npos) << s.error().message;
 }
 
 TEST_F(VirtualGrinderTest, TableInForceMustBeReadable) {
