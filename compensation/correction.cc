@@ -50,7 +50,7 @@ DegreeTable smooth_harmonics(const DegreeTable& values, int max_harmonic) {
 }
 
 HarmonicChoice choose_harmonics(const DegreeTable& error_um, const DegreeTable& spread_um, int revolutions, int cap,
-                                double sigmas, int gap) {
+                                double sigmas) {
   HarmonicChoice out;
   cap = std::clamp(cap, 0, kNyquist);
   double spread_squares = 0.0;
@@ -61,25 +61,16 @@ HarmonicChoice choose_harmonics(const DegreeTable& error_um, const DegreeTable& 
   out.threshold_um = sigmas * out.noise_um;
   if (!(out.noise_um > 0.0)) {
     out.harmonics = cap;
-    out.highest_above_noise = cap;
     return out;
   }
   thread_local Eigen::FFT<double> fft;
   const std::vector<double> in(error_um.begin(), error_um.end());
   std::vector<std::complex<double>> spectrum;
   fft.fwd(spectrum, in);
-  int below_in_a_row = 0;
-  bool band_ended = false;
   for (int k = 1; k <= cap; ++k) {
     // The amplitude of the cosine k theta + phase: 2 |X_k| / N (bins k and N - k together).
     const double amplitude_um = 2.0 * std::abs(spectrum[static_cast<size_t>(k)]) / static_cast<double>(kDegrees);
-    if (amplitude_um > out.threshold_um) {
-      out.highest_above_noise = k;
-      if (!band_ended) out.harmonics = k;
-      below_in_a_row = 0;
-    } else if (++below_in_a_row >= gap) {
-      band_ended = true;
-    }
+    if (amplitude_um > out.threshold_um) out.harmonics = k;
   }
   return out;
 }

@@ -21,10 +21,9 @@ DegreeTable smooth_harmonics(const DegreeTable& values, int max_harmonic);
 // The harmonics of the measured error that stand above the noise of its mean, as a band
 // 0..harmonics (choose_harmonics).
 struct HarmonicChoice {
-  int harmonics = 0;             // the band fed back is 0..harmonics
-  double noise_um = 0.0;         // sigma of one harmonic's cosine (or sine) amplitude from gauge noise
-  double threshold_um = 0.0;     // the amplitude a harmonic must exceed to count as measured
-  int highest_above_noise = -1;  // the highest harmonic <= cap above the threshold (-1: none)
+  int harmonics = 0;          // the band fed back is 0..harmonics
+  double noise_um = 0.0;      // sigma of one harmonic's cosine (or sine) amplitude from gauge noise
+  double threshold_um = 0.0;  // the amplitude a harmonic must exceed to count as measured
 };
 
 // Chooses how many harmonics of `error_um` to feed back, from the revolutions' repeatability.
@@ -32,13 +31,14 @@ struct HarmonicChoice {
 // sqrt(revolutions) per degree; white over 360 degrees, that puts sigma_m * sqrt(2 / 360) on
 // the cosine and on the sine amplitude of every harmonic (noise_um), and a noise-only
 // harmonic's amplitude exceeds `sigmas` times that with probability exp(-sigmas^2 / 2)
-// (Rayleigh: 1.1 % for 3). The band is contiguous from 0: it ends at the last harmonic above
-// the threshold before `gap` harmonics in a row that are not (a lone harmonic far up the
-// spectrum is more often vibration of this part, which feeding back only puts on the next
-// one), and never goes beyond `cap`. revolutions < 2 or no spread (nothing tells the noise)
-// gives the cap.
+// (Rayleigh: 3e-4 for 4, so 30 harmonics of pure noise pass one in a hundred times). The band
+// runs from 0 to the highest harmonic up to `cap` whose amplitude exceeds the threshold (0
+// when none does). The cap keeps the band below what the gauge sees of the part's own
+// vibration: it repeats over the revolutions, so it stands above the noise, but it is new
+// every part and feeding it back only puts it on the next one. revolutions < 2 or no spread
+// (nothing tells the noise) gives the cap.
 HarmonicChoice choose_harmonics(const DegreeTable& error_um, const DegreeTable& spread_um, int revolutions, int cap,
-                                double sigmas = 3.0, int gap = 8);
+                                double sigmas = 4.0);
 
 struct CompensationSettings {
   double gain = 1.0;                  // g in (0, 1]: fraction of the smoothed error fed back

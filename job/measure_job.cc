@@ -83,14 +83,13 @@ Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings&
   return out;
 }
 
-// "harmonics 0..27 fed back (above 0.039 um, 3 sigma of the gauge noise on the mean, to harmonic 27; cap 30)".
+// "harmonics 0..27 fed back (above 0.052 um, 4 sigma of the gauge noise on the mean; cap 30)".
 std::string harmonics_text(const CompensationSettings& s, const HarmonicChoice& h) {
   std::string out = "harmonics 0.." + std::to_string(h.harmonics) + " fed back";
   if (!s.choose_harmonics) return out + " (fixed)";
   if (!(h.noise_um > 0.0)) return out + " (the cap: no spread to tell the noise)";
   return out + " (above " + format_fixed(h.threshold_um, 3) + " um, " + format_fixed(h.threshold_um / h.noise_um, 0) +
-         " sigma of the gauge noise on the mean, to harmonic " + std::to_string(h.harmonics) + "; cap " +
-         std::to_string(s.max_harmonic) + ")";
+         " sigma of the gauge noise on the mean; cap " + std::to_string(s.max_harmonic) + ")";
 }
 
 std::map<std::string, std::string> template_values(const JobSettings& s) {

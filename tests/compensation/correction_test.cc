@@ -482,7 +482,7 @@ TEST(CorrectedWheelPath, RejectsANonFiniteCorrection) {
 }
 
 // A timing error within max_phase_deg is the phase guard's: on the intake lobe's flanks a
-// 0.33 deg turn is some 60 um of lift, past the 50 um change limit, and the change guard
+// 0.33 deg turn is more than 50 um of lift, past the 50 um change limit, and the change guard
 // held such a correction blaming the wheel. It judges the change without the phase part.
 TEST(DecideCorrection, ALobeTurnedWithinThePhaseLimitIsNotHeldByTheChangeLimit) {
   const Loop loop = loop_for(kLoopLobes[0]);
@@ -522,26 +522,32 @@ TEST(DecideCorrection, ALobeTurnedWithinThePhaseLimitIsNotHeldByTheChangeLimit) 
   EXPECT_THAT(d->reasons(), HasSubstr("not counting the lobe's turn of 0.33"));
 }
 
-// The band fed back ends where the measured error sinks into the noise of the mean.
-TEST(ChooseHarmonics, KeepsTheHarmonicsAboveTheNoiseOfTheMeanAsOneBandFromZero) {
+// The band fed back runs to the highest harmonic that stands above the noise of the mean,
+// within the cap.
+TEST(ChooseHarmonics, KeepsTheHarmonicsUpToTheLastAboveTheNoiseOfTheMean) {
   // 0.3 um spread per degree over 3 revolutions: 0.173 um on the mean, 0.0129 um per
-  // harmonic amplitude; at 3 sigma the threshold is 0.039 um.
+  // harmonic amplitude; at 4 sigma the threshold is 0.052 um.
   DegreeTable spread{};
   spread.fill(0.3);
   DegreeTable error{};
   for (size_t d = 0; d < 360; ++d) {
     const double t = static_cast<double>(d) * kRadPerDeg;
-    for (int k = 1; k <= 12; ++k) error[d] += 0.2 / k * std::cos(k * t + k);  // 0.017 um at 12: below
-    error[d] += 0.5 * std::sin(50 * t);  // one harmonic far up, past a gap: vibration, left alone
+    for (int k = 1; k <= 12; ++k) error[d] += 0.2 / k * std::cos(k * t + k);  // 0.067 at 3, 0.050 at 4
+    error[d] += 0.5 * std::sin(50 * t);  // far up the spectrum: vibration, beyond the cap
   }
   const HarmonicChoice h = choose_harmonics(error, spread, 3, 30);
   EXPECT_NEAR(h.noise_um, 0.3 / std::sqrt(3.0) * std::sqrt(2.0 / 360.0), 1e-9);
-  EXPECT_NEAR(h.threshold_um, 3.0 * h.noise_um, 1e-12);
-  EXPECT_EQ(h.harmonics, 5);                                               // 0.2 / 5 = 0.040 um is the last above 0.039
-  EXPECT_EQ(choose_harmonics(error, spread, 3, 3).harmonics, 3);           // the cap
-  EXPECT_EQ(choose_harmonics(error, spread, 3, 60).harmonics, 5);          // 50 is past the gap
+  EXPECT_NEAR(h.threshold_um, 4.0 * h.noise_um, 1e-12);
+  EXPECT_EQ(h.harmonics, 3);
+  EXPECT_EQ(choose_harmonics(error, spread, 3, 2).harmonics, 2);           // the cap
+  EXPECT_EQ(choose_harmonics(error, spread, 3, 60).harmonics, 50);         // what the cap is for
   EXPECT_EQ(choose_harmonics(error, DegreeTable{}, 3, 30).harmonics, 30);  // nothing tells the noise
   EXPECT_EQ(choose_harmonics(error, spread, 1, 30).harmonics, 30);
+  DegreeTable quiet{};
+  EXPECT_EQ(choose_harmonics(quiet, spread, 3, 30).harmonics, 0);
+  DegreeTable one_high = error;  // a harmonic above the noise takes the band with it
+  for (size_t d = 0; d < 360; ++d) one_high[d] += 0.1 * std::cos(20 * static_cast<double>(d) * kRadPerDeg);
+  EXPECT_EQ(choose_harmonics(one_high, spread, 3, 30).harmonics, 20);
 
   // Through decide_correction: harmonics = "auto" smooths to the band; a fixed count does not.
   LobeAnalysis a = analysis_with_error(error);
@@ -549,9 +555,9 @@ TEST(ChooseHarmonics, KeepsTheHarmonicsAboveTheNoiseOfTheMeanAsOneBandFromZero) 
   a.revolutions = 3;
   Result<CompensationDecision> d = decide_correction(a, DegreeTable{}, CompensationSettings{});
   ASSERT_TRUE(d.ok()) << d.error().message;
-  EXPECT_EQ(d->harmonics.harmonics, 5);
-  const DegreeTable five = smooth_harmonics(error, 5);
-  for (size_t deg = 0; deg < 360; ++deg) EXPECT_NEAR(d->correction_um[deg], five[deg], 1e-9) << deg;
+  EXPECT_EQ(d->harmonics.harmonics, 3);
+  const DegreeTable three = smooth_harmonics(error, 3);
+  for (size_t deg = 0; deg < 360; ++deg) EXPECT_NEAR(d->correction_um[deg], three[deg], 1e-9) << deg;
   CompensationSettings fixed;
   fixed.choose_harmonics = false;
   d = decide_correction(a, DegreeTable{}, fixed);
