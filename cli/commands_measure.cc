@@ -345,10 +345,10 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
   auto print_part = [](const LoopIteration& it) {
     const LobeAnalysis& a = it.job.analysis;
     const std::string table =
-        it.job.pushed()
-            ? "v" + std::to_string(it.job.table_version) + ", " + std::to_string(it.job.table_blocks) + " blocks"
-            : "not pushed (" + std::string(compensation_verdict_name(it.job.verdict)) +
-                  "): " + it.job.not_pushed_reason;
+        it.job.pushed() ? "v" + std::to_string(it.job.table_version) + ", " + std::to_string(it.job.table_blocks) +
+                              " blocks, harmonics 0.." + std::to_string(it.job.harmonics_fed_back)
+                        : "not pushed (" + std::string(compensation_verdict_name(it.job.verdict)) +
+                              "): " + it.job.not_pushed_reason;
     std::printf("%4d  %-22s %5lld  %6.2f  %6.2f  %+9.4f  %9.2f  %-7s | %8.2f  %5.2f  %s\n", it.iteration,
                 it.ground_from.c_str(), static_cast<long long>(it.job.run_id), a.max_abs_error_um, a.rms_error_um,
                 a.phase_error_deg, a.base_circle_runout_um, std::string(verdict_name(it.job.tolerance_verdict)).c_str(),

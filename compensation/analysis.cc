@@ -393,6 +393,7 @@ Result<LobeAnalysis> analyse_lobe(const MeasuredRun& run, const DesignReading& d
 
   LobeAnalysis a;
   a.design_lift_mm = design_lift_mm;
+  a.revolutions = static_cast<int>(cam->size());
   DegreeTable mean{};
   for (size_t d = 0; d < kDegrees; ++d) {
     double sum = 0.0;

@@ -49,6 +49,32 @@ DegreeTable smooth_harmonics(const DegreeTable& values, int max_harmonic) {
   return out;
 }
 
+HarmonicChoice choose_harmonics(const DegreeTable& error_um, const DegreeTable& spread_um, int revolutions, int cap,
+                                double sigmas) {
+  HarmonicChoice out;
+  cap = std::clamp(cap, 0, kNyquist);
+  double spread_squares = 0.0;
+  for (double s : spread_um) spread_squares += s * s;
+  const double mean_noise_um =
+      revolutions >= 2 ? std::sqrt(spread_squares / static_cast<double>(kDegrees) / revolutions) : 0.0;
+  out.noise_um = mean_noise_um * std::sqrt(2.0 / static_cast<double>(kDegrees));
+  out.threshold_um = sigmas * out.noise_um;
+  if (!(out.noise_um > 0.0)) {
+    out.harmonics = cap;
+    return out;
+  }
+  thread_local Eigen::FFT<double> fft;
+  const std::vector<double> in(error_um.begin(), error_um.end());
+  std::vector<std::complex<double>> spectrum;
+  fft.fwd(spectrum, in);
+  for (int k = 1; k <= cap; ++k) {
+    // The amplitude of the cosine k theta + phase: 2 |X_k| / N (bins k and N - k together).
+    const double amplitude_um = 2.0 * std::abs(spectrum[static_cast<size_t>(k)]) / static_cast<double>(kDegrees);
+    if (amplitude_um > out.threshold_um) out.harmonics = k;
+  }
+  return out;
+}
+
 std::string_view compensation_verdict_name(CompensationVerdict verdict) {
   switch (verdict) {
     case CompensationVerdict::kApply:
@@ -128,21 +154,32 @@ Result<CompensationDecision> decide(const LobeAnalysis& analysis, const DesignRe
   }
   DegreeTable remainder{};
   for (size_t d = 0; d < kDegrees; ++d) remainder[d] = analysis.error_um[d] - phase_part[d];
-  const DegreeTable smooth = smooth_harmonics(remainder, s.max_harmonic);
-
   CompensationDecision out;
+  if (s.choose_harmonics) {
+    out.harmonics = choose_harmonics(remainder, analysis.spread_um, analysis.revolutions, s.max_harmonic);
+  } else {
+    out.harmonics.harmonics = s.max_harmonic;
+  }
+  const DegreeTable smooth = smooth_harmonics(remainder, out.harmonics.harmonics);
+
   size_t worst_correction = 0;
   size_t worst_change = 0;
+  size_t worst_form_change = 0;
+  DegreeTable form_change_um{};
   for (size_t d = 0; d < kDegrees; ++d) {
-    out.change_um[d] = s.gain * (smooth[d] + phase_part[d]);
+    form_change_um[d] = s.gain * smooth[d];
+    out.change_um[d] = form_change_um[d] + s.gain * phase_part[d];
     out.correction_um[d] = in_force_um[d] + out.change_um[d];
     if (std::abs(out.correction_um[d]) > std::abs(out.correction_um[worst_correction])) worst_correction = d;
     if (std::abs(out.change_um[d]) > std::abs(out.change_um[worst_change])) worst_change = d;
+    if (std::abs(form_change_um[d]) > std::abs(form_change_um[worst_form_change])) worst_form_change = d;
   }
   out.largest_correction_um = out.correction_um[worst_correction];
   out.largest_correction_deg = static_cast<int>(worst_correction);
   out.largest_change_um = out.change_um[worst_change];
   out.largest_change_deg = static_cast<int>(worst_change);
+  out.largest_form_change_um = form_change_um[worst_form_change];
+  out.largest_form_change_deg = static_cast<int>(worst_form_change);
 
   if (std::abs(out.largest_correction_um) > s.max_correction_um) {
     out.findings.push_back({CompensationGuard::kCorrectionLimit, CompensationVerdict::kRefuse,
@@ -152,13 +189,17 @@ Result<CompensationDecision> decide(const LobeAnalysis& analysis, const DesignRe
                                 " um the wheel path may carry; check the measurement and the setup, or have an "
                                 "operator raise the limit"});
   }
-  if (std::abs(out.largest_change_um) > s.max_change_um) {
-    out.findings.push_back({CompensationGuard::kChangeLimit, CompensationVerdict::kHold,
-                            "the correction would move by " + format_fixed(out.largest_change_um, 1) +
-                                " um at cam degree " + std::to_string(worst_change) +
-                                " from the one in force, more than the " + format_fixed(s.max_change_um, 1) +
-                                " um allowed from one part to the next; check the wheel (dressed, changed?) and "
-                                "measure again, or have an operator approve it"});
+  if (std::abs(out.largest_form_change_um) > s.max_change_um) {
+    const bool turned = phi != 0.0 && design != nullptr;
+    out.findings.push_back(
+        {CompensationGuard::kChangeLimit, CompensationVerdict::kHold,
+         "the correction would move by " + format_fixed(out.largest_form_change_um, 1) + " um at cam degree " +
+             std::to_string(worst_form_change) + " from the one in force" +
+             (turned ? " (not counting the lobe's turn of " + format_fixed(phi, 3) + " deg, which max_phase_deg judges)"
+                     : std::string()) +
+             ", more than the " + format_fixed(s.max_change_um, 1) +
+             " um allowed from one part to the next; check the wheel (dressed, changed?) and "
+             "measure again, or have an operator approve it"});
   }
   if (analysis.repeatability_um > s.max_repeatability_um) {
     out.findings.push_back({CompensationGuard::kRepeatability, CompensationVerdict::kHold,

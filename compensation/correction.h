@@ -18,13 +18,39 @@ namespace gaugeloop {
 // in the table's own units. max_harmonic < 0 gives all zeros; >= 180 returns the input.
 DegreeTable smooth_harmonics(const DegreeTable& values, int max_harmonic);
 
+// The harmonics of the measured error that stand above the noise of its mean, as a band
+// 0..harmonics (choose_harmonics).
+struct HarmonicChoice {
+  int harmonics = 0;          // the band fed back is 0..harmonics
+  double noise_um = 0.0;      // sigma of one harmonic's cosine (or sine) amplitude from gauge noise
+  double threshold_um = 0.0;  // the amplitude a harmonic must exceed to count as measured
+};
+
+// Chooses how many harmonics of `error_um` to feed back, from the revolutions' repeatability.
+// The mean of `revolutions` revolutions carries noise of sigma_m = rms(spread_um) /
+// sqrt(revolutions) per degree; white over 360 degrees, that puts sigma_m * sqrt(2 / 360) on
+// the cosine and on the sine amplitude of every harmonic (noise_um), and a noise-only
+// harmonic's amplitude exceeds `sigmas` times that with probability exp(-sigmas^2 / 2)
+// (Rayleigh: 3e-4 for 4, so 30 harmonics of pure noise pass one in a hundred times). The band
+// runs from 0 to the highest harmonic up to `cap` whose amplitude exceeds the threshold (0
+// when none does). The cap keeps the band below what the gauge sees of the part's own
+// vibration: it repeats over the revolutions, so it stands above the noise, but it is new
+// every part and feeding it back only puts it on the next one. revolutions < 2 or no spread
+// (nothing tells the noise) gives the cap.
+HarmonicChoice choose_harmonics(const DegreeTable& error_um, const DegreeTable& spread_um, int revolutions, int cap,
+                                double sigmas = 4.0);
+
 struct CompensationSettings {
   double gain = 1.0;                  // g in (0, 1]: fraction of the smoothed error fed back
-  int max_harmonic = 30;              // harmonics kept when smoothing the error, 0..180
+  int max_harmonic = 30;              // 0..180: the cap of the band, or the band (choose_harmonics)
   double max_correction_um = 100.0;   // refuse: the correction in force after this step, anywhere
   double max_change_um = 50.0;        // hold: the change from the correction in force, anywhere
   double max_repeatability_um = 2.0;  // hold: the revolutions disagree by more (largest spread)
   double max_phase_deg = 0.5;         // hold: the lobe appears turned by more
+  // The error is smoothed to harmonics 0..K before it is fed back. True: K from the
+  // measurement (choose_harmonics), at most max_harmonic (config `harmonics = "auto"`);
+  // false: K = max_harmonic (config `harmonics = N`).
+  bool choose_harmonics = true;
 };
 
 // Correction convention: a correction c(theta) in um, cam frame, per whole cam degree, in
@@ -67,6 +93,11 @@ struct CompensationDecision {
   int largest_correction_deg = 0;
   double largest_change_um = 0.0;
   int largest_change_deg = 0;
+  // The change without the phase part (gain * smoothed remainder): what max_change_um judges,
+  // the phase part being max_phase_deg's. Equal to the above without a design model.
+  double largest_form_change_um = 0.0;
+  int largest_form_change_deg = 0;
+  HarmonicChoice harmonics;            // the band fed back (harmonics.harmonics) and why
   std::vector<GuardFinding> findings;  // empty when applied, else one per guard tripped
 
   bool apply() const { return verdict == CompensationVerdict::kApply; }
@@ -80,15 +111,19 @@ struct CompensationDecision {
 //               shows at nominal timing, computed exactly, not smoothed: it is one fitted
 //               number and carries no noise, and cutting its harmonics would leave ripple
 //               where the flanks meet the base circle;
-//   remainder   r = error_um - p, smoothed to harmonics 0..max_harmonic (noise is not fed
-//               back);
+//   remainder   r = error_um - p, smoothed to harmonics 0..K (noise is not fed back), K
+//               from choose_harmonics(r, analysis.spread_um, analysis.revolutions,
+//               max_harmonic) or max_harmonic (CompensationSettings::choose_harmonics);
 //   correction  = correction_in_force + gain * (smooth(r) + p).
 // So a timing error (servo lag, a late latch) is corrected through the lift, as a turn of the
 // target lobe: the table is what holds the correction, and moving c_offset_deg instead would
 // also move the gauge's frame mapping (which uses it) and hide the error rather than remove
 // it. A phase beyond max_phase_deg is held: in-process, the gauge and the wheel share the C
 // axis, and a large apparent phase is more often a mis-set probe_offset_deg.
-// Guards, each a GuardFinding: see CompensationGuard. The verdict is kRefuse if any finding
+// Guards, each a GuardFinding: see CompensationGuard. The change guard judges the change
+// without the phase part (largest_form_change_um): a turn within max_phase_deg is the phase
+// guard's to judge, and on a steep flank 0.3 deg is already tens of um of lift, which must not
+// be blamed on the wheel. The verdict is kRefuse if any finding
 // refuses, else kHold if any holds, else kApply.
 // Errors (kInvalidInput): gain outside (0, 1]; max_harmonic outside [0, 180]; a limit that is
 // not a positive number; NaN or infinity in the analysis or the correction in force; a

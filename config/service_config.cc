@@ -121,11 +121,24 @@ Status read_compensation_table(TomlReader& top, const ConfigFile& f, JobSettings
   const toml::table* t = top.subtable("compensation");
   if (t == nullptr) return {};
   TomlReader kr(*t, f.source, "compensation.");
-  kr.allow_only({"gain", "max_harmonic", "max_correction_um", "max_change_um", "max_repeatability_um", "max_phase_deg",
-                 "build_on_table_in_force"});
+  kr.allow_only({"gain", "harmonics", "max_harmonic", "max_correction_um", "max_change_um", "max_repeatability_um",
+                 "max_phase_deg", "build_on_table_in_force"});
   CompensationSettings& s = job.compensation;
   s.gain = kr.number("gain", 1.0, 0.0, 1.0, true);
-  s.max_harmonic = static_cast<int>(kr.integer("max_harmonic", 30, 0, 180));
+  // harmonics = "auto": the band from the measurement, capped at max_harmonic; N: 0..N always.
+  const toml::node* harmonics = t->get("harmonics");
+  if (harmonics != nullptr && !harmonics->is_string()) {
+    s.choose_harmonics = false;
+    s.max_harmonic = static_cast<int>(kr.integer("harmonics", 30, 0, 180));
+    if (kr.has("max_harmonic")) {
+      kr.fail(kr.where("max_harmonic") +
+              ": is the cap of harmonics = \"auto\"; with a fixed harmonics count it has no use: remove one");
+    }
+  } else {
+    kr.choice("harmonics", "auto", {"auto"});
+    s.choose_harmonics = true;
+    s.max_harmonic = static_cast<int>(kr.integer("max_harmonic", 30, 0, 180));
+  }
   s.max_correction_um = kr.number("max_correction_um", 100.0, 0.0, 10000.0, true);
   s.max_change_um = kr.number("max_change_um", 50.0, 0.0, 10000.0, true);
   s.max_repeatability_um = kr.number("max_repeatability_um", 2.0, 0.0, 1000.0, true);

@@ -42,6 +42,7 @@ struct LobeAnalysis {
   double rms_error_um = 0.0;
   double peak_to_valley_um = 0.0;
   double repeatability_um = 0.0;  // largest per-degree spread
+  int revolutions = 0;            // averaged into the mean (0: not known, e.g. made by hand)
   // Inspection figures, as a cam inspection report gives them.
   double phase_error_deg = 0.0;                    // lobe rotation that best explains the error, least squares
   double base_circle_runout_um = 0.0;              // total indicator reading of the base circle

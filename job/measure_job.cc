@@ -83,6 +83,15 @@ Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings&
   return out;
 }
 
+// "harmonics 0..27 fed back (above 0.052 um, 4 sigma of the gauge noise on the mean; cap 30)".
+std::string harmonics_text(const CompensationSettings& s, const HarmonicChoice& h) {
+  std::string out = "harmonics 0.." + std::to_string(h.harmonics) + " fed back";
+  if (!s.choose_harmonics) return out + " (fixed)";
+  if (!(h.noise_um > 0.0)) return out + " (the cap: no spread to tell the noise)";
+  return out + " (above " + format_fixed(h.threshold_um, 3) + " um, " + format_fixed(h.threshold_um / h.noise_um, 0) +
+         " sigma of the gauge noise on the mean; cap " + std::to_string(s.max_harmonic) + ")";
+}
+
 std::map<std::string, std::string> template_values(const JobSettings& s) {
   return {{"program_name", s.nc_program},
           {"part", s.part.name},
@@ -122,6 +131,8 @@ std::string settings_text(const JobSettings& s) {
   line("analysis.base_circle_center_deg", num(s.analysis.base_circle_center_deg));
   line("analysis.base_circle_half_width_deg", num(s.analysis.base_circle_half_width_deg));
   line("compensation.gain", num(s.compensation.gain));
+  line("compensation.harmonics",
+       s.compensation.choose_harmonics ? "auto" : std::to_string(s.compensation.max_harmonic));
   line("compensation.max_harmonic", std::to_string(s.compensation.max_harmonic));
   line("compensation.max_correction_um", num(s.compensation.max_correction_um));
   line("compensation.max_change_um", num(s.compensation.max_change_um));
@@ -585,6 +596,7 @@ class JobRun {
     verdict_ = decision->verdict;
     verdict_reasons_ = decision->reasons();
     correction_max_um_ = std::abs(decision->largest_correction_um);
+    harmonics_ = decision->harmonics;
     if (verdict_ != CompensationVerdict::kRefuse && !correction_stands) {
       if (Status b = build_corrected_table(); !b) return b;
     }
@@ -632,6 +644,7 @@ class JobRun {
                                         format_fixed(decision.largest_correction_um, 2) + " um at " +
                                         std::to_string(decision.largest_correction_deg) + " deg";
     if (const std::optional<std::int64_t> r = ground_.run_id()) what += ", built on run " + std::to_string(*r) + "'s";
+    if (!s_.inspect) what += "; " + harmonics_text(s_.compensation, harmonics_);
     if (built_) {
       what += "; table " + std::to_string(built_->table.block_count()) + " blocks (" + built_->table.writer +
               "), command position error " + format_fixed(built_->table.error.max_abs_um, 3) + " um";
@@ -653,6 +666,7 @@ class JobRun {
     report_.tolerance_verdict = record_.verdict;
     report_.verdict = verdict_;
     report_.correction_max_um = correction_max_um_;
+    report_.harmonics_fed_back = harmonics_.harmonics;
     report_.correction_in_force_run = ground_.run_id();
     report_.ground_with_version = ground_.version;
     report_.ground_with_source = ground_.source;
@@ -787,6 +801,7 @@ class JobRun {
   CompensationVerdict verdict_ = CompensationVerdict::kApply;
   std::string verdict_reasons_;
   double correction_max_um_ = 0.0;
+  HarmonicChoice harmonics_;
   std::optional<BuiltTable> built_;
   // store_run on
   JobReport report_;

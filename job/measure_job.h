@@ -133,6 +133,7 @@ struct JobReport {
   bool inspection = false;
   CompensationVerdict verdict = CompensationVerdict::kApply;
   double correction_max_um = 0.0;  // largest |correction| proposed
+  int harmonics_fed_back = 0;      // the smoothing band 0..N of the correction (CompensationDecision::harmonics)
   // The table built (empty interpolation: none, the correction was refused).
   std::string interpolation;  // "linear" or "cspline"
   std::string table_writer;   // how its points were chosen, e.g. "adaptive cspline"

@@ -304,7 +304,8 @@ TEST(Compensation, APureNoiseMeasurementMovesTheWheelPathLessThanTheNoise) {
     const Loop loop = loop_for(lobe);
     const NoiseEffect e = noise_effect(lobe, loop, CompensationSettings{});
     ASSERT_EQ(e.refusal, "") << lobe.name;
-    // Keeping harmonics 0..30 keeps 61 of 360 degrees of freedom of white noise: the RMS
+    // The band chosen from the data keeps few harmonics of pure noise; a fixed band of
+    // harmonics 0..30 keeps 61 of 360 degrees of freedom of white noise: the RMS
     // falls to sqrt(61/360) = 0.41 of it (measured 0.35: 0.097 of 0.276 um); the noise's
     // phase fit moves the path by ~1e-4 deg x 0.18 mm/deg = 0.02 um more. Bounds: RMS below
     // 0.6 of the noise's, the largest move below the largest noise (measured 0.32 of 0.94 um).
@@ -315,6 +316,7 @@ TEST(Compensation, APureNoiseMeasurementMovesTheWheelPathLessThanTheNoise) {
     // against a radius of curvature of 6 mm at the intake's nose, which turns non-convex (the
     // path is refused); on the roller the noise moves the path as much as it is.
     CompensationSettings raw;
+    raw.choose_harmonics = false;
     raw.max_harmonic = 180;
     const NoiseEffect unsmoothed = noise_effect(lobe, loop, raw);
     if (lobe.part.follower == FollowerKind::kFlat) {
@@ -477,6 +479,90 @@ TEST(CorrectedWheelPath, RejectsANonFiniteCorrection) {
   ASSERT_FALSE(path.ok());
   EXPECT_EQ(path.error().code, ErrorCode::kInvalidInput);
   EXPECT_THAT(path.error().message, HasSubstr("degree 12"));
+}
+
+// A timing error within max_phase_deg is the phase guard's: on the intake lobe's flanks a
+// 0.33 deg turn is more than 50 um of lift, past the 50 um change limit, and the change guard
+// held such a correction blaming the wheel. It judges the change without the phase part.
+TEST(DecideCorrection, ALobeTurnedWithinThePhaseLimitIsNotHeldByTheChangeLimit) {
+  const Loop loop = loop_for(kLoopLobes[0]);
+  const Part& part = kLoopLobes[0].part;
+  Result<DegreeTable> turned = flat_probe_reading(testing::spline_of(testing::rotated_table(loop.design, 0.33)), part);
+  ASSERT_TRUE(turned.ok());
+  Result<LobeAnalysis> a = analyse_lobe(testing::measured_run(part, *turned, 0.3, 3), loop.reading, part, {});
+  ASSERT_TRUE(a.ok()) << a.error().message;
+  ASSERT_NEAR(a->phase_error_deg, 0.33, 0.01);
+  ASSERT_GT(a->max_abs_error_um, 50.0);  // the turn alone reads beyond max_change_um
+  Result<CompensationDecision> d = decide_correction(*a, loop.reading, DegreeTable{}, CompensationSettings{});
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_GT(std::abs(d->largest_change_um), 50.0);
+  EXPECT_LT(std::abs(d->largest_form_change_um), 5.0);
+  EXPECT_TRUE(d->apply()) << d->reasons();
+  EXPECT_THAT(d->reasons(), ::testing::Not(HasSubstr("wheel")));
+
+  // Beyond the phase limit it is held, and the phase guard says so, not the change guard.
+  CompensationSettings tight;
+  tight.max_phase_deg = 0.3;
+  d = decide_correction(*a, loop.reading, DegreeTable{}, tight);
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->verdict, CompensationVerdict::kHold);
+  ASSERT_EQ(d->findings.size(), 1u) << d->reasons();
+  EXPECT_EQ(d->findings[0].guard, CompensationGuard::kPhase);
+
+  // A form change beyond the limit on a turned lobe is still held by the change guard, and
+  // its message sets the turn apart.
+  LobeAnalysis worn = *a;
+  for (size_t deg = 0; deg < 360; ++deg) worn.error_um[deg] += 60.0 * std::cos(static_cast<double>(deg) * kRadPerDeg);
+  CompensationSettings roomy;
+  roomy.max_correction_um = 500.0;
+  d = decide_correction(worn, loop.reading, DegreeTable{}, roomy);
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  ASSERT_EQ(d->findings.size(), 1u) << d->reasons();
+  EXPECT_EQ(d->findings[0].guard, CompensationGuard::kChangeLimit);
+  EXPECT_THAT(d->reasons(), HasSubstr("not counting the lobe's turn of 0.33"));
+}
+
+// The band fed back runs to the highest harmonic that stands above the noise of the mean,
+// within the cap.
+TEST(ChooseHarmonics, KeepsTheHarmonicsUpToTheLastAboveTheNoiseOfTheMean) {
+  // 0.3 um spread per degree over 3 revolutions: 0.173 um on the mean, 0.0129 um per
+  // harmonic amplitude; at 4 sigma the threshold is 0.052 um.
+  DegreeTable spread{};
+  spread.fill(0.3);
+  DegreeTable error{};
+  for (size_t d = 0; d < 360; ++d) {
+    const double t = static_cast<double>(d) * kRadPerDeg;
+    for (int k = 1; k <= 12; ++k) error[d] += 0.2 / k * std::cos(k * t + k);  // 0.067 at 3, 0.050 at 4
+    error[d] += 0.5 * std::sin(50 * t);  // far up the spectrum: vibration, beyond the cap
+  }
+  const HarmonicChoice h = choose_harmonics(error, spread, 3, 30);
+  EXPECT_NEAR(h.noise_um, 0.3 / std::sqrt(3.0) * std::sqrt(2.0 / 360.0), 1e-9);
+  EXPECT_NEAR(h.threshold_um, 4.0 * h.noise_um, 1e-12);
+  EXPECT_EQ(h.harmonics, 3);
+  EXPECT_EQ(choose_harmonics(error, spread, 3, 2).harmonics, 2);           // the cap
+  EXPECT_EQ(choose_harmonics(error, spread, 3, 60).harmonics, 50);         // what the cap is for
+  EXPECT_EQ(choose_harmonics(error, DegreeTable{}, 3, 30).harmonics, 30);  // nothing tells the noise
+  EXPECT_EQ(choose_harmonics(error, spread, 1, 30).harmonics, 30);
+  DegreeTable quiet{};
+  EXPECT_EQ(choose_harmonics(quiet, spread, 3, 30).harmonics, 0);
+  DegreeTable one_high = error;  // a harmonic above the noise takes the band with it
+  for (size_t d = 0; d < 360; ++d) one_high[d] += 0.1 * std::cos(20 * static_cast<double>(d) * kRadPerDeg);
+  EXPECT_EQ(choose_harmonics(one_high, spread, 3, 30).harmonics, 20);
+
+  // Through decide_correction: harmonics = "auto" smooths to the band; a fixed count does not.
+  LobeAnalysis a = analysis_with_error(error);
+  a.spread_um = spread;
+  a.revolutions = 3;
+  Result<CompensationDecision> d = decide_correction(a, DegreeTable{}, CompensationSettings{});
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->harmonics.harmonics, 3);
+  const DegreeTable three = smooth_harmonics(error, 3);
+  for (size_t deg = 0; deg < 360; ++deg) EXPECT_NEAR(d->correction_um[deg], three[deg], 1e-9) << deg;
+  CompensationSettings fixed;
+  fixed.choose_harmonics = false;
+  d = decide_correction(a, DegreeTable{}, fixed);
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->harmonics.harmonics, 30);
 }
 
 }  // namespace

@@ -70,6 +70,7 @@ TEST_F(ServiceConfigTest, AMinimalFileTakesTheDocumentedDefaults) {
   EXPECT_EQ(c->job.analysis.base_circle_center_deg, 180.0);
   EXPECT_EQ(c->job.analysis.base_circle_half_width_deg, 30.0);
   EXPECT_EQ(c->job.compensation.gain, 1.0);
+  EXPECT_TRUE(c->job.compensation.choose_harmonics);
   EXPECT_EQ(c->job.compensation.max_harmonic, 30);
   EXPECT_EQ(c->job.compensation.max_correction_um, 100.0);
   EXPECT_EQ(c->job.compensation.max_change_um, 50.0);
@@ -293,6 +294,23 @@ TEST_F(ServiceConfigTest, AnUnknownKeyIsRefusedListingTheKnownOnes) {
                       at(4, "part.lobe") + ": unknown key; known keys: file, plc_part_number"));
   EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + kNc + "[database]\nfile = \"x.sqlite\"\n"), ErrorCode::kInvalidInput,
                       at(7, "database.file") + ": unknown key; known keys: path"));
+}
+
+TEST_F(ServiceConfigTest, TheHarmonicsFedBackAreChosenOrFixed) {
+  const std::string ok = "[gauge]\n" + kIntake + kNc + "[compensation]\n";  // 6 lines
+  auto c = read(ok + "harmonics = \"auto\"\nmax_harmonic = 24\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_TRUE(c->job.compensation.choose_harmonics);
+  EXPECT_EQ(c->job.compensation.max_harmonic, 24);
+  c = read(ok + "harmonics = 30\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_FALSE(c->job.compensation.choose_harmonics);
+  EXPECT_EQ(c->job.compensation.max_harmonic, 30);
+  EXPECT_TRUE(refused(read(ok + "harmonics = \"all\"\n"), ErrorCode::kInvalidInput, at(7, "compensation.harmonics")));
+  EXPECT_TRUE(refused(read(ok + "harmonics = 181\n"), ErrorCode::kInvalidInput,
+                      at(7, "compensation.harmonics") + ": 181 is out of range; allowed [0, 180]"));
+  EXPECT_TRUE(refused(read(ok + "harmonics = 20\nmax_harmonic = 30\n"), ErrorCode::kInvalidInput,
+                      at(8, "compensation.max_harmonic") + ": is the cap of harmonics = \"auto\""));
 }
 
 TEST_F(ServiceConfigTest, TheTablesAlternateBetweenTwoDistinctNumbers) {

@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
 
 #include "cli/embedded_defaults.h"
@@ -101,7 +103,7 @@ TEST_F(GrindingLoopTest, DefaultMachineReachesTheSeedResultInOneStep) {
 // new table keeps the points of the one in force (write_default_table), so the loop meets the
 // same interpolation error of up to 0.5 um part after part and cancels it. A fresh choice of
 // points for every table brought a new pattern each time, a third of the floor, which the
-// loop chased: 0.90 to 1.30 times the floor at part 3 over eight seeds, against 0.93 to 1.19
+// loop chased: 0.90 to 1.30 times the floor at part 3 over eight seeds, against 0.98 to 1.18
 // over sixteen keeping the points (docs/virtual_grinder.md); this seed: 0.94.
 TEST_F(GrindingLoopTest, ThreeStepsReachTheFloor) {
   const std::vector<LoopIteration> loop = run(3);
@@ -119,6 +121,40 @@ TEST_F(GrindingLoopTest, ThreeStepsReachTheFloor) {
   EXPECT_TRUE(kept) << loop[1].job.table_writer;
 }
 
+// The demo's statistic over a few of its seeds (docs/virtual_grinder.md has all 16, seeds
+// 1..16 for both the gauge and the machine, `demo --iterations 3`): after one step every part
+// is at most 2.6 um, and part 3 comes within 1.2 times its floor. Over 16 seeds one run may
+// be beyond (15 of 16 is the bound; 1.18 times was the worst seen); over these four, one may
+// be, and the mean must stay under 1.15 (1.07 over the 16, 1.12 over these four).
+TEST_F(GrindingLoopTest, PartThreeIsAtItsFloorOverSeveralSeeds) {
+  int within = 0;
+  double ratio_sum = 0.0;
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    settings_.gauge.seed = seed;
+    settings_.machine.seed = seed;
+    const std::vector<LoopIteration> loop = run(3);
+    ASSERT_EQ(loop.size(), 4u);
+    const double ratio = loop[3].part.max_abs_um / loop[3].floor.max_abs_um;
+    std::printf("seed %llu: part 1 %.2f um, part 3 %.2f um, floor %.2f um (%.2f times), harmonics %d %d %d %d\n",
+                static_cast<unsigned long long>(seed), loop[1].part.max_abs_um, loop[3].part.max_abs_um,
+                loop[3].floor.max_abs_um, ratio, loop[0].job.harmonics_fed_back, loop[1].job.harmonics_fed_back,
+                loop[2].job.harmonics_fed_back, loop[3].job.harmonics_fed_back);
+    for (const LoopIteration& it : loop) EXPECT_TRUE(it.job.pushed()) << seed << ": " << it.job.not_pushed_reason;
+    EXPECT_LE(loop[1].part.max_abs_um, 2.6) << "seed " << seed;
+    // The band is chosen from the data, within its cap: the first part's servo error stands
+    // well above the noise over the first harmonics (23 to 30 kept over 16 seeds); what is
+    // left later is near the noise, and the band may end anywhere.
+    EXPECT_GE(loop[0].job.harmonics_fed_back, 20) << "seed " << seed;
+    for (const LoopIteration& it : loop) EXPECT_LE(it.job.harmonics_fed_back, 30) << "seed " << seed;
+    if (ratio <= 1.2) ++within;
+    ratio_sum += ratio;
+  }
+  EXPECT_GE(within, 3);
+  EXPECT_LT(ratio_sum / 4.0, 1.15);
+}
+
 // Only vibration: the correction follows nothing but the noise the smoothing lets through, so
 // over 20 parts the table stays within a fraction of a um of the design and does not wander.
 TEST_F(GrindingLoopTest, RandomErrorAloneLeavesTheTableBoundedOver20Parts) {
@@ -133,12 +169,14 @@ TEST_F(GrindingLoopTest, RandomErrorAloneLeavesTheTableBoundedOver20Parts) {
                 it.residual_max_um);
     // Every part stays near its floor. What the loop adds: the table's interpolation error
     // (up to 0.5 um, a new pattern with every table: this part's and, fed back, the last
-    // one's) and fed-back gauge noise (~0.25 um): at most 1.25 um; 0.4 to 0.9 seen.
+    // one's) and fed-back gauge noise (~0.25 um): at most 1.25 um; 0.4 to 0.9 seen with the
+    // band fixed at 30, up to 0.53 with the band chosen from the data.
     EXPECT_LT(it.residual_max_um, 1.25) << "part " << it.iteration;
   }
   // Bounded: the vibration lies above the 30 harmonics compensation keeps (its share below
   // them is ~0.01 um RMS); what the correction picks up is the gauge noise that survives
-  // averaging and smoothing, 0.4 to 0.65 um at its largest degree in our runs. Bound: 1 um,
+  // averaging and smoothing, 0.4 to 0.65 um at its largest degree with the band fixed at 30,
+  // 0.05 to 0.50 with the band chosen from the data. Bound: 1 um,
   // twice the vibration's RMS; a loop that kept adding noise would cross it.
   EXPECT_LT(*std::max_element(correction.begin(), correction.end()), 1.0);
   // No drift: the last five corrections are no larger than the first five, give or take the
