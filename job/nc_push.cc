@@ -256,7 +256,12 @@ Result<std::string> render_main_for_table(const MainProgramSource& source, const
       {"table_number", std::to_string(t->table_number)},
       {"point_count", std::to_string(t->points.size())},
       {"interpolation", std::string(interpolation_name(t->interpolation))}};
-  return render_main_program(source.template_text, source.template_name, values);
+  Result<std::string> main = render_main_program(source.template_text, source.template_name, values);
+  // The main program is loaded the way its table is: with an archive header when the table has one.
+  if (!main || !has_archive_header(table_program)) return main;
+  Result<std::string> header = archive_header(nc_file.stem().string() + "_MAIN", NcProgramKind::kMainProgram);
+  if (!header) return header.error();
+  return *header + *main;
 }
 
 namespace {

@@ -17,7 +17,7 @@ namespace gaugeloop {
 
 // Renders `template_text` with `values` (which must hold "program_name" and "table_number"),
 // then reads the result back: it must call the subprogram program_name (a block whose first
-// word, after an optional block number, is that name) and couple through table_number (an
+// word, after an optional block number, is that name, or EXTCALL("<that name>")) and couple through table_number (an
 // EGON(following axis, block change, leading axis, table, 0) or LEADON(following axis, leading
 // axis, table) naming it), and every coupling it makes must name that table, so a template
 // that couples a fixed number never ships. kInvalidInput naming the template otherwise.

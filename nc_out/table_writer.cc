@@ -35,9 +35,10 @@ std::size_t rows_per_step(const SampledPath& path, double c_step_deg) {
 }
 
 Status check_format(const SampledPath& path, const CurveTableFormat& format) {
-  if (format.c_decimals < 0 || format.c_decimals > 6 || format.x_decimals < 0 || format.x_decimals > 6) {
-    return make_error(ErrorCode::kInvalidInput, "table decimals must be 0..6");
+  if (format.c_decimals < 0 || format.c_decimals > 6) {
+    return make_error(ErrorCode::kInvalidInput, "table decimals of C must be 0..6");
   }
+  if (Status s = check_x_resolution(format.x_increments_per_mm, "table X resolution"); !s) return s;
   const double q = path.c_step_deg * std::pow(10.0, format.c_decimals);
   if (std::abs(q - std::round(q)) > 1e-6) {
     return make_error(ErrorCode::kInvalidInput, "fine path step " + format_fixed(path.c_step_deg, 6) +
@@ -54,7 +55,7 @@ std::vector<CurvePoint> points_at_rows(const SampledPath& path, const std::vecto
   std::vector<CurvePoint> out;
   out.reserve(rows.size());
   for (std::size_t k : rows) {
-    out.push_back({round_to(path.c_deg(k), format.c_decimals), round_to(path.x_mm[k % n], format.x_decimals)});
+    out.push_back({round_to(path.c_deg(k), format.c_decimals), format.round_x_mm(path.x_mm[k % n])});
   }
   out.back().c_deg = 360.0;
   return out;
@@ -265,7 +266,7 @@ Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const Ad
   const std::size_t n = path.size();
   const double bound_mm = settings.bound_um / kUmPerMm;
   const std::size_t max_rows = widest_rows(path, settings);
-  auto x_written = [&](std::size_t k) { return round_to(path.x_mm[k % n], format.x_decimals); };
+  auto x_written = [&](std::size_t k) { return format.round_x_mm(path.x_mm[k % n]); };
   // The chord from row a to row b as written keeps the bound at every row in between.
   auto keeps_bound = [&](std::size_t a, std::size_t b) {
     const double ya = x_written(a);
@@ -283,8 +284,9 @@ Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const Ad
       return make_error(ErrorCode::kRefused, "adaptive G1 table: even one fine step at C" +
                                                  format_fixed(path.c_deg(a), 3) + " breaks the " +
                                                  format_fixed(settings.bound_um, 3) + " um bound (rounding to " +
-                                                 std::to_string(format.x_decimals) +
-                                                 " decimals?); write X with more decimals or raise the bound");
+                                                 format_fixed(1000.0 / format.x_increments_per_mm, 3) +
+                                                 " um, the control's X resolution?); raise MD10200 and "
+                                                 "int_incr_per_mm, or the bound");
     }
     // Furthest row that keeps the bound: grow the chord by doubling, then bisect between the
     // last length that kept it and the first that did not. A chord of X that bends one way

@@ -76,6 +76,16 @@ TEST(MainProgram, ATemplateThatDoesNotCallTheTableOrCouplesNothingIsRefused) {
   EXPECT_THAT(no_coupling.error().message, HasSubstr("couples no curve table"));
 }
 
+// A table subprogram run from a drive (execution from external source) is a call too; another
+// program's name in EXTCALL is not.
+TEST(MainProgram, AnExtcallOfTheTableSubprogramCallsIt) {
+  const std::string couple = "N20 EGON(X,\"FINE\",C,{{table_number}},0)\nM30\n";
+  EXPECT_TRUE(render_main_program("N10 EXTCALL(\"{{program_name}}\")\n" + couple, "a.mpf", main_values("1")).ok());
+  Result<std::string> other = render_main_program("N10 EXTCALL(\"OTHER\")\n" + couple, "b.mpf", main_values("1"));
+  ASSERT_FALSE(other.ok());
+  EXPECT_THAT(other.error().message, HasSubstr("does not call the table subprogram CAM_INTAKE_L1"));
+}
+
 TEST(TableNumbers, ConsecutiveVersionsAlternateAndTheHeaderNamesTheNumber) {
   Result<CurveTable> t = write_linear_table(testing::analytic_path(4.0, 0.7), 2.0);
   ASSERT_TRUE(t.ok());
