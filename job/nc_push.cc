@@ -5,6 +5,7 @@
 #include <map>
 
 #include "core/atomic_file.h"
+#include "core/number_text.h"
 #include "core/utc_time.h"
 #include "nc_out/main_program.h"
 #include "nc_out/table_program.h"
@@ -254,6 +255,7 @@ Result<std::string> render_main_for_table(const MainProgramSource& source, const
       {"created_utc", source.created_utc.empty() ? utc_now() : source.created_utc},
       {"table_version", header_value(*t, "table_version")},
       {"table_number", std::to_string(t->table_number)},
+      {"table_start_c_deg", format_fixed(t->points.front().c_deg, 3)},
       {"point_count", std::to_string(t->points.size())},
       {"interpolation", std::string(interpolation_name(t->interpolation))}};
   Result<std::string> main = render_main_program(source.template_text, source.template_name, values);

@@ -54,8 +54,11 @@ Status validate_curve_points(const std::vector<CurvePoint>& points) {
                         "curve table " + point_name(points, i) + ": C does not increase; nothing was written");
     }
   }
-  if (points.front().c_deg != 0.0 || points.back().c_deg != 360.0) {
-    return make_error(ErrorCode::kInternal, "a periodic curve table must run from C0 to C360");
+  if (!(points.front().c_deg >= 0.0 && points.front().c_deg < 360.0) ||
+      points.back().c_deg != points.front().c_deg + 360.0) {
+    return make_error(ErrorCode::kInternal,
+                      "a periodic curve table must run over one turn, from C0 to C360 or "
+                      "from a start below C360 to 360 deg after it");
   }
   if (std::abs(points.front().x_mm - points.back().x_mm) > 1e-9) {
     return make_error(ErrorCode::kInternal, "a periodic curve table must end at the X it starts with");

@@ -12,7 +12,7 @@
 
 namespace gaugeloop {
 
-// One table point. Frame: machine frame. C in degrees in [0, 360], X the wheel infeed in mm
+// One table point. Frame: machine frame. C in degrees over the table's turn, X the wheel infeed in mm
 // (0 on the base circle).
 struct CurvePoint {
   double c_deg = 0.0;
@@ -52,8 +52,9 @@ enum class Interpolation {
 std::string_view interpolation_name(Interpolation interpolation);
 
 // Checks a periodic table before anything is written: at least 4 points, C strictly
-// increasing from 0 to 360, every X finite and the last X equal to the first (the period
-// closes). The message names the point (index and C) and the rule broken.
+// increasing over one turn (from c0 in [0, 360) to c0 + 360), every X finite and the last X
+// equal to the first (the period closes). The message names the point (index and C) and the
+// rule broken.
 Status validate_curve_points(const std::vector<CurvePoint>& points);
 
 // The table body: one block per point, the first carrying G1 (linear segments), e.g.

@@ -3,7 +3,8 @@
 //
 // Placeholders (docs/nc_output.md): program_name (the table subprogram it calls), part, lobe,
 // version (gaugeloop's), run_id, created_utc, table_version, table_number (the table the
-// subprogram just defined, the one to couple), point_count, interpolation. Any other, or one
+// subprogram just defined, the one to couple), table_start_c_deg (the table's first leading
+// value, 0.000 or a start on the base circle), point_count, interpolation. Any other, or one
 // left unfilled, is refused as for the table (render_nc_template).
 #pragma once
 

@@ -33,6 +33,7 @@ std::map<std::string, std::string> main_values(const std::string& table_number) 
           {"created_utc", "2026-12-01T10:00:00Z"},
           {"table_version", "3"},
           {"table_number", table_number},
+          {"table_start_c_deg", "180.000"},
           {"point_count", "91"},
           {"interpolation", "cspline"}};
 }
