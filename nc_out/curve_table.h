@@ -12,8 +12,8 @@
 
 namespace gaugeloop {
 
-// One table point. Frame: machine frame. C in degrees over the table's turn, X the wheel infeed in mm
-// (0 on the base circle).
+// One table point. Frame: machine frame. C in degrees over the table's turn, X the wheel
+// infeed in mm (0 on the base circle).
 struct CurvePoint {
   double c_deg = 0.0;
   double x_mm = 0.0;
@@ -60,8 +60,8 @@ Status validate_curve_points(const std::vector<CurvePoint>& points);
 // The table body: one block per point, the first carrying G1 (linear segments), e.g.
 //   G1 C0.000 X0.0000
 //   C1.000 X0.0003
-// X with format.x_decimals(), rounded to the control's increment (round_x_mm). Blocks are separated by newlines, with
-// none after the last. Call validate_curve_points first.
+// X with format.x_decimals(), rounded to the control's increment (round_x_mm). Blocks are
+// separated by newlines, with none after the last. Call validate_curve_points first.
 std::string render_curve_blocks(const std::vector<CurvePoint>& points, const CurveTableFormat& format = {});
 
 // The table body for either interpolation. kLinear: as render_curve_blocks. kCubicSpline:
