@@ -118,6 +118,8 @@ struct MeasureOptions {
   double table_step_deg = 1.0;
   std::string table = "auto";
   double command_error_um = 0.5;
+  int int_incr_per_mm = 10000;  // the control's MD10200: X is written on its grid
+  bool archive_header = false;  // the programs start with the punched-tape archive header
   bool require_approval = false;
   std::string machine = "grinder-1";
   std::string note;
@@ -160,6 +162,14 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
                  "tables may have")
       ->capture_default_str()
       ->check(CLI::Range(0.01, 100.0));
+  cmd.add_option("--int-incr-per-mm", o.int_incr_per_mm,
+                 "The control's X resolution, MD10200 $MN_INT_INCR_PER_MM: table X is rounded to 1/N mm and its "
+                 "command error includes the rounding (docs/nc_output.md)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
+  cmd.add_flag("--archive-header", o.archive_header,
+               "Start the table and main program with the archive header (%_N_<name>_SPF, ;$PATH=...) so the "
+               "HMI loads them as they are");
   cmd.add_flag("--require-approval", o.require_approval,
                "Keep each new table as pending until `gaugeloop nc approve ID` writes it");
   cmd.add_option("--machine", o.machine, "Machine name stored with the run")->capture_default_str();
@@ -206,6 +216,8 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
                   : o.table == "adaptive-spline" ? TableKind::kAdaptiveSpline
                                                  : TableKind::kAuto;
   js.table_choice.bound_um = o.command_error_um;
+  js.table_format.x_increments_per_mm = o.int_incr_per_mm;
+  js.nc_archive_header = o.archive_header;
   js.require_approval = o.require_approval;
   js.machine = o.machine;
   js.note = o.note;

@@ -165,6 +165,9 @@ void read_nc_table_keys(TomlReader& nr, JobSettings& job) {
   job.table_choice.max_step_deg = nr.number("max_segment_deg", 10.0, 0.0, 90.0, true);
   job.table_choice.allow_spline = nr.flag("allow_spline", true);
   job.require_approval = nr.flag("require_approval", false);
+  job.nc_archive_header = nr.flag("archive_header", false);
+  // The control's MD10200 $MN_INT_INCR_PER_MM: X is written on its grid (curve_table.h).
+  job.table_format.x_increments_per_mm = static_cast<double>(nr.integer("int_incr_per_mm", 10000, 1, 1000000));
   AxisLimits& l = job.axis_limits;
   l.x_min_mm = nr.number("x_min_mm", l.x_min_mm, -1000.0, 1000.0);
   l.x_max_mm = nr.number("x_max_mm", l.x_max_mm, -1000.0, 1000.0);
@@ -224,8 +227,9 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, JobSettings& job) {
   if (const toml::table* t = top.subtable("nc")) {
     TomlReader nr(*t, f.source, "nc.");
     nr.allow_only({"dir", "template", "table", "table_step_deg", "command_error_um", "max_segment_deg", "allow_spline",
-                   "require_approval", "table_number", "table_numbers", "main_template", "x_min_mm", "x_max_mm",
-                   "x_velocity_max_mm_per_s", "x_acceleration_max_mm_per_s2", "work_speed_rpm"});
+                   "require_approval", "table_number", "table_numbers", "main_template", "int_incr_per_mm",
+                   "archive_header", "x_min_mm", "x_max_mm", "x_velocity_max_mm_per_s", "x_acceleration_max_mm_per_s2",
+                   "work_speed_rpm"});
     job.nc_dir = f.resolve(nr.text("dir", "nc"));
     template_path = nr.text("template", "");
     const std::string main_path = nr.text("main_template", "");

@@ -65,15 +65,15 @@ Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings&
   Result<CurveTable> table = [&]() -> Result<CurveTable> {
     switch (s.table_kind) {
       case TableKind::kAuto:
-        return write_default_table(out.fine, s.table_choice, {}, in_force);
+        return write_default_table(out.fine, s.table_choice, s.table_format, in_force);
       case TableKind::kLinear:
-        return write_linear_table(out.fine, s.table_step_deg);
+        return write_linear_table(out.fine, s.table_step_deg, s.table_format);
       case TableKind::kSpline:
-        return write_spline_table(out.fine, s.table_step_deg);
+        return write_spline_table(out.fine, s.table_step_deg, s.table_format);
       case TableKind::kAdaptiveLinear:
-        return write_adaptive_linear_table(out.fine, adaptive);
+        return write_adaptive_linear_table(out.fine, adaptive, s.table_format);
       case TableKind::kAdaptiveSpline:
-        return write_adaptive_spline_table(out.fine, adaptive);
+        return write_adaptive_spline_table(out.fine, adaptive, s.table_format);
     }
     return make_error(ErrorCode::kInternal, "unknown table kind");
   }();
@@ -101,6 +101,14 @@ std::map<std::string, std::string> template_values(const JobSettings& s) {
           {"created_utc", ""},
           {"correction_max_um", "0"},
           {"table_number", std::to_string(s.table_numbers[0])}};
+}
+
+// `program` (a rendered table program) with the archive header when the settings ask for it.
+Result<std::string> with_archive_header(const JobSettings& s, Result<std::string> program) {
+  if (!program || !s.nc_archive_header) return program;
+  Result<std::string> header = archive_header(s.nc_program, NcProgramKind::kSubprogram);
+  if (!header) return header.error();
+  return *header + *program;
 }
 
 // The main program's template and the part it grinds, for push_program.
@@ -145,6 +153,7 @@ std::string settings_text(const JobSettings& s) {
   line("nc.command_error_bound_um", num(s.table_choice.bound_um));
   line("nc.max_segment_deg", num(s.table_choice.max_step_deg));
   line("nc.allow_spline", s.table_choice.allow_spline ? "true" : "false");
+  line("nc.int_incr_per_mm", format_fixed(s.table_format.x_increments_per_mm, 0));
   line("nc.x_min_mm", num(s.axis_limits.x_min_mm));
   line("nc.x_max_mm", num(s.axis_limits.x_max_mm));
   line("nc.x_velocity_max_mm_per_s", num(s.axis_limits.x_velocity_max_mm_per_s));
@@ -153,6 +162,7 @@ std::string settings_text(const JobSettings& s) {
   line("nc.require_approval", s.require_approval ? "true" : "false");
   line("nc.table_numbers", std::to_string(s.table_numbers[0]) + " " + std::to_string(s.table_numbers[1]));
   line("nc.main_template", s.nc_main_template_name);
+  line("nc.archive_header", s.nc_archive_header ? "true" : "false");
   out += tolerances_settings_text(s.part.tolerances);
   return out;
 }
@@ -210,7 +220,8 @@ Result<Prepared> prepare(const JobSettings& s) {
     provenance.table_version = version;
     provenance.table_numbers = s.table_numbers;
     Result<std::string> program =
-        render_table_program(s.nc_template, s.nc_template_name, template_values(s), design_table->table, provenance);
+        with_archive_header(s, render_table_program(s.nc_template, s.nc_template_name, template_values(s),
+                                                    design_table->table, provenance, s.table_format));
     if (!program) return program.error();
     if (s.nc_main_template.empty()) continue;
     if (Result<std::string> m = render_main_for_table(main_source(s, ""), s.nc_dir / (s.nc_program + ".SPF"), *program);
@@ -691,7 +702,8 @@ class JobRun {
     provenance.run_id = report_.run_id;
     provenance.table_version = table_version;
     provenance.table_numbers = s_.table_numbers;
-    return render_table_program(s_.nc_template, s_.nc_template_name, values, built_->table, provenance);
+    return with_archive_header(s_, render_table_program(s_.nc_template, s_.nc_template_name, values, built_->table,
+                                                        provenance, s_.table_format));
   }
 
   // What the push or the pending table records of the table built.

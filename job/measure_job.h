@@ -67,6 +67,13 @@ struct JobSettings {
   TableKind table_kind = TableKind::kAuto;
   double table_step_deg = 1.0;       // C step of a linear or spline table
   TableChoiceSettings table_choice;  // command position error bound (0.5 um), widest segment, CSPLINE allowed
+  // How the table's values are written: X rounded to the control's MD10200 resolution
+  // ([nc] int_incr_per_mm, 10000 by default), C to 0.001 deg.
+  CurveTableFormat table_format;
+  // True ([nc] archive_header): the table program starts with the punched-tape archive
+  // header (%_N_<nc_program>_SPF, ;$PATH=/_N_SPF_DIR), and so does the main program beside
+  // it, so the HMI loads them as they are (nc_out/table_program.h).
+  bool nc_archive_header = false;
   // What the infeed axis may do: software limits and the slide's velocity and acceleration
   // at the programmed work speed. Defaults fit the sample lobes at 60 rpm with margin.
   AxisLimits axis_limits{-0.5, 20.0, 300.0, 20000.0, 60.0};

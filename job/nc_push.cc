@@ -5,6 +5,7 @@
 #include <map>
 
 #include "core/atomic_file.h"
+#include "core/number_text.h"
 #include "core/utc_time.h"
 #include "nc_out/main_program.h"
 #include "nc_out/table_program.h"
@@ -254,9 +255,15 @@ Result<std::string> render_main_for_table(const MainProgramSource& source, const
       {"created_utc", source.created_utc.empty() ? utc_now() : source.created_utc},
       {"table_version", header_value(*t, "table_version")},
       {"table_number", std::to_string(t->table_number)},
+      {"table_start_c_deg", format_fixed(t->points.front().c_deg, 3)},
       {"point_count", std::to_string(t->points.size())},
       {"interpolation", std::string(interpolation_name(t->interpolation))}};
-  return render_main_program(source.template_text, source.template_name, values);
+  Result<std::string> main = render_main_program(source.template_text, source.template_name, values);
+  // The main program is loaded the way its table is: with an archive header when the table has one.
+  if (!main || !has_archive_header(table_program)) return main;
+  Result<std::string> header = archive_header(nc_file.stem().string() + "_MAIN", NcProgramKind::kMainProgram);
+  if (!header) return header.error();
+  return *header + *main;
 }
 
 namespace {

@@ -59,9 +59,11 @@ struct MainProgramSource {
 
 // The main program for `table_program` (version and table number set, as pushed to
 // `nc_file`), rendered with render_main_program (nc_out/main_program.h): program_name is
-// nc_file's stem; run_id, table_version, table_number, point_count and interpolation are the
-// table program's. kInvalidInput for a table program that does not parse or a template that
-// does not render.
+// nc_file's stem; run_id, table_version, table_number, table_start_c_deg (its first leading
+// value), point_count and interpolation are the table program's. A table program that starts
+// with an archive header gets a main program that does too (archive_header,
+// nc_out/table_program.h). kInvalidInput for a table program that does not parse or a
+// template that does not render.
 Result<std::string> render_main_for_table(const MainProgramSource& source, const std::filesystem::path& nc_file,
                                           std::string_view table_program);
 

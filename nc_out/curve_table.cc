@@ -1,6 +1,7 @@
 // Validation and formatting of curve-table points.
 #include "nc_out/curve_table.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -17,6 +18,27 @@ std::string point_name(const std::vector<CurvePoint>& points, size_t i) {
 
 }  // namespace
 
+int CurveTableFormat::x_decimals() const {
+  // 1e-9: log10 of a power of ten is not always exact in binary.
+  return std::max(0, static_cast<int>(std::ceil(std::log10(x_increments_per_mm) - 1e-9)));
+}
+
+double CurveTableFormat::round_x_mm(double x_mm) const {
+  const double r = std::round(x_mm * x_increments_per_mm) / x_increments_per_mm;
+  return r == 0.0 ? 0.0 : r;
+}
+
+Status check_x_resolution(double x_increments_per_mm, std::string_view where) {
+  if (!(x_increments_per_mm >= 1.0 && x_increments_per_mm <= 1e6) ||
+      x_increments_per_mm != std::round(x_increments_per_mm)) {
+    return make_error(ErrorCode::kInvalidInput,
+                      std::string(where) + ": " + format_fixed(x_increments_per_mm, 3) +
+                          " increments per mm: expected a whole number 1..1000000, the control's MD10200 "
+                          "$MN_INT_INCR_PER_MM (10000 for 0.1 um)");
+  }
+  return {};
+}
+
 Status validate_curve_points(const std::vector<CurvePoint>& points) {
   if (points.size() < 4) {
     return make_error(ErrorCode::kInvalidInput, "curve table has " + std::to_string(points.size()) +
@@ -32,8 +54,11 @@ Status validate_curve_points(const std::vector<CurvePoint>& points) {
                         "curve table " + point_name(points, i) + ": C does not increase; nothing was written");
     }
   }
-  if (points.front().c_deg != 0.0 || points.back().c_deg != 360.0) {
-    return make_error(ErrorCode::kInternal, "a periodic curve table must run from C0 to C360");
+  if (!(points.front().c_deg >= 0.0 && points.front().c_deg < 360.0) ||
+      points.back().c_deg != points.front().c_deg + 360.0) {
+    return make_error(ErrorCode::kInternal,
+                      "a periodic curve table must run over one turn, from C0 to C360 or "
+                      "from a start below C360 to 360 deg after it");
   }
   if (std::abs(points.front().x_mm - points.back().x_mm) > 1e-9) {
     return make_error(ErrorCode::kInternal, "a periodic curve table must end at the X it starts with");
@@ -61,8 +86,8 @@ std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpola
       out += "BNAT ENAT CSPLINE ";
     }
     // A tiny negative infeed prints as 0.0000, not as a signed zero (format_fixed).
-    out +=
-        "C" + format_fixed(points[i].c_deg, format.c_decimals) + " X" + format_fixed(points[i].x_mm, format.x_decimals);
+    out += "C" + format_fixed(points[i].c_deg, format.c_decimals) + " X" +
+           format_fixed(format.round_x_mm(points[i].x_mm), format.x_decimals());
   }
   return out;
 }

@@ -12,17 +12,35 @@
 
 namespace gaugeloop {
 
-// One table point. Frame: machine frame. C in degrees in [0, 360], X the wheel infeed in mm
-// (0 on the base circle).
+// One table point. Frame: machine frame. C in degrees over the table's turn, X the wheel
+// infeed in mm (0 on the base circle).
 struct CurvePoint {
   double c_deg = 0.0;
   double x_mm = 0.0;
 };
 
+// How the table's values are written. X is rounded to the control's computational resolution
+// for linear positions, MD10200 $MN_INT_INCR_PER_MM (the control rounds every programmed
+// position to it, so the table the NC holds is the rounded one); C is written to 0.001 deg,
+// MD10210 $MN_INT_INCR_PER_DEG at its default 1000. See docs/nc_output.md.
 struct CurveTableFormat {
   int c_decimals = 3;  // 0.001 deg
-  int x_decimals = 4;  // 0.1 um
+  // Increments per mm of X, a whole number 1..1000000 (check_x_resolution). The default,
+  // 10000 (0.1 um), keeps the 0.5 um command error bound on the sample lobes; at the
+  // control's default of 1000 the rounding alone can cost 0.5 um.
+  double x_increments_per_mm = 10000.0;
+
+  // The fewest decimals that write every increment so that the control reads the same
+  // increment back: exact for a power of ten (10000 -> 4), otherwise within half a last
+  // decimal, less than half an increment (3000 -> 4 decimals, 0.3333 read as 1/3000 mm).
+  int x_decimals() const;
+  // X on the control's grid: the nearest whole increment, never a signed zero.
+  double round_x_mm(double x_mm) const;
 };
+
+// kInvalidInput unless `x_increments_per_mm` is a whole number 1..1000000 (six decimals at
+// most), naming `where` (the key or option it came from).
+Status check_x_resolution(double x_increments_per_mm, std::string_view where);
 
 // How the NC interpolates between table points: the modal motion command of the blocks.
 enum class Interpolation {
@@ -34,14 +52,16 @@ enum class Interpolation {
 std::string_view interpolation_name(Interpolation interpolation);
 
 // Checks a periodic table before anything is written: at least 4 points, C strictly
-// increasing from 0 to 360, every X finite and the last X equal to the first (the period
-// closes). The message names the point (index and C) and the rule broken.
+// increasing over one turn (from c0 in [0, 360) to c0 + 360), every X finite and the last X
+// equal to the first (the period closes). The message names the point (index and C) and the
+// rule broken.
 Status validate_curve_points(const std::vector<CurvePoint>& points);
 
 // The table body: one block per point, the first carrying G1 (linear segments), e.g.
 //   G1 C0.000 X0.0000
 //   C1.000 X0.0003
-// Blocks are separated by newlines, with none after the last. Call validate_curve_points first.
+// X with format.x_decimals(), rounded to the control's increment (round_x_mm). Blocks are
+// separated by newlines, with none after the last. Call validate_curve_points first.
 std::string render_curve_blocks(const std::vector<CurvePoint>& points, const CurveTableFormat& format = {});
 
 // The table body for either interpolation. kLinear: as render_curve_blocks. kCubicSpline:

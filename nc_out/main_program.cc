@@ -140,6 +140,10 @@ Result<std::string> render_main_program(std::string_view template_text, std::str
     const std::string_view code = code_of(lines[i]);
     const std::string_view first = code.substr(0, code.find_first_of(" \t("));
     if (upper(first) == upper(subprogram)) calls = true;
+    // Execution from external source: EXTCALL("<name>") runs the table subprogram from a drive.
+    if (upper(first) == "EXTCALL" && upper(code).find("\"" + upper(subprogram) + "\"") != std::string::npos) {
+      calls = true;
+    }
     std::string error;
     const std::optional<int> n = coupling_on(code, error);
     const std::string where = "line " + std::to_string(i + 1);

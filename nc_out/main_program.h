@@ -3,7 +3,8 @@
 //
 // Placeholders (docs/nc_output.md): program_name (the table subprogram it calls), part, lobe,
 // version (gaugeloop's), run_id, created_utc, table_version, table_number (the table the
-// subprogram just defined, the one to couple), point_count, interpolation. Any other, or one
+// subprogram just defined, the one to couple), table_start_c_deg (the table's first leading
+// value, 0.000 or a start on the base circle), point_count, interpolation. Any other, or one
 // left unfilled, is refused as for the table (render_nc_template).
 #pragma once
 
@@ -17,7 +18,7 @@ namespace gaugeloop {
 
 // Renders `template_text` with `values` (which must hold "program_name" and "table_number"),
 // then reads the result back: it must call the subprogram program_name (a block whose first
-// word, after an optional block number, is that name) and couple through table_number (an
+// word, after an optional block number, is that name, or EXTCALL("<that name>")) and couple through table_number (an
 // EGON(following axis, block change, leading axis, table, 0) or LEADON(following axis, leading
 // axis, table) naming it), and every coupling it makes must name that table, so a template
 // that couples a fixed number never ships. kInvalidInput naming the template otherwise.

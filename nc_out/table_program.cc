@@ -1,6 +1,8 @@
 // Header, checksum, rendering with read-back, and the parser of a pushed table program.
 #include "nc_out/table_program.h"
 
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -83,6 +85,22 @@ std::vector<std::string_view> words_of(std::string_view code) {
 }
 
 }  // namespace
+
+Result<std::string> archive_header(std::string_view name, NcProgramKind kind) {
+  const bool ok = !name.empty() && name.size() <= 24 && std::all_of(name.begin(), name.end(), [](char ch) {
+    return ch == '_' || std::isalnum(static_cast<unsigned char>(ch)) != 0;
+  });
+  if (!ok) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "program `" + std::string(name) +
+                          "` cannot carry an archive header: the HMI reads a punched-tape file name of 1 to 24 "
+                          "letters, digits or '_'; rename the program or set [nc] archive_header = false");
+  }
+  const bool main = kind == NcProgramKind::kMainProgram;
+  return "%_N_" + std::string(name) + (main ? "_MPF" : "_SPF") + "\n;$PATH=/_N_" + (main ? "MPF" : "SPF") + "_DIR\n";
+}
+
+bool has_archive_header(std::string_view program) { return !program.empty() && program.front() == '%'; }
 
 std::string table_body_checksum(std::string_view body) {
   std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64-bit offset basis
@@ -335,24 +353,21 @@ Status verify_table_checksum(const ParsedTable& table, std::string_view file_nam
 
 Status compare_table_points(const ParsedTable& table, const std::vector<CurvePoint>& expected,
                             std::string_view file_name, const CurveTableFormat& format) {
+  const int xd = format.x_decimals();
   const size_t n = std::min(table.points.size(), expected.size());
   for (size_t i = 0; i < n; ++i) {
     const CurvePoint& a = table.points[i];
     const CurvePoint& b = expected[i];
-    // Compare as written: the decimals the table carries.
+    // Compare as written: the decimals the table carries, X on the control's grid. format_fixed
+    // never writes a signed zero, so -0.0000 and 0.0000 compare equal.
+    const std::string bx = format_fixed(format.round_x_mm(b.x_mm), xd);
     if (format_fixed(a.c_deg, format.c_decimals) != format_fixed(b.c_deg, format.c_decimals) ||
-        format_fixed(a.x_mm, format.x_decimals) != format_fixed(b.x_mm + 0.0, format.x_decimals)) {
-      const bool zero = format_fixed(a.x_mm, format.x_decimals) == format_fixed(0.0, format.x_decimals);
-      if (zero && format_fixed(std::abs(b.x_mm), format.x_decimals) == format_fixed(0.0, format.x_decimals) &&
-          format_fixed(a.c_deg, format.c_decimals) == format_fixed(b.c_deg, format.c_decimals)) {
-        continue;  // -0.0000 written as 0.0000
-      }
-      return make_error(ErrorCode::kRefused, std::string(file_name) + ":" + std::to_string(table.point_lines[i]) +
-                                                 ": point " + std::to_string(i) + " reads C" +
-                                                 format_fixed(a.c_deg, format.c_decimals) + " X" +
-                                                 format_fixed(a.x_mm, format.x_decimals) + ", the pushed table has C" +
-                                                 format_fixed(b.c_deg, format.c_decimals) + " X" +
-                                                 format_fixed(b.x_mm, format.x_decimals) + "; edited by hand");
+        format_fixed(a.x_mm, xd) != bx) {
+      return make_error(ErrorCode::kRefused,
+                        std::string(file_name) + ":" + std::to_string(table.point_lines[i]) + ": point " +
+                            std::to_string(i) + " reads C" + format_fixed(a.c_deg, format.c_decimals) + " X" +
+                            format_fixed(a.x_mm, xd) + ", the pushed table has C" +
+                            format_fixed(b.c_deg, format.c_decimals) + " X" + bx + "; edited by hand");
     }
   }
   if (table.points.size() != expected.size()) {

@@ -14,6 +14,11 @@
 // newline after the last line); written as 16 lower-case hex digits. Not a protection
 // against intent, only against a hand edit going unnoticed.
 //
+// Archive header: optional first two lines in the Sinumerik punched-tape (archive) format,
+// `%_N_<NAME>_SPF` and `;$PATH=/_N_SPF_DIR` (main programs `_MPF`, `/_N_MPF_DIR`), so the
+// HMI loads the file as it is into the NC's program directory. Outside the table: the parser,
+// the checksum and the comparison of points ignore them.
+//
 // Errors: kInvalidInput for a program that does not parse (naming the file and 1-based line);
 // kRefused for a table edited by hand (checksum or points), naming the file and line.
 #pragma once
@@ -30,6 +35,20 @@
 #include "nc_out/table_writer.h"
 
 namespace gaugeloop {
+
+enum class NcProgramKind {
+  kSubprogram,   // .SPF, /_N_SPF_DIR
+  kMainProgram,  // .MPF, /_N_MPF_DIR
+};
+
+// The archive header for program `name` (the file's stem, e.g. CAM_INTAKE_L1), two lines each
+// ending in "\n". kInvalidInput naming the program unless the name is 1..24 letters, digits or
+// '_' (the HMI's rule for a file name in punched-tape format).
+Result<std::string> archive_header(std::string_view name, NcProgramKind kind);
+
+// True when `program` starts with an archive header line: '%' in the first column of the
+// first line.
+bool has_archive_header(std::string_view program);
 
 // FNV-1a 64 of `body` with every '\r' skipped, 16 lower-case hex digits.
 std::string table_body_checksum(std::string_view body);

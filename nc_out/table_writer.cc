@@ -35,9 +35,10 @@ std::size_t rows_per_step(const SampledPath& path, double c_step_deg) {
 }
 
 Status check_format(const SampledPath& path, const CurveTableFormat& format) {
-  if (format.c_decimals < 0 || format.c_decimals > 6 || format.x_decimals < 0 || format.x_decimals > 6) {
-    return make_error(ErrorCode::kInvalidInput, "table decimals must be 0..6");
+  if (format.c_decimals < 0 || format.c_decimals > 6) {
+    return make_error(ErrorCode::kInvalidInput, "table decimals of C must be 0..6");
   }
+  if (Status s = check_x_resolution(format.x_increments_per_mm, "table X resolution"); !s) return s;
   const double q = path.c_step_deg * std::pow(10.0, format.c_decimals);
   if (std::abs(q - std::round(q)) > 1e-6) {
     return make_error(ErrorCode::kInvalidInput, "fine path step " + format_fixed(path.c_step_deg, 6) +
@@ -54,7 +55,7 @@ std::vector<CurvePoint> points_at_rows(const SampledPath& path, const std::vecto
   std::vector<CurvePoint> out;
   out.reserve(rows.size());
   for (std::size_t k : rows) {
-    out.push_back({round_to(path.c_deg(k), format.c_decimals), round_to(path.x_mm[k % n], format.x_decimals)});
+    out.push_back({round_to(path.c_deg(k), format.c_decimals), format.round_x_mm(path.x_mm[k % n])});
   }
   out.back().c_deg = 360.0;
   return out;
@@ -163,6 +164,58 @@ Result<std::vector<std::size_t>> rows_of_points(const SampledPath& path, const T
   return rows;
 }
 
+// The fine row at `c_deg`, or nullopt when C is not on a row or not in [0, 360).
+std::optional<std::size_t> row_at(const SampledPath& path, double c_deg) {
+  const double r = c_deg / path.c_step_deg;
+  const long long k = std::llround(r);
+  if (std::abs(r - static_cast<double>(k)) > 1e-6 || k < 0 || static_cast<std::size_t>(k) >= path.size()) {
+    return std::nullopt;
+  }
+  return static_cast<std::size_t>(k);
+}
+
+// `path` turned so that row k0 becomes row 0: a table over it from C0 is the table over `path`
+// from C = k0 step.
+SampledPath turned(const SampledPath& path, std::size_t k0) {
+  const std::size_t n = path.size();
+  SampledPath out = path;
+  for (std::size_t j = 0; j < n; ++j) {
+    out.x_mm[j] = path.x_mm[(j + k0) % n];
+    out.dx_dc_mm_per_deg[j] = path.dx_dc_mm_per_deg[(j + k0) % n];
+    out.d2x_dc2_mm_per_deg2[j] = path.d2x_dc2_mm_per_deg2[(j + k0) % n];
+  }
+  return out;
+}
+
+// A table written over the path turned by c0_deg, moved back: C from c0 to c0 + 360, the C of
+// its largest error in [0, 360). X and the error are unchanged: same points, same rows.
+CurveTable moved_back(CurveTable t, double c0_deg, const CurveTableFormat& format) {
+  if (c0_deg == 0.0) return t;
+  for (CurvePoint& p : t.points) p.c_deg = round_to(p.c_deg + c0_deg, format.c_decimals);
+  t.points.back().c_deg = c0_deg + 360.0;
+  t.error.at_c_deg = std::fmod(t.error.at_c_deg + c0_deg, 360.0);
+  t.writer += ", from C" + format_fixed(c0_deg, 0);
+  return t;
+}
+
+// A writer run over the path turned to start at c0_deg (a row of the path), its table moved back.
+template <typename Write>
+Result<CurveTable> written_from(const SampledPath& path, double c0_deg, const CurveTableFormat& format, Write write) {
+  if (c0_deg == 0.0) return write(path);
+  const std::optional<std::size_t> k0 = row_at(path, c0_deg);
+  if (!k0) {
+    return make_error(ErrorCode::kInvalidInput, "table start C" + format_fixed(c0_deg, 6) + " is not a row of the " +
+                                                    format_fixed(path.c_step_deg, 4) + " deg path");
+  }
+  Result<CurveTable> t = write(turned(path, *k0));
+  if (!t) {
+    Error e = t.error();
+    e.message += " (C counted from the table's start C" + format_fixed(c0_deg, 3) + ")";
+    return e;
+  }
+  return moved_back(std::move(*t), c0_deg, format);
+}
+
 }  // namespace
 
 Result<TableInterpolant> TableInterpolant::of(const std::vector<CurvePoint>& points, Interpolation interpolation) {
@@ -213,7 +266,14 @@ Result<TableInterpolant> TableInterpolant::of(const std::vector<CurvePoint>& poi
 
 TableInterpolant::Value TableInterpolant::at(double c_deg) const {
   const std::size_t m = c_deg_.size();
-  const double c = std::clamp(c_deg, c_deg_.front(), c_deg_.back());
+  // Outside the definition range a periodic table is read modulo its range (a table starting on
+  // the base circle covers C0 this way); within it, as defined.
+  const double range = c_deg_.back() - c_deg_.front();
+  double c = c_deg;
+  if (c < c_deg_.front() || c > c_deg_.back()) {
+    c = c_deg_.front() + std::fmod(std::fmod(c - c_deg_.front(), range) + range, range);
+  }
+  c = std::clamp(c, c_deg_.front(), c_deg_.back());
   std::size_t i = static_cast<std::size_t>(std::upper_bound(c_deg_.begin(), c_deg_.end(), c) - c_deg_.begin());
   i = std::min(i == 0 ? 0 : i - 1, m - 2);
   const double h = c_deg_[i + 1] - c_deg_[i];
@@ -254,8 +314,36 @@ Result<CurveTable> write_linear_table(const SampledPath& path, double c_step_deg
   return write_uniform(path, c_step_deg, format, Interpolation::kLinear);
 }
 
+double spline_start_c_deg(const SampledPath& path) {
+  if (!check_sampled_path_shape(path)) return 0.0;
+  const std::size_t n = path.size();
+  // Largest |X''| within 5 deg either side of C.
+  auto bend_near = [&](double c_deg) {
+    const std::optional<std::size_t> k = row_at(path, c_deg);
+    if (!k) return std::numeric_limits<double>::infinity();
+    const std::size_t w = static_cast<std::size_t>(std::llround(5.0 / path.c_step_deg));
+    double m = 0.0;
+    for (std::size_t j = 0; j <= 2 * w; ++j) m = std::max(m, std::abs(path.d2x_dc2_mm_per_deg2[(*k + n - w + j) % n]));
+    return m;
+  };
+  const double at_zero = bend_near(0.0);
+  double best_c = 0.0;
+  double best = at_zero;
+  for (double c : {180.0, 120.0, 240.0, 60.0, 300.0}) {
+    const double b = bend_near(c);
+    if (b < best) {
+      best = b;
+      best_c = c;
+    }
+  }
+  return best < 0.25 * at_zero ? best_c : 0.0;
+}
+
 Result<CurveTable> write_spline_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format) {
-  return write_uniform(path, c_step_deg, format, Interpolation::kCubicSpline);
+  if (Status s = check_inputs(path, format); !s) return s.error();
+  return written_from(path, spline_start_c_deg(path), format, [&](const SampledPath& p) {
+    return write_uniform(p, c_step_deg, format, Interpolation::kCubicSpline);
+  });
 }
 
 Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const AdaptiveSettings& settings,
@@ -265,7 +353,7 @@ Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const Ad
   const std::size_t n = path.size();
   const double bound_mm = settings.bound_um / kUmPerMm;
   const std::size_t max_rows = widest_rows(path, settings);
-  auto x_written = [&](std::size_t k) { return round_to(path.x_mm[k % n], format.x_decimals); };
+  auto x_written = [&](std::size_t k) { return format.round_x_mm(path.x_mm[k % n]); };
   // The chord from row a to row b as written keeps the bound at every row in between.
   auto keeps_bound = [&](std::size_t a, std::size_t b) {
     const double ya = x_written(a);
@@ -283,8 +371,9 @@ Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const Ad
       return make_error(ErrorCode::kRefused, "adaptive G1 table: even one fine step at C" +
                                                  format_fixed(path.c_deg(a), 3) + " breaks the " +
                                                  format_fixed(settings.bound_um, 3) + " um bound (rounding to " +
-                                                 std::to_string(format.x_decimals) +
-                                                 " decimals?); write X with more decimals or raise the bound");
+                                                 format_fixed(1000.0 / format.x_increments_per_mm, 3) +
+                                                 " um, the control's X resolution?); raise MD10200 and "
+                                                 "int_incr_per_mm, or the bound");
     }
     // Furthest row that keeps the bound: grow the chord by doubling, then bisect between the
     // last length that kept it and the first that did not. A chord of X that bends one way
@@ -315,9 +404,10 @@ Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const Ad
                        "adaptive linear, bound " + format_fixed(settings.bound_um, 3) + " um");
 }
 
-Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const AdaptiveSettings& settings,
-                                               const CurveTableFormat& format) {
-  if (Status s = check_inputs(path, format); !s) return s.error();
+namespace {
+
+Result<CurveTable> adaptive_spline_from_c0(const SampledPath& path, const AdaptiveSettings& settings,
+                                           const CurveTableFormat& format) {
   if (Status s = check_adaptive(settings); !s) return s.error();
   const std::size_t n = path.size();
   const double bound_mm = settings.bound_um / kUmPerMm;
@@ -413,12 +503,40 @@ Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const Ad
   return std::move(*best);
 }
 
+}  // namespace
+
+Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const AdaptiveSettings& settings,
+                                               const CurveTableFormat& format) {
+  if (Status s = check_inputs(path, format); !s) return s.error();
+  return written_from(path, spline_start_c_deg(path), format,
+                      [&](const SampledPath& p) { return adaptive_spline_from_c0(p, settings, format); });
+}
+
+namespace {
+
+// The table in force's points as seen from its own start: C0 .. C360.
+TablePointsInForce from_its_start(const TablePointsInForce& in_force) {
+  TablePointsInForce out = in_force;
+  if (!out.c_deg.empty()) {
+    const double c0 = in_force.c_deg.front();
+    for (double& c : out.c_deg) c -= c0;
+  }
+  return out;
+}
+
+double start_of(const TablePointsInForce& in_force) { return in_force.c_deg.empty() ? 0.0 : in_force.c_deg.front(); }
+
+}  // namespace
+
 Result<CurveTable> write_table_at_points(const SampledPath& path, const TablePointsInForce& in_force,
                                          const CurveTableFormat& format) {
   if (Status s = check_inputs(path, format); !s) return s.error();
-  Result<std::vector<std::size_t>> rows = rows_of_points(path, in_force);
-  if (!rows) return rows.error();
-  return table_at_rows(path, *rows, in_force.interpolation, format, "points of the table in force");
+  const TablePointsInForce own = from_its_start(in_force);
+  return written_from(path, start_of(in_force), format, [&](const SampledPath& p) -> Result<CurveTable> {
+    Result<std::vector<std::size_t>> rows = rows_of_points(p, own);
+    if (!rows) return rows.error();
+    return table_at_rows(p, *rows, in_force.interpolation, format, "points of the table in force");
+  });
 }
 
 namespace {
@@ -506,7 +624,10 @@ Result<CurveTable> write_default_table(const SampledPath& path, const TableChoic
                                                "; raise the bound or allow CSPLINE tables; nothing was written");
   }
   if (in_force && (in_force->interpolation == Interpolation::kLinear || settings.allow_spline)) {
-    Result<CurveTable> kept = refine_points_in_force(path, *in_force, adaptive, format);
+    const TablePointsInForce own = from_its_start(*in_force);
+    Result<CurveTable> kept = written_from(path, start_of(*in_force), format, [&](const SampledPath& p) {
+      return refine_points_in_force(p, own, adaptive, format);
+    });
     if (kept && kept->error.max_abs_um <= settings.bound_um &&
         kept->block_count() <= kKeptBlocksOverFewest * best->block_count()) {
       return kept;

@@ -2,8 +2,10 @@
 // will follow it.
 //
 // Frame: machine frame. C (work spindle, leading axis) in degrees, X (wheel infeed,
-// following axis) in mm, 0 on the base circle. A table runs from C0 to C360; its last point
-// repeats the first X (periodic table, CTABDEF periodicity 1).
+// following axis) in mm, 0 on the base circle. A table runs over one turn, from C0 to C360 or,
+// for a CSPLINE table, from a start on the base circle c0 to c0 + 360 (spline_start_c_deg); its
+// last point repeats the first X (periodic table, CTABDEF periodicity 1), and the control reads
+// any C modulo the table's range.
 //
 // The command position error of a table is the largest |what the NC interpolates between
 // table points - exact X| over the rows of the fine path (SampledPath), with the C where it
@@ -11,8 +13,9 @@
 // because that is what the control interpolates. What the control interpolates:
 //  - kLinear (G1): straight segments between points.
 //  - kCubicSpline (CSPLINE with BNAT ENAT): the interpolating cubic spline through all points
-//    over C, curvature continuous at inner points, zero curvature at C0 and C360 (natural
-//    ends). See docs/nc_output.md for where this comes from and what it assumes.
+//    over C, curvature continuous at inner points, zero curvature at the first and last point
+//    (natural ends). Started on the base circle, where X'' is 0 anyway, the natural ends cost
+//    nothing. See docs/nc_output.md for where this comes from and what it assumes.
 //
 // Errors: kInvalidInput for a step or setting out of range (named); kRefused when no table of
 // the kind asked for keeps the bound (the message gives the best error reached and where).
@@ -49,7 +52,8 @@ struct CurveTable {
   int block_count() const { return static_cast<int>(points.size()); }
 };
 
-// What the NC makes of a table: value, dX/dC and d2X/dC2 at any C in [0, 360].
+// What the NC makes of a periodic table: value, dX/dC and d2X/dC2 at any C; a C outside the
+// points' range is read modulo the range, as the control reads a periodic table.
 // For kLinear the derivatives are those of the segment (d2 is 0; at a point, the segment
 // that starts there). Built from points in increasing C, at least 2 (linear) or 3 (spline).
 class TableInterpolant {
@@ -82,7 +86,13 @@ Result<CommandError> command_position_error(const SampledPath& path, const std::
 // path's step; points are the path's rows at those C.
 Result<CurveTable> write_linear_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format = {});
 
-// CSPLINE table at a uniform step (same rules as write_linear_table).
+// Where a CSPLINE table starts: the multiple of 60 deg (a point of every uniform step) with the
+// least |X''| within 5 deg, if that is under a quarter of the nose's at C0 (a start on the base
+// circle); otherwise 0. Natural ends force X'' = 0 at the start: true on the base circle, wrong
+// by the most at the nose. docs/nc_output.md has the figures.
+double spline_start_c_deg(const SampledPath& path);
+
+// CSPLINE table at a uniform step (same rules as write_linear_table), from spline_start_c_deg.
 Result<CurveTable> write_spline_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format = {});
 
 struct AdaptiveSettings {
@@ -98,9 +108,9 @@ Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const Ad
 
 // CSPLINE table with points chosen from the fine rows: starts from a uniform step and halves
 // every segment whose error breaks the bound until none does (the spline is global: each
-// round re-solves it), then drops, in one pass from C0 on, every point whose removal keeps
-// the bound and the widest step. Starts from max_step_deg, 2 and 1 deg; keeps the fewest
-// points. kRefused if no start converges.
+// round re-solves it), then drops, in one pass from its start on, every point whose removal
+// keeps the bound and the widest step. Starts from max_step_deg, 2 and 1 deg; keeps the fewest
+// points. Runs from spline_start_c_deg. kRefused if no start converges.
 Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const AdaptiveSettings& settings,
                                                const CurveTableFormat& format = {});
 
@@ -114,11 +124,13 @@ struct TableChoiceSettings {
 // between them: what the next table of the lobe may keep.
 struct TablePointsInForce {
   Interpolation interpolation = Interpolation::kLinear;
-  std::vector<double> c_deg;  // from 0 to 360, increasing
+  std::vector<double> c_deg;  // from its start c0 to c0 + 360, increasing
 };
 
 // A table of `in_force`'s kind at its C positions, X from `path`. kInvalidInput if a C is not
-// a row of the path (a table written on another grid) or the positions do not run 0..360.
+// a row of the path (a table written on another grid) or the positions do not run over one
+// turn from a start in [0, 360) (C0 for tables written before splines started on the base
+// circle).
 Result<CurveTable> write_table_at_points(const SampledPath& path, const TablePointsInForce& in_force,
                                          const CurveTableFormat& format = {});
 

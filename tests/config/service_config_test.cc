@@ -329,6 +329,26 @@ TEST_F(ServiceConfigTest, TheTablesAlternateBetweenTwoDistinctNumbers) {
                       at(6, "nc.table_number") + ": give table_numbers = [A, B] alone"));
 }
 
+TEST_F(ServiceConfigTest, TheControlsXResolutionAndTheArchiveHeaderAreRead) {
+  const std::string ok = "[gauge]\n" + kIntake + kNc;  // 5 lines
+  auto d = read(ok);
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->job.table_format.x_increments_per_mm, 10000.0) << "0.1 um unless told";
+  auto c = read(ok + "int_incr_per_mm = 1000\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->job.table_format.x_increments_per_mm, 1000.0);
+  EXPECT_EQ(c->job.table_format.x_decimals(), 3);
+  EXPECT_FALSE(c->job.nc_archive_header) << "no archive header unless asked";
+  auto h = read(ok + "archive_header = true\n");
+  ASSERT_TRUE(h.ok()) << h.error().message;
+  EXPECT_TRUE(h->job.nc_archive_header);
+  for (const char* bad : {"0", "1.5", "2000000", "\"1000\""}) {
+    auto r = read(ok + "int_incr_per_mm = " + bad + "\n");
+    ASSERT_FALSE(r.ok()) << bad;
+    EXPECT_NE(r.error().message.find(at(6, "nc.int_incr_per_mm")), std::string::npos) << r.error().message;
+  }
+}
+
 TEST_F(ServiceConfigTest, TheMainProgramTemplateIsReadWhenNamed) {
   dir_.write("main.mpf", "N10 {{program_name}}\nN20 EGON(X,\"FINE\",C,{{table_number}},0)\nM30\n");
   auto c = read("[gauge]\n" + kIntake + kNc + "main_template = \"main.mpf\"\n");

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -151,6 +152,34 @@ TEST_F(NcPushTest, EachPushWritesTheTableToTheOtherNumberAndTheMainProgramCoupli
   ASSERT_EQ(back.exit_code, 0) << back.output;
   EXPECT_NE(slurp(nc_file()).find("CTABDEF(X,C,2,1)"), std::string::npos) << "version 4 goes to number 2";
   EXPECT_NE(slurp(main_file).find("EGON(X,\"FINE\",C,2,0)"), std::string::npos) << slurp(main_file);
+}
+
+// A control at MD10200 = 1000 loading through the HMI: the table's X are whole microns (3
+// decimals), both files start with the archive header, the second run checks the table on the
+// control, header and all, before overwriting it, and `nc check` finds it as pushed.
+TEST_F(NcPushTest, AtOneMicronWithTheArchiveHeaderTheProgramsAreOnTheGridAndVerify) {
+  JobSettings js = job_settings();
+  js.nc_main_template = std::string(embedded::kNcMainTemplate);
+  js.nc_main_template_name = "cam_main.mpf";
+  js.nc_archive_header = true;
+  js.table_format.x_increments_per_mm = 1000.0;
+  const fs::path main_file = dir_ / "nc" / (part_.nc_program + "_MAIN.MPF");
+  for (int version = 1; version <= 2; ++version) {
+    auto r = measure(ground_with_table_in_force(js));
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    ASSERT_TRUE(r->pushed()) << r->not_pushed_reason;
+    const std::string table = slurp(nc_file());
+    const std::string main = slurp(main_file);
+    EXPECT_EQ(table.rfind("%_N_" + part_.nc_program + "_SPF\n;$PATH=/_N_SPF_DIR\n", 0), 0u) << table.substr(0, 200);
+    EXPECT_EQ(main.rfind("%_N_" + part_.nc_program + "_MAIN_MPF\n;$PATH=/_N_MPF_DIR\n", 0), 0u) << main.substr(0, 200);
+    Result<ParsedTable> t = parse_table_program(table, nc_file().string());
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    for (const CurvePoint& p : t->points) EXPECT_NEAR(p.x_mm * 1000.0, std::round(p.x_mm * 1000.0), 1e-9);
+    EXPECT_EQ(table.find("X0.0000"), std::string::npos) << "X is written with 3 decimals";
+    EXPECT_NE(table.find(" X0.000"), std::string::npos);
+  }
+  CommandResult check = run_command("nc check " + data());
+  EXPECT_EQ(check.exit_code, 0) << check.output;
 }
 
 TEST_F(NcPushTest, TableEditedByHandIsReportedAndKept) {

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 
+#include "core/atomic_file.h"
 #include "core/text_file.h"
 #include "job/nc_push.h"
 #include "nc_out/main_program.h"
@@ -62,7 +63,8 @@ class MainProgramPushTest : public testing::StoreTest {
   fs::path nc_file() const { return dir_ / "nc" / "CAM_TEST.SPF"; }
   fs::path main_file() const { return dir_ / "nc" / "CAM_TEST_MAIN.MPF"; }
 
-  Result<PushCompletion> push(NcFiles& files, const std::function<void(PushStep)>& observer = {}) {
+  Result<PushCompletion> push(NcFiles& files, const std::function<void(PushStep)>& observer = {},
+                              bool archive = false) {
     PushFacts facts;
     facts.run_id = run_;
     facts.reason = "run " + std::to_string(run_);
@@ -72,8 +74,10 @@ class MainProgramPushTest : public testing::StoreTest {
     options.observer = observer;
     return push_program(
         *store_, nc_file(), facts,
-        [this](int version) {
-          return testing::program_for(run_, version, 1.0 + version, {1, 2});
+        [this, archive](int version) -> Result<std::string> {
+          Result<std::string> p = testing::program_for(run_, version, 1.0 + version, {1, 2});
+          if (!p || !archive) return p;
+          return *archive_header(nc_file().stem().string(), NcProgramKind::kSubprogram) + *p;
         },
         options);
   }
@@ -199,6 +203,53 @@ TEST_F(MainProgramPushTest, ARollbackIsANewVersionAndAlternatesToo) {
   EXPECT_EQ(now->body_checksum, then->body_checksum);
   EXPECT_EQ(now->header["table_version"], "3");
   EXPECT_EQ(now->header["table_number"], "1");
+}
+
+// With the archive header the table and the main program start with the punched-tape lines the
+// HMI reads; each push checks the table on the control before overwriting it, the header and
+// all, and a rollback keeps it.
+TEST_F(MainProgramPushTest, ProgramsWithTheArchiveHeaderArePushedReadBackAndVerified) {
+  MainWriteFails files;
+  for (int version = 1; version <= 3; ++version) {
+    Result<PushCompletion> r = push(files, {}, /*archive=*/true);
+    ASSERT_TRUE(r.ok()) << "version " << version << ": " << r.error().message;
+    const std::string table = *read_regular_file(nc_file(), "table");
+    const std::string main = *read_regular_file(main_file(), "main program");
+    EXPECT_EQ(table.rfind("%_N_CAM_TEST_SPF\n;$PATH=/_N_SPF_DIR\n;", 0), 0u) << table.substr(0, 200);
+    EXPECT_EQ(main.rfind("%_N_CAM_TEST_MAIN_MPF\n;$PATH=/_N_MPF_DIR\n;", 0), 0u) << main.substr(0, 200);
+    Result<ParsedTable> t = parse_table_program(table, nc_file().string());
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    EXPECT_TRUE(verify_table_checksum(*t, nc_file().string()).ok());
+    EXPECT_EQ(t->table_number, version % 2 == 1 ? 1 : 2);
+    EXPECT_EQ(coupled(), t->table_number);
+    EXPECT_NE(main.find("\nN10 CAM_TEST "), std::string::npos) << main;
+    EXPECT_TRUE(check_not_edited_by_hand(*store_, nc_file(), files).ok());
+  }
+  Result<PushOutcome> back = rollback_to_version(*store_, nc_file().string(), 2, "anna", main_);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(read_regular_file(nc_file(), "table")->rfind("%_N_CAM_TEST_SPF\n", 0), 0u);
+  EXPECT_EQ(read_regular_file(main_file(), "main")->rfind("%_N_CAM_TEST_MAIN_MPF\n", 0), 0u);
+  // A hand edit under the header is still caught.
+  std::string edited = *read_regular_file(nc_file(), "table");
+  const std::size_t x = edited.find(" X", edited.find("CTABDEF"));
+  edited.insert(x + 2, "9");
+  ASSERT_TRUE(write_file_atomically(nc_file(), edited));
+  Status s = check_not_edited_by_hand(*store_, nc_file(), files);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().code, ErrorCode::kRefused);
+}
+
+TEST(ArchiveHeader, NamesTheProgramAndItsDirectoryAndRefusesANameTheHmiCannotRead) {
+  EXPECT_EQ(*archive_header("CAM_INTAKE_L1", NcProgramKind::kSubprogram),
+            "%_N_CAM_INTAKE_L1_SPF\n;$PATH=/_N_SPF_DIR\n");
+  EXPECT_EQ(*archive_header("CAM_INTAKE_L1_MAIN", NcProgramKind::kMainProgram),
+            "%_N_CAM_INTAKE_L1_MAIN_MPF\n;$PATH=/_N_MPF_DIR\n");
+  for (const char* bad : {"", "CAM-1", "CAM 1", "A_NAME_LONGER_THAN_24_CHARS"}) {
+    Result<std::string> h = archive_header(bad, NcProgramKind::kSubprogram);
+    ASSERT_FALSE(h.ok()) << bad;
+    EXPECT_EQ(h.error().code, ErrorCode::kInvalidInput);
+    EXPECT_NE(h.error().message.find("archive_header = false"), std::string::npos) << h.error().message;
+  }
 }
 
 TEST(WithTableVersion, SetsTheNumberOfTheVersionWhenTheHeaderNamesThePair) {

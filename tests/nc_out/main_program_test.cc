@@ -33,6 +33,7 @@ std::map<std::string, std::string> main_values(const std::string& table_number) 
           {"created_utc", "2026-12-01T10:00:00Z"},
           {"table_version", "3"},
           {"table_number", table_number},
+          {"table_start_c_deg", "180.000"},
           {"point_count", "91"},
           {"interpolation", "cspline"}};
 }
@@ -74,6 +75,16 @@ TEST(MainProgram, ATemplateThatDoesNotCallTheTableOrCouplesNothingIsRefused) {
   Result<std::string> no_coupling = render_main_program("N10 {{program_name}}\nM30\n", "b.mpf", main_values("1"));
   ASSERT_FALSE(no_coupling.ok());
   EXPECT_THAT(no_coupling.error().message, HasSubstr("couples no curve table"));
+}
+
+// A table subprogram run from a drive (execution from external source) is a call too; another
+// program's name in EXTCALL is not.
+TEST(MainProgram, AnExtcallOfTheTableSubprogramCallsIt) {
+  const std::string couple = "N20 EGON(X,\"FINE\",C,{{table_number}},0)\nM30\n";
+  EXPECT_TRUE(render_main_program("N10 EXTCALL(\"{{program_name}}\")\n" + couple, "a.mpf", main_values("1")).ok());
+  Result<std::string> other = render_main_program("N10 EXTCALL(\"OTHER\")\n" + couple, "b.mpf", main_values("1"));
+  ASSERT_FALSE(other.ok());
+  EXPECT_THAT(other.error().message, HasSubstr("does not call the table subprogram CAM_INTAKE_L1"));
 }
 
 TEST(TableNumbers, ConsecutiveVersionsAlternateAndTheHeaderNamesTheNumber) {

@@ -83,6 +83,10 @@ inline std::function<double(double)> ref_interpolant(const RefTable& t) {
     for (int i = 0; i < n; ++i) slope[static_cast<size_t>(i)] = s(i);
   }
   return [t, slope](double c) {
+    // A periodic table is read modulo its range (a table that starts on the base circle).
+    const double range = t.c.back() - t.c.front();
+    if (c < t.c.front()) c += range;
+    if (c > t.c.back()) c -= range;
     size_t i = static_cast<size_t>(std::upper_bound(t.c.begin(), t.c.end(), c) - t.c.begin());
     i = std::min(i == 0 ? 0 : i - 1, t.c.size() - 2);
     const double h = t.c[i + 1] - t.c[i];

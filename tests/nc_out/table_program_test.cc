@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/number_text.h"
 #include "nc_out/nc_template.h"
 #include "tests/nc_out/analytic_path.h"
 
@@ -71,10 +72,18 @@ TEST(TableProgram, RoundTripGivesTheSamePointsAndHeader) {
   }
 }
 
+// The spline starts where X bends least (spline_start_c_deg; for this path C120, where its
+// X'' is an eighth of that at C0) and runs one turn from there.
 TEST(TableProgram, SplineBodyStartsWithG1ThenNaturalCspline) {
-  const std::string p = program(table(Interpolation::kCubicSpline));
-  EXPECT_THAT(p, HasSubstr("CTABDEF(X,C,3,1)\nG1 C0.000 X0.0000\nBNAT ENAT CSPLINE C4.000 X"));
-  EXPECT_THAT(p, HasSubstr("\nC360.000 X0.0000\nCTABEND\nM17\n"));
+  const CurveTable t = table(Interpolation::kCubicSpline);
+  const double c0 = spline_start_c_deg(testing::analytic_path(4.0, 0.7));
+  EXPECT_EQ(c0, 120.0);
+  EXPECT_EQ(t.points.front().c_deg, c0);
+  EXPECT_EQ(t.points.back().c_deg, c0 + 360.0);
+  const std::string p = program(t);
+  EXPECT_THAT(p, HasSubstr("CTABDEF(X,C,3,1)\nG1 C120.000 X"));
+  EXPECT_THAT(p, HasSubstr("\nBNAT ENAT CSPLINE C124.000 X"));
+  EXPECT_THAT(p, HasSubstr("\nC480.000 X" + format_fixed(t.points.front().x_mm, 4) + "\nCTABEND\nM17\n"));
 }
 
 TEST(TableProgram, AHandEditedXIsDetectedWithItsLine) {
@@ -200,10 +209,12 @@ TEST(TableProgram, TheExampleTemplatesRenderWithTheDocumentedPlaceholders) {
       main_values["point_count"] = "91";
       main_values["interpolation"] = "cspline";
       main_values["table_version"] = "7";
+      main_values["table_start_c_deg"] = "180.000";
       Result<std::string> r = render_nc_template(ss.str(), file, main_values);
       ASSERT_TRUE(r.ok()) << r.error().message;
       EXPECT_THAT(*r, HasSubstr("N10 CAM_INTAKE_L1 "));
       EXPECT_THAT(*r, HasSubstr("EGON(X,\"FINE\",C,1,0)"));
+      EXPECT_THAT(*r, HasSubstr("G0 C180.000 "));
     }
   }
 }

@@ -16,7 +16,7 @@ namespace {
 using testing::analytic_path;
 using testing::kRadPerDeg;
 
-constexpr CurveTableFormat kSixDecimals{3, 6};  // X to 1e-6 mm: rounding far below the checks
+constexpr CurveTableFormat kSixDecimals{3, 1e6};  // X to 1e-6 mm: rounding far below the checks
 
 std::string program_of(const CurveTable& t, const CurveTableFormat& format = kSixDecimals) {
   Result<std::string> p = render_table_program("{{table_header}}\nCTABDEF(X,C,1,1)\n{{table_blocks}}\nCTABEND\nM17\n",
@@ -92,6 +92,55 @@ TEST(TableWriter, RefusesAStepThatDoesNotFitTheGrid) {
     Result<CurveTable> t = write_linear_table(p, h);
     ASSERT_FALSE(t.ok()) << h;
     EXPECT_EQ(t.error().code, ErrorCode::kInvalidInput);
+  }
+}
+
+// At the control's default MD10200 (1000 increments/mm) every X lies on the 1 um grid, the
+// program carries 3 decimals, and the reported error is that of the rounded points: a
+// 0.1 deg G1 table misses a 4 mm cosine by 0.002 um between points, the rounding by up to
+// 0.5 um.
+TEST(TableWriter, AtOneMicronResolutionPointsAreOnTheGridAndTheErrorIncludesTheRounding) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  const CurveTableFormat um{3, 1000.0};
+  Result<CurveTable> coarse = write_linear_table(p, 0.1, um);
+  Result<CurveTable> fine = write_linear_table(p, 0.1, kSixDecimals);
+  ASSERT_TRUE(coarse.ok() && fine.ok());
+  for (const CurvePoint& pt : coarse->points) {
+    EXPECT_NEAR(pt.x_mm * 1000.0, std::round(pt.x_mm * 1000.0), 1e-9) << "C" << pt.c_deg;
+  }
+  EXPECT_LT(fine->error.max_abs_um, 0.01);
+  EXPECT_GT(coarse->error.max_abs_um, 0.4) << "the rounding to 1 um is part of the command error";
+  EXPECT_LE(coarse->error.max_abs_um, 0.5 + fine->error.max_abs_um + 1e-9);
+  const std::string program = program_of(*coarse, um);
+  EXPECT_NE(program.find("\nG1 C0.000 X0.000\n"), std::string::npos) << program.substr(0, 600);
+  EXPECT_NEAR(coarse->error.max_abs_um, testing::ref_error_um(program, p), 1e-4);
+}
+
+// A resolution that is not a power of ten: X on the increment (1/3000 mm), not on a decimal;
+// written with 4 decimals, which the control reads back as the same increment.
+TEST(TableWriter, RoundsToAnIncrementThatIsNotAPowerOfTen) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  const CurveTableFormat third{3, 3000.0};
+  EXPECT_EQ(third.x_decimals(), 4);
+  Result<CurveTable> t = write_spline_table(p, 2.0, third);
+  ASSERT_TRUE(t.ok()) << t.error().message;
+  bool off_decimal_grid = false;
+  for (const CurvePoint& pt : t->points) {
+    EXPECT_NEAR(pt.x_mm * 3000.0, std::round(pt.x_mm * 3000.0), 1e-7) << "C" << pt.c_deg;
+    off_decimal_grid |= std::abs(pt.x_mm * 1e4 - std::round(pt.x_mm * 1e4)) > 1e-3;
+  }
+  EXPECT_TRUE(off_decimal_grid) << "rounded to 4 decimals, not to the 1/3000 mm increment";
+  // The text is within 0.05 um of each increment; the errors agree to that.
+  EXPECT_NEAR(t->error.max_abs_um, testing::ref_error_um(program_of(*t, third), p), 0.06);
+}
+
+TEST(TableWriter, RefusesAResolutionTheControlCannotHave) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  for (double incr : {0.0, 0.5, 2500.5, 2e6, std::nan("")}) {
+    Result<CurveTable> t = write_linear_table(p, 1.0, CurveTableFormat{3, incr});
+    ASSERT_FALSE(t.ok()) << incr;
+    EXPECT_EQ(t.error().code, ErrorCode::kInvalidInput);
+    EXPECT_NE(t.error().message.find("MD10200"), std::string::npos) << t.error().message;
   }
 }
 
