@@ -189,7 +189,20 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
       ->capture_default_str();
 }
 
-// The job settings of the options, for `lp`.
+// The job's speed program (empty: one speed) and the templates that go with it, the embedded
+// ones unless --main-template names the main program's: with a speed program the main program
+// must call the speed subprogram (examples/sinumerik/cam_main_speed.mpf).
+void set_speed_program(JobSettings& js, std::optional<WorkSpeedSettings> speed, const MeasureOptions& o) {
+  js.speed = std::move(speed);
+  js.nc_speed_template = js.speed ? std::string(embedded::kNcSpeedTemplate) : std::string();
+  js.nc_speed_template_name = js.speed ? "embedded:cam_speed.spf" : "";
+  if (o.main_template_path.empty()) {
+    js.nc_main_template = std::string(js.speed ? embedded::kNcMainSpeedTemplate : embedded::kNcMainTemplate);
+    js.nc_main_template_name = js.speed ? "embedded:cam_main_speed.mpf" : "embedded:cam_main.mpf";
+  }
+}
+
+// The job settings of the options, for `lp`: with the part file's [speed], its speed program.
 Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions& o, bool build_on_table_in_force) {
   if (Status ids = check_identity_options(o); !ids) return ids.error();
   std::string template_name;
@@ -209,6 +222,7 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
   Result<std::string> main_tmpl = load_main_template(o.main_template_path, js.nc_main_template_name);
   if (!main_tmpl) return main_tmpl.error();
   js.nc_main_template = std::move(*main_tmpl);
+  set_speed_program(js, lp.file.speed, o);
   js.table_step_deg = o.table_step_deg;
   js.table_kind = o.table == "linear"            ? TableKind::kLinear
                   : o.table == "spline"          ? TableKind::kSpline
@@ -339,6 +353,8 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
   if (!job) return report_error(job.error());
   LoopSettings ls;
   ls.job = std::move(*job);
+  // The grinder grinds at one speed unless --speed-program: so does the table program.
+  set_speed_program(ls.job, std::nullopt, o);
   ls.machine = lo.machine;
   ls.gauge = sim_settings;
   ls.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
@@ -381,6 +397,8 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
     if (!constant) return report_error(constant.error());
     constant_last = constant->back();
     ls.machine.speed_program = speed->plan.program;
+    // The tables of these parts go to the control with the speed subprogram beside them.
+    set_speed_program(ls.job, speed->settings, o);
     std::printf("\nat the speed program, %.0f mm/min on the lobe, %.0f rpm on the base circle:\n",
                 speed->settings.lobe_speed_mm_per_min, speed->settings.base_speed_rpm);
   }

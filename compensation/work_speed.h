@@ -56,7 +56,7 @@ struct WorkSpeedSettings {
   double lobe_speed_mm_per_min = 2000.0;
   double lobe_threshold_mm = 0.01;
   // The work spindle's acceleration limit (either sense).
-  double c_acceleration_max_deg_per_s2 = 3600.0;
+  double c_acceleration_max_deg_per_s2 = 1000.0;
   // The wheel slide's limits, as for the table guards.
   double x_velocity_max_mm_per_s = 300.0;
   double x_acceleration_max_mm_per_s2 = 20000.0;

@@ -221,18 +221,37 @@ void read_table_numbers(TomlReader& nr, const toml::table& t, JobSettings& job) 
 
 // [nc]: the output directory (writable), the template (required, read now), the main
 // program's template (optional, read now) and the table keys.
-Status read_nc_table(TomlReader& top, const ConfigFile& f, JobSettings& job) {
+Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
+  JobSettings& job = c.job;
   std::string template_path;
   job.nc_dir = f.resolve("nc");
   if (const toml::table* t = top.subtable("nc")) {
     TomlReader nr(*t, f.source, "nc.");
-    nr.allow_only({"dir", "template", "table", "table_step_deg", "command_error_um", "max_segment_deg", "allow_spline",
-                   "require_approval", "table_number", "table_numbers", "main_template", "int_incr_per_mm",
-                   "archive_header", "x_min_mm", "x_max_mm", "x_velocity_max_mm_per_s", "x_acceleration_max_mm_per_s2",
-                   "work_speed_rpm"});
+    nr.allow_only({"dir",
+                   "template",
+                   "table",
+                   "table_step_deg",
+                   "command_error_um",
+                   "max_segment_deg",
+                   "allow_spline",
+                   "require_approval",
+                   "table_number",
+                   "table_numbers",
+                   "main_template",
+                   "int_incr_per_mm",
+                   "archive_header",
+                   "x_min_mm",
+                   "x_max_mm",
+                   "x_velocity_max_mm_per_s",
+                   "x_acceleration_max_mm_per_s2",
+                   "work_speed_rpm",
+                   "speed_template",
+                   "main_speed_template"});
     job.nc_dir = f.resolve(nr.text("dir", "nc"));
     template_path = nr.text("template", "");
     const std::string main_path = nr.text("main_template", "");
+    const std::string speed_path = nr.text("speed_template", "");
+    const std::string main_speed_path = nr.text("main_speed_template", "");
     read_nc_table_keys(nr, job);
     read_table_numbers(nr, *t, job);
     if (nr.error) return *nr.error;
@@ -241,6 +260,18 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, JobSettings& job) {
       if (!text) return at_key(nr, "main_template", text.error());
       job.nc_main_template = std::move(*text);
       job.nc_main_template_name = f.resolve(main_path).string();
+    }
+    if (!speed_path.empty()) {
+      Result<std::string> text = read_text(f.resolve(speed_path), "NC speed subprogram template");
+      if (!text) return at_key(nr, "speed_template", text.error());
+      job.nc_speed_template = std::move(*text);
+      job.nc_speed_template_name = f.resolve(speed_path).string();
+    }
+    if (!main_speed_path.empty()) {
+      Result<std::string> text = read_text(f.resolve(main_speed_path), "NC main program template (speed)");
+      if (!text) return at_key(nr, "main_speed_template", text.error());
+      c.nc_main_speed_template = std::move(*text);
+      c.nc_main_speed_template_name = f.resolve(main_speed_path).string();
     }
     if (!(job.axis_limits.x_min_mm < job.axis_limits.x_max_mm)) {
       return make_error(ErrorCode::kInvalidInput, nr.where("x_max_mm") + ": must be above x_min_mm");
@@ -564,7 +595,7 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   if (Status s = read_gauge_table(top, f, c); !s) return s.error();
   if (Status s = read_analysis_table(top, f, c.job.analysis); !s) return s.error();
   if (Status s = read_compensation_table(top, f, c.job); !s) return s.error();
-  if (Status s = read_nc_table(top, f, c.job); !s) return s.error();
+  if (Status s = read_nc_table(top, f, c); !s) return s.error();
   if (Status s = read_database_table(top, f, c.job); !s) return s.error();
   Result<std::optional<HttpSettings>> http = read_http_table(top, f);
   if (!http) return http.error();
@@ -632,6 +663,11 @@ JobSettings job_for(const ServiceConfig& config, const ServicePart& part) {
   js.part = part.file.part;
   js.design = part.design;
   js.nc_program = part.file.nc_program;
+  js.speed = part.file.speed;
+  if (js.speed && !config.nc_main_speed_template.empty()) {
+    js.nc_main_template = config.nc_main_speed_template;
+    js.nc_main_template_name = config.nc_main_speed_template_name;
+  }
   return js;
 }
 

@@ -54,6 +54,11 @@ struct ServiceConfig {
   // Everything a job needs except the part: poller, analysis, compensation, NC output,
   // database (JobSettings' part, design and nc_program are filled per part by job_for).
   JobSettings job;
+  // For the parts with a speed program (their part file's [speed]): [nc] main_speed_template,
+  // the main program that calls the speed subprogram, used instead of [nc] main_template;
+  // the speed subprogram's template, [nc] speed_template, is job.nc_speed_template.
+  std::string nc_main_speed_template;
+  std::string nc_main_speed_template_name;
   std::optional<HttpSettings> http;  // absent: no HTTP API
   std::optional<PlcSettings> plc;    // absent: no PLC trigger
 };
@@ -87,7 +92,8 @@ std::string configured_parts(const ServiceConfig& config);
 // The part the PLC names by `plc_part_number` and `lobe`; kNotFound listing the numbered ones.
 Result<const ServicePart*> find_plc_part(const ServiceConfig& config, int plc_part_number, int lobe);
 
-// The job settings for measuring `part` under `config`.
+// The job settings for measuring `part` under `config`: with the part's speed program (its
+// [speed]) the main program is [nc] main_speed_template, when set.
 JobSettings job_for(const ServiceConfig& config, const ServicePart& part);
 
 }  // namespace gaugeloop

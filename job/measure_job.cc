@@ -25,7 +25,9 @@
 #include "core/number_text.h"
 #include "core/verdict_text.h"
 #include "job/nc_push.h"
+#include "job/speed_files.h"
 #include "job/tolerance_settings.h"
+#include "nc_out/main_program.h"
 #include "nc_out/table_guards.h"
 #include "nc_out/table_program.h"
 #include "report/run_json.h"
@@ -42,11 +44,46 @@ Error in_step(const std::string& step, Error e) {
   return e;
 }
 
-// A table and the exact path it was chosen against.
+// The speed program is planned on the fine path (0.01 deg) and written from every 0.5 deg of
+// it: the feed blocks are tens of degrees long, and the writer's search over block ends grows
+// with the square of the points a block may span.
+constexpr double kSpeedProgramStepDeg = 0.5;
+
+// A speed program planned for a path, and its feed blocks as the control will run them.
+struct BuiltSpeed {
+  WorkSpeedPlan plan;
+  WorkSpeedProgram written;  // the plan's program on the kSpeedProgramStepDeg grid
+  SpeedProfile profile;
+};
+
+// A table and the exact path it was chosen against, and its speed program when there is one.
 struct BuiltTable {
   SampledPath fine;
   CurveTable table;
+  std::optional<BuiltSpeed> speed;
 };
+
+// The lobe's speed program on `path` (JobSettings::speed), within the slide's limits of the
+// axis guards. Errors: kInvalidInput for settings out of range (naming the key); kRefused
+// when no feed profile keeps the speed bound at the control's block rate.
+Result<BuiltSpeed> build_speed(const MachinePath& path, const JobSettings& s) {
+  WorkSpeedSettings ws = *s.speed;
+  ws.x_velocity_max_mm_per_s = s.axis_limits.x_velocity_max_mm_per_s;
+  ws.x_acceleration_max_mm_per_s2 = s.axis_limits.x_acceleration_max_mm_per_s2;
+  Result<WorkSpeedPlan> plan = plan_work_speed(path, s.part, ws);
+  if (!plan) return plan.error();
+  BuiltSpeed out;
+  const auto every = static_cast<std::size_t>(std::lround(kSpeedProgramStepDeg / plan->program.c_step_deg));
+  out.written.c_step_deg = plan->program.c_step_deg * static_cast<double>(every);
+  for (std::size_t k = 0; k < plan->program.speed_rpm.size(); k += every) {
+    out.written.speed_rpm.push_back(plan->program.speed_rpm[k]);
+  }
+  Result<SpeedProfile> profile = write_speed_profile(out.written, s.speed_profile);
+  if (!profile) return profile.error();
+  out.plan = std::move(*plan);
+  out.profile = std::move(*profile);
+  return out;
+}
 
 // The wheel path of `lift_mm` on the fine C grid (compute_machine_path: exact rows), the
 // axis guards on it, the table the settings ask for, and the guards on the table as the NC
@@ -56,6 +93,11 @@ Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings&
   Result<MachinePath> path = compute_machine_path(lift_mm, s.part, kFinePathStepDeg);
   if (!path) return in_step("wheel path", path.error());
   BuiltTable out;
+  if (s.speed) {
+    Result<BuiltSpeed> speed = build_speed(*path, s);
+    if (!speed) return in_step("speed program", speed.error());
+    out.speed = std::move(*speed);
+  }
   out.fine.c_step_deg = kFinePathStepDeg;
   out.fine.x_mm = std::move(path->x_mm);
   out.fine.dx_dc_mm_per_deg = std::move(path->dx_dc_mm_per_deg);
@@ -111,6 +153,17 @@ Result<std::string> with_archive_header(const JobSettings& s, Result<std::string
   return *header + *program;
 }
 
+// The speed subprogram for `speed`, from the settings' template, for run `run_id`.
+Result<std::string> render_speed(const JobSettings& s, const BuiltSpeed& speed, std::int64_t run_id,
+                                 const std::string& created_utc) {
+  std::map<std::string, std::string> values = template_values(s);
+  values["run_id"] = std::to_string(run_id);
+  values["created_utc"] = created_utc;
+  SpeedProvenance provenance;
+  provenance.run_id = run_id;
+  return render_speed_program(s.nc_speed_template, s.nc_speed_template_name, values, speed.profile, provenance);
+}
+
 // The main program's template and the part it grinds, for push_program.
 MainProgramSource main_source(const JobSettings& s, const std::string& created_utc) {
   MainProgramSource m = main_program_source(s);
@@ -163,6 +216,15 @@ std::string settings_text(const JobSettings& s) {
   line("nc.table_numbers", std::to_string(s.table_numbers[0]) + " " + std::to_string(s.table_numbers[1]));
   line("nc.main_template", s.nc_main_template_name);
   line("nc.archive_header", s.nc_archive_header ? "true" : "false");
+  if (s.speed) {
+    // Only with a speed program, so the settings of a run at one speed hash as before.
+    line("speed.base_speed_rpm", num(s.speed->base_speed_rpm));
+    line("speed.lobe_speed_mm_per_min", num(s.speed->lobe_speed_mm_per_min));
+    line("speed.lobe_threshold_mm", num(s.speed->lobe_threshold_mm));
+    line("speed.c_acceleration_max_deg_per_s2", num(s.speed->c_acceleration_max_deg_per_s2));
+    line("nc.speed_template", s.nc_speed_template_name);
+    line("nc.speed_error_bound_percent", num(s.speed_profile.bound_percent));
+  }
   out += tolerances_settings_text(s.part.tolerances);
   return out;
 }
@@ -206,8 +268,21 @@ Result<Prepared> prepare(const JobSettings& s) {
   if (Status l = check_axis_limits(s.axis_limits); !l) return l.error();
   Result<PeriodicSpline> design = PeriodicSpline::fit(s.design.angle_deg, s.design.lift_mm);
   if (!design) return in_step("design lift table " + s.design.source, design.error());
+  if (s.speed && s.nc_speed_template.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "part " + s.part.name +
+                          " has a [speed] section, but no speed subprogram template is set: "
+                          "give one (examples/sinumerik/cam_speed.spf, [nc] speed_template) or remove [speed]");
+  }
   Result<BuiltTable> design_table = build_table(*design, s);
   if (!design_table) return in_step("the design", design_table.error());
+  // The speed subprogram renders, and the main program calls it: found before measuring.
+  std::optional<std::string> speed_program;
+  if (design_table->speed) {
+    Result<std::string> text = render_speed(s, *design_table->speed, 0, "");
+    if (!text) return in_step("speed program", text.error());
+    speed_program = std::move(*text);
+  }
   Result<DesignReading> design_reading = DesignReading::of_lobe(*design, s.part);
   if (!design_reading) return in_step("flat-probe reading", design_reading.error());
   // Zones that do not fit this lobe are a mistake in the part file: found before measuring.
@@ -224,9 +299,13 @@ Result<Prepared> prepare(const JobSettings& s) {
                                                     design_table->table, provenance, s.table_format));
     if (!program) return program.error();
     if (s.nc_main_template.empty()) continue;
-    if (Result<std::string> m = render_main_for_table(main_source(s, ""), s.nc_dir / (s.nc_program + ".SPF"), *program);
-        !m) {
-      return m.error();
+    Result<std::string> m = render_main_for_table(main_source(s, ""), s.nc_dir / (s.nc_program + ".SPF"), *program);
+    if (!m) return m.error();
+    if (speed_program) {
+      if (Status c = check_main_calls_speed_program(*m, s.nc_main_template_name, speed_program_name(s.nc_program));
+          !c) {
+        return c.error();
+      }
     }
   }
   return Prepared{std::move(*design), std::move(*design_reading)};
@@ -659,6 +738,13 @@ class JobRun {
     if (built_) {
       what += "; table " + std::to_string(built_->table.block_count()) + " blocks (" + built_->table.writer +
               "), command position error " + format_fixed(built_->table.error.max_abs_um, 3) + " um";
+      if (const std::optional<BuiltSpeed>& sp = built_->speed) {
+        what += "; speed program " + std::to_string(sp->profile.block_count()) + " feed blocks (speed error " +
+                format_fixed(sp->profile.error.max_speed_error_percent, 2) + " %), one turn " +
+                format_fixed(sp->plan.cycle_time_s, 3) + " s against " +
+                format_fixed(sp->plan.constant_cycle_time_s, 3) + " s at " + format_fixed(s_.speed->base_speed_rpm, 0) +
+                " rpm";
+      }
     }
     if (!verdict_reasons_.empty()) what += "; " + verdict_reasons_;
     if (!evidence_.empty()) what += "; " + evidence_;
@@ -689,6 +775,12 @@ class JobRun {
       report_.table_writer = built_->table.writer;
       report_.table_blocks = built_->table.block_count();
       report_.command_error_um = built_->table.error.max_abs_um;
+      if (built_->speed) {
+        report_.speed_cycle_time_s = built_->speed->plan.cycle_time_s;
+        report_.constant_cycle_time_s = built_->speed->plan.constant_cycle_time_s;
+        report_.speed_blocks = built_->speed->profile.block_count();
+        report_.speed_error_percent = built_->speed->profile.error.max_speed_error_percent;
+      }
     }
     return {};
   }
@@ -748,8 +840,13 @@ class JobRun {
     PushOptions options;
     options.files = s_.nc_files.get();
     options.main = main_source(s_, finished_utc_);
-    Result<PushCompletion> version = push_program(
-        store_, nc_file_, push_facts(), [this](int table_version) { return render(table_version); }, options);
+    const RenderForVersion render_table = [this](int table_version) { return render(table_version); };
+    Result<PushCompletion> version = [&]() -> Result<PushCompletion> {
+      if (!built_->speed) return push_program(store_, nc_file_, push_facts(), render_table, options);
+      Result<std::string> speed = render_speed(s_, *built_->speed, report_.run_id, finished_utc_);
+      if (!speed) return speed.error();
+      return push_program_with_speed(store_, nc_file_, push_facts(), render_table, *speed, options);
+    }();
     if (!version) {
       // A table edited by hand on the control is not overwritten: a person decides.
       if (version.error().code == ErrorCode::kRefused)

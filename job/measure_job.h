@@ -13,6 +13,7 @@
 #include "acquisition/poller.h"
 #include "compensation/analysis.h"
 #include "compensation/correction.h"
+#include "compensation/work_speed.h"
 #include "core/lift_table.h"
 #include "core/part.h"
 #include "core/result.h"
@@ -20,6 +21,7 @@
 #include "core/tolerance.h"
 #include "job/nc_files.h"
 #include "job/nc_push.h"
+#include "nc_out/speed_table.h"
 #include "nc_out/table_guards.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
@@ -74,6 +76,15 @@ struct JobSettings {
   // header (%_N_<nc_program>_SPF, ;$PATH=/_N_SPF_DIR), and so does the main program beside
   // it, so the HMI loads them as they are (nc_out/table_program.h).
   bool nc_archive_header = false;
+  // The lobe's work speed program (the part file's [speed]); empty: one speed. With it, every
+  // table is written with a speed subprogram <nc_dir>/<nc_program>_SPEED.SPF beside it,
+  // planned on the corrected wheel path (plan_work_speed, the slide's limits from
+  // axis_limits) and rendered from nc_speed_template; the main program must call it
+  // (docs/variable_speed.md, docs/nc_output.md "Variable work speed on the control").
+  std::optional<WorkSpeedSettings> speed;
+  std::string nc_speed_template;       // template text, required with `speed`
+  std::string nc_speed_template_name;  // for messages
+  SpeedProfileSettings speed_profile;  // the feed blocks' speed error bound and block time
   // What the infeed axis may do: software limits and the slide's velocity and acceleration
   // at the programmed work speed. Defaults fit the sample lobes at 60 rpm with margin.
   AxisLimits axis_limits{-0.5, 20.0, 300.0, 20000.0, 60.0};
@@ -146,6 +157,12 @@ struct JobReport {
   std::string table_writer;   // how its points were chosen, e.g. "adaptive cspline"
   int table_blocks = 0;
   double command_error_um = 0.0;  // largest |NC interpolation - exact X|
+  // With a speed program (JobSettings::speed): one turn under it and at the base speed, s, and
+  // its feed blocks as written; 0 without.
+  double speed_cycle_time_s = 0.0;
+  double constant_cycle_time_s = 0.0;
+  int speed_blocks = 0;
+  double speed_error_percent = 0.0;
   std::filesystem::path nc_file;  // empty when not pushed
   int table_version = 0;          // 0 when not pushed
   std::string not_pushed_reason;  // empty when pushed

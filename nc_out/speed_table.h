@@ -53,11 +53,11 @@ struct SpeedProfileFormat {
 };
 
 struct SpeedProfileSettings {
-  double bound_percent = 1.0;  // largest speed error allowed
+  double bound_percent = 2.0;  // largest speed error allowed: the grinding-point speed, and h_eq, within 2 %
   double max_step_deg = 30.0;  // no block turns C further than this
   // No block shorter than this at the speed it runs: the control must prepare blocks faster
   // than it runs them (a few interpolation cycles each; check MD10050/MD10070 on the control).
-  double min_block_time_s = 0.012;
+  double min_block_time_s = 0.008;
 };
 
 // What the control runs from a profile, against the program.

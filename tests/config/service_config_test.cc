@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "tests/support/refused.h"
@@ -311,6 +312,35 @@ TEST_F(ServiceConfigTest, TheHarmonicsFedBackAreChosenOrFixed) {
                       at(7, "compensation.harmonics") + ": 181 is out of range; allowed [0, 180]"));
   EXPECT_TRUE(refused(read(ok + "harmonics = 20\nmax_harmonic = 30\n"), ErrorCode::kInvalidInput,
                       at(8, "compensation.max_harmonic") + ": is the cap of harmonics = \"auto\""));
+}
+
+// A part file with [speed]: its job takes the speed program and [nc] main_speed_template; the
+// speed subprogram's template is required, and a main program that does not call the speed
+// subprogram is refused at start, naming the template.
+TEST_F(ServiceConfigTest, APartWithASpeedProgramTakesTheSpeedTemplates) {
+  std::ifstream in(dir_.path() / "parts" / "intake_flat.toml");
+  const std::string intake((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  dir_.write("parts/intake_speed.toml", intake + "\n[speed]\nlobe_speed_mm_per_min = 2500.0\n");
+  fs::copy_file(kExamples / "sinumerik" / "cam_speed.spf", dir_.path() / "speed.spf");
+  fs::copy_file(kExamples / "sinumerik" / "cam_main.mpf", dir_.path() / "main.mpf");
+  fs::copy_file(kExamples / "sinumerik" / "cam_main_speed.mpf", dir_.path() / "main_speed.mpf");
+  const std::string ok = "[gauge]\n[[part]]\nfile = \"parts/intake_speed.toml\"\n" + kNc;  // 5 lines
+  auto c = read(ok);
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(c.error().message.find("[nc] speed_template"), std::string::npos) << c.error().message;
+  c = read(ok + "speed_template = \"speed.spf\"\nmain_template = \"main.mpf\"\n");
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(c.error().message.find("main.mpf: the main program does not call the speed subprogram CAM_INTAKE_L1_SPEED"),
+            std::string::npos)
+      << c.error().message;
+  c = read(ok +
+           "speed_template = \"speed.spf\"\nmain_template = \"main.mpf\"\nmain_speed_template = \"main_speed.mpf\"\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  const JobSettings js = job_for(*c, c->parts.front());
+  ASSERT_TRUE(js.speed.has_value());
+  EXPECT_EQ(js.speed->lobe_speed_mm_per_min, 2500.0);
+  EXPECT_EQ(js.nc_main_template_name, (dir_.path() / "main_speed.mpf").string());
+  EXPECT_EQ(js.nc_speed_template_name, (dir_.path() / "speed.spf").string());
 }
 
 TEST_F(ServiceConfigTest, TheTablesAlternateBetweenTwoDistinctNumbers) {

@@ -19,6 +19,7 @@
 #include "core/atomic_file.h"
 #include "job/measure_job.h"
 #include "job/nc_push.h"
+#include "job/speed_files.h"
 #include "nc_out/table_program.h"
 #include "simulator/gauge_simulator.h"
 #include "storage/run_store.h"
@@ -180,6 +181,70 @@ TEST_F(NcPushTest, AtOneMicronWithTheArchiveHeaderTheProgramsAreOnTheGridAndVeri
   }
   CommandResult check = run_command("nc check " + data());
   EXPECT_EQ(check.exit_code, 0) << check.output;
+}
+
+// A lobe with a speed program: each push writes the table, the speed subprogram beside it
+// (read back: the speed the control runs is within the bound of the program planned on the
+// corrected path, and the turn is the slower one) and the main program that couples the new
+// table number and calls the speed subprogram; every placeholder filled.
+TEST_F(NcPushTest, WithASpeedProgramEachPushWritesTheSpeedSubprogramTheMainProgramCalls) {
+  JobSettings js = job_settings();
+  js.speed = WorkSpeedSettings{};
+  js.nc_speed_template = std::string(embedded::kNcSpeedTemplate);
+  js.nc_speed_template_name = "cam_speed.spf";
+  js.nc_main_template = std::string(embedded::kNcMainSpeedTemplate);
+  js.nc_main_template_name = "cam_main_speed.mpf";
+  const fs::path main_file = dir_ / "nc" / (part_.nc_program + "_MAIN.MPF");
+  const fs::path speed_file = dir_ / "nc" / (part_.nc_program + "_SPEED.SPF");
+  for (int version = 1; version <= 2; ++version) {
+    auto r = measure(ground_with_table_in_force(js));
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    ASSERT_TRUE(r->pushed()) << r->not_pushed_reason;
+    const std::string n = version % 2 == 1 ? "1" : "2";
+    const std::string table = slurp(nc_file());
+    const std::string main = slurp(main_file);
+    const std::string speed = slurp(speed_file);
+    EXPECT_NE(table.find("CTABDEF(X,C," + n + ",1)"), std::string::npos) << "version " << version;
+    EXPECT_NE(main.find("EGON(X,\"FINE\",C," + n + ",0)"), std::string::npos) << main;
+    EXPECT_NE(main.find("\nN60 " + part_.nc_program + "_SPEED P10"), std::string::npos) << main;
+    for (const std::string* text : {&table, &main, &speed}) EXPECT_EQ(text->find("{{"), std::string::npos) << *text;
+    EXPECT_NE(speed.find("run_id: " + std::to_string(r->run_id)), std::string::npos) << speed.substr(0, 600);
+    Result<ParsedSpeedProgram> back = read_speed_program(nc_file());
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    EXPECT_EQ(static_cast<int>(back->blocks.size()), r->speed_blocks);
+    // The speed as written: slower on the lobe than on the base circle (C 180 is on it).
+    double slowest = 1e9, at_base = 0.0;
+    for (const SpeedBlock& b : back->blocks) {
+      slowest = std::min(slowest, b.feed_deg_per_min / 360.0);
+      if (b.c_end_deg > 150.0 && b.c_end_deg < 210.0) at_base = b.feed_deg_per_min / 360.0;
+    }
+    EXPECT_NEAR(at_base, js.speed->base_speed_rpm, 0.01) << speed;
+    EXPECT_LT(slowest, 0.5 * js.speed->base_speed_rpm) << speed;
+    EXPECT_LE(r->speed_error_percent, js.speed_profile.bound_percent);
+    EXPECT_GT(r->speed_cycle_time_s, 1.5 * r->constant_cycle_time_s);
+    EXPECT_NEAR(r->constant_cycle_time_s, 60.0 / js.speed->base_speed_rpm, 1e-6);
+  }
+}
+
+// With a speed program, a main program that does not call the speed subprogram (the one for
+// one speed) is refused before the gauge is read, naming the template and the subprogram.
+TEST_F(NcPushTest, WithASpeedProgramAMainProgramNotCallingItIsRefusedBeforeMeasuring) {
+  JobSettings js = job_settings();
+  js.speed = WorkSpeedSettings{};
+  js.nc_speed_template = std::string(embedded::kNcSpeedTemplate);
+  js.nc_speed_template_name = "cam_speed.spf";
+  js.nc_main_template = std::string(embedded::kNcMainTemplate);
+  js.nc_main_template_name = "/etc/gaugeloop/cam_main.mpf";
+  auto report = measure(js);
+  ASSERT_FALSE(report.ok());
+  EXPECT_NE(report.error().message.find("/etc/gaugeloop/cam_main.mpf"), std::string::npos) << report.error().message;
+  EXPECT_NE(report.error().message.find(part_.nc_program + "_SPEED"), std::string::npos) << report.error().message;
+  js.nc_speed_template.clear();
+  report = measure(js);
+  ASSERT_FALSE(report.ok());
+  EXPECT_NE(report.error().message.find("speed_template"), std::string::npos) << report.error().message;
+  EXPECT_EQ(sim_->requests_served(), 0) << "no gauge request was made";
+  EXPECT_FALSE(fs::exists(nc_file()));
 }
 
 TEST_F(NcPushTest, TableEditedByHandIsReportedAndKept) {

@@ -149,9 +149,10 @@ TEST_F(SpeedFilesTest, TableSpeedAndMainProgramAreWrittenAndReadBack) {
     EXPECT_EQ(speed.find("{{"), std::string::npos) << speed;
     Result<ParsedSpeedProgram> parsed = read_speed_program(nc_file(), files);
     ASSERT_TRUE(parsed.ok()) << parsed.error().message;
-    Result<SpeedProfileError> e = check_speed_program(speed, speed_file().string(), program_, 1.0);
+    const double bound_percent = SpeedProfileSettings{}.bound_percent;  // the writer's default
+    Result<SpeedProfileError> e = check_speed_program(speed, speed_file().string(), program_, bound_percent);
     ASSERT_TRUE(e.ok()) << e.error().message;
-    EXPECT_LE(e->max_speed_error_percent, 1.0);
+    EXPECT_LE(e->max_speed_error_percent, bound_percent);
     EXPECT_GT(e->turn_time_s, 2.0 * 2.0) << "the slow flanks take more than twice the 2 s of 30 rpm";
   }
 }

@@ -232,6 +232,7 @@ TEST(SpeedTable, TheShippedSpeedMainProgramCallsTheSpeedSubprogramAndCouplesTheT
   values["table_number"] = "2";
   values["point_count"] = "91";
   values["interpolation"] = "cspline";
+  values["table_start_c_deg"] = "180.000";
   Result<std::string> main = render_main_program(shipped("cam_main_speed.mpf"), "cam_main_speed.mpf", values);
   ASSERT_TRUE(main.ok()) << main.error().message;
   EXPECT_EQ(main->find("{{"), std::string::npos) << *main;
