@@ -230,7 +230,7 @@ void add_profile_commands(CLI::App& app, CommandAction& action) {
                   "--speed-program: the speed on the base circle [the part file's [speed], else 60]");
   cmd->add_flag("--speed-program", o->speed_program,
                 "At a work speed program (docs/variable_speed.md): C slowed on the lobe to hold "
-                "--lobe-speed-mm-per-min there, within the part file's [speed] (else 3600 deg/s^2 of C) and the "
+                "--lobe-speed-mm-per-min there, within the part file's [speed] (else 1000 deg/s^2 of C) and the "
                 "slide's 300 mm/s and 20000 mm/s^2; adds c_speed_rpm, and v, a and the grinding-point speed at "
                 "that speed");
   cmd->add_option("--lobe-speed-mm-per-min", o->lobe_speed_mm_per_min,

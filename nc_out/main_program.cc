@@ -7,21 +7,14 @@
 #include <vector>
 
 #include "nc_out/nc_template.h"
+#include "nc_out/nc_text.h"
 
 namespace gaugeloop {
 namespace {
 
-std::string upper(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return out;
-}
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
-  return s;
-}
+using nc_text::lines_of;
+using nc_text::trim;
+using nc_text::upper;
 
 std::optional<int> parse_int(std::string_view s) {
   s = trim(s);
@@ -74,19 +67,6 @@ std::optional<int> coupling_on(std::string_view code, std::string& error) {
   std::optional<int> n = args.size() > index ? parse_int(args[index]) : std::nullopt;
   if (!n) error = "the coupling's curve table number cannot be read";
   return n;
-}
-
-std::vector<std::string_view> lines_of(std::string_view text) {
-  std::vector<std::string_view> out;
-  while (!text.empty()) {
-    const size_t nl = text.find('\n');
-    std::string_view line = text.substr(0, nl);
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    out.push_back(line);
-    if (nl == std::string_view::npos) break;
-    text = text.substr(nl + 1);
-  }
-  return out;
 }
 
 }  // namespace

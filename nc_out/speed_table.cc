@@ -9,10 +9,15 @@
 
 #include "core/number_text.h"
 #include "nc_out/nc_template.h"
+#include "nc_out/nc_text.h"
 #include "nc_out/table_program.h"
 
 namespace gaugeloop {
 namespace {
+
+using nc_text::lines_of;
+using nc_text::trim;
+using nc_text::upper;
 
 constexpr std::string_view kHeaderPrefix = "; gaugeloop ";
 constexpr double kFullTurnDeg = 360.0;
@@ -23,31 +28,6 @@ std::string deg_text(double c_deg) { return "C" + format_fixed(c_deg, 3); }
 double round_to(double value, int decimals) {
   const double scale = std::pow(10.0, decimals);
   return std::round(value * scale) / scale;
-}
-
-std::string upper(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return out;
-}
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
-  return s;
-}
-
-std::vector<std::string_view> lines_of(std::string_view text) {
-  std::vector<std::string_view> out;
-  while (!text.empty()) {
-    const size_t nl = text.find('\n');
-    std::string_view line = text.substr(0, nl);
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    out.push_back(line);
-    if (nl == std::string_view::npos) break;
-    text = text.substr(nl + 1);
-  }
-  return out;
 }
 
 std::optional<double> parse_number(std::string_view s) {
