@@ -52,7 +52,7 @@ struct WorkSpeedSettings {
   // C speed on the base circle, and the most C ever turns: the program only slows down.
   double base_speed_rpm = 60.0;
   // The grinding-point speed held where the wheel is on the lobe (X above lobe_threshold_mm),
-  // flanks and nose; the seed paper's slow-down took the flanks to 2000 mm/min.
+  // flanks and nose; the variable-speed camshaft paper's slow-down took the flanks to 2000 mm/min.
   double lobe_speed_mm_per_min = 2000.0;
   double lobe_threshold_mm = 0.01;
   // The work spindle's acceleration limit (either sense).

@@ -37,7 +37,7 @@ struct RoughnessModel {
 RoughnessModel calibrate_roughness(double v_fast_mm_per_min, double ra_fast_um, double v_slow_mm_per_min,
                                    double ra_slow_um, const GrindingConditions& c);
 
-// The seed paper's calibration: 8000 mm/min -> 3.2 um, 2000 mm/min -> 0.775 um.
+// The variable-speed camshaft paper's calibration: 8000 mm/min -> 3.2 um, 2000 mm/min -> 0.775 um.
 RoughnessModel paper_roughness_model(const GrindingConditions& c = {});
 
 double roughness_ra_um(const RoughnessModel& model, double h_eq_um);

@@ -1,4 +1,4 @@
-// The roughness model against the seed paper's two figures.
+// The roughness model against the variable-speed camshaft paper's two figures.
 #include "simulator/surface_roughness.h"
 
 #include <gtest/gtest.h>
