@@ -19,7 +19,6 @@ using nc_text::lines_of;
 using nc_text::trim;
 using nc_text::upper;
 
-constexpr std::string_view kHeaderPrefix = "; gaugeloop ";
 constexpr double kFullTurnDeg = 360.0;
 constexpr double kTurnTolDeg = 0.0005;  // half the default C resolution
 
@@ -288,13 +287,7 @@ std::string render_speed_blocks(const std::vector<SpeedBlock>& blocks, const Spe
 
 std::string render_speed_header(const SpeedProfile& profile, const SpeedProvenance& provenance, std::string_view body) {
   std::string out;
-  auto line = [&](std::string_view key, const std::string& value) {
-    if (!out.empty()) out += '\n';
-    out += kHeaderPrefix;
-    out += key;
-    out += ": ";
-    out += value;
-  };
+  auto line = [&out](std::string_view key, const std::string& value) { append_header_line(out, key, value); };
   const SpeedProfileError& e = profile.error;
   line("run_id", std::to_string(provenance.run_id));
   line("table_version", std::to_string(provenance.table_version));
@@ -360,14 +353,7 @@ Result<ParsedSpeedProgram> parse_speed_program(std::string_view text, std::strin
   size_t last_block = 0;
   for (size_t i = 0; i < lines.size(); ++i) {
     const std::string_view l = trim(lines[i]);
-    if (l.substr(0, kHeaderPrefix.size()) == kHeaderPrefix) {
-      const std::string_view kv = l.substr(kHeaderPrefix.size());
-      const size_t colon = kv.find(':');
-      if (colon != std::string_view::npos) {
-        p.header[std::string(trim(kv.substr(0, colon)))] = std::string(trim(kv.substr(colon + 1)));
-      }
-      continue;
-    }
+    if (read_header_line(l, p.header)) continue;
     std::string_view code = l.substr(0, l.find(';'));
     std::vector<std::string_view> words;
     while (true) {

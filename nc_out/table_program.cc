@@ -118,15 +118,27 @@ int table_number_for_version(const TableNumbers& numbers, std::int64_t table_ver
   return table_version <= 0 ? numbers[0] : numbers[static_cast<std::size_t>((table_version - 1) % 2)];
 }
 
+void append_header_line(std::string& out, std::string_view key, std::string_view value) {
+  if (!out.empty()) out += '\n';
+  out += kHeaderPrefix;
+  out += key;
+  out += ": ";
+  out += value;
+}
+
+bool read_header_line(std::string_view line, std::map<std::string, std::string>& header) {
+  if (line.substr(0, kHeaderPrefix.size()) != kHeaderPrefix) return false;
+  const std::string_view kv = line.substr(kHeaderPrefix.size());
+  const size_t colon = kv.find(':');
+  if (colon != std::string_view::npos) {
+    header[std::string(trim(kv.substr(0, colon)))] = std::string(trim(kv.substr(colon + 1)));
+  }
+  return true;
+}
+
 std::string render_table_header(const CurveTable& table, const TableProvenance& provenance, std::string_view body) {
   std::string out;
-  auto line = [&](std::string_view key, const std::string& value) {
-    if (!out.empty()) out += '\n';
-    out += kHeaderPrefix;
-    out += key;
-    out += ": ";
-    out += value;
-  };
+  auto line = [&out](std::string_view key, const std::string& value) { append_header_line(out, key, value); };
   line("run_id", std::to_string(provenance.run_id));
   line("table_version", std::to_string(provenance.table_version));
   if (provenance.table_numbers[0] != 0) {
@@ -285,14 +297,7 @@ Result<ParsedTable> parse_table_program(std::string_view text, std::string_view 
   SplineEnds ends;
   for (size_t i = 0; i < lines.size(); ++i) {
     const std::string_view l = trim(lines[i]);
-    if (l.substr(0, kHeaderPrefix.size()) == kHeaderPrefix) {
-      const std::string_view kv = l.substr(kHeaderPrefix.size());
-      const size_t colon = kv.find(':');
-      if (colon != std::string_view::npos) {
-        t.header[std::string(trim(kv.substr(0, colon)))] = std::string(trim(kv.substr(colon + 1)));
-      }
-      continue;
-    }
+    if (read_header_line(l, t.header)) continue;
     const std::vector<std::string_view> words = words_of(code_of(l));
     if (words.empty()) continue;
     const std::string first = upper(words.front());

@@ -53,6 +53,12 @@ bool has_archive_header(std::string_view program);
 // FNV-1a 64 of `body` with every '\r' skipped, 16 lower-case hex digits.
 std::string table_body_checksum(std::string_view body);
 
+// The header lines gaugeloop writes into its programs (table and speed subprogram):
+// `; gaugeloop <key>: <value>`. Appends one to `out`, after a '\n' unless `out` is empty.
+void append_header_line(std::string& out, std::string_view key, std::string_view value);
+// True when `line` (trimmed) is such a header line; its key and value then go into `header`.
+bool read_header_line(std::string_view line, std::map<std::string, std::string>& header);
+
 // The two CTABDEF numbers a program's tables alternate between (docs/nc_output.md): the table
 // of version v goes to numbers[(v - 1) % 2], so the next version never redefines the table
 // the main program couples now. Version 0 (a pending table, its version not yet known) takes

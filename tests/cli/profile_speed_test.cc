@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "tests/support/cli.h"
+#include "tests/support/csv_reader.h"
 #include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
@@ -24,24 +25,8 @@ CommandResult profile(const std::string& args) {
                    "/examples/intake_flat.toml " + args + " 2>/dev/null; true");
 }
 
-struct Csv {
-  std::string header;
-  std::vector<std::vector<double>> rows;
-};
-Csv parse_csv(const std::string& text) {
-  Csv csv;
-  std::istringstream in(text);
-  std::getline(in, csv.header);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<double> row;
-    std::istringstream cells(line);
-    std::string cell;
-    while (std::getline(cells, cell, ',')) row.push_back(std::stod(cell));
-    csv.rows.push_back(row);
-  }
-  return csv;
-}
+using Csv = testing::NumericCsv;
+constexpr auto parse_csv = testing::read_numeric_csv;
 
 // rb = 18 mm on the base circle: 2 pi rb n mm/min.
 constexpr double kBaseCircleAt60RpmMmPerMin = 2.0 * std::numbers::pi * 18.0 * 60.0;

@@ -18,6 +18,7 @@
 #include "compensation/wheel_path.h"
 #include "core/lift_table.h"
 #include "core/part.h"
+#include "tests/support/csv_reader.h"
 #include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
@@ -47,24 +48,8 @@ CommandResult run_command(const std::string& args, bool with_stderr = true) {
 std::string example(const std::string& file) { return std::string(GAUGELOOP_SOURCE_DIR) + "/examples/" + file; }
 
 // CSV rows after the header, as numbers.
-struct Csv {
-  std::string header;
-  std::vector<std::vector<double>> rows;
-};
-Csv parse_csv(const std::string& text) {
-  Csv csv;
-  std::istringstream in(text);
-  std::getline(in, csv.header);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<double> row;
-    std::istringstream cells(line);
-    std::string cell;
-    while (std::getline(cells, cell, ',')) row.push_back(std::stod(cell));
-    csv.rows.push_back(row);
-  }
-  return csv;
-}
+using Csv = testing::NumericCsv;
+constexpr auto parse_csv = testing::read_numeric_csv;
 
 // The same path from the library, for the part the example file describes.
 WheelPath library_path(const std::string& csv_file, const Part& part, double step_deg) {

@@ -13,6 +13,7 @@
 #include "nc_out/main_program.h"
 #include "nc_out/table_program.h"
 #include "storage/run_store.h"
+#include "tests/support/failing_nc_files.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/store_test.h"
 #include "tests/support/table_program.h"
@@ -21,24 +22,6 @@ namespace gaugeloop {
 namespace {
 
 namespace fs = std::filesystem;
-
-// The real NC directory, except that writing the main program fails while `fail_main` is set.
-class MainWriteFails final : public NcFiles {
- public:
-  bool fail_main = false;
-  Result<DirectoryLock> lock_directory(const fs::path& dir) override { return real_nc_files().lock_directory(dir); }
-  bool is_directory(const fs::path& dir) override { return real_nc_files().is_directory(dir); }
-  Result<std::optional<std::string>> read_program(const fs::path& path) override {
-    return real_nc_files().read_program(path);
-  }
-  Status write_program(const fs::path& path, std::string_view contents, const AtomicWriteObserver& observer) override {
-    if (fail_main && path.filename().string().ends_with("_MAIN.MPF")) {
-      return Error{ErrorCode::kIo, "No space left on device (scripted)"};
-    }
-    return real_nc_files().write_program(path, contents, observer);
-  }
-  Result<int> remove_leftovers(const fs::path& path) override { return real_nc_files().remove_leftovers(path); }
-};
 
 class MainProgramPushTest : public testing::StoreTest {
  protected:
@@ -107,7 +90,7 @@ class MainProgramPushTest : public testing::StoreTest {
 };
 
 TEST_F(MainProgramPushTest, ThreePushesAlternateTheTableNumberAndTheMainProgramCouplesTheOneJustWritten) {
-  MainWriteFails files;
+  testing::FailingNcFiles files;
   const int expected[] = {0, 1, 2, 1};
   for (int version = 1; version <= 3; ++version) {
     Result<PushCompletion> r = push(files);
@@ -131,7 +114,7 @@ TEST_F(MainProgramPushTest, ThreePushesAlternateTheTableNumberAndTheMainProgramC
 }
 
 TEST_F(MainProgramPushTest, AMainTemplateWithAnUnknownPlaceholderIsRefusedBeforeAnythingIsWritten) {
-  MainWriteFails files;
+  testing::FailingNcFiles files;
   main_.template_text += "; {{wheel_speed}}\n";
   main_.template_name = "/etc/gaugeloop/cam_main.mpf";
   Result<PushCompletion> r = push(files);
@@ -150,11 +133,11 @@ TEST_F(MainProgramPushTest, AMainTemplateWithAnUnknownPlaceholderIsRefusedBefore
 }
 
 TEST_F(MainProgramPushTest, AMainProgramNotWrittenLeavesTheCouplingOnTheTableTheNewOneDidNotRedefine) {
-  MainWriteFails files;
+  testing::FailingNcFiles files;
   ASSERT_TRUE(push(files).ok());  // version 1: table 1, coupled
   ASSERT_EQ(coupled(), 1);
 
-  files.fail_main = true;
+  files.fail_writes_ending_with = "_MAIN.MPF";
   Result<PushCompletion> second = push(files);
   ASSERT_FALSE(second.ok()) << "the push fails as a failed table write does";
   EXPECT_EQ(second.error().code, ErrorCode::kIo);
@@ -174,7 +157,7 @@ TEST_F(MainProgramPushTest, AMainProgramNotWrittenLeavesTheCouplingOnTheTableThe
 
   // The next push goes to number 1, which the stale main program couples: the main program is
   // first pointed at table 2 (the table in force), so table 1 is never redefined while coupled.
-  files.fail_main = false;
+  files.fail_writes_ending_with.clear();
   int coupled_when_the_table_was_written = 0;
   Result<PushCompletion> third = push(files, [&](PushStep step) {
     if (step == PushStep::kTemporaryWritten) coupled_when_the_table_was_written = coupled();
@@ -187,7 +170,7 @@ TEST_F(MainProgramPushTest, AMainProgramNotWrittenLeavesTheCouplingOnTheTableThe
 }
 
 TEST_F(MainProgramPushTest, ARollbackIsANewVersionAndAlternatesToo) {
-  MainWriteFails files;
+  testing::FailingNcFiles files;
   ASSERT_TRUE(push(files).ok());  // version 1, table 1
   ASSERT_TRUE(push(files).ok());  // version 2, table 2
   const std::string v2 = *read_regular_file(nc_file(), "table");
@@ -209,7 +192,7 @@ TEST_F(MainProgramPushTest, ARollbackIsANewVersionAndAlternatesToo) {
 // HMI reads; each push checks the table on the control before overwriting it, the header and
 // all, and a rollback keeps it.
 TEST_F(MainProgramPushTest, ProgramsWithTheArchiveHeaderArePushedReadBackAndVerified) {
-  MainWriteFails files;
+  testing::FailingNcFiles files;
   for (int version = 1; version <= 3; ++version) {
     Result<PushCompletion> r = push(files, {}, /*archive=*/true);
     ASSERT_TRUE(r.ok()) << "version " << version << ": " << r.error().message;

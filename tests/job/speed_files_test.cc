@@ -15,6 +15,7 @@
 #include "core/text_file.h"
 #include "nc_out/main_program.h"
 #include "nc_out/table_program.h"
+#include "tests/support/failing_nc_files.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/store_test.h"
 #include "tests/support/table_program.h"
@@ -43,24 +44,6 @@ WorkSpeedProgram slow_flank_program() {
   }
   return p;
 }
-
-// The real NC directory, except that writing the speed file fails while `fail_speed` is set.
-class SpeedWriteFails final : public NcFiles {
- public:
-  bool fail_speed = false;
-  Result<DirectoryLock> lock_directory(const fs::path& dir) override { return real_nc_files().lock_directory(dir); }
-  bool is_directory(const fs::path& dir) override { return real_nc_files().is_directory(dir); }
-  Result<std::optional<std::string>> read_program(const fs::path& path) override {
-    return real_nc_files().read_program(path);
-  }
-  Status write_program(const fs::path& path, std::string_view contents, const AtomicWriteObserver& observer) override {
-    if (fail_speed && path.filename().string().ends_with("_SPEED.SPF")) {
-      return Error{ErrorCode::kIo, "No space left on device (scripted)"};
-    }
-    return real_nc_files().write_program(path, contents, observer);
-  }
-  Result<int> remove_leftovers(const fs::path& path) override { return real_nc_files().remove_leftovers(path); }
-};
 
 class SpeedFilesTest : public testing::StoreTest {
  protected:
@@ -123,7 +106,7 @@ class SpeedFilesTest : public testing::StoreTest {
 };
 
 TEST_F(SpeedFilesTest, TableSpeedAndMainProgramAreWrittenAndReadBack) {
-  SpeedWriteFails files;
+  testing::FailingNcFiles files;
   const int expected[] = {0, 1, 2, 1};
   for (int version = 1; version <= 3; ++version) {
     Result<PushCompletion> r = push(files);
@@ -158,7 +141,7 @@ TEST_F(SpeedFilesTest, TableSpeedAndMainProgramAreWrittenAndReadBack) {
 }
 
 TEST_F(SpeedFilesTest, AMainTemplateThatIgnoresTheSpeedIsRefusedBeforeAnythingIsWritten) {
-  SpeedWriteFails files;
+  testing::FailingNcFiles files;
   main_.template_text = *read_regular_file(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/sinumerik/cam_main.mpf",
                                            "constant-speed main template");
   main_.template_name = "cam_main.mpf";
@@ -172,10 +155,10 @@ TEST_F(SpeedFilesTest, AMainTemplateThatIgnoresTheSpeedIsRefusedBeforeAnythingIs
 }
 
 TEST_F(SpeedFilesTest, ASpeedFileNotWrittenLeavesTheTableInForceUntouched) {
-  SpeedWriteFails files;
+  testing::FailingNcFiles files;
   ASSERT_TRUE(push(files).ok());  // version 1
   const std::string table_before = *read_regular_file(nc_file(), "table");
-  files.fail_speed = true;
+  files.fail_writes_ending_with = "_SPEED.SPF";
   Result<PushCompletion> r = push(files);
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, ErrorCode::kIo);
@@ -188,7 +171,7 @@ TEST_F(SpeedFilesTest, ASpeedFileNotWrittenLeavesTheTableInForceUntouched) {
 }
 
 TEST_F(SpeedFilesTest, AHandEditedSpeedFileIsReportedOnReadBack) {
-  SpeedWriteFails files;
+  testing::FailingNcFiles files;
   ASSERT_TRUE(write_speed_program(nc_file(), speed_text_, files).ok());
   std::string edited = speed_text_;
   const size_t at = edited.find("F10800.0");

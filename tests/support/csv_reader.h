@@ -4,6 +4,7 @@
 #pragma once
 
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,27 @@ inline std::optional<std::vector<CsvRecord>> read_csv(const std::string& text) {
   }
   if (!record.empty()) return std::nullopt;
   return records;
+}
+
+// A table of numbers as `profile` writes it: one header line, then rows of numbers separated by
+// commas, lines ending in LF. std::stod throws on a cell that is not a number, failing the test.
+struct NumericCsv {
+  std::string header;
+  std::vector<std::vector<double>> rows;
+};
+inline NumericCsv read_numeric_csv(const std::string& text) {
+  NumericCsv csv;
+  std::istringstream in(text);
+  std::getline(in, csv.header);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<double> row;
+    std::istringstream cells(line);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) row.push_back(std::stod(cell));
+    csv.rows.push_back(row);
+  }
+  return csv;
 }
 
 }  // namespace gaugeloop::testing

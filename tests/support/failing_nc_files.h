@@ -4,6 +4,7 @@
 #pragma once
 
 #include <map>
+#include <string>
 #include <vector>
 
 #include "job/nc_files.h"
@@ -16,6 +17,8 @@ class FailingNcFiles final : public NcFiles {
 
   std::map<Op, Error> fail;  // an operation listed fails with its error, every time
   std::vector<Op> calls;     // every operation asked for, in order
+  // A write to a file whose name ends with this ("_MAIN.MPF") fails as on a full disk; empty: none.
+  std::string fail_writes_ending_with;
 
   Result<DirectoryLock> lock_directory(const std::filesystem::path& dir) override {
     calls.push_back(Op::kLock);
@@ -32,6 +35,9 @@ class FailingNcFiles final : public NcFiles {
                        const AtomicWriteObserver& observer) override {
     calls.push_back(Op::kWrite);
     if (auto it = fail.find(Op::kWrite); it != fail.end()) return it->second;
+    if (!fail_writes_ending_with.empty() && path.filename().string().ends_with(fail_writes_ending_with)) {
+      return Error{ErrorCode::kIo, "No space left on device (scripted)"};
+    }
     return real_nc_files().write_program(path, contents, observer);
   }
   Result<int> remove_leftovers(const std::filesystem::path& path) override {
