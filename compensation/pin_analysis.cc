@@ -1,0 +1,2 @@
+// Implemented with the crankpin work; see pin_analysis.h.
+#include "compensation/pin_analysis.h"

@@ -1,0 +1,2 @@
+// Implemented with the crankpin work; see pin_envelope.h.
+#include "compensation/pin_envelope.h"

@@ -1,0 +1,2 @@
+// Implemented with the crankpin work; see pin_grinder.h.
+#include "simulator/pin_grinder.h"

@@ -1,0 +1,2 @@
+// Crankpin tests; filled in with the crankpin work.
+#include <gtest/gtest.h>
