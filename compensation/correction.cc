@@ -96,11 +96,7 @@ std::string CompensationDecision::reasons() const {
   return out;
 }
 
-namespace {
-
-// The step both overloads share; `design` null: no phase part, the whole error is smoothed.
-Result<CompensationDecision> decide(const LobeAnalysis& analysis, const DesignReading* design,
-                                    const DegreeTable& in_force_um, const CompensationSettings& s) {
+Status check_compensation_settings(const CompensationSettings& s) {
   if (!(s.gain > 0.0 && s.gain <= 1.0)) {
     return make_error(ErrorCode::kInvalidInput,
                       "compensation: gain " + format_fixed(s.gain, 3) +
@@ -121,14 +117,97 @@ Result<CompensationDecision> decide(const LobeAnalysis& analysis, const DesignRe
                                                       " must be a positive number");
     }
   }
+  return {};
+}
+
+Result<CompensationDecision> learning_step(const LearningStep& step, const DegreeTable& in_force_um,
+                                           const CompensationSettings& s) {
+  if (Status settings = check_compensation_settings(s); !settings.ok()) return settings.error();
   for (size_t d = 0; d < kDegrees; ++d) {
-    if (!std::isfinite(analysis.error_um[d]) || !std::isfinite(in_force_um[d])) {
+    if (!std::isfinite(step.smoothed_part_um[d]) || !std::isfinite(step.exact_part_um[d]) ||
+        !std::isfinite(in_force_um[d])) {
       return make_error(ErrorCode::kInvalidInput,
-                        "compensation: NaN or infinity in the error or in the "
-                        "correction in force at cam degree " +
-                            std::to_string(d));
+                        "compensation: NaN or infinity in the error or in the correction in force at " +
+                            std::string(step.degree_name) + " " + std::to_string(d));
     }
   }
+  if (!std::isfinite(step.repeatability_um)) {
+    return make_error(ErrorCode::kInvalidInput, "compensation: the analysis' repeatability is not a number");
+  }
+
+  CompensationDecision out;
+  if (s.choose_harmonics) {
+    out.harmonics = choose_harmonics(step.smoothed_part_um, step.spread_um, step.revolutions, s.max_harmonic);
+  } else {
+    out.harmonics.harmonics = s.max_harmonic;
+  }
+  const DegreeTable smooth = smooth_harmonics(step.smoothed_part_um, out.harmonics.harmonics);
+
+  size_t worst_correction = 0;
+  size_t worst_change = 0;
+  size_t worst_form_change = 0;
+  DegreeTable form_change_um{};
+  for (size_t d = 0; d < kDegrees; ++d) {
+    form_change_um[d] = s.gain * smooth[d];
+    out.change_um[d] = form_change_um[d] + s.gain * step.exact_part_um[d];
+    out.correction_um[d] = in_force_um[d] + out.change_um[d];
+    if (std::abs(out.correction_um[d]) > std::abs(out.correction_um[worst_correction])) worst_correction = d;
+    if (std::abs(out.change_um[d]) > std::abs(out.change_um[worst_change])) worst_change = d;
+    if (std::abs(form_change_um[d]) > std::abs(form_change_um[worst_form_change])) worst_form_change = d;
+  }
+  out.largest_correction_um = out.correction_um[worst_correction];
+  out.largest_correction_deg = static_cast<int>(worst_correction);
+  out.largest_change_um = out.change_um[worst_change];
+  out.largest_change_deg = static_cast<int>(worst_change);
+  out.largest_form_change_um = form_change_um[worst_form_change];
+  out.largest_form_change_deg = static_cast<int>(worst_form_change);
+
+  const std::string degree(step.degree_name);
+  if (std::abs(out.largest_correction_um) > s.max_correction_um) {
+    out.findings.push_back({CompensationGuard::kCorrectionLimit, CompensationVerdict::kRefuse,
+                            "the correction would reach " + format_fixed(out.largest_correction_um, 1) + " um at " +
+                                degree + " " + std::to_string(worst_correction) + ", beyond the " +
+                                format_fixed(s.max_correction_um, 1) +
+                                " um the wheel path may carry; check the measurement and the setup, or have an "
+                                "operator raise the limit"});
+  }
+  if (std::abs(out.largest_form_change_um) > s.max_change_um) {
+    out.findings.push_back({CompensationGuard::kChangeLimit, CompensationVerdict::kHold,
+                            "the correction would move by " + format_fixed(out.largest_form_change_um, 1) + " um at " +
+                                degree + " " + std::to_string(worst_form_change) + " from the one in force" +
+                                step.change_note + ", more than the " + format_fixed(s.max_change_um, 1) +
+                                " um allowed from one part to the next; check the wheel (dressed, changed?) and "
+                                "measure again, or have an operator approve it"});
+  }
+  if (step.repeatability_um > s.max_repeatability_um) {
+    out.findings.push_back({CompensationGuard::kRepeatability, CompensationVerdict::kHold,
+                            "the revolutions disagree by up to " + format_fixed(step.repeatability_um, 2) +
+                                " um (largest per-degree standard deviation), more than the " +
+                                format_fixed(s.max_repeatability_um, 2) +
+                                " um a measurement to correct from may show; check the probe tip, coolant and "
+                                "chips on the " +
+                                std::string(step.part_name) + ", and the clamping, and measure again"});
+  }
+  settle_verdict(out);
+  return out;
+}
+
+void settle_verdict(CompensationDecision& decision) {
+  decision.verdict = CompensationVerdict::kApply;
+  for (const GuardFinding& f : decision.findings) {
+    if (f.verdict == CompensationVerdict::kRefuse || decision.verdict == CompensationVerdict::kApply)
+      decision.verdict = f.verdict;
+  }
+}
+
+namespace {
+
+// The step both overloads share; `design` null: no phase part, the whole error is smoothed.
+Result<CompensationDecision> decide(const LobeAnalysis& analysis, const DesignReading* design,
+                                    const DegreeTable& in_force_um, const CompensationSettings& s) {
+  // The settings first, as ever; a NaN in the error or the correction in force is
+  // learning_step's to name (the design is finite, so it stays NaN in the remainder).
+  if (Status settings = check_compensation_settings(s); !settings.ok()) return settings.error();
   const double phi = analysis.phase_error_deg;
   if (!std::isfinite(phi) || !std::isfinite(analysis.repeatability_um)) {
     return make_error(ErrorCode::kInvalidInput, "compensation: the analysis' phase or repeatability is not a number");
@@ -146,80 +225,28 @@ Result<CompensationDecision> decide(const LobeAnalysis& analysis, const DesignRe
   }
 
   // Fit the phase first, compensate the remainder.
-  DegreeTable phase_part{};
+  LearningStep step;
+  step.spread_um = analysis.spread_um;
+  step.revolutions = analysis.revolutions;
+  step.repeatability_um = analysis.repeatability_um;
   if (design != nullptr && phi != 0.0) {
     for (size_t d = 0; d < kDegrees; ++d) {
-      phase_part[d] = (design->at(static_cast<double>(d) - phi) - design->table()[d]) * 1000.0;
+      step.exact_part_um[d] = (design->at(static_cast<double>(d) - phi) - design->table()[d]) * 1000.0;
     }
+    step.change_note =
+        " (not counting the lobe's turn of " + format_fixed(phi, 3) + " deg, which max_phase_deg judges)";
   }
-  DegreeTable remainder{};
-  for (size_t d = 0; d < kDegrees; ++d) remainder[d] = analysis.error_um[d] - phase_part[d];
-  CompensationDecision out;
-  if (s.choose_harmonics) {
-    out.harmonics = choose_harmonics(remainder, analysis.spread_um, analysis.revolutions, s.max_harmonic);
-  } else {
-    out.harmonics.harmonics = s.max_harmonic;
-  }
-  const DegreeTable smooth = smooth_harmonics(remainder, out.harmonics.harmonics);
-
-  size_t worst_correction = 0;
-  size_t worst_change = 0;
-  size_t worst_form_change = 0;
-  DegreeTable form_change_um{};
-  for (size_t d = 0; d < kDegrees; ++d) {
-    form_change_um[d] = s.gain * smooth[d];
-    out.change_um[d] = form_change_um[d] + s.gain * phase_part[d];
-    out.correction_um[d] = in_force_um[d] + out.change_um[d];
-    if (std::abs(out.correction_um[d]) > std::abs(out.correction_um[worst_correction])) worst_correction = d;
-    if (std::abs(out.change_um[d]) > std::abs(out.change_um[worst_change])) worst_change = d;
-    if (std::abs(form_change_um[d]) > std::abs(form_change_um[worst_form_change])) worst_form_change = d;
-  }
-  out.largest_correction_um = out.correction_um[worst_correction];
-  out.largest_correction_deg = static_cast<int>(worst_correction);
-  out.largest_change_um = out.change_um[worst_change];
-  out.largest_change_deg = static_cast<int>(worst_change);
-  out.largest_form_change_um = form_change_um[worst_form_change];
-  out.largest_form_change_deg = static_cast<int>(worst_form_change);
-
-  if (std::abs(out.largest_correction_um) > s.max_correction_um) {
-    out.findings.push_back({CompensationGuard::kCorrectionLimit, CompensationVerdict::kRefuse,
-                            "the correction would reach " + format_fixed(out.largest_correction_um, 1) +
-                                " um at cam degree " + std::to_string(worst_correction) + ", beyond the " +
-                                format_fixed(s.max_correction_um, 1) +
-                                " um the wheel path may carry; check the measurement and the setup, or have an "
-                                "operator raise the limit"});
-  }
-  if (std::abs(out.largest_form_change_um) > s.max_change_um) {
-    const bool turned = phi != 0.0 && design != nullptr;
-    out.findings.push_back(
-        {CompensationGuard::kChangeLimit, CompensationVerdict::kHold,
-         "the correction would move by " + format_fixed(out.largest_form_change_um, 1) + " um at cam degree " +
-             std::to_string(worst_form_change) + " from the one in force" +
-             (turned ? " (not counting the lobe's turn of " + format_fixed(phi, 3) + " deg, which max_phase_deg judges)"
-                     : std::string()) +
-             ", more than the " + format_fixed(s.max_change_um, 1) +
-             " um allowed from one part to the next; check the wheel (dressed, changed?) and "
-             "measure again, or have an operator approve it"});
-  }
-  if (analysis.repeatability_um > s.max_repeatability_um) {
-    out.findings.push_back({CompensationGuard::kRepeatability, CompensationVerdict::kHold,
-                            "the revolutions disagree by up to " + format_fixed(analysis.repeatability_um, 2) +
-                                " um (largest per-degree standard deviation), more than the " +
-                                format_fixed(s.max_repeatability_um, 2) +
-                                " um a measurement to correct from may show; check the probe tip, coolant and "
-                                "chips on the lobe, and the clamping, and measure again"});
-  }
+  for (size_t d = 0; d < kDegrees; ++d) step.smoothed_part_um[d] = analysis.error_um[d] - step.exact_part_um[d];
+  Result<CompensationDecision> out = learning_step(step, in_force_um, s);
+  if (!out.ok()) return out;
   if (std::abs(phi) > s.max_phase_deg) {
-    out.findings.push_back({CompensationGuard::kPhase, CompensationVerdict::kHold,
-                            "the lobe appears turned by " + format_fixed(phi, 3) + " deg, more than the " +
-                                format_fixed(s.max_phase_deg, 3) +
-                                " deg a correction may turn it; in-process that is more often a mis-set "
-                                "probe_offset_deg or a late gauge latch than the grinding: check them, or have an "
-                                "operator approve it"});
-  }
-  for (const GuardFinding& f : out.findings) {
-    if (f.verdict == CompensationVerdict::kRefuse || out.verdict == CompensationVerdict::kApply)
-      out.verdict = f.verdict;
+    out->findings.push_back({CompensationGuard::kPhase, CompensationVerdict::kHold,
+                             "the lobe appears turned by " + format_fixed(phi, 3) + " deg, more than the " +
+                                 format_fixed(s.max_phase_deg, 3) +
+                                 " deg a correction may turn it; in-process that is more often a mis-set "
+                                 "probe_offset_deg or a late gauge latch than the grinding: check them, or have an "
+                                 "operator approve it"});
+    settle_verdict(*out);
   }
   return out;
 }

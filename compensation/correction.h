@@ -53,6 +53,20 @@ struct CompensationSettings {
   bool choose_harmonics = true;
 };
 
+// The pieces every learning step shares, the lobe's (decide_correction) and the pin's
+// (decide_pin_correction): they differ in what is fed back exactly and what the messages
+// call a degree and the part, not in the band, the update or the guards.
+struct LearningStep {
+  DegreeTable smoothed_part_um{};  // smoothed to the band (noise is not fed back)
+  DegreeTable exact_part_um{};     // fed back as it is (a lobe's phase part; 0 for a pin)
+  DegreeTable spread_um{};         // per-degree spread across revolutions (choose_harmonics)
+  int revolutions = 0;
+  double repeatability_um = 0.0;                // what max_repeatability_um judges
+  std::string_view degree_name = "cam degree";  // how the reasons name an index
+  std::string_view part_name = "lobe";          // what the reasons say the chips are on
+  std::string change_note;                      // added to the change guard's reason after "from the one in force"
+};
+
 // Correction convention: a correction c(theta) in um, cam frame, per whole cam degree, in
 // flat-probe reading terms. The next part is ground to the target whose flat-probe reading
 // is design - c (correct the target, as iterative learning control does), so a lobe that measured e um high
@@ -104,6 +118,23 @@ struct CompensationDecision {
   // The findings' reasons joined with "; ", "" when applied.
   std::string reasons() const;
 };
+
+// kInvalidInput for gain outside (0, 1], max_harmonic outside [0, 180] or a limit that is not
+// a positive number (decide_correction's checks of its settings).
+Status check_compensation_settings(const CompensationSettings& settings);
+
+// correction = in force + gain * (smooth(smoothed_part_um) + exact_part_um), the band K from
+// choose_harmonics(smoothed_part_um, spread_um, revolutions, max_harmonic) or max_harmonic,
+// with the correction, change (of the smoothed part alone) and repeatability guards and the
+// verdict they give. A phase guard is the caller's (then settle_verdict again).
+// Errors: as check_compensation_settings; kInvalidInput for NaN or infinity in either part,
+// the correction in force or the repeatability, naming the degree.
+Result<CompensationDecision> learning_step(const LearningStep& step, const DegreeTable& correction_in_force_um,
+                                           const CompensationSettings& settings);
+
+// Sets decision.verdict from its findings: kRefuse if any refuses, else kHold if any holds,
+// else kApply.
+void settle_verdict(CompensationDecision& decision);
 
 // One iterative-learning step: fit the phase first, compensate the remainder.
 // With phi = analysis.phase_error_deg and D the design reading model:
