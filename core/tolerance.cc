@@ -144,6 +144,12 @@ std::string characteristic_title(std::string_view key) {
     return "Base circle runout (1st harmonic)";
   } else if (key == "roundness") {
     return "Base circle roundness";
+  } else if (key == "diameter_error") {
+    return "Pin diameter error";
+  } else if (key == "stroke_error") {
+    return "Pin stroke (throw) error";
+  } else if (key == "index_error") {
+    return "Pin index (angular position) error";
   } else if (base == "harmonic" && !zone.empty() && zone.find_first_not_of("0123456789") == std::string_view::npos) {
     return "Lift error, harmonic " + std::string(zone);
   } else {
