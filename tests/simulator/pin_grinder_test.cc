@@ -143,6 +143,7 @@ TEST(PinGrinder, VibrationOnlyGivesTheFloor) {
   const GroundPin floor = grind(pin, vibration_only(full));
   EXPECT_EQ(floor.largest_servo_error_um, 0.0);
   const TruePinError e = true_pin_error(floor.radius_error_mm);
+  std::cout << "C-X vibration only: rms " << e.rms_um << " um, roundness " << e.roundness_um << " um\n";
   EXPECT_GT(e.rms_um, 0.6 * full.x.vibration_rms_um);
   EXPECT_LT(e.rms_um, 1.4 * full.x.vibration_rms_um);
   EXPECT_LT(e.roundness_um, true_pin_error(grind(pin, full).radius_error_mm).roundness_um);
