@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
+#include <utility>
 
 #include "compensation/pin_envelope.h"
 #include "compensation/pin_kinematics.h"
