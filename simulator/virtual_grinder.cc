@@ -197,7 +197,7 @@ MachineErrorModel vibration_only(const MachineErrorModel& model) {
   return m;
 }
 
-Result<CommandedPath> commanded_path_from_program(const std::filesystem::path& nc_file) {
+Result<ProgramSlidePath> slide_path_from_program(const std::filesystem::path& nc_file) {
   std::ifstream in(nc_file, std::ios::binary);
   if (!in) {
     return make_error(ErrorCode::kNotFound,
@@ -209,12 +209,17 @@ Result<CommandedPath> commanded_path_from_program(const std::filesystem::path& n
   if (!table) return table.error();
   Result<TableInterpolant> nc = TableInterpolant::of(table->points, table->interpolation);
   if (!nc) return nc.error();
-  CommandedPath path;
-  path.c_step_deg = kGridStepDeg;
-  path.source = nc_file.string();
-  path.x_mm.resize(kGridRows);
-  for (int k = 0; k < kGridRows; ++k) path.x_mm[static_cast<size_t>(k)] = nc->at(k * kGridStepDeg).x_mm;
+  ProgramSlidePath path;
+  path.following_axis = table->following_axis;
+  path.position_mm.resize(kGridRows);
+  for (int k = 0; k < kGridRows; ++k) path.position_mm[static_cast<size_t>(k)] = nc->at(k * kGridStepDeg).x_mm;
   return path;
+}
+
+Result<CommandedPath> commanded_path_from_program(const std::filesystem::path& nc_file) {
+  Result<ProgramSlidePath> slide = slide_path_from_program(nc_file);
+  if (!slide) return slide.error();
+  return CommandedPath{kGridStepDeg, std::move(slide->position_mm), nc_file.string()};
 }
 
 Result<CommandedPath> commanded_path_from_design(const Part& part, const LiftTable& design) {
@@ -225,29 +230,39 @@ Result<CommandedPath> commanded_path_from_design(const Part& part, const LiftTab
   return CommandedPath{kGridStepDeg, std::move(exact->x_mm), "design"};
 }
 
-Result<GroundPart> grind_part(const Part& part, const CommandedPath& commanded, const MachineErrorModel& m,
-                              int part_index) {
+Result<FollowedSlide> follow_slide(const std::vector<double>& commanded_mm, double c_step_deg,
+                                   const MachineErrorModel& m, int part_index, std::string_view source) {
   if (Status s = validate(m); !s) return s.error();
-  if (commanded.x_mm.size() != static_cast<size_t>(kGridRows) || commanded.c_step_deg != kGridStepDeg) {
-    return make_error(ErrorCode::kInvalidInput, "virtual grinder: the commanded path from " + commanded.source +
+  if (commanded_mm.size() != static_cast<size_t>(kGridRows) || c_step_deg != kGridStepDeg) {
+    return make_error(ErrorCode::kInvalidInput, "virtual grinder: the commanded path from " + std::string(source) +
                                                     " must have 3600 rows at 0.1 deg of C");
   }
   if (part_index < 0) return make_error(ErrorCode::kInvalidInput, "virtual grinder: part index must be >= 0");
-  GroundPart ground;
-  ground.part_index = part_index;
-  ground.followed_x_mm = servo_response(commanded.x_mm, m);
-  const double x_max_mm = *std::max_element(commanded.x_mm.begin(), commanded.x_mm.end());
+  FollowedSlide slide;
+  slide.followed_mm = servo_response(commanded_mm, m);
+  const double max_mm = *std::max_element(commanded_mm.begin(), commanded_mm.end());
   const std::vector<double> vibration = vibration_um(m, part_index);
   for (int k = 0; k < kGridRows; ++k) {
     const auto j = static_cast<size_t>(k);
-    ground.largest_servo_error_um =
-        std::max(ground.largest_servo_error_um, std::abs(ground.followed_x_mm[j] - commanded.x_mm[j]) * 1000.0);
+    slide.largest_servo_error_um =
+        std::max(slide.largest_servo_error_um, std::abs(slide.followed_mm[j] - commanded_mm[j]) * 1000.0);
     const double c_rad = deg_to_rad(k * kGridStepDeg);
     const double geometric_um = m.geometric_once_um * std::cos(c_rad + deg_to_rad(m.geometric_once_phase_deg)) +
                                 m.geometric_twice_um * std::cos(2.0 * c_rad + deg_to_rad(m.geometric_twice_phase_deg));
-    const double drift_um = x_max_mm > 0.0 ? m.drift_um_per_part * part_index * commanded.x_mm[j] / x_max_mm : 0.0;
-    ground.followed_x_mm[j] += (geometric_um + drift_um + vibration[j]) * 1e-3;
+    const double drift_um = max_mm > 0.0 ? m.drift_um_per_part * part_index * commanded_mm[j] / max_mm : 0.0;
+    slide.followed_mm[j] += (geometric_um + drift_um + vibration[j]) * 1e-3;
   }
+  return slide;
+}
+
+Result<GroundPart> grind_part(const Part& part, const CommandedPath& commanded, const MachineErrorModel& m,
+                              int part_index) {
+  Result<FollowedSlide> slide = follow_slide(commanded.x_mm, commanded.c_step_deg, m, part_index, commanded.source);
+  if (!slide) return slide.error();
+  GroundPart ground;
+  ground.part_index = part_index;
+  ground.followed_x_mm = std::move(slide->followed_mm);
+  ground.largest_servo_error_um = slide->largest_servo_error_um;
   // Row k of the followed path is the wheel at psi = s * (C - c0) in the cam frame.
   std::vector<std::pair<double, double>> by_psi(kGridRows);
   for (int k = 0; k < kGridRows; ++k) {

@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/lift_table.h"
@@ -79,6 +80,30 @@ Status validate(const MachineErrorModel& model);
 // The same model without its systematic terms (ideal servo, no geometric error, no drift):
 // what a perfect table ground on this machine still shows, its floor.
 MachineErrorModel vibration_only(const MachineErrorModel& model);
+
+// One slide following its command through the model: the servo (in time, at the work speed or
+// under the speed program), the geometric error with C, the drift of part `part_index` (a scale
+// error of the slide, drift_um_per_part * i at its largest commanded position) and that part's
+// vibration. The lobe's X and the pin's X and Y all go through this one function, so a slide
+// errs the same way whatever it grinds. `commanded_mm` holds 3600 rows at C = k * 0.1 deg;
+// the slide's positions in mm. Two slides given the same seed vibrate alike.
+// Errors: kInvalidInput for a bad model, another grid (the message names `source`) or a
+// negative part index.
+struct FollowedSlide {
+  std::vector<double> followed_mm;      // on the commanded grid
+  double largest_servo_error_um = 0.0;  // largest |followed - commanded| from the servo alone
+};
+Result<FollowedSlide> follow_slide(const std::vector<double>& commanded_mm, double c_step_deg,
+                                   const MachineErrorModel& model, int part_index, std::string_view source);
+
+// A table program read back as the NC runs it: the table's following axis (CTABDEF's first
+// argument, e.g. "X") and the position it interpolates at C = k * 0.1 deg, 3600 rows. Errors:
+// as commanded_path_from_program.
+struct ProgramSlidePath {
+  std::string following_axis;
+  std::vector<double> position_mm;
+};
+Result<ProgramSlidePath> slide_path_from_program(const std::filesystem::path& nc_file);
 
 // The commanded wheel path on the machine's C grid: x_mm[k] at C = k * c_step_deg.
 struct CommandedPath {
