@@ -7,8 +7,10 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <numbers>
 #include <sstream>
+#include <string>
 
 #include "nc_out/main_program.h"
 #include "nc_out/table_program.h"
