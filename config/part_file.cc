@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "compensation/pin_kinematics.h"
 #include "config/toml_reader.h"
 #include "core/text_file.h"
 
@@ -218,6 +219,86 @@ std::optional<WorkSpeedSettings> read_speed(TomlReader& top, std::string_view so
   return s;
 }
 
+// [pin.tolerance]: absent means nothing is judged. Read as the lobe's [tolerance].
+PinTolerances read_pin_tolerances(TomlReader& pin, std::string_view source) {
+  PinTolerances t;
+  const toml::table* table = pin.subtable("tolerance");
+  if (table == nullptr) return t;
+  TomlReader r(*table, source, "pin.tolerance.");
+  r.allow_only({"roundness_um", "diameter_error_um", "stroke_error_um", "index_error_deg"});
+  t.roundness_um = upper_only(r, *table, "roundness_um");
+  t.diameter_error_um = symmetric_or_range(r, *table, "diameter_error_um");
+  t.stroke_error_um = symmetric_or_range(r, *table, "stroke_error_um");
+  t.index_error_deg = symmetric_or_range(r, *table, "index_error_deg");
+  if (r.error) pin.fail(r.error->message);
+  return t;
+}
+
+// A part file with [pin]: a crankpin. The lobe's keys mean nothing for it and are refused by
+// name rather than ignored, so a lobe file with a stray [pin] is never ground as a pin unseen.
+Result<PartFile> parse_pin_part(const toml::table& table, std::string_view source) {
+  TomlReader r(table, source);
+  for (std::string_view key : {"lobe", "lift_table", "follower", "follower_radius_mm", "base_circle_radius_mm",
+                               "wheel_radius_mm", "rotation_sense", "c_offset_deg", "probe_offset_deg", "tolerance"}) {
+    if (!table.contains(key)) continue;
+    const std::string instead = key == "lobe"              ? "give the pin's number as pin_number"
+                                : key == "wheel_radius_mm" ? "give it in [pin]"
+                                : key == "tolerance"       ? "give a pin's tolerances in [pin.tolerance]"
+                                                           : "remove it";
+    r.fail(r.where(key) + ": a lobe's key, and this file describes a crankpin ([pin]); " + instead +
+           " (docs/parts.md)");
+  }
+  r.allow_only({"name", "pin_number", "nc_program", "speed", "pin"});
+  PartFile out;
+  Part& p = out.part;
+  p.name = r.text("name", std::nullopt);
+  p.lobe = static_cast<int>(r.integer("pin_number", 1, 1, 64));
+  out.nc_program = r.text("nc_program", std::nullopt);
+  if (!r.error && !valid_program_name(out.nc_program)) {
+    r.fail(r.where("nc_program") + ": `" + out.nc_program +
+           "` is not a valid NC program name; use up to 24 letters, digits and '_', starting with a letter");
+  }
+  PinGeometry pin;
+  const toml::table* pin_table = r.subtable("pin");
+  if (pin_table != nullptr) {
+    TomlReader pr(*pin_table, source, "pin.");
+    pr.allow_only(
+        {"throw_mm", "pin_radius_mm", "wheel_radius_mm", "pin_angle_deg", "mode", "gauge_offset_deg", "tolerance"});
+    pin.throw_mm = pr.number("throw_mm", std::nullopt, 0.0, 2000.0, true);
+    pin.pin_radius_mm = pr.number("pin_radius_mm", std::nullopt, 0.0, 1000.0, true);
+    pin.wheel_radius_mm = pr.number("wheel_radius_mm", std::nullopt, 0.0, 2000.0, true);
+    pin.pin_angle_deg = pr.number("pin_angle_deg", std::nullopt, -360.0, 360.0);
+    const std::string mode = pr.choice("mode", std::nullopt, {"c-x", "c-x-y"});
+    if (auto m = pin_mode_from_name(mode)) pin.mode = *m;
+    pin.gauge_offset_deg = pr.number("gauge_offset_deg", 180.0, -360.0, 360.0);
+    pin.tolerances = read_pin_tolerances(pr, source);
+    if (!pr.error) {
+      if (Status s = validate(pin); !s) {
+        // The line of the key the message names, else that of [pin].
+        std::string where = at(source, *pin_table);
+        for (std::string_view key : {"throw_mm", "pin_radius_mm", "wheel_radius_mm", "pin_angle_deg"}) {
+          if (s.error().message.find(key) != std::string::npos) {
+            where = at(source, *pin_table->get(key));
+            break;
+          }
+        }
+        pr.fail(where + ": " + s.error().message);
+      }
+    }
+    if (pr.error) r.fail(pr.error->message);
+  }
+  if (r.has("speed") && !r.error && pin.mode == PinMode::kCXY) {
+    r.fail(r.where("speed") +
+           ": a pin ground C-X-Y keeps its grinding-point speed constant at a constant C speed, so it has no "
+           "speed program; remove [speed], or grind the pin with mode = \"c-x\"");
+  }
+  out.speed = read_speed(r, source);
+  if (r.error) return *r.error;
+  p.wheel_radius_mm = pin.wheel_radius_mm;
+  out.pin = pin;
+  return out;
+}
+
 }  // namespace
 
 Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_name,
@@ -225,6 +306,7 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
   Result<toml::table> parsed = parse_toml(text, source_name);
   if (!parsed) return parsed.error();
   const toml::table& table = *parsed;
+  if (table.contains("pin")) return parse_pin_part(table, source_name);
   TomlReader r(table, source_name);
   r.allow_only({"name", "lobe", "lift_table", "follower", "follower_radius_mm", "base_circle_radius_mm",
                 "wheel_radius_mm", "rotation_sense", "c_offset_deg", "probe_offset_deg", "nc_program", "tolerance",

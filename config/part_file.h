@@ -1,4 +1,5 @@
-// Part files: TOML describing a lobe (lift table, follower, radii, machine angles).
+// Part files: TOML describing a lobe (lift table, follower, radii, machine angles) or, with a
+// [pin] section, a crankpin (throw, radii, angular position, how the wheel chases it).
 #pragma once
 
 #include <filesystem>
@@ -8,6 +9,7 @@
 
 #include "compensation/work_speed.h"
 #include "core/part.h"
+#include "core/pin.h"
 #include "core/result.h"
 
 namespace gaugeloop {
@@ -20,11 +22,19 @@ struct PartFile {
   // for one speed. Its keys: base_speed_rpm, lobe_speed_mm_per_min, lobe_threshold_mm,
   // c_acceleration_max_deg_per_s2; the slide's limits are the machine's ([nc] of the service).
   std::optional<WorkSpeedSettings> speed;
+  // [pin]: the file describes a crankpin, not a lobe. `part` then holds only the name, the pin
+  // number (top-level `pin_number`, 1-based, as Part::lobe) and the wheel radius; its lift
+  // table, follower and lobe tolerances are unset. A pin's [speed] is for C-X only, where the
+  // grinding-point speed held is lobe_speed_mm_per_min (C-X-Y keeps it constant anyway).
+  std::optional<PinGeometry> pin;
 };
 
 // Parses part TOML. `source_name` is used in messages; a relative `lift_table` is resolved
 // against `base_dir`. Errors (kInvalidInput) name the file, the line and the key, and say
 // what is allowed. Unknown keys are refused, so a typo never silently falls back to a default.
+// A pin file (docs/parts.md) takes name, pin_number, nc_program, [speed] (C-X only), [pin] and
+// [pin.tolerance]; a lobe's key in it is refused naming the key, and the pin must pass
+// validate(PinGeometry) (compensation/pin_kinematics.h), whose message is given with the file.
 Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_name,
                                  const std::filesystem::path& base_dir);
 

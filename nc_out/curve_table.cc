@@ -75,7 +75,7 @@ std::string render_curve_blocks(const std::vector<CurvePoint>& points, const Cur
 }
 
 std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpolation interpolation,
-                                const CurveTableFormat& format) {
+                                const CurveTableFormat& format, std::string_view following_axis) {
   std::string out;
   out.reserve(points.size() * 24 + 32);
   for (size_t i = 0; i < points.size(); ++i) {
@@ -86,7 +86,7 @@ std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpola
       out += "BNAT ENAT CSPLINE ";
     }
     // A tiny negative infeed prints as 0.0000, not as a signed zero (format_fixed).
-    out += "C" + format_fixed(points[i].c_deg, format.c_decimals) + " X" +
+    out += "C" + format_fixed(points[i].c_deg, format.c_decimals) + " " + std::string(following_axis) +
            format_fixed(format.round_x_mm(points[i].x_mm), format.x_decimals());
   }
   return out;

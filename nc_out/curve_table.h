@@ -70,8 +70,10 @@ std::string render_curve_blocks(const std::vector<CurvePoint>& points, const Cur
 //   G1 C0.000 X0.0000
 //   BNAT ENAT CSPLINE C1.000 X0.0003
 //   C2.000 X0.0011
-// Call validate_curve_points first.
+// `following_axis` is the word the following values are written under: X for the wheel
+// infeed, Y for the wheel height of a crankpin ground C-X-Y (its values then are Y in mm,
+// rounded on the same linear grid). Call validate_curve_points first.
 std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpolation interpolation,
-                                const CurveTableFormat& format = {});
+                                const CurveTableFormat& format = {}, std::string_view following_axis = "X");
 
 }  // namespace gaugeloop

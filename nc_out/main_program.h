@@ -5,7 +5,8 @@
 // version (gaugeloop's), run_id, created_utc, table_version, table_number (the table the
 // subprogram just defined, the one to couple), table_start_c_deg (the table's first leading
 // value, 0.000 or a start on the base circle), point_count, interpolation. Any other, or one
-// left unfilled, is refused as for the table (render_nc_template).
+// left unfilled, is refused as for the table (render_nc_template). A crankpin ground C-X-Y
+// adds y_program_name (the Y table's subprogram) and y_table_number (the table it defines).
 #pragma once
 
 #include <map>
@@ -22,8 +23,18 @@ namespace gaugeloop {
 // EGON(following axis, block change, leading axis, table, 0) or LEADON(following axis, leading
 // axis, table) naming it), and every coupling it makes must name that table, so a template
 // that couples a fixed number never ships. kInvalidInput naming the template otherwise.
+//
+// A crankpin ground C-X-Y couples two tables to C: when `values` hold "y_program_name" and
+// "y_table_number" (both or neither), the program must call both subprograms, couple X through
+// table_number and Y through y_table_number, each axis only to its own table and no other
+// axis, and the two numbers must differ. Without them (a lobe, or a pin ground C-X) the rule
+// above holds unchanged.
 Result<std::string> render_main_program(std::string_view template_text, std::string_view template_name,
                                         const std::map<std::string, std::string>& values);
+
+// The Y table's subprogram of a crankpin ground C-X-Y: <program_name>_Y (CRANK_PIN1_XY ->
+// CRANK_PIN1_XY_Y), the file that defines the Y table beside the X table's <program_name>.
+std::string pin_y_program_name(std::string_view program_name);
 
 // The speed subprogram of a table subprogram: <program_name>_SPEED (CAM -> CAM_SPEED), the
 // file the main program calls for one turn of C at the programmed work speed
@@ -37,7 +48,8 @@ std::string speed_program_name(std::string_view program_name);
 Status check_main_calls_speed_program(std::string_view program, std::string_view file_name,
                                       std::string_view speed_subprogram);
 
-// The table number the first EGON or LEADON of `program` couples through; kInvalidInput
+// The table number the first EGON or LEADON of `program` couples through (a crankpin's X
+// table when its template couples X first, as examples/sinumerik/pin_main.mpf does); kInvalidInput
 // naming `file_name` and the line if it has none or it cannot be read.
 Result<int> coupled_table_number(std::string_view program, std::string_view file_name);
 

@@ -84,6 +84,29 @@ std::vector<std::string_view> words_of(std::string_view code) {
   return words;
 }
 
+// The following axis the template's CTABDEF names (its first argument, upper case), so that
+// the blocks are written under the axis the table defines: X for the infeed, Y for the wheel
+// height of a crankpin ground C-X-Y. X when the template has no readable CTABDEF; the
+// read-back then refuses it with its line.
+std::string template_following_axis(std::string_view template_text) {
+  for (const std::string_view line : split_lines(template_text)) {
+    const std::vector<std::string_view> words = words_of(code_of(line));
+    if (words.empty() || upper(words.front()).rfind("CTABDEF", 0) != 0) continue;
+    const std::string_view code = code_of(line);
+    const size_t open = code.find('(');
+    if (open == std::string_view::npos) break;
+    const std::string_view rest = code.substr(open + 1);
+    const std::string axis = upper(trim(rest.substr(0, rest.find_first_of(",)"))));
+    const bool name = !axis.empty() && std::isalpha(static_cast<unsigned char>(axis.front())) &&
+                      std::all_of(axis.begin(), axis.end(), [](char ch) {
+                        return ch == '_' || std::isalnum(static_cast<unsigned char>(ch)) != 0;
+                      });
+    if (name) return axis;
+    break;
+  }
+  return "X";
+}
+
 }  // namespace
 
 Result<std::string> archive_header(std::string_view name, NcProgramKind kind) {
@@ -160,7 +183,8 @@ Result<std::string> render_table_program(std::string_view template_text, std::st
                                          std::map<std::string, std::string> values, const CurveTable& table,
                                          const TableProvenance& provenance, const CurveTableFormat& format) {
   if (Status s = validate_curve_points(table.points); !s) return s.error();
-  const std::string body = render_table_blocks(table.points, table.interpolation, format);
+  const std::string axis = template_following_axis(template_text);
+  const std::string body = render_table_blocks(table.points, table.interpolation, format, axis);
   values["table_blocks"] = body;
   values["table_header"] = render_table_header(table, provenance, body);
   values["point_count"] = std::to_string(table.points.size());
@@ -189,7 +213,7 @@ Result<std::string> render_table_program(std::string_view template_text, std::st
   if (back->interpolation != table.interpolation) return refuse("interpolation differs");
   if (numbered && back->table_number != number) {
     return refuse("CTABDEF names table " + std::to_string(back->table_number) + ", not table " +
-                  std::to_string(number) + "; write CTABDEF(X,C,{{table_number}},1)");
+                  std::to_string(number) + "; write CTABDEF(" + axis + ",C,{{table_number}},1)");
   }
   return program;
 }
@@ -368,11 +392,12 @@ Status compare_table_points(const ParsedTable& table, const std::vector<CurvePoi
     const std::string bx = format_fixed(format.round_x_mm(b.x_mm), xd);
     if (format_fixed(a.c_deg, format.c_decimals) != format_fixed(b.c_deg, format.c_decimals) ||
         format_fixed(a.x_mm, xd) != bx) {
-      return make_error(ErrorCode::kRefused,
-                        std::string(file_name) + ":" + std::to_string(table.point_lines[i]) + ": point " +
-                            std::to_string(i) + " reads C" + format_fixed(a.c_deg, format.c_decimals) + " X" +
-                            format_fixed(a.x_mm, xd) + ", the pushed table has C" +
-                            format_fixed(b.c_deg, format.c_decimals) + " X" + bx + "; edited by hand");
+      return make_error(ErrorCode::kRefused, std::string(file_name) + ":" + std::to_string(table.point_lines[i]) +
+                                                 ": point " + std::to_string(i) + " reads C" +
+                                                 format_fixed(a.c_deg, format.c_decimals) + " " + table.following_axis +
+                                                 format_fixed(a.x_mm, xd) + ", the pushed table has C" +
+                                                 format_fixed(b.c_deg, format.c_decimals) + " " + table.following_axis +
+                                                 bx + "; edited by hand");
     }
   }
   if (table.points.size() != expected.size()) {

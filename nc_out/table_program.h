@@ -1,7 +1,8 @@
 // The rendered table program (.SPF): header comment, checksum, rendering from the user's
 // template, and reading a pushed program back.
 //
-// Frame and units as curve_table.h: C in degrees (leading axis), X in mm (following axis).
+// Frame and units as curve_table.h: C in degrees (leading axis), X in mm (following axis);
+// a crankpin's Y table has Y in mm as its following axis, everything else alike.
 //
 // Header: comment lines `; gaugeloop <key>: <value>` that the template places with
 // {{table_header}}. Keys: run_id, table_version, table_number and table_numbers (when the
@@ -82,6 +83,9 @@ std::string render_table_header(const CurveTable& table, const TableProvenance& 
 // Renders the user's table template with `values` plus the table's own placeholders:
 // table_blocks, table_header, point_count, block_count, interpolation, command_error_um, and
 // table_number when provenance.table_numbers is known (the CTABDEF read back must name it).
+// The blocks carry the following axis the template's CTABDEF names: CTABDEF(X,C,..) for the
+// infeed, CTABDEF(Y,C,..) for the wheel height of a crankpin ground C-X-Y (X when it names
+// none that can be read; the read-back then refuses it).
 // Then reads the result back (parse_table_program) and refuses (kInvalidInput, naming the
 // template) unless it gives exactly table.points, the interpolation and a matching checksum,
 // so a template that puts text inside the table or leaves {{table_blocks}} out never ships.
