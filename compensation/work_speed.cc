@@ -187,6 +187,7 @@ Result<WorkSpeedPlan> plan_work_speed_rows(const SpeedPlanRows& rows, double tar
 }
 
 Result<WorkSpeedPlan> plan_work_speed(const MachinePath& path, const Part& part, const WorkSpeedSettings& s) {
+  // The settings first (the row planner checks them again): a bad key is named before a bad path.
   if (Status st = validate(s); !st) return st.error();
   double h = 0.0;
   if (Status st = check_path(path, h); !st) return st.error();
