@@ -51,9 +51,13 @@ Result<std::vector<double>> split_along_direction(double displacement_mm, double
 // direction psi, c = correction_um (pin frame, index = whole pin degree; positive takes more
 // off): at each row the design wheel moves by -c(contact_psi) / 1000 along the grinding
 // normal, split onto the mode's axes (X alone, or X and Y) by split_along_direction. c is
-// interpolated with a periodic spline; exact to first order in c (the second order is
-// c^2 / (r + rw), below 1e-6 um for corrections of tens of um). Derivatives of the moved path
-// are the design's plus those of the move (spline derivatives through the chain rule).
+// interpolated with a periodic spline. C-X-Y moves along the line of centres (the normal is
+// horizontal, so the move is all X), exactly; C-X moves X by d / cos n, which also carries
+// the wheel d tan n across that line and changes the distance of the centres by
+// d^2 tan^2 n / (2 (r + rw)) more: second order, 1.2e-8 mm at 20 um on the sample pin
+// (R 45, r 25, rw 300), and the grinding point moves by a negligible angle. Derivatives of
+// the moved path are the design's plus those of the move (spline derivatives through the
+// chain rule).
 // A zero correction gives the design path bit for bit. Errors: as compute_pin_path;
 // kInvalidInput for a non-finite correction.
 Result<PinPath> corrected_pin_path(const PinGeometry& pin, const DegreeTable& correction_um, double c_step_deg);

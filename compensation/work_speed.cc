@@ -97,36 +97,52 @@ double cycle_time_s(const WorkSpeedProgram& program) {
   return t;
 }
 
-Result<WorkSpeedPlan> plan_work_speed(const MachinePath& path, const Part& part, const WorkSpeedSettings& s) {
+Result<WorkSpeedPlan> plan_work_speed_rows(const SpeedPlanRows& rows, double target_mm_per_min,
+                                           const WorkSpeedSettings& s) {
   if (Status st = validate(s); !st) return st.error();
-  double h = 0.0;
-  if (Status st = check_path(path, h); !st) return st.error();
-  const size_t n = path.x_mm.size();
+  const size_t n = rows.contact_arc_mm_per_deg.size();
+  bool sizes_agree = rows.held.size() == n && rows.d_dc_mm_per_deg.size() == rows.d2_dc2_mm_per_deg2.size();
+  for (size_t a = 0; sizes_agree && a < rows.d_dc_mm_per_deg.size(); ++a) {
+    sizes_agree = rows.d_dc_mm_per_deg[a].size() == n && rows.d2_dc2_mm_per_deg2[a].size() == n;
+  }
+  if (n < 4 || !sizes_agree) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "speed program: the path needs the contact arc and every axis's first and second "
+                      "C-derivatives at every row (at least 4 rows); compute the path with its derivatives");
+  }
+  const double h = rows.c_step_deg;
+  if (!(h > 0.0) || std::abs(h * static_cast<double>(n) - 360.0) > 1e-6) {
+    return make_error(ErrorCode::kInvalidInput, "speed program: " + std::to_string(n) + " rows at " +
+                                                    std::to_string(h) + " deg are not one uniform turn of C");
+  }
   const double a_half = 0.5 * s.x_acceleration_max_mm_per_s2;
   const double w_base = 6.0 * s.base_speed_rpm;
-  const double v_lobe_mm_per_s = s.lobe_speed_mm_per_min / 60.0;
+  const double v_target_mm_per_s = target_mm_per_min / 60.0;
 
   // 1. The ceiling on omega^2, (deg/s)^2.
   std::vector<double> w2(n);
   for (size_t k = 0; k < n; ++k) {
     double cap = w_base * w_base;
-    if (path.x_mm[k] > s.lobe_threshold_mm) {
-      const double arc = contact_arc_mm_per_deg(path.x_mm[k], path.dx_dc_mm_per_deg[k], path.d2x_dc2_mm_per_deg2[k],
-                                                part.base_circle_radius_mm, part.wheel_radius_mm);
-      if (arc > 0.0) cap = std::min(cap, std::pow(v_lobe_mm_per_s / arc, 2));
+    const double arc = rows.contact_arc_mm_per_deg[k];
+    if (rows.held[k] && arc > 0.0) cap = std::min(cap, std::pow(v_target_mm_per_s / arc, 2));
+    for (size_t a = 0; a < rows.d_dc_mm_per_deg.size(); ++a) {
+      const double v1 = std::abs(rows.d_dc_mm_per_deg[a][k]);
+      if (v1 > 0.0) cap = std::min(cap, std::pow(s.x_velocity_max_mm_per_s / v1, 2));
+      const double a2 = std::abs(rows.d2_dc2_mm_per_deg2[a][k]);
+      if (a2 > 0.0) cap = std::min(cap, a_half / a2);
     }
-    const double v1 = std::abs(path.dx_dc_mm_per_deg[k]);
-    if (v1 > 0.0) cap = std::min(cap, std::pow(s.x_velocity_max_mm_per_s / v1, 2));
-    const double a2 = std::abs(path.d2x_dc2_mm_per_deg2[k]);
-    if (a2 > 0.0) cap = std::min(cap, a_half / a2);
     w2[k] = cap;
   }
   // 2. The allowed change of omega^2 from row k to k+1: 2 alpha h, alpha the smaller of the C
-  // limit and what the slide's other half allows at either end.
+  // limit and what the slides' other half allows at either end.
   std::vector<double> step(n);
   auto alpha_at = [&](size_t k) {
-    const double v1 = std::abs(path.dx_dc_mm_per_deg[k]);
-    return v1 > 0.0 ? std::min(s.c_acceleration_max_deg_per_s2, a_half / v1) : s.c_acceleration_max_deg_per_s2;
+    double alpha = s.c_acceleration_max_deg_per_s2;
+    for (const std::vector<double>& d1 : rows.d_dc_mm_per_deg) {
+      const double v1 = std::abs(d1[k]);
+      if (v1 > 0.0) alpha = std::min(alpha, a_half / v1);
+    }
+    return alpha;
   };
   for (size_t k = 0; k < n; ++k) step[k] = 2.0 * h * std::min(alpha_at(k), alpha_at((k + 1) % n));
   for (int lap = 0; lap < 2; ++lap) {
@@ -145,22 +161,50 @@ Result<WorkSpeedPlan> plan_work_speed(const MachinePath& path, const Part& part,
   WorkSpeedPlan plan;
   plan.program.c_step_deg = h;
   plan.program.speed_rpm.resize(n);
-  for (size_t k = 0; k < n; ++k) plan.program.speed_rpm[k] = std::sqrt(w2[k]) / 6.0;
-  Result<std::vector<double>> v = grinding_point_speed_mm_per_min(path, part, plan.program);
-  if (!v) return v.error();
-  plan.grinding_point_speed_mm_per_min = std::move(*v);
-  plan.constant_grinding_point_speed_mm_per_min = grinding_point_speed_mm_per_min(path, part, s.base_speed_rpm);
+  plan.grinding_point_speed_mm_per_min.resize(n);
+  plan.constant_grinding_point_speed_mm_per_min.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    plan.program.speed_rpm[k] = std::sqrt(w2[k]) / 6.0;
+    const double v_per_rpm = grinding_point_speed_mm_per_min(rows.contact_arc_mm_per_deg[k], 1.0);
+    plan.grinding_point_speed_mm_per_min[k] = v_per_rpm * std::abs(plan.program.speed_rpm[k]);
+    plan.constant_grinding_point_speed_mm_per_min[k] =
+        grinding_point_speed_mm_per_min(rows.contact_arc_mm_per_deg[k], s.base_speed_rpm);
+  }
   plan.cycle_time_s = cycle_time_s(plan.program);
   plan.constant_cycle_time_s = 60.0 / s.base_speed_rpm;
   for (size_t k = 0; k < n; ++k) {
     const double half_dw2_dc = (w2[(k + 1) % n] - w2[(k + n - 1) % n]) / (4.0 * h);  // omega d(omega)/dC
     plan.largest_c_acceleration_deg_per_s2 = std::max(plan.largest_c_acceleration_deg_per_s2, std::abs(half_dw2_dc));
-    plan.largest_x_velocity_mm_per_s =
-        std::max(plan.largest_x_velocity_mm_per_s, std::abs(path.dx_dc_mm_per_deg[k]) * std::sqrt(w2[k]));
-    const double a = path.d2x_dc2_mm_per_deg2[k] * w2[k] + path.dx_dc_mm_per_deg[k] * half_dw2_dc;
-    plan.largest_x_acceleration_mm_per_s2 = std::max(plan.largest_x_acceleration_mm_per_s2, std::abs(a));
+    for (size_t a = 0; a < rows.d_dc_mm_per_deg.size(); ++a) {
+      const double d1 = rows.d_dc_mm_per_deg[a][k];
+      const double d2 = rows.d2_dc2_mm_per_deg2[a][k];
+      plan.largest_x_velocity_mm_per_s = std::max(plan.largest_x_velocity_mm_per_s, std::abs(d1) * std::sqrt(w2[k]));
+      plan.largest_x_acceleration_mm_per_s2 =
+          std::max(plan.largest_x_acceleration_mm_per_s2, std::abs(d2 * w2[k] + d1 * half_dw2_dc));
+    }
   }
   return plan;
+}
+
+Result<WorkSpeedPlan> plan_work_speed(const MachinePath& path, const Part& part, const WorkSpeedSettings& s) {
+  // The settings first (the row planner checks them again): a bad key is named before a bad path.
+  if (Status st = validate(s); !st) return st.error();
+  double h = 0.0;
+  if (Status st = check_path(path, h); !st) return st.error();
+  const size_t n = path.x_mm.size();
+  SpeedPlanRows rows;
+  rows.c_step_deg = h;
+  rows.contact_arc_mm_per_deg.resize(n);
+  rows.held.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    rows.contact_arc_mm_per_deg[k] =
+        contact_arc_mm_per_deg(path.x_mm[k], path.dx_dc_mm_per_deg[k], path.d2x_dc2_mm_per_deg2[k],
+                               part.base_circle_radius_mm, part.wheel_radius_mm);
+    rows.held[k] = path.x_mm[k] > s.lobe_threshold_mm;
+  }
+  rows.d_dc_mm_per_deg = {path.dx_dc_mm_per_deg};
+  rows.d2_dc2_mm_per_deg2 = {path.d2x_dc2_mm_per_deg2};
+  return plan_work_speed_rows(rows, s.lobe_speed_mm_per_min, s);
 }
 
 }  // namespace gaugeloop

@@ -71,7 +71,8 @@ struct WorkSpeedPlan {
   std::vector<double> constant_grinding_point_speed_mm_per_min;  // per row, at base_speed_rpm throughout
   double cycle_time_s = 0.0;                                     // one turn under the program
   double constant_cycle_time_s = 0.0;                            // one turn at base_speed_rpm
-  // Over the turn, under the program, from the discrete program (central differences):
+  // Over the turn, under the program, from the discrete program (central differences); for
+  // more than one following axis, the largest over the axes:
   double largest_c_acceleration_deg_per_s2 = 0.0;
   double largest_x_velocity_mm_per_s = 0.0;
   double largest_x_acceleration_mm_per_s2 = 0.0;
@@ -94,6 +95,28 @@ struct WorkSpeedPlan {
 // Errors: as validate; kInvalidInput for a path without derivatives or not on a uniform grid
 // that divides 360.
 Result<WorkSpeedPlan> plan_work_speed(const MachinePath& path, const Part& part, const WorkSpeedSettings& settings);
+
+// The planner under plan_work_speed and plan_pin_work_speed (compensation/pin_path.h): what
+// it needs of a path, row by row on a uniform C grid over one turn.
+struct SpeedPlanRows {
+  double c_step_deg = 0.0;
+  // How far the grinding point runs over the work's surface per degree of C, mm/deg.
+  std::vector<double> contact_arc_mm_per_deg;
+  // Rows where the grinding-point speed is held at the target (the lobe; every row of a pin).
+  std::vector<bool> held;
+  // The following axes' derivatives, per axis and row (X; X and Y for a C-X-Y pin). Each
+  // axis is kept within the slide's limits of the settings: the slides share them.
+  std::vector<std::vector<double>> d_dc_mm_per_deg;
+  std::vector<std::vector<double>> d2_dc2_mm_per_deg2;
+};
+
+// The ceiling per row (6 base_speed_rpm; target / arc on the held rows; each axis's velocity
+// and half its acceleration), then the forward and backward passes on omega^2 as
+// plan_work_speed describes; the plan's largest_x_* figures are the largest over the axes.
+// `target_mm_per_min` is the grinding-point speed held. Errors: as validate; kInvalidInput
+// for rows of differing sizes, fewer than 4, or a step that does not make one turn.
+Result<WorkSpeedPlan> plan_work_speed_rows(const SpeedPlanRows& rows, double target_mm_per_min,
+                                           const WorkSpeedSettings& settings);
 
 // One turn's time under `program`, s: the trapezoid rule over dt = dC / omega.
 double cycle_time_s(const WorkSpeedProgram& program);
