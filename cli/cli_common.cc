@@ -87,6 +87,7 @@ Result<LoadedPart> load_part(const std::string& part_path) {
   Result<PartFile> pf = part_path.empty() ? parse_part_toml(embedded::kDemoPartToml, "embedded:intake_flat.toml", "")
                                           : read_part_file(part_path);
   if (!pf) return pf.error();
+  if (pf->pin) return LoadedPart{std::move(*pf), LiftTable{}};  // a pin has no lift table
   Result<LiftTable> design = part_path.empty()
                                  ? parse_lift_table_csv(embedded::kDemoLiftCsv, "embedded:intake_flat.csv")
                                  : read_lift_table_csv(pf->part.lift_table);

@@ -15,12 +15,16 @@
 #include "cli/cli_common.h"
 #include "cli/embedded_defaults.h"
 #include "cli/grinding_loop.h"
+#include "cli/pin_loop.h"
 #include "compensation/periodic_spline.h"
+#include "compensation/pin_kinematics.h"
+#include "compensation/pin_path.h"
 #include "compensation/wheel_path.h"
 #include "compensation/work_speed.h"
 #include "config/gauge_config.h"
 #include "config/service_config.h"
 #include "core/atomic_file.h"
+#include "core/number_text.h"
 #include "core/text_file.h"
 #include "core/verdict_text.h"
 #include "job/measure_job.h"
@@ -223,6 +227,7 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
   if (!main_tmpl) return main_tmpl.error();
   js.nc_main_template = std::move(*main_tmpl);
   set_speed_program(js, lp.file.speed, o);
+  if (lp.file.pin) set_pin_job(js, *lp.file.pin, /*main_template_given=*/!o.main_template_path.empty());
   js.table_step_deg = o.table_step_deg;
   js.table_kind = o.table == "linear"            ? TableKind::kLinear
                   : o.table == "spline"          ? TableKind::kSpline
@@ -269,9 +274,27 @@ void write_demo_report(const MeasureOptions& o, std::int64_t run_id) {
               pdf.string().c_str(), static_cast<long long>(run_id));
 }
 
-int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {
+// demo --iterations: the loop on the virtual grinder (docs/virtual_grinder.md).
+struct LoopOptions {
+  int iterations = 0;     // 0: one run on the simulator's built-in form error
+  std::string plot_path;  // empty: <data-dir>/loop.svg
+  MachineErrorModel machine;
+  // --speed-program: the loop at constant speed, then again at a work speed program: the part
+  // file's [speed], else lobe_speed_mm_per_min on the lobe (2000 unset) and base_speed_rpm
+  // (the work speed unset) on the base circle; the flags override the part file.
+  bool speed_program = false;
+  std::optional<double> lobe_speed_mm_per_min;
+  std::optional<double> base_speed_rpm;
+};
+
+int cmd_pin_demo_loop(const MeasureOptions& o, const LoadedPart& lp, const SimulatorSettings& sim_settings,
+                      const LoopOptions& lo);
+
+int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings, const LoopOptions& lo) {
   Result<LoadedPart> lp = load_part(o.part_path);
   if (!lp) return report_error(lp.error());
+  // A pin is always ground on the virtual grinder: the simulator has no built-in pin.
+  if (lp->file.pin) return cmd_pin_demo_loop(o, *lp, sim_settings, lo);
   auto sim = GaugeSimulator::start(lp->file.part, lp->design, sim_settings);
   if (!sim) return report_error(sim.error());
   std::printf(
@@ -297,19 +320,6 @@ int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings) {
   }
   return status;
 }
-
-// demo --iterations: the loop on the virtual grinder (docs/virtual_grinder.md).
-struct LoopOptions {
-  int iterations = 0;     // 0: one run on the simulator's built-in form error
-  std::string plot_path;  // empty: <data-dir>/loop.svg
-  MachineErrorModel machine;
-  // --speed-program: the loop at constant speed, then again at a work speed program: the part
-  // file's [speed], else lobe_speed_mm_per_min on the lobe (2000 unset) and base_speed_rpm
-  // (the work speed unset) on the base circle; the flags override the part file.
-  bool speed_program = false;
-  std::optional<double> lobe_speed_mm_per_min;
-  std::optional<double> base_speed_rpm;
-};
 
 // The speed program for the demo's part, within the job's slide limits, and the surface it
 // leaves against the constant speed.
@@ -346,9 +356,112 @@ Result<DemoSpeedPlan> demo_speed_plan(const LoadedPart& lp, const JobSettings& j
   return d;
 }
 
+// demo --part <pin> [--iterations N]: the pin loop on the virtual grinder (docs/crankpins.md).
+int cmd_pin_demo_loop(const MeasureOptions& o, const LoadedPart& lp, const SimulatorSettings& sim_settings,
+                      const LoopOptions& lo) {
+  Result<JobSettings> job = job_settings_for(lp, o, /*build_on_table_in_force=*/false);
+  if (!job) return report_error(job.error());
+  const PinGeometry& pin = *lp.file.pin;
+  PinLoopSettings ls;
+  ls.job = std::move(*job);
+  ls.job.axis_limits.speed_rpm = lo.machine.work_speed_rpm;
+  ls.job.y_axis_limits.speed_rpm = lo.machine.work_speed_rpm;
+  ls.machine.x = lo.machine;
+  ls.machine.y = lo.machine;  // the same slide: a C-X-Y machine's Y is built like its X
+  ls.gauge = sim_settings;
+  ls.response_timeout = std::chrono::milliseconds(o.response_timeout_ms);
+  ls.iterations = lo.iterations;
+  const MachineErrorModel& m = lo.machine;
+  std::optional<WorkSpeedPlan> speed;
+  if (ls.job.speed) {
+    // The grinder turns C at the program planned on the design path, as the control would
+    // run the speed subprogram pushed with the first table.
+    Result<PinPath> path = compute_pin_path(pin, 0.5);
+    if (!path) return report_error(path.error());
+    WorkSpeedSettings ws = *ls.job.speed;
+    ws.x_velocity_max_mm_per_s = ls.job.axis_limits.x_velocity_max_mm_per_s;
+    ws.x_acceleration_max_mm_per_s2 = ls.job.axis_limits.x_acceleration_max_mm_per_s2;
+    Result<WorkSpeedPlan> plan = plan_pin_work_speed(*path, pin, ws);
+    if (!plan) return report_error(plan.error());
+    ls.machine.x.speed_program = plan->program;
+    ls.machine.y.speed_program = plan->program;
+    speed = std::move(*plan);
+  }
+  std::printf(
+      "virtual grinder: %s pin %d, %s, throw %.1f mm, pin radius %.1f mm, wheel %.0f mm, at %.0f rpm; servo %.0f Hz "
+      "(damping %.2f, feed-forward %.3f) on %s, geometric %.1f + %.1f um, drift %.2f um/part, vibration %.2f um "
+      "RMS (harmonics %d..%d), seed %llu\n",
+      lp.file.part.name.c_str(), lp.file.part.lobe, pin.mode == PinMode::kCXY ? "C-X-Y" : "C-X", pin.throw_mm,
+      pin.pin_radius_mm, pin.wheel_radius_mm, m.work_speed_rpm, m.servo_bandwidth_hz, m.servo_damping,
+      m.velocity_feed_forward, pin.mode == PinMode::kCXY ? "X and Y" : "X", m.geometric_once_um, m.geometric_twice_um,
+      m.drift_um_per_part, m.vibration_rms_um, m.vibration_min_harmonic, m.vibration_max_harmonic,
+      static_cast<unsigned long long>(m.seed));
+  std::printf(
+      "gauge: riding on the pin, %.0f pin degrees from the grinding point; simulator at %.0f rpm x %.0f, noise "
+      "%.1f um RMS (seed %llu), %d revolutions %s; database %s\n\n",
+      pin.gauge_offset_deg, sim_settings.speed_rpm, sim_settings.time_scale, sim_settings.noise_rms_um,
+      static_cast<unsigned long long>(sim_settings.seed), o.revolutions, o.mode.c_str(),
+      ls.job.db_path.string().c_str());
+  const bool with_y = pin.mode == PinMode::kCXY;
+  std::printf(
+      "part  ground from               run  max um  round um  diam um  stroke um  index deg  verdict | true max  "
+      "true round  floor  left  table\n");
+  auto print_part = [with_y](const PinLoopIteration& it) {
+    const JobReport& r = it.job;
+    auto figure = [&r](const std::string& key) {
+      for (const Characteristic& c : r.characteristics) {
+        if (c.key == key) return c.value;
+      }
+      return 0.0;
+    };
+    std::string table =
+        r.pushed() ? "v" + std::to_string(r.table_version) + ", X " + std::to_string(r.table_blocks) + " blocks " +
+                         format_fixed(r.command_error_um, 3) + " um"
+                   : "not pushed (" + std::string(compensation_verdict_name(r.verdict)) + "): " + r.not_pushed_reason;
+    if (r.pushed() && with_y) {
+      table += ", Y " + std::to_string(r.y_table_blocks) + " blocks " + format_fixed(r.y_command_error_um, 3) + " um";
+    }
+    std::printf("%4d  %-23s %5lld  %6.2f  %8.2f  %+7.2f  %+9.2f  %+9.4f  %-7s | %8.2f  %10.2f  %5.2f  %4.2f  %s\n",
+                it.iteration, it.ground_from.c_str(), static_cast<long long>(r.run_id), r.analysis.max_abs_error_um,
+                figure("roundness"), figure("diameter_error"), figure("stroke_error"), figure("index_error"),
+                std::string(verdict_name(r.tolerance_verdict)).c_str(), it.part.max_abs_um, it.part.roundness_um,
+                it.floor.max_abs_um, it.residual_max_um, table.c_str());
+    std::fflush(stdout);
+  };
+  Result<std::vector<PinLoopIteration>> loop = run_pin_grinding_loop(ls, print_part);
+  if (!loop) return report_error(loop.error());
+  const PinLoopIteration& first = loop->front();
+  const PinLoopIteration& last = loop->back();
+  std::printf(
+      "\nlargest radius error %.2f um as ground before compensation, %.2f um after %d (roundness %.2f um); floor "
+      "%.2f um (a perfect path under the same vibration): %.2f times the floor\n",
+      first.part.max_abs_um, last.part.max_abs_um, last.iteration, last.part.roundness_um, last.floor.max_abs_um,
+      last.floor.max_abs_um > 0.0 ? last.part.max_abs_um / last.floor.max_abs_um : 0.0);
+  if (speed) {
+    const auto [low, high] = std::minmax_element(speed->grinding_point_speed_mm_per_min.begin(),
+                                                 speed->grinding_point_speed_mm_per_min.end());
+    std::printf(
+        "speed program: grinding point %.0f to %.0f mm/min over a turn (%.3f to 1); one turn %.3f s against %.3f s at "
+        "%.0f rpm\n",
+        *low, *high, *high / *low, speed->cycle_time_s, speed->constant_cycle_time_s, ls.job.speed->base_speed_rpm);
+  }
+  if (!with_y) {
+    const double fastest = pin_grinding_point_speed_mm_per_min(pin, -pin.pin_angle_deg, m.work_speed_rpm);
+    const double slowest = pin_grinding_point_speed_mm_per_min(pin, 180.0 - pin.pin_angle_deg, m.work_speed_rpm);
+    std::printf(
+        "grinding-point speed at %.0f rpm: %.0f to %.0f mm/min over a turn, %.3f to 1 (C-X; a speed program holds it: "
+        "[speed] in the part file)\n",
+        m.work_speed_rpm, slowest, fastest, fastest / slowest);
+  }
+  return std::all_of(loop->begin(), loop->end(), [](const PinLoopIteration& it) { return it.job.pushed(); })
+             ? kExitOk
+             : kExitNotPushed;
+}
+
 int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings, const LoopOptions& lo) {
   Result<LoadedPart> lp = load_part(o.part_path);
   if (!lp) return report_error(lp.error());
+  if (lp->file.pin) return cmd_pin_demo_loop(o, *lp, sim_settings, lo);
   Result<JobSettings> job = job_settings_for(*lp, o, /*build_on_table_in_force=*/false);
   if (!job) return report_error(job.error());
   LoopSettings ls;
@@ -683,7 +796,7 @@ void add_demo_command(CLI::App& app, CommandAction& action) {
       action = [demo_opts, demo_sim, loop] { return cmd_demo_loop(*demo_opts, *demo_sim, *loop); };
       return;
     }
-    action = [demo_opts, demo_sim] { return cmd_demo(*demo_opts, *demo_sim); };
+    action = [demo_opts, demo_sim, loop] { return cmd_demo(*demo_opts, *demo_sim, *loop); };
   });
 }
 

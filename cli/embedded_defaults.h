@@ -13,5 +13,9 @@ extern const std::string_view kNcMainTemplate;  // examples/sinumerik/cam_main.m
 // With a work speed program: the speed subprogram and the main program that calls it.
 extern const std::string_view kNcSpeedTemplate;      // examples/sinumerik/cam_speed.spf
 extern const std::string_view kNcMainSpeedTemplate;  // examples/sinumerik/cam_main_speed.mpf
+// Crankpins: the Y table (C-X-Y) and the main programs coupling X (C-X) or X and Y (C-X-Y).
+extern const std::string_view kPinYTableTemplate;  // examples/sinumerik/pin_y_table.spf
+extern const std::string_view kPinMainTemplate;    // examples/sinumerik/pin_main.mpf
+extern const std::string_view kPinMainCxTemplate;  // examples/sinumerik/pin_main_cx.mpf
 
 }  // namespace gaugeloop::embedded

@@ -175,6 +175,43 @@ void read_nc_table_keys(TomlReader& nr, JobSettings& job) {
   l.x_acceleration_max_mm_per_s2 =
       nr.number("x_acceleration_max_mm_per_s2", l.x_acceleration_max_mm_per_s2, 0.0, 1e8, true);
   l.speed_rpm = nr.number("work_speed_rpm", l.speed_rpm, 0.0, 3000.0, true);
+  // A crankpin grinder's vertical slide (C-X-Y pins only).
+  AxisLimits& y = job.y_axis_limits;
+  y.x_min_mm = nr.number("y_min_mm", y.x_min_mm, -1000.0, 1000.0);
+  y.x_max_mm = nr.number("y_max_mm", y.x_max_mm, -1000.0, 1000.0);
+  y.x_velocity_max_mm_per_s = nr.number("y_velocity_max_mm_per_s", y.x_velocity_max_mm_per_s, 0.0, 1e6, true);
+  y.x_acceleration_max_mm_per_s2 =
+      nr.number("y_acceleration_max_mm_per_s2", y.x_acceleration_max_mm_per_s2, 0.0, 1e8, true);
+  y.speed_rpm = l.speed_rpm;
+}
+
+// `key` = [A, B]: two distinct whole numbers 1..999, or nothing (empty) when absent or wrong
+// (nr.fail says which).
+std::optional<TableNumbers> read_number_pair(TomlReader& nr, const toml::table& t, const std::string& key,
+                                             const std::string& example) {
+  const toml::node* node = t.get(key);
+  if (node == nullptr) return std::nullopt;
+  const std::string expected = ": expected two distinct whole numbers 1..999, e.g. " + key + " = " + example;
+  const toml::array* a = node->as_array();
+  if (a == nullptr || a->size() != 2) {
+    nr.fail(nr.where(key) + expected);
+    return std::nullopt;
+  }
+  TableNumbers numbers{0, 0};
+  for (std::size_t i = 0; i < 2; ++i) {
+    const std::optional<std::int64_t> v = a->get(i)->value_exact<std::int64_t>();
+    if (!v || *v < 1 || *v > 999) {
+      nr.fail(nr.where(key) + expected);
+      return std::nullopt;
+    }
+    numbers[i] = static_cast<int>(*v);
+  }
+  if (numbers[0] == numbers[1]) {
+    nr.fail(nr.where(key) + ": the two numbers are both " + std::to_string(numbers[0]) +
+            "; they must differ, so a new table never redefines the one coupled");
+    return std::nullopt;
+  }
+  return numbers;
 }
 
 // table_numbers = [A, B]: two distinct numbers 1..999. The older single table_number = N is
@@ -194,29 +231,19 @@ void read_table_numbers(TomlReader& nr, const toml::table& t, JobSettings& job) 
     job.table_numbers = {static_cast<int>(n), static_cast<int>(n + 1)};
     return;
   }
-  const toml::node* node = t.get("table_numbers");
-  if (node == nullptr) return;
-  const std::string expected = ": expected two distinct whole numbers 1..999, e.g. table_numbers = [1, 2]";
-  const toml::array* a = node->as_array();
-  if (a == nullptr || a->size() != 2) {
-    nr.fail(nr.where("table_numbers") + expected);
-    return;
+  if (std::optional<TableNumbers> numbers = read_number_pair(nr, t, "table_numbers", "[1, 2]")) {
+    job.table_numbers = *numbers;
   }
-  TableNumbers numbers{0, 0};
-  for (std::size_t i = 0; i < 2; ++i) {
-    const std::optional<std::int64_t> v = a->get(i)->value_exact<std::int64_t>();
-    if (!v || *v < 1 || *v > 999) {
-      nr.fail(nr.where("table_numbers") + expected);
+  if (std::optional<TableNumbers> y = read_number_pair(nr, t, "y_table_numbers", "[3, 4]")) job.y_table_numbers = *y;
+  for (int y : job.y_table_numbers) {
+    if (!nr.error && (y == job.table_numbers[0] || y == job.table_numbers[1])) {
+      nr.fail(nr.where(nr.has("y_table_numbers") ? "y_table_numbers" : "table_numbers") + ": table " +
+              std::to_string(y) +
+              " would hold both a pin's X table and its Y table; give y_table_numbers two "
+              "numbers the X tables do not use");
       return;
     }
-    numbers[i] = static_cast<int>(*v);
   }
-  if (numbers[0] == numbers[1]) {
-    nr.fail(nr.where("table_numbers") + ": the two numbers are both " + std::to_string(numbers[0]) +
-            "; they must differ, so a new table never redefines the one coupled");
-    return;
-  }
-  job.table_numbers = numbers;
 }
 
 // [nc]: the output directory (writable), the template (required, read now), the main
@@ -246,12 +273,23 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
                    "x_acceleration_max_mm_per_s2",
                    "work_speed_rpm",
                    "speed_template",
-                   "main_speed_template"});
+                   "main_speed_template",
+                   "y_template",
+                   "y_table_numbers",
+                   "pin_main_template",
+                   "pin_main_xy_template",
+                   "y_min_mm",
+                   "y_max_mm",
+                   "y_velocity_max_mm_per_s",
+                   "y_acceleration_max_mm_per_s2"});
     job.nc_dir = f.resolve(nr.text("dir", "nc"));
     template_path = nr.text("template", "");
     const std::string main_path = nr.text("main_template", "");
     const std::string speed_path = nr.text("speed_template", "");
     const std::string main_speed_path = nr.text("main_speed_template", "");
+    const std::string y_path = nr.text("y_template", "");
+    const std::string pin_main_path = nr.text("pin_main_template", "");
+    const std::string pin_main_xy_path = nr.text("pin_main_xy_template", "");
     read_nc_table_keys(nr, job);
     read_table_numbers(nr, *t, job);
     if (nr.error) return *nr.error;
@@ -272,6 +310,30 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
       if (!text) return at_key(nr, "main_speed_template", text.error());
       c.nc_main_speed_template = std::move(*text);
       c.nc_main_speed_template_name = f.resolve(main_speed_path).string();
+    }
+    // Crankpins: the Y table's template, and the main programs coupling X (C-X) or X and Y (C-X-Y).
+    auto read_template = [&](const std::string& path, const char* key, std::string& text_out,
+                             std::string& name_out) -> Status {
+      if (path.empty()) return {};
+      Result<std::string> text = read_text(f.resolve(path), "NC template");
+      if (!text) return at_key(nr, key, text.error());
+      text_out = std::move(*text);
+      name_out = f.resolve(path).string();
+      return {};
+    };
+    if (Status r = read_template(y_path, "y_template", job.nc_y_template, job.nc_y_template_name); !r) return r;
+    if (Status r =
+            read_template(pin_main_path, "pin_main_template", c.nc_pin_main_template, c.nc_pin_main_template_name);
+        !r) {
+      return r;
+    }
+    if (Status r = read_template(pin_main_xy_path, "pin_main_xy_template", c.nc_pin_main_xy_template,
+                                 c.nc_pin_main_xy_template_name);
+        !r) {
+      return r;
+    }
+    if (!(job.y_axis_limits.x_min_mm < job.y_axis_limits.x_max_mm)) {
+      return make_error(ErrorCode::kInvalidInput, nr.where("y_max_mm") + ": must be above y_min_mm");
     }
     if (!(job.axis_limits.x_min_mm < job.axis_limits.x_max_mm)) {
       return make_error(ErrorCode::kInvalidInput, nr.where("x_max_mm") + ": must be above x_min_mm");
@@ -533,7 +595,7 @@ Status read_part_entry(const toml::table& entry, const ConfigFile& f, PartClaims
   if (pr.error) return *pr.error;
   Result<PartFile> pf = read_part_file(f.resolve(file));
   if (!pf) return at_key(pr, "file", pf.error());
-  Result<LiftTable> design = read_lift_table_csv(pf->part.lift_table);
+  Result<LiftTable> design = pf->pin ? Result<LiftTable>(LiftTable{}) : read_lift_table_csv(pf->part.lift_table);
   if (!design) return at_key(pr, "file", design.error());
   if (!claims.parts.insert({pf->part.name, pf->part.lobe}).second) {
     return make_error(ErrorCode::kInvalidInput, pr.where("file") + ": part " + pf->part.name + " lobe " +
@@ -664,9 +726,18 @@ JobSettings job_for(const ServiceConfig& config, const ServicePart& part) {
   js.design = part.design;
   js.nc_program = part.file.nc_program;
   js.speed = part.file.speed;
+  js.pin = part.file.pin;
   if (js.speed && !config.nc_main_speed_template.empty()) {
     js.nc_main_template = config.nc_main_speed_template;
     js.nc_main_template_name = config.nc_main_speed_template_name;
+  } else if (js.pin) {
+    // A pin's main program couples what its mode moves: X, or X and Y.
+    const bool with_y = js.pin->mode == PinMode::kCXY;
+    const std::string& text = with_y ? config.nc_pin_main_xy_template : config.nc_pin_main_template;
+    js.nc_main_template = text;
+    js.nc_main_template_name = text.empty()
+                                   ? std::string()
+                                   : (with_y ? config.nc_pin_main_xy_template_name : config.nc_pin_main_template_name);
   }
   return js;
 }

@@ -59,6 +59,15 @@ struct ServiceConfig {
   // the speed subprogram's template, [nc] speed_template, is job.nc_speed_template.
   std::string nc_main_speed_template;
   std::string nc_main_speed_template_name;
+  // For crankpins (part files with [pin], docs/crankpins.md): [nc] pin_main_template couples X
+  // to C (C-X), [nc] pin_main_xy_template couples X and Y (C-X-Y); used instead of [nc]
+  // main_template, and empty: no main program for those pins. The Y table's template, [nc]
+  // y_template, is job.nc_y_template; its numbers [nc] y_table_numbers (default [3, 4]) and the
+  // Y slide's limits [nc] y_min_mm... are in job.
+  std::string nc_pin_main_template;
+  std::string nc_pin_main_template_name;
+  std::string nc_pin_main_xy_template;
+  std::string nc_pin_main_xy_template_name;
   std::optional<HttpSettings> http;  // absent: no HTTP API
   std::optional<PlcSettings> plc;    // absent: no PLC trigger
 };
@@ -93,7 +102,8 @@ std::string configured_parts(const ServiceConfig& config);
 Result<const ServicePart*> find_plc_part(const ServiceConfig& config, int plc_part_number, int lobe);
 
 // The job settings for measuring `part` under `config`: with the part's speed program (its
-// [speed]) the main program is [nc] main_speed_template, when set.
+// [speed]) the main program is [nc] main_speed_template, when set; for a pin, its [pin] and
+// the pin main program of its mode.
 JobSettings job_for(const ServiceConfig& config, const ServicePart& part);
 
 }  // namespace gaugeloop

@@ -19,12 +19,16 @@
 #include "compensation/flat_probe.h"
 #include "compensation/judgement.h"
 #include "compensation/periodic_spline.h"
+#include "compensation/pin_analysis.h"
+#include "compensation/pin_kinematics.h"
+#include "compensation/pin_path.h"
 #include "compensation/table_evidence.h"
 #include "compensation/wheel_path.h"
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "core/verdict_text.h"
 #include "job/nc_push.h"
+#include "job/pin_files.h"
 #include "job/speed_files.h"
 #include "job/tolerance_settings.h"
 #include "nc_out/main_program.h"
@@ -61,16 +65,23 @@ struct BuiltTable {
   SampledPath fine;
   CurveTable table;
   std::optional<BuiltSpeed> speed;
+  // A C-X-Y pin's Y table and the exact Y path it was chosen against.
+  std::optional<SampledPath> y_fine;
+  std::optional<CurveTable> y_table;
 };
 
 // The lobe's speed program on `path` (JobSettings::speed), within the slide's limits of the
 // axis guards. Errors: kInvalidInput for settings out of range (naming the key); kRefused
 // when no feed profile keeps the speed bound at the control's block rate.
-Result<BuiltSpeed> build_speed(const MachinePath& path, const JobSettings& s) {
+WorkSpeedSettings speed_settings(const JobSettings& s) {
   WorkSpeedSettings ws = *s.speed;
   ws.x_velocity_max_mm_per_s = s.axis_limits.x_velocity_max_mm_per_s;
   ws.x_acceleration_max_mm_per_s2 = s.axis_limits.x_acceleration_max_mm_per_s2;
-  Result<WorkSpeedPlan> plan = plan_work_speed(path, s.part, ws);
+  return ws;
+}
+
+// The feed blocks of a planned speed program.
+Result<BuiltSpeed> speed_from_plan(Result<WorkSpeedPlan> plan, const JobSettings& s) {
   if (!plan) return plan.error();
   BuiltSpeed out;
   const auto every = static_cast<std::size_t>(std::lround(kSpeedProgramStepDeg / plan->program.c_step_deg));
@@ -88,40 +99,82 @@ Result<BuiltSpeed> build_speed(const MachinePath& path, const JobSettings& s) {
 // The wheel path of `lift_mm` on the fine C grid (compute_machine_path: exact rows), the
 // axis guards on it, the table the settings ask for, and the guards on the table as the NC
 // will interpolate it. Refusals (a wheel that does not fit, a limit broken) are kRefused.
+// The table the settings ask for on the exact path `fine` of one following axis, with the
+// axis guards on the path and on the table as the NC will interpolate it.
+Result<CurveTable> table_for_path(const SampledPath& fine, const AxisLimits& limits, const JobSettings& s,
+                                  const TablePointsInForce* in_force, const std::string& what) {
+  if (Status g = check_path_guards(fine, limits); !g) return in_step(what + " path", g.error());
+  const AdaptiveSettings adaptive{s.table_choice.bound_um, s.table_choice.max_step_deg};
+  Result<CurveTable> table = [&]() -> Result<CurveTable> {
+    switch (s.table_kind) {
+      case TableKind::kAuto:
+        return write_default_table(fine, s.table_choice, s.table_format, in_force);
+      case TableKind::kLinear:
+        return write_linear_table(fine, s.table_step_deg, s.table_format);
+      case TableKind::kSpline:
+        return write_spline_table(fine, s.table_step_deg, s.table_format);
+      case TableKind::kAdaptiveLinear:
+        return write_adaptive_linear_table(fine, adaptive, s.table_format);
+      case TableKind::kAdaptiveSpline:
+        return write_adaptive_spline_table(fine, adaptive, s.table_format);
+    }
+    return make_error(ErrorCode::kInternal, "unknown table kind");
+  }();
+  if (!table) return in_step(what + " table", table.error());
+  if (Status g = check_table_guards(*table, fine, limits); !g) return in_step(what + " table", g.error());
+  return table;
+}
+
+SampledPath fine_path(std::vector<double> x, std::vector<double> dx, std::vector<double> d2x) {
+  SampledPath out;
+  out.c_step_deg = kFinePathStepDeg;
+  out.x_mm = std::move(x);
+  out.dx_dc_mm_per_deg = std::move(dx);
+  out.d2x_dc2_mm_per_deg2 = std::move(d2x);
+  return out;
+}
+
 Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings& s,
                                const TablePointsInForce* in_force = nullptr) {
   Result<MachinePath> path = compute_machine_path(lift_mm, s.part, kFinePathStepDeg);
   if (!path) return in_step("wheel path", path.error());
   BuiltTable out;
   if (s.speed) {
-    Result<BuiltSpeed> speed = build_speed(*path, s);
+    Result<BuiltSpeed> speed = speed_from_plan(plan_work_speed(*path, s.part, speed_settings(s)), s);
     if (!speed) return in_step("speed program", speed.error());
     out.speed = std::move(*speed);
   }
-  out.fine.c_step_deg = kFinePathStepDeg;
-  out.fine.x_mm = std::move(path->x_mm);
-  out.fine.dx_dc_mm_per_deg = std::move(path->dx_dc_mm_per_deg);
-  out.fine.d2x_dc2_mm_per_deg2 = std::move(path->d2x_dc2_mm_per_deg2);
-  if (Status g = check_path_guards(out.fine, s.axis_limits); !g) return in_step("wheel path", g.error());
-  const AdaptiveSettings adaptive{s.table_choice.bound_um, s.table_choice.max_step_deg};
-  Result<CurveTable> table = [&]() -> Result<CurveTable> {
-    switch (s.table_kind) {
-      case TableKind::kAuto:
-        return write_default_table(out.fine, s.table_choice, s.table_format, in_force);
-      case TableKind::kLinear:
-        return write_linear_table(out.fine, s.table_step_deg, s.table_format);
-      case TableKind::kSpline:
-        return write_spline_table(out.fine, s.table_step_deg, s.table_format);
-      case TableKind::kAdaptiveLinear:
-        return write_adaptive_linear_table(out.fine, adaptive, s.table_format);
-      case TableKind::kAdaptiveSpline:
-        return write_adaptive_spline_table(out.fine, adaptive, s.table_format);
-    }
-    return make_error(ErrorCode::kInternal, "unknown table kind");
-  }();
-  if (!table) return in_step("curve table", table.error());
-  if (Status g = check_table_guards(*table, out.fine, s.axis_limits); !g) return in_step("curve table", g.error());
+  out.fine = fine_path(std::move(path->x_mm), std::move(path->dx_dc_mm_per_deg), std::move(path->d2x_dc2_mm_per_deg2));
+  Result<CurveTable> table = table_for_path(out.fine, s.axis_limits, s, in_force, "wheel");
+  if (!table) return table.error();
   out.table = std::move(*table);
+  return out;
+}
+
+// A pin's tables for `correction_um` (pin frame): the path moved along the grinding normal and
+// split onto X (and Y), the X table (keeping the points in force, as a lobe's), the Y table in
+// C-X-Y, and in C-X the speed program that holds the grinding-point speed.
+Result<BuiltTable> build_pin_table(const DegreeTable& correction_um, const JobSettings& s,
+                                   const TablePointsInForce* in_force = nullptr) {
+  Result<PinPath> path = corrected_pin_path(*s.pin, correction_um, kFinePathStepDeg);
+  if (!path) return in_step("pin path", path.error());
+  BuiltTable out;
+  if (s.speed) {
+    Result<BuiltSpeed> speed = speed_from_plan(plan_pin_work_speed(*path, *s.pin, speed_settings(s)), s);
+    if (!speed) return in_step("speed program", speed.error());
+    out.speed = std::move(*speed);
+  }
+  out.fine = fine_path(std::move(path->x_mm), std::move(path->dx_dc_mm_per_deg), std::move(path->d2x_dc2_mm_per_deg2));
+  Result<CurveTable> x = table_for_path(out.fine, s.axis_limits, s, in_force, "X");
+  if (!x) return x.error();
+  out.table = std::move(*x);
+  if (s.pin->mode == PinMode::kCXY) {
+    out.y_fine =
+        fine_path(std::move(path->y_mm), std::move(path->dy_dc_mm_per_deg), std::move(path->d2y_dc2_mm_per_deg2));
+    Result<CurveTable> y = table_for_path(*out.y_fine, s.y_axis_limits, s, nullptr, "Y");
+    if (!y) return y.error();
+    out.y_table = std::move(*y);
+  }
   return out;
 }
 
@@ -170,7 +223,32 @@ MainProgramSource main_source(const JobSettings& s, const std::string& created_u
   m.part = s.part.name;
   m.lobe = s.part.lobe;
   m.created_utc = created_utc;
+  if (s.pin && s.pin->mode == PinMode::kCXY) {
+    m.y_program_name = pin_y_program_name(s.nc_program);
+    m.y_table_numbers = s.y_table_numbers;
+  }
   return m;
+}
+
+// The Y table program of a C-X-Y pin for a table version, from the settings' Y template.
+Result<std::string> render_y_table(const JobSettings& s, const CurveTable& y_table, std::int64_t run_id,
+                                   const std::string& created_utc, double correction_max_um, int table_version) {
+  std::map<std::string, std::string> values = template_values(s);
+  values["program_name"] = pin_y_program_name(s.nc_program);
+  values["run_id"] = std::to_string(run_id);
+  values["created_utc"] = created_utc;
+  values["correction_max_um"] = format_fixed(correction_max_um, 1);
+  values["table_number"] = std::to_string(s.y_table_numbers[0]);
+  TableProvenance provenance;
+  provenance.run_id = run_id;
+  provenance.table_version = table_version;
+  provenance.table_numbers = s.y_table_numbers;
+  Result<std::string> program =
+      render_table_program(s.nc_y_template, s.nc_y_template_name, values, y_table, provenance, s.table_format);
+  if (!program || !s.nc_archive_header) return program;
+  Result<std::string> header = archive_header(pin_y_program_name(s.nc_program), NcProgramKind::kSubprogram);
+  if (!header) return header.error();
+  return *header + *program;
 }
 
 // The settings a run was made with, one "key = value" a line in a fixed order, so that
@@ -179,14 +257,26 @@ std::string settings_text(const JobSettings& s) {
   std::string out;
   auto line = [&out](const std::string& key, const std::string& value) { out += key + " = " + value + "\n"; };
   auto num = [](double v) { return format_fixed(v, 6); };
-  line("design.lift_table", s.design.source);
-  line("part.follower", std::string(follower_kind_name(s.part.follower)));
-  line("part.follower_radius_mm", num(s.part.follower_radius_mm));
-  line("part.base_circle_radius_mm", num(s.part.base_circle_radius_mm));
-  line("part.wheel_radius_mm", num(s.part.wheel_radius_mm));
-  line("part.rotation_sense", std::to_string(s.part.rotation_sense));
-  line("part.c_offset_deg", num(s.part.c_offset_deg));
-  line("part.probe_offset_deg", num(s.part.probe_offset_deg));
+  if (s.pin) {
+    // A pin has no lift table, follower or cam angles: its geometry instead.
+    const PinGeometry& p = *s.pin;
+    line("part.kind", "pin");
+    line("pin.mode", std::string(pin_mode_name(p.mode)));
+    line("pin.throw_mm", num(p.throw_mm));
+    line("pin.pin_radius_mm", num(p.pin_radius_mm));
+    line("pin.wheel_radius_mm", num(p.wheel_radius_mm));
+    line("pin.pin_angle_deg", num(p.pin_angle_deg));
+    line("pin.gauge_offset_deg", num(p.gauge_offset_deg));
+  } else {
+    line("design.lift_table", s.design.source);
+    line("part.follower", std::string(follower_kind_name(s.part.follower)));
+    line("part.follower_radius_mm", num(s.part.follower_radius_mm));
+    line("part.base_circle_radius_mm", num(s.part.base_circle_radius_mm));
+    line("part.wheel_radius_mm", num(s.part.wheel_radius_mm));
+    line("part.rotation_sense", std::to_string(s.part.rotation_sense));
+    line("part.c_offset_deg", num(s.part.c_offset_deg));
+    line("part.probe_offset_deg", num(s.part.probe_offset_deg));
+  }
   line("poller.mode", std::string(sampling_mode_name(s.poller.mode)));
   line("poller.revolutions", std::to_string(s.poller.revolutions));
   line("analysis.base_circle_center_deg", num(s.analysis.base_circle_center_deg));
@@ -216,6 +306,14 @@ std::string settings_text(const JobSettings& s) {
   line("nc.table_numbers", std::to_string(s.table_numbers[0]) + " " + std::to_string(s.table_numbers[1]));
   line("nc.main_template", s.nc_main_template_name);
   line("nc.archive_header", s.nc_archive_header ? "true" : "false");
+  if (s.pin && s.pin->mode == PinMode::kCXY) {
+    line("nc.y_template", s.nc_y_template_name);
+    line("nc.y_table_numbers", std::to_string(s.y_table_numbers[0]) + " " + std::to_string(s.y_table_numbers[1]));
+    line("nc.y_min_mm", num(s.y_axis_limits.x_min_mm));
+    line("nc.y_max_mm", num(s.y_axis_limits.x_max_mm));
+    line("nc.y_velocity_max_mm_per_s", num(s.y_axis_limits.x_velocity_max_mm_per_s));
+    line("nc.y_acceleration_max_mm_per_s2", num(s.y_axis_limits.x_acceleration_max_mm_per_s2));
+  }
   if (s.speed) {
     // Only with a speed program, so the settings of a run at one speed hash as before.
     line("speed.base_speed_rpm", num(s.speed->base_speed_rpm));
@@ -224,6 +322,17 @@ std::string settings_text(const JobSettings& s) {
     line("speed.c_acceleration_max_deg_per_s2", num(s.speed->c_acceleration_max_deg_per_s2));
     line("nc.speed_template", s.nc_speed_template_name);
     line("nc.speed_error_bound_percent", num(s.speed_profile.bound_percent));
+  }
+  if (s.pin) {
+    auto limits = [&](const std::string& key, const Limits& l) {
+      if (l.lower) line(key + ".lower", num(*l.lower));
+      if (l.upper) line(key + ".upper", num(*l.upper));
+    };
+    limits("tolerance.roundness_um", s.pin->tolerances.roundness_um);
+    limits("tolerance.diameter_error_um", s.pin->tolerances.diameter_error_um);
+    limits("tolerance.stroke_error_um", s.pin->tolerances.stroke_error_um);
+    limits("tolerance.index_error_deg", s.pin->tolerances.index_error_deg);
+    return out;
   }
   out += tolerances_settings_text(s.part.tolerances);
   return out;
@@ -255,9 +364,65 @@ struct Prepared {
   DesignReading reading;
 };
 
+// The checks before the gauge for a pin: the geometry, the design's tables within the axis
+// limits, and every template renders them (the Y table's and a main program coupling both).
+Result<Prepared> prepare_pin(const JobSettings& s) {
+  if (Status v = validate(*s.pin); !v) return in_step("part " + s.part.name, v.error());
+  if (Status l = check_axis_limits(s.axis_limits); !l) return l.error();
+  const bool with_y = s.pin->mode == PinMode::kCXY;
+  if (with_y) {
+    if (Status l = check_axis_limits(s.y_axis_limits); !l) return l.error();
+    if (s.nc_y_template.empty()) {
+      return make_error(ErrorCode::kInvalidInput, "part " + s.part.name +
+                                                      " is a C-X-Y pin, but no Y table template is set: give one "
+                                                      "(examples/sinumerik/pin_y_table.spf)");
+    }
+  }
+  if (s.speed && s.nc_speed_template.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "part " + s.part.name +
+                          " has a [speed] section, but no speed subprogram template is set: "
+                          "give one (examples/sinumerik/cam_speed.spf, [nc] speed_template) or remove [speed]");
+  }
+  const DegreeTable none{};
+  Result<BuiltTable> design_table = build_pin_table(none, s);
+  if (!design_table) return in_step("the design", design_table.error());
+  std::optional<std::string> speed_program;
+  if (design_table->speed) {
+    Result<std::string> text = render_speed(s, *design_table->speed, 0, "");
+    if (!text) return in_step("speed program", text.error());
+    speed_program = std::move(*text);
+  }
+  for (int version : {1, 2}) {
+    TableProvenance provenance;
+    provenance.table_version = version;
+    provenance.table_numbers = s.table_numbers;
+    Result<std::string> program =
+        with_archive_header(s, render_table_program(s.nc_template, s.nc_template_name, template_values(s),
+                                                    design_table->table, provenance, s.table_format));
+    if (!program) return program.error();
+    if (with_y) {
+      Result<std::string> y = render_y_table(s, *design_table->y_table, 0, "", 0.0, version);
+      if (!y) return y.error();
+    }
+    if (s.nc_main_template.empty()) continue;
+    Result<std::string> m = render_main_for_table(main_source(s, ""), s.nc_dir / (s.nc_program + ".SPF"), *program);
+    if (!m) return m.error();
+    if (speed_program) {
+      if (Status c = check_main_calls_speed_program(*m, s.nc_main_template_name, speed_program_name(s.nc_program));
+          !c) {
+        return c.error();
+      }
+    }
+  }
+  // A round pin's gauge should read 0 everywhere: that is its design.
+  return Prepared{PeriodicSpline::fit(none), DesignReading::interpolating(none)};
+}
+
 // Checks that need no gauge, so bad input costs no measurement: the design must make a
 // table within the axis limits, and the template must render it.
 Result<Prepared> prepare(const JobSettings& s) {
+  if (s.pin) return prepare_pin(s);
   if (s.table_kind == TableKind::kLinear || s.table_kind == TableKind::kSpline) {
     const double steps = 360.0 / s.table_step_deg;
     if (!(s.table_step_deg > 0.0) || std::abs(steps - std::round(steps)) > 1e-9 || steps < 36) {
@@ -649,7 +814,8 @@ class JobRun {
     record_.operator_name = s_.operator_name;
     record_.measured = std::move(*measured);
     record_.correction_in_force_run = ground_.run_id();
-    record_.geometry = s_.part;
+    // A pin's geometry is in its settings: the stored geometry is a lobe's frame mapping.
+    if (!s_.pin) record_.geometry = s_.part;
     record_.settings = settings_text(s_);
     record_.inspection = s_.inspect;
     if (!ground_.source.empty() && ground_.version) {
@@ -662,6 +828,48 @@ class JobRun {
   // The lift error, whether the part shows the table in force, the correction and its verdict,
   // and the table built from it (for a held correction too: a person may approve it).
   Status analyse_and_correct() {
+    Result<CompensationDecision> decision = s_.pin ? analyse_pin_run() : analyse_lobe_run();
+    if (!decision) return decision.error();
+    // An inspection, or a part the table did not grind, leaves the correction in force as it is.
+    const bool correction_stands = s_.inspect || !not_built_on_.empty();
+    record_.correction_um = correction_stands ? correction_in_force_ : decision->correction_um;
+    verdict_ = decision->verdict;
+    verdict_reasons_ = decision->reasons();
+    correction_max_um_ = std::abs(decision->largest_correction_um);
+    harmonics_ = decision->harmonics;
+    if (verdict_ != CompensationVerdict::kRefuse && !correction_stands) {
+      if (Status b = build_corrected_table(); !b) return b;
+    }
+    step("compensated", compensated_text(*decision));
+    return {};
+  }
+
+  // A pin: the gauge read through the kinematics, the pin's figures, its tolerances, and the
+  // correction along the grinding normal. Whether the part shows the table in force is a
+  // lobe's check (compensation/table_evidence.h): a pin is assumed ground with it.
+  Result<CompensationDecision> analyse_pin_run() {
+    Result<PinAnalysis> pin = analyse_pin(record_.measured, *s_.pin);
+    if (!pin) return in_step("pin analysis", pin.error());
+    record_.analysis = pin->table;
+    step("analysed", "pin roundness " + format_fixed(pin->roundness_um, 2) + " um, diameter error " +
+                         format_fixed(pin->diameter_error_um, 2) + " um, stroke error " +
+                         format_fixed(pin->stroke_error_um, 2) + " um, index error " +
+                         format_fixed(pin->index_error_deg, 4) + " deg, largest radius error " +
+                         format_fixed(pin->table.max_abs_error_um, 2) + " um, repeatability " +
+                         format_fixed(pin->table.repeatability_um, 2) + " um");
+    record_.characteristics = judge_pin(*pin, s_.pin->tolerances);
+    std::vector<Verdict> verdicts;
+    for (const Characteristic& c : record_.characteristics) verdicts.push_back(c.verdict);
+    record_.verdict = combined_verdict(verdicts);
+    step("judged", verdict_summary(record_.verdict, record_.characteristics));
+    Result<CompensationDecision> decision = decide_pin_correction(*pin, correction_in_force_, s_.compensation);
+    if (!decision) return in_step("compensation", decision.error());
+    return decision;
+  }
+
+  // A lobe: the lift error, its tolerances, whether the part shows the table in force, and
+  // the correction.
+  Result<CompensationDecision> analyse_lobe_run() {
     Result<LobeAnalysis> analysis = analyse_lobe(record_.measured, design_reading_, s_.part, s_.analysis);
     if (!analysis) return in_step("analysis", analysis.error());
     record_.analysis = std::move(*analysis);
@@ -680,18 +888,7 @@ class JobRun {
     Result<CompensationDecision> decision =
         decide_correction(a, design_reading_, correction_in_force_, s_.compensation);
     if (!decision) return in_step("compensation", decision.error());
-    // An inspection, or a part the table did not grind, leaves the correction in force as it is.
-    const bool correction_stands = s_.inspect || !not_built_on_.empty();
-    record_.correction_um = correction_stands ? correction_in_force_ : decision->correction_um;
-    verdict_ = decision->verdict;
-    verdict_reasons_ = decision->reasons();
-    correction_max_um_ = std::abs(decision->largest_correction_um);
-    harmonics_ = decision->harmonics;
-    if (verdict_ != CompensationVerdict::kRefuse && !correction_stands) {
-      if (Status b = build_corrected_table(); !b) return b;
-    }
-    step("compensated", compensated_text(*decision));
-    return {};
+    return decision;
   }
 
   // The run's characteristics and verdict against the part's tolerances. A judgement that
@@ -713,9 +910,11 @@ class JobRun {
   // a limit broken) is a refusal: the run is stored, nothing is pushed.
   Status build_corrected_table() {
     Result<BuiltTable> b = [&]() -> Result<BuiltTable> {
+      const TablePointsInForce* in_force = points_in_force_ ? &*points_in_force_ : nullptr;
+      if (s_.pin) return build_pin_table(record_.correction_um, s_, in_force);
       Result<PeriodicSpline> target = corrected_lift(s_.design, design_reading_, record_.correction_um, s_.part);
       if (!target) return in_step("corrected lift", target.error());
-      return build_table(*target, s_, points_in_force_ ? &*points_in_force_ : nullptr);
+      return build_table(*target, s_, in_force);
     }();
     if (b) {
       built_ = std::move(*b);
@@ -736,8 +935,13 @@ class JobRun {
     if (const std::optional<std::int64_t> r = ground_.run_id()) what += ", built on run " + std::to_string(*r) + "'s";
     if (!s_.inspect) what += "; " + harmonics_text(s_.compensation, harmonics_);
     if (built_) {
-      what += "; table " + std::to_string(built_->table.block_count()) + " blocks (" + built_->table.writer +
+      what += "; " + std::string(built_->y_table ? "X table " : "table ") +
+              std::to_string(built_->table.block_count()) + " blocks (" + built_->table.writer +
               "), command position error " + format_fixed(built_->table.error.max_abs_um, 3) + " um";
+      if (const std::optional<CurveTable>& y = built_->y_table) {
+        what += "; Y table " + std::to_string(y->block_count()) + " blocks (" + y->writer +
+                "), command position error " + format_fixed(y->error.max_abs_um, 3) + " um";
+      }
       if (const std::optional<BuiltSpeed>& sp = built_->speed) {
         what += "; speed program " + std::to_string(sp->profile.block_count()) + " feed blocks (speed error " +
                 format_fixed(sp->profile.error.max_speed_error_percent, 2) + " %), one turn " +
@@ -775,6 +979,10 @@ class JobRun {
       report_.table_writer = built_->table.writer;
       report_.table_blocks = built_->table.block_count();
       report_.command_error_um = built_->table.error.max_abs_um;
+      if (built_->y_table) {
+        report_.y_table_blocks = built_->y_table->block_count();
+        report_.y_command_error_um = built_->y_table->error.max_abs_um;
+      }
       if (built_->speed) {
         report_.speed_cycle_time_s = built_->speed->plan.cycle_time_s;
         report_.constant_cycle_time_s = built_->speed->plan.constant_cycle_time_s;
@@ -842,6 +1050,12 @@ class JobRun {
     options.main = main_source(s_, finished_utc_);
     const RenderForVersion render_table = [this](int table_version) { return render(table_version); };
     Result<PushCompletion> version = [&]() -> Result<PushCompletion> {
+      if (built_->y_table) {
+        const RenderYForVersion render_y = [this](int table_version) {
+          return render_y_table(s_, *built_->y_table, report_.run_id, finished_utc_, correction_max_um_, table_version);
+        };
+        return push_pin_programs(store_, nc_file_, push_facts(), render_table, render_y, options);
+      }
       if (!built_->speed) return push_program(store_, nc_file_, push_facts(), render_table, options);
       Result<std::string> speed = render_speed(s_, *built_->speed, report_.run_id, finished_utc_);
       if (!speed) return speed.error();
@@ -863,7 +1077,13 @@ class JobRun {
   // Not pushed: the table is kept for approval when there is one, and the reason is an event.
   Result<JobReport> keep(const std::string& reason, CompensationVerdict why, const std::string& code) {
     report_.not_pushed_reason = reason;
-    if (built_) {
+    if (built_ && built_->y_table) {
+      // An approval pushes one table program; the Y table would not follow it, and an X table
+      // without its Y is a wrong pin. So a C-X-Y pin's table is not kept for approval.
+      report_.not_pushed_reason +=
+          " (a C-X-Y pin's tables are not kept for approval: measure again once the cause "
+          "is cleared)";
+    } else if (built_) {
       Result<std::string> program = render(0);
       if (!program) return program.error();
       PendingTable pending;

@@ -16,6 +16,7 @@
 #include "compensation/work_speed.h"
 #include "core/lift_table.h"
 #include "core/part.h"
+#include "core/pin.h"
 #include "core/result.h"
 #include "core/run.h"
 #include "core/tolerance.h"
@@ -53,7 +54,18 @@ struct JobStep {
 
 struct JobSettings {
   Part part;
-  LiftTable design;        // the part's design lift table, already read
+  LiftTable design;  // the part's design lift table, already read (unused for a pin)
+  // A crankpin instead of a lobe (the part file's [pin], docs/crankpins.md); part then holds
+  // the name, the pin number (lobe) and nothing else the job reads. The gauge is read through
+  // the pin's kinematics (analyse_pin), judged against pin.tolerances, the correction is split
+  // along the grinding normal onto X (and Y), and in C-X-Y the Y table is written beside the X
+  // table as <nc_program>_Y.SPF from nc_y_template (job/pin_files.h), its CTABDEF number
+  // alternating over y_table_numbers, within y_axis_limits; the main program must couple both.
+  std::optional<PinGeometry> pin;
+  std::string nc_y_template;
+  std::string nc_y_template_name;
+  TableNumbers y_table_numbers{3, 4};
+  AxisLimits y_axis_limits{-60.0, 60.0, 300.0, 20000.0, 60.0, 'Y'};
   std::string nc_program;  // subprogram name: the file written is <nc_dir>/<nc_program>.SPF
   PollerSettings poller;
   AnalysisSettings analysis;
@@ -157,6 +169,9 @@ struct JobReport {
   std::string table_writer;   // how its points were chosen, e.g. "adaptive cspline"
   int table_blocks = 0;
   double command_error_um = 0.0;  // largest |NC interpolation - exact X|
+  // A C-X-Y pin's Y table, as the X table's figures above; 0 without.
+  int y_table_blocks = 0;
+  double y_command_error_um = 0.0;
   // With a speed program (JobSettings::speed): one turn under it and at the base speed, s, and
   // its feed blocks as written; 0 without.
   double speed_cycle_time_s = 0.0;

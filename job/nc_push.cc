@@ -1,6 +1,7 @@
 // The push: hand-edit check, table version, atomic write, record.
 #include "job/nc_push.h"
 
+#include <charconv>
 #include <cstdio>
 #include <map>
 
@@ -258,6 +259,14 @@ Result<std::string> render_main_for_table(const MainProgramSource& source, const
       {"table_start_c_deg", format_fixed(t->points.front().c_deg, 3)},
       {"point_count", std::to_string(t->points.size())},
       {"interpolation", std::string(interpolation_name(t->interpolation))}};
+  if (!source.y_program_name.empty()) {
+    // The Y table of a version goes to the number of that version, as the X table does.
+    const std::string version_text = header_value(*t, "table_version");
+    std::int64_t version = 0;
+    std::from_chars(version_text.data(), version_text.data() + version_text.size(), version);
+    values["y_program_name"] = source.y_program_name;
+    values["y_table_number"] = std::to_string(table_number_for_version(source.y_table_numbers, version));
+  }
   Result<std::string> main = render_main_program(source.template_text, source.template_name, values);
   // The main program is loaded the way its table is: with an archive header when the table has one.
   if (!main || !has_archive_header(table_program)) return main;

@@ -13,6 +13,7 @@
 
 #include "core/result.h"
 #include "job/nc_files.h"
+#include "nc_out/table_program.h"
 #include "storage/run_store.h"
 
 namespace gaugeloop {
@@ -55,12 +56,18 @@ struct MainProgramSource {
   std::string part;           // empty: the run's (approve_pending, rollback_to_version)
   int lobe = 0;               // 0: the run's
   std::string created_utc;    // empty: now
+  // A crankpin ground in C-X-Y: the main program also calls the Y table subprogram
+  // (y_program_name, e.g. CRANK_PIN1_Y) and couples Y through y_table_number, the number of
+  // y_table_numbers the table's version goes to (table_number_for_version). Empty: X alone.
+  std::string y_program_name;
+  TableNumbers y_table_numbers{0, 0};
 };
 
 // The main program for `table_program` (version and table number set, as pushed to
 // `nc_file`), rendered with render_main_program (nc_out/main_program.h): program_name is
 // nc_file's stem; run_id, table_version, table_number, table_start_c_deg (its first leading
-// value), point_count and interpolation are the table program's. A table program that starts
+// value), point_count and interpolation are the table program's; with a Y table
+// (source.y_program_name), y_program_name and y_table_number too. A table program that starts
 // with an archive header gets a main program that does too (archive_header,
 // nc_out/table_program.h). kInvalidInput for a table program that does not parse or a
 // template that does not render.

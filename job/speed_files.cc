@@ -1,6 +1,7 @@
 // Writing the speed subprogram beside the table and reading it back.
 #include "job/speed_files.h"
 
+#include "job/pin_files.h"
 #include "nc_out/main_program.h"
 
 namespace gaugeloop {
@@ -16,21 +17,7 @@ Status write_speed_program(const std::filesystem::path& nc_file, std::string_vie
   if (Status s = verify_speed_checksum(*meant, path.string()); !s) {
     return make_error(ErrorCode::kInvalidInput, s.error().message);
   }
-  Result<DirectoryLock> lock = files.lock_directory(path.parent_path());
-  if (!lock) return lock.error();
-  if (Result<int> removed = files.remove_leftovers(path); !removed) return removed.error();
-  if (Status s = files.write_program(path, speed_program, {}); !s) {
-    return make_error(s.error().code, path.string() + ": the speed program was not written (" + s.error().message +
-                                          "); the one on the control, if any, stays");
-  }
-  Result<std::optional<std::string>> back = files.read_program(path);
-  if (!back) return back.error();
-  if (!*back || **back != speed_program) {
-    return make_error(ErrorCode::kRefused, path.string() +
-                                               ": the speed program read back differs from the one written; check "
-                                               "the NC directory (a share that rewrites files?) and push again");
-  }
-  return {};
+  return write_program_beside(path, speed_program, "speed program", files);
 }
 
 Result<ParsedSpeedProgram> read_speed_program(const std::filesystem::path& nc_file, NcFiles& files) {

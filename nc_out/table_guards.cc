@@ -11,6 +11,12 @@ namespace {
 
 std::string at_c(double c_deg) { return "at C" + format_fixed(c_deg, 3); }
 
+// The axis letter and the prefix of its limits' keys: "X" and "x_", "Y" and "y_".
+std::string axis_key(const AxisLimits& l, const char* rest) {
+  std::string key(1, static_cast<char>(l.axis == 'Y' ? 'y' : 'x'));
+  return key + rest;
+}
+
 // What a guard checks, at one C: value and the velocity/acceleration per degree.
 struct Row {
   double c_deg;
@@ -29,9 +35,10 @@ Status check_row(const char* what, const Row& r, const AxisLimits& l, bool check
   if (r.x_mm < l.x_min_mm || r.x_mm > l.x_max_mm) {
     const bool low = r.x_mm < l.x_min_mm;
     return make_error(ErrorCode::kRefused,
-                      std::string(what) + " X " + format_fixed(r.x_mm, 4) + " mm " + at_c(r.c_deg) + " is " +
-                          (low ? "below the axis limit x_min_mm " + format_fixed(l.x_min_mm, 4)
-                               : "above the axis limit x_max_mm " + format_fixed(l.x_max_mm, 4)) +
+                      std::string(what) + " " + l.axis + " " + format_fixed(r.x_mm, 4) + " mm " + at_c(r.c_deg) +
+                          " is " +
+                          (low ? "below the axis limit " + axis_key(l, "_min_mm ") + format_fixed(l.x_min_mm, 4)
+                               : "above the axis limit " + axis_key(l, "_max_mm ") + format_fixed(l.x_max_mm, 4)) +
                           " mm; check the part geometry and the correction, or the configured axis limits; "
                           "nothing was written");
   }
@@ -39,21 +46,21 @@ Status check_row(const char* what, const Row& r, const AxisLimits& l, bool check
   if (std::abs(v) > l.x_velocity_max_mm_per_s) {
     // Velocity grows with the speed: this speed would just fit.
     const double fits_rpm = std::abs(l.speed_rpm) * l.x_velocity_max_mm_per_s / std::abs(v);
-    return make_error(ErrorCode::kRefused, std::string(what) + " X velocity " + format_fixed(std::abs(v), 2) +
-                                               " mm/s " + at_c(r.c_deg) + " exceeds the limit " +
-                                               format_fixed(l.x_velocity_max_mm_per_s, 2) + " mm/s at " +
-                                               format_fixed(std::abs(l.speed_rpm), 2) + " rpm; grind at most " +
-                                               format_fixed(fits_rpm, 2) + " rpm; nothing was written");
+    return make_error(ErrorCode::kRefused,
+                      std::string(what) + " " + l.axis + " velocity " + format_fixed(std::abs(v), 2) + " mm/s " +
+                          at_c(r.c_deg) + " exceeds the limit " + format_fixed(l.x_velocity_max_mm_per_s, 2) +
+                          " mm/s at " + format_fixed(std::abs(l.speed_rpm), 2) + " rpm; grind at most " +
+                          format_fixed(fits_rpm, 2) + " rpm; nothing was written");
   }
   const double a = r.d2x_dc2 * w * w;
   if (check_acceleration && std::abs(a) > l.x_acceleration_max_mm_per_s2) {
     // Acceleration grows with the square of the speed.
     const double fits_rpm = std::abs(l.speed_rpm) * std::sqrt(l.x_acceleration_max_mm_per_s2 / std::abs(a));
-    return make_error(ErrorCode::kRefused, std::string(what) + " X acceleration " + format_fixed(std::abs(a), 1) +
-                                               " mm/s^2 " + at_c(r.c_deg) + " exceeds the limit " +
-                                               format_fixed(l.x_acceleration_max_mm_per_s2, 1) + " mm/s^2 at " +
-                                               format_fixed(std::abs(l.speed_rpm), 2) + " rpm; grind at most " +
-                                               format_fixed(fits_rpm, 2) + " rpm; nothing was written");
+    return make_error(ErrorCode::kRefused,
+                      std::string(what) + " " + l.axis + " acceleration " + format_fixed(std::abs(a), 1) + " mm/s^2 " +
+                          at_c(r.c_deg) + " exceeds the limit " + format_fixed(l.x_acceleration_max_mm_per_s2, 1) +
+                          " mm/s^2 at " + format_fixed(std::abs(l.speed_rpm), 2) + " rpm; grind at most " +
+                          format_fixed(fits_rpm, 2) + " rpm; nothing was written");
   }
   return {};
 }

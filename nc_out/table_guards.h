@@ -23,6 +23,10 @@ struct AxisLimits {
   double x_velocity_max_mm_per_s = 0.0;
   double x_acceleration_max_mm_per_s2 = 0.0;
   double speed_rpm = 0.0;  // programmed work speed of C
+  // The axis the limits are of, as messages name it: 'X' (the infeed; keys x_min_mm...) or
+  // 'Y' (a crankpin's vertical slide in C-X-Y; keys y_min_mm...). The fields keep their x_
+  // names for either.
+  char axis = 'X';
 };
 
 // Checks the limits themselves: kInvalidInput naming the setting.
