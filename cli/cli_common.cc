@@ -95,6 +95,18 @@ Result<LoadedPart> load_part(const std::string& part_path) {
   return LoadedPart{std::move(*pf), std::move(*design)};
 }
 
+Result<LoadedPart> load_lobe_part(const std::string& part_path, std::string_view command) {
+  Result<LoadedPart> lp = load_part(part_path);
+  if (lp && lp->file.pin) {
+    return make_error(ErrorCode::kInvalidInput,
+                      part_path + ": part " + lp->file.part.name + " is a crankpin; `" + std::string(command) +
+                          "` takes cam lobes. For a pin: `gaugeloop demo --part " + part_path +
+                          "` grinds and measures it on the virtual grinder, `gaugeloop measure --part " + part_path +
+                          "` measures it from a gauge (docs/crankpins.md)");
+  }
+  return lp;
+}
+
 Status require_database(const std::filesystem::path& db, std::string_view advice) {
   if (std::filesystem::exists(db)) return {};
   return make_error(ErrorCode::kNotFound, "no run database at " + db.string() + "; " + std::string(advice));

@@ -79,6 +79,10 @@ struct LoadedPart {
 
 Result<LoadedPart> load_part(const std::string& part_path);
 
+// load_part for a command that knows only cam lobes (`command`, e.g. "gaugeloop sim"): a pin
+// part is refused (kInvalidInput) saying which commands take a pin.
+Result<LoadedPart> load_lobe_part(const std::string& part_path, std::string_view command);
+
 // The main program's template from `path` (`--main-template`), or (empty path) the embedded
 // examples/sinumerik/cam_main.mpf; `name` is set for messages.
 Result<std::string> load_main_template(const std::string& path, std::string& name);

@@ -683,7 +683,7 @@ class SimGrinder {
 };
 
 int cmd_sim(const std::string& part_path, const SimulatorSettings& settings, const SimGrind& grind) {
-  Result<LoadedPart> lp = load_part(part_path);
+  Result<LoadedPart> lp = load_lobe_part(part_path, "gaugeloop sim");
   if (!lp) return report_error(lp.error());
   if (grind.enabled) {
     if (Status v = validate(grind.machine); !v) return report_error(v.error());

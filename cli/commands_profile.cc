@@ -63,7 +63,7 @@ int cmd_profile(const ProfileOptions& o) {
                                                                  "rpm, non-zero, at most " + number(kMaxSpeedRpm) +
                                                                  " either way (negative: C turning down)"));
   }
-  Result<LoadedPart> loaded = load_part(o.part_path);
+  Result<LoadedPart> loaded = load_lobe_part(o.part_path, "gaugeloop profile");
   if (!loaded) return report_error(loaded.error());
   const Part& part = loaded->file.part;
   Result<PeriodicSpline> lift = PeriodicSpline::fit(loaded->design.angle_deg, loaded->design.lift_mm);

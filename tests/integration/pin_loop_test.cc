@@ -12,6 +12,7 @@
 #include <string>
 
 #include "cli/embedded_defaults.h"
+#include "compensation/pin_path.h"
 #include "config/part_file.h"
 #include "core/text_file.h"
 #include "job/nc_push.h"
@@ -156,6 +157,43 @@ TEST_P(PinLoopTest, ThePushedProgramsBelongTogetherAndTheRunsAreStored) {
   EXPECT_NE(run->settings.find(std::string("pin.mode = ") + (with_y() ? "c-x-y" : "c-x")), std::string::npos);
 }
 
+// Constant removal in C-X: with a speed program the grinding point runs at the speed held all
+// round the pin (8000 mm/min, below the 8120 the slowest point has at 60 rpm), the speed
+// subprogram goes to the control beside the table, and a turn takes longer than at one speed.
+TEST_P(PinLoopTest, ASpeedProgramHoldsTheGrindingPointSpeedInCx) {
+  if (with_y()) GTEST_SKIP() << "C-X-Y grinds at a constant grinding-point speed already; [speed] is refused there";
+  JobSettings& js = settings_.job;
+  js.speed = WorkSpeedSettings{};
+  js.speed->base_speed_rpm = 60.0;
+  js.speed->lobe_speed_mm_per_min = 8000.0;
+  js.nc_speed_template = std::string(embedded::kNcSpeedTemplate);
+  js.nc_speed_template_name = "cam_speed.spf";
+  js.nc_main_template = std::string(embedded::kNcMainSpeedTemplate);
+  js.nc_main_template_name = "cam_main_speed.mpf";
+  Result<PinPath> path = compute_pin_path(*js.pin, 0.5);
+  ASSERT_TRUE(path.ok());
+  WorkSpeedSettings ws = *js.speed;
+  ws.x_velocity_max_mm_per_s = js.axis_limits.x_velocity_max_mm_per_s;
+  ws.x_acceleration_max_mm_per_s2 = js.axis_limits.x_acceleration_max_mm_per_s2;
+  Result<WorkSpeedPlan> plan = plan_pin_work_speed(*path, *js.pin, ws);
+  ASSERT_TRUE(plan.ok()) << plan.error().message;
+  // Held within 1 % everywhere (the planner's ceiling is the target; nothing else binds here).
+  for (double v : plan->grinding_point_speed_mm_per_min) EXPECT_NEAR(v, 8000.0, 80.0);
+  settings_.machine.x.speed_program = plan->program;
+  const std::vector<PinLoopIteration> loop = run(1);
+  ASSERT_EQ(loop.size(), 2u);
+  for (const PinLoopIteration& it : loop) {
+    ASSERT_TRUE(it.job.pushed()) << it.job.not_pushed_reason;
+    EXPECT_GT(it.job.speed_blocks, 0);
+    EXPECT_LE(it.job.speed_error_percent, 2.0);
+    // Slower where the pin is near the wheel: 1.18 s against 1.00 s at 60 rpm.
+    EXPECT_GT(it.job.speed_cycle_time_s, 1.1 * it.job.constant_cycle_time_s);
+  }
+  EXPECT_TRUE(fs::exists(dir_ / "nc" / (js.nc_program + "_SPEED.SPF")));
+  // The loop closes at the program as it does at one speed.
+  EXPECT_LT(loop[1].part.max_abs_um, 3.0 * loop[1].floor.max_abs_um);
+}
+
 INSTANTIATE_TEST_SUITE_P(BothModes, PinLoopTest, ::testing::Values("crankpin_cx.toml", "crankpin_cxy.toml"),
                          [](const ::testing::TestParamInfo<const char*>& param) {
                            return std::string(param.param).find("cxy") != std::string::npos ? "CXY" : "CX";
@@ -173,6 +211,17 @@ TEST(PinDemoCommand, ClosesTheLoopForTheSampleCxPin) {
   EXPECT_NE(r.output.find("1.321 to 1"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(tmp.path() / "nc" / "CRANK_PIN1.SPF"));
   EXPECT_TRUE(fs::exists(tmp.path() / "nc" / "CRANK_PIN1_MAIN.MPF"));
+}
+
+// The commands that know only lobes say so for a pin, and name the ones that take it.
+TEST(PinDemoCommand, SimAndProfileRefuseAPinNamingTheCommandsThatTakeOne) {
+  const std::string pin = std::string(GAUGELOOP_SOURCE_DIR) + "/examples/crankpin_cxy.toml";
+  for (const std::string& command : {"sim --part " + pin, "profile --step-deg 1 --part " + pin}) {
+    const testing::CommandResult r = testing::run_command(command);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.output;
+    EXPECT_NE(r.output.find("is a crankpin"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("gaugeloop demo --part"), std::string::npos) << r.output;
+  }
 }
 
 }  // namespace
