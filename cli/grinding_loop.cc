@@ -10,6 +10,20 @@
 
 namespace gaugeloop {
 
+Result<JobReport> measure_on_gauge_simulator(const Part& part, const LiftTable& design, SimulatorSettings gauge,
+                                             std::chrono::milliseconds response_timeout, const JobSettings& job) {
+  gauge.port = 0;
+  Result<std::unique_ptr<GaugeSimulator>> sim = GaugeSimulator::start(part, design, gauge);
+  if (!sim) return sim.error();
+  ModbusSettings link;
+  link.port = (*sim)->port();
+  link.response_timeout = response_timeout;
+  ModbusGauge client(link);
+  Result<JobReport> report = run_measure_job(client, job);
+  (*sim)->stop();
+  return report;
+}
+
 Result<std::vector<LoopIteration>> run_grinding_loop(const LoopSettings& settings,
                                                      const std::function<void(const LoopIteration&)>& on_part) {
   if (Status s = validate(settings.machine); !s) return s.error();
@@ -59,20 +73,13 @@ Result<std::vector<LoopIteration>> run_grinding_loop(const LoopSettings& setting
     it.residual_rms_um = std::sqrt(sum_sq / static_cast<double>(it.part.error_um.size()));
 
     SimulatorSettings gauge = settings.gauge;
-    gauge.port = 0;
     gauge.seed = settings.gauge.seed + static_cast<std::uint64_t>(i);
     gauge.ground_reading_mm = ground->reading_mm;
-    Result<std::unique_ptr<GaugeSimulator>> sim = GaugeSimulator::start(part, settings.job.design, gauge);
-    if (!sim) return sim.error();
-    ModbusSettings link;
-    link.port = (*sim)->port();
-    link.response_timeout = settings.response_timeout;
-    ModbusGauge client(link);
     JobSettings job = settings.job;
     job.build_on_table_in_force = !table_in_force.empty();
     if (job.note.empty()) job.note = "virtual grinder part " + std::to_string(i) + ", ground from " + it.ground_from;
-    Result<JobReport> report = run_measure_job(client, job);
-    (*sim)->stop();
+    Result<JobReport> report =
+        measure_on_gauge_simulator(part, settings.job.design, gauge, settings.response_timeout, job);
     if (!report) return report.error();
     it.job = std::move(*report);
     if (it.job.pushed()) {

@@ -41,6 +41,13 @@ struct LoopIteration {
   double largest_servo_error_um = 0.0;
 };
 
+// One ground part measured as the loop measures it: a fresh gauge simulator on loopback
+// (a free port, `gauge` as given, serving `gauge.ground_reading_mm` for `part` and `design`),
+// the product's gauge client with `response_timeout`, and run_measure_job with `job`; the
+// simulator is stopped before returning. Errors: the simulator's and the job's.
+Result<JobReport> measure_on_gauge_simulator(const Part& part, const LiftTable& design, SimulatorSettings gauge,
+                                             std::chrono::milliseconds response_timeout, const JobSettings& job);
+
 // Runs the loop; `on_part` (may be empty) sees each iteration as it ends. A held or refused
 // correction does not stop the loop: the next part is ground with the table in force, as on
 // the shop floor. Errors: those of the machine model, the grinder or the job (the iterations

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "acquisition/modbus_gauge.h"
+#include "cli/grinding_loop.h"
 #include "cli/embedded_defaults.h"
 #include "job/pin_files.h"
 
@@ -92,21 +92,13 @@ Result<std::vector<PinLoopIteration>> run_pin_grinding_loop(
     }
 
     SimulatorSettings gauge = settings.gauge;
-    gauge.port = 0;
     gauge.seed = settings.gauge.seed + static_cast<std::uint64_t>(i);
     gauge.gauge_offset_mm = 0.0;
     gauge.ground_reading_mm = ground->gauge_reading_mm;
-    Result<std::unique_ptr<GaugeSimulator>> sim = GaugeSimulator::start(frame, flat, gauge);
-    if (!sim) return sim.error();
-    ModbusSettings link;
-    link.port = (*sim)->port();
-    link.response_timeout = settings.response_timeout;
-    ModbusGauge client(link);
     JobSettings job = settings.job;
     job.build_on_table_in_force = !table_in_force.empty();
     if (job.note.empty()) job.note = "virtual grinder pin " + std::to_string(i) + ", ground from " + it.ground_from;
-    Result<JobReport> report = run_measure_job(client, job);
-    (*sim)->stop();
+    Result<JobReport> report = measure_on_gauge_simulator(frame, flat, gauge, settings.response_timeout, job);
     if (!report) return report.error();
     it.job = std::move(*report);
     if (it.job.pushed()) {

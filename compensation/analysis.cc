@@ -477,6 +477,22 @@ BaseCircleRunout fit_base_circle_runout(const DegreeTable& error_um, const Degre
   return out;
 }
 
+DegreeFigures degree_figures(const DegreeTable& values) {
+  DegreeFigures f;
+  double squares = 0.0;
+  double lowest = values[0];
+  double highest = values[0];
+  for (double v : values) {
+    f.max_abs = std::max(f.max_abs, std::abs(v));
+    squares += v * v;
+    lowest = std::min(lowest, v);
+    highest = std::max(highest, v);
+  }
+  f.rms = std::sqrt(squares / static_cast<double>(values.size()));
+  f.peak_to_valley = highest - lowest;
+  return f;
+}
+
 std::array<double, 31> harmonic_amplitudes_um(const DegreeTable& values_um) {
   Eigen::FFT<double>& fft = thread_fft();
   const std::vector<double> in(values_um.begin(), values_um.end());

@@ -112,6 +112,14 @@ struct PhaseFit {
 Result<PhaseFit> fit_phase_error(const LobeAnalysis& analysis, double max_phase_deg = 5.0);
 Result<PhaseFit> fit_phase_error(const LobeAnalysis& analysis, const DesignReading& design, double max_phase_deg = 5.0);
 
+// Largest |value|, RMS and peak to valley of a per-degree table, in its unit.
+struct DegreeFigures {
+  double max_abs = 0.0;
+  double rms = 0.0;
+  double peak_to_valley = 0.0;
+};
+DegreeFigures degree_figures(const DegreeTable& values);
+
 // Amplitudes of harmonics 0..30 of a per-degree table (Eigen FFT), in the table's unit:
 // the table is sum over k of A_k cos(k theta + phase_k), A_0 = |mean|. Harmonic k has k
 // undulations per turn.

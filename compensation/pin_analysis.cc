@@ -23,34 +23,27 @@ constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 // and phase come from the run too, a pin's gauge is mastered.
 constexpr int kMinRevolutions = 2;
 
-// The least-squares circle e ~ a0 + a1 cos psi + b1 sin psi over whole degrees: on an even
-// grid over one turn the three functions are orthogonal, so each coefficient is a projection.
-struct Circle {
-  double a0 = 0.0;
-  double a1 = 0.0;
-  double b1 = 0.0;
-  double at(size_t d) const {
-    const double psi = static_cast<double>(d) * kRadPerDeg;
-    return a0 + a1 * std::cos(psi) + b1 * std::sin(psi);
-  }
-};
+}  // namespace
 
-Circle fit_circle(const DegreeTable& e) {
-  Circle c;
-  for (size_t d = 0; d < kDegrees; ++d) {
-    const double psi = static_cast<double>(d) * kRadPerDeg;
-    c.a0 += e[d];
-    c.a1 += e[d] * std::cos(psi);
-    c.b1 += e[d] * std::sin(psi);
-  }
-  const double n = static_cast<double>(kDegrees);
-  c.a0 /= n;
-  c.a1 *= 2.0 / n;
-  c.b1 *= 2.0 / n;
-  return c;
+double LeastSquaresCircle::at_um(std::size_t psi_deg) const {
+  const double psi = static_cast<double>(psi_deg) * kRadPerDeg;
+  return a0_um + a1_um * std::cos(psi) + b1_um * std::sin(psi);
 }
 
-}  // namespace
+LeastSquaresCircle fit_least_squares_circle(const DegreeTable& e) {
+  LeastSquaresCircle c;
+  for (size_t d = 0; d < kDegrees; ++d) {
+    const double psi = static_cast<double>(d) * kRadPerDeg;
+    c.a0_um += e[d];
+    c.a1_um += e[d] * std::cos(psi);
+    c.b1_um += e[d] * std::sin(psi);
+  }
+  const double n = static_cast<double>(kDegrees);
+  c.a0_um /= n;
+  c.a1_um *= 2.0 / n;
+  c.b1_um *= 2.0 / n;
+  return c;
+}
 
 Result<PinAnalysis> analyse_pin(const MeasuredRun& run, const PinGeometry& pin) {
   if (Status valid = validate(pin); !valid.ok()) return valid.error();
@@ -95,9 +88,6 @@ Result<PinAnalysis> analyse_pin(const MeasuredRun& run, const PinGeometry& pin) 
   PinAnalysis out;
   LobeAnalysis& a = out.table;
   a.revolutions = revolutions;
-  double squares = 0.0;
-  double lowest = std::numeric_limits<double>::infinity();
-  double highest = -std::numeric_limits<double>::infinity();
   for (size_t d = 0; d < kDegrees; ++d) {
     double sum = 0.0;
     for (const DegreeTable& rev : resampled) sum += rev[d];
@@ -107,38 +97,27 @@ Result<PinAnalysis> analyse_pin(const MeasuredRun& run, const PinGeometry& pin) 
     a.spread_um[d] = std::sqrt(spread_squares / (revolutions - 1)) * 1000.0;
     a.repeatability_um = std::max(a.repeatability_um, a.spread_um[d]);
     a.mean_lift_mm[d] = mean;
-    const double e = mean * 1000.0;
-    a.error_um[d] = e;
-    a.max_abs_error_um = std::max(a.max_abs_error_um, std::abs(e));
-    squares += e * e;
-    lowest = std::min(lowest, e);
-    highest = std::max(highest, e);
+    a.error_um[d] = mean * 1000.0;
   }
-  a.rms_error_um = std::sqrt(squares / kDegreesPerRevolution);
-  a.peak_to_valley_um = highest - lowest;
+  const DegreeFigures error = degree_figures(a.error_um);
+  a.max_abs_error_um = error.max_abs;
+  a.rms_error_um = error.rms;
+  a.peak_to_valley_um = error.peak_to_valley;
   a.harmonic_amplitude_um = harmonic_amplitudes_um(a.error_um);
 
-  const Circle circle = fit_circle(a.error_um);
-  squares = 0.0;
-  lowest = std::numeric_limits<double>::infinity();
-  highest = -std::numeric_limits<double>::infinity();
-  for (size_t d = 0; d < kDegrees; ++d) {
-    const double residual = a.error_um[d] - circle.at(d);
-    a.residual_error_um[d] = residual;
-    a.max_abs_residual_um = std::max(a.max_abs_residual_um, std::abs(residual));
-    squares += residual * residual;
-    lowest = std::min(lowest, residual);
-    highest = std::max(highest, residual);
-  }
-  a.rms_residual_um = std::sqrt(squares / kDegreesPerRevolution);
-  a.peak_to_valley_residual_um = highest - lowest;
+  const LeastSquaresCircle circle = fit_least_squares_circle(a.error_um);
+  for (size_t d = 0; d < kDegrees; ++d) a.residual_error_um[d] = a.error_um[d] - circle.at_um(d);
+  const DegreeFigures residual = degree_figures(a.residual_error_um);
+  a.max_abs_residual_um = residual.max_abs;
+  a.rms_residual_um = residual.rms;
+  a.peak_to_valley_residual_um = residual.peak_to_valley;
 
-  out.radius_error_um = circle.a0;
-  out.diameter_error_um = 2.0 * circle.a0;
-  out.stroke_error_um = circle.a1;
+  out.radius_error_um = circle.a0_um;
+  out.diameter_error_um = 2.0 * circle.a0_um;
+  out.stroke_error_um = circle.a1_um;
   // The centre moved b1 across the crank radius, counter-clockwise (the sense of C), at R from
   // the main axis: the pin stands turned by that angle about it.
-  out.index_error_deg = std::atan2(circle.b1, pin.throw_mm * 1000.0) / kRadPerDeg;
+  out.index_error_deg = std::atan2(circle.b1_um, pin.throw_mm * 1000.0) / kRadPerDeg;
   out.roundness_um = a.peak_to_valley_residual_um;
   a.phase_error_deg = out.index_error_deg;
   a.roundness_um = out.roundness_um;

@@ -33,6 +33,19 @@ struct PinAnalysis {
   double roundness_um = 0.0;       // peak to valley of the residual
 };
 
+// The least-squares circle of a pin's radius error in um per whole pin degree:
+// e(psi) ~ a0 + a1 cos psi + b1 sin psi. On an even grid over one turn the three functions
+// are orthogonal, so each coefficient is a projection; to first order in the error the circle
+// is the pin's size (a0) and its centre's offset (a1 outward along the crank radius, b1
+// across it, counter-clockwise).
+struct LeastSquaresCircle {
+  double a0_um = 0.0;
+  double a1_um = 0.0;
+  double b1_um = 0.0;
+  double at_um(std::size_t psi_deg) const;
+};
+LeastSquaresCircle fit_least_squares_circle(const DegreeTable& error_um);
+
 // Maps every revolution's 360 samples (index = machine degree C) to the pin-frame angle the
 // gauge read there (gauge_psi_deg), resamples each revolution onto whole pin degrees with a
 // periodic cubic spline through those angles (in C-X they are not evenly spaced: the grinding

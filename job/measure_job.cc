@@ -364,6 +364,51 @@ struct Prepared {
   DesignReading reading;
 };
 
+// A part with [speed] needs the speed subprogram's template.
+Status check_speed_template(const JobSettings& s) {
+  if (!s.speed || !s.nc_speed_template.empty()) return {};
+  return make_error(ErrorCode::kInvalidInput,
+                    "part " + s.part.name +
+                        " has a [speed] section, but no speed subprogram template is set: "
+                        "give one (examples/sinumerik/cam_speed.spf, [nc] speed_template) or remove [speed]");
+}
+
+// Every program the design's tables make renders, before measuring: the speed subprogram,
+// and for versions 1 and 2 (both table numbers, so a template naming a fixed one is refused
+// now) the table program, a pin's Y table, and the main program, which must call the speed
+// subprogram when there is one.
+Status check_programs_render(const JobSettings& s, const BuiltTable& design_table) {
+  std::optional<std::string> speed_program;
+  if (design_table.speed) {
+    Result<std::string> text = render_speed(s, *design_table.speed, 0, "");
+    if (!text) return in_step("speed program", text.error());
+    speed_program = std::move(*text);
+  }
+  for (int version : {1, 2}) {
+    TableProvenance provenance;
+    provenance.table_version = version;
+    provenance.table_numbers = s.table_numbers;
+    Result<std::string> program =
+        with_archive_header(s, render_table_program(s.nc_template, s.nc_template_name, template_values(s),
+                                                    design_table.table, provenance, s.table_format));
+    if (!program) return program.error();
+    if (design_table.y_table) {
+      Result<std::string> y = render_y_table(s, *design_table.y_table, 0, "", 0.0, version);
+      if (!y) return y.error();
+    }
+    if (s.nc_main_template.empty()) continue;
+    Result<std::string> m = render_main_for_table(main_source(s, ""), s.nc_dir / (s.nc_program + ".SPF"), *program);
+    if (!m) return m.error();
+    if (speed_program) {
+      if (Status c = check_main_calls_speed_program(*m, s.nc_main_template_name, speed_program_name(s.nc_program));
+          !c) {
+        return c;
+      }
+    }
+  }
+  return {};
+}
+
 // The checks before the gauge for a pin: the geometry, the design's tables within the axis
 // limits, and every template renders them (the Y table's and a main program coupling both).
 Result<Prepared> prepare_pin(const JobSettings& s) {
@@ -378,43 +423,11 @@ Result<Prepared> prepare_pin(const JobSettings& s) {
                                                       "(examples/sinumerik/pin_y_table.spf)");
     }
   }
-  if (s.speed && s.nc_speed_template.empty()) {
-    return make_error(ErrorCode::kInvalidInput,
-                      "part " + s.part.name +
-                          " has a [speed] section, but no speed subprogram template is set: "
-                          "give one (examples/sinumerik/cam_speed.spf, [nc] speed_template) or remove [speed]");
-  }
+  if (Status t = check_speed_template(s); !t) return t.error();
   const DegreeTable none{};
   Result<BuiltTable> design_table = build_pin_table(none, s);
   if (!design_table) return in_step("the design", design_table.error());
-  std::optional<std::string> speed_program;
-  if (design_table->speed) {
-    Result<std::string> text = render_speed(s, *design_table->speed, 0, "");
-    if (!text) return in_step("speed program", text.error());
-    speed_program = std::move(*text);
-  }
-  for (int version : {1, 2}) {
-    TableProvenance provenance;
-    provenance.table_version = version;
-    provenance.table_numbers = s.table_numbers;
-    Result<std::string> program =
-        with_archive_header(s, render_table_program(s.nc_template, s.nc_template_name, template_values(s),
-                                                    design_table->table, provenance, s.table_format));
-    if (!program) return program.error();
-    if (with_y) {
-      Result<std::string> y = render_y_table(s, *design_table->y_table, 0, "", 0.0, version);
-      if (!y) return y.error();
-    }
-    if (s.nc_main_template.empty()) continue;
-    Result<std::string> m = render_main_for_table(main_source(s, ""), s.nc_dir / (s.nc_program + ".SPF"), *program);
-    if (!m) return m.error();
-    if (speed_program) {
-      if (Status c = check_main_calls_speed_program(*m, s.nc_main_template_name, speed_program_name(s.nc_program));
-          !c) {
-        return c.error();
-      }
-    }
-  }
+  if (Status r = check_programs_render(s, *design_table); !r) return r.error();
   // A round pin's gauge should read 0 everywhere: that is its design.
   return Prepared{PeriodicSpline::fit(none), DesignReading::interpolating(none)};
 }
@@ -422,7 +435,6 @@ Result<Prepared> prepare_pin(const JobSettings& s) {
 // Checks that need no gauge, so bad input costs no measurement: the design must make a
 // table within the axis limits, and the template must render it.
 Result<Prepared> prepare(const JobSettings& s) {
-  if (s.pin) return prepare_pin(s);
   if (s.table_kind == TableKind::kLinear || s.table_kind == TableKind::kSpline) {
     const double steps = 360.0 / s.table_step_deg;
     if (!(s.table_step_deg > 0.0) || std::abs(steps - std::round(steps)) > 1e-9 || steps < 36) {
@@ -430,49 +442,20 @@ Result<Prepared> prepare(const JobSettings& s) {
                                                       " deg must divide 360 into at least 36 steps");
     }
   }
+  if (s.pin) return prepare_pin(s);
   if (Status l = check_axis_limits(s.axis_limits); !l) return l.error();
   Result<PeriodicSpline> design = PeriodicSpline::fit(s.design.angle_deg, s.design.lift_mm);
   if (!design) return in_step("design lift table " + s.design.source, design.error());
-  if (s.speed && s.nc_speed_template.empty()) {
-    return make_error(ErrorCode::kInvalidInput,
-                      "part " + s.part.name +
-                          " has a [speed] section, but no speed subprogram template is set: "
-                          "give one (examples/sinumerik/cam_speed.spf, [nc] speed_template) or remove [speed]");
-  }
+  if (Status t = check_speed_template(s); !t) return t.error();
   Result<BuiltTable> design_table = build_table(*design, s);
   if (!design_table) return in_step("the design", design_table.error());
-  // The speed subprogram renders, and the main program calls it: found before measuring.
-  std::optional<std::string> speed_program;
-  if (design_table->speed) {
-    Result<std::string> text = render_speed(s, *design_table->speed, 0, "");
-    if (!text) return in_step("speed program", text.error());
-    speed_program = std::move(*text);
-  }
   Result<DesignReading> design_reading = DesignReading::of_lobe(*design, s.part);
   if (!design_reading) return in_step("flat-probe reading", design_reading.error());
   // Zones that do not fit this lobe are a mistake in the part file: found before measuring.
   if (Result<std::vector<ZoneArc>> zones = zone_arcs(s.part.tolerances, design_reading->table()); !zones) {
     return in_step("part " + s.part.name + " tolerances", zones.error());
   }
-  // Versions 1 and 2: both table numbers, so a template naming a fixed one is refused now.
-  for (int version : {1, 2}) {
-    TableProvenance provenance;
-    provenance.table_version = version;
-    provenance.table_numbers = s.table_numbers;
-    Result<std::string> program =
-        with_archive_header(s, render_table_program(s.nc_template, s.nc_template_name, template_values(s),
-                                                    design_table->table, provenance, s.table_format));
-    if (!program) return program.error();
-    if (s.nc_main_template.empty()) continue;
-    Result<std::string> m = render_main_for_table(main_source(s, ""), s.nc_dir / (s.nc_program + ".SPF"), *program);
-    if (!m) return m.error();
-    if (speed_program) {
-      if (Status c = check_main_calls_speed_program(*m, s.nc_main_template_name, speed_program_name(s.nc_program));
-          !c) {
-        return c.error();
-      }
-    }
-  }
+  if (Status r = check_programs_render(s, *design_table); !r) return r.error();
   return Prepared{std::move(*design), std::move(*design_reading)};
 }
 

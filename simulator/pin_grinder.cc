@@ -2,6 +2,9 @@
 // envelope of the wheel (pin_grinder.h).
 #include "simulator/pin_grinder.h"
 
+#include "compensation/analysis.h"
+#include "compensation/pin_analysis.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -117,28 +120,15 @@ Result<GroundPin> grind_pin(const PinGeometry& pin, const PinCommandedPath& comm
 
 TruePinError true_pin_error(const DegreeTable& radius_error_mm) {
   TruePinError e;
-  const auto n = static_cast<double>(radius_error_mm.size());
-  // The least-squares circle of a radius error sampled evenly round the pin: its mean and its
-  // once-per-turn harmonic (the centre's offset), to first order in the error.
-  double mean_um = 0.0, cos_um = 0.0, sin_um = 0.0, sum_sq = 0.0;
-  for (size_t d = 0; d < radius_error_mm.size(); ++d) {
-    const double a = static_cast<double>(d) * std::numbers::pi / 180.0;
-    e.error_um[d] = radius_error_mm[d] * 1000.0;
-    e.max_abs_um = std::max(e.max_abs_um, std::abs(e.error_um[d]));
-    sum_sq += e.error_um[d] * e.error_um[d];
-    mean_um += e.error_um[d] / n;
-    cos_um += 2.0 * e.error_um[d] * std::cos(a) / n;
-    sin_um += 2.0 * e.error_um[d] * std::sin(a) / n;
-  }
-  e.rms_um = std::sqrt(sum_sq / n);
-  double lo = 0.0, hi = 0.0;
-  for (size_t d = 0; d < radius_error_mm.size(); ++d) {
-    const double a = static_cast<double>(d) * std::numbers::pi / 180.0;
-    const double residual = e.error_um[d] - mean_um - cos_um * std::cos(a) - sin_um * std::sin(a);
-    lo = d == 0 ? residual : std::min(lo, residual);
-    hi = d == 0 ? residual : std::max(hi, residual);
-  }
-  e.roundness_um = hi - lo;
+  for (size_t d = 0; d < radius_error_mm.size(); ++d) e.error_um[d] = radius_error_mm[d] * 1000.0;
+  const DegreeFigures figures = degree_figures(e.error_um);
+  e.max_abs_um = figures.max_abs;
+  e.rms_um = figures.rms;
+  // Roundness as the gauge's analysis gives it: after the least-squares circle.
+  const LeastSquaresCircle circle = fit_least_squares_circle(e.error_um);
+  DegreeTable residual{};
+  for (size_t d = 0; d < residual.size(); ++d) residual[d] = e.error_um[d] - circle.at_um(d);
+  e.roundness_um = degree_figures(residual).peak_to_valley;
   return e;
 }
 
