@@ -235,15 +235,32 @@ void read_table_numbers(TomlReader& nr, const toml::table& t, JobSettings& job) 
     job.table_numbers = *numbers;
   }
   if (std::optional<TableNumbers> y = read_number_pair(nr, t, "y_table_numbers", "[3, 4]")) job.y_table_numbers = *y;
+  // Given, they must stay clear of the X tables' numbers. Left at their default they matter
+  // only to a C-X-Y pin (check_y_table_numbers), so a service of lobes may use 3 and 4.
+  if (!nr.has("y_table_numbers")) return;
   for (int y : job.y_table_numbers) {
     if (!nr.error && (y == job.table_numbers[0] || y == job.table_numbers[1])) {
-      nr.fail(nr.where(nr.has("y_table_numbers") ? "y_table_numbers" : "table_numbers") + ": table " +
-              std::to_string(y) +
+      nr.fail(nr.where("y_table_numbers") + ": table " + std::to_string(y) +
               " would hold both a pin's X table and its Y table; give y_table_numbers two "
               "numbers the X tables do not use");
       return;
     }
   }
+}
+
+// A C-X-Y pin's Y tables go to y_table_numbers, 3 and 4 unless [nc] gives them: refused
+// (naming the part's entry) when table_numbers gives one of them to the X tables.
+Status check_y_table_numbers(const TomlReader& pr, const JobSettings& job) {
+  if (!job.pin || job.pin->mode != PinMode::kCXY) return {};
+  for (int y : job.y_table_numbers) {
+    if (y == job.table_numbers[0] || y == job.table_numbers[1]) {
+      return make_error(ErrorCode::kInvalidInput,
+                        pr.where("file") + ": part " + job.part.name + " is a C-X-Y pin, and its Y tables would go " +
+                            "to table " + std::to_string(y) + ", which [nc] table_numbers gives the X tables; give " +
+                            "[nc] y_table_numbers two numbers the X tables do not use");
+    }
+  }
+  return {};
 }
 
 // [nc]: the output directory (writable), the template (required, read now), the main
@@ -605,7 +622,9 @@ Status read_part_entry(const toml::table& entry, const ConfigFile& f, PartClaims
     if (Status claimed = claim_plc_number(pr, *plc_number, pf->part, claims); !claimed) return claimed;
   }
   c.parts.push_back({std::move(*pf), std::move(*design), plc_number});
-  if (Status ok = check_job_settings(job_for(c, c.parts.back())); !ok) return at_key(pr, "file", ok.error());
+  const JobSettings job = job_for(c, c.parts.back());
+  if (Status y = check_y_table_numbers(pr, job); !y) return y;
+  if (Status ok = check_job_settings(job); !ok) return at_key(pr, "file", ok.error());
   return {};
 }
 

@@ -420,7 +420,7 @@ Result<Prepared> prepare_pin(const JobSettings& s) {
     if (s.nc_y_template.empty()) {
       return make_error(ErrorCode::kInvalidInput, "part " + s.part.name +
                                                       " is a C-X-Y pin, but no Y table template is set: give one "
-                                                      "(examples/sinumerik/pin_y_table.spf)");
+                                                      "(examples/sinumerik/pin_y_table.spf, [nc] y_template)");
     }
   }
   if (Status t = check_speed_template(s); !t) return t.error();

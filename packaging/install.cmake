@@ -14,11 +14,12 @@ install(FILES ${PROJECT_SOURCE_DIR}/packaging/tmpfiles.conf DESTINATION lib/tmpf
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
 set(GAUGELOOP_DOCS
   PERFORMANCE.md acquisition.md aqdef.md architecture.md building.md compensation.md gauge.md http_api.md
-  nc_output.md parts.md reports.md service.md simulator.md spc_and_shafts.md storage.md variable_speed.md
-  virtual_grinder.md)
+  crankpins.md nc_output.md parts.md reports.md service.md simulator.md spc_and_shafts.md storage.md
+  variable_speed.md virtual_grinder.md)
 list(TRANSFORM GAUGELOOP_DOCS PREPEND ${PROJECT_SOURCE_DIR}/docs/)
 install(FILES ${GAUGELOOP_DOCS} DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
-install(FILES ${PROJECT_SOURCE_DIR}/docs/img/cam_report.png DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs/img)
+install(FILES ${PROJECT_SOURCE_DIR}/docs/img/cam_report.png ${PROJECT_SOURCE_DIR}/docs/img/crankpin_frames.svg
+        DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs/img)
 # The service's example config and what its relative paths name (gauge config, parts and
 # their lift tables, the NC template), so `serve --check` passes on it as installed. Listed,
 # not the folder: a run from the source tree leaves databases and NC files in it.
@@ -26,6 +27,7 @@ set(GAUGELOOP_EXAMPLES
   exhaust_roller.csv exhaust_roller.toml intake_flat.csv intake_flat.toml intake_flat_half_degree.csv
   intake_flat_half_degree.toml)
 list(APPEND GAUGELOOP_EXAMPLES camshaft.toml)  # names intake_flat.toml and exhaust_roller.toml
+list(APPEND GAUGELOOP_EXAMPLES crankpin_cx.toml crankpin_cxy.toml)  # the sample crankpin, C-X and C-X-Y
 list(TRANSFORM GAUGELOOP_EXAMPLES PREPEND ${PROJECT_SOURCE_DIR}/examples/)
 install(FILES ${GAUGELOOP_EXAMPLES} DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples)
 install(FILES ${PROJECT_SOURCE_DIR}/examples/gauges/simulator.toml ${PROJECT_SOURCE_DIR}/examples/gauges/other_amplifier.toml
@@ -33,6 +35,8 @@ install(FILES ${PROJECT_SOURCE_DIR}/examples/gauges/simulator.toml ${PROJECT_SOU
 install(FILES ${PROJECT_SOURCE_DIR}/examples/service/gaugeloop.toml DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples/service)
 install(FILES ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_main.mpf ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_table.spf
               ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_main_speed.mpf ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_speed.spf
+              ${PROJECT_SOURCE_DIR}/examples/sinumerik/pin_main.mpf ${PROJECT_SOURCE_DIR}/examples/sinumerik/pin_main_cx.mpf
+              ${PROJECT_SOURCE_DIR}/examples/sinumerik/pin_y_table.spf
         DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples/sinumerik)
 
 # The unit names the binary by its installed path. The prefix is known for certain only when

@@ -149,7 +149,15 @@ def check_install(cmake, build_dir, source_dir, version, prefix, unit_dir):
             if not f.startswith(places):
                 fail(f"{f} installed, outside the places docs/service.md names")
         docs = sorted(n for n in os.listdir(os.path.join(source_dir, "docs")) if n.endswith(".md"))
-        for f in [f"{doc}/README.md", f"{doc}/examples/service/gaugeloop.toml", unit] + [f"{doc}/docs/{n}" for n in docs]:
+        # The figures the docs show, and every Sinumerik template the docs and the example
+        # config name (the crankpins' too).
+        images = sorted(os.listdir(os.path.join(source_dir, "docs", "img")))
+        sinumerik = sorted(os.listdir(os.path.join(source_dir, "examples", "sinumerik")))
+        expected = ([f"{doc}/README.md", f"{doc}/examples/service/gaugeloop.toml", unit] +
+                    [f"{doc}/docs/{n}" for n in docs] + [f"{doc}/docs/img/{n}" for n in images] +
+                    [f"{doc}/examples/sinumerik/{n}" for n in sinumerik] +
+                    [f"{doc}/examples/crankpin_cx.toml", f"{doc}/examples/crankpin_cxy.toml"])
+        for f in expected:
             if f not in files:
                 fail(f"{f} not installed (prefix {prefix})")
         if unit in files:
