@@ -10,6 +10,7 @@
 #include <set>
 
 #include "cli/cli_common.h"
+#include "cli/embedded_defaults.h"
 #include "core/number_text.h"
 #include "core/text_file.h"
 #include "job/nc_push.h"
@@ -201,11 +202,16 @@ constexpr const char* kMainTemplateHelp =
     "[built-in Sinumerik 840D main program]";
 
 // The main program's template as the option names it; its part and lobe are the run's.
+// Without --main-template, a crankpin ground C-X gets the built-in pin main program.
 Result<MainProgramSource> main_source(const std::string& path) {
   MainProgramSource m;
   Result<std::string> text = load_main_template(path, m.template_name);
   if (!text) return text.error();
   m.template_text = std::move(*text);
+  if (path.empty()) {
+    m.pin_cx_template_text = std::string(embedded::kPinMainCxTemplate);
+    m.pin_cx_template_name = "embedded:pin_main_cx.mpf";
+  }
   return m;
 }
 

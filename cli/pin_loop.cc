@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "cli/grinding_loop.h"
 #include "cli/embedded_defaults.h"
+#include "cli/grinding_loop.h"
 #include "job/pin_files.h"
 
 namespace gaugeloop {

@@ -405,11 +405,31 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
 
 namespace {
 
-// `main` with the part and lobe of run `run_id` where it leaves them open.
-Result<MainProgramSource> main_for_run(const RunStore& store, std::int64_t run_id, MainProgramSource main) {
-  if (main.template_text.empty() || (!main.part.empty() && main.lobe != 0)) return main;
+// True if the settings text has `line` as one of its lines.
+bool has_setting_line(const std::string& settings, const std::string& line) {
+  return settings.starts_with(line + "\n") || settings.find("\n" + line + "\n") != std::string::npos;
+}
+
+// `main` for pushing run `run_id`'s table again (`what`: "approved", "rolled back"), with the
+// run's part and lobe where it leaves them open. A C-X pin's table gets main.pin_cx_template
+// when there is one. A C-X-Y pin's table is refused: its Y table is written only with a
+// measurement, and the X table alone would run with a Y table of another version.
+Result<MainProgramSource> main_for_run(const RunStore& store, std::int64_t run_id, MainProgramSource main,
+                                       const std::string& nc_file, std::string_view what) {
   Result<StoredRun> run = store.load_run(run_id);
   if (!run) return run.error();
+  if (has_setting_line(run->settings, "pin.mode = c-x-y")) {
+    return make_error(ErrorCode::kRefused,
+                      nc_file + " is the X table of a crankpin ground C-X-Y (run " + std::to_string(run_id) +
+                          "); it cannot be " + std::string(what) +
+                          " alone: its Y table is written only with a measurement, and X would run with a Y table of "
+                          "another version. Measure the pin again to push a matched pair");
+  }
+  if (has_setting_line(run->settings, "pin.mode = c-x") && !main.pin_cx_template_text.empty()) {
+    main.template_text = main.pin_cx_template_text;
+    main.template_name = main.pin_cx_template_name;
+  }
+  if (main.template_text.empty()) return main;
   if (main.part.empty()) main.part = run->summary.part;
   if (main.lobe == 0) main.lobe = run->summary.lobe;
   return main;
@@ -439,7 +459,7 @@ Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, co
   const std::string& text = t->program_text;
   PushOptions options;
   options.overwrite_edited = overwrite_edited;
-  Result<MainProgramSource> m = main_for_run(store, t->run_id, main);
+  Result<MainProgramSource> m = main_for_run(store, t->run_id, main, t->nc_file, "approved");
   if (!m) return m.error();
   options.main = std::move(*m);
   Result<PushCompletion> pushed = push_program(
@@ -465,7 +485,7 @@ Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_f
   facts.table = old->table;
   const std::string& text = *old->program_text;
   PushOptions options;
-  Result<MainProgramSource> m = main_for_run(store, old->run_id, main);
+  Result<MainProgramSource> m = main_for_run(store, old->run_id, main, nc_file, "rolled back");
   if (!m) return m.error();
   options.main = std::move(*m);
   Result<PushCompletion> pushed = push_program(

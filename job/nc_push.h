@@ -61,6 +61,10 @@ struct MainProgramSource {
   // y_table_numbers the table's version goes to (table_number_for_version). Empty: X alone.
   std::string y_program_name;
   TableNumbers y_table_numbers{0, 0};
+  // For an approval or a rollback: the main program of a crankpin ground C-X (its run's
+  // settings say so), used instead of template_text; empty: template_text for every part.
+  std::string pin_cx_template_text;
+  std::string pin_cx_template_name;
 };
 
 // The main program for `table_program` (version and table number set, as pushed to
@@ -147,14 +151,16 @@ struct PushOutcome {
 
 // `gaugeloop nc approve` and POST /api/nc/approve: pushes pending table `pending_id` (still
 // pending: else kRefused naming its status) and records the push and the approval by `by`
-// in one transaction. A hand-edited program is overwritten only with `overwrite_edited`.
+// in one transaction. The table of a crankpin ground C-X-Y is refused (kRefused): its Y table
+// would not follow it (a measurement writes both). A hand-edited program is overwritten only with `overwrite_edited`.
 // With a main program template in `main`, the main program is rewritten to couple it.
 Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, const std::string& by,
                                     const std::string& note, bool overwrite_edited, const MainProgramSource& main = {});
 
 // `gaugeloop nc rollback` and POST /api/nc/rollback: pushes the program of `table_version`
 // of `nc_file` again, as a new version (header updated, body untouched); its run becomes the
-// one in force. kNotFound for a version never pushed or pushed without its text.
+// one in force. kNotFound for a version never pushed or pushed without its text; kRefused for
+// the table of a crankpin ground C-X-Y (its Y table would not follow).
 Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_file, int table_version,
                                         const std::string& by, const MainProgramSource& main = {});
 

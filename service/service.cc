@@ -381,13 +381,26 @@ void Service::stop() {
   events_->stop(kEventDrainLimit);
 }
 
+namespace {
+
+// The main programs an approval or a rollback renders: the lobes' ([nc] main_template), and
+// for a crankpin ground C-X its own ([nc] pin_main_template).
+MainProgramSource main_program_for_pushes(const ServiceConfig& c) {
+  MainProgramSource m = main_program_source(c.job);
+  m.pin_cx_template_text = c.nc_pin_main_template;
+  m.pin_cx_template_name = c.nc_pin_main_template_name;
+  return m;
+}
+
+}  // namespace
+
 Result<json> Service::approve(std::int64_t pending_id, const std::string& by, const std::string& note) {
   const Result<RunReservation> held = wait_and_reserve();  // one push at a time
   if (!held) return held.error();
   Result<RunStore> store = RunStore::open(config()->job.db_path);
   if (!store) return store.error();
   Result<PushOutcome> pushed =
-      approve_pending(*store, pending_id, by, note, /*overwrite_edited=*/false, main_program_source(config()->job));
+      approve_pending(*store, pending_id, by, note, /*overwrite_edited=*/false, main_program_for_pushes(*config()));
   if (!pushed) return pushed.error();
   spdlog::info("pending table {} approved by {}: table version {} of run {} pushed to {}", pending_id, by,
                pushed->table_version, pushed->run_id, pushed->nc_file);
@@ -410,7 +423,7 @@ Result<json> Service::rollback(const std::string& program, int table_version, co
   Result<RunStore> store = RunStore::open(c->job.db_path);
   if (!store) return store.error();
   Result<PushOutcome> pushed = rollback_to_version(*store, std::filesystem::absolute(file).lexically_normal().string(),
-                                                   table_version, by, main_program_source(c->job));
+                                                   table_version, by, main_program_for_pushes(*c));
   if (!pushed) return pushed.error();
   spdlog::info("rollback by {}: {} table version {} is the table of version {} (run {})", by, pushed->nc_file,
                pushed->table_version, table_version, pushed->run_id);

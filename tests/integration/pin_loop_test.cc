@@ -194,6 +194,31 @@ TEST_P(PinLoopTest, ASpeedProgramHoldsTheGrindingPointSpeedInCx) {
   EXPECT_LT(loop[1].part.max_abs_um, 3.0 * loop[1].floor.max_abs_um);
 }
 
+// A rollback pushes one table program again. A C-X pin's goes back with the pin's main
+// program; a C-X-Y pin's is refused, since its Y table would not follow (the control would run
+// X of one version with Y of another), and nothing is written.
+TEST_P(PinLoopTest, ARollbackKeepsXAndYTogether) {
+  const std::vector<PinLoopIteration> loop = run(1);
+  ASSERT_EQ(loop.size(), 2u);
+  ASSERT_TRUE(loop[1].job.pushed());
+  const fs::path x_file = loop[1].job.nc_file;
+  const std::string x_before = testing::slurp(x_file);
+  const testing::CommandResult r =
+      testing::run_command("nc rollback --data-dir " + dir_.string() + " --program " + settings_.job.nc_program + " 1");
+  if (with_y()) {
+    const std::string y_before = testing::slurp(y_table_program_path(x_file));
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("cannot be rolled back alone"), std::string::npos) << r.output;
+    EXPECT_EQ(testing::slurp(x_file), x_before);
+    EXPECT_EQ(testing::slurp(y_table_program_path(x_file)), y_before);
+  } else {
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(testing::slurp(x_file), x_before);
+    // The pin's own main program: it feeds the wheel in towards the pin.
+    EXPECT_NE(testing::slurp(main_program_path(x_file)).find("X-0.2"), std::string::npos);
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(BothModes, PinLoopTest, ::testing::Values("crankpin_cx.toml", "crankpin_cxy.toml"),
                          [](const ::testing::TestParamInfo<const char*>& param) {
                            return std::string(param.param).find("cxy") != std::string::npos ? "CXY" : "CX";
