@@ -323,18 +323,7 @@ std::string settings_text(const JobSettings& s) {
     line("nc.speed_template", s.nc_speed_template_name);
     line("nc.speed_error_bound_percent", num(s.speed_profile.bound_percent));
   }
-  if (s.pin) {
-    auto limits = [&](const std::string& key, const Limits& l) {
-      if (l.lower) line(key + ".lower", num(*l.lower));
-      if (l.upper) line(key + ".upper", num(*l.upper));
-    };
-    limits("tolerance.roundness_um", s.pin->tolerances.roundness_um);
-    limits("tolerance.diameter_error_um", s.pin->tolerances.diameter_error_um);
-    limits("tolerance.stroke_error_um", s.pin->tolerances.stroke_error_um);
-    limits("tolerance.index_error_deg", s.pin->tolerances.index_error_deg);
-    return out;
-  }
-  out += tolerances_settings_text(s.part.tolerances);
+  out += s.pin ? tolerances_settings_text(s.pin->tolerances) : tolerances_settings_text(s.part.tolerances);
   return out;
 }
 

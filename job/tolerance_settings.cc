@@ -29,15 +29,27 @@ bool judges_anything(const LobeTolerances& t) {
   });
 }
 
+// `key = lower upper` when `l` has a bound.
+void append_limits(std::string& out, const std::string& key, const Limits& l) {
+  if (l.any()) out += key + " = " + bound(l.lower) + " " + bound(l.upper) + "\n";
+}
+
 }  // namespace
+
+std::string tolerances_settings_text(const PinTolerances& t) {
+  std::string out;
+  append_limits(out, "tolerance.roundness_um", t.roundness_um);
+  append_limits(out, "tolerance.diameter_error_um", t.diameter_error_um);
+  append_limits(out, "tolerance.stroke_error_um", t.stroke_error_um);
+  append_limits(out, "tolerance.index_error_deg", t.index_error_deg);
+  return out;
+}
 
 std::string tolerances_settings_text(const LobeTolerances& t) {
   if (!judges_anything(t)) return {};
   std::string out;
   auto line = [&out](const std::string& key, const std::string& value) { out += key + " = " + value + "\n"; };
-  auto limits = [&line](const std::string& key, const Limits& l) {
-    if (l.any()) line(key, bound(l.lower) + " " + bound(l.upper));
-  };
+  auto limits = [&out](const std::string& key, const Limits& l) { append_limits(out, key, l); };
   line("tolerance.lift_error", std::string(lift_error_reference_name(t.lift_error_reference)));
   limits("tolerance.lift_error_um", t.lift_error_um);
   limits("tolerance.velocity_error_mm_per_deg", t.velocity_error_mm_per_deg);

@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "core/pin.h"
 #include "core/tolerance.h"
 
 namespace gaugeloop {
@@ -20,5 +21,9 @@ namespace gaugeloop {
 // given have no line, and tolerances that judge nothing give "" (so a part without
 // [tolerance] keeps the settings it had before tolerances existed).
 std::string tolerances_settings_text(const LobeTolerances& tolerances);
+
+// A crankpin's, in the same form: tolerance.roundness_um, diameter_error_um, stroke_error_um,
+// index_error_deg, those given.
+std::string tolerances_settings_text(const PinTolerances& tolerances);
 
 }  // namespace gaugeloop
