@@ -121,9 +121,9 @@ struct MeasureOptions {
   int revolutions = 3;
   double table_step_deg = 1.0;
   std::string table = "auto";
-  double command_error_um = 0.5;
-  int int_incr_per_mm = 10000;  // the control's MD10200: X is written on its grid
-  bool archive_header = false;  // the programs start with the punched-tape archive header
+  std::optional<double> command_error_um;  // empty: 0.5 um for a lobe, kPinCommandErrorBoundUm for a pin
+  int int_incr_per_mm = 10000;             // the control's MD10200: X is written on its grid
+  bool archive_header = false;             // the programs start with the punched-tape archive header
   bool require_approval = false;
   std::string machine = "grinder-1";
   std::string note;
@@ -163,8 +163,7 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o) {
       ->capture_default_str();
   cmd.add_option("--command-error-um", o.command_error_um,
                  "Largest command position error (NC interpolation against the exact path) auto and adaptive "
-                 "tables may have")
-      ->capture_default_str()
+                 "tables may have [0.5 for a lobe, 0.1 for a crankpin]")
       ->check(CLI::Range(0.01, 100.0));
   cmd.add_option("--int-incr-per-mm", o.int_incr_per_mm,
                  "The control's X resolution, MD10200 $MN_INT_INCR_PER_MM: table X is rounded to 1/N mm and its "
@@ -234,7 +233,8 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
                   : o.table == "adaptive-linear" ? TableKind::kAdaptiveLinear
                   : o.table == "adaptive-spline" ? TableKind::kAdaptiveSpline
                                                  : TableKind::kAuto;
-  js.table_choice.bound_um = o.command_error_um;
+  // Without the option: TableChoiceSettings' 0.5 um for a lobe, set_pin_job's for a pin.
+  js.table_choice.bound_um = o.command_error_um.value_or(js.table_choice.bound_um);
   js.table_format.x_increments_per_mm = o.int_incr_per_mm;
   js.nc_archive_header = o.archive_header;
   js.require_approval = o.require_approval;
@@ -421,9 +421,13 @@ int cmd_pin_demo_loop(const MeasureOptions& o, const LoadedPart& lp, const Simul
     if (r.pushed() && with_y) {
       table += ", Y " + std::to_string(r.y_table_blocks) + " blocks " + format_fixed(r.y_command_error_um, 3) + " um";
     }
-    std::printf("%4d  %-23s %5lld  %6.2f  %8.2f  %+7.2f  %+9.2f  %+9.4f  %-7s | %8.2f  %10.2f  %5.2f  %4.2f  %s\n",
-                it.iteration, it.ground_from.c_str(), static_cast<long long>(r.run_id), r.analysis.max_abs_error_um,
-                figure("roundness"), figure("diameter_error"), figure("stroke_error"), figure("index_error"),
+    if (r.pushed()) table += ", harmonics 0.." + std::to_string(r.harmonics_fed_back);
+    // Signed figures through format_signed_fixed: never "-0.0000" for a value that rounds to zero.
+    std::printf("%4d  %-23s %5lld  %6.2f  %8.2f  %7s  %9s  %9s  %-7s | %8.2f  %10.2f  %5.2f  %4.2f  %s\n", it.iteration,
+                it.ground_from.c_str(), static_cast<long long>(r.run_id), r.analysis.max_abs_error_um,
+                figure("roundness"), format_signed_fixed(figure("diameter_error"), 2).c_str(),
+                format_signed_fixed(figure("stroke_error"), 2).c_str(),
+                format_signed_fixed(figure("index_error"), 4).c_str(),
                 std::string(verdict_name(r.tolerance_verdict)).c_str(), it.part.max_abs_um, it.part.roundness_um,
                 it.floor.max_abs_um, it.residual_max_um, table.c_str());
     std::fflush(stdout);
@@ -434,9 +438,12 @@ int cmd_pin_demo_loop(const MeasureOptions& o, const LoadedPart& lp, const Simul
   const PinLoopIteration& last = loop->back();
   std::printf(
       "\nlargest radius error %.2f um as ground before compensation, %.2f um after %d (roundness %.2f um); floor "
-      "%.2f um (a perfect path under the same vibration): %.2f times the floor\n",
-      first.part.max_abs_um, last.part.max_abs_um, last.iteration, last.part.roundness_um, last.floor.max_abs_um,
-      last.floor.max_abs_um > 0.0 ? last.part.max_abs_um / last.floor.max_abs_um : 0.0);
+      "%.2f um (a perfect path under the same vibration)",
+      first.part.max_abs_um, last.part.max_abs_um, last.iteration, last.part.roundness_um, last.floor.max_abs_um);
+  // Without vibration there is no floor to compare with.
+  if (last.floor.max_abs_um >= 0.01)
+    std::printf(": %.2f times the floor", last.part.max_abs_um / last.floor.max_abs_um);
+  std::printf("\n");
   if (speed) {
     const auto [low, high] = std::minmax_element(speed->grinding_point_speed_mm_per_min.begin(),
                                                  speed->grinding_point_speed_mm_per_min.end());

@@ -44,6 +44,7 @@ void set_pin_job(JobSettings& js, const PinGeometry& pin, bool main_template_giv
     js.nc_main_template = std::string(with_y ? embedded::kPinMainTemplate : embedded::kPinMainCxTemplate);
     js.nc_main_template_name = with_y ? "embedded:pin_main.mpf" : "embedded:pin_main_cx.mpf";
   }
+  js.table_choice.bound_um = kPinCommandErrorBoundUm;
   const double rpm = js.axis_limits.speed_rpm;
   js.axis_limits = AxisLimits{-1.0, 2.0 * pin.throw_mm + 5.0, 600.0, 30000.0, rpm};
   js.y_axis_limits = AxisLimits{-pin.throw_mm - 5.0, pin.throw_mm + 5.0, 600.0, 30000.0, rpm, 'Y'};

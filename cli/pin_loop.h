@@ -20,7 +20,8 @@ namespace gaugeloop {
 // template and the speed program if any): the pin, the Y table's template in C-X-Y (the
 // embedded examples/sinumerik/pin_y_table.spf), the main program coupling what the mode moves
 // (embedded pin_main_cx.mpf or pin_main.mpf, unless a main template was given or a speed
-// program's main program is set), and the limits of a crankpin grinder's slides: X over the
+// program's main program is set), the command position error bound of a pin's tables
+// (kPinCommandErrorBoundUm), and the limits of a crankpin grinder's slides: X over the
 // stroke and Y over the throw with 5 mm of margin, 600 mm/s and 30000 mm/s^2 (linear-motor
 // slides, as such machines have; the pin's X swings 2R every turn), at the job's work speed.
 void set_pin_job(JobSettings& js, const PinGeometry& pin, bool main_template_given);

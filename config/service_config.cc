@@ -276,6 +276,7 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
                    "table",
                    "table_step_deg",
                    "command_error_um",
+                   "pin_command_error_um",
                    "max_segment_deg",
                    "allow_spline",
                    "require_approval",
@@ -308,6 +309,7 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
     const std::string pin_main_path = nr.text("pin_main_template", "");
     const std::string pin_main_xy_path = nr.text("pin_main_xy_template", "");
     read_nc_table_keys(nr, job);
+    c.pin_command_error_um = nr.number("pin_command_error_um", kPinCommandErrorBoundUm, 0.0, 100.0, true);
     read_table_numbers(nr, *t, job);
     if (nr.error) return *nr.error;
     if (!main_path.empty()) {
@@ -758,6 +760,7 @@ JobSettings job_for(const ServiceConfig& config, const ServicePart& part) {
                                    ? std::string()
                                    : (with_y ? config.nc_pin_main_xy_template_name : config.nc_pin_main_template_name);
   }
+  if (js.pin) js.table_choice.bound_um = config.pin_command_error_um;
   return js;
 }
 

@@ -64,6 +64,9 @@ struct ServiceConfig {
   // main_template, and empty: no main program for those pins. The Y table's template, [nc]
   // y_template, is job.nc_y_template; its numbers [nc] y_table_numbers (default [3, 4]) and the
   // Y slide's limits [nc] y_min_mm... are in job.
+  // [nc] pin_command_error_um: the command position error a pin's tables keep (default
+  // kPinCommandErrorBoundUm, 0.1 um; [nc] command_error_um is the lobes').
+  double pin_command_error_um = kPinCommandErrorBoundUm;
   std::string nc_pin_main_template;
   std::string nc_pin_main_template_name;
   std::string nc_pin_main_xy_template;

@@ -131,5 +131,18 @@ TEST_F(ServicePinTest, ACxyPinWithoutAYTemplateIsRefusedAtReadingSayingWhatToGiv
   EXPECT_TRUE(refused(c, "give one (examples/sinumerik/pin_y_table.spf, [nc] y_template)"));
 }
 
+// A pin's tables keep their own command position error bound, 0.1 um unless [nc]
+// pin_command_error_um says otherwise; the lobes keep [nc] command_error_um.
+TEST_F(ServicePinTest, PinTablesKeepTheirOwnCommandErrorBound) {
+  auto c = read(kPins + kNc + "y_template = \"pin_y_table.spf\"\ncommand_error_um = 0.4\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->job.table_choice.bound_um, 0.4);
+  EXPECT_EQ(job_for(*c, c->parts[0]).table_choice.bound_um, kPinCommandErrorBoundUm);
+  EXPECT_EQ(job_for(*c, c->parts[1]).table_choice.bound_um, kPinCommandErrorBoundUm);
+  auto set = read(kPins + kNc + "y_template = \"pin_y_table.spf\"\npin_command_error_um = 0.25\n");
+  ASSERT_TRUE(set.ok()) << set.error().message;
+  EXPECT_EQ(job_for(*set, set->parts[1]).table_choice.bound_um, 0.25);
+}
+
 }  // namespace
 }  // namespace gaugeloop
