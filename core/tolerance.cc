@@ -161,4 +161,11 @@ std::string characteristic_title(std::string_view key, PartKind kind) {
   return title + ", " + std::string(lobe_zone_title(*z));
 }
 
+PartKind part_kind_of(const std::vector<Characteristic>& characteristics) {
+  for (const Characteristic& c : characteristics) {
+    if (c.key == "diameter_error" || c.key == "stroke_error" || c.key == "index_error") return PartKind::kPin;
+  }
+  return PartKind::kLobe;
+}
+
 }  // namespace gaugeloop

@@ -131,4 +131,9 @@ enum class PartKind { kLobe, kPin };
 // is.
 std::string characteristic_title(std::string_view key, PartKind kind = PartKind::kLobe);
 
+// What a run's characteristics tell of its part, where its settings are not at hand (SPC, the
+// AQDEF export): a pin's carry keys only a pin has (diameter_error, stroke_error,
+// index_error); anything else, none included, is a lobe's.
+PartKind part_kind_of(const std::vector<Characteristic>& characteristics);
+
 }  // namespace gaugeloop
