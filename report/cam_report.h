@@ -51,7 +51,7 @@ struct CamReportWords {
   std::string polar_title;                         // the polar view's title
   std::string polar_zero;                          // the polar view's label at 0 degrees
   std::string polar_angle;                         // the polar view's scale line starts with it: "cam deg", "pin deg"
-  std::string polar_reference;                     // what its rings are about: "base circle", "circle"
+  std::string polar_reference;                     // what its rings are about: "base circle", "least-squares circle"
   std::string harmonics_title;                     // the harmonics chart's title
   bool derivative_charts = true;                   // velocity and acceleration error: a lobe's only
   std::vector<std::string> characteristic_titles;  // the table's, in run.characteristics' order
