@@ -259,7 +259,8 @@ int run_job(GaugeClient& gauge, const LoadedPart& lp, const MeasureOptions& o, b
   return report->pushed() || report->inspection ? kExitOk : kExitNotPushed;
 }
 
-// The cam report of the demo's last run, as a quality engineer files it: <data-dir>/report.pdf.
+// The report of the demo's last run (a lobe's or a pin's), as a quality engineer files it:
+// <data-dir>/report.pdf.
 // A report that cannot be written is said, and the demo's outcome stands.
 void write_demo_report(const MeasureOptions& o, std::int64_t run_id) {
   const std::filesystem::path pdf = std::filesystem::path(o.paths.data_dir) / "report.pdf";
@@ -460,6 +461,7 @@ int cmd_pin_demo_loop(const MeasureOptions& o, const LoadedPart& lp, const Simul
         "[speed] in the part file)\n",
         m.work_speed_rpm, slowest, fastest, fastest / slowest);
   }
+  write_demo_report(o, last.job.run_id);
   return std::all_of(loop->begin(), loop->end(), [](const PinLoopIteration& it) { return it.job.pushed(); })
              ? kExitOk
              : kExitNotPushed;

@@ -125,10 +125,15 @@ std::string limits_text(const Limits& l, int decimals) {
   return "-";
 }
 
-void print_characteristics(const StoredRun& r) {
-  std::printf(
-      "tolerances        %s (lift error judged %s)\n", verdict_name(r.summary.verdict).data(),
-      r.lift_error_reference == LiftErrorReference::kNominal ? "at the nominal timing" : "after the best-fit phase");
+void print_characteristics(const StoredRun& r, PartKind kind) {
+  if (kind == PartKind::kPin) {
+    // A pin has no lift error and no timing: nothing was judged after a best-fit phase.
+    std::printf("tolerances        %s\n", verdict_name(r.summary.verdict).data());
+  } else {
+    std::printf(
+        "tolerances        %s (lift error judged %s)\n", verdict_name(r.summary.verdict).data(),
+        r.lift_error_reference == LiftErrorReference::kNominal ? "at the nominal timing" : "after the best-fit phase");
+  }
   if (r.characteristics.empty()) {
     std::printf("  not judged: no characteristics recorded with this run\n");
     return;
@@ -136,7 +141,7 @@ void print_characteristics(const StoredRun& r) {
   std::printf("  %-46s %14s %14s  %-24s %-9s %s\n", "characteristic", "value", "range", "limits", "unit", "verdict");
   for (const Characteristic& c : r.characteristics) {
     const int d = figure_decimals(c.unit);
-    std::string title = characteristic_title(c.key);
+    std::string title = characteristic_title(c.key, kind);
     if (c.from_deg && c.to_deg) title += " (" + std::to_string(*c.from_deg) + ".." + std::to_string(*c.to_deg) + ")";
     const std::string range = c.min == c.max ? "" : format_fixed(c.max - c.min, d);
     std::printf("  %-46s %14s %14s  %-24s %-9s %s\n", title.c_str(), format_fixed(c.value, d).c_str(), range.c_str(),
@@ -150,11 +155,34 @@ struct RunOptions {
   bool json_out = false;
 };
 
-std::string frame_text(const StoredRun& r) {
+constexpr const char* kPinFrame = "pin frame, 0 deg along the crank radius outward";
+
+std::string frame_text(const StoredRun& r, const RunPart& part) {
+  if (part.pin()) {
+    return std::string(kPinFrame) +
+           (part.pin_mode ? (*part.pin_mode == PinMode::kCXY ? " (C-X-Y)" : " (C-X)") : std::string());
+  }
   if (!r.geometry) return "not recorded with this run (revolutions stay in the machine frame)";
   const Part& g = *r.geometry;
   return "C = " + std::string(g.rotation_sense > 0 ? "+" : "-") + "psi + " + format_fixed(g.c_offset_deg, 3) +
          " deg; probe " + format_signed_fixed(g.probe_offset_deg, 3) + " deg of C from the wheel";
+}
+
+// A pin's own figures, from its characteristics (a pin run has no phase or runout; its
+// stored phase is the index error). "-" for one the run did not record.
+void print_pin_figures(const std::vector<Characteristic>& characteristics) {
+  auto figure = [&characteristics](const char* key, int decimals, bool with_sign = true) -> std::string {
+    for (const Characteristic& c : characteristics) {
+      if (c.key == key) return with_sign ? format_signed_fixed(c.value, decimals) : format_fixed(c.value, decimals);
+    }
+    return "-";
+  };
+  std::printf("  roundness         %s um (least-squares circle)\n", figure("roundness", 2, false).c_str());
+  std::printf("  diameter error    %s um\n", figure("diameter_error", 2).c_str());
+  std::printf("  stroke error      %s um (pin centre along the crank radius, outward)\n",
+              figure("stroke_error", 2).c_str());
+  std::printf("  index error       %s deg (pin centre round the main axis, in the sense of C)\n",
+              figure("index_error", 4).c_str());
 }
 
 std::vector<std::pair<int, double>> top_harmonics(const LobeAnalysis& a, std::size_t n) {
@@ -185,8 +213,12 @@ int cmd_show(const RunOptions& o) {
     return kExitOk;
   }
 
-  std::printf("run %lld: %s lobe %d on %s (%s)\n", static_cast<long long>(s.id), s.part.c_str(), s.lobe,
-              s.machine.c_str(), s.status.c_str());
+  const RunPart part = run_part(r);
+  const bool pin = part.pin();
+  // A pin's tables are indexed by pin degrees, a lobe's by cam degrees.
+  const char* const at = pin ? "pin" : "cam";
+  std::printf("run %lld: %s %s %d on %s (%s)\n", static_cast<long long>(s.id), s.part.c_str(), pin ? "pin" : "lobe",
+              s.lobe, s.machine.c_str(), s.status.c_str());
   std::printf("  started           %s, finished %s\n", s.started_utc.c_str(), r.finished_utc.c_str());
   std::printf("  gauge             %s\n", r.gauge.c_str());
   std::printf("  serial            %s\n", s.serial.empty() ? "not given" : s.serial.c_str());
@@ -196,24 +228,36 @@ int cmd_show(const RunOptions& o) {
               static_cast<long long>(r.discarded_revolutions), static_cast<long long>(r.reconnects),
               static_cast<long long>(r.polls),
               s.raw_pruned_utc.empty() ? "" : ("; raw samples pruned " + s.raw_pruned_utc).c_str());
-  std::printf("  frame             %s\n", frame_text(r).c_str());
+  std::printf("  frame             %s\n", frame_text(r, part).c_str());
   std::printf("  settings          %s\n", s.settings_hash.empty() ? "not recorded" : s.settings_hash.c_str());
-  std::printf("analysis (cam frame, 0 deg at the nose)\n");
-  std::printf("  max lift error    %.2f um at cam %zu deg (%+.2f um)\n", s.max_abs_error_um, worst, a.error_um[worst]);
-  std::printf("  RMS lift error    %.2f um\n", s.rms_error_um);
+  if (pin) {
+    std::printf("analysis (%s)\n", kPinFrame);
+    std::printf("  largest radius error %.2f um at pin %zu deg (%+.2f um)\n", s.max_abs_error_um, worst,
+                a.error_um[worst]);
+    std::printf("  RMS radius error  %.2f um\n", s.rms_error_um);
+  } else {
+    std::printf("analysis (cam frame, 0 deg at the nose)\n");
+    std::printf("  max lift error    %.2f um at cam %zu deg (%+.2f um)\n", s.max_abs_error_um, worst,
+                a.error_um[worst]);
+    std::printf("  RMS lift error    %.2f um\n", s.rms_error_um);
+  }
   std::printf("  peak to valley    %.2f um\n", s.peak_to_valley_um);
-  std::printf("  repeatability     %.2f um (largest per-degree standard deviation, at cam %zu deg)\n",
-              s.repeatability_um, worst_spread);
-  std::printf("  phase error       %s deg\n", opt(s.phase_error_deg, 3, true).c_str());
-  std::printf("  runout            %s um (base circle, total indicator reading)\n",
-              opt(s.base_circle_runout_um, 2).c_str());
+  std::printf("  repeatability     %.2f um (largest per-degree standard deviation, at %s %zu deg)\n",
+              s.repeatability_um, at, worst_spread);
+  if (pin) {
+    print_pin_figures(r.characteristics);
+  } else {
+    std::printf("  phase error       %s deg\n", opt(s.phase_error_deg, 3, true).c_str());
+    std::printf("  runout            %s um (base circle, total indicator reading)\n",
+                opt(s.base_circle_runout_um, 2).c_str());
+  }
   if (has_inspection) {
     std::string h;
     for (const auto& [n, amp] : top_harmonics(a, 5)) h += "  h" + std::to_string(n) + " " + format_fixed(amp, 2);
     std::printf("  largest harmonics%s um\n", h.c_str());
   }
-  std::printf("correction (cam frame)\n");
-  std::printf("  largest           %.2f um at cam %zu deg, %s\n", std::abs(r.correction_um[worst_corr]), worst_corr,
+  std::printf("%s\n", pin ? "correction (in pin degrees)" : "correction (cam frame)");
+  std::printf("  largest           %.2f um at %s %zu deg, %s\n", std::abs(r.correction_um[worst_corr]), at, worst_corr,
               r.correction_in_force_run ? ("built on run " + std::to_string(*r.correction_in_force_run) +
                                            "'s (the table that ground the part)")
                                               .c_str()
@@ -225,7 +269,7 @@ int cmd_show(const RunOptions& o) {
                                                    : "assumed: the table in force");
   }
   if (r.inspection) std::printf("  inspection        measured to inspect: the correction in force, unchanged\n");
-  print_characteristics(r);
+  print_characteristics(r, part.kind);
   if (r.pushes.empty()) std::printf("  NC pushes         none\n");
   for (const NcPush& p : r.pushes) {
     std::string detail = ", version " + std::to_string(p.table_version);

@@ -122,7 +122,7 @@ Characteristic single_characteristic(std::string key, std::string unit, double v
   return c;
 }
 
-std::string characteristic_title(std::string_view key) {
+std::string characteristic_title(std::string_view key, PartKind kind) {
   std::string_view base = key;
   std::string_view zone;
   if (const size_t dot = key.find('.'); dot != std::string_view::npos) {
@@ -143,7 +143,7 @@ std::string characteristic_title(std::string_view key) {
   } else if (key == "base_circle_runout_h1") {
     return "Base circle runout (1st harmonic)";
   } else if (key == "roundness") {
-    return "Base circle roundness";
+    return kind == PartKind::kPin ? "Pin roundness" : "Base circle roundness";
   } else if (key == "diameter_error") {
     return "Pin diameter error";
   } else if (key == "stroke_error") {
@@ -159,6 +159,13 @@ std::string characteristic_title(std::string_view key) {
   const std::optional<LobeZone> z = lobe_zone_from_name(zone);
   if (!z) return std::string(key);
   return title + ", " + std::string(lobe_zone_title(*z));
+}
+
+PartKind part_kind_of(const std::vector<Characteristic>& characteristics) {
+  for (const Characteristic& c : characteristics) {
+    if (c.key == "diameter_error" || c.key == "stroke_error" || c.key == "index_error") return PartKind::kPin;
+  }
+  return PartKind::kLobe;
 }
 
 }  // namespace gaugeloop

@@ -120,10 +120,20 @@ int figure_decimals(std::string_view unit);
 // A single figure (min = max = value) judged against `limits`.
 Characteristic single_characteristic(std::string key, std::string unit, double value, const Limits& limits);
 
+// What a run measured. A few keys mean a different thing on each: "roundness" is of a
+// lobe's base circle and of a pin's whole circumference.
+enum class PartKind { kLobe, kPin };
+
 // "Lift error, opening flank", "Phase (timing) error"...: a key as a report or a DFQ
 // description (K2002) writes it; "harmonic.<k>" (the amplitude of harmonic k of the lift
-// error, an export's extra characteristic) is "Lift error, harmonic k". An unknown key comes
-// back as it is.
-std::string characteristic_title(std::string_view key);
+// error, an export's extra characteristic) is "Lift error, harmonic k". On a pin, "roundness"
+// is "Pin roundness"; every other key reads the same on both. An unknown key comes back as it
+// is.
+std::string characteristic_title(std::string_view key, PartKind kind = PartKind::kLobe);
+
+// What a run's characteristics tell of its part, where its settings are not at hand (SPC, the
+// AQDEF export): a pin's carry keys only a pin has (diameter_error, stroke_error,
+// index_error); anything else, none included, is a lobe's.
+PartKind part_kind_of(const std::vector<Characteristic>& characteristics);
 
 }  // namespace gaugeloop

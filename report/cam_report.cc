@@ -12,6 +12,7 @@
 #include "core/number_text.h"
 #include "core/tolerance.h"
 #include "report/chart_cairo.h"
+#include "report/run_json.h"
 
 namespace gaugeloop {
 namespace {
@@ -271,25 +272,24 @@ std::string started_text(const std::string& utc) {
   return utc.substr(0, 10) + " " + utc.substr(11, 8) + " UTC";
 }
 
-void draw_header(cairo_t* cr, const StoredRun& run) {
+void draw_header(cairo_t* cr, const StoredRun& run, const CamReportWords& w) {
   const RunSummary& s = run.summary;
   chart::set_colour(cr, chart::kInk);
-  chart::text(cr, kMargin, 30, "Cam inspection report", 15, Align::kLeft, true);
-  chart::text(cr, kMargin + 190, 30, chart::fit_text(cr, s.part, 12, 330) + " \u00b7 lobe " + std::to_string(s.lobe),
-              12, Align::kLeft);
+  chart::text(cr, kMargin, 30, w.page_title, 15, Align::kLeft, true);
+  chart::text(cr, kMargin + 190, 30, chart::fit_text(cr, s.part, 12, 330) + " \u00b7 " + w.item, 12, Align::kLeft);
 
   // The verdict, in colour, at the top right.
   const Verdict v = s.verdict;
   const std::string verdict = v == Verdict::kIn    ? "IN TOLERANCE"
                               : v == Verdict::kOut ? "OUT OF TOLERANCE"
                                                    : "NOT JUDGED";
-  const double w = chart::text_width(cr, verdict, 11, true) + 20;
+  const double box_w = chart::text_width(cr, verdict, 11, true) + 20;
   const double right = kReportWidthPt - kMargin;
   chart::set_colour(cr, verdict_colour(v));
-  cairo_rectangle(cr, right - w, 14, w, 22);
+  cairo_rectangle(cr, right - box_w, 14, box_w, 22);
   cairo_fill(cr);
   cairo_set_source_rgb(cr, 1, 1, 1);
-  chart::text(cr, right - w / 2, 29, verdict, 11, Align::kCentre, true);
+  chart::text(cr, right - box_w / 2, 29, verdict, 11, Align::kCentre, true);
 
   // Identity: label and value pairs on two lines.
   auto fields = [&](double y, const std::vector<std::pair<std::string, std::string>>& pairs) {
@@ -305,7 +305,7 @@ void draw_header(cairo_t* cr, const StoredRun& run) {
     }
   };
   fields(50, {{"Part", s.part},
-              {"Lobe", std::to_string(s.lobe)},
+              {w.item_label, std::to_string(s.lobe)},
               {"Serial", s.serial},
               {"Operator", s.operator_name},
               {"Machine", s.machine}});
@@ -320,14 +320,10 @@ void draw_header(cairo_t* cr, const StoredRun& run) {
   cairo_stroke(cr);
 }
 
-void draw_lift_chart(cairo_t* cr, const ReportData& d) {
+void draw_lift_chart(cairo_t* cr, const ReportData& d, const CamReportWords& w) {
   const Frame f = lift_frame(d);
-  const bool best_fit = d.run->lift_error_reference == LiftErrorReference::kBestFit;
   draw_band(cr, f, d.lift_limits, 1.0);
-  chart::draw_axes(cr, f, cam_angle_ticks(), kCamAngleTitle, "lift error, \u00b5m",
-                   best_fit_missing(*d.run) ? "Lift error at nominal timing (no best fit), \u00b5m"
-                   : best_fit               ? "Lift error after best-fit phase (judged), \u00b5m"
-                                            : "Lift error at nominal timing (judged), \u00b5m");
+  chart::draw_axes(cr, f, cam_angle_ticks(), w.angle_axis, w.error_axis, w.error_chart);
   draw_curve(cr, f, d.raw_um, chart::kFaint, 0.8);
   draw_curve(cr, f, d.judged_um, chart::kCurve, 1.5);
   const int out = mark_out_of_tolerance(cr, f, d.judged_um, d.lift_limits, 1.0);
@@ -352,12 +348,12 @@ void draw_derivative_chart(cairo_t* cr, const Box& box, const DegreeCurve& c, co
   mark_out_of_tolerance(cr, f, c, limits, 1000.0);
 }
 
-void draw_polar(cairo_t* cr, const ReportData& d) {
+void draw_polar(cairo_t* cr, const ReportData& d, const CamReportWords& w) {
   const double cx = kPolarCentreX;
   const double cy = kPolarCentreY;
   const double r0 = kPolarBaseRadius;
   chart::set_colour(cr, chart::kInk);
-  chart::text(cr, kTableLeft, kLiftBox.top - 5, "Polar view of the judged lift error", 8, Align::kLeft, true);
+  chart::text(cr, kTableLeft, kLiftBox.top - 5, w.polar_title, 8, Align::kLeft, true);
   double biggest = 0.0;
   for (double v : d.judged_um.value) biggest = std::max(biggest, std::abs(v));
   // Two rings either side of the base circle hold the largest error: a ring step of 1, 2 or 5
@@ -393,7 +389,7 @@ void draw_polar(cairo_t* cr, const ReportData& d) {
   cairo_stroke(cr);
   chart::set_colour(cr, chart::kInk);
   const double label_r = r0 + 2 * kPolarRingStep + 9;
-  chart::text(cr, cx, cy - label_r + 2, "0 (nose)", 6.5, Align::kCentre);
+  chart::text(cr, cx, cy - label_r + 2, w.polar_zero, 6.5, Align::kCentre);
   chart::text(cr, cx + label_r - 6, cy + 2.3, "90", 6.5, Align::kLeft);
   chart::text(cr, cx, cy + label_r + 3, "180", 6.5, Align::kCentre);
   chart::text(cr, cx - label_r + 6, cy + 2.3, "\u221290", 6.5, Align::kRight);
@@ -412,12 +408,13 @@ void draw_polar(cairo_t* cr, const ReportData& d) {
   cairo_stroke(cr);
   chart::set_colour(cr, chart::kInk);
   const int decimals = chart::decimals_for_step(step_um);
-  chart::text(cr, cx, cy + label_r + 15,
-              "cam deg; rings every " + format_fixed(step_um, decimals) + " \u00b5m about the base circle", 6.5,
-              Align::kCentre);
+  chart::text(
+      cr, cx, cy + label_r + 15,
+      w.polar_angle + "; rings every " + format_fixed(step_um, decimals) + " \u00b5m about the " + w.polar_reference,
+      6.5, Align::kCentre);
 }
 
-void draw_harmonics(cairo_t* cr, const StoredRun& run) {
+void draw_harmonics(cairo_t* cr, const StoredRun& run, const CamReportWords& w) {
   const auto& h = run.analysis.harmonic_amplitude_um;
   double top = 0.0;
   for (std::size_t k = 1; k <= 30; ++k) top = std::max(top, h[k]);
@@ -426,7 +423,7 @@ void draw_harmonics(cairo_t* cr, const StoredRun& run) {
   chart::nice_range(lo, hi, 4);
   const Frame f{kHarmonicsBox, 0.0, 31.0, 0.0, hi};
   chart::draw_axes(cr, f, {1, 5, 10, 15, 20, 25, 30}, "harmonic, undulations/turn", "amplitude, \u00b5m",
-                   "Harmonics of the lift error", 4);
+                   w.harmonics_title, 4);
   chart::set_colour(cr, chart::kCurve);
   for (std::size_t k = 1; k <= 30; ++k) {
     const double x = static_cast<double>(k);
@@ -437,8 +434,7 @@ void draw_harmonics(cairo_t* cr, const StoredRun& run) {
 
 // A characteristic's title as the table's first column holds it: "Acceleration error" always
 // shortened to "Accel. error" (alike on every row), "1st harmonic" to "H1" where it would be cut.
-std::string table_title(cairo_t* cr, const std::string& key, double size_pt, double width_pt) {
-  std::string title = characteristic_title(key);
+std::string table_title(cairo_t* cr, std::string title, double size_pt, double width_pt) {
   const auto shorten = [&title](const std::string& from, const std::string& to) {
     if (const std::size_t at = title.find(from); at != std::string::npos) title.replace(at, from.size(), to);
   };
@@ -447,7 +443,7 @@ std::string table_title(cairo_t* cr, const std::string& key, double size_pt, dou
   return chart::fit_text(cr, title, size_pt, width_pt);
 }
 
-void draw_table(cairo_t* cr, const StoredRun& run) {
+void draw_table(cairo_t* cr, const StoredRun& run, const CamReportWords& w) {
   const std::vector<Characteristic>& cs = run.characteristics;
   const double right = kReportWidthPt - kMargin;
   // Column positions: title and unit left-aligned, figures right-aligned, limits centred.
@@ -491,7 +487,7 @@ void draw_table(cairo_t* cr, const StoredRun& run) {
       cairo_fill(cr);
     }
     chart::set_colour(cr, chart::kInk);
-    chart::text(cr, kTableLeft, y, table_title(cr, c.key, size, unit_x - kTableLeft - 3), size);
+    chart::text(cr, kTableLeft, y, table_title(cr, w.characteristic_titles[i], size, unit_x - kTableLeft - 3), size);
     chart::text(cr, unit_x, y, display_unit(c.unit), size);
     chart::text(cr, value_r, y, format_fixed(c.value, dec), size, Align::kRight);
     chart::text(cr, min_r, y, format_fixed(c.min, dec), size, Align::kRight);
@@ -526,9 +522,7 @@ std::string derivative_noise_text(const StoredRun& run) {
          " \u00b5m/deg\u00b2 RMS";
 }
 
-void draw_footer(cairo_t* cr, const StoredRun& run) {
-  const LobeAnalysis& a = run.analysis;
-  const bool best_fit = run.lift_error_reference == LiftErrorReference::kBestFit && !best_fit_missing(run);
+void draw_footer(cairo_t* cr, const CamReportWords& w) {
   const double y = kReportHeightPt - 22;
   chart::set_colour(cr, chart::kGrid);
   cairo_set_line_width(cr, 0.8);
@@ -536,6 +530,30 @@ void draw_footer(cairo_t* cr, const StoredRun& run) {
   cairo_line_to(cr, kReportWidthPt - kMargin, y - 12);
   cairo_stroke(cr);
   chart::set_colour(cr, chart::kInk);
+  chart::text(cr, kMargin, y, w.footer_judged, 6.5);
+  chart::text(cr, kMargin, y + 10, w.footer_detail, 6.5);
+  chart::text(cr, kReportWidthPt - kMargin, y + 6, "Checked by ____________________   Date ____________", 8,
+              Align::kRight);
+}
+
+CamReportWords lobe_words(const StoredRun& run) {
+  const LobeAnalysis& a = run.analysis;
+  const bool best_fit = run.lift_error_reference == LiftErrorReference::kBestFit && !best_fit_missing(run);
+  CamReportWords w;
+  w.page_title = "Cam inspection report";
+  w.item = "lobe " + std::to_string(run.summary.lobe);
+  w.item_label = "Lobe";
+  w.angle_axis = kCamAngleTitle;
+  w.error_axis = "lift error, \u00b5m";
+  w.error_chart = best_fit_missing(run) ? "Lift error at nominal timing (no best fit), \u00b5m"
+                  : best_fit            ? "Lift error after best-fit phase (judged), \u00b5m"
+                                        : "Lift error at nominal timing (judged), \u00b5m";
+  w.polar_title = "Polar view of the judged lift error";
+  w.polar_zero = "0 (nose)";
+  w.polar_angle = "cam deg";
+  w.polar_reference = "base circle";
+  w.harmonics_title = "Harmonics of the lift error";
+  for (const Characteristic& c : run.characteristics) w.characteristic_titles.push_back(characteristic_title(c.key));
   const std::string judged =
       best_fit
           ? "judged: lift error after the best-fit phase (" + format_signed_fixed(a.phase_error_deg, 3) +
@@ -545,13 +563,40 @@ void draw_footer(cairo_t* cr, const StoredRun& run) {
                                               : "judged: lift error at nominal timing") +
                 ", RMS " + format_fixed(a.rms_error_um, 2) + " \u00b5m, peak to valley " +
                 format_fixed(a.peak_to_valley_um, 2) + " \u00b5m";
-  chart::text(cr, kMargin, y, judged + " \u00b7 repeatability " + format_fixed(a.repeatability_um, 2) + " \u00b5m",
-              6.5);
-  chart::text(cr, kMargin, y + 10,
-              "velocity, acceleration: harmonics 1\u201330" + derivative_noise_text(run) + " \u00b7 gauge " + run.gauge,
-              6.5);
-  chart::text(cr, kReportWidthPt - kMargin, y + 6, "Checked by ____________________   Date ____________", 8,
-              Align::kRight);
+  w.footer_judged = judged + " \u00b7 repeatability " + format_fixed(a.repeatability_um, 2) + " \u00b5m";
+  w.footer_detail =
+      "velocity, acceleration: harmonics 1\u201330" + derivative_noise_text(run) + " \u00b7 gauge " + run.gauge;
+  return w;
+}
+
+// A pin run stores its radius error in error_um and the error less the least-squares circle
+// (what roundness judges) as the residual: the chart shows both as a lobe's shows its raw and
+// judged lift error.
+CamReportWords pin_words(const StoredRun& run, const RunPart& part) {
+  const LobeAnalysis& a = run.analysis;
+  CamReportWords w;
+  w.page_title = "Pin inspection report";
+  w.item = "pin " + std::to_string(run.summary.lobe);
+  w.item_label = "Pin";
+  w.angle_axis = "pin degree (0 along the crank radius outward)";
+  w.error_axis = "radius error, \u00b5m";
+  w.error_chart = "Radius error less the least-squares circle (judged), \u00b5m";
+  w.polar_title = "Polar view of the judged radius error";
+  w.polar_zero = "0 (outward)";
+  w.polar_angle = "pin deg";
+  w.polar_reference = "least-squares circle";
+  w.harmonics_title = "Harmonics of the radius error";
+  w.derivative_charts = false;
+  for (const Characteristic& c : run.characteristics) {
+    w.characteristic_titles.push_back(characteristic_title(c.key, PartKind::kPin));
+  }
+  w.footer_judged = "judged: radius error less the least-squares circle, RMS " + format_fixed(a.rms_residual_um, 2) +
+                    " \u00b5m, peak to valley " + format_fixed(a.peak_to_valley_residual_um, 2) +
+                    " \u00b5m \u00b7 repeatability " + format_fixed(a.repeatability_um, 2) + " \u00b5m";
+  const std::string mode = part.pin_mode ? (*part.pin_mode == PinMode::kCXY ? "C-X-Y" : "C-X") : "mode not recorded";
+  w.footer_detail =
+      "crankpin, " + mode + "; raw: the radius error as measured, circle included \u00b7 gauge " + run.gauge;
+  return w;
 }
 
 }  // namespace
@@ -559,6 +604,11 @@ void draw_footer(cairo_t* cr, const StoredRun& run) {
 Status check_page_file_name(const std::filesystem::path& out) {
   if (Result<chart::PageFormat> format = chart::page_format_for(out); !format) return format.error();
   return {};
+}
+
+CamReportWords cam_report_words(const StoredRun& run) {
+  const RunPart part = run_part(run);
+  return part.pin() ? pin_words(run, part) : lobe_words(run);
 }
 
 ChartPlacement cam_report_lift_chart(const StoredRun& run) {
@@ -574,17 +624,20 @@ Status write_cam_report(const StoredRun& run, const std::filesystem::path& out) 
                                                     " to " + out.string() + ": " + derivatives.error().message);
   }
   const ReportData d = report_data(run, &*derivatives);
+  const CamReportWords w = cam_report_words(run);
   return chart::write_page(out, kReportWidthPt, kReportHeightPt, [&](cairo_t* cr) {
-    draw_header(cr, run);
-    draw_lift_chart(cr, d);
-    draw_derivative_chart(cr, kVelocityBox, d.velocity_um_per_deg, d.velocity_limits, "velocity error, \u00b5m/deg",
-                          "Velocity error (d/d\u03b8 of the judged lift error)");
-    draw_derivative_chart(cr, kAccelerationBox, d.acceleration_um_per_deg2, d.acceleration_limits,
-                          "accel. error, \u00b5m/deg\u00b2", "Acceleration error (d\u00b2/d\u03b8\u00b2)");
-    draw_polar(cr, d);
-    draw_harmonics(cr, run);
-    draw_table(cr, run);
-    draw_footer(cr, run);
+    draw_header(cr, run, w);
+    draw_lift_chart(cr, d, w);
+    if (w.derivative_charts) {
+      draw_derivative_chart(cr, kVelocityBox, d.velocity_um_per_deg, d.velocity_limits, "velocity error, \u00b5m/deg",
+                            "Velocity error (d/d\u03b8 of the judged lift error)");
+      draw_derivative_chart(cr, kAccelerationBox, d.acceleration_um_per_deg2, d.acceleration_limits,
+                            "accel. error, \u00b5m/deg\u00b2", "Acceleration error (d\u00b2/d\u03b8\u00b2)");
+    }
+    draw_polar(cr, d, w);
+    draw_harmonics(cr, run, w);
+    draw_table(cr, run, w);
+    draw_footer(cr, w);
   });
 }
 

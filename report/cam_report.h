@@ -36,6 +36,30 @@ Status check_page_file_name(const std::filesystem::path& out);
 // holding a non-finite value.
 Status write_cam_report(const StoredRun& run, const std::filesystem::path& out);
 
+// The words a report prints around its figures, told from what the run measured (run_part:
+// a lobe or a crankpin). A pin's page speaks of the radius error over pin degrees (pin
+// frame, 0 along the crank radius outward), titles its characteristics as a pin's, and
+// leaves out what only a lobe has (velocity and acceleration error, phase, base circle
+// runout). write_cam_report draws exactly these words; a test reads them here.
+struct CamReportWords {
+  std::string page_title;                          // "Cam inspection report", "Pin inspection report"
+  std::string item;                                // "lobe 3", "pin 1"
+  std::string item_label;                          // "Lobe", "Pin": the identity field
+  std::string angle_axis;                          // the charts' x axis title
+  std::string error_axis;                          // the error chart's y axis title
+  std::string error_chart;                         // the error chart's title
+  std::string polar_title;                         // the polar view's title
+  std::string polar_zero;                          // the polar view's label at 0 degrees
+  std::string polar_angle;                         // the polar view's scale line starts with it: "cam deg", "pin deg"
+  std::string polar_reference;                     // what its rings are about: "base circle", "least-squares circle"
+  std::string harmonics_title;                     // the harmonics chart's title
+  bool derivative_charts = true;                   // velocity and acceleration error: a lobe's only
+  std::vector<std::string> characteristic_titles;  // the table's, in run.characteristics' order
+  std::string footer_judged;                       // the footer's first line
+  std::string footer_detail;                       // and its second
+};
+CamReportWords cam_report_words(const StoredRun& run);
+
 // Where the report draws the lift error chart, for checking a rendered page: the plot area
 // (points from the page's top left, y down) and the ranges it shows (x: cam degrees
 // -180..180, y: lift error in um, upwards).

@@ -200,7 +200,9 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
     const PartBlock& b = blocks[p];
     const int part_number = static_cast<int>(p) + 1;
     out.add("K1001", part_number, b.part);
-    out.add("K1002", part_number, "lobe " + std::to_string(b.lobe));
+    // A part block is one part and lobe (or pin): its newest run tells which.
+    const PartKind kind = part_kind_of(b.runs.back()->characteristics);
+    out.add("K1002", part_number, (kind == PartKind::kPin ? "pin " : "lobe ") + std::to_string(b.lobe));
     const bool one_machine = std::all_of(b.runs.begin(), b.runs.end(), [&](const RunCharacteristics* r) {
       return r->run.machine == b.runs.front()->run.machine;
     });
@@ -215,7 +217,7 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
         natural_lower = true;
       }
       out.add("K2001", d.number, d.key);
-      out.add("K2002", d.number, characteristic_title(d.key));
+      out.add("K2002", d.number, characteristic_title(d.key, kind));
       out.add("K2022", d.number, std::to_string(decimals));
       out.add("K2101", d.number, format_fixed(0.0, decimals));
       if (lower) out.add("K2110", d.number, format_fixed(*lower, decimals));

@@ -67,6 +67,18 @@ json run_summary_json(const RunSummary& r) {
           {"raw_pruned_utc", text_or_null(r.raw_pruned_utc)}};
 }
 
+RunPart run_part(const StoredRun& run) {
+  RunPart part;
+  std::istringstream in(run.settings);
+  for (std::string line; std::getline(in, line);) {
+    if (line == "part.kind = pin") part.kind = PartKind::kPin;
+    constexpr std::string_view kMode = "pin.mode = ";
+    if (line.rfind(kMode, 0) == 0) part.pin_mode = pin_mode_from_name(std::string_view(line).substr(kMode.size()));
+  }
+  if (!part.pin()) part.pin_mode.reset();
+  return part;
+}
+
 json run_detail_json(const StoredRun& r) {
   const LobeAnalysis& a = r.analysis;
   // Runs stored before schema version 2 computed no inspection figures, harmonics included.
@@ -104,13 +116,16 @@ json run_detail_json(const StoredRun& r) {
   j["peak_to_valley_residual_um"] = a.peak_to_valley_residual_um;
   j["dial_runout_um"] = a.dial_runout_um;
   j["roundness_um"] = a.roundness_um;
-  j["characteristics"] = characteristics_json(r.characteristics);
+  const RunPart part = run_part(r);
+  j["part_kind"] = part.pin() ? "pin" : "lobe";
+  if (part.pin()) j["pin_mode"] = part.pin_mode ? json(pin_mode_name(*part.pin_mode)) : json(nullptr);
+  j["characteristics"] = characteristics_json(r.characteristics, part.kind);
   return j;
 }
 
-json characteristic_json(const Characteristic& c) {
+json characteristic_json(const Characteristic& c, PartKind kind) {
   return {{"key", c.key},
-          {"title", characteristic_title(c.key)},
+          {"title", characteristic_title(c.key, kind)},
           {"unit", c.unit},
           {"value", c.value},
           {"min", c.min},
@@ -122,9 +137,9 @@ json characteristic_json(const Characteristic& c) {
           {"to_deg", opt_json(c.to_deg)}};
 }
 
-json characteristics_json(const std::vector<Characteristic>& characteristics) {
+json characteristics_json(const std::vector<Characteristic>& characteristics, PartKind kind) {
   json out = json::array();
-  for (const Characteristic& c : characteristics) out.push_back(characteristic_json(c));
+  for (const Characteristic& c : characteristics) out.push_back(characteristic_json(c, kind));
   return out;
 }
 

@@ -9,24 +9,41 @@
 #include <string_view>
 #include <vector>
 
+#include "core/pin.h"
 #include "core/result.h"
+#include "core/tolerance.h"
 #include "core/utc_time.h"
 #include "storage/run_store.h"
 
 namespace gaugeloop {
 
+// What a stored run measured, told from its settings text (the lines `part.kind = pin` and
+// `pin.mode = c-x` or `c-x-y`, as the measure job writes them): a lobe unless they say pin,
+// so runs stored before pins, and runs without settings, read as lobes. No schema change: the
+// settings are the run's record of what it was.
+struct RunPart {
+  PartKind kind = PartKind::kLobe;
+  std::optional<PinMode> pin_mode;  // a pin's mode when its settings name a known one
+  bool pin() const { return kind == PartKind::kPin; }
+};
+RunPart run_part(const StoredRun& run);
+
 // One row of `runs list --json` and `runs trend --json`. Figures a run did not record (phase,
 // runout, settings hash, prune time) are null.
 nlohmann::json run_summary_json(const RunSummary& run);
 
-// `runs show --json`: the summary plus the rest of the record, the worst degrees (cam frame),
-// the frame mapping (null if not recorded) and every push of the run (nc_push_json, oldest first).
+// `runs show --json`: the summary plus the rest of the record, the worst degrees (cam frame;
+// pin degrees for a pin), the frame mapping (null if not recorded), every push of the run
+// (nc_push_json, oldest first), and what was measured: part_kind "lobe" or "pin" and, for a
+// pin, pin_mode "c-x" or "c-x-y" (null if its settings name none).
 nlohmann::json run_detail_json(const StoredRun& run);
 
 // One characteristic of a run against its tolerances: key, title, unit, value, min, max,
 // lower_limit and upper_limit (null: none), verdict, from_deg and to_deg (null: not a zone).
-nlohmann::json characteristic_json(const Characteristic& c);
-nlohmann::json characteristics_json(const std::vector<Characteristic>& characteristics);
+// The title is the one for `kind` (characteristic_title).
+nlohmann::json characteristic_json(const Characteristic& c, PartKind kind = PartKind::kLobe);
+nlohmann::json characteristics_json(const std::vector<Characteristic>& characteristics,
+                                    PartKind kind = PartKind::kLobe);
 
 // One NC push as `nc history --json` and `runs show --json` list it, without the program text.
 // Figures not recorded (pushes made by older versions) are null.

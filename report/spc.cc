@@ -21,6 +21,7 @@ struct Gathered {
   bool limits_changed = false;
   int out_count = 0;
   int judged_count = 0;
+  PartKind part_kind = PartKind::kLobe;
 };
 
 void add_capability(SpcFigure& f) {
@@ -84,6 +85,7 @@ std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs) 
       g.values.push_back(c.value);
       g.newest = &c;
       g.newest_run = run.run.id;
+      g.part_kind = part_kind_of(run.characteristics);
       if (c.verdict != Verdict::kNotJudged) ++g.judged_count;
       if (c.verdict == Verdict::kOut) ++g.out_count;
     }
@@ -101,6 +103,7 @@ std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs) 
     f.limits_changed = g.limits_changed;
     f.out_count = g.out_count;
     f.judged_count = g.judged_count;
+    f.part_kind = g.part_kind;
     // A running mean: the sum of many values near the largest double would overflow.
     f.mean = 0.0;
     for (std::size_t i = 0; i < g.values.size(); ++i) f.mean += (g.values[i] - f.mean) / static_cast<double>(i + 1);
@@ -131,7 +134,8 @@ std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs) 
 
 std::string spc_table_text(const std::vector<SpcFigure>& figures) {
   std::size_t title_width = std::string("characteristic").size();
-  for (const SpcFigure& f : figures) title_width = std::max(title_width, characteristic_title(f.key).size());
+  for (const SpcFigure& f : figures)
+    title_width = std::max(title_width, characteristic_title(f.key, f.part_kind).size());
   const int w = static_cast<int>(title_width);
   std::string out;
   char line[512];
@@ -144,19 +148,20 @@ std::string spc_table_text(const std::vector<SpcFigure>& figures) {
     if (f.cpk_side == "upper") cpk += " (U)";
     if (f.cpk_side == "lower") cpk += " (L)";
     std::snprintf(line, sizeof line, "%-*s  %-8s  %4d  %12s  %12s  %12s  %12s  %6s  %9s  %d/%d\n", w,
-                  characteristic_title(f.key).c_str(), f.unit.c_str(), f.n, format_signed_fixed(f.mean, d).c_str(),
-                  or_dash(f.sd, d, false).c_str(), or_dash(f.limits.lower, d, true).c_str(),
-                  or_dash(f.limits.upper, d, true).c_str(), or_dash(f.cp, 2, false).c_str(), cpk.c_str(), f.out_count,
-                  f.judged_count);
+                  characteristic_title(f.key, f.part_kind).c_str(), f.unit.c_str(), f.n,
+                  format_signed_fixed(f.mean, d).c_str(), or_dash(f.sd, d, false).c_str(),
+                  or_dash(f.limits.lower, d, true).c_str(), or_dash(f.limits.upper, d, true).c_str(),
+                  or_dash(f.cp, 2, false).c_str(), cpk.c_str(), f.out_count, f.judged_count);
     out += line;
   }
   if (!figures.empty()) out += "LSL, USL: the limits of the newest run that has the characteristic\n";
   for (const SpcFigure& f : figures) {
     if (f.limits_changed) {
-      out += characteristic_title(f.key) + ": the limits changed over these runs; shown are those of run " +
-             std::to_string(f.limits_from_run) + " (the newest), each run was judged against its own\n";
+      out += characteristic_title(f.key, f.part_kind) +
+             ": the limits changed over these runs; shown are those of run " + std::to_string(f.limits_from_run) +
+             " (the newest), each run was judged against its own\n";
     }
-    if (!f.not_computed.empty()) out += characteristic_title(f.key) + ": " + f.not_computed + "\n";
+    if (!f.not_computed.empty()) out += characteristic_title(f.key, f.part_kind) + ": " + f.not_computed + "\n";
   }
   return out;
 }
@@ -164,7 +169,7 @@ std::string spc_table_text(const std::vector<SpcFigure>& figures) {
 nlohmann::json spc_figure_json(const SpcFigure& f) {
   auto number = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
   return {{"key", f.key},
-          {"title", characteristic_title(f.key)},
+          {"title", characteristic_title(f.key, f.part_kind)},
           {"unit", f.unit},
           {"n", f.n},
           {"mean", f.mean},

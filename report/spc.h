@@ -38,6 +38,8 @@ struct SpcFigure {
   std::string not_computed;
   int out_count = 0;     // runs whose verdict for the key was out
   int judged_count = 0;  // runs whose verdict for the key was in or out
+  // The part of the newest run that has the key (part_kind_of): its title reads for it.
+  PartKind part_kind = PartKind::kLobe;
 };
 
 // The SPC figures of `runs` (oldest first, as RunStore::characteristics returns them), one per
@@ -46,7 +48,8 @@ struct SpcFigure {
 // Every number given is finite: a ratio that would not be is left out and said so.
 std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs);
 
-// One figure as `runs spc --json` prints it: key, title (characteristic_title), unit, n, mean,
+// One figure as `runs spc --json` prints it: key, title (characteristic_title for its
+// part_kind), unit, n, mean,
 // sd, lsl, usl, limits_from_run, limits_changed, cp, cpk, cpk_side, out, judged, note; null for
 // what is not given.
 nlohmann::json spc_figure_json(const SpcFigure& figure);

@@ -19,6 +19,8 @@
 #include "job/pin_files.h"
 #include "nc_out/main_program.h"
 #include "nc_out/table_program.h"
+#include "report/cam_report.h"
+#include "report/run_json.h"
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
 #include "tests/support/temp_dir.h"
@@ -155,6 +157,14 @@ TEST_P(PinLoopTest, ThePushedProgramsBelongTogetherAndTheRunsAreStored) {
   EXPECT_EQ(keys, (std::vector<std::string>{"roundness", "diameter_error", "stroke_error", "index_error"}));
   EXPECT_NE(run->settings.find("part.kind = pin"), std::string::npos) << run->settings;
   EXPECT_NE(run->settings.find(std::string("pin.mode = ") + (with_y() ? "c-x-y" : "c-x")), std::string::npos);
+  // What people read of the stored run speaks of a pin of its mode.
+  const RunPart part = run_part(*run);
+  EXPECT_TRUE(part.pin());
+  EXPECT_EQ(part.pin_mode, part_.pin->mode);
+  EXPECT_EQ(run_detail_json(*run)["part_kind"], "pin");
+  const CamReportWords words = cam_report_words(*run);
+  EXPECT_EQ(words.page_title, "Pin inspection report");
+  EXPECT_EQ(words.characteristic_titles.front(), "Pin roundness");
 }
 
 // Constant removal in C-X: with a speed program the grinding point runs at the speed held all
@@ -236,6 +246,10 @@ TEST(PinDemoCommand, ClosesTheLoopForTheSampleCxPin) {
   EXPECT_NE(r.output.find("1.321 to 1"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(tmp.path() / "nc" / "CRANK_PIN1.SPF"));
   EXPECT_TRUE(fs::exists(tmp.path() / "nc" / "CRANK_PIN1_MAIN.MPF"));
+  // The last pin's report, as the lobe demo writes its last lobe's.
+  EXPECT_NE(r.output.find("report: " + (tmp.path() / "report.pdf").string()), std::string::npos) << r.output;
+  const std::string pdf = testing::slurp(tmp.path() / "report.pdf");
+  EXPECT_EQ(pdf.rfind("%PDF-", 0), 0u);
 }
 
 // The commands that know only lobes say so for a pin, and name the ones that take it.

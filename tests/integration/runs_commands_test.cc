@@ -284,6 +284,32 @@ TEST_F(RunsCommandsTest, ShowGivesSummaryAnalysisCorrectionAndPushes) {
   EXPECT_EQ(j["settings_hash"], settings_hash("compensation.gain = 0.5\nanalysis.window = 150..210\n"));
 }
 
+TEST_F(RunsCommandsTest, ShowSpeaksOfAPinForAPinRun) {
+  std::int64_t id = 0;
+  {
+    Result<RunStore> store = RunStore::open(dir_ / "gaugeloop.sqlite");
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    id = *store->insert_run(testing::sample_pin_run("crankpin_cxy", "c-x-y", "2020-11-23T08:00:00Z", 2.0));
+  }
+  CommandResult r = run_command("runs show " + std::to_string(id) + data_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f :
+       {"crankpin_cxy pin 1 on grinder-1", "frame             pin frame, 0 deg along the crank radius outward (C-X-Y)",
+        "analysis (pin frame, 0 deg along the crank radius outward)", "largest radius error 2.00 um at pin 90 deg",
+        "roundness         3.50 um", "diameter error    +0.15 um", "stroke error      -0.01 um",
+        "index error       +0.0020 deg", "correction (in pin degrees)", "largest           1.80 um at pin 90 deg",
+        "Pin roundness", "Pin stroke (throw) error"}) {
+    EXPECT_TRUE(has(r.output, f)) << "'" << f << "' not in:\n" << r.output;
+  }
+  for (const char* lobe_word : {"lobe 1", "cam frame", "nose", "lift error", "phase error", "runout", "Base circle"}) {
+    EXPECT_FALSE(has(r.output, lobe_word)) << "'" << lobe_word << "' in:\n" << r.output;
+  }
+  const nlohmann::json j = json_of("runs show --json " + std::to_string(id));
+  EXPECT_EQ(j["part_kind"], "pin");
+  EXPECT_EQ(j["pin_mode"], "c-x-y");
+  EXPECT_EQ(json_of("runs show --json " + std::to_string(ids_[0]))["part_kind"], "lobe");
+}
+
 TEST_F(RunsCommandsTest, ExportMapsRevolutionsToTheCamFrameWhenTheFrameIsKnown) {
   CommandResult r = run_command("runs export " + std::to_string(ids_[0]) + data_);
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "core/tolerance.h"
 #include "tests/support/cli.h"
 #include "tests/support/temp_dir.h"
 
@@ -322,6 +323,86 @@ TEST(CamReport, RunWithoutBestFitErrorChartsTheRawError) {
     const double raw = run.analysis.error_um[index_of(x)];
     EXPECT_TRUE(png.near_pt(c.x_pt(x), c.y_pt(raw), kCurveColour, 3, 40)) << x << " deg, " << raw << " um";
   }
+}
+
+// A crankpin run as the measure job stores it: radius error in pin degrees, the error less
+// the least-squares circle as the residual, the pin's characteristics, settings saying pin.
+StoredRun pin_run() {
+  StoredRun r;
+  r.summary.id = 7;
+  r.summary.part = "crankpin_cx";
+  r.summary.lobe = 1;
+  r.summary.revolutions = 3;
+  r.summary.verdict = Verdict::kIn;
+  r.gauge = "tcp:127.0.0.1:1502";
+  r.settings = "part.kind = pin\npin.mode = c-x\npin.throw_mm = 45.000000\n";
+  for (int x = -179; x <= 180; ++x) {
+    const std::size_t d = index_of(x);
+    r.analysis.residual_error_um[d] = 1.5 * std::sin(2 * kPi * 2 * x / 360.0);
+    r.analysis.error_um[d] = r.analysis.residual_error_um[d] + 4.0 + 2.0 * std::cos(2 * kPi * x / 360.0);
+  }
+  r.analysis.peak_to_valley_residual_um = 3.0;
+  r.characteristics = {single_characteristic("roundness", "um", 3.0, Limits{std::nullopt, 4.0}),
+                       single_characteristic("diameter_error", "um", 8.0, Limits{-8.0, 8.0}),
+                       single_characteristic("stroke_error", "um", 2.0, Limits{-25.0, 25.0}),
+                       single_characteristic("index_error", "deg", 0.0, Limits{-0.03, 0.03})};
+  return r;
+}
+
+std::string all_words(const CamReportWords& w) {
+  std::string out = w.page_title + "|" + w.item + "|" + w.item_label + "|" + w.angle_axis + "|" + w.error_axis + "|" +
+                    w.error_chart + "|" + w.polar_title + "|" + w.polar_zero + "|" + w.polar_angle + "|" +
+                    w.polar_reference + "|" + w.harmonics_title + "|" + w.footer_judged + "|" + w.footer_detail;
+  for (const std::string& t : w.characteristic_titles) out += "|" + t;
+  return out;
+}
+
+TEST(CamReport, APinRunSpeaksOfThePinAndLeavesOutTheLobesFigures) {
+  const CamReportWords w = cam_report_words(pin_run());
+  EXPECT_EQ(w.page_title, "Pin inspection report");
+  EXPECT_EQ(w.item, "pin 1");
+  EXPECT_EQ(w.item_label, "Pin");
+  EXPECT_NE(w.error_axis.find("radius error"), std::string::npos) << w.error_axis;
+  EXPECT_EQ(w.error_chart.rfind("Radius error", 0), 0u) << w.error_chart;
+  EXPECT_EQ(w.angle_axis.rfind("pin degree", 0), 0u) << w.angle_axis;
+  EXPECT_FALSE(w.derivative_charts);
+  EXPECT_EQ(w.characteristic_titles,
+            (std::vector<std::string>{"Pin roundness", "Pin diameter error", "Pin stroke (throw) error",
+                                      "Pin index (angular position) error"}));
+  EXPECT_NE(w.footer_detail.find("C-X"), std::string::npos) << w.footer_detail;
+  const std::string words = all_words(w);
+  for (const char* lobe_word :
+       {"lift", "Lift", "cam", "nose", "phase", "runout", "base circle", "Base circle", "velocity", "acceleration"}) {
+    EXPECT_EQ(words.find(lobe_word), std::string::npos) << "'" << lobe_word << "' in " << words;
+  }
+
+  testing::TempDir dir;
+  const fs::path out = dir / "pin7.pdf";
+  Status s = write_cam_report(pin_run(), out);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  const std::string pdf = slurp(out);
+  EXPECT_EQ(pdf.rfind("%PDF-", 0), 0u);
+  EXPECT_EQ(count_of(pdf, "/Type /Page") - count_of(pdf, "/Type /Pages"), 1u);
+  const fs::path png = dir / "pin7.png";
+  ASSERT_TRUE(write_cam_report(pin_run(), png).ok());
+  keep_picture(png);
+}
+
+TEST(CamReport, ALobeRunKeepsTheCamWords) {
+  StoredRun r = out_of_tolerance_run();
+  r.settings = "compensation.gain = 1\n";
+  r.characteristics.push_back(single_characteristic("roundness", "um", 1.0, Limits{std::nullopt, 4.0}));
+  const CamReportWords w = cam_report_words(r);
+  EXPECT_EQ(w.page_title, "Cam inspection report");
+  EXPECT_EQ(w.item, "lobe 3");
+  EXPECT_EQ(w.angle_axis, "cam angle, deg (nose at 0; opening side negative, closing side positive)");
+  EXPECT_EQ(w.error_chart, "Lift error after best-fit phase (judged), \u00b5m");
+  EXPECT_EQ(w.polar_title, "Polar view of the judged lift error");
+  EXPECT_EQ(w.polar_zero, "0 (nose)");
+  EXPECT_TRUE(w.derivative_charts);
+  EXPECT_EQ(w.characteristic_titles.back(), "Base circle roundness");
+  EXPECT_EQ(w.footer_judged.rfind("judged: lift error after the best-fit phase (+0.125 deg removed)", 0), 0u)
+      << w.footer_judged;
 }
 
 TEST(CamReport, AnotherExtensionIsRefusedAndNothingWritten) {

@@ -257,6 +257,23 @@ TEST(DfqRoundTrip, OnePartBlockPerPartAndLobeNumberedAcrossTheFile) {
   EXPECT_EQ(file.characteristics[2].fields.at("K2120"), "1") << "roundness has a natural lower boundary";
 }
 
+TEST(DfqRoundTrip, APinsBlockSaysPinAndTitlesItsRoundnessAsThePins) {
+  const std::vector<RunCharacteristics> runs = {
+      run(5, "2026-11-22T02:34:44Z", "", "",
+          {characteristic("roundness", "um", 3.5, std::nullopt, 4.0),
+           characteristic("diameter_error", "um", 0.15, -8.0, 8.0),
+           characteristic("stroke_error", "um", -0.01, -25.0, 25.0),
+           characteristic("index_error", "deg", 0.002, -0.03, 0.03)}),
+  };
+  const DfqFile file = written_and_read(runs);
+  ASSERT_EQ(file.parts.size(), 1u);
+  EXPECT_EQ(file.parts[0].fields.at("K1002"), "pin 2");
+  ASSERT_EQ(file.characteristics.size(), 4u);
+  EXPECT_EQ(file.characteristics[0].fields.at("K2001"), "roundness");
+  EXPECT_EQ(file.characteristics[0].fields.at("K2002"), "Pin roundness");
+  EXPECT_EQ(file.characteristics[1].fields.at("K2002"), "Pin diameter error");
+}
+
 TEST(DfqRoundTrip, OneBlockOfRunsFromTwoMachinesHasNoPartMachine) {
   std::vector<RunCharacteristics> runs = hand_written_runs();
   runs[1].run.machine = "grinder-2";

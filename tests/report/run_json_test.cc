@@ -62,7 +62,8 @@ const std::set<std::string> kDetailKeys = {"lift_error_reference",
                                            "harmonic_amplitude_um",
                                            "settings",
                                            "frame",
-                                           "nc_pushes"};
+                                           "nc_pushes",
+                                           "part_kind"};
 
 // docs/http_api.md, GET /api/nc/history: one push.
 const std::set<std::string> kPushKeys = {"nc_file",     "table_version",     "pushed_utc",  "run_id",
@@ -164,6 +165,47 @@ TEST_F(RunJsonTest, AStoredRunHasEveryDocumentedKeyAndItsFigures) {
   const json row = run_summary_json(list->front());
   EXPECT_EQ(keys_of(row), kSummaryKeys);
   expect_units_in_names(row);
+}
+
+TEST_F(RunJsonTest, APinRunSaysPinItsModeAndTitlesItsRoundnessAsThePins) {
+  const std::int64_t cx = insert(testing::sample_pin_run("crankpin_cx", "c-x", "2026-11-22T02:34:44Z", 2.0));
+  const std::int64_t cxy = insert(testing::sample_pin_run("crankpin_cxy", "c-x-y", "2026-11-22T02:35:44Z", 2.0));
+  RunRecord lobe = testing::sample_run("intake_flat", 1, "grinder-1", "2026-11-22T02:36:44Z", 5.0);
+  lobe.characteristics = {single_characteristic("roundness", "um", 1.0, Limits{std::nullopt, 4.0})};
+  const std::int64_t lobe_id = insert(lobe);
+
+  const json j = run_detail_json(load(cx));
+  std::set<std::string> expected = kSummaryKeys;
+  expected.insert(kDetailKeys.begin(), kDetailKeys.end());
+  expected.insert("pin_mode");
+  EXPECT_EQ(keys_of(j), expected);
+  EXPECT_EQ(j["part_kind"], "pin");
+  EXPECT_EQ(j["pin_mode"], "c-x");
+  ASSERT_EQ(j["characteristics"].size(), 4u);
+  EXPECT_EQ(j["characteristics"][0]["key"], "roundness");
+  EXPECT_EQ(j["characteristics"][0]["title"], "Pin roundness");
+  EXPECT_EQ(j["characteristics"][1]["title"], "Pin diameter error");
+  EXPECT_EQ(run_detail_json(load(cxy))["pin_mode"], "c-x-y");
+
+  const json l = run_detail_json(load(lobe_id));
+  EXPECT_EQ(l["part_kind"], "lobe");
+  EXPECT_FALSE(l.contains("pin_mode"));
+  EXPECT_EQ(l["characteristics"][0]["title"], "Base circle roundness");
+}
+
+TEST_F(RunJsonTest, ARunIsAPinOnlyWhenItsSettingsSaySo) {
+  RunRecord unknown_mode = testing::sample_pin_run("crankpin", "c-x-z", "2026-11-22T02:34:44Z", 2.0);
+  RunRecord mode_alone = testing::sample_run("intake_flat", 1, "grinder-1", "2026-11-22T02:35:44Z", 5.0);
+  mode_alone.settings = "pin.mode = c-x\n";
+  RunRecord bare = testing::sample_run("intake_flat", 1, "grinder-1", "2026-11-22T02:36:44Z", 5.0);
+  bare.settings.clear();
+  const RunPart a = run_part(load(insert(unknown_mode)));
+  EXPECT_TRUE(a.pin());
+  EXPECT_FALSE(a.pin_mode.has_value());
+  const RunPart b = run_part(load(insert(mode_alone)));
+  EXPECT_FALSE(b.pin());
+  EXPECT_FALSE(b.pin_mode.has_value());
+  EXPECT_FALSE(run_part(load(insert(bare))).pin());
 }
 
 TEST_F(RunJsonTest, WhatARunDidNotRecordIsNull) {

@@ -208,6 +208,20 @@ TEST(Spc, JsonHasEveryKeyAndNullsForWhatIsNotGiven) {
   EXPECT_TRUE(j["cpk"].is_null());
 }
 
+TEST(Spc, APinsRoundnessIsTitledAsThePinsAndALobesAsTheBaseCircles) {
+  const std::vector<SpcFigure> pin = spc_figures(
+      {run(1, {make("roundness", 3.0, Limits{std::nullopt, 4.0}), make("diameter_error", 0.2, both(-8, 8))}),
+       run(2, {make("roundness", 3.5, Limits{std::nullopt, 4.0}), make("diameter_error", 0.1, both(-8, 8))})});
+  EXPECT_EQ(figure(pin, "roundness").part_kind, PartKind::kPin);
+  EXPECT_EQ(spc_figure_json(figure(pin, "roundness"))["title"], "Pin roundness");
+  const std::string text = spc_table_text(pin);
+  EXPECT_NE(text.find("Pin roundness"), std::string::npos) << text;
+  EXPECT_EQ(text.find("Base circle"), std::string::npos) << text;
+
+  const std::vector<SpcFigure> lobe = spc_figures({run(3, {make("roundness", 1.0, Limits{std::nullopt, 4.0})})});
+  EXPECT_EQ(spc_figure_json(lobe[0])["title"], "Base circle roundness");
+}
+
 TEST(Spc, TableHasARowPerCharacteristicAndSaysWhatIsMissing) {
   // Lift error 1, 2, 3 um against -5..+5 (s = 1, Cp = 10 / 6 = 1.67, Cpk = min(3, 7) / 3 =
   // 1.00); runout 2 um once against an upper limit of 10.

@@ -6,6 +6,7 @@
 
 #include "core/part.h"
 #include "core/run.h"
+#include "core/tolerance.h"
 #include "storage/run_store.h"
 
 namespace gaugeloop::testing {
@@ -47,6 +48,25 @@ inline RunRecord sample_run(const std::string& part, int lobe, const std::string
   Part g;
   g.c_offset_deg = 10.0;
   r.geometry = g;
+  return r;
+}
+
+// A crankpin run as the measure job stores it: sample_run's tables read as pin degrees, the
+// settings saying pin and `mode` ("c-x" or "c-x-y"), no cam frame, and the pin's four
+// characteristics (roundness 3.5 um, diameter error +0.15 um, stroke error -0.01 um, index
+// error 0.002 deg).
+inline RunRecord sample_pin_run(const std::string& part, const std::string& mode, const std::string& started,
+                                double max_um) {
+  RunRecord r = sample_run(part, 1, "grinder-1", started, max_um);
+  for (std::size_t d = 0; d < 360; ++d) r.analysis.design_lift_mm[d] = 0.0;
+  r.analysis.phase_error_deg = 0.002;
+  r.analysis.base_circle_runout_um = 0.0;
+  r.settings = "part.kind = pin\npin.mode = " + mode + "\npin.throw_mm = 45.000000\n";
+  r.geometry.reset();
+  r.characteristics = {single_characteristic("roundness", "um", 3.5, Limits{std::nullopt, 4.0}),
+                       single_characteristic("diameter_error", "um", 0.15, Limits{-8.0, 8.0}),
+                       single_characteristic("stroke_error", "um", -0.01, Limits{-25.0, 25.0}),
+                       single_characteristic("index_error", "deg", 0.002, Limits{-0.03, 0.03})};
   return r;
 }
 
