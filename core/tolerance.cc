@@ -149,7 +149,7 @@ std::string characteristic_title(std::string_view key, PartKind kind) {
   } else if (key == "stroke_error") {
     return "Pin stroke (throw) error";
   } else if (key == "index_error") {
-    return "Pin index (angular position) error";
+    return "Pin index error";
   } else if (base == "harmonic" && !zone.empty() && zone.find_first_not_of("0123456789") == std::string_view::npos) {
     return "Lift error, harmonic " + std::string(zone);
   } else {

@@ -211,7 +211,7 @@ json job_report_json(const JobReport& r) {
               {"not_pushed_reason", r.pushed() ? json(nullptr) : json(r.not_pushed_reason)},
               {"pending_id", r.pending_id ? json(*r.pending_id) : json(nullptr)},
               {"tolerance_verdict", verdict_name(r.tolerance_verdict)},
-              {"characteristics", characteristics_json(r.characteristics)}};
+              {"characteristics", characteristics_json(r.characteristics, part_kind_of(r.characteristics))}};
 }
 
 Service::Service(ServiceConfig config, GaugeFactory gauge)

@@ -241,7 +241,7 @@ TEST(JudgePin, JudgesEachFigureAgainstItsLimits) {
 TEST(JudgePin, TheNewKeysHaveTitles) {
   EXPECT_EQ(characteristic_title("diameter_error"), "Pin diameter error");
   EXPECT_EQ(characteristic_title("stroke_error"), "Pin stroke (throw) error");
-  EXPECT_EQ(characteristic_title("index_error"), "Pin index (angular position) error");
+  EXPECT_EQ(characteristic_title("index_error"), "Pin index error");
 }
 
 // A pin analysis whose error is known exactly, harmonics 0..3 only.

@@ -366,9 +366,8 @@ TEST(CamReport, APinRunSpeaksOfThePinAndLeavesOutTheLobesFigures) {
   EXPECT_EQ(w.error_chart.rfind("Radius error", 0), 0u) << w.error_chart;
   EXPECT_EQ(w.angle_axis.rfind("pin degree", 0), 0u) << w.angle_axis;
   EXPECT_FALSE(w.derivative_charts);
-  EXPECT_EQ(w.characteristic_titles,
-            (std::vector<std::string>{"Pin roundness", "Pin diameter error", "Pin stroke (throw) error",
-                                      "Pin index (angular position) error"}));
+  EXPECT_EQ(w.characteristic_titles, (std::vector<std::string>{"Pin roundness", "Pin diameter error",
+                                                               "Pin stroke (throw) error", "Pin index error"}));
   EXPECT_NE(w.footer_detail.find("C-X"), std::string::npos) << w.footer_detail;
   const std::string words = all_words(w);
   for (const char* lobe_word :
