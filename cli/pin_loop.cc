@@ -9,31 +9,20 @@
 #include "job/pin_files.h"
 
 namespace gaugeloop {
-namespace {
 
-// The gauge simulator serves a reading per machine degree: a part whose cam frame is the
-// machine frame (no offsets, positive sense), a flat design of no lift, and the ground pin's
-// gauge reading as the "ground lobe".
-Part gauge_frame_part(const JobSettings& job) {
-  Part p;
-  p.name = job.part.name;
-  p.lobe = job.part.lobe;
-  p.base_circle_radius_mm = job.pin->pin_radius_mm;
-  p.wheel_radius_mm = job.pin->wheel_radius_mm;
-  return p;
-}
-
-LiftTable no_lift() {
-  LiftTable t;
-  t.source = "round pin";
-  for (int d = 0; d < 360; ++d) {
-    t.angle_deg.push_back(d);
-    t.lift_mm.push_back(0.0);
+PinGaugeFrame pin_gauge_frame(const JobSettings& job) {
+  PinGaugeFrame f;
+  f.part.name = job.part.name;
+  f.part.lobe = job.part.lobe;
+  f.part.base_circle_radius_mm = job.pin->pin_radius_mm;
+  f.part.wheel_radius_mm = job.pin->wheel_radius_mm;
+  f.design.source = "round pin";
+  for (int d = 0; d < kDegreesPerRevolution; ++d) {
+    f.design.angle_deg.push_back(d);
+    f.design.lift_mm.push_back(0.0);
   }
-  return t;
+  return f;
 }
-
-}  // namespace
 
 void set_pin_job(JobSettings& js, const PinGeometry& pin, bool main_template_given) {
   js.pin = pin;
@@ -62,8 +51,7 @@ Result<std::vector<PinLoopIteration>> run_pin_grinding_loop(
   Result<PinCommandedPath> design_path = pin_commanded_path_from_design(pin);
   if (!design_path) return design_path.error();
   const PinMachineErrorModel floor_model = vibration_only(settings.machine);
-  const Part frame = gauge_frame_part(settings.job);
-  const LiftTable flat = no_lift();
+  const PinGaugeFrame frame = pin_gauge_frame(settings.job);
 
   std::vector<PinLoopIteration> done;
   std::filesystem::path table_in_force;  // the X table program last pushed by this loop
@@ -99,7 +87,8 @@ Result<std::vector<PinLoopIteration>> run_pin_grinding_loop(
     JobSettings job = settings.job;
     job.build_on_table_in_force = !table_in_force.empty();
     if (job.note.empty()) job.note = "virtual grinder pin " + std::to_string(i) + ", ground from " + it.ground_from;
-    Result<JobReport> report = measure_on_gauge_simulator(frame, flat, gauge, settings.response_timeout, job);
+    Result<JobReport> report =
+        measure_on_gauge_simulator(frame.part, frame.design, gauge, settings.response_timeout, job);
     if (!report) return report.error();
     it.job = std::move(*report);
     if (it.job.pushed()) {

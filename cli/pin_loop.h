@@ -26,6 +26,16 @@ namespace gaugeloop {
 // slides, as such machines have; the pin's X swings 2R every turn), at the job's work speed.
 void set_pin_job(JobSettings& js, const PinGeometry& pin, bool main_template_given);
 
+// What the gauge simulator is given to serve a pin's reading per machine degree
+// (SimulatorSettings::ground_reading_mm, with gauge_offset_mm 0: a pin gauge is mastered): a
+// part whose cam frame is the machine frame (no offsets, positive sense) and a design of no
+// lift, so machine degree C is served as reading C.
+struct PinGaugeFrame {
+  Part part;
+  LiftTable design;
+};
+PinGaugeFrame pin_gauge_frame(const JobSettings& job);
+
 struct PinLoopSettings {
   JobSettings job;  // job.pin set; build_on_table_in_force is decided by the loop
   PinMachineErrorModel machine;

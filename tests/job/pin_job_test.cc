@@ -48,23 +48,13 @@ class PinJobTest : public ::testing::Test {
   // Serves `reading_mm` per machine degree (absolute: a pin gauge is mastered) at four times
   // real time.
   void start_gauge(const JobSettings& js, const DegreeTable& reading_mm) {
-    Part frame;
-    frame.name = js.part.name;
-    frame.lobe = js.part.lobe;
-    frame.base_circle_radius_mm = js.pin->pin_radius_mm;
-    frame.wheel_radius_mm = js.pin->wheel_radius_mm;
-    LiftTable flat;
-    flat.source = "round pin";
-    for (int d = 0; d < 360; ++d) {
-      flat.angle_deg.push_back(d);
-      flat.lift_mm.push_back(0.0);
-    }
+    const PinGaugeFrame frame = pin_gauge_frame(js);
     SimulatorSettings ss;
     ss.time_scale = 4.0;
     ss.seed = 17;
     ss.gauge_offset_mm = 0.0;
     ss.ground_reading_mm = reading_mm;
-    Result<std::unique_ptr<GaugeSimulator>> sim = GaugeSimulator::start(frame, flat, ss);
+    Result<std::unique_ptr<GaugeSimulator>> sim = GaugeSimulator::start(frame.part, frame.design, ss);
     ASSERT_TRUE(sim.ok()) << sim.error().message;
     sim_ = std::move(*sim);
   }
