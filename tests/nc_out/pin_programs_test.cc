@@ -194,5 +194,28 @@ TEST(PinMainProgram, OnlyOneOfTheYValuesIsRefused) {
   EXPECT_THAT(r.error().message, HasSubstr("needs both y_table_number and y_program_name"));
 }
 
+// Every shipped main program feeds the wheel towards the part (X grows as the wheel moves
+// away, so the overlaid infeed is negative) and, once the couplings are released, takes the
+// wheel off incrementally: an absolute G0 X0 would drive it into the lobe or the pin wherever
+// C stopped off the base circle (or away from t = 180 on a pin).
+TEST(ShippedMainPrograms, FeedTowardsThePartAndRetractIncrementally) {
+  for (const char* name : {"cam_main.mpf", "cam_main_speed.mpf", "pin_main.mpf", "pin_main_cx.mpf"}) {
+    const std::string text = shipped(name);
+    ASSERT_FALSE(text.empty()) << name;
+    std::istringstream lines(text);
+    std::string line;
+    bool retracts = false;
+    while (std::getline(lines, line)) {
+      const std::string code = line.substr(0, line.find(';'));
+      EXPECT_EQ(code.find("G0 X0"), std::string::npos) << name << ": " << line;
+      if (code.find("C3600") != std::string::npos) {
+        EXPECT_THAT(code, HasSubstr("X-")) << name << ": " << line;
+      }
+      if (code.find("G91 G0 X") != std::string::npos) retracts = true;
+    }
+    EXPECT_TRUE(retracts) << name;
+  }
+}
+
 }  // namespace
 }  // namespace gaugeloop
