@@ -10,6 +10,7 @@
 #include "core/utc_time.h"
 #include "nc_out/main_program.h"
 #include "nc_out/table_program.h"
+#include "report/run_json.h"
 
 namespace gaugeloop {
 namespace {
@@ -405,11 +406,6 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
 
 namespace {
 
-// True if the settings text has `line` as one of its lines.
-bool has_setting_line(const std::string& settings, const std::string& line) {
-  return settings.starts_with(line + "\n") || settings.find("\n" + line + "\n") != std::string::npos;
-}
-
 // `main` for pushing run `run_id`'s table again (`what`: "approved", "rolled back"), with the
 // run's part and lobe where it leaves them open. A C-X pin's table gets main.pin_cx_template
 // when there is one. A C-X-Y pin's table is refused: its Y table is written only with a
@@ -418,14 +414,15 @@ Result<MainProgramSource> main_for_run(const RunStore& store, std::int64_t run_i
                                        const std::string& nc_file, std::string_view what) {
   Result<StoredRun> run = store.load_run(run_id);
   if (!run) return run.error();
-  if (has_setting_line(run->settings, "pin.mode = c-x-y")) {
+  const RunPart part = run_part(*run);
+  if (part.pin_mode == PinMode::kCXY) {
     return make_error(ErrorCode::kRefused,
                       nc_file + " is the X table of a crankpin ground C-X-Y (run " + std::to_string(run_id) +
                           "); it cannot be " + std::string(what) +
                           " alone: its Y table is written only with a measurement, and X would run with a Y table of "
                           "another version. Measure the pin again to push a matched pair");
   }
-  if (has_setting_line(run->settings, "pin.mode = c-x") && !main.pin_cx_template_text.empty()) {
+  if (part.pin_mode == PinMode::kCX && !main.pin_cx_template_text.empty()) {
     main.template_text = main.pin_cx_template_text;
     main.template_name = main.pin_cx_template_name;
   }
