@@ -19,6 +19,8 @@ packages=(
   libcpp-httplib-dev # the HTTP API of `gaugeloop serve` (built with OpenSSL: HTTPS)
   libsystemd-dev     # sd_notify: readiness and the watchdog under systemd
   libcairo2-dev      # the cam report and trend charts: one drawing code for PDF, SVG and PNG
+  libmosquitto-dev   # plant messages to an MQTT broker (store and forward from the outbox)
+  libpqxx-dev        # the plant's central history in PostgreSQL (brings libpq-dev)
   fonts-dejavu-core  # the font the reports are drawn with
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
@@ -28,6 +30,8 @@ packages=(
   python3            # runs tests/layering's include check (and the pymodbus peer)
   python3-pymodbus   # an independent Modbus server: tests read a gauge served by it
   python3-serial python3-serial-asyncio  # pymodbus imports both even for TCP; only Recommended, so named here
+  mosquitto mosquitto-clients  # a real MQTT broker and an independent subscriber for the plant tests
+  postgresql-15      # a real PostgreSQL server the plant tests start in a temporary directory
   openssl            # self-signed certificates for the HTTPS tests; `gaugeloop token new` needs none
   curl               # an independent HTTP client: tests talk to the service with it
   locales            # a decimal-comma locale, to test that output ignores the C locale

@@ -633,8 +633,92 @@ END;
 CREATE INDEX runs_by_verdict ON runs (verdict, started_utc) WHERE verdict IS NOT NULL;
 )sql";
 
-const std::array<Migration, 8>& all_migrations() {
-  static const std::array<Migration, 8> kMigrations{{
+// A random version-4 UUID in SQL, for rows that no gaugeloop wrote (backfill, sqlite3 users):
+// gaugeloop itself gives each record core/uuid.h's new_uuid().
+#define GL_SQL_UUID                                                                          \
+  "lower(hex(randomblob(4)) || '-' || hex(randomblob(2)) || '-4' || substr(hex(randomblob(2)), 2) " \
+  "|| '-' || substr('89ab', 1 + abs(random()) % 4, 1) || substr(hex(randomblob(2)), 2) || '-' || "  \
+  "hex(randomblob(6)))"
+
+// Version 9: one plant, many grinders.
+//  - runs, nc_pushes and events get a UUID (existing rows a random one), unique, so records
+//    of many machines meet in one central history without colliding; a row inserted without
+//    one (by hand) gets one from its trigger.
+//  - outbox: the plant messages (MQTT), each written by a trigger in the same transaction as
+//    the run or push it describes, while outbox_state.enabled is set (by the service with a
+//    broker configured). A sender deletes a message when the broker acknowledges it. Bounded:
+//    past max_depth the oldest message is dropped and counted.
+const std::string kSchemaV9 = std::string(R"sql(
+ALTER TABLE runs ADD COLUMN uuid TEXT CHECK (uuid IS NULL OR length(uuid) = 36);
+ALTER TABLE nc_pushes ADD COLUMN uuid TEXT CHECK (uuid IS NULL OR length(uuid) = 36);
+ALTER TABLE events ADD COLUMN uuid TEXT CHECK (uuid IS NULL OR length(uuid) = 36);
+UPDATE runs SET uuid = )sql") + GL_SQL_UUID + R"sql(;
+UPDATE nc_pushes SET uuid = )sql" + GL_SQL_UUID + R"sql(;
+UPDATE events SET uuid = )sql" + GL_SQL_UUID + R"sql(;
+CREATE UNIQUE INDEX runs_by_uuid ON runs (uuid);
+CREATE UNIQUE INDEX nc_pushes_by_uuid ON nc_pushes (uuid);
+CREATE UNIQUE INDEX events_by_uuid ON events (uuid);
+CREATE TRIGGER runs_get_a_uuid AFTER INSERT ON runs WHEN NEW.uuid IS NULL BEGIN
+  UPDATE runs SET uuid = )sql" + GL_SQL_UUID + R"sql( WHERE id = NEW.id;
+END;
+CREATE TRIGGER nc_pushes_get_a_uuid AFTER INSERT ON nc_pushes WHEN NEW.uuid IS NULL BEGIN
+  UPDATE nc_pushes SET uuid = )sql" + GL_SQL_UUID + R"sql( WHERE id = NEW.id;
+END;
+CREATE TRIGGER events_get_a_uuid AFTER INSERT ON events WHEN NEW.uuid IS NULL BEGIN
+  UPDATE events SET uuid = )sql" + GL_SQL_UUID + R"sql( WHERE id = NEW.id;
+END;
+
+CREATE TABLE outbox_state (
+  id            INTEGER PRIMARY KEY CHECK (id = 1),
+  enabled       INTEGER NOT NULL DEFAULT 0 CHECK (enabled IN (0, 1)),
+  max_depth     INTEGER NOT NULL DEFAULT 100000 CHECK (max_depth >= 1),
+  depth         INTEGER NOT NULL DEFAULT 0,  -- messages waiting (kept by triggers)
+  sent_total    INTEGER NOT NULL DEFAULT 0,  -- acknowledged by the broker
+  dropped_total INTEGER NOT NULL DEFAULT 0   -- dropped over max_depth
+);
+INSERT INTO outbox_state (id) VALUES (1);
+CREATE TABLE outbox (
+  id          INTEGER PRIMARY KEY AUTOINCREMENT,  -- delivery order
+  uuid        TEXT    NOT NULL UNIQUE CHECK (length(uuid) = 36),  -- the message's identity
+  topic       TEXT    NOT NULL CHECK (topic IN ('run', 'nc', 'verdict', 'state')),
+  run_id      INTEGER,  -- run, verdict: the run; nc: the push's run
+  push_id     INTEGER,  -- nc: the push
+  created_utc TEXT    NOT NULL,
+  payload     TEXT      -- verdict, state: the JSON published; run, nc: NULL, made from the record
+);
+CREATE TRIGGER outbox_counted_on_insert AFTER INSERT ON outbox BEGIN
+  UPDATE outbox_state SET depth = depth + 1;
+  UPDATE outbox_state SET dropped_total = dropped_total + 1 WHERE depth > max_depth;
+  DELETE FROM outbox WHERE id = (SELECT min(id) FROM outbox)
+    AND (SELECT depth > max_depth FROM outbox_state);
+END;
+CREATE TRIGGER outbox_counted_on_delete AFTER DELETE ON outbox BEGIN
+  UPDATE outbox_state SET depth = depth - 1;
+END;
+CREATE TRIGGER runs_to_outbox AFTER INSERT ON runs WHEN (SELECT enabled FROM outbox_state) BEGIN
+  INSERT INTO outbox (uuid, topic, run_id, created_utc)
+    VALUES ()sql" + GL_SQL_UUID + R"sql(, 'run', NEW.id, strftime('%Y-%m-%dT%H:%M:%SZ', 'now'));
+  -- The lobe's verdict changed from its previous run's (or it is the lobe's first run).
+  INSERT INTO outbox (uuid, topic, run_id, created_utc, payload)
+    SELECT )sql" + GL_SQL_UUID + R"sql(, 'verdict', NEW.id, strftime('%Y-%m-%dT%H:%M:%SZ', 'now'),
+           json_object('run_id', NEW.id, 'machine', NEW.machine, 'part', NEW.part, 'lobe', NEW.lobe,
+                       'started_utc', NEW.started_utc, 'verdict', coalesce(NEW.verdict, 'not_judged'),
+                       'previous_verdict', previous.verdict, 'previous_run_id', previous.id)
+    FROM (SELECT NULL) LEFT JOIN (SELECT id, coalesce(verdict, 'not_judged') AS verdict FROM runs
+                                  WHERE machine = NEW.machine AND part = NEW.part AND lobe = NEW.lobe
+                                    AND id < NEW.id
+                                  ORDER BY started_utc DESC, id DESC LIMIT 1) AS previous
+    WHERE previous.verdict IS NOT coalesce(NEW.verdict, 'not_judged');
+END;
+CREATE TRIGGER nc_pushes_to_outbox AFTER INSERT ON nc_pushes WHEN (SELECT enabled FROM outbox_state) BEGIN
+  INSERT INTO outbox (uuid, topic, run_id, push_id, created_utc)
+    VALUES ()sql" + GL_SQL_UUID + R"sql(, 'nc', NEW.run_id, NEW.id, strftime('%Y-%m-%dT%H:%M:%SZ', 'now'));
+END;
+)sql";
+#undef GL_SQL_UUID
+
+const std::array<Migration, 9>& all_migrations() {
+  static const std::array<Migration, 9> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -666,6 +750,11 @@ const std::array<Migration, 8>& all_migrations() {
        "runs judged against their tolerances: run_characteristics, verdicts, the best-fit profile error, dial "
        "runout and roundness",
        std::string(kSchemaV8),
+       nullptr,
+       {}},
+      {9,
+       "one plant, many grinders: UUIDs on runs, pushes and events; the outbox of plant messages",
+       kSchemaV9,
        nullptr,
        {}},
   }};

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/utc_time.h"
+#include "core/uuid.h"
 
 namespace gaugeloop::storage_internal {
 namespace {
@@ -40,6 +41,9 @@ Status check_identity(const RunRecord& run) {
     return run_refused("finished_utc " + run.finished_utc + " is before started_utc " + run.started_utc);
   }
   if (run.machine.empty()) return run_refused("the machine name is empty");
+  if (!run.uuid.empty() && !is_uuid(run.uuid)) {
+    return run_refused("uuid '" + run.uuid + "' is not a UUID like 123e4567-e89b-42d3-a456-426614174000");
+  }
   if (run.part.empty()) return run_refused("the part name is empty");
   if (run.lobe < 1) return run_refused("lobe " + std::to_string(run.lobe) + " is not 1 or more");
   if (Status s = check_run_identity("serial", run.serial); !s.ok()) return run_refused(s.error().message);

@@ -27,6 +27,8 @@ struct Connection;  // SQLite connection; defined in storage/sqlite_db.h, never 
 struct RunRecord {
   std::string started_utc;   // "2026-11-22T02:34:44Z"
   std::string finished_utc;  // not earlier than started_utc
+  // The run's global identity (core/uuid.h form); empty: a new one. Unique across the plant.
+  std::string uuid;
   std::string machine;       // e.g. "grinder-1"; not empty
   std::string part;          // part name; not empty
   int lobe = 1;              // 1-based
@@ -81,6 +83,7 @@ Status check_run_identity(std::string_view what, std::string_view value);
 // One row of the run list.
 struct RunSummary {
   std::int64_t id = 0;
+  std::string uuid;  // the run's global identity (every run has one from schema 9 on)
   std::string started_utc;
   std::string machine;
   std::string part;
@@ -118,6 +121,7 @@ struct TableFacts {
 // One NC program written to the control from a run, as nc_pushes keeps it.
 struct NcPush {
   std::int64_t id = 0;      // read back (nc_pushes.id: push order); ignored when recording
+  std::string uuid;         // read back: the push's global identity; ignored when recording (a new one)
   std::int64_t run_id = 0;  // read back; when recording, the run is an argument
   std::string pushed_utc;   // ISO 8601 UTC; empty when recording: now
   std::string nc_file;      // not empty; compared as text, so give every push of a file the same path
@@ -271,6 +275,7 @@ EventKind event_kind_for(ErrorCode code);
 // or a step of the service (kInfo) that someone may ask about later.
 struct EventRecord {
   std::string at_utc;  // ISO 8601 UTC; empty when recording: now
+  std::string uuid;    // the event's global identity; empty when recording: a new one
   EventKind kind = EventKind::kFault;
   std::string code;  // error_code_name() of the error, e.g. "gauge timeout"
   std::string machine;
@@ -324,6 +329,41 @@ struct StoreMetrics {
   std::int64_t pending_tables = 0;  // NC tables waiting for approval (status pending)
   // One entry per machine, part and lobe ever measured, ordered by machine, part, then lobe.
   std::vector<LobeLastRun> last_runs;
+};
+
+// ---- the plant (schema 9): messages for the broker and replication to the central history ----
+
+// Whether runs and pushes queue plant messages, and how many may wait.
+struct OutboxSettings {
+  bool enabled = false;             // set by a service with a broker configured
+  std::int64_t max_depth = 100000;  // >= 1; past it the oldest waiting message is dropped and counted
+};
+
+// One message waiting in the outbox, oldest first (delivery order).
+struct OutboxMessage {
+  std::int64_t id = 0;          // delivery order; what outbox_delivered takes
+  std::string uuid;             // the message's identity: a consumer drops a second delivery by it
+  std::string topic;            // "run", "nc", "verdict", "state"
+  std::int64_t run_id = 0;      // run, verdict: the run; nc: the push's run; state: 0
+  std::int64_t push_id = 0;     // nc: the push; otherwise 0
+  std::string created_utc;      // when the record was stored
+  std::string payload;          // verdict, state: the JSON to publish; run, nc: empty (made from the record)
+};
+
+// The outbox as /metrics and health show it.
+struct OutboxCounts {
+  OutboxSettings settings;
+  std::int64_t depth = 0;          // messages waiting
+  std::int64_t sent_total = 0;     // acknowledged and deleted, ever
+  std::int64_t dropped_total = 0;  // dropped over max_depth, ever
+  std::string oldest_utc;          // created_utc of the oldest waiting; empty when none
+};
+
+// A push as replicated: the push with its run's identity and machine.
+struct ReplicatedPush {
+  NcPush push;
+  std::string run_uuid;
+  std::string machine;
 };
 
 // What RunStore::open did to a file written by an older gaugeloop.
@@ -503,6 +543,24 @@ class RunStore {
 
   // One run, read in a single snapshot. kNotFound if absent.
   Result<StoredRun> load_run(std::int64_t run_id) const;
+
+  // ---- the outbox (schema 9; docs/plant.md) ----
+  // Turns queuing on or off and sets the bound. Messages already waiting stay.
+  Status configure_outbox(const OutboxSettings& settings);
+  // Up to `limit` (>= 1) waiting messages, oldest first.
+  Result<std::vector<OutboxMessage>> outbox_batch(int limit) const;
+  // Deletes the messages the broker acknowledged and counts them sent, in one transaction.
+  // Ids no longer waiting (dropped meanwhile) are ignored.
+  Status outbox_delivered(const std::vector<std::int64_t>& ids);
+  // Queues a service state message (its JSON payload, not empty). Returns the message id, or
+  // 0 when the outbox is not enabled (nothing queued).
+  Result<std::int64_t> enqueue_state(const std::string& payload_json);
+  Result<OutboxCounts> outbox_counts() const;
+
+  // ---- replication (schema 9): records in local id order after `after_id`, at most `limit` ----
+  Result<std::vector<std::int64_t>> run_ids_after(std::int64_t after_id, int limit) const;
+  Result<std::vector<ReplicatedPush>> pushes_after(std::int64_t after_id, int limit) const;
+  Result<std::vector<StoredEvent>> events_after(std::int64_t after_id, int limit) const;
 
   // Takes the write lock and lets it go again, writing nothing: before a measurement, so that
   // a database another program keeps locked (waiting up to 5 s, as every write does) is found

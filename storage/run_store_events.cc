@@ -2,6 +2,7 @@
 #include <utility>
 
 #include "core/utc_time.h"
+#include "core/uuid.h"
 #include "storage/record_checks.h"
 #include "storage/run_store.h"
 #include "storage/run_store_internal.h"
@@ -16,8 +17,8 @@ using storage_internal::Statement;
 namespace {
 
 constexpr std::string_view kInsertEvent = R"sql(
-INSERT INTO events (at_utc, kind, code, machine, part, lobe, run_id, message)
-VALUES (:at_utc, :kind, :code, :machine, :part, :lobe, :run_id, :message))sql";
+INSERT INTO events (at_utc, kind, code, machine, part, lobe, run_id, message, uuid)
+VALUES (:at_utc, :kind, :code, :machine, :part, :lobe, :run_id, :message, :uuid))sql";
 
 Status check_event(const EventRecord& event) {
   if (event.message.empty() || event.code.empty()) {
@@ -39,6 +40,8 @@ EventKind event_kind_from_db(std::string_view name) {
   return EventKind::kFault;
 }
 
+constexpr std::string_view kEventColumns = "id, at_utc, kind, code, machine, part, lobe, run_id, message, uuid";
+
 StoredEvent read_event(const Statement& s) {
   StoredEvent e;
   e.id = s.column<std::int64_t>(0);
@@ -50,6 +53,7 @@ StoredEvent read_event(const Statement& s) {
   e.event.lobe = s.column<std::optional<int>>(6).value_or(0);
   e.event.run_id = s.column<std::optional<std::int64_t>>(7);
   e.event.message = s.column<std::string>(8);
+  e.event.uuid = s.column<std::string>(9);
   return e;
 }
 
@@ -69,6 +73,7 @@ Result<std::int64_t> RunStore::record_event(const EventRecord& event) {
   ins->bind(":lobe", event.lobe > 0 ? std::optional<int>(event.lobe) : std::nullopt);
   ins->bind(":run_id", event.run_id);
   ins->bind(":message", event.message);
+  ins->bind(":uuid", std::string_view(event.uuid.empty() ? new_uuid() : event.uuid));
   if (Status s = ins->run(); !s.ok()) return s.error();
   return conn.last_insert_rowid();
 }
@@ -88,12 +93,26 @@ Result<std::vector<StoredEvent>> RunStore::list_events(const EventQuery& q) cons
   if (!q.until_utc.empty()) where.add("at_utc <", q.until_utc);
   Result<Statement> st =
       Statement::prepare(*conn_,
-                         "SELECT id, at_utc, kind, code, machine, part, lobe, run_id, message FROM events" +
+                         "SELECT " + std::string(kEventColumns) + " FROM events" +
                              where.sql() + " ORDER BY at_utc DESC, id DESC LIMIT :limit",
                          "list events");
   if (!st.ok()) return st.error();
   st->bind(":limit", q.limit);
   where.bind(*st);
+  return st->collect(read_event);
+}
+
+Result<std::vector<StoredEvent>> RunStore::events_after(std::int64_t after_id, int limit) const {
+  if (limit < 1) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "cannot read events to replicate: limit " + std::to_string(limit) + " is not 1 or more");
+  }
+  Result<Statement> st = Statement::prepare(
+      *conn_, "SELECT " + std::string(kEventColumns) + " FROM events WHERE id > :after ORDER BY id LIMIT :limit",
+      "read events to replicate");
+  if (!st.ok()) return st.error();
+  st->bind(":after", after_id);
+  st->bind(":limit", limit);
   return st->collect(read_event);
 }
 

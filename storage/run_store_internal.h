@@ -51,10 +51,10 @@ class WhereClause {
 void bind_table_facts(Statement& s, const TableFacts& table);
 TableFacts read_table_facts(const Statement& s, int first);
 
-// Columns 0..11 of nc_pushes AS p, read by read_push(); program_text, when selected, follows.
+// Columns 0..12 of nc_pushes AS p, read by read_push(); program_text, when selected, follows.
 inline constexpr std::string_view kPushColumns =
     "p.id, p.run_id, p.pushed_utc, p.nc_file, p.table_version, p.reason, p.interpolation, p.block_count, "
-    "p.command_error_um, p.point_count, p.correction_max_um, p.program_hash";
+    "p.command_error_um, p.point_count, p.correction_max_um, p.program_hash, p.uuid";
 NcPush read_push(const Statement& s, bool with_text);
 
 // The next table version of `nc_file`: 1 + the highest recorded (1 if none).

@@ -3,6 +3,7 @@
 #include <utility>
 
 #include "core/utc_time.h"
+#include "core/uuid.h"
 #include "storage/record_checks.h"
 #include "storage/run_store.h"
 #include "storage/run_store_internal.h"
@@ -22,9 +23,9 @@ constexpr std::string_view kRecordNcFile = "UPDATE runs SET status = 'pushed', n
 
 constexpr std::string_view kInsertPush = R"sql(
 INSERT INTO nc_pushes (run_id, pushed_utc, nc_file, table_version, reason, interpolation, block_count,
-                       command_error_um, point_count, correction_max_um, program_hash, program_text)
+                       command_error_um, point_count, correction_max_um, program_hash, program_text, uuid)
 VALUES (:run_id, :pushed_utc, :nc_file, :table_version, :reason, :interpolation, :block_count,
-        :command_error_um, :point_count, :correction_max_um, :program_hash, :program_text))sql";
+        :command_error_um, :point_count, :correction_max_um, :program_hash, :program_text, :uuid))sql";
 
 Status check_claimed_version(const NcPush& push, int next, const std::string& operation) {
   if (push.table_version == 0 || push.table_version == next) return {};
@@ -65,7 +66,8 @@ NcPush read_push(const Statement& s, bool with_text) {
   p.reason = s.column<std::string>(5);
   p.table = read_table_facts(s, 6);
   p.program_hash = s.column<std::string>(11);
-  if (with_text) p.program_text = s.column<std::optional<std::string>>(12);
+  p.uuid = s.column<std::string>(12);
+  if (with_text) p.program_text = s.column<std::optional<std::string>>(13);
   return p;
 }
 
@@ -102,6 +104,7 @@ Result<std::int64_t> insert_push(Connection& conn, std::int64_t run_id, const Nc
   const std::string hash = text.empty() ? push.program_hash : settings_hash(text);
   ins->bind(":program_hash", text_or_null(hash));
   ins->bind(":program_text", text_or_null(text));
+  ins->bind(":uuid", std::string_view(new_uuid()));  // a rollback re-records a loaded push: always a new one
   if (Status s = ins->run(); !s.ok()) return s.error();
   return conn.last_insert_rowid();
 }

@@ -8,6 +8,8 @@
 #include "storage/degree_json.h"
 #include "storage/record_checks.h"
 #include "storage/run_store.h"
+
+#include "core/uuid.h"
 #include "storage/run_store_internal.h"
 #include "storage/sqlite_db.h"
 
@@ -35,7 +37,7 @@ INSERT INTO runs (started_utc, finished_utc, machine, part, lobe, gauge, note, s
                   rotation_sense, c_offset_deg, probe_offset_deg, ground_with_version,
                   ground_with_source, inspection, serial, operator, verdict, lift_error_reference,
                   max_abs_residual_um, rms_residual_um, peak_to_valley_residual_um, dial_runout_um,
-                  roundness_um)
+                  roundness_um, uuid)
 VALUES (:started_utc, :finished_utc, :machine, :part, :lobe, :gauge, :note, 'measured',
         :revolutions, :degrees_captured, :polls, :reconnects, :discarded_revolutions,
         :zero_offset_mm, :max_abs_error_um, :rms_error_um, :peak_to_valley_um,
@@ -44,7 +46,7 @@ VALUES (:started_utc, :finished_utc, :machine, :part, :lobe, :gauge, :note, 'mea
         :rotation_sense, :c_offset_deg, :probe_offset_deg, :ground_with_version,
         :ground_with_source, :inspection, :serial, :operator, :verdict, :lift_error_reference,
         :max_abs_residual_um, :rms_residual_um, :peak_to_valley_residual_um, :dial_runout_um,
-        :roundness_um))sql";
+        :roundness_um, :uuid))sql";
 
 constexpr std::string_view kInsertRaw = R"sql(
 INSERT INTO run_raw (run_id, amplifier_revolutions, lift) VALUES (?1, ?2, ?3))sql";
@@ -78,9 +80,10 @@ constexpr std::string_view kSummaryColumns =
     "r.id, r.started_utc, r.machine, r.part, r.lobe, r.status, r.revolutions, r.degrees_captured, "
     "r.max_abs_error_um, r.rms_error_um, r.repeatability_um, r.nc_file, r.phase_error_deg, "
     "r.base_circle_runout_um, r.peak_to_valley_um, r.settings_hash, r.note, r.raw_pruned_utc, r.serial, "
-    "r.operator, r.zero_offset_mm, r.verdict";
+    "r.operator, r.zero_offset_mm, r.verdict, r.uuid";
 constexpr int kZeroOffsetColumn = 20;
 constexpr int kVerdictColumn = 21;
+constexpr int kUuidColumn = 22;
 
 std::string select_summaries(std::string_view rest) {
   return "SELECT " + std::string(kSummaryColumns) + " FROM runs AS r" + std::string(rest);
@@ -193,6 +196,7 @@ Result<std::int64_t> insert_run_row(Connection& conn, const RunRecord& run, cons
   const LobeAnalysis& a = run.analysis;
   const std::optional<Part>& g = run.geometry;
   ins->bind(":started_utc", run.started_utc);
+  ins->bind(":uuid", run.uuid.empty() ? new_uuid() : run.uuid);
   ins->bind(":finished_utc", run.finished_utc);
   ins->bind(":machine", run.machine);
   ins->bind(":part", run.part);
@@ -342,6 +346,7 @@ RunSummary read_summary(const Statement& s) {
   r.operator_name = s.column<std::string>(19);
   // NULL (before schema 8) reads as not judged.
   r.verdict = verdict_from_name(s.column<std::string>(kVerdictColumn)).value_or(Verdict::kNotJudged);
+  r.uuid = s.column<std::string>(kUuidColumn);
   return r;
 }
 
