@@ -45,6 +45,7 @@ double raw_at_cam_deg(const RevolutionSamples& rev, const Part& g, int beta) {
 
 json run_summary_json(const RunSummary& r) {
   return {{"id", r.id},
+          {"uuid", text_or_null(r.uuid)},
           {"started_utc", r.started_utc},
           {"machine", r.machine},
           {"part", r.part},
@@ -158,6 +159,7 @@ void add_table_facts(json& j, const TableFacts& t) {
 
 json nc_push_json(const NcPush& p) {
   json j{{"table_version", p.table_version},
+         {"uuid", text_or_null(p.uuid)},
          {"pushed_utc", p.pushed_utc},
          {"run_id", p.run_id},
          {"reason", p.reason},
@@ -186,6 +188,7 @@ json pending_table_json(const PendingTable& t) {
 
 json event_json(const StoredEvent& e) {
   return {{"id", e.id},
+          {"uuid", text_or_null(e.event.uuid)},
           {"at_utc", e.event.at_utc},
           {"kind", event_kind_name(e.event.kind)},
           {"code", e.event.code},

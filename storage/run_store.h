@@ -381,7 +381,18 @@ struct SchemaUpgrade {
 // and SQLite's reason), kIo if the directory cannot be created, kInvalidInput for a record
 // or query that breaks the contracts above, kNotFound for an unknown run id, push or pending
 // table, kRefused for a decision on a pending table that is no longer pending.
-class RunStore {
+// The queries a run history answers, whichever database holds it: the local file (RunStore)
+// or the plant's central history in PostgreSQL (plant/). Same filters, same rows, in the same
+// order, so every query command prints the same whichever it reads.
+class RunHistory {
+ public:
+  virtual ~RunHistory() = default;
+  virtual Result<std::vector<RunSummary>> list_runs(const RunQuery& q) const = 0;
+  virtual Result<std::vector<RunSummary>> trend(const RunQuery& q) const = 0;
+  virtual Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q) const = 0;
+};
+
+class RunStore : public RunHistory {
  public:
   // Opens (creating the parent directories and the file if need be) and brings the schema
   // up to date. ":memory:" opens a private in-memory database. A database written by a
@@ -513,14 +524,14 @@ class RunStore {
 
   // Runs newest first (by started_utc, then by id). kInvalidInput for a malformed time bound,
   // a status other than measured/pushed, or a negative lobe.
-  Result<std::vector<RunSummary>> list_runs(const RunQuery& q) const;
+  Result<std::vector<RunSummary>> list_runs(const RunQuery& q) const override;
 
   // The same filters, oldest first: the runs of a lobe over time (q.limit: the newest that
   // many, still returned oldest first).
-  Result<std::vector<RunSummary>> trend(const RunQuery& q) const;
+  Result<std::vector<RunSummary>> trend(const RunQuery& q) const override;
 
   // The runs trend() returns (oldest first), each with its characteristics.
-  Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q) const;
+  Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q) const override;
 
   // Deletes the raw samples of runs started before `cutoff_utc` (exclusive), keeping every
   // summary, profile, correction, push and event, and marks those runs pruned at `now_utc`.

@@ -1,0 +1,1 @@
+#include "plant/central_history.h"
