@@ -1,0 +1,308 @@
+// The outbox sender against a real mosquitto broker started by the test: what a run stored
+// with the outbox enabled becomes at a subscriber, and what each failure does (broker down,
+// broker restart, a sender stopped before the acknowledgement, a connection that dies).
+#include <gtest/gtest.h>
+#include <mosquitto.h>
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "plant/outbox_sender.h"
+#include "plant/plant_messages.h"
+#include "storage/run_store.h"
+#include "tests/support/mosquitto_broker.h"
+#include "tests/support/sample_runs.h"
+#include "tests/support/temp_dir.h"
+
+namespace gaugeloop {
+namespace {
+
+using nlohmann::json;
+using testing::wait_until;
+
+struct Received {
+  std::string topic;
+  json payload;
+  bool retained = false;
+};
+
+// A subscriber of its own (libmosquitto with its network thread), independent of the sender.
+// With `persistent`, the broker keeps its QoS 1 messages while it is disconnected (a broker
+// restart), as a plant consumer's session does.
+class Subscriber {
+ public:
+  Subscriber(int port, std::string filter, bool persistent = false, std::string id = {}) : filter_(std::move(filter)) {
+    mosquitto_lib_init();
+    if (id.empty()) id = "test-subscriber-" + std::to_string(++count());
+    mosq_ = mosquitto_new(id.c_str(), !persistent, this);
+    mosquitto_connect_callback_set(mosq_, [](struct mosquitto* m, void* self, int rc) {
+      if (rc == 0) mosquitto_subscribe(m, nullptr, static_cast<Subscriber*>(self)->filter_.c_str(), 1);
+    });
+    mosquitto_subscribe_callback_set(mosq_, [](struct mosquitto*, void* self, int, int, const int*) {
+      auto* s = static_cast<Subscriber*>(self);
+      std::lock_guard<std::mutex> lock(s->mutex_);
+      ++s->subscribed_;
+    });
+    mosquitto_message_callback_set(mosq_, [](struct mosquitto*, void* self, const mosquitto_message* m) {
+      auto* s = static_cast<Subscriber*>(self);
+      const std::string text(static_cast<const char*>(m->payload), static_cast<std::size_t>(m->payloadlen));
+      std::lock_guard<std::mutex> lock(s->mutex_);
+      s->messages_.push_back({m->topic, json::parse(text, nullptr, false), m->retain});
+    });
+    mosquitto_reconnect_delay_set(mosq_, 1, 1, false);
+    EXPECT_EQ(mosquitto_connect(mosq_, "127.0.0.1", port, 10), MOSQ_ERR_SUCCESS);
+    EXPECT_EQ(mosquitto_loop_start(mosq_), MOSQ_ERR_SUCCESS);
+    EXPECT_TRUE(wait_until([this] { return subscriptions() > 0; })) << "no SUBACK from the broker";
+  }
+  ~Subscriber() {
+    mosquitto_disconnect(mosq_);
+    mosquitto_loop_stop(mosq_, true);
+    mosquitto_destroy(mosq_);
+  }
+
+  std::vector<Received> messages() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return messages_;
+  }
+  int subscriptions() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return subscribed_;
+  }
+  // The messages on topics ending in `kind`.
+  std::vector<Received> of(const std::string& kind) const {
+    std::vector<Received> out;
+    for (const Received& r : messages()) {
+      if (r.topic.size() >= kind.size() && r.topic.compare(r.topic.size() - kind.size(), kind.size(), kind) == 0) {
+        out.push_back(r);
+      }
+    }
+    return out;
+  }
+
+ private:
+  static int& count() {
+    static int n = 0;
+    return n;
+  }
+  std::string filter_;
+  struct mosquitto* mosq_ = nullptr;
+  mutable std::mutex mutex_;
+  std::vector<Received> messages_;
+  int subscribed_ = 0;
+};
+
+class OutboxSenderTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    broker_ = std::make_unique<testing::MosquittoBroker>(dir_ / "broker");
+    ASSERT_TRUE(broker_->started()) << "mosquitto did not start; see " << (dir_ / "broker" / "mosquitto.log");
+    Result<RunStore> s = RunStore::open(db());
+    ASSERT_TRUE(s.ok()) << s.error().message;
+    store_.emplace(std::move(*s));
+    ASSERT_TRUE(store_->configure_outbox({true, 1000}).ok());
+  }
+
+  std::filesystem::path db() const { return dir_ / "runs.sqlite"; }
+
+  MqttSettings settings() const {
+    MqttSettings m;
+    m.host = "127.0.0.1";
+    m.port = broker_->port();
+    m.site = "plant-a";
+    m.keepalive_s = 5;
+    m.reconnect_min = std::chrono::milliseconds(100);
+    m.reconnect_max = std::chrono::milliseconds(500);
+    m.poll_interval = std::chrono::milliseconds(500);
+    return m;
+  }
+  std::unique_ptr<OutboxSender> start_sender() { return std::make_unique<OutboxSender>(db(), settings(), "grinder-1"); }
+
+  // Stores a run of intake lobe 1 at minute `minute`; returns its UUID.
+  std::string add_run(int minute) {
+    char started[32];
+    std::snprintf(started, sizeof started, "2026-11-22T08:%02d:00Z", minute);
+    Result<std::int64_t> id = store_->insert_run(testing::sample_run("intake", 1, "grinder-1", started, 3.0));
+    EXPECT_TRUE(id.ok()) << id.error().message;
+    if (!id.ok()) return {};
+    Result<StoredRun> run = store_->load_run(*id);
+    return run.ok() ? run->summary.uuid : std::string();
+  }
+  std::int64_t depth() const {
+    Result<OutboxCounts> c = store_->outbox_counts();
+    return c.ok() ? c->depth : -1;
+  }
+  OutboxCounts counts() const {
+    Result<OutboxCounts> c = store_->outbox_counts();
+    EXPECT_TRUE(c.ok());
+    return c.ok() ? *c : OutboxCounts{};
+  }
+  static std::set<std::string> run_uuids(const Subscriber& sub) {
+    std::set<std::string> out;
+    for (const Received& r : sub.of("/run")) out.insert(r.payload.value("uuid", ""));
+    return out;
+  }
+
+  testing::TempDir dir_;
+  std::unique_ptr<testing::MosquittoBroker> broker_;
+  std::optional<RunStore> store_;
+};
+
+TEST_F(OutboxSenderTest, ARunStoredArrivesAtASubscriberAndLeavesTheOutbox) {
+  Subscriber sub(broker_->port(), "gaugeloop/plant-a/grinder-1/#");
+  std::unique_ptr<OutboxSender> sender = start_sender();
+  ASSERT_TRUE(wait_until([&] { return sender->status().connected; })) << sender->status().last_error;
+  const std::string uuid = add_run(0);
+  ASSERT_EQ(depth(), 2) << "the run and its verdict wait";
+  sender->notify();
+  ASSERT_TRUE(wait_until([&] { return sub.of("/run").size() == 1 && sub.of("/verdict").size() == 1; }));
+  const Received run = sub.of("/run")[0];
+  EXPECT_EQ(run.topic, "gaugeloop/plant-a/grinder-1/run");
+  EXPECT_FALSE(run.retained);
+  EXPECT_EQ(run.payload["uuid"], uuid);
+  EXPECT_TRUE(run.payload["message_uuid"].is_string());
+  EXPECT_NE(run.payload["message_uuid"], uuid);
+  for (const char* key : {"id", "machine", "part", "lobe", "started_utc", "verdict", "characteristics", "nc_pushes"}) {
+    EXPECT_TRUE(run.payload.contains(key)) << key;
+  }
+  EXPECT_EQ(sub.of("/verdict")[0].payload["run_uuid"], uuid);
+  // Deleted on the broker's acknowledgement, and counted.
+  ASSERT_TRUE(wait_until([&] { return depth() == 0; }));
+  EXPECT_EQ(counts().sent_total, 2);
+  ASSERT_TRUE(wait_until([&] { return sender->status().acknowledged == 2; }));
+  ASSERT_TRUE(wait_until([&] {
+    return sender->metrics().find("gaugeloop_outbox_sent_total 2\n") != std::string::npos;
+  })) << sender->metrics();
+  EXPECT_NE(sender->metrics().find("gaugeloop_mqtt_connected 1\n"), std::string::npos);
+  EXPECT_EQ(sender->health()["connected"], true);
+}
+
+TEST_F(OutboxSenderTest, RunsStoredWhileTheBrokerIsDownAllArriveWhenItIsBack) {
+  // A plant consumer's session: the broker keeps its messages over the broker's restart.
+  auto sub = std::make_unique<Subscriber>(broker_->port(), "gaugeloop/plant-a/grinder-1/run", true, "consumer-1");
+  std::unique_ptr<OutboxSender> sender = start_sender();
+  ASSERT_TRUE(wait_until([&] { return sender->status().connected; })) << sender->status().last_error;
+  broker_->stop();
+  ASSERT_TRUE(wait_until([&] { return !sender->status().connected; }));
+  std::set<std::string> stored;
+  for (int i = 0; i < 5; ++i) stored.insert(add_run(i));
+  sender->notify();
+  // Nothing can be acknowledged: all wait (5 runs and the lobe's first verdict).
+  ASSERT_TRUE(wait_until([&] { return sender->health()["depth"] == 6; })) << sender->health().dump();
+  EXPECT_EQ(depth(), 6);
+  EXPECT_EQ(sender->health()["connected"], false);
+  EXPECT_FALSE(sender->status().last_error.empty());
+
+  ASSERT_TRUE(broker_->restart());
+  ASSERT_TRUE(wait_until([&] { return depth() == 0; })) << sender->status().last_error;
+  ASSERT_TRUE(wait_until([&] { return run_uuids(*sub) == stored; }))
+      << "of 5 runs, " << run_uuids(*sub).size() << " arrived";
+  EXPECT_EQ(counts().sent_total, 6);
+  EXPECT_EQ(counts().dropped_total, 0);
+  EXPECT_GE(sender->status().reconnects, 1);
+}
+
+TEST_F(OutboxSenderTest, ASenderStoppedBeforeTheAcknowledgementSendsAgainWithTheSameMessageUuid) {
+  Subscriber sub(broker_->port(), "gaugeloop/plant-a/grinder-1/#");
+  std::set<std::string> stored;
+  {
+    std::unique_ptr<OutboxSender> sender = start_sender();
+    ASSERT_TRUE(wait_until([&] { return sender->status().connected; })) << sender->status().last_error;
+    // The broker freezes: it takes our bytes (the kernel does) and acknowledges nothing.
+    ASSERT_TRUE(broker_->pause());
+    for (int i = 0; i < 4; ++i) stored.insert(add_run(i));
+    sender->notify();
+    ASSERT_TRUE(wait_until([&] { return sender->status().published >= 5; }));
+    EXPECT_EQ(sender->status().acknowledged, 0);
+  }  // stopped: the offline state waits kSenderStopLimit for an answer, then it goes
+  EXPECT_EQ(depth(), 5) << "unacknowledged messages stay in the outbox";
+  ASSERT_TRUE(broker_->resume());
+
+  std::unique_ptr<OutboxSender> again = start_sender();
+  ASSERT_TRUE(wait_until([&] { return depth() == 0; })) << again->status().last_error;
+  ASSERT_TRUE(wait_until([&] { return run_uuids(sub) == stored; }));
+  // At least once; a repeat carries the message_uuid of the first, with the same record.
+  std::map<std::string, std::string> record_of_message;
+  for (const Received& r : sub.of("/run")) {
+    const std::string message = r.payload["message_uuid"];
+    const std::string record = r.payload["uuid"];
+    const auto [it, fresh] = record_of_message.emplace(message, record);
+    if (!fresh) {
+      EXPECT_EQ(it->second, record) << "message " << message << " came twice with different runs";
+    }
+  }
+  EXPECT_EQ(record_of_message.size(), 4u) << "one message identity per run";
+}
+
+TEST_F(OutboxSenderTest, ALateSubscriberGetsTheRetainedStateAndALostConnectionTheLastWill) {
+  std::unique_ptr<OutboxSender> sender = start_sender();
+  ASSERT_TRUE(wait_until([&] { return sender->status().connected; })) << sender->status().last_error;
+  {
+    Subscriber late(broker_->port(), "gaugeloop/plant-a/grinder-1/state");
+    ASSERT_TRUE(wait_until([&] { return !late.of("/state").empty(); }));
+    const Received first = late.of("/state")[0];
+    EXPECT_TRUE(first.retained);
+    EXPECT_EQ(first.payload["state"], "online");
+    EXPECT_EQ(first.payload["machine"], "grinder-1");
+  }
+  Subscriber watching(broker_->port(), "gaugeloop/plant-a/grinder-1/state");
+  ASSERT_TRUE(wait_until([&] { return !watching.of("/state").empty(); }));
+  sender->stop_abruptly();  // no DISCONNECT: the broker publishes the will
+  ASSERT_TRUE(wait_until([&] { return watching.of("/state").size() >= 2; }));
+  EXPECT_EQ(watching.of("/state").back().payload["state"], "offline");
+  Subscriber later(broker_->port(), "gaugeloop/plant-a/grinder-1/state");
+  ASSERT_TRUE(wait_until([&] { return !later.of("/state").empty(); }));
+  EXPECT_EQ(later.of("/state")[0].payload["state"], "offline");
+  EXPECT_TRUE(later.of("/state")[0].retained);
+}
+
+TEST_F(OutboxSenderTest, ACleanStopLeavesTheOfflineStateAndQueuedStatesAreSent) {
+  Subscriber sub(broker_->port(), "gaugeloop/plant-a/grinder-1/state");
+  {
+    std::unique_ptr<OutboxSender> sender = start_sender();
+    ASSERT_TRUE(wait_until([&] { return sender->status().connected; })) << sender->status().last_error;
+    sender->queue_state("started", "test");
+    ASSERT_TRUE(wait_until([&] {
+      for (const Received& r : sub.of("/state"))
+        if (r.payload["state"] == "started") return true;
+      return false;
+    }));
+    sender->queue_state("stopping");
+  }
+  ASSERT_TRUE(
+      wait_until([&] { return !sub.of("/state").empty() && sub.of("/state").back().payload["state"] == "offline"; }));
+  std::vector<std::string> states;
+  for (const Received& r : sub.of("/state")) states.push_back(r.payload["state"]);
+  EXPECT_NE(std::find(states.begin(), states.end(), "stopping"), states.end()) << "queued before the stop, sent";
+  EXPECT_EQ(sub.of("/state").back().payload["detail"], "the service stopped");
+  EXPECT_EQ(depth(), 0);
+}
+
+TEST_F(OutboxSenderTest, AMessageWhoseRunIsGoneIsSkippedAndTheRestArrive) {
+  Subscriber sub(broker_->port(), "gaugeloop/plant-a/grinder-1/run");
+  {
+    // A row naming a run that is not there (deleted by hand in sqlite3).
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(db().c_str(), &raw), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(raw,
+                           "INSERT INTO outbox (uuid, topic, run_id, created_utc) VALUES "
+                           "('00000000-0000-4000-8000-000000000001', 'run', 4242, '2026-11-22T08:00:00Z')",
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(raw);
+  }
+  const std::string uuid = add_run(1);
+  std::unique_ptr<OutboxSender> sender = start_sender();
+  ASSERT_TRUE(wait_until([&] { return depth() == 0; })) << sender->status().last_error;
+  ASSERT_TRUE(wait_until([&] { return run_uuids(sub) == std::set<std::string>{uuid}; }));
+  EXPECT_EQ(sender->status().skipped, 1);
+}
+
+}  // namespace
+}  // namespace gaugeloop

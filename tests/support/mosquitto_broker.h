@@ -1,0 +1,162 @@
+// A real mosquitto broker for the plant tests: `mosquitto -c <conf>` on 127.0.0.1 and a free
+// port, with its persistence in a directory of the test's, stopped (SIGTERM, then waited for)
+// at the end. It can be stopped and started again on the same port and directory, as a broker
+// restart is. No fixed ports, nothing beyond loopback.
+#pragma once
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+
+namespace gaugeloop::testing {
+
+// A port the kernel had free a moment ago (bound to port 0, read back, closed).
+inline int free_loopback_port() {
+  const int s = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = 0;
+  socklen_t len = sizeof a;
+  int port = 0;
+  if (::bind(s, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
+      ::getsockname(s, reinterpret_cast<sockaddr*>(&a), &len) == 0) {
+    port = ntohs(a.sin_port);
+  }
+  ::close(s);
+  return port;
+}
+
+// Whether something accepts TCP connections on 127.0.0.1:port now.
+inline bool accepts_connections(int port) {
+  const int s = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  const bool ok = ::connect(s, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+  ::close(s);
+  return ok;
+}
+
+// Polls `done` until it holds or `within` passes (a loaded machine is slow: be generous).
+template <typename F>
+bool wait_until(F&& done, std::chrono::milliseconds within = std::chrono::seconds(30)) {
+  const auto deadline = std::chrono::steady_clock::now() + within;
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return true;
+}
+
+class MosquittoBroker {
+ public:
+  // Starts a broker keeping its state in `dir` (created). Check started().
+  explicit MosquittoBroker(std::filesystem::path dir) : dir_(std::move(dir)) {
+    std::filesystem::create_directories(dir_);
+    for (int attempt = 0; attempt < 5 && !running(); ++attempt) {
+      port_ = free_loopback_port();
+      start();
+    }
+  }
+  ~MosquittoBroker() { stop(); }
+  MosquittoBroker(const MosquittoBroker&) = delete;
+  MosquittoBroker& operator=(const MosquittoBroker&) = delete;
+
+  bool started() const { return running(); }
+  int port() const { return port_; }
+  const std::filesystem::path& dir() const { return dir_; }
+
+  // SIGTERM (mosquitto saves its persistence), then waits for the process.
+  void stop() {
+    if (pid_ <= 0) return;
+    ::kill(pid_, SIGCONT);  // a paused broker would never act on SIGTERM
+    ::kill(pid_, SIGTERM);
+    ::waitpid(pid_, nullptr, 0);
+    pid_ = -1;
+  }
+  // SIGSTOP / SIGCONT: a broker that hangs, its socket still open; the kernel takes the
+  // client's bytes and nothing answers.
+  bool pause() { return pid_ > 0 && ::kill(pid_, SIGSTOP) == 0; }
+  bool resume() { return pid_ > 0 && ::kill(pid_, SIGCONT) == 0; }
+  // SIGKILL: a broker that dies without saving.
+  void kill() {
+    if (pid_ <= 0) return;
+    ::kill(pid_, SIGKILL);
+    ::waitpid(pid_, nullptr, 0);
+    pid_ = -1;
+  }
+  // Again on the same port and directory; true once it accepts connections.
+  bool restart() {
+    stop();
+    // The port was ours a moment ago; another process may take it meanwhile, rarely: retry.
+    for (int attempt = 0; attempt < 50 && !running(); ++attempt) start();
+    return running();
+  }
+
+  static std::filesystem::path binary() {
+    for (const char* p : {"/usr/sbin/mosquitto", "/usr/bin/mosquitto", "/usr/local/sbin/mosquitto"}) {
+      if (std::filesystem::exists(p)) return p;
+    }
+    return "mosquitto";
+  }
+
+ private:
+  bool running() const { return pid_ > 0; }
+
+  void start() {
+    const std::filesystem::path conf = dir_ / "mosquitto.conf";
+    {
+      std::ofstream c(conf);
+      c << "listener " << port_ << " 127.0.0.1\n"
+        << "allow_anonymous true\n"
+        << "persistence true\n"
+        << "persistence_location " << dir_.string() << "/\n"
+        << "log_dest file " << (dir_ / "mosquitto.log").string() << "\n"
+        << "log_type all\n";
+      // As root, mosquitto would change to the user `mosquitto`, who cannot write our directory.
+      if (::geteuid() == 0) c << "user root\n";
+    }
+    const std::string bin = binary().string();
+    const std::string conf_path = conf.string();
+    const std::string out_path = (dir_ / "mosquitto.out").string();
+    pid_ = ::fork();
+    if (pid_ == 0) {
+      // Its own lines (e.g. "should not be run as root") to a file, not the test's output.
+      const int out = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      if (out >= 0) {
+        ::dup2(out, STDOUT_FILENO);
+        ::dup2(out, STDERR_FILENO);
+      }
+      ::execl(bin.c_str(), bin.c_str(), "-c", conf_path.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    // Up to 30 s for it to accept; it failing to bind (port taken) ends the process.
+    const bool up = wait_until([this] {
+      if (::waitpid(pid_, nullptr, WNOHANG) == pid_) {
+        pid_ = -1;
+        return true;
+      }
+      return accepts_connections(port_);
+    });
+    if (!up && pid_ > 0) kill();
+  }
+
+  std::filesystem::path dir_;
+  int port_ = 0;
+  pid_t pid_ = -1;
+};
+
+}  // namespace gaugeloop::testing
