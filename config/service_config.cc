@@ -15,6 +15,7 @@
 #include "config/gauge_config.h"
 #include "config/toml_reader.h"
 #include "core/text_file.h"
+#include "plant/plant_messages.h"
 
 namespace gaugeloop {
 namespace {
@@ -580,6 +581,106 @@ Result<std::optional<PlcSettings>> read_plc_table(TomlReader& top, const ConfigF
   return std::optional<PlcSettings>(std::move(ps));
 }
 
+// [plant.mqtt] password_file: checked like the token file (a secret), its text without
+// trailing blanks, not empty.
+Result<std::string> read_password_file(const TomlReader& mr, const ConfigFile& f, const std::string& file) {
+  const fs::path path = f.resolve(file);
+  if (Status s = check_secret_file(mr, "password_file", path, "broker password file"); !s) return s.error();
+  Result<std::string> text = read_text(path, "broker password file");
+  if (!text) return at_key(mr, "password_file", text.error());
+  std::string password = *text;
+  while (!password.empty() && (password.back() == '\n' || password.back() == '\r' || password.back() == ' ')) {
+    password.pop_back();
+  }
+  if (password.empty()) return make_error(ErrorCode::kInvalidInput, mr.where("password_file") + ": the file is empty");
+  return password;
+}
+
+// [plant.mqtt] ca_file, cert_file, key_file: TLS when ca_file is set; a client certificate
+// needs both cert_file and key_file (the key a secret, checked like the token file).
+Status read_mqtt_tls(const TomlReader& mr, const ConfigFile& f, const std::string& ca, const std::string& cert,
+                     const std::string& key, MqttSettings& m) {
+  if (cert.empty() != key.empty()) {
+    return make_error(ErrorCode::kInvalidInput, mr.where(cert.empty() ? "key_file" : "cert_file") +
+                                                    ": give both cert_file and key_file (PEM files) for a client "
+                                                    "certificate, or neither");
+  }
+  if (!cert.empty() && ca.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      mr.where("cert_file") +
+                          ": a client certificate is sent over TLS only; give ca_file too (the CA "
+                          "that signed the broker's certificate)");
+  }
+  if (ca.empty()) return {};
+  m.ca_file = f.resolve(ca);
+  Result<std::string> ca_text = read_regular_file(m.ca_file, "broker CA file");
+  if (!ca_text) return at_key(mr, "ca_file", ca_text.error());
+  if (cert.empty()) return {};
+  m.cert_file = f.resolve(cert);
+  m.key_file = f.resolve(key);
+  Result<std::string> cert_text = read_regular_file(m.cert_file, "broker client certificate");
+  if (!cert_text) return at_key(mr, "cert_file", cert_text.error());
+  if (Status s = check_secret_file(mr, "key_file", m.key_file, "broker client key"); !s) return s;
+  Result<std::string> key_text = read_regular_file(m.key_file, "broker client key");
+  if (!key_text) return at_key(mr, "key_file", key_text.error());
+  return {};
+}
+
+// [plant.mqtt]: the plant's broker; absent table, no broker (the outbox stays disabled). The
+// machine name becomes a topic level, so it is checked here too.
+Result<std::optional<MqttSettings>> read_plant_table(TomlReader& top, const ConfigFile& f, const std::string& machine) {
+  const toml::table* plant = top.subtable("plant");
+  if (plant == nullptr) return std::optional<MqttSettings>();
+  TomlReader pr(*plant, f.source, "plant.");
+  pr.allow_only({"mqtt"});
+  const toml::table* t = pr.subtable("mqtt");
+  if (pr.error) return *pr.error;
+  if (t == nullptr) return std::optional<MqttSettings>();
+  TomlReader mr(*t, f.source, "plant.mqtt.");
+  mr.allow_only({"host", "port", "site", "client_id", "username", "password", "password_file", "ca_file", "cert_file",
+                 "key_file", "keepalive_s", "max_depth"});
+  MqttSettings m;
+  m.host = mr.text("host", std::nullopt);
+  m.port = static_cast<int>(mr.integer("port", 1883, 1, 65535));
+  m.site = mr.text("site", std::nullopt);
+  m.client_id = mr.text("client_id", "gaugeloop-" + machine);
+  m.username = mr.text("username", "");
+  const std::string password_file = mr.text("password_file", "");
+  const std::string ca = mr.text("ca_file", "");
+  const std::string cert = mr.text("cert_file", "");
+  const std::string key = mr.text("key_file", "");
+  m.keepalive_s = static_cast<int>(mr.integer("keepalive_s", 30, 5, 3600));
+  m.max_depth = mr.integer("max_depth", 100000, 1, 100000000);
+  if (mr.error) return *mr.error;
+  if (mr.has("password")) {
+    return make_error(ErrorCode::kInvalidInput,
+                      mr.where("password") +
+                          ": a password written in the config is refused: the config is often readable by every user "
+                          "and copied around. Put it in a file only root and the service's group can read and give "
+                          "`password_file = \"/etc/gaugeloop/mqtt-password\"`");
+  }
+  if (m.host.empty()) return make_error(ErrorCode::kInvalidInput, mr.where("host") + ": is empty; name the broker");
+  if (Status s = check_topic_level(mr.where("site"), m.site); !s) return s.error();
+  if (Status s = check_topic_level(top.where("machine") + " (a level of the broker's topics)", machine); !s) {
+    return s.error();
+  }
+  if (m.client_id.empty() || m.client_id.size() > 128) {
+    return make_error(ErrorCode::kInvalidInput,
+                      mr.where("client_id") + ": give 1 to 128 characters, unique among the broker's clients");
+  }
+  if (!password_file.empty()) {
+    if (m.username.empty()) {
+      return make_error(ErrorCode::kInvalidInput,
+                        mr.where("password_file") + ": a password needs a username; give username too");
+    }
+    Result<std::string> password = read_password_file(mr, f, password_file);
+    if (!password) return password.error();
+    m.password = std::move(*password);
+  }
+  if (Status s = read_mqtt_tls(mr, f, ca, cert, key, m); !s) return s.error();
+  return std::optional<MqttSettings>(std::move(m));
+}
+
 // What the [[part]] entries read so far claim, to refuse a part or a PLC number given twice.
 struct PartClaims {
   std::set<std::pair<std::string, int>> parts;  // (name, lobe)
@@ -669,7 +770,7 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   if (!parsed) return parsed.error();
   const toml::table& table = *parsed;
   TomlReader top(table, f.source);
-  top.allow_only({"machine", "gauge", "part", "analysis", "compensation", "nc", "database", "http", "plc"});
+  top.allow_only({"machine", "gauge", "part", "analysis", "compensation", "nc", "database", "http", "plc", "plant"});
 
   ServiceConfig c;
   c.source = path;
@@ -686,6 +787,9 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   Result<std::optional<PlcSettings>> plc = read_plc_table(top, f);
   if (!plc) return plc.error();
   c.plc = std::move(*plc);
+  Result<std::optional<MqttSettings>> mqtt = read_plant_table(top, f, c.machine);
+  if (!mqtt) return mqtt.error();
+  c.mqtt = std::move(*mqtt);
   if (Status s = read_part_entries(table, top, f, c); !s) return s.error();
   return c;
 }

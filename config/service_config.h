@@ -15,6 +15,7 @@
 #include "core/lift_table.h"
 #include "core/result.h"
 #include "job/measure_job.h"
+#include "plant/mqtt_settings.h"
 
 namespace gaugeloop {
 
@@ -73,6 +74,9 @@ struct ServiceConfig {
   std::string nc_pin_main_xy_template_name;
   std::optional<HttpSettings> http;  // absent: no HTTP API
   std::optional<PlcSettings> plc;    // absent: no PLC trigger
+  // [plant.mqtt]: the plant's broker the outbox sender delivers runs, pushes and states to
+  // (docs/plant.md); absent: no broker, the outbox stays disabled.
+  std::optional<MqttSettings> mqtt;
 };
 
 // Reads and checks the whole file before anything uses it: every part file and lift table
