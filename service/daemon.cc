@@ -10,6 +10,7 @@
 
 #include "acquisition/plc_link.h"
 #include "job/nc_push.h"
+#include "plant/outbox_sender.h"
 #include "service/http_api.h"
 #include "service/plc_trigger.h"
 #include "service/service.h"
@@ -48,6 +49,16 @@ Status prepare_database(const std::filesystem::path& db_path) {
   return {};
 }
 
+// The [plant.mqtt] settings that need a restart, as one text to compare; empty without it.
+// The password is compared, never logged.
+std::string mqtt_text(const std::optional<MqttSettings>& m) {
+  if (!m) return "";
+  return m->host + ":" + std::to_string(m->port) + " site " + m->site + " client " + m->client_id + " user " +
+         m->username + " " + m->password + " tls " + m->ca_file.string() + " " + m->cert_file.string() + " " +
+         m->key_file.string() + " keepalive " + std::to_string(m->keepalive_s) + " bound " +
+         std::to_string(m->max_depth);
+}
+
 Result<std::unique_ptr<HttpApi>> start_http(Service& service, PlcTrigger* plc, const HttpSettings& settings,
                                             const std::filesystem::path& db_path) {
   HttpWrites writes;
@@ -80,6 +91,8 @@ struct StartedWith {
   std::optional<HttpSettings> http;
   std::optional<PlcSettings> plc;
   std::filesystem::path db_path;
+  std::optional<MqttSettings> mqtt;
+  std::string machine;
 };
 
 // SIGHUP: a configuration that reads and checks whole replaces the one in force; what needs a
@@ -96,6 +109,9 @@ void reload(Service& service, const std::filesystem::path& config_path, StartedW
   }
   if (plc_text(fresh->plc) != plc_text(started.plc)) {
     spdlog::warn("reload: [plc] changes take effect when the service restarts");
+  }
+  if (mqtt_text(fresh->mqtt) != mqtt_text(started.mqtt) || fresh->machine != started.machine) {
+    spdlog::warn("reload: [plant.mqtt] and machine changes reach the broker when the service restarts");
   }
   std::optional<HttpSettings>& was = started.http;
   if (fresh->http.has_value() != was.has_value() ||
@@ -121,6 +137,24 @@ void reload(Service& service, const std::filesystem::path& config_path, StartedW
 }
 
 }  // namespace
+
+Status configure_plant_outbox(const std::filesystem::path& db_path, const std::optional<MqttSettings>& mqtt) {
+  Result<RunStore> store = RunStore::open(db_path);
+  if (!store) return Error{store.error().code, "database refused, not starting: " + store.error().message};
+  Result<OutboxCounts> counts = store->outbox_counts();
+  if (!counts)
+    return Error{counts.error().code, "the outbox could not be read, not starting: " + counts.error().message};
+  if (!mqtt && !counts->settings.enabled) return {};
+  const OutboxSettings wanted{mqtt.has_value(), mqtt ? mqtt->max_depth : counts->settings.max_depth};
+  if (Status s = store->configure_outbox(wanted); !s)
+    return Error{s.error().code, "the outbox could not be set, not starting: " + s.error().message};
+  if (!mqtt) {
+    spdlog::info("no [plant.mqtt]: the outbox is off; {} messages queued before stay in it", counts->depth);
+  } else if (counts->depth > 0) {
+    spdlog::info("outbox: {} messages wait for the broker since {}", counts->depth, counts->oldest_utc);
+  }
+  return {};
+}
 
 std::string describe_service_config(const ServiceConfig& c) {
   std::string parts;
@@ -153,12 +187,25 @@ Status run_service(const std::filesystem::path& config_path) {
 
   Result<ServiceConfig> config = read_service_config(config_path);
   if (!config) return not_starting(config.error(), "configuration refused");
-  StartedWith started{config->http, config->plc, config->job.db_path};
+  StartedWith started{config->http, config->plc, config->job.db_path, config->mqtt, config->machine};
   const std::optional<HttpSettings>& http_settings = started.http;
   const std::optional<PlcSettings>& plc_settings = started.plc;
   const std::filesystem::path& db_path = started.db_path;
   if (Status s = prepare_database(db_path); !s) return s;
+  if (Status s = configure_plant_outbox(db_path, started.mqtt); !s) return s;
+  // Before the service, so that it outlives every thread that tells it something; its end
+  // publishes the offline state.
+  std::unique_ptr<OutboxSender> outbox;
+  if (started.mqtt) {
+    outbox = std::make_unique<OutboxSender>(db_path, *started.mqtt, started.machine);
+    spdlog::info("plant broker: {}:{} as {}, topics gaugeloop/{}/{}/...", started.mqtt->host, started.mqtt->port,
+                 started.mqtt->client_id, started.mqtt->site, started.machine);
+  }
   Service service(std::move(*config));
+  if (outbox) {
+    service.set_outbox(outbox.get());
+    service.plant_state("started", describe_service_config(*service.config()));
+  }
   spdlog::info("starting: {}", describe_service_config(*service.config()));
 
   // Before the HTTP API, which reports its status; started after it.
@@ -197,6 +244,7 @@ Status run_service(const std::filesystem::path& config_path) {
     // systemd times the stop from here (TimeoutStopSec), no longer the watchdog.
     watchdog.reset();
     service.set_stopping();  // no new run or push; /api/health says "stopping"
+    service.plant_state("stopping");
     // The PLC is polled on, and told "not now" (code 7) for every request, until the last
     // run has ended, whoever started it, and the outcome of its own is in its registers.
     if (plc) plc->stop();

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include "config/service_config.h"
@@ -17,6 +18,13 @@ namespace gaugeloop {
 // "<file>: machine grinder-1, parts intake_flat lobe 1, database ..., PLC ...": what a
 // configuration sets up, for the log and `serve --check`.
 std::string describe_service_config(const ServiceConfig& config);
+
+// The outbox of the run database `db_path` queues broker messages exactly while a broker is
+// configured: on, with its bound, for [plant.mqtt]; off without it (a file a service with a
+// broker used before would otherwise go on queuing messages nobody sends; those already
+// queued stay). A database that has never had it on is not written. Errors name the database
+// and say the service did not start.
+Status configure_plant_outbox(const std::filesystem::path& db_path, const std::optional<MqttSettings>& mqtt);
 
 // Runs the service until SIGTERM or SIGINT; returns ok after a clean stop. Blocks SIGTERM,
 // SIGINT and SIGHUP in the calling thread first (call it before any other thread starts, so

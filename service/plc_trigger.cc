@@ -248,15 +248,18 @@ void PlcTrigger::report(PlcEvent e) {
   switch (e) {
     case PlcEvent::kConnected:
       spdlog::info("PLC link up at {}{}", address(), link_down_ ? " again" : "");
-      if (link_down_)
+      if (link_down_) {
         service_.record_event(EventKind::kInfo, "plc link up", "", 0, std::nullopt,
                               "PLC link at " + address() + " up again");
+        service_.plant_state("plc link up", "PLC link at " + address() + " up again");
+      }
       link_down_ = false;
       break;
     case PlcEvent::kConnectFailed:
       if (!link_down_) {  // once per loss, not once per attempt
         spdlog::warn("PLC link down: {}; retrying with backoff", handshake_.last_link_error());
         service_.record_event(EventKind::kFault, "plc link down", "", 0, std::nullopt, handshake_.last_link_error());
+        service_.plant_state("plc link down", handshake_.last_link_error());
       }
       link_down_ = true;
       break;
@@ -264,6 +267,7 @@ void PlcTrigger::report(PlcEvent e) {
       if (!link_down_) {
         spdlog::warn("PLC link lost: {}; reconnecting with backoff", handshake_.last_link_error());
         service_.record_event(EventKind::kFault, "plc link down", "", 0, std::nullopt, handshake_.last_link_error());
+        service_.plant_state("plc link down", handshake_.last_link_error());
       }
       link_down_ = true;
       break;

@@ -26,6 +26,7 @@ namespace gaugeloop {
 
 class Service;
 class EventWriter;
+class OutboxSender;
 
 // The one run (or push) at a time, held: whoever holds it may run; it is released when the
 // holder ends it, on whichever thread (destruction, or moving it on to a worker thread and
@@ -146,6 +147,14 @@ class Service {
   // thread starts.
   void set_plc_status(std::function<nlohmann::json()> status) { plc_status_ = std::move(status); }
 
+  // The plant broker's sender ([plant.mqtt]); null: none. Set before any thread starts, and it
+  // must outlive the service's threads. /api/health gets its "outbox", /metrics its series,
+  // and it is told after every run, push and state change.
+  void set_outbox(OutboxSender* sender) { outbox_ = sender; }
+  // A state change for the plant's broker ("started", "stopping", "plc link down"...): queued
+  // in the outbox by the sender's thread. Nothing without a sender. Any thread.
+  void plant_state(const std::string& state, const std::string& detail = {}) const;
+
   nlohmann::json health() const;
   std::string metrics() const;  // Prometheus lines of the service's counters
   // Counted after the reload's event is written (flush_events; unless the database holds it
@@ -171,6 +180,7 @@ class Service {
   std::atomic<long long> reload_failures_{0};
   mutable std::atomic<long long> thread_faults_{0};
   std::function<nlohmann::json()> plc_status_;
+  OutboxSender* outbox_ = nullptr;
   std::unique_ptr<EventWriter> events_;  // last: its thread ends first
 };
 

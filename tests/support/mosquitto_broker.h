@@ -7,6 +7,7 @@
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <mosquitto.h>
 #include <netinet/in.h>
 #include <signal.h>
 #include <sys/socket.h>
@@ -16,8 +17,11 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace gaugeloop::testing {
 
@@ -157,6 +161,77 @@ class MosquittoBroker {
   std::filesystem::path dir_;
   int port_ = 0;
   pid_t pid_ = -1;
+};
+
+struct Received {
+  std::string topic;
+  nlohmann::json payload;
+  bool retained = false;
+};
+
+// A subscriber of its own (libmosquitto with its network thread), independent of the sender.
+// With `persistent`, the broker keeps its QoS 1 messages while it is disconnected (a broker
+// restart), as a plant consumer's session does.
+class Subscriber {
+ public:
+  Subscriber(int port, std::string filter, bool persistent = false, std::string id = {}) : filter_(std::move(filter)) {
+    mosquitto_lib_init();
+    if (id.empty()) id = "test-subscriber-" + std::to_string(++count());
+    mosq_ = mosquitto_new(id.c_str(), !persistent, this);
+    mosquitto_connect_callback_set(mosq_, [](struct mosquitto* m, void* self, int rc) {
+      if (rc == 0) mosquitto_subscribe(m, nullptr, static_cast<Subscriber*>(self)->filter_.c_str(), 1);
+    });
+    mosquitto_subscribe_callback_set(mosq_, [](struct mosquitto*, void* self, int, int, const int*) {
+      auto* s = static_cast<Subscriber*>(self);
+      std::lock_guard<std::mutex> lock(s->mutex_);
+      ++s->subscribed_;
+    });
+    mosquitto_message_callback_set(mosq_, [](struct mosquitto*, void* self, const mosquitto_message* m) {
+      auto* s = static_cast<Subscriber*>(self);
+      const std::string text(static_cast<const char*>(m->payload), static_cast<std::size_t>(m->payloadlen));
+      std::lock_guard<std::mutex> lock(s->mutex_);
+      s->messages_.push_back({m->topic, nlohmann::json::parse(text, nullptr, false), m->retain});
+    });
+    mosquitto_reconnect_delay_set(mosq_, 1, 1, false);
+    EXPECT_EQ(mosquitto_connect(mosq_, "127.0.0.1", port, 10), MOSQ_ERR_SUCCESS);
+    EXPECT_EQ(mosquitto_loop_start(mosq_), MOSQ_ERR_SUCCESS);
+    EXPECT_TRUE(wait_until([this] { return subscriptions() > 0; })) << "no SUBACK from the broker";
+  }
+  ~Subscriber() {
+    mosquitto_disconnect(mosq_);
+    mosquitto_loop_stop(mosq_, true);
+    mosquitto_destroy(mosq_);
+  }
+
+  std::vector<Received> messages() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return messages_;
+  }
+  int subscriptions() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return subscribed_;
+  }
+  // The messages on topics ending in `kind`.
+  std::vector<Received> of(const std::string& kind) const {
+    std::vector<Received> out;
+    for (const Received& r : messages()) {
+      if (r.topic.size() >= kind.size() && r.topic.compare(r.topic.size() - kind.size(), kind.size(), kind) == 0) {
+        out.push_back(r);
+      }
+    }
+    return out;
+  }
+
+ private:
+  static int& count() {
+    static int n = 0;
+    return n;
+  }
+  std::string filter_;
+  struct mosquitto* mosq_ = nullptr;
+  mutable std::mutex mutex_;
+  std::vector<Received> messages_;
+  int subscribed_ = 0;
 };
 
 }  // namespace gaugeloop::testing
