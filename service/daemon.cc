@@ -172,8 +172,11 @@ std::string describe_service_config(const ServiceConfig& c) {
     plc = ModbusPlcLink(c.plc->link).address() + " base " + std::to_string(c.plc->link.base_address) +
           " (part numbers " + numbers + ")";
   }
+  const std::string broker = c.mqtt ? c.mqtt->host + ":" + std::to_string(c.mqtt->port) + " (site " + c.mqtt->site +
+                                          (c.mqtt->ca_file.empty() ? "" : ", TLS") + ")"
+                                    : std::string("none");
   return c.source.string() + ": machine " + c.machine + ", parts " + parts + ", database " + c.job.db_path.string() +
-         ", NC directory " + c.job.nc_dir.string() + ", PLC " + plc;
+         ", NC directory " + c.job.nc_dir.string() + ", PLC " + plc + ", plant broker " + broker;
 }
 
 Status run_service(const std::filesystem::path& config_path) {

@@ -67,8 +67,10 @@ bool wait_until(F&& done, std::chrono::milliseconds within = std::chrono::second
 
 class MosquittoBroker {
  public:
-  // Starts a broker keeping its state in `dir` (created). Check started().
-  explicit MosquittoBroker(std::filesystem::path dir) : dir_(std::move(dir)) {
+  // Starts a broker keeping its state in `dir` (created). Check started(). With
+  // `password_file` (made with mosquitto_passwd), only its users may connect.
+  explicit MosquittoBroker(std::filesystem::path dir, std::filesystem::path password_file = {})
+      : dir_(std::move(dir)), password_file_(std::move(password_file)) {
     std::filesystem::create_directories(dir_);
     for (int attempt = 0; attempt < 5 && !running(); ++attempt) {
       port_ = free_loopback_port();
@@ -125,13 +127,17 @@ class MosquittoBroker {
     {
       std::ofstream c(conf);
       c << "listener " << port_ << " 127.0.0.1\n"
-        << "allow_anonymous true\n"
+        << "allow_anonymous " << (password_file_.empty() ? "true" : "false") << "\n"
         << "persistence true\n"
         << "persistence_location " << dir_.string() << "/\n"
         << "log_dest file " << (dir_ / "mosquitto.log").string() << "\n"
-        << "log_type all\n";
+        << "log_type all\n"
+        // A subscriber that falls behind a backlog sent at once must not lose messages to the
+        // broker's per-client queue (1000 by default): the tests count every one.
+        << "max_queued_messages 0\n";
       // As root, mosquitto would change to the user `mosquitto`, who cannot write our directory.
       if (::geteuid() == 0) c << "user root\n";
+      if (!password_file_.empty()) c << "password_file " << password_file_.string() << "\n";
     }
     const std::string bin = binary().string();
     const std::string conf_path = conf.string();
@@ -159,6 +165,7 @@ class MosquittoBroker {
   }
 
   std::filesystem::path dir_;
+  std::filesystem::path password_file_;
   int port_ = 0;
   pid_t pid_ = -1;
 };
