@@ -41,6 +41,7 @@ Result<std::unique_ptr<MqttClient>> MqttClient::connect(const MqttConnectOptions
   mosquitto_connect_callback_set(c->mosq_, &MqttClient::on_connect);
   mosquitto_disconnect_callback_set(c->mosq_, &MqttClient::on_disconnect);
   mosquitto_publish_callback_set(c->mosq_, &MqttClient::on_publish);
+  mosquitto_log_callback_set(c->mosq_, &MqttClient::on_log);
   if (!o.username.empty()) {
     const int rc =
         mosquitto_username_pw_set(c->mosq_, o.username.c_str(), o.password.empty() ? nullptr : o.password.c_str());
@@ -68,7 +69,7 @@ Result<std::unique_ptr<MqttClient>> MqttClient::connect(const MqttConnectOptions
   errno = 0;
   const int rc = mosquitto_connect(c->mosq_, o.host.c_str(), o.port, o.keepalive_s);
   if (rc != MOSQ_ERR_SUCCESS) {
-    return make_error(ErrorCode::kIo, "cannot connect to the broker " + c->address_ + ": " + reason(rc));
+    return make_error(ErrorCode::kIo, "cannot connect to the broker " + c->address_ + ": " + c->reason_of(rc));
   }
   return c;
 }
@@ -90,7 +91,19 @@ void MqttClient::on_connect(struct mosquitto*, void* self, int rc) {
 void MqttClient::on_disconnect(struct mosquitto*, void* self, int rc) {
   auto* c = static_cast<MqttClient*>(self);
   c->connected_ = false;
-  if (!c->disconnected_) c->fail("the connection to the broker " + c->address_ + " was lost: " + reason(rc));
+  if (!c->disconnected_) c->fail("the connection to the broker " + c->address_ + " was lost: " + c->reason_of(rc));
+}
+
+void MqttClient::on_log(struct mosquitto*, void* self, int level, const char* line) {
+  if ((level & (MOSQ_LOG_ERR | MOSQ_LOG_WARNING)) != 0 && line != nullptr) {
+    static_cast<MqttClient*>(self)->last_log_error_ = line;
+  }
+}
+
+std::string MqttClient::reason_of(int rc) const {
+  std::string r = reason(rc);
+  if (rc == MOSQ_ERR_TLS && !last_log_error_.empty()) r += " (" + last_log_error_ + ")";
+  return r;
 }
 
 void MqttClient::on_publish(struct mosquitto*, void* self, int mid) {
@@ -135,7 +148,7 @@ bool MqttClient::run_for(std::chrono::milliseconds timeout, int wake_fd) {
     if ((fds[0].revents & (POLLIN | POLLHUP | POLLERR)) != 0) rc = mosquitto_loop_read(mosq_, 1);
     if (rc == MOSQ_ERR_SUCCESS && (fds[0].revents & POLLOUT) != 0) rc = mosquitto_loop_write(mosq_, 1);
     if (rc != MOSQ_ERR_SUCCESS) {
-      fail("the connection to the broker " + address_ + " was lost: " + reason(rc));
+      fail("the connection to the broker " + address_ + " was lost: " + reason_of(rc));
       return woken;
     }
   }

@@ -78,6 +78,10 @@ class MqttClient {
   static void on_connect(struct mosquitto*, void* self, int rc);
   static void on_disconnect(struct mosquitto*, void* self, int rc);
   static void on_publish(struct mosquitto*, void* self, int mid);
+  static void on_log(struct mosquitto*, void* self, int level, const char* line);
+  // libmosquitto's reason for `rc`, with what its log said last (OpenSSL's reason for a TLS
+  // failure: "certificate verify failed").
+  std::string reason_of(int rc) const;
   void fail(std::string why);
 
   struct mosquitto* mosq_ = nullptr;
@@ -86,6 +90,7 @@ class MqttClient {
   bool disconnected_ = false;  // by disconnect()
   std::string failure_;
   std::vector<int> acknowledged_;
+  std::string last_log_error_;  // libmosquitto's last error log line
 };
 
 }  // namespace gaugeloop

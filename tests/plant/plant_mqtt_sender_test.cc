@@ -290,5 +290,48 @@ TEST_F(OutboxSenderTest, ABrokerThatRefusesTheLoginKeepsTheMessagesAndTheRightOn
   EXPECT_EQ(counts().sent_total, 2);
 }
 
+// A CA and a broker certificate for "localhost", made with the openssl command line.
+bool make_tls_files(const std::filesystem::path& dir) {
+  const std::string d = dir.string();
+  const std::string script =
+      "cd " + d + " && " +
+      "openssl req -x509 -newkey rsa:2048 -nodes -keyout ca.key -out ca.pem -days 2 -subj '/CN=plant test CA' && "
+      "openssl req -x509 -newkey rsa:2048 -nodes -keyout other-ca.key -out other-ca.pem -days 2 "
+      "-subj '/CN=another CA' && "
+      "openssl req -newkey rsa:2048 -nodes -keyout server.key -out server.csr -subj '/CN=localhost' && "
+      "printf 'subjectAltName=DNS:localhost\\n' > san.ext && "
+      "openssl x509 -req -in server.csr -CA ca.pem -CAkey ca.key -CAcreateserial -out server.pem -days 2 "
+      "-extfile san.ext";
+  return std::system((script + " >" + d + "/openssl.log 2>&1").c_str()) == 0;
+}
+
+TEST_F(OutboxSenderTest, OverTlsTheBrokerIsCheckedAgainstTheCaFile) {
+  const std::filesystem::path tls = dir_ / "tls";
+  std::filesystem::create_directories(tls);
+  ASSERT_TRUE(make_tls_files(tls)) << "see " << (tls / "openssl.log");
+  testing::MosquittoBroker secure(dir_ / "secure", {},
+                                  "cafile " + (tls / "ca.pem").string() + "\ncertfile " +
+                                      (tls / "server.pem").string() + "\nkeyfile " + (tls / "server.key").string() +
+                                      "\n");
+  ASSERT_TRUE(secure.started()) << "see " << (dir_ / "secure" / "mosquitto.log");
+  add_run(0);
+  MqttSettings m = settings();
+  m.host = "localhost";
+  m.port = secure.port();
+  m.ca_file = tls / "other-ca.pem";
+  {
+    OutboxSender untrusted(db(), m, "grinder-1");
+    ASSERT_TRUE(wait_until([&] { return untrusted.status().reconnects >= 2; }));
+    EXPECT_FALSE(untrusted.status().connected);
+    EXPECT_EQ(depth(), 2) << "a broker whose certificate the CA did not sign gets nothing";
+    EXPECT_NE(untrusted.status().last_error.find("certificate verify failed"), std::string::npos)
+        << untrusted.status().last_error;
+  }
+  m.ca_file = tls / "ca.pem";
+  OutboxSender sender(db(), m, "grinder-1");
+  ASSERT_TRUE(wait_until([&] { return depth() == 0; })) << sender.status().last_error;
+  EXPECT_EQ(counts().sent_total, 2);
+}
+
 }  // namespace
 }  // namespace gaugeloop

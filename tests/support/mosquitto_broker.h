@@ -68,9 +68,11 @@ bool wait_until(F&& done, std::chrono::milliseconds within = std::chrono::second
 class MosquittoBroker {
  public:
   // Starts a broker keeping its state in `dir` (created). Check started(). With
-  // `password_file` (made with mosquitto_passwd), only its users may connect.
-  explicit MosquittoBroker(std::filesystem::path dir, std::filesystem::path password_file = {})
-      : dir_(std::move(dir)), password_file_(std::move(password_file)) {
+  // `password_file` (made with mosquitto_passwd), only its users may connect; `listener_conf`
+  // adds lines to the listener (e.g. TLS: cafile, certfile, keyfile).
+  explicit MosquittoBroker(std::filesystem::path dir, std::filesystem::path password_file = {},
+                           std::string listener_conf = {})
+      : dir_(std::move(dir)), password_file_(std::move(password_file)), listener_conf_(std::move(listener_conf)) {
     std::filesystem::create_directories(dir_);
     for (int attempt = 0; attempt < 5 && !running(); ++attempt) {
       port_ = free_loopback_port();
@@ -127,7 +129,7 @@ class MosquittoBroker {
     {
       std::ofstream c(conf);
       c << "listener " << port_ << " 127.0.0.1\n"
-        << "allow_anonymous " << (password_file_.empty() ? "true" : "false") << "\n"
+        << listener_conf_ << "allow_anonymous " << (password_file_.empty() ? "true" : "false") << "\n"
         << "persistence true\n"
         << "persistence_location " << dir_.string() << "/\n"
         << "log_dest file " << (dir_ / "mosquitto.log").string() << "\n"
@@ -166,6 +168,7 @@ class MosquittoBroker {
 
   std::filesystem::path dir_;
   std::filesystem::path password_file_;
+  std::string listener_conf_;
   int port_ = 0;
   pid_t pid_ = -1;
 };
