@@ -290,6 +290,31 @@ TEST_F(OutboxSenderTest, ABrokerThatRefusesTheLoginKeepsTheMessagesAndTheRightOn
   EXPECT_EQ(counts().sent_total, 2);
 }
 
+TEST_F(OutboxSenderTest, HealthIsDegradedWhileOldMessagesWaitForAnUnreachableBroker) {
+  broker_->stop();
+  {
+    // A state queued long ago (the clock's minutes are not waited for: the row says when).
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(db().c_str(), &raw), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(raw,
+                           "INSERT INTO outbox (uuid, topic, created_utc, payload) VALUES "
+                           "('00000000-0000-4000-8000-000000000002', 'state', '2026-01-01T00:00:00Z', "
+                           "'{\"state\":\"started\"}')",
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(raw);
+  }
+  std::unique_ptr<OutboxSender> sender = start_sender();
+  ASSERT_TRUE(wait_until([&] { return sender->health()["depth"] == 1; })) << sender->health().dump();
+  EXPECT_EQ(sender->health()["oldest_utc"], "2026-01-01T00:00:00Z");
+  EXPECT_EQ(sender->health()["degraded"], true) << sender->health().dump();
+  EXPECT_TRUE(sender->health()["last_error"].is_string());
+  ASSERT_TRUE(broker_->restart());
+  ASSERT_TRUE(wait_until([&] { return sender->health()["depth"] == 0; })) << sender->health().dump();
+  EXPECT_EQ(sender->health()["degraded"], false);
+  EXPECT_EQ(sender->health()["connected"], true);
+}
+
 // A CA and a broker certificate for "localhost", made with the openssl command line.
 bool make_tls_files(const std::filesystem::path& dir) {
   const std::string d = dir.string();
