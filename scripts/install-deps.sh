@@ -30,9 +30,9 @@ packages=(
   python3            # runs tests/layering's include check (and the pymodbus peer)
   python3-pymodbus   # an independent Modbus server: tests read a gauge served by it
   python3-serial python3-serial-asyncio  # pymodbus imports both even for TCP; only Recommended, so named here
-  mosquitto mosquitto-clients  # a real MQTT broker and an independent subscriber for the plant tests
+  mosquitto mosquitto-clients  # a real MQTT broker (and mosquitto_passwd) for the plant tests
   postgresql-15      # a real PostgreSQL server the plant tests start in a temporary directory
-  openssl            # self-signed certificates for the HTTPS tests; `gaugeloop token new` needs none
+  openssl            # self-signed certificates for the HTTPS and broker TLS tests; `gaugeloop token new` needs none
   curl               # an independent HTTP client: tests talk to the service with it
   locales            # a decimal-comma locale, to test that output ignores the C locale
   librsvg2-bin       # rsvg-convert: view a `gaugeloop runs plot` SVG as PNG; not needed to build or test
