@@ -78,6 +78,12 @@ class OutboxSender::Loop {
   }
 
   void run();
+  // After an exception ended run(): waits a while (or until stopped); false when stopping.
+  bool pause_after_fault() {
+    if (stopping_) return false;
+    wait_for_wake(settings_.reconnect_max);
+    return !stopping_;
+  }
 
  private:
   // Drains the wake-up counter; true if it was set.
@@ -352,8 +358,15 @@ void OutboxSender::Loop::finish(RunStore* store, std::unique_ptr<MqttClient> cli
 OutboxSender::OutboxSender(std::filesystem::path db_path, MqttSettings settings, std::string machine,
                            std::function<void(std::string_view, std::string_view)> on_fault)
     : loop_(std::make_unique<Loop>(std::move(db_path), std::move(settings), std::move(machine))) {
-  thread_ = start_guarded_thread(
-      "outbox sender", [l = loop_.get()] { l->run(); }, std::move(on_fault));
+  // An exception that ends a pass is told (on_fault) and the sender starts again after a
+  // pause, with a new connection: the messages are in the database, so nothing is lost, and
+  // a fault must not stop the deliveries for good.
+  thread_ = std::thread([l = loop_.get(), fault = std::move(on_fault)] {
+    while (!run_guarded(
+        "outbox sender", [l] { l->run(); }, fault)) {
+      if (!l->pause_after_fault()) break;
+    }
+  });
 }
 
 OutboxSender::~OutboxSender() { stop(true); }

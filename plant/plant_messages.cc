@@ -11,6 +11,14 @@ namespace gaugeloop {
 
 using nlohmann::json;
 
+namespace {
+
+// Text a person typed (a note) may hold bytes that are not UTF-8: replaced (U+FFFD) rather
+// than thrown on, so one odd run never stops the messages behind it.
+std::string dump(const json& j) { return j.dump(-1, ' ', false, json::error_handler_t::replace); }
+
+}  // namespace
+
 Status check_topic_level(std::string_view key, std::string_view value) {
   const std::string advice =
       "; give a name without '/', '+', '#' (it is one level of the topic gaugeloop/<site>/<machine>/...)";
@@ -38,7 +46,7 @@ std::string plant_topic(const std::string& site, const std::string& machine, std
 std::string state_payload(const std::string& machine, std::string_view state, const std::string& detail) {
   json j{{"state", state}, {"machine", machine}, {"at_utc", utc_now()}};
   j["detail"] = detail.empty() ? json(nullptr) : json(detail);
-  return j.dump();
+  return dump(j);
 }
 
 namespace {
@@ -71,7 +79,7 @@ Result<std::optional<PlantMessage>> render_message(const RunStore& store, const 
   if (m.topic == "state") {
     Result<json> j = stored_object(m);
     if (!j) return j.error();
-    out.payload = j->dump();
+    out.payload = dump(*j);
     return std::optional<PlantMessage>(std::move(out));
   }
   if (m.topic != "run" && m.topic != "nc" && m.topic != "verdict") {
@@ -99,7 +107,7 @@ Result<std::optional<PlantMessage>> render_message(const RunStore& store, const 
     j["run_uuid"] = r.summary.uuid;
   }
   j["message_uuid"] = m.uuid;
-  out.payload = j.dump();
+  out.payload = dump(j);
   return std::optional<PlantMessage>(std::move(out));
 }
 

@@ -154,5 +154,16 @@ TEST_F(PlantMessagesTest, AStoredPayloadThatIsNotAnObjectIsRefused) {
   EXPECT_NE(r.error().message.find("outbox message 7"), std::string::npos) << r.error().message;
 }
 
+TEST_F(PlantMessagesTest, ANoteThatIsNotUtf8IsSentWithAReplacementCharacter) {
+  RunRecord r = testing::sample_run("intake", 1, "grinder-1", "2026-11-22T08:00:00Z", 4.0);
+  r.note = "wheel \xff dressed";
+  ASSERT_TRUE(store_->insert_run(r).ok());
+  for (const OutboxMessage& m : waiting()) {
+    if (m.topic != "run") continue;
+    const json run = render(m);
+    EXPECT_EQ(run["note"], "wheel \xEF\xBF\xBD dressed");
+  }
+}
+
 }  // namespace
 }  // namespace gaugeloop
