@@ -4,6 +4,7 @@
 #include <signal.h>
 #include <spdlog/spdlog.h>
 
+#include <atomic>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -198,14 +199,27 @@ Status run_service(const std::filesystem::path& config_path) {
   if (Status s = configure_plant_outbox(db_path, started.mqtt); !s) return s;
   // Before the service, so that it outlives every thread that tells it something; its end
   // publishes the offline state.
+  std::atomic<const Service*> fault_sink{nullptr};  // the sender's faults, while the service exists
   std::unique_ptr<OutboxSender> outbox;
   if (started.mqtt) {
-    outbox = std::make_unique<OutboxSender>(db_path, *started.mqtt, started.machine);
+    outbox = std::make_unique<OutboxSender>(
+        db_path, *started.mqtt, started.machine, [&fault_sink](std::string_view name, std::string_view what) {
+          if (const Service* s = fault_sink.load()) {
+            s->record_thread_fault(name, what);
+          } else {
+            spdlog::error("the {} thread was ended by an exception: {}", name, what);
+          }
+        });
     spdlog::info("plant broker: {}:{} as {}, topics gaugeloop/{}/{}/...", started.mqtt->host, started.mqtt->port,
                  started.mqtt->client_id, started.mqtt->site, started.machine);
   }
   Service service(std::move(*config));
+  struct ForgetService {  // before the service ends, the sender's faults go back to the log
+    std::atomic<const Service*>& sink;
+    ~ForgetService() { sink = nullptr; }
+  } forget_service{fault_sink};
   if (outbox) {
+    fault_sink = &service;
     service.set_outbox(outbox.get());
     service.plant_state("started", describe_service_config(*service.config()));
   }
