@@ -10,9 +10,10 @@ CMAKE_GEN := -G Ninja
 # run in the normal build only: under a sanitizer's slowdown they test the machine, not the code.
 REALTIME_TESTS := ^(LiveLink\.|PymodbusPeer\.|SimulatorFaults/LiveOutageTest\.)
 # The tests of the service's threads (HTTP server, PLC trigger and handshake, the run) and of
-# the guard every thread starts through, and the systemd watchdog's: the ones ThreadSanitizer runs.
-TSAN_TESTS := ^(GuardedThread|PlcHandshakeTest|PlcServiceWords|PlcServiceTest|HttpApiTest|ServiceTest|ServiceStateTest|ServiceConfigFile|ServiceWatchdog|ServiceNotifyEnv)\.
-TSAN_TARGETS := core_test service_unit_test service_integration_test packaging_test gaugeloop
+# the guard every thread starts through, the systemd watchdog's and the outbox sender's: the ones
+# ThreadSanitizer runs.
+TSAN_TESTS := ^(GuardedThread|OutboxSenderTest|PlcHandshakeTest|PlcServiceWords|PlcServiceTest|HttpApiTest|ServiceTest|ServiceStateTest|ServiceConfigFile|ServiceWatchdog|ServiceNotifyEnv)\.
+TSAN_TARGETS := core_test plant_mqtt_test service_unit_test service_integration_test packaging_test gaugeloop
 
 .PHONY: all deps configure build build-asan build-tsan demo test test-normal test-asan test-tsan package test-package bench clean
 
