@@ -209,7 +209,9 @@ class Subscriber {
   }
   ~Subscriber() {
     mosquitto_disconnect(mosq_);
-    mosquitto_loop_stop(mosq_, true);
+    // Not forced: a cancelled network thread could hold a libmosquitto mutex that destroy then
+    // frees (ThreadSanitizer: destroy of a locked mutex). After the DISCONNECT it ends itself.
+    mosquitto_loop_stop(mosq_, false);
     mosquitto_destroy(mosq_);
   }
 
