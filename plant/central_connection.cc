@@ -137,8 +137,15 @@ Result<CentralConnection> connect(const CentralUrl& url) {
 }
 
 Error database_error(const CentralUrl& url, std::string_view operation, const std::exception& e) {
-  if (dynamic_cast<const pqxx::broken_connection*>(&e) != nullptr ||
-      dynamic_cast<const pqxx::in_doubt_error*>(&e) != nullptr) {
+  if (dynamic_cast<const pqxx::in_doubt_error*>(&e) != nullptr) {
+    // The commit was sent but its answer never came: the batch and its progress are there
+    // together or not at all, so running again is safe either way.
+    return make_error(ErrorCode::kStorage, "cannot " + std::string(operation) + ": the connection to the central " +
+                                               "history at " + where(url) + " was lost while committing (" +
+                                               one_line(e.what()) + "), so whether that step was kept is not " +
+                                               "known; run it again once the server is back: nothing is copied twice");
+  }
+  if (dynamic_cast<const pqxx::broken_connection*>(&e) != nullptr) {
     return make_error(ErrorCode::kStorage, "cannot " + std::string(operation) + ": the connection to the central " +
                                                "history at " + where(url) + " was lost (" + one_line(e.what()) +
                                                "); nothing of the unfinished step was kept: run it again once the " +

@@ -272,6 +272,41 @@ TEST_F(CentralTest, ASyncStoppedHalfWayResumesToTheSameContentsAsOneWhole) {
   EXPECT_TRUE(has(got, "g1|runs|11|")) << got;
 }
 
+TEST_F(CentralTest, AServerThatGoesAwayDuringASyncLosesOnlyTheBatchUnderWay) {
+  // A server of its own: this test stops it.
+  PostgresServer server;
+  ASSERT_EQ(server.start(), "");
+  const std::string url = server.create_database();
+  ASSERT_FALSE(url.empty());
+  const std::string db = url.substr(url.rfind('/') + 1);
+  Grinder g("central-server-gone");
+  fill(*g.store, "g1", "2026-11-21", 10);
+
+  CentralSyncOptions dying;
+  dying.batch_size = 4;
+  dying.before_commit = [&server](std::string_view, int batch) -> Status {
+    if (batch == 2) {
+      EXPECT_EQ(server.kill_server(), "");
+    }
+    return {};
+  };
+  Result<CentralSyncCounts> broken = sync_to_central(*g.store, url, "g1", dying);
+  ASSERT_FALSE(broken.ok());
+  EXPECT_EQ(broken.error().code, ErrorCode::kStorage);
+  EXPECT_TRUE(has(broken.error().message, "was lost")) << broken.error().message;
+  EXPECT_TRUE(has(broken.error().message, "the 1 batches before it are in the central history"))
+      << broken.error().message;
+
+  ASSERT_EQ(server.start_again(), "");
+  EXPECT_EQ(server.psql(db, "SELECT count(*) FROM runs"), "4");
+  Result<CentralSyncCounts> resumed = sync_to_central(*g.store, url, "g1");
+  ASSERT_TRUE(resumed.ok()) << resumed.error().message;
+  EXPECT_EQ(resumed->runs.inserted, 6);
+  EXPECT_EQ(resumed->runs.already_there, 0);
+  EXPECT_EQ(server.psql(db, "SELECT count(*), count(DISTINCT uuid) FROM runs"), "10|10");
+  EXPECT_EQ(server.psql(db, "SELECT count(*) FROM run_characteristics"), "30");
+}
+
 TEST_F(CentralTest, ARunPushedAfterItWasSyncedIsPushedInTheCentralHistoryToo) {
   Grinder g("central-pushed-later");
   ASSERT_TRUE(g.store->insert_run(judged_run("intake", 1, "g1", "2026-11-22T08:00:00Z", 1)).ok());

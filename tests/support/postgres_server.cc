@@ -60,6 +60,12 @@ int free_loopback_port() {
 
 PostgresServer::~PostgresServer() { stop(); }
 
+std::string PostgresServer::server_options() const {
+  // fsync off: a test cluster need not survive a power cut, and the disk is shared. Commits
+  // stay synchronous, so a server stopped abruptly keeps every committed transaction.
+  return "-p " + std::to_string(port_) + " -k " + dir_.string() + " -c listen_addresses=127.0.0.1 -c fsync=off";
+}
+
 std::string PostgresServer::run_as_owner(const std::string& command) const {
   // initdb and postgres refuse to run as root.
   const std::string line =
@@ -95,10 +101,7 @@ std::string PostgresServer::start() {
   for (int attempt = 0; attempt < 5; ++attempt) {
     port_ = free_loopback_port();
     if (port_ == 0) return "no free loopback port";
-    // fsync off: a test cluster need not survive a power cut, and the disk is shared.
-    const std::string options = "-p " + std::to_string(port_) + " -k " + dir_.string() +
-                                " -c listen_addresses=127.0.0.1 -c fsync=off -c synchronous_commit=off"
-                                " -c full_page_writes=off";
+    const std::string options = server_options();
     out = run_as_owner(std::string(kBin) + "pg_ctl start -D " + shell_quoted(data) + " -l " +
                        shell_quoted((dir_ / "server.log").string()) + " -w -t 60 -o " + shell_quoted(options));
     if (last_exit_ == 0) {
@@ -121,6 +124,24 @@ void PostgresServer::stop() {
     std::filesystem::remove_all(dir_, ec);
     dir_.clear();
   }
+}
+
+std::string PostgresServer::kill_server() {
+  const std::string out = run_as_owner(std::string(kBin) + "pg_ctl stop -D " + shell_quoted((dir_ / "data").string()) +
+                                       " -m immediate -w -t 60");
+  if (last_exit_ != 0) return "pg_ctl stop failed: " + out;
+  running_ = false;
+  return "";
+}
+
+std::string PostgresServer::start_again() {
+  const std::string options = server_options();
+  const std::string out =
+      run_as_owner(std::string(kBin) + "pg_ctl start -D " + shell_quoted((dir_ / "data").string()) + " -l " +
+                   shell_quoted((dir_ / "server.log").string()) + " -w -t 60 -o " + shell_quoted(options));
+  if (last_exit_ != 0) return "pg_ctl start failed: " + out + read_all(dir_ / "server.log");
+  running_ = true;
+  return "";
 }
 
 std::string PostgresServer::url(const std::string& database) const {

@@ -21,6 +21,10 @@ class PostgresServer {
   // success or what failed, with the server's log.
   std::string start();
   void stop();
+  // Stops the server as a crash or an administrator would (pg_ctl stop -m immediate), keeping
+  // its files, and starts it again on the same port: "" or what failed.
+  std::string kill_server();
+  std::string start_again();
 
   bool running() const { return running_; }
   int port() const { return port_; }
@@ -34,6 +38,7 @@ class PostgresServer {
 
  private:
   std::string run_as_owner(const std::string& command) const;  // returns output; sets last_exit_
+  std::string server_options() const;                          // postgres -o: port, socket, loopback
   std::filesystem::path dir_;
   int port_ = 0;
   bool running_ = false;
