@@ -120,9 +120,12 @@ Result<CentralConnection> connect(const CentralUrl& url) {
   c.url = url;
   try {
     c.conn = std::make_unique<pqxx::connection>(url.url);
-    // Exact floats whatever the server's setting; UTC, so no time ever depends on the server.
+    // Exact floats whatever the server's setting; the grinder's text is UTF-8; UTC, so no time
+    // ever depends on the server.
     pqxx::nontransaction setup(*c.conn);
-    setup.exec("SET extra_float_digits = 3; SET TIME ZONE 'UTC'; SET statement_timeout = '300s'");
+    setup.exec(
+        "SET extra_float_digits = 3; SET client_encoding = 'UTF8'; SET TIME ZONE 'UTC'; SET statement_timeout = "
+        "'300s'");
   } catch (const pqxx::broken_connection& e) {
     return make_error(ErrorCode::kStorage,
                       "cannot reach the central history at " + where(url) + ": " + one_line(e.what()) +

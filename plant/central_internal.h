@@ -16,14 +16,14 @@
 namespace gaugeloop::central_internal {
 
 // A connection to the central history, set up as every central query expects: floats printed
-// exactly (extra_float_digits 3), times as stored text, one statement timeout.
+// exactly (extra_float_digits 3), UTF-8 text, UTC, a statement timeout of 300 s.
 struct CentralConnection {
   CentralUrl url;
   std::unique_ptr<pqxx::connection> conn;
 };
 
-// Connects to `url`; `purpose` ("sync", "query") only shapes the message. kStorage naming the
-// host, port and database and what to check when the server cannot be reached or refuses.
+// Connects to `url`. kStorage naming the host, port and database and what to check when the
+// server cannot be reached or refuses.
 Result<CentralConnection> connect(const CentralUrl& url);
 
 // kStorage "<operation> in the central history at <url>: <PostgreSQL's reason>" for an exception
