@@ -1,7 +1,13 @@
 // The central history from the command line, as a user runs it: `plant sync`, and the query
 // commands with --db printing exactly what they print from the grinder's file.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "core/tolerance.h"
@@ -90,6 +96,73 @@ TEST_F(CentralCliTest, QueriesWithDbPrintExactlyWhatTheyPrintFromTheFile) {
   CommandResult again = run_command("plant sync --to " + url_ + data_ + " --machine cell-1");
   ASSERT_EQ(again.exit_code, 0) << again.output;
   EXPECT_TRUE(has(again.output, "runs       0 copied, 0 already there (up to id 5)")) << again.output;
+}
+
+// The central history's rows, without the time of the sync.
+std::string central_contents(const std::string& url) {
+  const std::string db = url.substr(url.rfind('/') + 1);
+  return shared_postgres().psql(
+             db, "SELECT uuid, local_id, started_utc, status, max_abs_error_um FROM runs ORDER BY uuid") +
+         "\n" + shared_postgres().psql(db, "SELECT run_uuid, position, value FROM run_characteristics ORDER BY 1, 2") +
+         "\n" + shared_postgres().psql(db, "SELECT uuid, run_uuid FROM nc_pushes ORDER BY uuid") + "\n" +
+         shared_postgres().psql(db, "SELECT uuid FROM events ORDER BY uuid") + "\n" +
+         shared_postgres().psql(db, "SELECT table_name, last_local_id FROM sync_progress ORDER BY 1");
+}
+
+TEST_F(CentralCliTest, ASyncKilledHalfWayResumesAndCopiesNothingTwice) {
+  {
+    Result<RunStore> store = RunStore::open(dir_ / "gaugeloop.sqlite");
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    for (int i = 0; i < 400; ++i) {
+      char started[32];
+      std::snprintf(started, sizeof started, "2020-12-%02dT%02d:%02d:00Z", 1 + i / 96, (i % 96) / 4, (i % 4) * 15);
+      ASSERT_TRUE(store->insert_run(testing::sample_run("intake", 1 + i % 3, "g1", started, 1.0 + 0.01 * i)).ok());
+    }
+  }
+  const std::string reference = shared_postgres().create_database();
+  CommandResult whole = run_command("plant sync --to " + reference + data_ + " --machine g1");
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+
+  // One run per transaction, killed (SIGKILL: no clean-up of any kind) once some are copied.
+  const std::string db = url_.substr(url_.rfind('/') + 1);
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const std::string binary = testing::gaugeloop_binary();
+    const std::string data_dir = dir_.path().string();
+    std::freopen("/dev/null", "w", stdout);
+    ::execl(binary.c_str(), binary.c_str(), "plant", "sync", "--to", url_.c_str(), "--data-dir", data_dir.c_str(),
+            "--machine", "g1", "--batch-size", "1", static_cast<char*>(nullptr));
+    std::_Exit(127);
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  std::int64_t copied = 0;
+  while (std::chrono::steady_clock::now() < deadline) {
+    const std::string out = shared_postgres().psql(db, "SELECT count(*) FROM runs");
+    copied = std::strtoll(out.c_str(), nullptr, 10);
+    if (copied >= 5) break;
+  }
+  ASSERT_GE(copied, 5) << "the sync copied no runs in 30 s";
+  ASSERT_EQ(::kill(pid, SIGKILL), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  const std::string after_kill = shared_postgres().psql(db, "SELECT count(*), count(DISTINCT uuid) FROM runs");
+  // Killed mid-way (unless the machine was fast enough to finish first): what is there is
+  // whole batches, each once, and the progress names the last of them.
+  RecordProperty("runs_when_killed", WIFSIGNALED(status) ? after_kill : "finished before the kill");
+  if (WIFSIGNALED(status)) {
+    const std::int64_t there = std::strtoll(after_kill.c_str(), nullptr, 10);
+    EXPECT_LT(there, 405) << after_kill;
+    EXPECT_EQ(after_kill, std::to_string(there) + "|" + std::to_string(there));
+    EXPECT_EQ(shared_postgres().psql(db, "SELECT max(local_id) FROM runs"),
+              shared_postgres().psql(db, "SELECT last_local_id FROM sync_progress WHERE table_name = 'runs'"));
+  }
+
+  CommandResult resumed = run_command("plant sync --to " + url_ + data_ + " --machine g1");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_TRUE(has(resumed.output, ", 0 already there (up to id 405)")) << resumed.output;
+  EXPECT_EQ(central_contents(url_), central_contents(reference));
+  EXPECT_EQ(shared_postgres().psql(db, "SELECT count(*), count(DISTINCT uuid) FROM runs"), "405|405");
 }
 
 TEST_F(CentralCliTest, AServerNobodyListensOnOrABadUrlIsAClearErrorAndExitStatus) {
