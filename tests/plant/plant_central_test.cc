@@ -514,6 +514,30 @@ TEST_F(CentralTest, ACentralSchemaNewerThanThisGaugeloopIsRefused) {
   EXPECT_EQ(count("SELECT count(*) FROM runs"), 2);
 }
 
+TEST_F(CentralTest, AGrindersUserWithoutCreateSyncsIntoASchemaAnAdministratorMade) {
+  Grinder g("central-privileges");
+  fill(*g.store, "g1", "2026-11-20", 3);
+  const std::string role = "grinder_" + database_.substr(1, database_.find('_') - 1);
+  sql("CREATE ROLE " + role + " LOGIN");
+  const std::string grinder_url = "postgresql://" + role + "@" + url_.substr(url_.find("@") + 1);
+  // PostgreSQL 15 gives nobody CREATE on the public schema: the grinder cannot make the tables.
+  Result<CentralSyncCounts> refused = sync_to_central(*g.store, grinder_url, "g1");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_TRUE(has(refused.error().message, "migrate the central history to schema version 1"))
+      << refused.error().message;
+  EXPECT_TRUE(has(refused.error().message, "permission denied")) << refused.error().message;
+
+  Grinder admin("central-privileges-admin");
+  ASSERT_TRUE(sync_to_central(*admin.store, url_, "admin").ok());  // an empty file: the schema only
+  sql("GRANT SELECT, INSERT, UPDATE ON ALL TABLES IN SCHEMA public TO " + role);
+  Result<CentralSyncCounts> synced = sync_to_central(*g.store, grinder_url, "g1");
+  ASSERT_TRUE(synced.ok()) << synced.error().message;
+  EXPECT_EQ(synced->runs.inserted, 3);
+  Result<CentralHistory> read = CentralHistory::open(grinder_url);
+  ASSERT_TRUE(read.ok()) << read.error().message;
+  EXPECT_EQ(rows(read->list_runs(RunQuery{})), rows(g.store->list_runs(RunQuery{})));
+}
+
 TEST_F(CentralTest, AMachineNameOrBatchSizeItCannotUseIsRefusedBeforeConnecting) {
   Grinder g("central-bad-options");
   Result<CentralSyncCounts> nameless = sync_to_central(*g.store, url_, "");
