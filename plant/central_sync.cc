@@ -250,8 +250,9 @@ class Syncer {
 
   Error committed_before(Error e) const {
     if (counts_.batches > 0) {
-      e.message += "; the " + std::to_string(counts_.batches) +
-                   " batches before it are in the central history: sync again to copy the rest";
+      e.message += counts_.batches == 1 ? std::string("; the batch before it is")
+                                        : "; the " + std::to_string(counts_.batches) + " batches before it are";
+      e.message += " in the central history: sync again to copy the rest";
     } else {
       e.message += "; nothing was copied";
     }
