@@ -7,6 +7,7 @@
 
 #include "cli/embedded_defaults.h"
 #include "core/text_file.h"
+#include "plant/central_history.h"
 
 namespace gaugeloop {
 
@@ -132,6 +133,31 @@ Result<RunStore> open_history(const DataPaths& paths) {
 Result<RunStore> open_history_read_only(const DataPaths& paths) {
   if (Status s = require_database(paths.db(), make_one(paths)); !s) return s.error();
   return RunStore::open_read_only(paths.db());
+}
+
+CLI::Option* add_central_db_option(CLI::App& cmd, std::string& url, CLI::Option* config) {
+  CLI::Option* db =
+      cmd.add_option("--db", url,
+                     "Read the plant's central history at this URL (postgresql://USER@HOST:PORT/DATABASE) "
+                     "instead of the grinder's file: every machine synced there")
+          ->excludes("--data-dir");
+  if (config != nullptr) db->excludes(config);
+  return db;
+}
+
+Result<std::unique_ptr<RunHistory>> open_run_history(const DataPaths& paths, const std::string& db_url) {
+  if (!db_url.empty()) {
+    Result<CentralHistory> central = CentralHistory::open(db_url);
+    if (!central) {
+      Error e = central.error();
+      e.message += " (--db)";
+      return e;
+    }
+    return std::unique_ptr<RunHistory>(std::make_unique<CentralHistory>(std::move(*central)));
+  }
+  Result<RunStore> store = open_history_read_only(paths);
+  if (!store) return store.error();
+  return std::unique_ptr<RunHistory>(std::make_unique<RunStore>(std::move(*store)));
 }
 
 }  // namespace gaugeloop

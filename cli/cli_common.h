@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -71,6 +72,15 @@ Result<RunStore> open_history(const DataPaths& paths);
 // (RunStore::open_read_only), so it works on a read-only file or mount.
 Result<RunStore> open_history_read_only(const DataPaths& paths);
 
+// --db URL on a query command: the plant's central history (postgresql://...) instead of the
+// grinder's file; excludes --data-dir and `config` (the --config option, if the command has one).
+CLI::Option* add_central_db_option(CLI::App& cmd, std::string& url, CLI::Option* config);
+
+// The history a query command reads: the central history at `db_url` if given (kInvalidInput
+// for a URL it cannot use, kStorage for a server it cannot reach), else the grinder's file,
+// read-only as open_history_read_only opens it.
+Result<std::unique_ptr<RunHistory>> open_run_history(const DataPaths& paths, const std::string& db_url);
+
 // A part and its design table, from a file or (empty path) from the embedded sample.
 struct LoadedPart {
   PartFile file;
@@ -98,5 +108,6 @@ void add_nc_commands(CLI::App& app, CommandAction& action);       // nc ...
 void add_serve_commands(CLI::App& app, CommandAction& action);    // serve
 void add_db_commands(CLI::App& app, CommandAction& action);       // db ...
 void add_token_commands(CLI::App& app, CommandAction& action);    // token new
+void add_plant_commands(CLI::App& app, CommandAction& action);    // plant sync
 
 }  // namespace gaugeloop

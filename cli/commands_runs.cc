@@ -62,6 +62,7 @@ void print_json(const json& j) { std::cout << j.dump(2) << "\n"; }
 
 struct ListOptions {
   DataPaths paths;
+  std::string db_url;  // --db: the central history instead of the file
   RunQuery query;
   std::string since, until;
   std::string verdict;  // --verdict; empty: any
@@ -77,14 +78,15 @@ Result<RunQuery> resolved(const ListOptions& o) {
   return q;
 }
 
-// The runs `runs list` (RunStore::list_runs) or `runs trend` (RunStore::trend) selects.
-using RunSelection = Result<std::vector<RunSummary>> (RunStore::*)(const RunQuery&) const;
+// The runs `runs list` (RunHistory::list_runs) or `runs trend` (RunHistory::trend) selects,
+// from the grinder's file or the central history (--db).
+using RunSelection = Result<std::vector<RunSummary>> (RunHistory::*)(const RunQuery&) const;
 Result<std::vector<RunSummary>> selected_runs(const ListOptions& o, RunSelection select) {
   Result<RunQuery> q = resolved(o);
   if (!q) return q.error();
-  Result<RunStore> store = open_history_read_only(o.paths);
-  if (!store) return store.error();
-  return ((*store).*select)(*q);
+  Result<std::unique_ptr<RunHistory>> history = open_run_history(o.paths, o.db_url);
+  if (!history) return history.error();
+  return ((**history).*select)(*q);
 }
 
 void print_runs_json(const std::vector<RunSummary>& runs) {
@@ -96,7 +98,7 @@ void print_runs_json(const std::vector<RunSummary>& runs) {
 int cmd_list(const ListOptions& o) {
   // A serial no run can have (too long, a control character) would only find nothing.
   if (Status s = check_run_identity("--serial", o.query.serial); !s) return report_error(s.error());
-  Result<std::vector<RunSummary>> runs = selected_runs(o, &RunStore::list_runs);
+  Result<std::vector<RunSummary>> runs = selected_runs(o, &RunHistory::list_runs);
   if (!runs) return report_error(runs.error());
   if (o.json_out) {
     print_runs_json(*runs);
@@ -427,7 +429,7 @@ int cmd_trend(const ListOptions& o) {
     Result<RunQuery> q = resolved(o);
     return q ? cmd_trend_plot(o.paths, *q, o.plot, o.characteristic) : report_error(q.error());
   }
-  Result<std::vector<RunSummary>> runs = selected_runs(o, &RunStore::trend);
+  Result<std::vector<RunSummary>> runs = selected_runs(o, &RunHistory::trend);
   if (!runs) return report_error(runs.error());
   if (o.json_out) {
     print_runs_json(*runs);
@@ -556,8 +558,8 @@ void add_time_options(CLI::App& cmd, std::string& since, std::string& until) {
   cmd.add_option("--until", until, "Only up to this UTC date or time, inclusive (2026-11-22: the whole day)");
 }
 
-void add_filter_options(CLI::App& cmd, ListOptions& o, bool lobe_required) {
-  add_data_options(cmd, o.paths);
+CLI::Option* add_filter_options(CLI::App& cmd, ListOptions& o, bool lobe_required) {
+  CLI::Option* db = add_central_db_option(cmd, o.db_url, add_data_options(cmd, o.paths));
   CLI::Option* part = cmd.add_option("--part", o.query.part, "Only runs of this part");
   CLI::Option* lobe = cmd.add_option("--lobe", o.query.lobe, "Only runs of this lobe")->check(CLI::Range(1, 1000));
   if (lobe_required) {
@@ -567,6 +569,7 @@ void add_filter_options(CLI::App& cmd, ListOptions& o, bool lobe_required) {
   cmd.add_option("--machine", o.query.machine, "Only runs on this machine");
   add_time_options(cmd, o.since, o.until);
   cmd.add_flag("--json", o.json_out, "Print JSON instead of a table");
+  return db;
 }
 
 }  // namespace
@@ -630,12 +633,15 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   trend->query.limit = 10000;
   CLI::App* trend_cmd =
       runs->add_subcommand("trend", "Max error, phase and runout of one lobe over time, oldest first.");
-  add_filter_options(*trend_cmd, *trend, true);
+  CLI::Option* trend_db = add_filter_options(*trend_cmd, *trend, true);
   trend_cmd->add_option("--limit", trend->query.limit, "At most the newest this many runs")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
   CLI::Option* trend_plot =
-      trend_cmd->add_option("--plot", trend->plot, "Draw the characteristic over the runs to this .svg, .pdf or .png");
+      trend_cmd
+          ->add_option("--plot", trend->plot,
+                       "Draw the characteristic over the runs to this .svg, .pdf or .png (from the grinder's file)")
+          ->excludes(trend_db);
   trend_cmd->add_option("--characteristic", trend->characteristic, "With --plot: the characteristic's key")
       ->capture_default_str()
       ->needs(trend_plot);

@@ -26,6 +26,7 @@ void print_json(const json& j) { std::cout << j.dump(2) << "\n"; }
 
 struct SpcOptions {
   DataPaths paths;
+  std::string db_url;  // --db: the central history instead of the file
   RunQuery query;
   std::string since, until;
   bool json_out = false;
@@ -34,9 +35,9 @@ struct SpcOptions {
 int cmd_spc(const SpcOptions& o) {
   RunQuery q = o.query;
   if (Status t = set_time_bounds(o.since, o.until, q.since_utc, q.until_utc); !t) return report_error(t.error());
-  Result<RunStore> store = open_history_read_only(o.paths);
-  if (!store) return report_error(store.error());
-  Result<std::vector<RunCharacteristics>> runs = store->characteristics(q);
+  Result<std::unique_ptr<RunHistory>> history = open_run_history(o.paths, o.db_url);
+  if (!history) return report_error(history.error());
+  Result<std::vector<RunCharacteristics>> runs = (*history)->characteristics(q);
   if (!runs) return report_error(runs.error());
   const std::vector<SpcFigure> figures = spc_figures(*runs);
   if (o.json_out) {
@@ -147,7 +148,7 @@ void add_spc_commands(CLI::App* runs, CommandAction& action) {
   spc->query.limit = 10000;
   CLI::App* spc_cmd = runs->add_subcommand(
       "spc", "Mean, standard deviation, Cp, Cpk and the count out of tolerance per characteristic of one lobe.");
-  add_data_options(*spc_cmd, spc->paths);
+  add_central_db_option(*spc_cmd, spc->db_url, add_data_options(*spc_cmd, spc->paths));
   spc_cmd->add_option("--part", spc->query.part, "The part")->required();
   spc_cmd->add_option("--lobe", spc->query.lobe, "The lobe")->required()->check(CLI::Range(1, 1000));
   spc_cmd->add_option("--last", spc->query.limit, "Only the newest this many runs")

@@ -14,7 +14,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/packaging/tmpfiles.conf DESTINATION lib/tmpf
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
 set(GAUGELOOP_DOCS
   PERFORMANCE.md acquisition.md aqdef.md architecture.md building.md compensation.md gauge.md http_api.md
-  crankpins.md nc_output.md parts.md reports.md service.md simulator.md spc_and_shafts.md storage.md
+  crankpins.md nc_output.md parts.md plant.md reports.md service.md simulator.md spc_and_shafts.md storage.md
   variable_speed.md virtual_grinder.md)
 list(TRANSFORM GAUGELOOP_DOCS PREPEND ${PROJECT_SOURCE_DIR}/docs/)
 install(FILES ${GAUGELOOP_DOCS} DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)

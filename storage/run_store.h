@@ -29,11 +29,11 @@ struct RunRecord {
   std::string finished_utc;  // not earlier than started_utc
   // The run's global identity (core/uuid.h form); empty: a new one. Unique across the plant.
   std::string uuid;
-  std::string machine;       // e.g. "grinder-1"; not empty
-  std::string part;          // part name; not empty
-  int lobe = 1;              // 1-based
-  std::string gauge;         // gauge address, e.g. "tcp:127.0.0.1:1502"
-  std::string note;          // operator note, may be empty
+  std::string machine;  // e.g. "grinder-1"; not empty
+  std::string part;     // part name; not empty
+  int lobe = 1;         // 1-based
+  std::string gauge;    // gauge address, e.g. "tcp:127.0.0.1:1502"
+  std::string note;     // operator note, may be empty
   // The measured part's serial number and the operator who measured it: free text, at most
   // 64 characters, no control characters (check_run_identity). Empty: not given (NULL).
   std::string serial;
@@ -341,13 +341,13 @@ struct OutboxSettings {
 
 // One message waiting in the outbox, oldest first (delivery order).
 struct OutboxMessage {
-  std::int64_t id = 0;          // delivery order; what outbox_delivered takes
-  std::string uuid;             // the message's identity: a consumer drops a second delivery by it
-  std::string topic;            // "run", "nc", "verdict", "state"
-  std::int64_t run_id = 0;      // run, verdict: the run; nc: the push's run; state: 0
-  std::int64_t push_id = 0;     // nc: the push; otherwise 0
-  std::string created_utc;      // when the record was stored
-  std::string payload;          // verdict, state: the JSON to publish; run, nc: empty (made from the record)
+  std::int64_t id = 0;       // delivery order; what outbox_delivered takes
+  std::string uuid;          // the message's identity: a consumer drops a second delivery by it
+  std::string topic;         // "run", "nc", "verdict", "state"
+  std::int64_t run_id = 0;   // run, verdict: the run; nc: the push's run; state: 0
+  std::int64_t push_id = 0;  // nc: the push; otherwise 0
+  std::string created_utc;   // when the record was stored
+  std::string payload;       // verdict, state: the JSON to publish; run, nc: empty (made from the record)
 };
 
 // The outbox as /metrics and health show it.

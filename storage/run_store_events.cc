@@ -91,11 +91,10 @@ Result<std::vector<StoredEvent>> RunStore::list_events(const EventQuery& q) cons
   if (q.kind) where.add("kind =", std::string(event_kind_name(*q.kind)));
   if (!q.since_utc.empty()) where.add("at_utc >=", q.since_utc);
   if (!q.until_utc.empty()) where.add("at_utc <", q.until_utc);
-  Result<Statement> st =
-      Statement::prepare(*conn_,
-                         "SELECT " + std::string(kEventColumns) + " FROM events" +
-                             where.sql() + " ORDER BY at_utc DESC, id DESC LIMIT :limit",
-                         "list events");
+  Result<Statement> st = Statement::prepare(*conn_,
+                                            "SELECT " + std::string(kEventColumns) + " FROM events" + where.sql() +
+                                                " ORDER BY at_utc DESC, id DESC LIMIT :limit",
+                                            "list events");
   if (!st.ok()) return st.error();
   st->bind(":limit", q.limit);
   where.bind(*st);

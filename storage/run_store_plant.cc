@@ -55,8 +55,7 @@ Status RunStore::configure_outbox(const OutboxSettings& settings) {
 Result<std::vector<OutboxMessage>> RunStore::outbox_batch(int limit) const {
   if (Status s = check_limit(limit, "the outbox"); !s.ok()) return s.error();
   Result<Statement> st = Statement::prepare(
-      *conn_,
-      "SELECT id, uuid, topic, run_id, push_id, created_utc, payload FROM outbox ORDER BY id LIMIT :limit",
+      *conn_, "SELECT id, uuid, topic, run_id, push_id, created_utc, payload FROM outbox ORDER BY id LIMIT :limit",
       "read the outbox");
   if (!st.ok()) return st.error();
   st->bind(":limit", limit);

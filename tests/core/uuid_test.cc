@@ -14,7 +14,7 @@ TEST(Uuid, IsCanonicalVersion4Text) {
   for (int i = 0; i < 1000; ++i) {
     const std::string u = new_uuid();
     ASSERT_TRUE(is_uuid(u)) << u;
-    EXPECT_EQ(u[14], '4') << u;  // version nibble
+    EXPECT_EQ(u[14], '4') << u;                                          // version nibble
     EXPECT_NE(std::string("89ab").find(u[19]), std::string::npos) << u;  // RFC variant
   }
 }

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "core/uuid.h"
+
 #include <set>
 #include <string>
 
@@ -18,6 +20,7 @@ using nlohmann::json;
 
 // docs/http_api.md, GET /api/runs: one row of the run list.
 const std::set<std::string> kSummaryKeys = {"id",
+                                            "uuid",
                                             "started_utc",
                                             "machine",
                                             "part",
@@ -66,9 +69,9 @@ const std::set<std::string> kDetailKeys = {"lift_error_reference",
                                            "part_kind"};
 
 // docs/http_api.md, GET /api/nc/history: one push.
-const std::set<std::string> kPushKeys = {"nc_file",     "table_version",     "pushed_utc",  "run_id",
-                                         "reason",      "interpolation",     "block_count", "command_error_um",
-                                         "point_count", "correction_max_um", "program_hash"};
+const std::set<std::string> kPushKeys = {"nc_file",     "table_version",     "pushed_utc",   "run_id",
+                                         "reason",      "interpolation",     "block_count",  "command_error_um",
+                                         "point_count", "correction_max_um", "program_hash", "uuid"};
 
 std::set<std::string> keys_of(const json& object) {
   std::set<std::string> keys;
@@ -122,6 +125,7 @@ TEST_F(RunJsonTest, AStoredRunHasEveryDocumentedKeyAndItsFigures) {
   expect_units_in_names(j);
 
   EXPECT_EQ(j["id"], id);
+  EXPECT_TRUE(is_uuid(j["uuid"].get<std::string>())) << j["uuid"];
   EXPECT_EQ(j["started_utc"], "2026-11-22T02:34:44Z");
   EXPECT_EQ(j["part"], "intake_flat");
   EXPECT_EQ(j["status"], "pushed");
@@ -151,6 +155,8 @@ TEST_F(RunJsonTest, AStoredRunHasEveryDocumentedKeyAndItsFigures) {
   const json& p = j["nc_pushes"][0];
   EXPECT_EQ(keys_of(p), kPushKeys);
   EXPECT_EQ(p["table_version"], 1);
+  EXPECT_TRUE(is_uuid(p["uuid"].get<std::string>())) << p["uuid"];
+  EXPECT_NE(p["uuid"], j["uuid"]) << "a push is not its run";
   EXPECT_EQ(p["run_id"], id);
   EXPECT_EQ(p["reason"], "run " + std::to_string(id));
   EXPECT_EQ(p["interpolation"], "CSPLINE");
@@ -244,8 +250,9 @@ TEST_F(RunJsonTest, AnEventNotAboutALobeOrRunHasNulls) {
   ASSERT_TRUE(events.ok()) << events.error().message;
   ASSERT_EQ(events->size(), 1u);
   const json j = event_json(events->front());
-  EXPECT_EQ(keys_of(j),
-            (std::set<std::string>{"id", "at_utc", "kind", "code", "machine", "part", "lobe", "run_id", "message"}));
+  EXPECT_EQ(keys_of(j), (std::set<std::string>{"id", "uuid", "at_utc", "kind", "code", "machine", "part", "lobe",
+                                               "run_id", "message"}));
+  EXPECT_TRUE(is_uuid(j["uuid"].get<std::string>())) << j["uuid"];
   EXPECT_EQ(j["kind"], "refusal");
   EXPECT_TRUE(j["lobe"].is_null());
   EXPECT_TRUE(j["run_id"].is_null());

@@ -115,9 +115,9 @@ TEST_F(PlantStoreTest, NothingIsQueuedUntilTheOutboxIsEnabled) {
 TEST_F(PlantStoreTest, ARunAndItsPushQueueTheirMessagesAndAVerdictChangeQueuesOne) {
   ASSERT_TRUE(store().configure_outbox({true, 1000}).ok());
   const std::int64_t first = add_run("2026-11-22T08:00:00Z", Verdict::kIn);  // first of the lobe: a change
-  add_run("2026-11-22T08:01:00Z", Verdict::kIn);                              // same verdict: none
-  const std::int64_t out = add_run("2026-11-22T08:02:00Z", Verdict::kOut);    // in -> out
-  add_run("2026-11-22T08:03:00Z", Verdict::kOut, 2);                          // another lobe's first
+  add_run("2026-11-22T08:01:00Z", Verdict::kIn);                             // same verdict: none
+  const std::int64_t out = add_run("2026-11-22T08:02:00Z", Verdict::kOut);   // in -> out
+  add_run("2026-11-22T08:03:00Z", Verdict::kOut, 2);                         // another lobe's first
   push(first);
   EXPECT_EQ(topics(), (std::vector<std::string>{"run", "verdict", "run", "run", "verdict", "run", "verdict", "nc"}));
 
@@ -204,10 +204,11 @@ TEST(PlantStoreMigration, Version9GivesEveryOlderRecordAUniqueUuid) {
     ASSERT_TRUE(storage_internal::apply_migrations_up_to(conn, 8).ok());
     RawDb raw(db);
     for (int i = 0; i < 50; ++i) {
-      raw.exec("INSERT INTO runs (started_utc, finished_utc, machine, part, lobe, gauge, status, revolutions,"
-               " degrees_captured, zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um,"
-               " repeatability_um) VALUES ('2026-11-22T08:00:00Z', '2026-11-22T08:01:00Z', 'g1', 'a', 1,"
-               " 'tcp:sim', 'measured', 3, 1080, 0.0, 4.5, 1.0, 6.0, 0.5)");
+      raw.exec(
+          "INSERT INTO runs (started_utc, finished_utc, machine, part, lobe, gauge, status, revolutions,"
+          " degrees_captured, zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um,"
+          " repeatability_um) VALUES ('2026-11-22T08:00:00Z', '2026-11-22T08:01:00Z', 'g1', 'a', 1,"
+          " 'tcp:sim', 'measured', 3, 1080, 0.0, 4.5, 1.0, 6.0, 0.5)");
     }
     raw.exec("INSERT INTO events (at_utc, kind, code, message) VALUES ('2026-11-22T08:00:00Z', 'info', 'plc', 'x')");
   }

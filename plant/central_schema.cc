@@ -1,0 +1,249 @@
+// The central history's schema (PostgreSQL), versioned by the rows of central_schema_version.
+#include "plant/central_schema.h"
+
+#include <array>
+#include <string>
+
+#include "core/utc_time.h"
+#include "plant/central_internal.h"
+
+namespace gaugeloop {
+
+namespace {
+
+// Version 1. Text columns compare byte by byte (COLLATE "C"), as SQLite compares them, so a
+// query orders and filters exactly as the grinder's file does whatever the server's locale.
+// Times stay the text the grinder stored ("2026-11-22T02:34:44Z"): printed byte for byte as
+// the local file prints them, and text order is time order. Numbers are float8, read back
+// exactly. Records are keyed by their UUID, so a record synced twice is kept once; local_id is
+// the record's id in its grinder's file, source_machine and source the grinder and the file it
+// was synced from.
+constexpr std::string_view kCentralV1 = R"sql(
+CREATE TABLE runs (
+  uuid                  text COLLATE "C" PRIMARY KEY CHECK (length(uuid) = 36),
+  source_machine        text COLLATE "C" NOT NULL,  -- the grinder it was synced from (plant sync --machine)
+  source                text COLLATE "C" NOT NULL,  -- the file it was synced from
+  local_id              bigint NOT NULL,            -- runs.id in that file
+  started_utc           text COLLATE "C" NOT NULL,
+  finished_utc          text COLLATE "C" NOT NULL,
+  machine               text COLLATE "C" NOT NULL,  -- as the run recorded it
+  part                  text COLLATE "C" NOT NULL,
+  lobe                  integer NOT NULL CHECK (lobe >= 1),
+  gauge                 text COLLATE "C" NOT NULL,
+  note                  text COLLATE "C" NOT NULL DEFAULT '',
+  status                text COLLATE "C" NOT NULL CHECK (status IN ('measured', 'pushed')),
+  revolutions           integer NOT NULL,
+  degrees_captured      integer NOT NULL,
+  polls                 bigint NOT NULL,
+  reconnects            bigint NOT NULL,
+  discarded_revolutions bigint NOT NULL,
+  zero_offset_mm        float8 NOT NULL,
+  max_abs_error_um      float8 NOT NULL,
+  rms_error_um          float8 NOT NULL,
+  peak_to_valley_um     float8 NOT NULL,
+  repeatability_um      float8 NOT NULL,
+  nc_file               text COLLATE "C",          -- the NC program last pushed from the run
+  phase_error_deg       float8,
+  base_circle_runout_um float8,
+  harmonic_amplitude_um text,                      -- JSON array, harmonics 0..30
+  correction_in_force_run bigint,                  -- a local id in the same file
+  settings_hash         text COLLATE "C",
+  settings              text,
+  raw_pruned_utc        text COLLATE "C",          -- as the file said when the run was synced
+  ground_with_version   integer,
+  ground_with_source    text COLLATE "C",
+  inspection            boolean NOT NULL,
+  serial                text COLLATE "C",
+  operator              text COLLATE "C",
+  verdict               text COLLATE "C" NOT NULL CHECK (verdict IN ('in', 'out', 'not_judged')),
+  lift_error_reference  text COLLATE "C" NOT NULL,
+  max_abs_residual_um   float8,
+  rms_residual_um       float8,
+  peak_to_valley_residual_um float8,
+  dial_runout_um        float8,
+  roundness_um          float8,
+  synced_utc            text COLLATE "C" NOT NULL
+);
+-- The query commands' filters, newest first.
+CREATE INDEX runs_by_started ON runs (started_utc DESC, local_id DESC);
+CREATE INDEX runs_by_machine_started ON runs (machine, started_utc DESC);
+CREATE INDEX runs_by_part_lobe_started ON runs (part, lobe, started_utc DESC);
+CREATE INDEX runs_by_machine_part_lobe_started ON runs (machine, part, lobe, started_utc DESC);
+CREATE INDEX runs_by_serial ON runs (serial, started_utc DESC) WHERE serial IS NOT NULL;
+CREATE INDEX runs_by_verdict ON runs (verdict, started_utc DESC);
+
+CREATE TABLE run_characteristics (
+  run_uuid    text COLLATE "C" NOT NULL REFERENCES runs (uuid) ON DELETE CASCADE,
+  position    integer NOT NULL CHECK (position >= 0),
+  key         text COLLATE "C" NOT NULL,
+  unit        text COLLATE "C" NOT NULL,
+  value       float8 NOT NULL,
+  min_value   float8 NOT NULL,
+  max_value   float8 NOT NULL,
+  lower_limit float8,
+  upper_limit float8,
+  verdict     text COLLATE "C" NOT NULL CHECK (verdict IN ('in', 'out', 'not_judged')),
+  from_deg    integer,
+  to_deg      integer,
+  PRIMARY KEY (run_uuid, position)
+);
+
+-- No reference to runs: a push may be synced before a run stored after the sync read the runs.
+CREATE TABLE nc_pushes (
+  uuid              text COLLATE "C" PRIMARY KEY CHECK (length(uuid) = 36),
+  run_uuid          text COLLATE "C" NOT NULL,
+  machine           text COLLATE "C" NOT NULL,  -- the run's
+  source_machine    text COLLATE "C" NOT NULL,
+  source            text COLLATE "C" NOT NULL,
+  local_id          bigint NOT NULL,            -- nc_pushes.id in the file: push order
+  local_run_id      bigint NOT NULL,
+  pushed_utc        text COLLATE "C" NOT NULL,
+  nc_file           text COLLATE "C" NOT NULL,
+  table_version     integer NOT NULL,
+  reason            text,
+  interpolation     text COLLATE "C",
+  block_count       integer,
+  command_error_um  float8,
+  point_count       integer,
+  correction_max_um float8,
+  program_hash      text COLLATE "C",
+  synced_utc        text COLLATE "C" NOT NULL
+);
+CREATE INDEX nc_pushes_by_run ON nc_pushes (run_uuid, local_id);
+CREATE INDEX nc_pushes_by_machine_pushed ON nc_pushes (machine, pushed_utc DESC);
+
+CREATE TABLE events (
+  uuid           text COLLATE "C" PRIMARY KEY CHECK (length(uuid) = 36),
+  source_machine text COLLATE "C" NOT NULL,
+  source         text COLLATE "C" NOT NULL,
+  local_id       bigint NOT NULL,
+  at_utc         text COLLATE "C" NOT NULL,
+  kind           text COLLATE "C" NOT NULL CHECK (kind IN ('fault', 'refusal', 'info')),
+  code           text COLLATE "C" NOT NULL,
+  machine        text COLLATE "C" NOT NULL,  -- as the event recorded it (may be empty)
+  part           text COLLATE "C" NOT NULL,
+  lobe           integer NOT NULL,
+  local_run_id   bigint,
+  message        text NOT NULL,
+  synced_utc     text COLLATE "C" NOT NULL
+);
+CREATE INDEX events_by_machine_at ON events (machine, at_utc DESC);
+CREATE INDEX events_by_at ON events (at_utc DESC);
+
+-- Where each grinder's sync stopped: the last record copied per table, with its UUID so a
+-- file replaced since (other records under the same ids) is noticed.
+CREATE TABLE sync_progress (
+  machine       text COLLATE "C" NOT NULL,
+  source        text COLLATE "C" NOT NULL,
+  table_name    text COLLATE "C" NOT NULL CHECK (table_name IN ('runs', 'nc_pushes', 'events')),
+  last_local_id bigint NOT NULL DEFAULT 0,
+  last_uuid     text COLLATE "C",
+  updated_utc   text COLLATE "C" NOT NULL,
+  PRIMARY KEY (machine, source, table_name)
+);
+)sql";
+
+constexpr std::array<CentralMigration, 1> kMigrations{{
+    {1, "runs, run_characteristics, nc_pushes, events and sync_progress", kCentralV1},
+}};
+
+// Any 64-bit number of our own: held by whoever migrates, so two grinders syncing into an
+// empty database do not both create the tables.
+constexpr std::int64_t kMigrationLock = 0x6761756765;  // "gauge"
+
+constexpr std::string_view kCreateVersionTable = R"sql(
+CREATE TABLE IF NOT EXISTS central_schema_version (
+  version     integer PRIMARY KEY,
+  applied_utc text NOT NULL,
+  description text NOT NULL
+))sql";
+
+}  // namespace
+
+std::span<const CentralMigration> central_migrations() { return kMigrations; }
+
+int latest_central_schema_version() { return kMigrations.back().version; }
+
+namespace central_internal {
+
+namespace {
+
+int version_in(pqxx::transaction_base& tx) {
+  pqxx::result has = tx.exec("SELECT to_regclass('central_schema_version') IS NOT NULL");
+  if (!has[0][0].as<bool>()) return 0;
+  pqxx::result v = tx.exec("SELECT coalesce(max(version), 0) FROM central_schema_version");
+  return v[0][0].as<int>();
+}
+
+Error too_new(const CentralConnection& c, int version) {
+  return make_error(ErrorCode::kStorage, "the central history at " + c.url.shown + " has schema version " +
+                                             std::to_string(version) + ", newer than this gaugeloop understands (" +
+                                             std::to_string(latest_central_schema_version()) +
+                                             "); run a newer gaugeloop, or give the URL of another database");
+}
+
+}  // namespace
+
+Result<int> read_central_version(CentralConnection& c) {
+  try {
+    pqxx::read_transaction tx(*c.conn);
+    return version_in(tx);
+  } catch (const std::exception& e) {
+    return database_error(c.url, "read the schema version", e);
+  }
+}
+
+Status migrate(CentralConnection& c) {
+  // Up to date (the usual case): nothing is created, so a grinder's user needs no CREATE
+  // privilege once the schema is there.
+  Result<int> current = read_central_version(c);
+  if (!current.ok()) return current.error();
+  if (*current > latest_central_schema_version()) return too_new(c, *current);
+  if (*current == latest_central_schema_version()) return {};
+  for (const CentralMigration& m : kMigrations) {
+    const std::string operation = "migrate the central history to schema version " + std::to_string(m.version);
+    try {
+      pqxx::work tx(*c.conn);
+      tx.exec("SELECT pg_advisory_xact_lock(" + std::to_string(kMigrationLock) + ")");
+      // Read again under the lock: another grinder may have migrated meanwhile.
+      tx.exec(std::string(kCreateVersionTable));
+      const int version = version_in(tx);
+      if (version > latest_central_schema_version()) return too_new(c, version);
+      if (m.version <= version) continue;  // the transaction rolls back, nothing was written
+      tx.exec(std::string(m.sql));
+      Params p;
+      p.integer(std::int64_t{m.version}).text(utc_now()).text(m.description);
+      exec(tx, "INSERT INTO central_schema_version (version, applied_utc, description) VALUES ($1, $2, $3)", p);
+      tx.commit();
+    } catch (const std::exception& e) {
+      return database_error(c.url, operation, e);
+    }
+  }
+  // A newer schema than every migration here: refused even when there was nothing to apply.
+  Result<int> version = read_central_version(c);
+  if (!version.ok()) return version.error();
+  if (*version > latest_central_schema_version()) return too_new(c, *version);
+  return {};
+}
+
+Status require_latest(CentralConnection& c) {
+  Result<int> version = read_central_version(c);
+  if (!version.ok()) return version.error();
+  if (*version > latest_central_schema_version()) return too_new(c, *version);
+  if (*version == 0) {
+    return make_error(ErrorCode::kStorage, "the database at " + c.url.shown +
+                                               " holds no central history yet; copy a grinder's runs into it with "
+                                               "`gaugeloop plant sync --to " +
+                                               c.url.shown + "`");
+  }
+  if (*version < latest_central_schema_version()) {
+    return make_error(ErrorCode::kStorage, "the central history at " + c.url.shown + " has schema version " +
+                                               std::to_string(*version) + ", older than this gaugeloop's (" +
+                                               std::to_string(latest_central_schema_version()) +
+                                               "); `gaugeloop plant sync --to " + c.url.shown + "` upgrades it");
+  }
+  return {};
+}
+
+}  // namespace central_internal
+}  // namespace gaugeloop

@@ -1,0 +1,347 @@
+// Copying a grinder's file into the central history, batch by batch, each batch and the
+// progress it makes in one PostgreSQL transaction.
+#include "plant/central_sync.h"
+
+#include <filesystem>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "core/utc_time.h"
+#include "plant/central_history.h"
+#include "plant/central_internal.h"
+#include "plant/central_schema.h"
+
+namespace gaugeloop {
+
+using central_internal::CentralConnection;
+using central_internal::Params;
+
+namespace {
+
+constexpr std::string_view kInsertRun = R"sql(
+INSERT INTO runs (uuid, source_machine, source, local_id, started_utc, finished_utc, machine, part, lobe, gauge,
+                  note, status, revolutions, degrees_captured, polls, reconnects, discarded_revolutions,
+                  zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um, repeatability_um, nc_file,
+                  phase_error_deg, base_circle_runout_um, harmonic_amplitude_um, correction_in_force_run,
+                  settings_hash, settings, raw_pruned_utc, ground_with_version, ground_with_source, inspection,
+                  serial, operator, verdict, lift_error_reference, max_abs_residual_um, rms_residual_um,
+                  peak_to_valley_residual_um, dial_runout_um, roundness_um, synced_utc)
+VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21, $22, $23,
+        $24, $25, $26, $27, $28, $29, $30, $31, $32, $33, $34, $35, $36, $37, $38, $39, $40, $41, $42, $43)
+ON CONFLICT (uuid) DO NOTHING
+RETURNING 1)sql";
+
+constexpr std::string_view kInsertCharacteristic = R"sql(
+INSERT INTO run_characteristics (run_uuid, position, key, unit, value, min_value, max_value, lower_limit,
+                                 upper_limit, verdict, from_deg, to_deg)
+VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12)
+ON CONFLICT (run_uuid, position) DO NOTHING)sql";
+
+constexpr std::string_view kInsertPush = R"sql(
+INSERT INTO nc_pushes (uuid, run_uuid, machine, source_machine, source, local_id, local_run_id, pushed_utc, nc_file,
+                       table_version, reason, interpolation, block_count, command_error_um, point_count,
+                       correction_max_um, program_hash, synced_utc)
+VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18)
+ON CONFLICT (uuid) DO NOTHING
+RETURNING 1)sql";
+
+// As RunStore::record_push does to the local row: the run is pushed, and its nc_file is the
+// program last pushed from it.
+constexpr std::string_view kMarkPushed = R"sql(
+UPDATE runs SET status = 'pushed',
+                nc_file = (SELECT p.nc_file FROM nc_pushes AS p WHERE p.run_uuid = $1 ORDER BY p.local_id DESC LIMIT 1)
+WHERE uuid = $1)sql";
+
+constexpr std::string_view kInsertEvent = R"sql(
+INSERT INTO events (uuid, source_machine, source, local_id, at_utc, kind, code, machine, part, lobe, local_run_id,
+                    message, synced_utc)
+VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13)
+ON CONFLICT (uuid) DO NOTHING
+RETURNING 1)sql";
+
+std::string harmonics_json(const LobeAnalysis& a) {
+  std::string out = "[";
+  for (std::size_t h = 0; h < a.harmonic_amplitude_um.size(); ++h) {
+    Params p;  // the same exact number text the parameters use
+    p.number(a.harmonic_amplitude_um[h]);
+    out += (h == 0 ? "" : ",") + std::string(p.pointers()[0]);
+  }
+  return out + "]";
+}
+
+bool insert_run(pqxx::work& tx, const StoredRun& run, const std::string& machine, const std::string& source,
+                const std::string& now) {
+  const RunSummary& s = run.summary;
+  const LobeAnalysis& a = run.analysis;
+  Params p;
+  p.text(s.uuid).text(machine).text(source).integer(s.id).text(s.started_utc).text(run.finished_utc);
+  p.text(s.machine).text(s.part).integer(std::int64_t{s.lobe}).text(run.gauge).text(s.note).text(s.status);
+  p.integer(std::int64_t{s.revolutions}).integer(std::int64_t{s.degrees_captured}).integer(run.polls);
+  p.integer(run.reconnects).integer(run.discarded_revolutions).number(a.zero_offset_mm).number(s.max_abs_error_um);
+  p.number(s.rms_error_um).number(s.peak_to_valley_um).number(s.repeatability_um).text_or_null(s.nc_file);
+  p.number(s.phase_error_deg).number(s.base_circle_runout_um).text(harmonics_json(a));
+  p.integer(run.correction_in_force_run).text_or_null(s.settings_hash).text_or_null(run.settings);
+  p.text_or_null(s.raw_pruned_utc);
+  p.integer(run.ground_with_version ? std::optional<std::int64_t>(*run.ground_with_version) : std::nullopt);
+  p.text_or_null(run.ground_with_source).text(run.inspection ? "true" : "false");
+  p.text_or_null(s.serial).text_or_null(s.operator_name).text(verdict_name(s.verdict));
+  p.text(run.lift_error_reference == LiftErrorReference::kNominal ? "nominal" : "best_fit");
+  p.number(a.max_abs_residual_um).number(a.rms_residual_um).number(a.peak_to_valley_residual_um);
+  p.number(a.dial_runout_um).number(a.roundness_um).text(now);
+  if (central_internal::exec(tx, std::string(kInsertRun), p).empty()) return false;
+  for (std::size_t i = 0; i < run.characteristics.size(); ++i) {
+    const Characteristic& c = run.characteristics[i];
+    Params cp;
+    cp.text(s.uuid).integer(static_cast<std::int64_t>(i)).text(c.key).text(c.unit).number(c.value).number(c.min);
+    cp.number(c.max).number(c.limits.lower).number(c.limits.upper).text(verdict_name(c.verdict));
+    cp.integer(c.from_deg ? std::optional<std::int64_t>(*c.from_deg) : std::nullopt);
+    cp.integer(c.to_deg ? std::optional<std::int64_t>(*c.to_deg) : std::nullopt);
+    central_internal::exec(tx, std::string(kInsertCharacteristic), cp);
+  }
+  return true;
+}
+
+bool insert_push(pqxx::work& tx, const ReplicatedPush& r, const std::string& machine, const std::string& source,
+                 const std::string& now) {
+  const NcPush& push = r.push;
+  auto optional_int = [](std::optional<int> v) {
+    return v ? std::optional<std::int64_t>(*v) : std::optional<std::int64_t>();
+  };
+  Params p;
+  p.text(push.uuid).text(r.run_uuid).text(r.machine).text(machine).text(source).integer(push.id).integer(push.run_id);
+  p.text(push.pushed_utc).text(push.nc_file).integer(std::int64_t{push.table_version}).text_or_null(push.reason);
+  p.text_or_null(push.table.interpolation).integer(optional_int(push.table.block_count));
+  p.number(push.table.command_error_um).integer(optional_int(push.table.point_count));
+  p.number(push.table.correction_max_um).text_or_null(push.program_hash).text(now);
+  if (central_internal::exec(tx, std::string(kInsertPush), p).empty()) return false;
+  Params mark;
+  mark.text(r.run_uuid);
+  central_internal::exec(tx, std::string(kMarkPushed), mark);
+  return true;
+}
+
+bool insert_event(pqxx::work& tx, const StoredEvent& e, const std::string& machine, const std::string& source,
+                  const std::string& now) {
+  const EventRecord& ev = e.event;
+  Params p;
+  p.text(ev.uuid).text(machine).text(source).integer(e.id).text(ev.at_utc).text(event_kind_name(ev.kind));
+  p.text(ev.code).text(ev.machine).text(ev.part).integer(std::int64_t{ev.lobe}).integer(ev.run_id).text(ev.message);
+  p.text(now);
+  return !central_internal::exec(tx, std::string(kInsertEvent), p).empty();
+}
+
+// One table's records as the sync reads them from the file.
+template <typename Record>
+struct TableReader {
+  std::string_view table;  // sync_progress.table_name
+  std::string_view noun;   // "run", "push", "event": for messages
+  // The records after `after_id` in id order, at most `limit`.
+  std::function<Result<std::vector<Record>>(std::int64_t after_id, int limit)> read;
+  std::function<std::int64_t(const Record&)> id;
+  std::function<std::string(const Record&)> uuid;
+  std::function<bool(pqxx::work&, const Record&, const std::string& machine, const std::string& source,
+                     const std::string& now)>
+      insert;
+};
+
+class Syncer {
+ public:
+  Syncer(CentralConnection& c, std::string machine, std::string source, const CentralSyncOptions& options,
+         CentralSyncCounts& counts)
+      : c_(c), machine_(std::move(machine)), source_(std::move(source)), options_(options), counts_(counts) {}
+
+  // Copies one table; false when max_batches stopped it.
+  template <typename Record>
+  Result<bool> sync(const TableReader<Record>& reader, CentralSyncTableCounts& counts) {
+    std::optional<std::int64_t> position;  // from_start: where this sync stands, ignoring the stored progress
+    if (options_.from_start) position = 0;
+    bool anchor_checked = options_.from_start;
+    for (;;) {
+      if (options_.max_batches > 0 && counts_.batches >= options_.max_batches) return false;
+      const std::string operation = "copy " + std::string(reader.table) + " of " + source_;
+      try {
+        pqxx::work tx(*c_.conn);
+        Params key;
+        key.text(machine_).text(source_).text(reader.table);
+        Params row = key;
+        row.text(utc_now());
+        central_internal::exec(tx,
+                               "INSERT INTO sync_progress (machine, source, table_name, updated_utc) "
+                               "VALUES ($1, $2, $3, $4) ON CONFLICT DO NOTHING",
+                               row);
+        // Locked until the commit: a second sync of the same file waits here and then goes on
+        // from where this batch ends.
+        pqxx::result progress = central_internal::exec(
+            tx,
+            "SELECT last_local_id, last_uuid FROM sync_progress WHERE machine = $1 AND source = $2 "
+            "AND table_name = $3 FOR UPDATE",
+            key);
+        const std::int64_t stored = progress[0][0].as<std::int64_t>();
+        const std::string stored_uuid = central_internal::text_of(progress[0][1]);
+        if (!anchor_checked) {
+          if (Status s = check_anchor(reader, stored, stored_uuid); !s.ok()) return s.error();
+          anchor_checked = true;
+        }
+        const std::int64_t after = position.value_or(stored);
+        Result<std::vector<Record>> records = reader.read(after, options_.batch_size);
+        if (!records.ok()) return records.error();
+        if (records->empty()) {
+          counts.last_local_id = after;
+          return true;  // nothing left: the transaction rolls back, nothing was written
+        }
+        const std::string now = utc_now();
+        std::int64_t inserted = 0;
+        for (const Record& r : *records) {
+          if (reader.insert(tx, r, machine_, source_, now)) ++inserted;
+        }
+        const Record& last = records->back();
+        Params moved;
+        moved.integer(reader.id(last))
+            .text(reader.uuid(last))
+            .text(now)
+            .text(machine_)
+            .text(source_)
+            .text(reader.table);
+        central_internal::exec(tx,
+                               "UPDATE sync_progress SET last_local_id = $1, last_uuid = $2, updated_utc = $3 "
+                               "WHERE machine = $4 AND source = $5 AND table_name = $6",
+                               moved);
+        if (options_.before_commit) {
+          if (Status s = options_.before_commit(reader.table, counts_.batches + 1); !s.ok()) {
+            return committed_before(s.error());
+          }
+        }
+        tx.commit();
+        ++counts_.batches;
+        counts.inserted += inserted;
+        counts.already_there += static_cast<std::int64_t>(records->size()) - inserted;
+        counts.last_local_id = reader.id(last);
+        if (position) position = reader.id(last);
+      } catch (const std::exception& e) {
+        return committed_before(central_internal::database_error(c_.url, operation, e));
+      }
+    }
+  }
+
+ private:
+  // The record where the last sync stopped must still be there with its UUID; otherwise the
+  // ids after it name other records than those the central history has, and some would never
+  // be copied.
+  template <typename Record>
+  Status check_anchor(const TableReader<Record>& reader, std::int64_t stored, const std::string& stored_uuid) {
+    if (stored == 0 || stored_uuid.empty()) return {};
+    Result<std::vector<Record>> at = reader.read(stored - 1, 1);
+    if (!at.ok()) return at.error();
+    std::string found;
+    if (at->empty() || reader.id(at->front()) != stored) {
+      found = "holds no " + std::string(reader.noun) + " " + std::to_string(stored);
+    } else if (reader.uuid(at->front()) != stored_uuid) {
+      found = "holds another " + std::string(reader.noun) + " under id " + std::to_string(stored);
+    } else {
+      return {};
+    }
+    return make_error(ErrorCode::kRefused,
+                      "run database " + source_ + " is not the file the central history last synced for machine " +
+                          machine_ + ": it " + found + " (" + std::string(reader.noun) + " " + stored_uuid +
+                          " was synced there), so it was replaced or restored from a backup; sync it again with "
+                          "--from-start, which compares every record by UUID and copies none twice");
+  }
+
+  Error committed_before(Error e) const {
+    if (counts_.batches > 0) {
+      e.message += counts_.batches == 1 ? std::string("; the batch before it is")
+                                        : "; the " + std::to_string(counts_.batches) + " batches before it are";
+      e.message += " in the central history: sync again to copy the rest";
+    } else {
+      e.message += "; nothing was copied";
+    }
+    return e;
+  }
+
+  CentralConnection& c_;
+  std::string machine_;
+  std::string source_;
+  const CentralSyncOptions& options_;
+  CentralSyncCounts& counts_;
+};
+
+std::string source_of(const RunStore& local) {
+  std::error_code ec;
+  std::filesystem::path p = std::filesystem::weakly_canonical(local.path(), ec);
+  if (ec) p = std::filesystem::absolute(local.path(), ec).lexically_normal();
+  return p.string();
+}
+
+}  // namespace
+
+Result<CentralSyncCounts> sync_to_central(const RunStore& local, const std::string& url, const std::string& machine,
+                                          const CentralSyncOptions& options) {
+  if (machine.empty()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "cannot sync to the central history without the grinder's name; give it with --machine");
+  }
+  if (Status s = check_run_identity("the machine name", machine); !s.ok()) return s.error();
+  if (options.batch_size < 1) {
+    return make_error(ErrorCode::kInvalidInput, "cannot sync to the central history: the batch size " +
+                                                    std::to_string(options.batch_size) + " is not 1 or more");
+  }
+  if (options.max_batches < 0) {
+    return make_error(ErrorCode::kInvalidInput, "cannot sync to the central history: the batch limit " +
+                                                    std::to_string(options.max_batches) + " is negative");
+  }
+  Result<CentralUrl> parsed = parse_central_url(url);
+  if (!parsed.ok()) return parsed.error();
+  Result<CentralConnection> c = central_internal::connect(*parsed);
+  if (!c.ok()) return c.error();
+  if (Status s = central_internal::migrate(*c); !s.ok()) return s.error();
+
+  CentralSyncCounts counts;
+  counts.source = source_of(local);
+  Syncer syncer(*c, machine, counts.source, options, counts);
+
+  const TableReader<StoredRun> runs{
+      "runs",
+      "run",
+      [&local](std::int64_t after, int limit) -> Result<std::vector<StoredRun>> {
+        Result<std::vector<std::int64_t>> ids = local.run_ids_after(after, limit);
+        if (!ids.ok()) return ids.error();
+        std::vector<StoredRun> out;
+        out.reserve(ids->size());
+        for (std::int64_t id : *ids) {
+          Result<StoredRun> run = local.load_run(id);
+          if (!run.ok()) return run.error();
+          out.push_back(std::move(*run));
+        }
+        return out;
+      },
+      [](const StoredRun& r) { return r.summary.id; },
+      [](const StoredRun& r) { return r.summary.uuid; },
+      insert_run,
+  };
+  const TableReader<ReplicatedPush> pushes{
+      "nc_pushes",
+      "push",
+      [&local](std::int64_t after, int limit) { return local.pushes_after(after, limit); },
+      [](const ReplicatedPush& p) { return p.push.id; },
+      [](const ReplicatedPush& p) { return p.push.uuid; },
+      insert_push,
+  };
+  const TableReader<StoredEvent> events{
+      "events",
+      "event",
+      [&local](std::int64_t after, int limit) { return local.events_after(after, limit); },
+      [](const StoredEvent& e) { return e.id; },
+      [](const StoredEvent& e) { return e.event.uuid; },
+      insert_event,
+  };
+
+  Result<bool> done = syncer.sync(runs, counts.runs);
+  if (done.ok() && *done) done = syncer.sync(pushes, counts.pushes);
+  if (done.ok() && *done) done = syncer.sync(events, counts.events);
+  if (!done.ok()) return done.error();
+  counts.caught_up = *done;
+  return counts;
+}
+
+}  // namespace gaugeloop

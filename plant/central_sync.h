@@ -1,0 +1,55 @@
+// Copying one grinder's run database into the plant's central history (docs/plant.md,
+// "The central history"): runs (summary, settings and characteristics; not the per-degree
+// tables), NC pushes (without the program text) and events, each keyed by its UUID.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <string_view>
+
+#include "core/result.h"
+#include "storage/run_store.h"
+
+namespace gaugeloop {
+
+struct CentralSyncOptions {
+  int batch_size = 200;  // records per PostgreSQL transaction; >= 1
+  int max_batches = 0;   // stop after this many batches (0: until every record is copied)
+  // Read the file from its first record again, ignoring where the last sync stopped: after the
+  // file was replaced or restored from a backup. Records already there are found by UUID.
+  bool from_start = false;
+  // Called before each batch's commit with the table ("runs", "nc_pushes", "events") and the
+  // batch's number (1, 2... over the whole sync); an error aborts that batch's transaction and
+  // ends the sync with it. For tests: a sync that fails half way.
+  std::function<Status(std::string_view table, int batch)> before_commit;
+};
+
+struct CentralSyncTableCounts {
+  std::int64_t inserted = 0;       // copied by this sync
+  std::int64_t already_there = 0;  // found by UUID (an earlier sync, or another grinder's copy)
+  std::int64_t last_local_id = 0;  // where the sync of this table stands now
+};
+
+struct CentralSyncCounts {
+  std::string source;  // the file synced, as the central history names it (its absolute path)
+  CentralSyncTableCounts runs, pushes, events;
+  int batches = 0;         // transactions committed
+  bool caught_up = false;  // false: stopped by max_batches with records left to copy
+};
+
+// Copies the records of `local` (in id order, after where the last sync of `machine` from this
+// file stopped) into the central history at `url`, creating or upgrading its schema first.
+// Each batch is one PostgreSQL transaction that inserts its records (ON CONFLICT (uuid) DO
+// NOTHING) and advances sync_progress together: a sync that stops anywhere resumes where the
+// last committed batch ended and never copies a record twice. Runs first, then pushes (which
+// mark their run pushed), then events.
+// `machine` names the grinder (not empty, at most 64 characters, no control characters).
+// Errors: kInvalidInput for a bad URL, machine or option; kStorage for a server that cannot be
+// reached or fails (the batches committed before stay), a newer central schema; kRefused when
+// the file is not the one the last sync read (a record at the id where it stopped is gone or
+// has another UUID): from_start reads it whole.
+Result<CentralSyncCounts> sync_to_central(const RunStore& local, const std::string& url, const std::string& machine,
+                                          const CentralSyncOptions& options = {});
+
+}  // namespace gaugeloop
