@@ -9,6 +9,9 @@ CMAKE_GEN := -G Ninja
 # The tests that time live polling against a real clock (SERIAL: about 280 s run alone). They
 # run in the normal build only: under a sanitizer's slowdown they test the machine, not the code.
 REALTIME_TESTS := ^(LiveLink\.|PymodbusPeer\.|SimulatorFaults/LiveOutageTest\.)
+# A plant of grinders, a broker and PostgreSQL as processes, through outages (examples/plant):
+# what it tests of our code under the sanitizers the plant tests test in-process; normal build only.
+PROCESS_TESTS := ^PlantRun\.
 # The tests of the service's threads (HTTP server, PLC trigger and handshake, the run) and of
 # the guard every thread starts through, the systemd watchdog's and the outbox sender's: the ones
 # ThreadSanitizer runs.
@@ -50,7 +53,7 @@ test-normal: configure
 
 test-asan: build-asan
 	cd $(ASAN_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
-	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS) -E '$(REALTIME_TESTS)'
+	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS) -E '$(REALTIME_TESTS)|$(PROCESS_TESTS)'
 
 test-tsan: build-tsan
 	cd $(TSAN_DIR) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \

@@ -23,24 +23,9 @@
 #include <thread>
 #include <vector>
 
-namespace gaugeloop::testing {
+#include "tests/support/free_port.h"
 
-// A port the kernel had free a moment ago (bound to port 0, read back, closed).
-inline int free_loopback_port() {
-  const int s = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = 0;
-  socklen_t len = sizeof a;
-  int port = 0;
-  if (::bind(s, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
-      ::getsockname(s, reinterpret_cast<sockaddr*>(&a), &len) == 0) {
-    port = ntohs(a.sin_port);
-  }
-  ::close(s);
-  return port;
-}
+namespace gaugeloop::testing {
 
 // Whether something accepts TCP connections on 127.0.0.1:port now.
 inline bool accepts_connections(int port) {

@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <string>
 
+#include "tests/support/free_port.h"
+
 namespace gaugeloop::testing {
 
 class PostgresServer {
@@ -45,9 +47,6 @@ class PostgresServer {
   int databases_ = 0;
   mutable int last_exit_ = 0;
 };
-
-// A port on 127.0.0.1 nothing listened on a moment ago (bound to port 0, then closed).
-int free_loopback_port();
 
 // The one server of a test executable: postgres_server.cc registers a gtest Environment that
 // starts it before the first test and stops it after the last, so tests share the cluster and
