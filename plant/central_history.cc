@@ -6,7 +6,6 @@
 #include <map>
 #include <utility>
 
-#include "core/utc_time.h"
 #include "plant/central_internal.h"
 #include "plant/central_schema.h"
 
@@ -78,12 +77,7 @@ Characteristic read_characteristic(const pqxx::row& row, int first) {
   return c;
 }
 
-Error bad_bound(std::string_view what, const std::string& value) {
-  return make_error(ErrorCode::kInvalidInput,
-                    std::string(what) + " '" + value + "' is not an ISO 8601 UTC time like 2026-11-22T02:34:44Z");
-}
-
-// The query's WHERE clause and its parameters; the same checks and messages as RunStore's.
+// The query's WHERE clause and its parameters (check_run_query checks it, as for RunStore).
 struct Filter {
   std::string where;
   Params params;
@@ -95,19 +89,7 @@ struct Filter {
 };
 
 Result<Filter> run_filter(const RunQuery& q) {
-  if (q.limit < 1) {
-    return make_error(ErrorCode::kInvalidInput,
-                      "cannot list runs: the limit must be 1 or more, not " + std::to_string(q.limit));
-  }
-  if (q.lobe < 0) {
-    return make_error(ErrorCode::kInvalidInput, "cannot list runs: lobe " + std::to_string(q.lobe) + " is negative");
-  }
-  if (!q.status.empty() && q.status != "measured" && q.status != "pushed") {
-    return make_error(ErrorCode::kInvalidInput,
-                      "cannot list runs: status '" + q.status + "' is not one of measured, pushed");
-  }
-  if (!q.since_utc.empty() && !is_utc_timestamp(q.since_utc)) return bad_bound("cannot list runs: since", q.since_utc);
-  if (!q.until_utc.empty() && !is_utc_timestamp(q.until_utc)) return bad_bound("cannot list runs: until", q.until_utc);
+  if (Status valid = check_run_query(q); !valid.ok()) return valid.error();
   Filter f;
   if (!q.part.empty()) f.add("r.part =", q.part);
   if (q.lobe > 0) f.add("r.lobe =", std::to_string(q.lobe));

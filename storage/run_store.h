@@ -262,6 +262,11 @@ struct RunQuery {
   std::string until_utc;           // started before (exclusive); empty = no bound
 };
 
+// kInvalidInput, with the message every history gives, for a query no history can answer: a
+// limit below 1, a negative lobe, a status other than measured/pushed, a malformed time bound.
+// RunStore and the central history check every query with it.
+Status check_run_query(const RunQuery& q);
+
 enum class EventKind {
   kFault,    // something failed: the gauge, the database, the NC directory...
   kRefusal,  // a guard or the geometry refused: a correction too large, a lobe not grindable

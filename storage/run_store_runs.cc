@@ -562,10 +562,7 @@ Result<StoredRun> RunStore::load_run(std::int64_t run_id) const {
   return out;
 }
 
-namespace {
-
-// Validates the query and makes its WHERE clause.
-Result<storage_internal::WhereClause> run_filter(const RunQuery& q) {
+Status check_run_query(const RunQuery& q) {
   if (q.limit < 1) {
     return make_error(ErrorCode::kInvalidInput,
                       "cannot list runs: the limit must be 1 or more, not " + std::to_string(q.limit));
@@ -583,6 +580,14 @@ Result<storage_internal::WhereClause> run_filter(const RunQuery& q) {
   if (!storage_internal::is_time_bound(q.until_utc)) {
     return storage_internal::bad_bound("cannot list runs: until", q.until_utc);
   }
+  return {};
+}
+
+namespace {
+
+// Validates the query and makes its WHERE clause.
+Result<storage_internal::WhereClause> run_filter(const RunQuery& q) {
+  if (Status valid = check_run_query(q); !valid.ok()) return valid.error();
   storage_internal::WhereClause where;
   if (!q.part.empty()) where.add("r.part =", q.part);
   if (q.lobe > 0) where.add_literal("r.lobe = " + std::to_string(q.lobe));

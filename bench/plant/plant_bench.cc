@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "core/utc_time.h"
 #include "plant/central_history.h"
 #include "plant/central_sync.h"
 #include "plant/outbox_sender.h"
@@ -60,19 +61,11 @@ fs::path scratch(const std::string& name) {
   return dir;
 }
 
-std::string utc(std::int64_t unix_s) {
-  const auto t = static_cast<std::time_t>(unix_s);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
 // A run as the job stores it, with the six characteristics of a judged lobe.
 RunRecord bench_run(int i, const std::string& machine) {
-  RunRecord r = testing::sample_run("cam_" + std::to_string(i % 5), 1 + i % 8, machine, utc(1767225600 + 60 * i),
-                                    2.0 + 0.001 * (i % 1000));
+  RunRecord r =
+      testing::sample_run("cam_" + std::to_string(i % 5), 1 + i % 8, machine,
+                          format_utc(static_cast<std::time_t>(1767225600 + 60 * i)), 2.0 + 0.001 * (i % 1000));
   for (int k = 0; k < 6; ++k) {
     Characteristic c;
     c.key = "lift_error_" + std::to_string(k);
