@@ -14,7 +14,7 @@ namespace {
 struct SyncOptions {
   DataPaths paths;
   std::string to;
-  std::string machine;  // empty: this computer's host name
+  std::string machine;  // empty: the config's machine with --config, else this computer's host name
   CentralSyncOptions sync;
 };
 
@@ -25,7 +25,9 @@ std::string host_name() {
 }
 
 int cmd_sync(const SyncOptions& o) {
-  const std::string machine = o.machine.empty() ? host_name() : o.machine;
+  const std::string machine = !o.machine.empty()        ? o.machine
+                              : !o.paths.config.empty() ? o.paths.from_config.machine
+                                                        : host_name();
   // Reading is all a sync does to the grinder's file: it works beside a running service.
   Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
@@ -60,8 +62,10 @@ void add_plant_commands(CLI::App& app, CommandAction& action) {
       "Each record once, by its UUID; a sync stopped anywhere resumes.");
   add_data_options(*sync_cmd, sync->paths);
   sync_cmd->add_option("--to", sync->to, "The central history: postgresql://USER@HOST:PORT/DATABASE")->required();
-  sync_cmd->add_option("--machine", sync->machine,
-                       "The grinder's name in the central history, the same at every sync (default: the host name)");
+  sync_cmd->add_option(
+      "--machine", sync->machine,
+      "The grinder's name in the central history, the same at every sync (default: the machine of --config, "
+      "else the host name)");
   sync_cmd->add_option("--batch-size", sync->sync.batch_size, "Records per transaction")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));

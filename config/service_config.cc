@@ -801,7 +801,7 @@ Result<ServiceDataPaths> read_service_data_paths(const fs::path& path) {
   Result<toml::table> parsed = parse_toml(*text, f.source);
   if (!parsed) return parsed.error();
   TomlReader top(*parsed, f.source);
-  ServiceDataPaths paths{f.resolve("gaugeloop.sqlite"), f.resolve("nc")};
+  ServiceDataPaths paths{f.resolve("gaugeloop.sqlite"), f.resolve("nc"), top.text("machine", "grinder-1")};
   if (const toml::table* t = top.subtable("database")) {
     TomlReader dr(*t, f.source, "database.");
     paths.db_path = f.resolve(dr.text("path", "gaugeloop.sqlite"));

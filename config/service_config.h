@@ -90,6 +90,7 @@ Result<ServiceConfig> read_service_config(const std::filesystem::path& path);
 struct ServiceDataPaths {
   std::filesystem::path db_path;  // [database] path
   std::filesystem::path nc_dir;   // [nc] dir
+  std::string machine;            // machine: the grinder's name (plant sync names its copy by it)
 };
 
 // Only [database] path and [nc] dir of the service's config, relative to its directory as the

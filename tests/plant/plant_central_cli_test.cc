@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <string>
 
 #include "core/tolerance.h"
@@ -163,6 +164,16 @@ TEST_F(CentralCliTest, ASyncKilledHalfWayResumesAndCopiesNothingTwice) {
   EXPECT_TRUE(has(resumed.output, ", 0 already there (up to id 405)")) << resumed.output;
   EXPECT_EQ(central_contents(url_), central_contents(reference));
   EXPECT_EQ(shared_postgres().psql(db, "SELECT count(*), count(DISTINCT uuid) FROM runs"), "405|405");
+}
+
+TEST_F(CentralCliTest, ASyncWithConfigNamesTheGrinderAsTheConfigDoes) {
+  // The service's config names its machine: a sync from that config needs no --machine.
+  std::ofstream(dir_ / "service.toml") << "machine = \"cell-7\"\n[database]\npath = \"gaugeloop.sqlite\"\n";
+  CommandResult sync = run_command("plant sync --to " + url_ + " --config " + (dir_ / "service.toml").string());
+  ASSERT_EQ(sync.exit_code, 0) << sync.output;
+  EXPECT_TRUE(has(sync.output, "(machine cell-7)")) << sync.output;
+  const std::string db = url_.substr(url_.rfind('/') + 1);
+  EXPECT_EQ(shared_postgres().psql(db, "SELECT DISTINCT source_machine FROM runs"), "cell-7");
 }
 
 TEST_F(CentralCliTest, AServerNobodyListensOnOrABadUrlIsAClearErrorAndExitStatus) {
