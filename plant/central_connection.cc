@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "core/utf8.h"
 #include "plant/central_internal.h"
 
 namespace gaugeloop {
@@ -159,7 +160,9 @@ Error database_error(const CentralUrl& url, std::string_view operation, const st
 }
 
 Params& Params::text(std::string_view v) {
-  values_.emplace_back(std::string(v));
+  // PostgreSQL refuses text that is not UTF-8, and would refuse the record at every sync: a
+  // note typed in another encoding goes in with U+FFFD for its stray bytes instead.
+  values_.emplace_back(with_valid_utf8(v));
   return *this;
 }
 

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/utc_time.h"
+#include "core/utf8.h"
 #include "core/uuid.h"
 
 namespace gaugeloop::storage_internal {
@@ -232,23 +233,9 @@ Status check_run_identity(std::string_view what, std::string_view value) {
   constexpr std::size_t kMaxCharacters = 64;
   std::size_t characters = 0;
   for (std::size_t i = 0; i < value.size();) {
-    const auto lead = static_cast<unsigned char>(value[i]);
-    // The length of the UTF-8 sequence and the smallest code point it may carry (shorter
-    // forms of the same character are not valid UTF-8).
-    const std::size_t length = lead < 0x80           ? 1
-                               : (lead >> 5) == 0x6  ? 2
-                               : (lead >> 4) == 0xE  ? 3
-                               : (lead >> 3) == 0x1E ? 4
-                                                     : 0;
-    char32_t cp = length == 1 ? lead : length == 2 ? (lead & 0x1Fu) : length == 3 ? (lead & 0x0Fu) : (lead & 0x07u);
-    bool valid = length != 0 && i + length <= value.size();
-    for (std::size_t k = 1; valid && k < length; ++k) {
-      const auto c = static_cast<unsigned char>(value[i + k]);
-      valid = (c >> 6) == 0x2;
-      cp = (cp << 6) | (c & 0x3Fu);
-    }
-    const char32_t smallest = length == 2 ? 0x80 : length == 3 ? 0x800 : length == 4 ? 0x10000 : 0;
-    if (!valid || cp < smallest || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) {
+    char32_t cp = 0;
+    const std::size_t length = utf8_sequence_at(value, i, cp);
+    if (length == 0) {
       return make_error(ErrorCode::kInvalidInput, std::string(what) + " is not valid UTF-8 at byte " +
                                                       std::to_string(i + 1) + "; write it as plain text");
     }

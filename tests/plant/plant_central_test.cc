@@ -306,6 +306,23 @@ TEST_F(CentralTest, AServerThatGoesAwayDuringASyncLosesOnlyTheBatchUnderWay) {
   EXPECT_EQ(server.psql(db, "SELECT count(*) FROM run_characteristics"), "30");
 }
 
+TEST_F(CentralTest, ANoteTypedInAnotherEncodingSyncsWithItsStrayBytesReplaced) {
+  // "Maß" typed on a Latin-1 terminal: PostgreSQL refuses bytes that are not UTF-8, and would
+  // refuse this run at every sync if they went in as they are.
+  Grinder g("latin1");
+  RunRecord r = testing::sample_run("intake", 1, "g1", "2026-11-22T08:00:00Z", 5.0);
+  r.note =
+      "Ma\xDF gepr\xFC"
+      "ft";
+  ASSERT_TRUE(g.store->insert_run(r).ok());
+  Result<CentralSyncCounts> s = sync_to_central(*g.store, url_, "g1");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->runs.inserted, 1);
+  EXPECT_EQ(shared_postgres().psql(database_, "SELECT note FROM runs"),
+            "Ma\xEF\xBF\xBD gepr\xEF\xBF\xBD"
+            "ft");
+}
+
 TEST_F(CentralTest, ARunPushedAfterItWasSyncedIsPushedInTheCentralHistoryToo) {
   Grinder g("central-pushed-later");
   ASSERT_TRUE(g.store->insert_run(judged_run("intake", 1, "g1", "2026-11-22T08:00:00Z", 1)).ok());
