@@ -74,7 +74,7 @@ TEST(CliCommon, TheServicesConfigGivesTheDatabaseAndNcDirectory) {
   DataPaths p;
   p.data_dir = "ignored";
   p.config = "/etc/gaugeloop/gaugeloop.toml";
-  p.from_config = {"/var/lib/gaugeloop/runs-7.sqlite", "/var/lib/gaugeloop/nc"};
+  p.from_config = {"/var/lib/gaugeloop/runs-7.sqlite", "/var/lib/gaugeloop/nc", "grinder-7"};
   EXPECT_EQ(p.db(), std::filesystem::path("/var/lib/gaugeloop/runs-7.sqlite"));
   EXPECT_EQ(p.nc(), std::filesystem::path("/var/lib/gaugeloop/nc"));
   EXPECT_EQ(p.where(), "--config /etc/gaugeloop/gaugeloop.toml");
