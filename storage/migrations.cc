@@ -635,7 +635,7 @@ CREATE INDEX runs_by_verdict ON runs (verdict, started_utc) WHERE verdict IS NOT
 
 // A random version-4 UUID in SQL, for rows that no gaugeloop wrote (backfill, sqlite3 users):
 // gaugeloop itself gives each record core/uuid.h's new_uuid().
-#define GL_SQL_UUID                                                                          \
+#define GL_SQL_UUID                                                                                 \
   "lower(hex(randomblob(4)) || '-' || hex(randomblob(2)) || '-4' || substr(hex(randomblob(2)), 2) " \
   "|| '-' || substr('89ab', 1 + abs(random()) % 4, 1) || substr(hex(randomblob(2)), 2) || '-' || "  \
   "hex(randomblob(6)))"
@@ -652,20 +652,26 @@ const std::string kSchemaV9 = std::string(R"sql(
 ALTER TABLE runs ADD COLUMN uuid TEXT CHECK (uuid IS NULL OR length(uuid) = 36);
 ALTER TABLE nc_pushes ADD COLUMN uuid TEXT CHECK (uuid IS NULL OR length(uuid) = 36);
 ALTER TABLE events ADD COLUMN uuid TEXT CHECK (uuid IS NULL OR length(uuid) = 36);
-UPDATE runs SET uuid = )sql") + GL_SQL_UUID + R"sql(;
-UPDATE nc_pushes SET uuid = )sql" + GL_SQL_UUID + R"sql(;
-UPDATE events SET uuid = )sql" + GL_SQL_UUID + R"sql(;
+UPDATE runs SET uuid = )sql") +
+                              GL_SQL_UUID + R"sql(;
+UPDATE nc_pushes SET uuid = )sql" +
+                              GL_SQL_UUID + R"sql(;
+UPDATE events SET uuid = )sql" +
+                              GL_SQL_UUID + R"sql(;
 CREATE UNIQUE INDEX runs_by_uuid ON runs (uuid);
 CREATE UNIQUE INDEX nc_pushes_by_uuid ON nc_pushes (uuid);
 CREATE UNIQUE INDEX events_by_uuid ON events (uuid);
 CREATE TRIGGER runs_get_a_uuid AFTER INSERT ON runs WHEN NEW.uuid IS NULL BEGIN
-  UPDATE runs SET uuid = )sql" + GL_SQL_UUID + R"sql( WHERE id = NEW.id;
+  UPDATE runs SET uuid = )sql" +
+                              GL_SQL_UUID + R"sql( WHERE id = NEW.id;
 END;
 CREATE TRIGGER nc_pushes_get_a_uuid AFTER INSERT ON nc_pushes WHEN NEW.uuid IS NULL BEGIN
-  UPDATE nc_pushes SET uuid = )sql" + GL_SQL_UUID + R"sql( WHERE id = NEW.id;
+  UPDATE nc_pushes SET uuid = )sql" +
+                              GL_SQL_UUID + R"sql( WHERE id = NEW.id;
 END;
 CREATE TRIGGER events_get_a_uuid AFTER INSERT ON events WHEN NEW.uuid IS NULL BEGIN
-  UPDATE events SET uuid = )sql" + GL_SQL_UUID + R"sql( WHERE id = NEW.id;
+  UPDATE events SET uuid = )sql" +
+                              GL_SQL_UUID + R"sql( WHERE id = NEW.id;
 END;
 
 CREATE TABLE outbox_state (
@@ -697,10 +703,12 @@ CREATE TRIGGER outbox_counted_on_delete AFTER DELETE ON outbox BEGIN
 END;
 CREATE TRIGGER runs_to_outbox AFTER INSERT ON runs WHEN (SELECT enabled FROM outbox_state) BEGIN
   INSERT INTO outbox (uuid, topic, run_id, created_utc)
-    VALUES ()sql" + GL_SQL_UUID + R"sql(, 'run', NEW.id, strftime('%Y-%m-%dT%H:%M:%SZ', 'now'));
+    VALUES ()sql" + GL_SQL_UUID +
+                              R"sql(, 'run', NEW.id, strftime('%Y-%m-%dT%H:%M:%SZ', 'now'));
   -- The lobe's verdict changed from its previous run's (or it is the lobe's first run).
   INSERT INTO outbox (uuid, topic, run_id, created_utc, payload)
-    SELECT )sql" + GL_SQL_UUID + R"sql(, 'verdict', NEW.id, strftime('%Y-%m-%dT%H:%M:%SZ', 'now'),
+    SELECT )sql" + GL_SQL_UUID +
+                              R"sql(, 'verdict', NEW.id, strftime('%Y-%m-%dT%H:%M:%SZ', 'now'),
            json_object('run_id', NEW.id, 'machine', NEW.machine, 'part', NEW.part, 'lobe', NEW.lobe,
                        'started_utc', NEW.started_utc, 'verdict', coalesce(NEW.verdict, 'not_judged'),
                        'previous_verdict', previous.verdict, 'previous_run_id', previous.id)
@@ -712,7 +720,8 @@ CREATE TRIGGER runs_to_outbox AFTER INSERT ON runs WHEN (SELECT enabled FROM out
 END;
 CREATE TRIGGER nc_pushes_to_outbox AFTER INSERT ON nc_pushes WHEN (SELECT enabled FROM outbox_state) BEGIN
   INSERT INTO outbox (uuid, topic, run_id, push_id, created_utc)
-    VALUES ()sql" + GL_SQL_UUID + R"sql(, 'nc', NEW.run_id, NEW.id, strftime('%Y-%m-%dT%H:%M:%SZ', 'now'));
+    VALUES ()sql" + GL_SQL_UUID +
+                              R"sql(, 'nc', NEW.run_id, NEW.id, strftime('%Y-%m-%dT%H:%M:%SZ', 'now'));
 END;
 )sql";
 #undef GL_SQL_UUID

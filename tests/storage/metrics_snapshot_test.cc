@@ -261,11 +261,12 @@ TEST(MetricsSnapshotMigration, Version6AddsTheIndexTheCountsAndTheirTriggers) {
   EXPECT_EQ(raw.query_text("SELECT group_concat(name, ',') FROM"
                            " (SELECT name FROM pragma_index_info('runs_by_lobe_started') ORDER BY seqno)"),
             "machine,part,lobe,started_utc");
-  EXPECT_EQ(raw.query_text("SELECT group_concat(name, ',') FROM (SELECT name FROM sqlite_schema"
-                           " WHERE type = 'trigger' AND name LIKE '%counted%' AND name NOT LIKE 'outbox%' ORDER BY name)"),
-            "events_counted_on_delete,events_counted_on_insert,events_counted_on_kind,"
-            "runs_counted_on_delete,runs_counted_on_insert,runs_counted_on_status,"
-            "runs_verdict_counted_on_delete,runs_verdict_counted_on_insert,runs_verdict_counted_on_update");
+  EXPECT_EQ(
+      raw.query_text("SELECT group_concat(name, ',') FROM (SELECT name FROM sqlite_schema"
+                     " WHERE type = 'trigger' AND name LIKE '%counted%' AND name NOT LIKE 'outbox%' ORDER BY name)"),
+      "events_counted_on_delete,events_counted_on_insert,events_counted_on_kind,"
+      "runs_counted_on_delete,runs_counted_on_insert,runs_counted_on_status,"
+      "runs_verdict_counted_on_delete,runs_verdict_counted_on_insert,runs_verdict_counted_on_update");
   Result<StoreMetrics> m = store->metrics_snapshot();
   ASSERT_TRUE(m.ok()) << m.error().message;
   EXPECT_EQ(m->runs_by_status, (Counts{{"measured", 2}, {"pushed", 1}})) << "the rows already there are counted";
