@@ -15,6 +15,7 @@
 #include "config/gauge_config.h"
 #include "config/toml_reader.h"
 #include "core/text_file.h"
+#include "plant/central_history.h"
 #include "plant/plant_messages.h"
 
 namespace gaugeloop {
@@ -626,17 +627,11 @@ Status read_mqtt_tls(const TomlReader& mr, const ConfigFile& f, const std::strin
   return {};
 }
 
-// [plant.mqtt]: the plant's broker; absent table, no broker (the outbox stays disabled). The
-// machine name becomes a topic level, so it is checked here too.
-Result<std::optional<MqttSettings>> read_plant_table(TomlReader& top, const ConfigFile& f, const std::string& machine) {
-  const toml::table* plant = top.subtable("plant");
-  if (plant == nullptr) return std::optional<MqttSettings>();
-  TomlReader pr(*plant, f.source, "plant.");
-  pr.allow_only({"mqtt"});
-  const toml::table* t = pr.subtable("mqtt");
-  if (pr.error) return *pr.error;
-  if (t == nullptr) return std::optional<MqttSettings>();
-  TomlReader mr(*t, f.source, "plant.mqtt.");
+// [plant.mqtt]: the plant's broker. The machine name becomes a topic level, so it is checked
+// here too.
+Result<MqttSettings> read_plant_mqtt(const TomlReader& top, const toml::table& t, const ConfigFile& f,
+                                     const std::string& machine) {
+  TomlReader mr(t, f.source, "plant.mqtt.");
   mr.allow_only({"host", "port", "site", "client_id", "username", "password", "password_file", "ca_file", "cert_file",
                  "key_file", "keepalive_s", "max_depth"});
   MqttSettings m;
@@ -678,7 +673,54 @@ Result<std::optional<MqttSettings>> read_plant_table(TomlReader& top, const Conf
     m.password = std::move(*password);
   }
   if (Status s = read_mqtt_tls(mr, f, ca, cert, key, m); !s) return s.error();
-  return std::optional<MqttSettings>(std::move(m));
+  return m;
+}
+
+// [plant.central]: the central history the service syncs its runs into. The URL's password,
+// like the broker's, never stands in the config: libpq reads it from a passfile.
+Result<CentralSyncSettings> read_plant_central(const toml::table& t, const ConfigFile& f) {
+  TomlReader cr(t, f.source, "plant.central.");
+  cr.allow_only({"url", "interval_s", "batch_size"});
+  CentralSyncSettings c;
+  c.url = cr.text("url", std::nullopt);
+  c.interval = std::chrono::seconds(cr.integer("interval_s", 60, 10, 86400));
+  c.batch_size = static_cast<int>(cr.integer("batch_size", 200, 1, 10000));
+  if (cr.error) return *cr.error;
+  Result<CentralUrl> url = parse_central_url(c.url);
+  if (!url) return make_error(ErrorCode::kInvalidInput, cr.where("url") + ": " + url.error().message);
+  if (url->shown.find(":***@") != std::string::npos || c.url.find("password=") != std::string::npos) {
+    return make_error(ErrorCode::kInvalidInput,
+                      cr.where("url") +
+                          ": a password written in the config is refused: the config is often readable by every user "
+                          "and copied around. Put it in a file in PostgreSQL's passfile form "
+                          "(HOST:PORT:DATABASE:USER:PASSWORD, mode 0600, owned by the service's user) and name it in "
+                          "the URL: postgresql://gaugeloop@central/plant?passfile=/etc/gaugeloop/pgpass");
+  }
+  return c;
+}
+
+// [plant]: the plant's broker ([plant.mqtt]) and central history ([plant.central]), each
+// optional. No broker: the outbox stays disabled; no central history: `gaugeloop plant sync`
+// (from a timer) copies the runs, or nothing does.
+Status read_plant_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
+  const toml::table* plant = top.subtable("plant");
+  if (plant == nullptr) return {};
+  TomlReader pr(*plant, f.source, "plant.");
+  pr.allow_only({"mqtt", "central"});
+  const toml::table* mqtt = pr.subtable("mqtt");
+  const toml::table* central = pr.subtable("central");
+  if (pr.error) return *pr.error;
+  if (mqtt != nullptr) {
+    Result<MqttSettings> m = read_plant_mqtt(top, *mqtt, f, c.machine);
+    if (!m) return m.error();
+    c.mqtt = std::move(*m);
+  }
+  if (central != nullptr) {
+    Result<CentralSyncSettings> sync = read_plant_central(*central, f);
+    if (!sync) return sync.error();
+    c.central = std::move(*sync);
+  }
+  return {};
 }
 
 // What the [[part]] entries read so far claim, to refuse a part or a PLC number given twice.
@@ -787,9 +829,7 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   Result<std::optional<PlcSettings>> plc = read_plc_table(top, f);
   if (!plc) return plc.error();
   c.plc = std::move(*plc);
-  Result<std::optional<MqttSettings>> mqtt = read_plant_table(top, f, c.machine);
-  if (!mqtt) return mqtt.error();
-  c.mqtt = std::move(*mqtt);
+  if (Status s = read_plant_table(top, f, c); !s) return s.error();
   if (Status s = read_part_entries(table, top, f, c); !s) return s.error();
   return c;
 }

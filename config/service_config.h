@@ -15,6 +15,7 @@
 #include "core/lift_table.h"
 #include "core/result.h"
 #include "job/measure_job.h"
+#include "plant/central_sync.h"
 #include "plant/mqtt_settings.h"
 
 namespace gaugeloop {
@@ -77,6 +78,9 @@ struct ServiceConfig {
   // [plant.mqtt]: the plant's broker the outbox sender delivers runs, pushes and states to
   // (docs/plant.md); absent: no broker, the outbox stays disabled.
   std::optional<MqttSettings> mqtt;
+  // [plant.central]: the central history the service syncs its runs, pushes and events into
+  // (docs/plant.md); absent: the service does not sync (`gaugeloop plant sync` may).
+  std::optional<CentralSyncSettings> central;
 };
 
 // Reads and checks the whole file before anything uses it: every part file and lift table

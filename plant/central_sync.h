@@ -3,6 +3,7 @@
 // tables), NC pushes (without the program text) and events, each keyed by its UUID.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -23,6 +24,17 @@ struct CentralSyncOptions {
   // batch's number (1, 2... over the whole sync); an error aborts that batch's transaction and
   // ends the sync with it. For tests: a sync that fails half way.
   std::function<Status(std::string_view table, int batch)> before_commit;
+};
+
+// The service's own sync, [plant.central] (docs/plant.md, "The service syncs itself").
+struct CentralSyncSettings {
+  std::string url;  // postgresql://...; checked by parse_central_url, no password in it
+  // A sync at least this often; also right after each run the service stores, while the last
+  // sync succeeded.
+  std::chrono::seconds interval{60};
+  int batch_size = 200;  // as CentralSyncOptions
+  // Not in the config file: the first wait after a failed sync, doubling up to `interval`.
+  std::chrono::milliseconds retry_min{5000};
 };
 
 struct CentralSyncTableCounts {

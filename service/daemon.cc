@@ -11,6 +11,8 @@
 
 #include "acquisition/plc_link.h"
 #include "job/nc_push.h"
+#include "plant/central_history.h"
+#include "plant/central_syncer.h"
 #include "plant/outbox_sender.h"
 #include "service/http_api.h"
 #include "service/plc_trigger.h"
@@ -60,6 +62,11 @@ std::string mqtt_text(const std::optional<MqttSettings>& m) {
          std::to_string(m->max_depth);
 }
 
+std::string central_text(const std::optional<CentralSyncSettings>& c) {
+  if (!c) return "";
+  return c->url + " every " + std::to_string(c->interval.count()) + " s, batches of " + std::to_string(c->batch_size);
+}
+
 Result<std::unique_ptr<HttpApi>> start_http(Service& service, PlcTrigger* plc, const HttpSettings& settings,
                                             const std::filesystem::path& db_path) {
   HttpWrites writes;
@@ -94,6 +101,7 @@ struct StartedWith {
   std::filesystem::path db_path;
   std::optional<MqttSettings> mqtt;
   std::string machine;
+  std::optional<CentralSyncSettings> central;
 };
 
 // SIGHUP: a configuration that reads and checks whole replaces the one in force; what needs a
@@ -113,6 +121,9 @@ void reload(Service& service, const std::filesystem::path& config_path, StartedW
   }
   if (mqtt_text(fresh->mqtt) != mqtt_text(started.mqtt) || fresh->machine != started.machine) {
     spdlog::warn("reload: [plant.mqtt] and machine changes reach the broker when the service restarts");
+  }
+  if (central_text(fresh->central) != central_text(started.central)) {
+    spdlog::warn("reload: [plant.central] changes take effect when the service restarts");
   }
   std::optional<HttpSettings>& was = started.http;
   if (fresh->http.has_value() != was.has_value() ||
@@ -176,8 +187,14 @@ std::string describe_service_config(const ServiceConfig& c) {
   const std::string broker = c.mqtt ? c.mqtt->host + ":" + std::to_string(c.mqtt->port) + " (site " + c.mqtt->site +
                                           (c.mqtt->ca_file.empty() ? "" : ", TLS") + ")"
                                     : std::string("none");
+  std::string central = "none";
+  if (c.central) {
+    const Result<CentralUrl> url = parse_central_url(c.central->url);  // checked by the config reader
+    central = url ? url->shown : c.central->url;
+  }
   return c.source.string() + ": machine " + c.machine + ", parts " + parts + ", database " + c.job.db_path.string() +
-         ", NC directory " + c.job.nc_dir.string() + ", PLC " + plc + ", plant broker " + broker;
+         ", NC directory " + c.job.nc_dir.string() + ", PLC " + plc + ", plant broker " + broker +
+         ", central history " + central;
 }
 
 Status run_service(const std::filesystem::path& config_path) {
@@ -191,7 +208,7 @@ Status run_service(const std::filesystem::path& config_path) {
 
   Result<ServiceConfig> config = read_service_config(config_path);
   if (!config) return not_starting(config.error(), "configuration refused");
-  StartedWith started{config->http, config->plc, config->job.db_path, config->mqtt, config->machine};
+  StartedWith started{config->http, config->plc, config->job.db_path, config->mqtt, config->machine, config->central};
   const std::optional<HttpSettings>& http_settings = started.http;
   const std::optional<PlcSettings>& plc_settings = started.plc;
   const std::filesystem::path& db_path = started.db_path;
@@ -199,27 +216,34 @@ Status run_service(const std::filesystem::path& config_path) {
   if (Status s = configure_plant_outbox(db_path, started.mqtt); !s) return s;
   // Before the service, so that it outlives every thread that tells it something; its end
   // publishes the offline state.
-  std::atomic<const Service*> fault_sink{nullptr};  // the sender's faults, while the service exists
+  std::atomic<const Service*> fault_sink{nullptr};  // the plant threads' faults, while the service exists
+  const auto on_fault = [&fault_sink](std::string_view name, std::string_view what) {
+    if (const Service* s = fault_sink.load()) {
+      s->record_thread_fault(name, what);
+    } else {
+      spdlog::error("the {} thread was ended by an exception: {}", name, what);
+    }
+  };
   std::unique_ptr<OutboxSender> outbox;
   if (started.mqtt) {
-    outbox = std::make_unique<OutboxSender>(
-        db_path, *started.mqtt, started.machine, [&fault_sink](std::string_view name, std::string_view what) {
-          if (const Service* s = fault_sink.load()) {
-            s->record_thread_fault(name, what);
-          } else {
-            spdlog::error("the {} thread was ended by an exception: {}", name, what);
-          }
-        });
+    outbox = std::make_unique<OutboxSender>(db_path, *started.mqtt, started.machine, on_fault);
     spdlog::info("plant broker: {}:{} as {}, topics gaugeloop/{}/{}/...", started.mqtt->host, started.mqtt->port,
                  started.mqtt->client_id, started.mqtt->site, started.machine);
+  }
+  std::unique_ptr<CentralSyncer> central;
+  if (started.central) {
+    central = std::make_unique<CentralSyncer>(db_path, *started.central, started.machine, on_fault);
+    spdlog::info("central history: {} synced every {} s and after each run, as machine {}", central->status().url,
+                 started.central->interval.count(), started.machine);
   }
   Service service(std::move(*config));
   struct ForgetService {  // before the service ends, the sender's faults go back to the log
     std::atomic<const Service*>& sink;
     ~ForgetService() { sink = nullptr; }
   } forget_service{fault_sink};
+  if (outbox || central) fault_sink = &service;
+  if (central) service.set_central_sync(central.get());
   if (outbox) {
-    fault_sink = &service;
     service.set_outbox(outbox.get());
     service.plant_state("started", describe_service_config(*service.config()));
   }

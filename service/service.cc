@@ -12,6 +12,7 @@
 #include "core/guarded_thread.h"
 #include "core/utc_time.h"
 #include "job/nc_push.h"
+#include "plant/central_syncer.h"
 #include "plant/outbox_sender.h"
 #include "report/run_json.h"
 
@@ -311,8 +312,9 @@ Result<JobReport> Service::run_reserved(RunReservation reservation, const std::s
     return run_measure_job(*gauge, js);
   }();
   // The run and its push queued their broker messages in their own transactions (a failed
-  // push may still have stored the run): the sender looks now rather than at its next poll.
-  if (outbox_ != nullptr) outbox_->notify();
+  // push may still have stored the run): the sender and the sync look now rather than at
+  // their next turn.
+  tell_plant();
   if (!report) {
     ++runs_failed_;
     spdlog::error("run failed: part {} lobe {}: {}", part_name, lobe, report.error().message);
@@ -408,7 +410,7 @@ Result<json> Service::approve(std::int64_t pending_id, const std::string& by, co
   if (!pushed) return pushed.error();
   spdlog::info("pending table {} approved by {}: table version {} of run {} pushed to {}", pending_id, by,
                pushed->table_version, pushed->run_id, pushed->nc_file);
-  if (outbox_ != nullptr) outbox_->notify();
+  tell_plant();
   return json{{"nc_file", pushed->nc_file},
               {"table_version", pushed->table_version},
               {"run_id", pushed->run_id},
@@ -432,7 +434,7 @@ Result<json> Service::rollback(const std::string& program, int table_version, co
   if (!pushed) return pushed.error();
   spdlog::info("rollback by {}: {} table version {} is the table of version {} (run {})", by, pushed->nc_file,
                pushed->table_version, table_version, pushed->run_id);
-  if (outbox_ != nullptr) outbox_->notify();
+  tell_plant();
   return json{{"nc_file", pushed->nc_file}, {"table_version", pushed->table_version}, {"run_id", pushed->run_id}};
 }
 
@@ -451,7 +453,13 @@ json Service::health() const {
           {"config_reload_failures", reload_failures_.load()},
           {"thread_faults", thread_faults_.load()},
           {"plc", plc_status_ ? plc_status_() : json(nullptr)},
-          {"outbox", outbox_ != nullptr ? outbox_->health() : json(nullptr)}};
+          {"outbox", outbox_ != nullptr ? outbox_->health() : json(nullptr)},
+          {"central", central_ != nullptr ? central_->health() : json(nullptr)}};
+}
+
+void Service::tell_plant() const {
+  if (outbox_ != nullptr) outbox_->notify();
+  if (central_ != nullptr) central_->notify();
 }
 
 void Service::plant_state(const std::string& state, const std::string& detail) const {
@@ -479,6 +487,7 @@ std::string Service::metrics() const {
   m += "# TYPE gaugeloop_service_events_dropped_total counter\n";
   m += "gaugeloop_service_events_dropped_total " + std::to_string(events_->dropped()) + "\n";
   if (outbox_ != nullptr) m += outbox_->metrics();
+  if (central_ != nullptr) m += central_->metrics();
   return m;
 }
 

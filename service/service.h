@@ -26,6 +26,7 @@ namespace gaugeloop {
 
 class Service;
 class EventWriter;
+class CentralSyncer;
 class OutboxSender;
 
 // The one run (or push) at a time, held: whoever holds it may run; it is released when the
@@ -151,6 +152,9 @@ class Service {
   // must outlive the service's threads. /api/health gets its "outbox", /metrics its series,
   // and it is told after every run, push and state change.
   void set_outbox(OutboxSender* sender) { outbox_ = sender; }
+  // The sync into the plant's central history ([plant.central]); null: none. As set_outbox:
+  // /api/health gets its "central", /metrics its series, and it is told after every run and push.
+  void set_central_sync(CentralSyncer* syncer) { central_ = syncer; }
   // A state change for the plant's broker ("started", "stopping", "plc link down"...): queued
   // in the outbox by the sender's thread. Nothing without a sender. Any thread.
   void plant_state(const std::string& state, const std::string& detail = {}) const;
@@ -164,6 +168,7 @@ class Service {
  private:
   friend class RunReservation;
   void release_run();
+  void tell_plant() const;  // a run or push was stored: the outbox sender and the sync look now
 
   GaugeFactory gauge_factory_;
   mutable std::mutex config_mutex_;
@@ -181,6 +186,7 @@ class Service {
   mutable std::atomic<long long> thread_faults_{0};
   std::function<nlohmann::json()> plc_status_;
   OutboxSender* outbox_ = nullptr;
+  CentralSyncer* central_ = nullptr;
   std::unique_ptr<EventWriter> events_;  // last: its thread ends first
 };
 

@@ -5,18 +5,20 @@ Starts a real mosquitto broker and a real PostgreSQL 15 cluster in a temporary d
 free loopback ports, and N grinders, each a virtual grinder (`gaugeloop sim --grind`) measured
 by its own service (`gaugeloop serve`) with its own SQLite file, publishing to the broker.
 Every grinder is asked for a run every few seconds (POST /api/measure); every few seconds each
-grinder's file is synced into PostgreSQL (`gaugeloop plant sync`). An independent subscriber
+grinder's file is synced into PostgreSQL (`gaugeloop plant sync`, as a timer would), or, with
+--service-sync, each service syncs its own file ([plant.central]). An independent subscriber
 (mosquitto_sub) records what the broker delivers.
 
 With --outages the broker and then PostgreSQL are each stopped for a while in the middle, and
 one grinder's service is killed with SIGKILL and started again. At the end the outboxes are
-drained, a last sync is made, and the runs stored in the grinders' files are counted against
+drained, a last sync is made (or waited for), and the runs stored in the grinders' files are counted against
 those the subscriber received and those in PostgreSQL, by UUID: lost, duplicated, and repeat
 deliveries (a consumer drops those by message_uuid). Exit status 0 only with nothing lost and
 nothing duplicated.
 
     plant_run.py --grinders 3 --minutes 1                 # the plant demo
     plant_run.py --grinders 20 --minutes 10 --outages     # the load test (docs/plant.md)
+    plant_run.py --grinders 3 --minutes 1.5 --outages --service-sync
 
 Needs the Debian packages scripts/install-deps.sh installs (mosquitto, mosquitto-clients,
 postgresql-15) and a built gaugeloop (--gaugeloop, default build/bin/gaugeloop). Runs as root
@@ -145,7 +147,7 @@ class Postgres:
 class Grinder:
     """A virtual grinder (gaugeloop sim --grind) and the service that measures it."""
 
-    def __init__(self, work, index, gaugeloop, broker_port, time_scale):
+    def __init__(self, work, index, gaugeloop, broker_port, time_scale, central_url=None, sync_every_s=60):
         self.index = index
         self.machine = f"grinder-{index + 1:02d}"
         self.dir = work / self.machine
@@ -190,7 +192,10 @@ token_file = "token"
 host = "127.0.0.1"
 port = {broker_port}
 site = "{SITE}"
-""")
+""" + ("" if central_url is None else f"""[plant.central]
+url = "{central_url}"
+interval_s = {max(10, int(sync_every_s))}
+"""))
         self.serve = None
         self.http_port = None
         self.requested = 0
@@ -293,6 +298,9 @@ def main():
     ap.add_argument("--minutes", type=float, default=1.0)
     ap.add_argument("--run-every-s", type=float, default=3.0, help="each grinder is asked for a run this often")
     ap.add_argument("--sync-every-s", type=float, default=10.0)
+    ap.add_argument("--service-sync", action="store_true",
+                    help="each service syncs its own file ([plant.central], at least every 10 s) instead of this "
+                         "script running `gaugeloop plant sync`")
     ap.add_argument("--outages", action="store_true",
                     help="stop the broker, then PostgreSQL, each for --outage-s, and kill one service with -9")
     ap.add_argument("--outage-s", type=float, default=60.0)
@@ -315,7 +323,8 @@ def main():
         subscriber.start()
         log(f"broker on 127.0.0.1:{broker.port}, PostgreSQL at {pg.url}, work in {work}")
         for i in range(args.grinders):
-            g = Grinder(work, i, args.gaugeloop, broker.port, args.time_scale)
+            g = Grinder(work, i, args.gaugeloop, broker.port, args.time_scale,
+                        pg.url if args.service_sync else None, args.sync_every_s)
             g.start_service()
             grinders.append(g)
         log(f"{len(grinders)} grinders running")
@@ -334,7 +343,8 @@ def main():
                 stop.wait(args.sync_every_s)
 
         threads = [threading.Thread(target=drive, args=(g,)) for g in grinders]
-        threads.append(threading.Thread(target=sync_loop))
+        if not args.service_sync:
+            threads.append(threading.Thread(target=sync_loop))
         for t in threads:
             t.start()
 
@@ -373,9 +383,15 @@ def main():
         log("runs stopped; draining the outboxes and syncing once more")
         wait_until("every outbox to drain", lambda: all(g.outbox_depth() == 0 for g in grinders), timeout_s=300,
                    interval_s=1.0)
-        for g in grinders:
-            if not g.sync(pg.url):
-                raise RuntimeError(f"{g.machine}: the last sync failed")
+        if args.service_sync:
+            # The services sync after each run and every interval: wait for them to catch up.
+            wanted = {u for g in grinders for u in g.stored_run_uuids()}
+            wait_until("the services to sync every run", lambda: wanted <= set(pg.query("SELECT uuid FROM runs")),
+                       timeout_s=300, interval_s=1.0)
+        else:
+            for g in grinders:
+                if not g.sync(pg.url):
+                    raise RuntimeError(f"{g.machine}: the last sync failed")
         # The subscriber has what the broker acknowledged to the senders once it has caught up.
         stored = [u for g in grinders for u in g.stored_run_uuids()]
         wait_until("the subscriber to receive every run",

@@ -1,8 +1,9 @@
-// [plant.mqtt] in the service's configuration: read back, and every refusal naming the file,
-// the line and the key.
+// [plant.mqtt] and [plant.central] in the service's configuration: read back, and every
+// refusal naming the file, the line and the key.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <chrono>
 #include <filesystem>
 #include <string>
 
@@ -111,6 +112,57 @@ TEST_F(PlantMqttConfigTest, MissingKeysAnInlinePasswordAndHalfATlsPairAreRefused
       kBase + "[plant.mqtt]\nhost = \"b\"\nsite = \"s\"\nusername = \"u\"\npassword_file = \"open-password\"\n");
   EXPECT_NE(open.find(at(10, "plant.mqtt.password_file")), std::string::npos) << open;
   EXPECT_NE(open.find("can be read by any user"), std::string::npos) << open;
+}
+
+// ---- [plant.central] ----
+
+using PlantCentralConfigTest = PlantMqttConfigTest;
+
+TEST_F(PlantCentralConfigTest, TheKeysAreReadWithTheirDefaults) {
+  Result<ServiceConfig> c = read(kBase);
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_FALSE(c->central.has_value()) << "no table, no sync";
+
+  c = read(kBase + "[plant.central]\nurl = \"postgresql://gaugeloop@central:5432/plant\"\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  ASSERT_TRUE(c->central.has_value());
+  EXPECT_EQ(c->central->url, "postgresql://gaugeloop@central:5432/plant");
+  EXPECT_EQ(c->central->interval, std::chrono::seconds(60));
+  EXPECT_EQ(c->central->batch_size, 200);
+  EXPECT_FALSE(c->mqtt.has_value()) << "the central history needs no broker";
+
+  c = read(kBase +
+           "[plant.central]\nurl = \"postgresql://gaugeloop@central/plant?passfile=/etc/gaugeloop/pgpass\"\n"
+           "interval_s = 600\nbatch_size = 50\n[plant.mqtt]\nhost = \"b\"\nsite = \"s\"\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->central->interval, std::chrono::seconds(600));
+  EXPECT_EQ(c->central->batch_size, 50);
+  EXPECT_TRUE(c->mqtt.has_value());
+}
+
+TEST_F(PlantCentralConfigTest, ABadUrlAPasswordInItAndBadNumbersNameFileLineAndKey) {
+  const std::string no_url = refusal(kBase + "[plant.central]\ninterval_s = 60\n");
+  EXPECT_NE(no_url.find("plant.central.url"), std::string::npos) << no_url;
+  const std::string file = refusal(kBase + "[plant.central]\nurl = \"/var/lib/gaugeloop/runs.sqlite\"\n");
+  EXPECT_NE(file.find(at(7, "plant.central.url")), std::string::npos) << file;
+  EXPECT_NE(file.find("postgresql://"), std::string::npos) << file;
+  const std::string no_db = refusal(kBase + "[plant.central]\nurl = \"postgresql://central:5432\"\n");
+  EXPECT_NE(no_db.find("database name"), std::string::npos) << no_db;
+  for (const std::string& with_password : {std::string("postgresql://gaugeloop:s3cret@central/plant"),
+                                           std::string("postgresql://gaugeloop@central/plant?password=s3cret")}) {
+    const std::string m = refusal(kBase + "[plant.central]\nurl = \"" + with_password + "\"\n");
+    EXPECT_NE(m.find(at(7, "plant.central.url")), std::string::npos) << m;
+    EXPECT_NE(m.find("passfile"), std::string::npos) << m;
+    EXPECT_EQ(m.find("s3cret"), std::string::npos) << "never print the password: " << m;
+  }
+  const std::string often = refusal(kBase + "[plant.central]\nurl = \"postgresql://central/plant\"\ninterval_s = 5\n");
+  EXPECT_NE(often.find(at(8, "plant.central.interval_s")), std::string::npos) << often;
+  const std::string batch = refusal(kBase + "[plant.central]\nurl = \"postgresql://central/plant\"\nbatch_size = 0\n");
+  EXPECT_NE(batch.find(at(8, "plant.central.batch_size")), std::string::npos) << batch;
+  const std::string typo = refusal(kBase + "[plant.central]\nurl = \"postgresql://central/plant\"\nintervall_s = 60\n");
+  EXPECT_NE(typo.find("intervall_s"), std::string::npos) << typo;
+  const std::string other = refusal(kBase + "[plant.cental]\nurl = \"postgresql://central/plant\"\n");
+  EXPECT_NE(other.find("cental"), std::string::npos) << other;
 }
 
 }  // namespace

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "tests/support/free_port.h"
+#include "tests/support/wait_until.h"
 
 namespace gaugeloop::testing {
 
@@ -37,17 +38,6 @@ inline bool accepts_connections(int port) {
   const bool ok = ::connect(s, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
   ::close(s);
   return ok;
-}
-
-// Polls `done` until it holds or `within` passes (a loaded machine is slow: be generous).
-template <typename F>
-bool wait_until(F&& done, std::chrono::milliseconds within = std::chrono::seconds(30)) {
-  const auto deadline = std::chrono::steady_clock::now() + within;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return true;
 }
 
 class MosquittoBroker {
