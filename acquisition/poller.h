@@ -60,7 +60,7 @@ struct PollerSettings {
   std::chrono::microseconds latch_idle_wait{500};
   std::chrono::milliseconds latch_max_wait{20};
   // The whole run. 0 (default): (revolutions + spare_revolutions + 2) revolutions at the
-  // spindle speed the poller sees, and at least 10 s.
+  // slowest spindle speed the poller has seen in the run, and at least 10 s.
   std::chrono::milliseconds run_timeout{0};
 };
 

@@ -17,9 +17,13 @@ class RunBudget {
  public:
   RunBudget(const PollerSettings& s, Clock::time_point start) : s_(s), start_(start) {}
 
-  // Spindle speed from the poller's own view (latch rate, angle rate); <= 0: unknown.
+  // Spindle speed from the poller's own view (latch rate, angle rate); <= 0: unknown. The
+  // budget keeps the slowest speed seen: a rate measured across a stall of the poller (a
+  // loaded machine taking it off the CPU between a reading and its time) reads fast, and a
+  // budget that believed it would time the run out while the spindle still turns. A budget
+  // too long only makes a failing run fail later.
   void saw_speed(double rev_per_s) {
-    if (rev_per_s > 0.0) rev_per_s_ = rev_per_s;
+    if (rev_per_s > 0.0 && (rev_per_s_ <= 0.0 || rev_per_s < rev_per_s_)) rev_per_s_ = rev_per_s;
   }
   // One revolution at the speed seen; zero while unknown.
   Clock::duration revolution() const;

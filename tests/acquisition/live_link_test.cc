@@ -16,8 +16,14 @@
 namespace gaugeloop {
 namespace {
 
-// A live run at 15 rpm through a simulator with `ss` (speed set here), a spare revolution
-// for every stall of the machine, not the test.
+// A live run at 15 rpm through a simulator with `ss` (speed set here), with the margin a
+// loaded machine needs, since these tests are about the link, not the scheduler. A degree is
+// 11 ms; on 2 cores at load 4 the poller is often off the CPU for longer, and at the default
+// 1 deg interpolation gap every such stall loses a degree and its revolution (measured: 7
+// revolutions in a row lost 91 degrees each, and the run failed). So a gap of 3 deg (33 ms;
+// the cubic's error grows to about 0.1 um, far inside the 50 um and 2.2 um tolerances below),
+// and a spare revolution for every stall: spares cost time only when a revolution is lost,
+// and 24 bound a run at 29 revolutions, 116 s, within ctest's 300 s.
 Result<MeasuredRun> measure_live(SimulatorSettings ss) {
   ss.speed_rpm = 15.0;
   auto sim = testing::start_intake_simulator(ss);
@@ -27,7 +33,8 @@ Result<MeasuredRun> measure_live(SimulatorSettings ss) {
   ModbusGauge gauge(ms);
   PollerSettings ps;
   ps.mode = SamplingMode::kLive;
-  ps.spare_revolutions = 6;
+  ps.max_interpolation_gap_deg = 3.0;
+  ps.spare_revolutions = 24;
   Poller poller(gauge, ps);
   return poller.measure();
 }
@@ -45,9 +52,10 @@ TEST(LiveLink, PollerMeasuresThreeRevolutionsOverLoopback) {
   Result<MeasuredRun> run = measure_live({});
   ASSERT_TRUE(run.ok()) << run.error().message;
   expect_lobe(*run);
-  // Interpolated (cubic) between polls at most 1 deg apart: under 0.001 um; plus 0.3 um noise
-  // per sample: revolutions agree within 5 sigma of a difference, 2.1 um.
-  for (int d = 0; d < 360; ++d) EXPECT_NEAR(run->revolutions[0].lift_mm[d], run->revolutions[1].lift_mm[d], 0.0021);
+  // Interpolated (cubic) between polls at most 3 deg apart: about 0.1 um at worst (1 deg:
+  // under 0.001 um); plus 0.3 um noise per sample: revolutions agree within 5 sigma of a
+  // difference plus that, 2.2 um.
+  for (int d = 0; d < 360; ++d) EXPECT_NEAR(run->revolutions[0].lift_mm[d], run->revolutions[1].lift_mm[d], 0.0022);
 }
 
 // Paced polling: sleeping between polls so they come about 0.1 deg apart (3600 a spindle

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <sys/prctl.h>
 
+#include "acquisition/run_watches.h"
 #include "scripted_gauge.h"
 
 namespace gaugeloop {
@@ -386,6 +387,23 @@ TEST(RunTimeout, FollowsTheSpeedAndTheRevolutions) {
   EXPECT_EQ(run_timeout_at(s, 60.0), std::chrono::milliseconds(75000));
   s.run_timeout = std::chrono::milliseconds(5000);
   EXPECT_EQ(run_timeout_at(s, 3.0), std::chrono::milliseconds(5000)) << "set by the user";
+}
+
+// A rate read across a stall of the poller reads fast: the budget keeps the slowest speed seen,
+// so such a reading never cuts the run (or the patience) short.
+TEST(RunTimeout, KeepsTheSlowestSpeedSeen) {
+  PollerSettings s;  // 8 revolutions
+  RunBudget budget(s, Clock::time_point{});
+  EXPECT_EQ(budget.run_timeout(), kRunTimeoutFloor) << "speed not seen yet";
+  budget.saw_speed(0.25);  // 15 rpm: 4 s a revolution
+  EXPECT_EQ(budget.run_timeout(), std::chrono::milliseconds(32000));
+  budget.saw_speed(1.25);  // a reading five times too fast
+  EXPECT_EQ(budget.run_timeout(), std::chrono::milliseconds(32000));
+  EXPECT_EQ(budget.revolution(), std::chrono::seconds(4));
+  budget.saw_speed(0.0);  // unknown: ignored
+  EXPECT_EQ(budget.run_timeout(), std::chrono::milliseconds(32000));
+  budget.saw_speed(0.125);  // slower still: taken
+  EXPECT_EQ(budget.run_timeout(), std::chrono::milliseconds(64000));
 }
 
 TEST(DegreeRanges, FormatsRuns) {
