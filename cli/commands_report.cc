@@ -50,11 +50,12 @@ int cmd_report(const ReportOptions& o) {
 
 }  // namespace
 
-int cmd_trend_plot(const DataPaths& paths, const RunQuery& query, const std::string& out, const std::string& key) {
+int cmd_trend_plot(const DataPaths& paths, const std::string& db_url, const RunQuery& query, const std::string& out,
+                   const std::string& key) {
   if (Status s = check_out("--plot", out); !s) return report_error(s.error());
-  Result<RunStore> store = open_history_read_only(paths);
-  if (!store) return report_error(store.error());
-  Result<std::vector<RunCharacteristics>> runs = store->characteristics(query);
+  Result<std::unique_ptr<RunHistory>> history = open_run_history(paths, db_url);
+  if (!history) return report_error(history.error());
+  Result<std::vector<RunCharacteristics>> runs = (*history)->characteristics(query);
   if (!runs) return report_error(runs.error());
   if (runs->empty()) {
     return report_error(make_error(ErrorCode::kNotFound, "no runs of " + query.part + " lobe " +

@@ -13,8 +13,10 @@ namespace gaugeloop {
 void add_report_commands(CLI::App* runs, CommandAction& action);
 
 // `runs trend --plot F [--characteristic KEY]`: plots KEY over the runs `query` selects
-// (RunStore::characteristics, oldest first) to `out`; read-only on the database. Returns the
-// exit code: 2 for another extension, a missing output directory or a key no run has.
-int cmd_trend_plot(const DataPaths& paths, const RunQuery& query, const std::string& out, const std::string& key);
+// (RunHistory::characteristics, oldest first) to `out`, from the grinder's file or, with
+// `db_url`, the central history; read-only on either. Returns the exit code: 2 for another
+// extension, a missing output directory or a key no run has.
+int cmd_trend_plot(const DataPaths& paths, const std::string& db_url, const RunQuery& query, const std::string& out,
+                   const std::string& key);
 
 }  // namespace gaugeloop

@@ -427,7 +427,7 @@ int cmd_compare(const CompareOptions& o) {
 int cmd_trend(const ListOptions& o) {
   if (!o.plot.empty()) {
     Result<RunQuery> q = resolved(o);
-    return q ? cmd_trend_plot(o.paths, *q, o.plot, o.characteristic) : report_error(q.error());
+    return q ? cmd_trend_plot(o.paths, o.db_url, *q, o.plot, o.characteristic) : report_error(q.error());
   }
   Result<std::vector<RunSummary>> runs = selected_runs(o, &RunHistory::trend);
   if (!runs) return report_error(runs.error());
@@ -633,15 +633,12 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   trend->query.limit = 10000;
   CLI::App* trend_cmd =
       runs->add_subcommand("trend", "Max error, phase and runout of one lobe over time, oldest first.");
-  CLI::Option* trend_db = add_filter_options(*trend_cmd, *trend, true);
+  add_filter_options(*trend_cmd, *trend, true);
   trend_cmd->add_option("--limit", trend->query.limit, "At most the newest this many runs")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
   CLI::Option* trend_plot =
-      trend_cmd
-          ->add_option("--plot", trend->plot,
-                       "Draw the characteristic over the runs to this .svg, .pdf or .png (from the grinder's file)")
-          ->excludes(trend_db);
+      trend_cmd->add_option("--plot", trend->plot, "Draw the characteristic over the runs to this .svg, .pdf or .png");
   trend_cmd->add_option("--characteristic", trend->characteristic, "With --plot: the characteristic's key")
       ->capture_default_str()
       ->needs(trend_plot);

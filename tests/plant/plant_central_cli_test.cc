@@ -93,6 +93,21 @@ TEST_F(CentralCliTest, QueriesWithDbPrintExactlyWhatTheyPrintFromTheFile) {
   CommandResult spc = run_command("runs spc --part intake --lobe 1 --db " + url_);
   EXPECT_TRUE(has(spc.output, "SPC of intake lobe 1: 4 runs")) << spc.output;
 
+  // The trend plot draws the same picture from either.
+  const std::string plot = " --part intake --lobe 1 --characteristic roundness --plot ";
+  CommandResult local_plot = run_command("runs trend" + plot + (dir_ / "local.svg").string() + data_);
+  CommandResult central_plot = run_command("runs trend" + plot + (dir_ / "central.svg").string() + " --db " + url_);
+  ASSERT_EQ(local_plot.exit_code, 0) << local_plot.output;
+  ASSERT_EQ(central_plot.exit_code, 0) << central_plot.output;
+  EXPECT_TRUE(has(central_plot.output, "roundness of 4 runs plotted to")) << central_plot.output;
+  const auto read = [](const std::filesystem::path& p) {
+    std::ifstream in(p);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string central_svg = read(dir_ / "central.svg");
+  EXPECT_TRUE(has(central_svg, "<svg")) << central_svg.substr(0, 200);
+  EXPECT_EQ(central_svg, read(dir_ / "local.svg"));
+
   // A second sync copies nothing.
   CommandResult again = run_command("plant sync --to " + url_ + data_ + " --machine cell-1");
   ASSERT_EQ(again.exit_code, 0) << again.output;
