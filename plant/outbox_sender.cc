@@ -227,7 +227,7 @@ bool OutboxSender::Loop::fill(RunStore& store, MqttClient& client) {
     ++published;
   }
   if (!skipped.empty()) {
-    if (Status s = store.outbox_delivered(skipped); !s)
+    if (Status s = store.outbox_delivered(skipped, RunStore::OutboxOutcome::kSkipped); !s)
       set_error("cannot delete skipped messages: " + s.error().message);
   }
   update([&](OutboxSenderStatus& st) {
@@ -399,7 +399,8 @@ std::string OutboxSender::metrics() const {
   series("gaugeloop_outbox_sent_total", "counter", "Plant messages the broker acknowledged, ever.",
          s.outbox.sent_total);
   series("gaugeloop_outbox_dropped_total", "counter",
-         "Plant messages dropped unsent because the outbox was full, ever.", s.outbox.dropped_total);
+         "Plant messages dropped unsent (the outbox was full, or one could not be sent), ever.",
+         s.outbox.dropped_total);
   series("gaugeloop_mqtt_connected", "gauge", "1 while the plant broker holds our connection.", s.connected ? 1 : 0);
   series("gaugeloop_mqtt_reconnects_total", "counter", "Connections to the plant broker lost or refused.",
          s.reconnects);

@@ -565,9 +565,11 @@ class RunStore : public RunHistory {
   Status configure_outbox(const OutboxSettings& settings);
   // Up to `limit` (>= 1) waiting messages, oldest first.
   Result<std::vector<OutboxMessage>> outbox_batch(int limit) const;
-  // Deletes the messages the broker acknowledged and counts them sent, in one transaction.
-  // Ids no longer waiting (dropped meanwhile) are ignored.
-  Status outbox_delivered(const std::vector<std::int64_t>& ids);
+  // Deletes the messages the broker acknowledged and counts them sent, in one transaction; or,
+  // kSkipped, messages that cannot be sent (their run or push gone, too large for the broker),
+  // counted dropped. Ids no longer waiting (dropped meanwhile) are ignored.
+  enum class OutboxOutcome { kSent, kSkipped };
+  Status outbox_delivered(const std::vector<std::int64_t>& ids, OutboxOutcome outcome = OutboxOutcome::kSent);
   // Queues a service state message (its JSON payload, not empty). Returns the message id, or
   // 0 when the outbox is not enabled (nothing queued).
   Result<std::int64_t> enqueue_state(const std::string& payload_json);

@@ -62,24 +62,28 @@ Result<std::vector<OutboxMessage>> RunStore::outbox_batch(int limit) const {
   return st->collect(read_message);
 }
 
-Status RunStore::outbox_delivered(const std::vector<std::int64_t>& ids) {
+Status RunStore::outbox_delivered(const std::vector<std::int64_t>& ids, OutboxOutcome outcome) {
   if (ids.empty()) return {};
-  const std::string operation = "mark outbox messages sent";
+  const bool as_sent = outcome == OutboxOutcome::kSent;
+  const std::string operation = as_sent ? "mark outbox messages sent" : "drop outbox messages that cannot be sent";
   Result<Transaction> tx = Transaction::begin(*conn_, Transaction::Mode::kWrite, operation);
   if (!tx.ok()) return tx.error();
   Result<Statement> del = Statement::prepare(*conn_, "DELETE FROM outbox WHERE id = :id", operation);
   if (!del.ok()) return del.error();
-  std::int64_t sent = 0;
+  std::int64_t deleted = 0;
   for (std::int64_t id : ids) {
     del->reset();
     del->bind(":id", id);
     if (Status s = del->run(); !s.ok()) return s;
-    sent += conn_->changes();
+    deleted += conn_->changes();
   }
   Result<Statement> count =
-      Statement::prepare(*conn_, "UPDATE outbox_state SET sent_total = sent_total + :sent WHERE id = 1", operation);
+      Statement::prepare(*conn_,
+                         as_sent ? "UPDATE outbox_state SET sent_total = sent_total + :count WHERE id = 1"
+                                 : "UPDATE outbox_state SET dropped_total = dropped_total + :count WHERE id = 1",
+                         operation);
   if (!count.ok()) return count.error();
-  count->bind(":sent", sent);
+  count->bind(":count", deleted);
   if (Status s = count->run(); !s.ok()) return s;
   return tx->commit();
 }

@@ -236,6 +236,7 @@ TEST_F(OutboxSenderTest, AMessageWhoseRunIsGoneIsSkippedAndTheRestArrive) {
   ASSERT_TRUE(wait_until([&] { return depth() == 0; })) << sender->status().last_error;
   ASSERT_TRUE(wait_until([&] { return run_uuids(sub) == std::set<std::string>{uuid}; }));
   EXPECT_EQ(sender->status().skipped, 1);
+  EXPECT_EQ(counts().dropped_total, 1) << "the row that cannot be sent is counted dropped, not sent";
 }
 
 TEST_F(OutboxSenderTest, ABacklogArrivesWholeAndInTheOrderItWasQueued) {

@@ -156,6 +156,14 @@ TEST_F(PlantStoreTest, DeliveredMessagesLeaveAndAreCounted) {
   EXPECT_EQ(c->sent_total, 2) << "an id no longer waiting is not counted";
   EXPECT_EQ(topics(), std::vector<std::string>{"state"});
   EXPECT_FALSE(c->oldest_utc.empty());
+
+  // A message that cannot be sent leaves counted dropped, not sent.
+  ASSERT_TRUE(store().outbox_delivered({(*store().outbox_batch(1))[0].id}, RunStore::OutboxOutcome::kSkipped).ok());
+  c = store().outbox_counts();
+  ASSERT_TRUE(c.ok());
+  EXPECT_EQ(c->depth, 0);
+  EXPECT_EQ(c->sent_total, 2);
+  EXPECT_EQ(c->dropped_total, 1);
 }
 
 TEST_F(PlantStoreTest, TheOutboxIsBoundedByDroppingTheOldestAndCountingIt) {
