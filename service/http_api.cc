@@ -34,6 +34,7 @@
 #include "report/run_json.h"
 #include "report/svg_plot.h"
 #include "service/metrics_text.h"
+#include "service/web_assets.h"
 #include "storage/run_store.h"
 
 namespace gaugeloop {
@@ -924,6 +925,29 @@ struct HttpApi::Impl {
     return read_whole_file(out);
   }
 
+  // ---- Pages ----
+
+  // The pages' files, built into the binary (service/web). /ui/ is the app (index.html).
+  void page_asset(const httplib::Request& req, httplib::Response& res) {
+    const std::string name = req.matches[1].str().empty() ? std::string("index.html") : req.matches[1].str();
+    const WebAsset* asset = find_web_asset(name);
+    if (asset == nullptr) {
+      return send_error(
+          res, 404,
+          "no such page file: " + req.path + "; the pages start at /ui/ (the run history), see " + std::string(kDocs));
+    }
+    res.status = 200;
+    // Checked again on every load, so the pages of an updated service show at once.
+    res.set_header("Cache-Control", "no-cache");
+    res.set_content(std::string(asset->body), std::string(asset->content_type));
+  }
+
+  static void redirect_to_pages(const httplib::Request&, httplib::Response& res) {
+    res.status = 302;
+    res.set_header("Location", "/ui/");
+    res.set_content("the pages are at /ui/\n", "text/plain; charset=utf-8");
+  }
+
   void metrics(const httplib::Request& req, httplib::Response& res) {
     Result<Query> q = Query::of(req, {});
     if (!q) return send_error(res, q.error());
@@ -1160,6 +1184,9 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
   s.route("/api/runs/([^/]+)/report.pdf", [&s](R q, W a) { s.run_report(q, a); });
   s.route("/api/trend.svg", [&s](R q, W a) { s.trend_plot(q, a); });
   s.route("/metrics", [&s](R q, W a) { s.metrics(q, a); });
+  s.route("/", &Impl::redirect_to_pages);
+  s.route("/ui", &Impl::redirect_to_pages);
+  s.route("/ui/([^/]*)", [&s](R q, W a) { s.page_asset(q, a); });
   s.route_write("/api/measure", [&s](R q, B b, W a) { s.measure(q, b, a); });
   s.route_write("/api/nc/approve/([^/]+)", [&s](R q, B b, W a) { s.approve(q, b, a); });
   s.route_write("/api/nc/rollback", [&s](R q, B b, W a) { s.rollback(q, b, a); });

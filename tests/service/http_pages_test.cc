@@ -1,6 +1,6 @@
-// What the pages need of the HTTP API, in-process: the run's plot and PDF report, the trend
-// plot, a table's text by version, a pending table's text, and rejecting a pending table with
-// the token.
+// What the pages need of the HTTP API, in-process: the page files served from the binary, the
+// run's plot and PDF report, the trend plot, a table's text by version, a pending table's
+// text, and rejecting a pending table with the token.
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
@@ -11,6 +11,7 @@
 
 #include "core/tolerance.h"
 #include "service/http_api.h"
+#include "service/web_assets.h"
 #include "storage/run_store.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
@@ -126,6 +127,56 @@ class HttpPagesTest : public ::testing::Test {
   std::unique_ptr<HttpApi> api_;
   std::unique_ptr<httplib::Client> client_;
 };
+
+TEST_F(HttpPagesTest, PageFilesAreServedFromTheBinaryWithTheirContentTypes) {
+  start();
+  Answer index = get("/ui/");
+  ASSERT_EQ(index.status, 200) << index.body;
+  EXPECT_EQ(index.content_type, "text/html; charset=utf-8");
+  EXPECT_TRUE(has(index.body, "<script src=\"/ui/app.js\"></script>")) << index.body;
+  EXPECT_TRUE(has(index.body, "href=\"/ui/style.css\"")) << index.body;
+  EXPECT_EQ(header(index, "Cache-Control"), "no-cache");
+  EXPECT_EQ(get("/ui/index.html").body, index.body);
+  Answer js = get("/ui/app.js");
+  ASSERT_EQ(js.status, 200);
+  EXPECT_EQ(js.content_type, "text/javascript; charset=utf-8");
+  EXPECT_TRUE(has(js.body, "/api/runs")) << "the app calls the API";
+  Answer css = get("/ui/style.css");
+  ASSERT_EQ(css.status, 200);
+  EXPECT_EQ(css.content_type, "text/css; charset=utf-8");
+  // What the binary holds is the files in the source tree, byte for byte.
+  const WebAsset* asset = find_web_asset("app.js");
+  ASSERT_NE(asset, nullptr);
+  EXPECT_EQ(js.body, std::string(asset->body));
+  EXPECT_EQ(find_web_asset("nothing.js"), nullptr);
+}
+
+TEST_F(HttpPagesTest, NoPageReachesAnotherHost) {
+  start();
+  for (const char* file : {"/ui/", "/ui/app.js", "/ui/style.css"}) {
+    const std::string body = get(file).body;
+    EXPECT_FALSE(has(body, "http://") || has(body, "https://") || has(body, "//cdn")) << file;
+  }
+}
+
+TEST_F(HttpPagesTest, RootAndUiLeadToThePages) {
+  start();
+  for (const char* path : {"/", "/ui"}) {
+    Answer a = get(path);
+    EXPECT_EQ(a.status, 302) << path;
+    EXPECT_EQ(header(a, "Location"), "/ui/") << path;
+  }
+}
+
+TEST_F(HttpPagesTest, UnknownPageFilesAre404InJsonAndTheApiAnswersStayAsTheyWere) {
+  start();
+  EXPECT_TRUE(has(error_of(get("/ui/nothing.js"), 404), "no such page file: /ui/nothing.js"));
+  EXPECT_TRUE(has(error_of(get("/ui/a/b"), 404), "no such endpoint"));
+  EXPECT_TRUE(has(error_of(get("/api/nothing"), 404), "no such endpoint: GET /api/nothing"));
+  EXPECT_TRUE(has(error_of(get("/nothing"), 404), "no such endpoint"));
+  EXPECT_TRUE(has(error_of(post("/ui/", "{}"), 405), "use GET"));
+  EXPECT_TRUE(has(error_of(get("/api/nc/reject/1"), 405), "use POST"));
+}
 
 TEST_F(HttpPagesTest, ARunsPlotIsItsErrorAsSvgWithItsToleranceBand) {
   fill();
