@@ -20,7 +20,7 @@ function fig(value, unit, decimals) {
   return Number(value).toFixed(decimals) + (unit ? " " + unit : "");
 }
 const um = (v) => fig(v, "µm", 2);
-const deg = (v) => fig(v, "deg", 3);
+const deg = (v) => fig(v, "deg", 4);
 
 function unitText(unit) {
   return {um: "µm", deg: "deg", "mm/deg": "mm/deg", "mm/deg^2": "mm/deg²"}[unit] ?? unit;
@@ -121,7 +121,10 @@ function card(label, value) {
 
 async function runsPage(p) {
   const pageNo = Math.max(0, parseInt(p.page || "0", 10) || 0);
-  const filters = {machine: p.machine, part: p.part, lobe: p.lobe, serial: p.serial, verdict: p.verdict, since: p.since, until: p.until};
+  // `size`: runs a page; kept in the address like the filters.
+  const size = Math.min(500, Math.max(1, parseInt(p.size || String(PAGE_SIZE), 10) || PAGE_SIZE));
+  const filters = {machine: p.machine, part: p.part, lobe: p.lobe, serial: p.serial, verdict: p.verdict, since: p.since, until: p.until,
+                   size: p.size};
   page().innerHTML = `
     <h1>Run history</h1>
     <form class="filters" id="run-filters">
@@ -141,15 +144,15 @@ async function runsPage(p) {
   document.getElementById("run-filters").addEventListener("submit", (ev) => {
     ev.preventDefault();
     const f = new FormData(ev.target);
-    location.hash = hashOf("/runs", Object.fromEntries(f.entries()));
+    location.hash = hashOf("/runs", {...Object.fromEntries(f.entries()), size: p.size});
   });
   const out = document.getElementById("runs-out");
   try {
     // Newest first; one more than the page shows says whether there is an older page.
-    const limit = (pageNo + 1) * PAGE_SIZE + 1;
-    const runs = await api("/api/runs?" + apiQuery({...filters, limit}));
-    const rows = runs.slice(pageNo * PAGE_SIZE, (pageNo + 1) * PAGE_SIZE);
-    const more = runs.length > (pageNo + 1) * PAGE_SIZE;
+    const limit = (pageNo + 1) * size + 1;
+    const runs = await api("/api/runs?" + apiQuery({...filters, size: undefined, limit}));
+    const rows = runs.slice(pageNo * size, (pageNo + 1) * size);
+    const more = runs.length > (pageNo + 1) * size;
     if (rows.length === 0) {
       message(out, pageNo > 0 ? "No more runs." : "No run matches these filters.");
       return;
@@ -168,7 +171,7 @@ async function runsPage(p) {
         </tbody></table></div>
       <div class="pager">
         ${pageNo > 0 ? `<a id="newer" href="${hashOf("/runs", {...filters, page: pageNo - 1})}">← Newer</a>` : ""}
-        <span class="muted">Page ${pageNo + 1}: runs ${pageNo * PAGE_SIZE + 1}–${pageNo * PAGE_SIZE + rows.length}</span>
+        <span class="muted" id="page-of">Page ${pageNo + 1}: runs ${pageNo * size + 1}–${pageNo * size + rows.length}, newest first</span>
         ${more ? `<a id="older" href="${hashOf("/runs", {...filters, page: pageNo + 1})}">Older →</a>` : ""}
       </div>`;
     out.querySelectorAll("tr.row-link").forEach((tr) => tr.addEventListener("click", () => { location.hash = "#/run/" + tr.dataset.run; }));
@@ -254,12 +257,20 @@ async function trendPage(p) {
   }
   if (!p.part && lobes.length > 0) { p.part = lobes[0].part; p.lobe = String(lobes[0].lobe); }
   const key = p.key || "lift_error";
-  const keys = ["lift_error", "velocity_error", "acceleration_error", "phase", "base_circle_runout", "roundness"];
+  // The characteristics the lobe's newest run was judged on; lift error when it was not judged.
+  let keys = [];
+  if (p.part) {
+    try {
+      const newest = await api("/api/runs?" + apiQuery({part: p.part, lobe: p.lobe, limit: 1}));
+      if (newest.length) keys = ((await api("/api/runs/" + newest[0].id)).characteristics || []).map((c) => c.key);
+    } catch (e) { keys = []; }
+  }
+  if (!keys.includes("lift_error")) keys.unshift("lift_error");
   if (!keys.includes(key)) keys.push(key);
   document.getElementById("trend-form").innerHTML = `
     <form class="filters" id="trend-filters">
       <label>Lobe<select name="lobe-of">${lobes.map((l) => `<option value="${esc(l.part)}|${l.lobe}" ${l.part === p.part && String(l.lobe) === String(p.lobe) ? "selected" : ""}>${esc(l.part)} lobe ${l.lobe}</option>`).join("")}</select></label>
-      <label>Characteristic<select name="key">${keys.map((k) => `<option ${k === key ? "selected" : ""}>${k}</option>`).join("")}</select></label>
+      <label>Characteristic<select name="key">${keys.map((k) => `<option value="${esc(k)}" ${k === key ? "selected" : ""}>${esc(k)}</option>`).join("")}</select></label>
       <label>Machine<input name="machine" value="${esc(p.machine)}"></label>
       <label>From (UTC)<input name="since" type="date" value="${esc(p.since)}"></label>
       <label>To (UTC)<input name="until" type="date" value="${esc(p.until)}"></label>

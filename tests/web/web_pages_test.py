@@ -74,7 +74,7 @@ class Service:
         token_file = work / "token"
         subprocess.run([gaugeloop, "token", "new", str(token_file)], check=True, stdout=subprocess.DEVNULL)
         self.token = token_file.read_text().strip()
-        sim = self.start([gaugeloop, "sim", "--grind", "--port", "0", "--time-scale", "20", "--data-dir", str(work)],
+        sim = self.start([gaugeloop, "sim", "--grind", "--port", "0", "--time-scale", "10", "--data-dir", str(work)],
                          "sim.log")
         sim_port = self.read_line(sim, lambda line: int(line.split()[1]) if line.startswith("port ") else None,
                                   "the gauge simulator's port", work / "sim.log")
@@ -220,6 +220,18 @@ def run_checks(svc, browser, shots):
     for fragment in ("S-1001", "S-1002", "intake_flat", "grinder-web", "µm", "deg"):
         check(fragment in table, f"the run history shows {fragment}: {table}")
     screenshots(b, shots, "runs", lambda: b.count("table#runs tbody tr") == 3)
+    all_ids = [r.get_attribute("data-run") for r in b.driver.find_elements(By.CSS_SELECTOR, "table#runs tbody tr")]
+    check(all_ids == sorted(all_ids, key=int, reverse=True), f"newest first: {all_ids}")
+    # Paging, 2 runs a page: the older page holds the third.
+    b.go(ui + "#/runs?size=2")
+    wait_until("a page of 2 runs", lambda: b.count("table#runs tbody tr") == 2)
+    check(b.count("#older") == 1 and b.count("#newer") == 0, "the first page leads only to older runs")
+    b.driver.find_element(By.CSS_SELECTOR, "#older").click()
+    wait_until("the second page's 1 run", lambda: b.count("table#runs tbody tr") == 1)
+    check(b.count("#newer") == 1 and b.count("#older") == 0, "the last page leads only to newer runs")
+    last = b.driver.find_element(By.CSS_SELECTOR, "table#runs tbody tr").get_attribute("data-run")
+    check(last == all_ids[2], f"the second page holds the oldest run: {last}, not {all_ids[2]}")
+    check("runs 3–3" in b.text("#page-of"), b.text("#page-of"))
     b.go(ui + "#/runs?serial=S-1002")
     wait_until("the serial filter to leave 2 runs", lambda: b.count("table#runs tbody tr") == 2)
     check("S-1001" not in b.text("table#runs"), "the serial filter leaves out S-1001")
@@ -257,6 +269,15 @@ def run_checks(svc, browser, shots):
     wait_until("2 runs in the trend", lambda: b.count("table#trend-runs tbody tr") == 2)
     check("µm" in b.text("table#trend-runs"), "the trend's figures have units")
     screenshots(b, shots, "trend", lambda: b.count("#trend-plot svg") == 1)
+    # Another characteristic of the run, chosen from those the lobe was judged on.
+    wait_until("the phase among the characteristics",
+               lambda: b.count("#trend-filters select[name=key] option[value=phase]") == 1)
+    lift_svg = b.driver.find_element(By.CSS_SELECTOR, "#trend-plot svg").get_attribute("outerHTML")
+    b.driver.execute_script("document.querySelector('#trend-filters select[name=key]').value = 'phase'")
+    b.driver.find_element(By.CSS_SELECTOR, "#trend-filters button[type=submit]").click()
+    b.wait_text("#trend-title", "phase per run")
+    wait_until("the phase's trend plot", lambda: b.count("#trend-plot svg") == 1
+               and b.driver.find_element(By.CSS_SELECTOR, "#trend-plot svg").get_attribute("outerHTML") != lift_svg)
 
     # ---- A camshaft's lobes ----
     b.go(ui + "#/shaft?serial=S-1002")
