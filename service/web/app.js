@@ -415,13 +415,14 @@ async function ncPage(p) {
     location.hash = hashOf("/nc", {program, a: f.get("a"), b: f.get("b")});
   });
   out.querySelectorAll("button.rollback").forEach((btn) => btn.addEventListener("click", async () => {
+    if (!window.confirm(`Write the table of version ${btn.dataset.version} to the control again, as a new version of ${program}?`)) return;
     const by = askName();
-    if (by === null) return;
     const msg = document.getElementById("nc-message");
+    if (by === null) { message(msg, "A rollback needs your name.", "error"); return; }
     try {
       const r = await write("/api/nc/rollback", {program, version: Number(btn.dataset.version), by});
       message(msg, `Rolled back: version ${r.table_version} holds the table of version ${btn.dataset.version}.`, "ok");
-      setTimeout(route, 1200);
+      msg.insertAdjacentHTML("beforeend", `<a id="nc-reload" href="${hashOf("/nc", {program, a: btn.dataset.version, b: r.table_version})}">Show version ${r.table_version}</a>`);
     } catch (e) {
       message(msg, errorText(e), "error");
     }

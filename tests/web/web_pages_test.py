@@ -334,6 +334,17 @@ def run_checks(svc, browser, shots):
     b.wait_text("#diff-count", "differ")
     check(b.count("#diff .add") > 0 and b.count("#diff .del") > 0, "the diff marks added and removed lines")
     screenshots(b, shots, "nc", lambda: b.count("#diff .add") > 0)
+    # Roll back to version 1 (confirmed): version 3 holds its table, the same text.
+    b.driver.find_element(By.CSS_SELECTOR, "table#nc-history tr[data-version='1'] button.rollback").click()
+    wait_until("the rollback's question", lambda: b.driver.switch_to.alert).accept()
+    b.wait_text("#nc-message", "Rolled back: version 3 holds the table of version 1")
+    b.driver.find_element(By.CSS_SELECTOR, "#nc-reload").click()
+    b.wait_text("#nc-title", "3 versions, version 3 in force")
+    b.wait_text("#diff-count", "differ")
+    v1 = svc.get_json("/api/nc/table?program=CAM_INTAKE_L1&version=1")["program_text"]
+    v3 = svc.get_json("/api/nc/table?program=CAM_INTAKE_L1&version=3")["program_text"]
+    check(v3 != v1 and "rollback" in svc.get_json("/api/nc/history?program=CAM_INTAKE_L1")[0]["reason"],
+          "version 3 was written by the rollback")
 
     # ---- Service state, refreshing itself ----
     b.go(ui + "#/state")
@@ -342,6 +353,15 @@ def run_checks(svc, browser, shots):
     first = b.text("#state-time")
     wait_until("the state to refresh itself", lambda: b.text("#state-time") != first, deadline_s=30)
     screenshots(b, shots, "state", lambda: b.count("#state-cards") == 1)
+    # Measure now, with the token still in the session.
+    before = len(svc.get_json("/api/runs"))
+    b.driver.find_element(By.CSS_SELECTOR, "#measure-form input[name=serial]").send_keys("S-1003")
+    b.driver.find_element(By.CSS_SELECTOR, "#measure-button").click()
+    b.wait_text("#measure-message", "Measured: run")
+    runs = svc.get_json("/api/runs")
+    check(len(runs) == before + 1 and runs[0]["serial"] == "S-1003", f"a run of S-1003 was measured: {runs[0]}")
+    b.driver.find_element(By.CSS_SELECTOR, "#measure-message a").click()
+    b.wait_text("#title", f"Run {runs[0]['id']}")
 
     # ---- Every asset from the service itself, nothing from elsewhere ----
     sources = b.driver.execute_script(
