@@ -136,6 +136,8 @@ TEST_F(HttpPagesTest, PageFilesAreServedFromTheBinaryWithTheirContentTypes) {
   EXPECT_TRUE(has(index.body, "<script src=\"/ui/app.js\"></script>")) << index.body;
   EXPECT_TRUE(has(index.body, "href=\"/ui/style.css\"")) << index.body;
   EXPECT_EQ(header(index, "Cache-Control"), "no-cache");
+  EXPECT_TRUE(has(header(index, "Content-Security-Policy"), "default-src 'self'")) << "no script from elsewhere";
+  EXPECT_EQ(header(index, "X-Content-Type-Options"), "nosniff");
   EXPECT_EQ(get("/ui/index.html").body, index.body);
   Answer js = get("/ui/app.js");
   ASSERT_EQ(js.status, 200);

@@ -168,6 +168,7 @@ class Browser:
     def __init__(self, work):
         options = webdriver.ChromeOptions()
         options.binary_location = "/usr/bin/chromium"
+        options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
         for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
                     f"--user-data-dir={work / 'chromium-profile'}", "--window-size=1366,768", "--lang=en-US"):
             options.add_argument(arg)
@@ -369,6 +370,12 @@ def run_checks(svc, browser, shots):
         ".concat([...document.querySelectorAll('[src],[href]')].map(e => e.src || e.href))")
     foreign = [s for s in sources if s.startswith("http") and not s.startswith(svc.base)]
     check(foreign == [], f"every asset comes from the service: {foreign}")
+
+    # No script error or blocked resource on any page; the writes refused without the token
+    # (401) were meant.
+    errors = [e for e in b.driver.get_log("browser")
+              if e["level"] == "SEVERE" and "status of 401" not in e["message"]]
+    check(errors == [], f"the browser console holds errors: {errors}")
 
 
 def main():
