@@ -658,6 +658,12 @@ struct HttpApi::Impl {
     if (!store) db["error"] = store.error().message;
     out["database"] = db;
     out["writes"] = current_token().empty() ? "disabled (no token configured)" : "enabled with the token";
+    // The shafts /api/shaft knows, so a client asks for a record only when there can be one.
+    json shafts = json::array();
+    if (status.shafts) {
+      for (const ShaftLayout& l : status.shafts()) shafts.push_back(l.name);
+    }
+    out["shafts"] = shafts;
     send_json(res, 200, out);
   }
 
@@ -854,6 +860,51 @@ struct HttpApi::Impl {
       out["program"] = fs::path(table->nc_file).stem().string();
       out["program_text"] = table->program_text;
       return out;
+    });
+  }
+
+  // The shaft record of a serial, as `gaugeloop runs shaft --json`, against the shaft the
+  // service knows that `shaft` names; without it, the one shaft, or the one the serial has
+  // runs of.
+  void shaft(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {"serial", "shaft"});
+    if (!q) return send_error(res, q.error());
+    const std::string serial = q->text("serial");
+    if (serial.empty())
+      return send_error(res, 400, "a shaft record is of one shaft: give its serial, e.g. ?serial=CS-0042");
+    const std::vector<ShaftLayout> layouts = status.shafts ? status.shafts() : std::vector<ShaftLayout>{};
+    if (layouts.empty()) {
+      return send_error(res, 404,
+                        "this service knows no shaft file, so it gives no index errors; GET /api/runs?serial=" +
+                            serial + " lists the lobes measured, `gaugeloop runs shaft --shaft FILE` gives the record");
+    }
+    std::string names;
+    for (const ShaftLayout& l : layouts) names += (names.empty() ? "" : ", ") + l.name;
+    std::vector<const ShaftLayout*> named;
+    for (const ShaftLayout& l : layouts) {
+      if (q->text("shaft").empty() || l.name == q->text("shaft")) named.push_back(&l);
+    }
+    if (named.empty()) {
+      return send_error(res, 404, "no shaft '" + q->text("shaft") + "' is known; the shafts are " + names);
+    }
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      std::vector<ShaftRecord> measured;
+      for (const ShaftLayout* layout : named) {
+        Result<ShaftRecord> record = load_shaft_record(store, *layout, serial);
+        if (!record) return record.error();
+        const bool any = std::any_of(record->lobes.begin(), record->lobes.end(),
+                                     [](const ShaftLobeRecord& l) { return l.run.has_value(); });
+        if (named.size() == 1) return shaft_record_json(*record);
+        if (any) measured.push_back(std::move(*record));
+      }
+      if (measured.size() == 1) return shaft_record_json(measured.front());
+      if (measured.empty()) {
+        return make_error(ErrorCode::kNotFound,
+                          "no lobe of the shafts " + names + " was measured with serial " + serial);
+      }
+      std::string which;
+      for (const ShaftRecord& r : measured) which += (which.empty() ? "" : ", ") + r.layout.name;
+      return bad_request("serial " + serial + " has runs on several shafts (" + which + "): name one with ?shaft=NAME");
     });
   }
 
@@ -1189,6 +1240,7 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
   s.route("/api/runs/([^/]+)/plot.svg", [&s](R q, W a) { s.run_plot(q, a); });
   s.route("/api/runs/([^/]+)/report.pdf", [&s](R q, W a) { s.run_report(q, a); });
   s.route("/api/trend.svg", [&s](R q, W a) { s.trend_plot(q, a); });
+  s.route("/api/shaft", [&s](R q, W a) { s.shaft(q, a); });
   s.route("/metrics", [&s](R q, W a) { s.metrics(q, a); });
   s.route("/", &Impl::redirect_to_pages);
   s.route("/ui", &Impl::redirect_to_pages);

@@ -321,6 +321,20 @@ async function shaftPage(p) {
         : `<p>Recent shafts: ${serials.slice(0, 30).map((s) => `<a href="${hashOf("/shaft", {serial: s})}">${esc(s)}</a>`).join(", ")}</p>`;
       return;
     }
+    // The shaft record with index errors when the service knows the shaft file; else the
+    // lobes measured with this serial, from the run history.
+    let why = "";
+    const known = (await api("/api/health")).shafts || [];
+    if (known.length > 0) {
+      try {
+        const record = await api("/api/shaft?" + apiQuery({serial: p.serial, shaft: p.shaft}));
+        out.innerHTML = shaftRecordHtml(record);
+        return;
+      } catch (e) {
+        if (!(e instanceof ApiError) || (e.status !== 404 && e.status !== 400)) throw e;
+        why = e.message;
+      }
+    }
     const runs = await api("/api/runs?" + apiQuery({serial: p.serial, limit: 1000}));
     // The newest run of each lobe: the list is newest first.
     const lobes = new Map();
@@ -339,10 +353,23 @@ async function shaftPage(p) {
       <tbody>${rows.map(({run: r, count}) => `<tr><td>${r.lobe}</td><td>${esc(r.part)}</td><td><a href="#/run/${r.id}">${r.id}</a></td><td>${utc(r.started_utc)}</td>
         <td>${esc(r.machine)}</td><td class="num">${um(r.max_abs_error_um)}</td><td class="num">${deg(r.phase_error_deg)}</td>
         <td class="num">${um(r.base_circle_runout_um)}</td><td>${verdict(r.verdict)}</td><td class="num">${count}</td></tr>`).join("")}</tbody></table></div>
-      <p class="muted">Index errors against the shaft's nominal lobe angles: <code>gaugeloop runs shaft --shaft FILE --serial ${esc(p.serial)}</code>.</p>`;
+      <p class="muted" id="shaft-note">${why ? esc(why)
+        : `Index errors against the shaft's nominal lobe angles: <code>gaugeloop runs shaft --shaft FILE --serial ${esc(p.serial)}</code>.`}</p>`;
   } catch (e) {
     message(out, errorText(e), "error");
   }
+}
+
+function shaftRecordHtml(rec) {
+  const tol = rec.index_tolerance_deg === null ? "no index tolerance" : `index tolerance ±${fig(rec.index_tolerance_deg, "deg", 3)}`;
+  return `<h2 id="shaft-title">Serial ${esc(rec.serial)} on ${esc(rec.shaft)}: shaft ${verdict(rec.verdict)}</h2>
+    <p class="muted">Reference at C ${fig(rec.reference_c_deg, "deg", 3)}, ${tol}, datum lobe ${esc(rec.datum_lobe ?? "–")}.</p>
+    <div class="scroll"><table id="shaft-lobes"><thead><tr><th>Lobe</th><th>Part</th><th>Nominal angle</th><th>Run</th><th>Started (UTC)</th>
+      <th>Verdict</th><th>Phase</th><th>Nose at C</th><th>Index error</th><th>To the datum</th><th>Index</th><th>Note</th></tr></thead>
+    <tbody>${rec.lobes.map((l) => `<tr><td>${l.lobe}</td><td>${esc(l.part)}</td><td class="num">${fig(l.angle_deg, "deg", 3)}</td>
+      <td>${l.run_id === null ? "–" : `<a href="#/run/${l.run_id}">${l.run_id}</a>`}</td><td>${utc(l.started_utc)}</td><td>${verdict(l.verdict)}</td>
+      <td class="num">${deg(l.phase_deg)}</td><td class="num">${fig(l.nose_c_deg, "deg", 3)}</td><td class="num">${fig(l.index_error_deg, "deg", 3)}</td>
+      <td class="num">${fig(l.relative_error_deg, "deg", 3)}</td><td>${verdict(l.index_verdict)}</td><td>${esc(l.note)}</td></tr>`).join("")}</tbody></table></div>`;
 }
 
 // ---- NC history and diffs ----

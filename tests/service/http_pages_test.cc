@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -64,11 +65,11 @@ class HttpPagesTest : public ::testing::Test {
     pending_id_ = *p;
   }
 
-  void start(const std::string& token = "") {
+  void start(const std::string& token = "", HttpStatus status = {}) {
     HttpSettings settings;
     settings.port = 0;
     settings.token = token;
-    Result<std::unique_ptr<HttpApi>> api = HttpApi::start(settings, db(), {}, {});
+    Result<std::unique_ptr<HttpApi>> api = HttpApi::start(settings, db(), {}, std::move(status));
     ASSERT_TRUE(api.ok()) << api.error().message;
     api_ = std::move(*api);
     client_ = std::make_unique<httplib::Client>("127.0.0.1", api_->port());
@@ -292,6 +293,62 @@ TEST_F(HttpPagesTest, RejectIsRefusedWhenTheApiIsReadOnly) {
   EXPECT_TRUE(
       has(error_of(post("/api/nc/reject/" + std::to_string(pending_id_), R"({"by": "anna"})"), 403), "read-only"));
   EXPECT_EQ(pending_status(), "pending");
+}
+
+// Intake lobe 1 at 0 deg (the datum) and lobe 2 at 110 deg, +-0.5 deg.
+ShaftLayout sample_shaft(const std::string& name) {
+  ShaftLayout shaft;
+  shaft.name = name;
+  shaft.index_tolerance_deg = 0.5;
+  shaft.lobes = {ShaftLobe{1, "intake_flat", "intake_flat.toml", 0.0},
+                 ShaftLobe{2, "intake_flat", "intake_l2.toml", 110.0}};
+  return shaft;
+}
+
+TEST_F(HttpPagesTest, AShaftRecordGivesEachLobesNewestRunAndItsIndexError) {
+  fill();
+  HttpStatus status;
+  status.shafts = [] { return std::vector<ShaftLayout>{sample_shaft("sample camshaft")}; };
+  start("", status);
+  EXPECT_EQ(get("/api/health").j["shafts"], json::array({"sample camshaft"}));
+  Answer a = get("/api/shaft?serial=S-7");
+  ASSERT_EQ(a.status, 200) << a.body;
+  EXPECT_EQ(a.j["shaft"], "sample camshaft");
+  EXPECT_EQ(a.j["serial"], "S-7");
+  ASSERT_EQ(a.j["lobes"].size(), 2u) << a.body;
+  EXPECT_EQ(a.j["lobes"][0]["run_id"], ids_[1]) << "the newest run of lobe 1";
+  // sample_run: c_offset 10 deg, phase 0.25 deg: the nose stands at C 10.25 deg, nominal 0.
+  EXPECT_NEAR(a.j["lobes"][0]["index_error_deg"].get<double>(), 10.25, 1e-9) << a.body;
+  EXPECT_EQ(a.j["lobes"][0]["index_verdict"], "out");
+  EXPECT_EQ(a.j["lobes"][1]["verdict"], "not_measured");
+  EXPECT_TRUE(a.j["lobes"][1]["run_id"].is_null());
+  EXPECT_EQ(a.j["verdict"], "out");
+  EXPECT_TRUE(has(error_of(get("/api/shaft"), 400), "give its serial"));
+  EXPECT_TRUE(has(error_of(get("/api/shaft?serial=S-7&shaft=other"), 404), "the shafts are sample camshaft"));
+  Answer none = get("/api/shaft?serial=S-8");
+  EXPECT_EQ(none.status, 200) << "one shaft: its record, nothing measured";
+  EXPECT_EQ(none.j["verdict"], "incomplete");
+}
+
+TEST_F(HttpPagesTest, OfSeveralShaftsTheOneTheSerialWasMeasuredOnIsChosen) {
+  fill();
+  HttpStatus status;
+  status.shafts = [] {
+    ShaftLayout other = sample_shaft("exhaust shaft");
+    for (ShaftLobe& l : other.lobes) l.part = "exhaust_roller";
+    return std::vector<ShaftLayout>{other, sample_shaft("intake shaft")};
+  };
+  start("", status);
+  EXPECT_EQ(get("/api/shaft?serial=S-7").j["shaft"], "intake shaft");
+  EXPECT_EQ(get("/api/shaft?serial=S-7&shaft=exhaust%20shaft").j["shaft"], "exhaust shaft");
+  EXPECT_TRUE(has(error_of(get("/api/shaft?serial=S-8"), 404), "no lobe of the shafts exhaust shaft, intake shaft"));
+}
+
+TEST_F(HttpPagesTest, WithoutShaftFilesTheShaftRecordSaysWhereToLook) {
+  fill();
+  start();
+  EXPECT_EQ(get("/api/health").j["shafts"], json::array());
+  EXPECT_TRUE(has(error_of(get("/api/shaft?serial=S-7"), 404), "knows no shaft file"));
 }
 
 }  // namespace

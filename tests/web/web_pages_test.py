@@ -285,6 +285,20 @@ def run_checks(svc, browser, shots):
     wait_until("both lobes of S-1002", lambda: b.count("table#shaft-lobes tbody tr") == 2)
     check("2 lobes measured" in b.text("#shaft-title"), b.text("#shaft-title"))
     screenshots(b, shots, "shaft", lambda: b.count("table#shaft-lobes tbody tr") == 2)
+    # This service knows no shaft file (/api/health "shafts" is empty), so the page lists the
+    # lobes by serial. A record as /api/shaft gives it, when one is known, drawn by the page's own code:
+    record = {"serial": "S-1002", "shaft": "sample camshaft", "reference_c_deg": 0.0, "index_tolerance_deg": 0.25,
+              "datum_lobe": 1, "verdict": "incomplete",
+              "lobes": [{"lobe": 1, "part": "intake_flat", "angle_deg": 0.0, "run_id": 2, "started_utc": "2026-12-02T10:00:00Z",
+                         "verdict": "in", "phase_deg": 0.0012, "nominal_c_deg": 0.0, "nose_c_deg": 0.0012,
+                         "index_error_deg": 0.0012, "relative_error_deg": 0.0, "index_verdict": "in", "note": ""},
+                        {"lobe": 2, "part": "exhaust_roller", "angle_deg": 110.0, "run_id": None, "started_utc": None,
+                         "verdict": "not_measured", "phase_deg": None, "nominal_c_deg": 110.0, "nose_c_deg": None,
+                         "index_error_deg": None, "relative_error_deg": None, "index_verdict": "not_judged",
+                         "note": "not measured"}]}
+    html = b.driver.execute_script("return shaftRecordHtml(arguments[0])", record)
+    for fragment in ("sample camshaft", "±0.250 deg", "110.000 deg", "0.001 deg", "not measured", "#/run/2"):
+        check(fragment in html, f"the shaft record shows {fragment}: {html}")
 
     # ---- Pending tables: refused without the token ----
     pending = svc.get_json("/api/nc/pending")
