@@ -76,7 +76,9 @@ function message(el, text, kind) {
 }
 
 function errorText(e) {
-  if (e instanceof ApiError && e.status === 401) return `Refused: ${e.message}. Enter the token at the top of the page.`;
+  if (e instanceof ApiError && e.status === 401) {
+    return `Refused: ${e.message}. ` + (token() ? "Forget the token at the top of the page and enter the right one." : "Enter the token at the top of the page.");
+  }
   if (e instanceof ApiError && e.status === 403) return `Refused: ${e.message}.`;
   return e.message || String(e);
 }

@@ -318,7 +318,21 @@ def run_checks(svc, browser, shots):
     check(len(svc.get_json("/api/nc/history?program=CAM_INTAKE_L1")) == 1, "no version written without the token")
     screenshots(b, shots, "pending", lambda: b.count(".card.pending") == 2)
 
+    # ---- A wrong token is refused too, and can be forgotten ----
+    b.driver.find_element(By.CSS_SELECTOR, "#token-input").send_keys("not-the-token")
+    b.driver.find_element(By.CSS_SELECTOR, "#token-use").click()
+    b.wait_text("#token-state", "writes enabled")
+    wait_until("the pending tables drawn again", lambda: b.count(f".card.pending[data-id='{approve_id}'] button.approve") == 1
+               and b.text(f".card.pending[data-id='{approve_id}'] button.approve") == "Approve and write")
+    b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{approve_id}'] button.approve").click()
+    refused = b.wait_text(f".card.pending[data-id='{approve_id}'] .result", "not the one configured")
+    check("Forget the token" in refused, refused)
+    check(len(svc.get_json("/api/nc/pending")) == 2, "nothing was decided with a wrong token")
+    b.driver.find_element(By.CSS_SELECTOR, "#token-forget").click()
+    b.wait_text("#token-state", "read-only")
+
     # ---- The token, entered once for the session ----
+    wait_until("the token field back", lambda: b.driver.find_element(By.CSS_SELECTOR, "#token-input").is_displayed())
     b.driver.find_element(By.CSS_SELECTOR, "#token-input").send_keys(svc.token)
     b.driver.find_element(By.CSS_SELECTOR, "#token-use").click()
     b.wait_text("#token-state", "writes enabled")
