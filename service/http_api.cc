@@ -636,8 +636,8 @@ struct HttpApi::Impl {
       return;
     }
     send_error(res, 404,
-               "no such endpoint: " + req.method + " " + req.path + "; the API is under /api/ and " + "/metrics (" +
-                   kDocs + ")");
+               "no such endpoint: " + req.method + " " + req.path + "; the API is under /api/ and " +
+                   "/metrics, the pages at /ui/ (" + kDocs + ")");
   }
 
   // ---- Reads ----

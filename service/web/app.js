@@ -502,7 +502,7 @@ async function pendingPage(p) {
     <div class="card pending" data-id="${t.id}" style="margin-bottom:10px">
       <h2>Table ${t.id} for ${esc(programOf(t.nc_file))} ${verdict(t.status)}</h2>
       <dl class="kv"><dt>Run</dt><dd><a href="#/run/${t.run_id}">${t.run_id}</a></dd><dt>Made (UTC)</dt><dd>${utc(t.created_utc)}</dd>
-        <dt>Why it waits</dt><dd>${t.verdict === "hold" ? "held: " + esc(t.reason) : "every table needs approval" + (t.reason ? ": " + esc(t.reason) : "")}</dd>
+        <dt>Why it waits</dt><dd>${t.verdict === "hold" ? "held: " + esc(t.reason) : "every table needs approval"}</dd>
         <dt>Correction</dt><dd>${um(t.correction_max_um)} at most; ${esc(t.block_count ?? "–")} blocks, command error ${um(t.command_error_um)}</dd>
         ${t.decided_by ? `<dt>Decided</dt><dd>by ${esc(t.decided_by)} at ${utc(t.decided_utc)} ${esc(t.note)}</dd>` : ""}</dl>
       ${t.status === "pending" ? `<div class="decide" style="margin-top:6px">

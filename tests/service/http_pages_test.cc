@@ -176,7 +176,7 @@ TEST_F(HttpPagesTest, UnknownPageFilesAre404InJsonAndTheApiAnswersStayAsTheyWere
   EXPECT_TRUE(has(error_of(get("/ui/nothing.js"), 404), "no such page file: /ui/nothing.js"));
   EXPECT_TRUE(has(error_of(get("/ui/a/b"), 404), "no such endpoint"));
   EXPECT_TRUE(has(error_of(get("/api/nothing"), 404), "no such endpoint: GET /api/nothing"));
-  EXPECT_TRUE(has(error_of(get("/nothing"), 404), "no such endpoint"));
+  EXPECT_TRUE(has(error_of(get("/nothing"), 404), "the pages at /ui/"));
   EXPECT_TRUE(has(error_of(post("/ui/", "{}"), 405), "use GET"));
   EXPECT_TRUE(has(error_of(get("/api/nc/reject/1"), 405), "use POST"));
 }
