@@ -130,10 +130,11 @@ async function runsPage(p) {
   page().innerHTML = `
     <h1>Run history</h1>
     <form class="filters" id="run-filters">
-      <label>Machine<input name="machine" value="${esc(p.machine)}"></label>
-      <label>Part<input name="part" value="${esc(p.part)}"></label>
+      <label>Machine<input name="machine" list="machines" value="${esc(p.machine)}"></label>
+      <label>Part<input name="part" list="parts" value="${esc(p.part)}"></label>
       <label>Lobe<input name="lobe" type="number" min="1" value="${esc(p.lobe)}"></label>
-      <label>Serial<input name="serial" value="${esc(p.serial)}"></label>
+      <label>Serial<input name="serial" list="serials" value="${esc(p.serial)}"></label>
+      <datalist id="machines"></datalist><datalist id="parts"></datalist><datalist id="serials"></datalist>
       <label>Verdict<select name="verdict">
         ${["", "in", "out", "not_judged"].map((v) => `<option value="${v}" ${p.verdict === v ? "selected" : ""}>${v ? v.replace("_", " ") : "any"}</option>`).join("")}
       </select></label>
@@ -149,6 +150,13 @@ async function runsPage(p) {
     location.hash = hashOf("/runs", {...Object.fromEntries(f.entries()), size: p.size});
   });
   const out = document.getElementById("runs-out");
+  // What the recent runs name, offered as the filters are typed.
+  api("/api/runs?limit=500").then((recent) => {
+    for (const [id, field] of [["machines", "machine"], ["parts", "part"], ["serials", "serial"]]) {
+      const list = document.getElementById(id);
+      if (list) list.innerHTML = [...new Set(recent.map((r) => r[field]).filter((v) => v))].map((v) => `<option value="${esc(v)}">`).join("");
+    }
+  }).catch(() => {});
   try {
     // Newest first; one more than the page shows says whether there is an older page.
     const limit = (pageNo + 1) * size + 1;
