@@ -430,7 +430,11 @@ def main():
         svc.measure(1, "S-1002")
         svc.measure(2, "S-1002")
         log(f"3 runs measured in {time.monotonic() - started:.1f} s")
-        browser = Browser(work)
+        try:
+            browser = Browser(work)
+        except (WebDriverException, OSError) as e:
+            raise Failed(f"cannot start headless Chromium ({e}); scripts/install-deps.sh installs chromium, "
+                         "chromium-driver and python3-selenium")
         run_checks(svc, browser, shots)
         ok = True
     except Failed as e:
