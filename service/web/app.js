@@ -237,6 +237,12 @@ async function runPage(id) {
           <td class="num">${fig(c.max, u, d)}</td><td class="num">${fig(c.lower_limit, u, d)}</td><td class="num">${fig(c.upper_limit, u, d)}</td>
           <td>${c.from_deg === null || c.from_deg === undefined ? "whole turn" : `${c.from_deg} to ${c.to_deg} deg`}</td><td>${verdict(c.verdict)}</td></tr>`;
       }).join("")}</tbody></table></div>`}
+    <h2>Curve tables written from this run</h2>
+    ${(r.nc_pushes || []).length === 0 ? `<p class="muted">None: no table of this run was written to the control.</p>` : `
+    <div class="scroll"><table id="run-pushes"><thead><tr><th>Program</th><th>Version</th><th>Written (UTC)</th><th>Why</th><th>Blocks</th><th>Command error</th></tr></thead>
+      <tbody>${r.nc_pushes.map((x) => `<tr><td><a href="${hashOf("/nc", {program: programOf(x.nc_file)})}">${esc(programOf(x.nc_file))}</a></td>
+        <td>${x.table_version}</td><td>${utc(x.pushed_utc)}</td><td>${esc(x.reason)}</td><td class="num">${esc(x.block_count ?? "–")}</td>
+        <td class="num">${um(x.command_error_um)}</td></tr>`).join("")}</tbody></table></div>`}
     <h2>Record</h2>
     <dl class="kv">
       <dt>Started</dt><dd>${utc(r.started_utc)} UTC</dd><dt>Finished</dt><dd>${utc(r.finished_utc)} UTC</dd>

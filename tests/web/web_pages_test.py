@@ -263,6 +263,11 @@ def run_checks(svc, browser, shots):
     check(status == 200 and ctype == "application/pdf" and body.startswith(b"%PDF"),
           f"the PDF link answers a PDF: {status} {ctype} {body[:20]!r}")
     screenshots(b, shots, "run", lambda: b.count("#plot svg") == 1)
+    # The first run's table, approved: version 1 of CAM_INTAKE_L1.
+    first_id = svc.get_json("/api/runs?serial=S-1001")[0]["id"]
+    b.go(ui + f"#/run/{first_id}")
+    pushes = b.wait_text("table#run-pushes", "CAM_INTAKE_L1")
+    check("approved by setup" in pushes and "µm" in pushes, f"the run's pushes: {pushes}")
 
     # ---- Trend of the lobe with its limits ----
     b.go(ui + "#/trend?part=intake_flat&lobe=1")
