@@ -1111,8 +1111,8 @@ struct HttpApi::Impl {
     answer(res, writes.rollback(*program, *version, *by));
   }
 
-  // Done here through the request's own store, not a service hook: rejecting writes nothing to
-  // the control, so it needs neither the push slot nor the service's configuration.
+  // Without the service's hook, done here through the request's own store: rejecting writes
+  // nothing to the control, so it needs neither the service's configuration nor the control.
   void reject(const httplib::Request& req, const std::string& text, httplib::Response& res) {
     Result<std::int64_t> id = path_id(req.matches[1], "pending table id");
     if (!id) return send_error(res, id.error());
@@ -1122,6 +1122,7 @@ struct HttpApi::Impl {
     if (!by) return send_error(res, by.error());
     Result<std::string> note = string_field(*body, "note", false);
     if (!note) return send_error(res, note.error());
+    if (writes.reject) return answer(res, writes.reject(*id, *by, *note));
     with_store(res, [&](RunStore& store) -> Result<json> {
       Result<PendingTable> table = store.load_pending(*id);
       if (!table) {

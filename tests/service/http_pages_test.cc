@@ -65,11 +65,11 @@ class HttpPagesTest : public ::testing::Test {
     pending_id_ = *p;
   }
 
-  void start(const std::string& token = "", HttpStatus status = {}) {
+  void start(const std::string& token = "", HttpStatus status = {}, HttpWrites writes = {}) {
     HttpSettings settings;
     settings.port = 0;
     settings.token = token;
-    Result<std::unique_ptr<HttpApi>> api = HttpApi::start(settings, db(), {}, std::move(status));
+    Result<std::unique_ptr<HttpApi>> api = HttpApi::start(settings, db(), std::move(writes), std::move(status));
     ASSERT_TRUE(api.ok()) << api.error().message;
     api_ = std::move(*api);
     client_ = std::make_unique<httplib::Client>("127.0.0.1", api_->port());
@@ -285,6 +285,23 @@ TEST_F(HttpPagesTest, RejectNeedsTheTokenAndLeavesTheTableInForce) {
   EXPECT_EQ(decided.j["note"], "flank error from a worn wheel");
   EXPECT_EQ(get("/api/nc/table?program=CAM_INTAKE_L1").j["table_version"], 2) << "the table in force stays";
   EXPECT_EQ(error_of(post(path, body, "secret"), 409).empty(), false) << "no longer pending";
+}
+
+TEST_F(HttpPagesTest, RejectGoesThroughTheServicesHookWhenItHasOne) {
+  fill();
+  std::vector<std::string> calls;
+  HttpWrites writes;
+  writes.reject = [&calls](std::int64_t id, const std::string& by, const std::string& note) -> Result<json> {
+    calls.push_back(std::to_string(id) + " " + by + " " + note);
+    return json{{"rejected", id}};
+  };
+  start("secret", {}, writes);
+  Answer a = post("/api/nc/reject/" + std::to_string(pending_id_), R"({"by": "anna", "note": "worn wheel"})", "secret");
+  ASSERT_EQ(a.status, 200) << a.body;
+  EXPECT_EQ(calls, std::vector<std::string>{std::to_string(pending_id_) + " anna worn wheel"});
+  EXPECT_EQ(pending_status(), "pending") << "the hook decides, not the API";
+  EXPECT_TRUE(has(error_of(post("/api/nc/reject/1", R"({"note": "x"})", "secret"), 400), "`by`"));
+  EXPECT_EQ(calls.size(), 1u) << "a bad body never reaches the hook";
 }
 
 TEST_F(HttpPagesTest, RejectIsRefusedWhenTheApiIsReadOnly) {
