@@ -11,7 +11,8 @@ CMAKE_GEN := -G Ninja
 REALTIME_TESTS := ^(LiveLink\.|PymodbusPeer\.|SimulatorFaults/LiveOutageTest\.)
 # A plant of grinders, a broker and PostgreSQL as processes, through outages (examples/plant):
 # what it tests of our code under the sanitizers the plant tests test in-process; normal build only.
-PROCESS_TESTS := ^PlantRun\.
+# The pages in headless Chromium (tests/web) likewise: their endpoints run in-process in tests/service.
+PROCESS_TESTS := ^(PlantRun|WebPages)\.
 # The tests of the service's threads (HTTP server, PLC trigger and handshake, the run) and of
 # the guard every thread starts through, the systemd watchdog's, the outbox sender's and the
 # central sync's: the ones ThreadSanitizer runs.

@@ -4,6 +4,7 @@
 
 #include <httplib.h>
 #include <spdlog/spdlog.h>
+#include <stdlib.h>
 
 #include <algorithm>
 #include <atomic>
@@ -15,6 +16,7 @@
 #include <ctime>
 #include <exception>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -28,8 +30,11 @@
 
 #include "core/guarded_thread.h"
 #include "core/utc_time.h"
+#include "report/cam_report.h"
 #include "report/run_json.h"
+#include "report/svg_plot.h"
 #include "service/metrics_text.h"
+#include "service/web_assets.h"
 #include "storage/run_store.h"
 
 namespace gaugeloop {
@@ -401,6 +406,67 @@ Result<std::string> resolve_program(const RunStore& store, const std::string& pr
                      "); give the path as ?program=PATH");
 }
 
+// ---- Pictures and files ----
+
+// The error plot of a run as `runs plot` draws it, with the lift error's tolerance band when the
+// run was judged against a symmetric one (the plot draws -t..+t only).
+std::string run_plot_svg(const StoredRun& run) {
+  const RunSummary& s = run.summary;
+  ErrorPlot p;
+  p.title =
+      "Run " + std::to_string(s.id) + " \u00b7 " + s.part + " lobe " + std::to_string(s.lobe) + " \u00b7 " + s.machine;
+  p.subtitle = s.started_utc.substr(0, std::min<std::size_t>(10, s.started_utc.size())) + " " +
+               (s.started_utc.size() >= 16 ? s.started_utc.substr(11, 5) : std::string()) + " UTC \u00b7 " + s.status +
+               (s.serial.empty() ? "" : " \u00b7 serial " + s.serial);
+  p.error_um = run.analysis.error_um;
+  p.spread_um = run.analysis.spread_um;
+  p.correction_um = run.correction_um;
+  for (const Characteristic& c : run.characteristics) {
+    if (c.key == "lift_error" && c.limits.upper && c.limits.lower && *c.limits.upper > 0 &&
+        std::fabs(*c.limits.upper + *c.limits.lower) < 1e-9) {
+      p.tolerance_um = *c.limits.upper;
+    }
+  }
+  char figures[200];
+  std::snprintf(figures, sizeof figures, "max %.2f \u00b5m \u00b7 RMS %.2f \u00b5m \u00b7 repeatability %.2f \u00b5m",
+                s.max_abs_error_um, s.rms_error_um, s.repeatability_um);
+  p.footer = std::string(figures) + " \u00b7 " + std::to_string(s.revolutions) + " revolutions";
+  return render_error_plot_svg(p);
+}
+
+// A directory of its own under the system's temporary directory, removed with everything in it
+// when this ends: the report and trend writers write files, and two requests must not share one.
+class ScratchDir {
+ public:
+  static Result<ScratchDir> make() {
+    std::error_code ec;
+    std::string pattern = (fs::temp_directory_path(ec) / "gaugeloop-http-XXXXXX").string();
+    if (ec || ::mkdtemp(pattern.data()) == nullptr) {
+      return make_error(ErrorCode::kIo, "cannot make a temporary directory for the file (" + pattern +
+                                            "); check that TMPDIR names a writable directory");
+    }
+    return ScratchDir(fs::path(pattern));
+  }
+  ScratchDir(ScratchDir&& other) noexcept : path_(std::exchange(other.path_, fs::path())) {}
+  ScratchDir& operator=(ScratchDir&&) = delete;
+  ~ScratchDir() {
+    std::error_code ec;
+    if (!path_.empty()) fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  explicit ScratchDir(fs::path path) : path_(std::move(path)) {}
+  fs::path path_;
+};
+
+Result<std::string> read_whole_file(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in.good() && !in.eof()) return make_error(ErrorCode::kIo, "cannot read back " + path.string());
+  return text;
+}
+
 }  // namespace
 
 // ---- The server ----
@@ -570,8 +636,8 @@ struct HttpApi::Impl {
       return;
     }
     send_error(res, 404,
-               "no such endpoint: " + req.method + " " + req.path + "; the API is under /api/ and " + "/metrics (" +
-                   kDocs + ")");
+               "no such endpoint: " + req.method + " " + req.path + "; the API is under /api/ and " +
+                   "/metrics, the pages at /ui/ (" + kDocs + ")");
   }
 
   // ---- Reads ----
@@ -592,6 +658,12 @@ struct HttpApi::Impl {
     if (!store) db["error"] = store.error().message;
     out["database"] = db;
     out["writes"] = current_token().empty() ? "disabled (no token configured)" : "enabled with the token";
+    // The shafts /api/shaft knows, so a client asks for a record only when there can be one.
+    json shafts = json::array();
+    if (status.shafts) {
+      for (const ShaftLayout& l : status.shafts()) shafts.push_back(l.name);
+    }
+    out["shafts"] = shafts;
     send_json(res, 200, out);
   }
 
@@ -698,17 +770,31 @@ struct HttpApi::Impl {
   }
 
   void nc_table(const httplib::Request& req, httplib::Response& res) {
-    Result<Query> q = Query::of(req, {"program"});
+    Result<Query> q = Query::of(req, {"program", "version"});
     if (!q) return send_error(res, q.error());
+    // Any version the history holds (for a diff of two); without `version`, the one in force.
+    Result<int> version = q->integer("version", 0, 1, INT_MAX);
+    if (!version) return send_error(res, version.error());
     with_store(res, [&](RunStore& store) -> Result<json> {
       Result<std::string> file = resolve_program(store, q->text("program"), false);
       if (!file) return file.error();
-      Result<std::optional<NcPush>> last = store.last_push(*file);
-      if (!last) return last.error();
-      if (!*last) return make_error(ErrorCode::kNotFound, "no table was pushed to " + *file);
-      json out = nc_push_json(**last);
+      std::optional<NcPush> push;
+      if (*version > 0) {
+        Result<NcPush> one = store.load_push(*file, *version);
+        if (!one) {
+          if (one.error().code != ErrorCode::kNotFound) return one.error();
+          return make_error(ErrorCode::kNotFound, one.error().message + "; GET /api/nc/history lists the versions");
+        }
+        push = std::move(*one);
+      } else {
+        Result<std::optional<NcPush>> last = store.last_push(*file);
+        if (!last) return last.error();
+        push = std::move(*last);
+      }
+      if (!push) return make_error(ErrorCode::kNotFound, "no table was pushed to " + *file);
+      json out = nc_push_json(*push);
       out["program"] = fs::path(*file).stem().string();
-      out["program_text"] = (*last)->program_text ? json(*(*last)->program_text) : json(nullptr);
+      out["program_text"] = push->program_text ? json(*push->program_text) : json(nullptr);
       return out;
     });
   }
@@ -756,6 +842,167 @@ struct HttpApi::Impl {
       for (const PendingTable& t : *tables) out.push_back(pending_table_json(t));
       return out;
     });
+  }
+
+  // One pending table with its program text, for a look at it (and a diff) before deciding.
+  void pending_table(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {});
+    if (!q) return send_error(res, q.error());
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      Result<std::int64_t> id = path_id(req.matches[1], "pending table id");
+      if (!id) return id.error();
+      Result<PendingTable> table = store.load_pending(*id);
+      if (!table) {
+        if (table.error().code != ErrorCode::kNotFound) return table.error();
+        return make_error(ErrorCode::kNotFound, table.error().message + "; GET /api/nc/pending?all=true lists the ids");
+      }
+      json out = pending_table_json(*table);
+      out["program"] = fs::path(table->nc_file).stem().string();
+      out["program_text"] = table->program_text;
+      return out;
+    });
+  }
+
+  // The shaft record of a serial, as `gaugeloop runs shaft --json`, against the shaft the
+  // service knows that `shaft` names; without it, the one shaft, or the one the serial has
+  // runs of.
+  void shaft(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {"serial", "shaft"});
+    if (!q) return send_error(res, q.error());
+    const std::string serial = q->text("serial");
+    if (serial.empty())
+      return send_error(res, 400, "a shaft record is of one shaft: give its serial, e.g. ?serial=CS-0042");
+    const std::vector<ShaftLayout> layouts = status.shafts ? status.shafts() : std::vector<ShaftLayout>{};
+    if (layouts.empty()) {
+      return send_error(res, 404,
+                        "this service knows no shaft file, so it gives no index errors; GET /api/runs?serial=" +
+                            serial + " lists the lobes measured, `gaugeloop runs shaft --shaft FILE` gives the record");
+    }
+    std::string names;
+    for (const ShaftLayout& l : layouts) names += (names.empty() ? "" : ", ") + l.name;
+    std::vector<const ShaftLayout*> named;
+    for (const ShaftLayout& l : layouts) {
+      if (q->text("shaft").empty() || l.name == q->text("shaft")) named.push_back(&l);
+    }
+    if (named.empty()) {
+      return send_error(res, 404, "no shaft '" + q->text("shaft") + "' is known; the shafts are " + names);
+    }
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      std::vector<ShaftRecord> measured;
+      for (const ShaftLayout* layout : named) {
+        Result<ShaftRecord> record = load_shaft_record(store, *layout, serial);
+        if (!record) return record.error();
+        const bool any = std::any_of(record->lobes.begin(), record->lobes.end(),
+                                     [](const ShaftLobeRecord& l) { return l.run.has_value(); });
+        if (named.size() == 1) return shaft_record_json(*record);
+        if (any) measured.push_back(std::move(*record));
+      }
+      if (measured.size() == 1) return shaft_record_json(measured.front());
+      if (measured.empty()) {
+        return make_error(ErrorCode::kNotFound,
+                          "no lobe of the shafts " + names + " was measured with serial " + serial);
+      }
+      std::string which;
+      for (const ShaftRecord& r : measured) which += (which.empty() ? "" : ", ") + r.layout.name;
+      return bad_request("serial " + serial + " has runs on several shafts (" + which + "): name one with ?shaft=NAME");
+    });
+  }
+
+  // ---- Pictures and documents ----
+
+  void run_plot(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {});
+    if (!q) return send_error(res, q.error());
+    Result<StorePool::Lease> store = stores.acquire();
+    if (!store) return send_error(res, store.error());
+    Result<StoredRun> run = load_run(**store, req.matches[1]);
+    if (!run) return fail_with_store(res, *store, run.error());
+    res.status = 200;
+    res.set_content(run_plot_svg(*run), "image/svg+xml");
+  }
+
+  // The cam report as `runs report` writes it, written to a file of its own and served from it.
+  void run_report(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {});
+    if (!q) return send_error(res, q.error());
+    Result<StorePool::Lease> store = stores.acquire();
+    if (!store) return send_error(res, store.error());
+    Result<StoredRun> run = load_run(**store, req.matches[1]);
+    if (!run) return fail_with_store(res, *store, run.error());
+    const std::string name = "run" + std::to_string(run->summary.id) + ".pdf";
+    Result<std::string> pdf = file_written_by([&](const fs::path& out) { return write_cam_report(*run, out); }, name);
+    if (!pdf) return send_error(res, pdf.error());
+    res.status = 200;
+    res.set_header("Content-Disposition", "inline; filename=\"" + name + "\"");
+    res.set_content(std::move(*pdf), "application/pdf");
+  }
+
+  // One characteristic of a lobe over its runs, with its limits: the trend plot of
+  // `runs trend --plot`, as SVG.
+  void trend_plot(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {"part", "lobe", "machine", "since", "until", "limit", "key"});
+    if (!q) return send_error(res, q.error());
+    Result<RunQuery> rq = run_query(*q, 10000);
+    if (!rq) return send_error(res, rq.error());
+    if (rq->part.empty() || rq->lobe == 0) {
+      return send_error(
+          res, 400,
+          "a trend is of one lobe: give both `part` and `lobe`, e.g. ?part=intake_flat&lobe=1&key=lift_error");
+    }
+    const std::string key = q->text("key").empty() ? std::string("lift_error") : q->text("key");
+    Result<StorePool::Lease> store = stores.acquire();
+    if (!store) return send_error(res, store.error());
+    Result<std::vector<RunCharacteristics>> runs = (*store)->characteristics(*rq);
+    if (!runs) return fail_with_store(res, *store, runs.error());
+    if (runs->empty()) {
+      return send_error(res, 404,
+                        "no runs of " + rq->part + " lobe " + std::to_string(rq->lobe) +
+                            " match; GET /api/runs lists which parts and lobes have runs");
+    }
+    Result<std::string> svg =
+        file_written_by([&](const fs::path& out) { return write_trend_plot(*runs, key, out); }, "trend.svg");
+    if (!svg) return send_error(res, svg.error());
+    res.status = 200;
+    res.set_content(std::move(*svg), "image/svg+xml");
+  }
+
+  // What `write` puts in a file named `name` (its extension chooses the format), read back.
+  static Result<std::string> file_written_by(const std::function<Status(const fs::path&)>& write,
+                                             const std::string& name) {
+    Result<ScratchDir> dir = ScratchDir::make();
+    if (!dir) return dir.error();
+    const fs::path out = dir->path() / name;
+    if (Status s = write(out); !s) return s.error();
+    return read_whole_file(out);
+  }
+
+  // ---- Pages ----
+
+  // The pages' files, built into the binary (service/web). /ui/ is the app (index.html).
+  void page_asset(const httplib::Request& req, httplib::Response& res) {
+    const std::string name = req.matches[1].str().empty() ? std::string("index.html") : req.matches[1].str();
+    const WebAsset* asset = find_web_asset(name);
+    if (asset == nullptr) {
+      return send_error(
+          res, 404,
+          "no such page file: " + req.path + "; the pages start at /ui/ (the run history), see " + std::string(kDocs));
+    }
+    res.status = 200;
+    // Checked again on every load, so the pages of an updated service show at once.
+    res.set_header("Cache-Control", "no-cache");
+    // Only this service's own script runs, whatever text a run or a table brings into a page;
+    // inline styles stay allowed for the plots' SVG.
+    res.set_header("Content-Security-Policy",
+                   "default-src 'self'; style-src 'self' 'unsafe-inline'; img-src 'self' data:; "
+                   "frame-ancestors 'none'; base-uri 'none'; form-action 'self'");
+    res.set_header("X-Content-Type-Options", "nosniff");
+    res.set_content(std::string(asset->body), std::string(asset->content_type));
+  }
+
+  static void redirect_to_pages(const httplib::Request&, httplib::Response& res) {
+    res.status = 302;
+    res.set_header("Location", "/ui/");
+    res.set_content("the pages are at /ui/\n", "text/plain; charset=utf-8");
   }
 
   void metrics(const httplib::Request& req, httplib::Response& res) {
@@ -864,6 +1111,30 @@ struct HttpApi::Impl {
     answer(res, writes.rollback(*program, *version, *by));
   }
 
+  // Without the service's hook, done here through the request's own store: rejecting writes
+  // nothing to the control, so it needs neither the service's configuration nor the control.
+  void reject(const httplib::Request& req, const std::string& text, httplib::Response& res) {
+    Result<std::int64_t> id = path_id(req.matches[1], "pending table id");
+    if (!id) return send_error(res, id.error());
+    Result<json> body = body_object(text, {"by", "note"}, R"({"by": "anna", "note": "flank error from a worn wheel"})");
+    if (!body) return send_error(res, body.error());
+    Result<std::string> by = string_field(*body, "by", true);
+    if (!by) return send_error(res, by.error());
+    Result<std::string> note = string_field(*body, "note", false);
+    if (!note) return send_error(res, note.error());
+    if (writes.reject) return answer(res, writes.reject(*id, *by, *note));
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      Result<PendingTable> table = store.load_pending(*id);
+      if (!table) {
+        if (table.error().code != ErrorCode::kNotFound) return table.error();
+        return make_error(ErrorCode::kNotFound, table.error().message + "; GET /api/nc/pending lists the ids");
+      }
+      if (Status s = store.reject_pending(*id, *by, *note); !s) return s.error();
+      spdlog::info("pending table {} of {} rejected by {}; the table in force stays", *id, table->nc_file, *by);
+      return json{{"rejected", *id}, {"nc_file", table->nc_file}, {"by", *by}};
+    });
+  }
+
   // ---- Helpers ----
 
   // Answers with what `read` builds from a pooled store, or with its error.
@@ -966,10 +1237,19 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
   s.route("/api/nc/table", [&s](R q, W a) { s.nc_table(q, a); });
   s.route("/api/nc/history", [&s](R q, W a) { s.nc_history(q, a); });
   s.route("/api/nc/pending", [&s](R q, W a) { s.nc_pending(q, a); });
+  s.route("/api/nc/pending/([^/]+)", [&s](R q, W a) { s.pending_table(q, a); });
+  s.route("/api/runs/([^/]+)/plot.svg", [&s](R q, W a) { s.run_plot(q, a); });
+  s.route("/api/runs/([^/]+)/report.pdf", [&s](R q, W a) { s.run_report(q, a); });
+  s.route("/api/trend.svg", [&s](R q, W a) { s.trend_plot(q, a); });
+  s.route("/api/shaft", [&s](R q, W a) { s.shaft(q, a); });
   s.route("/metrics", [&s](R q, W a) { s.metrics(q, a); });
+  s.route("/", &Impl::redirect_to_pages);
+  s.route("/ui", &Impl::redirect_to_pages);
+  s.route("/ui/([^/]*)", [&s](R q, W a) { s.page_asset(q, a); });
   s.route_write("/api/measure", [&s](R q, B b, W a) { s.measure(q, b, a); });
   s.route_write("/api/nc/approve/([^/]+)", [&s](R q, B b, W a) { s.approve(q, b, a); });
   s.route_write("/api/nc/rollback", [&s](R q, B b, W a) { s.rollback(q, b, a); });
+  s.route_write("/api/nc/reject/([^/]+)", [&s](R q, B b, W a) { s.reject(q, b, a); });
   s.server->set_pre_routing_handler([&s](R q, W a) { return s.before_body(q, a); });
   s.server->set_error_handler([&s](R q, W a) { s.fill_error(q, a); });
   s.server->set_exception_handler([](R q, W a, std::exception_ptr ep) { Impl::internal_error(q, a, std::move(ep)); });

@@ -9,9 +9,11 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "config/service_config.h"
 #include "core/result.h"
+#include "report/shaft.h"
 
 namespace gaugeloop {
 
@@ -28,6 +30,9 @@ struct HttpWrites {
       trigger_measure;
   std::function<Result<nlohmann::json>(std::int64_t pending_id, const std::string& by, const std::string& note)>
       approve;
+  // Optional: without it the API rejects through its own connection (RunStore::reject_pending).
+  // A service sets it to serialise a rejection with the approvals it pushes (its push slot).
+  std::function<Result<nlohmann::json>(std::int64_t pending_id, const std::string& by, const std::string& note)> reject;
   // `program` as the client gave it: a program name (CAM_INTAKE_L1) or an NC file path.
   std::function<Result<nlohmann::json>(const std::string& program, int table_version, const std::string& by)> rollback;
 };
@@ -39,6 +44,10 @@ struct HttpStatus {
   // Prometheus text lines (with their # HELP and # TYPE) appended to /metrics, e.g. the
   // counters the service keeps.
   std::function<std::string()> extra_metrics;
+  // The camshafts the service knows (shaft files: lobes and their nominal angles), for
+  // /api/shaft: a serial's newest run of each lobe and its index error. Empty hook, or none
+  // returned: /api/shaft answers 404 and the pages list a serial's lobes without index errors.
+  std::function<std::vector<ShaftLayout>()> shafts;
 };
 
 // cpp-httplib's server on a thread of its own (and its worker threads): HTTPS when the settings

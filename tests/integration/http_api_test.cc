@@ -632,7 +632,7 @@ TEST_F(HttpApiTest, ABodyWhereNoneIsTakenIsRefusedUnread) {
 TEST_F(HttpApiTest, UnknownPathsAre404AndWrongMethods405InJson) {
   start();
   EXPECT_TRUE(has(error_of(get("/api/nothing"), 404), "no such endpoint: GET /api/nothing"));
-  EXPECT_EQ(error_of(get("/"), 404).empty(), false);
+  EXPECT_EQ(error_of(get("/nothing"), 404).empty(), false);  // "/" leads to the pages (tests/service)
   EXPECT_EQ(error_of(get("/api/runs/1/export/more"), 404).empty(), false);
   EXPECT_TRUE(has(error_of(get("/api/measure"), 405), "use POST"));
   EXPECT_TRUE(has(error_of(post("/api/runs", "{}"), 405), "use GET"));

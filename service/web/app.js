@@ -1,0 +1,678 @@
+// The pages of gaugeloop: one small app over the service's JSON API (docs/http_api.md), routed
+// by the part of the address after '#', so every page is a link a person can keep. No library:
+// the grinder's PC has no network, and every byte here is served by the service itself.
+"use strict";
+
+const PAGE_SIZE = 25;
+const TOKEN_KEY = "gaugeloop.token";
+const BY_KEY = "gaugeloop.by";
+let refreshTimer = null;  // the service page's; stopped when another page is shown
+
+// ---- Helpers ----
+
+function esc(text) {
+  return String(text ?? "").replace(/[&<>"']/g, (c) => ({"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;"}[c]));
+}
+
+// A figure with its unit, or "–" when not recorded.
+function fig(value, unit, decimals) {
+  if (value === null || value === undefined || Number.isNaN(value)) return "–";
+  return Number(value).toFixed(decimals) + (unit ? " " + unit : "");
+}
+const um = (v) => fig(v, "µm", 2);
+const deg = (v) => fig(v, "deg", 4);
+
+function unitText(unit) {
+  return {um: "µm", deg: "deg", "mm/deg": "mm/deg", "mm/deg^2": "mm/deg²"}[unit] ?? unit;
+}
+function decimalsOf(unit) {
+  return {um: 2, deg: 4, "mm/deg": 6, "mm/deg^2": 7}[unit] ?? 4;
+}
+
+function verdict(v) {
+  return `<span class="verdict ${esc(v)}">${esc(String(v).replace("_", " "))}</span>`;
+}
+
+function utc(text) {
+  return text ? esc(String(text).replace("T", " ").replace("Z", "")) : "–";
+}
+
+function token() { return sessionStorage.getItem(TOKEN_KEY) || ""; }
+
+class ApiError extends Error {
+  constructor(status, message) { super(message); this.status = status; }
+}
+
+async function answerOf(r) {
+  const text = await r.text();
+  let body = null;
+  try { body = JSON.parse(text); } catch (e) { body = null; }
+  if (!r.ok) throw new ApiError(r.status, (body && body.error) || `HTTP ${r.status}`);
+  return body;
+}
+
+async function api(path) {
+  return answerOf(await fetch(path, {cache: "no-store"}));
+}
+
+async function apiText(path) {
+  const r = await fetch(path, {cache: "no-store"});
+  if (!r.ok) await answerOf(r);
+  return r.text();
+}
+
+// A write: the token goes along when one was entered; without it the service refuses and the
+// page shows its answer.
+async function write(path, body) {
+  const headers = {"Content-Type": "application/json"};
+  if (token()) headers["Authorization"] = "Bearer " + token();
+  return answerOf(await fetch(path, {method: "POST", headers, body: JSON.stringify(body)}));
+}
+
+function writeLabel(verb) { return token() ? verb : `${verb} (needs the token)`; }
+
+function message(el, text, kind) {
+  el.innerHTML = `<div class="message ${kind || ""}">${esc(text)}</div>`;
+}
+
+function errorText(e) {
+  if (e instanceof ApiError && e.status === 401) {
+    return `Refused: ${e.message}. ` + (token() ? "Forget the token at the top of the page and enter the right one." : "Enter the token at the top of the page.");
+  }
+  if (e instanceof ApiError && e.status === 403) return `Refused: ${e.message}.`;
+  return e.message || String(e);
+}
+
+function page() { return document.getElementById("page"); }
+
+function params(query) {
+  const out = {};
+  new URLSearchParams(query || "").forEach((v, k) => { if (v !== "") out[k] = v; });
+  return out;
+}
+
+function hashOf(path, p) {
+  const q = new URLSearchParams();
+  for (const [k, v] of Object.entries(p)) if (v !== undefined && v !== null && v !== "") q.set(k, v);
+  const s = q.toString();
+  return "#" + path + (s ? "?" + s : "");
+}
+
+function apiQuery(p) {
+  const q = new URLSearchParams();
+  for (const [k, v] of Object.entries(p)) if (v !== undefined && v !== null && v !== "") q.set(k, v);
+  return q.toString();
+}
+
+// The SVG from `path` put into `el` as markup (the service's own plots, no scripts in them),
+// so it scales with the page.
+async function showSvg(el, path) {
+  try {
+    el.innerHTML = await apiText(path);
+    el.classList.add("plot");
+  } catch (e) {
+    message(el, errorText(e), "error");
+  }
+}
+
+function card(label, value) {
+  return `<div class="card"><div class="label">${esc(label)}</div><div class="value">${value}</div></div>`;
+}
+
+// ---- Run history ----
+
+async function runsPage(p) {
+  const pageNo = Math.max(0, parseInt(p.page || "0", 10) || 0);
+  // `size`: runs a page; kept in the address like the filters.
+  const size = Math.min(500, Math.max(1, parseInt(p.size || String(PAGE_SIZE), 10) || PAGE_SIZE));
+  const filters = {machine: p.machine, part: p.part, lobe: p.lobe, serial: p.serial, verdict: p.verdict, since: p.since, until: p.until,
+                   size: p.size};
+  page().innerHTML = `
+    <h1>Run history</h1>
+    <form class="filters" id="run-filters">
+      <label>Machine<input name="machine" list="machines" value="${esc(p.machine)}"></label>
+      <label>Part<input name="part" list="parts" value="${esc(p.part)}"></label>
+      <label>Lobe<input name="lobe" type="number" min="1" value="${esc(p.lobe)}"></label>
+      <label>Serial<input name="serial" list="serials" value="${esc(p.serial)}"></label>
+      <datalist id="machines"></datalist><datalist id="parts"></datalist><datalist id="serials"></datalist>
+      <label>Verdict<select name="verdict">
+        ${["", "in", "out", "not_judged"].map((v) => `<option value="${v}" ${p.verdict === v ? "selected" : ""}>${v ? v.replace("_", " ") : "any"}</option>`).join("")}
+      </select></label>
+      <label>From (UTC)<input name="since" type="date" value="${esc(p.since)}"></label>
+      <label>To (UTC)<input name="until" type="date" value="${esc(p.until)}"></label>
+      <button type="submit">Filter</button>
+      <a href="#/runs">Clear</a>
+    </form>
+    <div id="runs-out"><p>Loading…</p></div>`;
+  document.getElementById("run-filters").addEventListener("submit", (ev) => {
+    ev.preventDefault();
+    const f = new FormData(ev.target);
+    location.hash = hashOf("/runs", {...Object.fromEntries(f.entries()), size: p.size});
+  });
+  const out = document.getElementById("runs-out");
+  // What the recent runs name, offered as the filters are typed.
+  api("/api/runs?limit=500").then((recent) => {
+    for (const [id, field] of [["machines", "machine"], ["parts", "part"], ["serials", "serial"]]) {
+      const list = document.getElementById(id);
+      if (list) list.innerHTML = [...new Set(recent.map((r) => r[field]).filter((v) => v))].map((v) => `<option value="${esc(v)}">`).join("");
+    }
+  }).catch(() => {});
+  try {
+    // Newest first; one more than the page shows says whether there is an older page.
+    const limit = (pageNo + 1) * size + 1;
+    const runs = await api("/api/runs?" + apiQuery({...filters, size: undefined, limit}));
+    const rows = runs.slice(pageNo * size, (pageNo + 1) * size);
+    const more = runs.length > (pageNo + 1) * size;
+    if (rows.length === 0) {
+      message(out, pageNo > 0 ? "No more runs." : "No run matches these filters.");
+      return;
+    }
+    out.innerHTML = `
+      <div class="scroll"><table id="runs">
+        <thead><tr><th>Run</th><th>Started (UTC)</th><th>Machine</th><th>Part</th><th>Lobe</th><th>Serial</th>
+          <th>Max error</th><th>RMS</th><th>Repeatability</th><th>Phase</th><th>Verdict</th><th>Status</th></tr></thead>
+        <tbody>${rows.map((r) => `
+          <tr class="row-link" data-run="${r.id}">
+            <td><a href="#/run/${r.id}">${r.id}</a></td><td>${utc(r.started_utc)}</td><td>${esc(r.machine)}</td>
+            <td>${esc(r.part)}</td><td>${r.lobe}</td><td>${esc(r.serial ?? "–")}</td>
+            <td class="num">${um(r.max_abs_error_um)}</td><td class="num">${um(r.rms_error_um)}</td>
+            <td class="num">${um(r.repeatability_um)}</td><td class="num">${deg(r.phase_error_deg)}</td>
+            <td>${verdict(r.verdict)}</td><td>${esc(r.status)}</td></tr>`).join("")}
+        </tbody></table></div>
+      <div class="pager">
+        ${pageNo > 0 ? `<a id="newer" href="${hashOf("/runs", {...filters, page: pageNo - 1})}">← Newer</a>` : ""}
+        <span class="muted" id="page-of">Page ${pageNo + 1}: runs ${pageNo * size + 1}–${pageNo * size + rows.length}, newest first</span>
+        ${more ? `<a id="older" href="${hashOf("/runs", {...filters, page: pageNo + 1})}">Older →</a>` : ""}
+      </div>`;
+    out.querySelectorAll("tr.row-link").forEach((tr) => tr.addEventListener("click", () => { location.hash = "#/run/" + tr.dataset.run; }));
+  } catch (e) {
+    message(out, errorText(e), "error");
+  }
+}
+
+// ---- One run ----
+
+async function runPage(id) {
+  page().innerHTML = `<p>Loading run ${esc(id)}…</p>`;
+  let r;
+  try {
+    r = await api("/api/runs/" + encodeURIComponent(id));
+  } catch (e) {
+    page().innerHTML = `<h1>Run ${esc(id)}</h1>`;
+    page().insertAdjacentHTML("beforeend", `<div class="message error">${esc(errorText(e))}</div>`);
+    return;
+  }
+  const chars = r.characteristics || [];
+  const program = r.nc_file ? r.nc_file.split("/").pop().replace(/\.spf$/i, "") : "";
+  page().innerHTML = `
+    <h1 id="title">Run ${r.id} · ${esc(r.part)} lobe ${r.lobe} · ${esc(r.machine)}</h1>
+    <div class="links">
+      <a id="report-pdf" href="/api/runs/${r.id}/report.pdf" target="_blank">Cam report (PDF)</a>
+      <a href="/api/runs/${r.id}/export?comments=true">Degrees (CSV)</a>
+      <a href="${hashOf("/trend", {part: r.part, lobe: r.lobe})}">Trend of this lobe</a>
+      ${r.serial ? `<a href="${hashOf("/shaft", {serial: r.serial})}">Camshaft ${esc(r.serial)}</a>` : ""}
+      ${program ? `<a href="${hashOf("/nc", {program})}">NC history of ${esc(program)}</a>` : ""}
+    </div>
+    <div class="cards" id="figures">
+      ${card("Verdict", verdict(r.verdict))}
+      ${card("Serial", esc(r.serial ?? "–"))}
+      ${card("Max lift error", um(r.max_abs_error_um) + ` <span class="muted">at ${fig(r.max_abs_error_at_cam_deg, "deg", 0)}</span>`)}
+      ${card("RMS lift error", um(r.rms_error_um))}
+      ${card("Peak to valley", um(r.peak_to_valley_um))}
+      ${card("Repeatability", um(r.repeatability_um))}
+      ${card("Phase error", deg(r.phase_error_deg))}
+      ${card("Base circle runout", um(r.base_circle_runout_um))}
+      ${card("Largest correction", um(r.correction_max_um))}
+      ${card("Revolutions", esc(r.revolutions))}
+    </div>
+    <h2>Lift error over the cam degrees</h2>
+    <div id="plot"><p>Loading the plot…</p></div>
+    <h2>Characteristics</h2>
+    ${chars.length === 0 ? `<p class="muted">This run was not judged: its part file gives no tolerances.</p>` : `
+    <div class="scroll"><table id="characteristics">
+      <thead><tr><th>Characteristic</th><th>Value</th><th>Min</th><th>Max</th><th>Lower limit</th><th>Upper limit</th><th>Zone</th><th>Verdict</th></tr></thead>
+      <tbody>${chars.map((c) => {
+        const u = unitText(c.unit), d = decimalsOf(c.unit);
+        return `<tr><td>${esc(c.title)}</td><td class="num">${fig(c.value, u, d)}</td><td class="num">${fig(c.min, u, d)}</td>
+          <td class="num">${fig(c.max, u, d)}</td><td class="num">${fig(c.lower_limit, u, d)}</td><td class="num">${fig(c.upper_limit, u, d)}</td>
+          <td>${c.from_deg === null || c.from_deg === undefined ? "whole turn" : `${c.from_deg} to ${c.to_deg} deg`}</td><td>${verdict(c.verdict)}</td></tr>`;
+      }).join("")}</tbody></table></div>`}
+    <h2>Curve tables written from this run</h2>
+    ${(r.nc_pushes || []).length === 0 ? `<p class="muted">None: no table of this run was written to the control.</p>` : `
+    <div class="scroll"><table id="run-pushes"><thead><tr><th>Program</th><th>Version</th><th>Written (UTC)</th><th>Why</th><th>Blocks</th><th>Command error</th></tr></thead>
+      <tbody>${r.nc_pushes.map((x) => `<tr><td><a href="${hashOf("/nc", {program: programOf(x.nc_file)})}">${esc(programOf(x.nc_file))}</a></td>
+        <td>${x.table_version}</td><td>${utc(x.pushed_utc)}</td><td>${esc(x.reason)}</td><td class="num">${esc(x.block_count ?? "–")}</td>
+        <td class="num">${um(x.command_error_um)}</td></tr>`).join("")}</tbody></table></div>`}
+    <h2>Record</h2>
+    <dl class="kv">
+      <dt>Started</dt><dd>${utc(r.started_utc)} UTC</dd><dt>Finished</dt><dd>${utc(r.finished_utc)} UTC</dd>
+      <dt>Operator</dt><dd>${esc(r.operator ?? "–")}</dd><dt>Gauge</dt><dd>${esc(r.gauge)}</dd>
+      <dt>Status</dt><dd>${esc(r.status)}</dd><dt>Note</dt><dd>${esc(r.note || "–")}</dd>
+      <dt>Zero offset</dt><dd>${fig(r.zero_offset_mm, "mm", 4)}</dd>
+      <dt>Ground with table</dt><dd>${r.ground_with_version ? "version " + esc(r.ground_with_version) : "–"}</dd>
+      <dt>NC program</dt><dd>${esc(r.nc_file || "none written")}</dd>
+    </dl>`;
+  showSvg(document.getElementById("plot"), `/api/runs/${r.id}/plot.svg`);
+}
+
+// ---- Trend of a lobe ----
+
+async function trendPage(p) {
+  page().innerHTML = `<h1>Trend of a lobe</h1><div id="trend-form"><p>Loading…</p></div><div id="trend-out"></div>`;
+  let lobes = [];
+  try {
+    const recent = await api("/api/runs?limit=500");
+    const seen = new Set();
+    for (const r of recent) {
+      const k = r.part + "\u0000" + r.lobe;
+      if (!seen.has(k)) { seen.add(k); lobes.push({part: r.part, lobe: r.lobe}); }
+    }
+  } catch (e) {
+    message(document.getElementById("trend-form"), errorText(e), "error");
+    return;
+  }
+  if (!p.part && lobes.length > 0) { p.part = lobes[0].part; p.lobe = String(lobes[0].lobe); }
+  const key = p.key || "lift_error";
+  // The characteristics the lobe's newest run was judged on; lift error when it was not judged.
+  let keys = [];
+  if (p.part) {
+    try {
+      const newest = await api("/api/runs?" + apiQuery({part: p.part, lobe: p.lobe, limit: 1}));
+      if (newest.length) keys = ((await api("/api/runs/" + newest[0].id)).characteristics || []).map((c) => c.key);
+    } catch (e) { keys = []; }
+  }
+  if (!keys.includes("lift_error")) keys.unshift("lift_error");
+  if (!keys.includes(key)) keys.push(key);
+  document.getElementById("trend-form").innerHTML = `
+    <form class="filters" id="trend-filters">
+      <label>Lobe<select name="lobe-of">${lobes.map((l) => `<option value="${esc(l.part)}|${l.lobe}" ${l.part === p.part && String(l.lobe) === String(p.lobe) ? "selected" : ""}>${esc(l.part)} lobe ${l.lobe}</option>`).join("")}</select></label>
+      <label>Characteristic<select name="key">${keys.map((k) => `<option value="${esc(k)}" ${k === key ? "selected" : ""}>${esc(k)}</option>`).join("")}</select></label>
+      <label>Machine<input name="machine" value="${esc(p.machine)}"></label>
+      <label>From (UTC)<input name="since" type="date" value="${esc(p.since)}"></label>
+      <label>To (UTC)<input name="until" type="date" value="${esc(p.until)}"></label>
+      <button type="submit">Show</button>
+    </form>`;
+  document.getElementById("trend-filters").addEventListener("submit", (ev) => {
+    ev.preventDefault();
+    const f = Object.fromEntries(new FormData(ev.target).entries());
+    const [part, lobe] = (f["lobe-of"] || "|").split("|");
+    location.hash = hashOf("/trend", {part, lobe, key: f.key, machine: f.machine, since: f.since, until: f.until});
+  });
+  const out = document.getElementById("trend-out");
+  if (!p.part) { message(out, "No runs yet: the trend shows once a lobe was measured."); return; }
+  const q = {part: p.part, lobe: p.lobe, machine: p.machine, since: p.since, until: p.until};
+  out.innerHTML = `<h2 id="trend-title">${esc(p.part)} lobe ${esc(p.lobe)}: ${esc(key)} per run, with its limits</h2>
+    <div id="trend-plot"><p>Loading the plot…</p></div><h2>Runs</h2><div id="trend-table"></div>`;
+  showSvg(document.getElementById("trend-plot"), "/api/trend.svg?" + apiQuery({...q, key}));
+  try {
+    const runs = await api("/api/trend?" + apiQuery(q));
+    document.getElementById("trend-table").innerHTML = `<div class="scroll"><table id="trend-runs">
+      <thead><tr><th>Run</th><th>Started (UTC)</th><th>Machine</th><th>Serial</th><th>Max error</th><th>RMS</th><th>Phase</th><th>Verdict</th></tr></thead>
+      <tbody>${runs.slice().reverse().map((r) => `<tr><td><a href="#/run/${r.id}">${r.id}</a></td><td>${utc(r.started_utc)}</td><td>${esc(r.machine)}</td>
+        <td>${esc(r.serial ?? "–")}</td><td class="num">${um(r.max_abs_error_um)}</td><td class="num">${um(r.rms_error_um)}</td>
+        <td class="num">${deg(r.phase_error_deg)}</td><td>${verdict(r.verdict)}</td></tr>`).join("")}</tbody></table></div>`;
+  } catch (e) {
+    message(document.getElementById("trend-table"), errorText(e), "error");
+  }
+}
+
+// ---- A camshaft's lobes ----
+
+async function shaftPage(p) {
+  page().innerHTML = `<h1>Camshaft</h1>
+    <form class="filters" id="shaft-form"><label>Serial<input name="serial" list="serials" value="${esc(p.serial)}"></label>
+      <datalist id="serials"></datalist><button type="submit">Show</button></form>
+    <div id="shaft-out"></div>`;
+  document.getElementById("shaft-form").addEventListener("submit", (ev) => {
+    ev.preventDefault();
+    location.hash = hashOf("/shaft", {serial: new FormData(ev.target).get("serial")});
+  });
+  const out = document.getElementById("shaft-out");
+  try {
+    const recent = await api("/api/runs?limit=500");
+    const serials = [...new Set(recent.map((r) => r.serial).filter((s) => s))];
+    document.getElementById("serials").innerHTML = serials.map((s) => `<option value="${esc(s)}">`).join("");
+    if (!p.serial) {
+      out.innerHTML = serials.length === 0 ? `<div class="message">No run recorded a serial number yet.</div>`
+        : `<p>Recent shafts: ${serials.slice(0, 30).map((s) => `<a href="${hashOf("/shaft", {serial: s})}">${esc(s)}</a>`).join(", ")}</p>`;
+      return;
+    }
+    // The shaft record with index errors when the service knows the shaft file; else the
+    // lobes measured with this serial, from the run history.
+    let why = "";
+    const known = (await api("/api/health")).shafts || [];
+    if (known.length > 0) {
+      try {
+        const record = await api("/api/shaft?" + apiQuery({serial: p.serial, shaft: p.shaft}));
+        out.innerHTML = shaftRecordHtml(record);
+        return;
+      } catch (e) {
+        if (!(e instanceof ApiError) || (e.status !== 404 && e.status !== 400)) throw e;
+        why = e.message;
+      }
+    }
+    const runs = await api("/api/runs?" + apiQuery({serial: p.serial, limit: 1000}));
+    // The newest run of each lobe: the list is newest first.
+    const lobes = new Map();
+    for (const r of runs) {
+      const k = r.part + "\u0000" + r.lobe;
+      if (!lobes.has(k)) lobes.set(k, {run: r, count: 0});
+      lobes.get(k).count += 1;
+    }
+    const rows = [...lobes.values()].sort((a, b) => a.run.lobe - b.run.lobe || a.run.part.localeCompare(b.run.part));
+    if (rows.length === 0) { message(out, `No run of serial ${p.serial} is recorded.`); return; }
+    const verdicts = rows.map((l) => l.run.verdict);
+    const shaft = verdicts.includes("out") ? "out" : verdicts.every((v) => v === "in") ? "in" : "not_judged";
+    out.innerHTML = `<h2 id="shaft-title">Serial ${esc(p.serial)}: ${rows.length} lobe${rows.length === 1 ? "" : "s"} measured, shaft ${verdict(shaft)}</h2>
+      <div class="scroll"><table id="shaft-lobes"><thead><tr><th>Lobe</th><th>Part</th><th>Newest run</th><th>Started (UTC)</th><th>Machine</th>
+        <th>Max error</th><th>Phase</th><th>Base circle runout</th><th>Verdict</th><th>Runs</th></tr></thead>
+      <tbody>${rows.map(({run: r, count}) => `<tr><td>${r.lobe}</td><td>${esc(r.part)}</td><td><a href="#/run/${r.id}">${r.id}</a></td><td>${utc(r.started_utc)}</td>
+        <td>${esc(r.machine)}</td><td class="num">${um(r.max_abs_error_um)}</td><td class="num">${deg(r.phase_error_deg)}</td>
+        <td class="num">${um(r.base_circle_runout_um)}</td><td>${verdict(r.verdict)}</td><td class="num">${count}</td></tr>`).join("")}</tbody></table></div>
+      <p class="muted" id="shaft-note">${why ? esc(why)
+        : `Index errors against the shaft's nominal lobe angles: <code>gaugeloop runs shaft --shaft FILE --serial ${esc(p.serial)}</code>.`}</p>`;
+  } catch (e) {
+    message(out, errorText(e), "error");
+  }
+}
+
+function shaftRecordHtml(rec) {
+  const tol = rec.index_tolerance_deg === null ? "no index tolerance" : `index tolerance ±${fig(rec.index_tolerance_deg, "deg", 3)}`;
+  return `<h2 id="shaft-title">Serial ${esc(rec.serial)} on ${esc(rec.shaft)}: shaft ${verdict(rec.verdict)}</h2>
+    <p class="muted">Reference at C ${fig(rec.reference_c_deg, "deg", 3)}, ${tol}, datum lobe ${esc(rec.datum_lobe ?? "–")}.</p>
+    <div class="scroll"><table id="shaft-lobes"><thead><tr><th>Lobe</th><th>Part</th><th>Nominal angle</th><th>Run</th><th>Started (UTC)</th>
+      <th>Verdict</th><th>Phase</th><th>Nose at C</th><th>Index error</th><th>To the datum</th><th>Index</th><th>Note</th></tr></thead>
+    <tbody>${rec.lobes.map((l) => `<tr><td>${l.lobe}</td><td>${esc(l.part)}</td><td class="num">${fig(l.angle_deg, "deg", 3)}</td>
+      <td>${l.run_id === null ? "–" : `<a href="#/run/${l.run_id}">${l.run_id}</a>`}</td><td>${utc(l.started_utc)}</td><td>${verdict(l.verdict)}</td>
+      <td class="num">${deg(l.phase_deg)}</td><td class="num">${fig(l.nose_c_deg, "deg", 3)}</td><td class="num">${fig(l.index_error_deg, "deg", 3)}</td>
+      <td class="num">${fig(l.relative_error_deg, "deg", 3)}</td><td>${verdict(l.index_verdict)}</td><td>${esc(l.note)}</td></tr>`).join("")}</tbody></table></div>`;
+}
+
+// ---- NC history and diffs ----
+
+function programOf(ncFile) { return String(ncFile).split("/").pop().replace(/\.spf$/i, ""); }
+
+// Line diff by longest common subsequence: tables are a few hundred lines.
+function diffLines(a, b) {
+  const x = a.split(/\r?\n/), y = b.split(/\r?\n/);
+  const n = x.length, m = y.length;
+  const L = Array.from({length: n + 1}, () => new Uint32Array(m + 1));
+  for (let i = n - 1; i >= 0; i--) for (let j = m - 1; j >= 0; j--) L[i][j] = x[i] === y[j] ? L[i + 1][j + 1] + 1 : Math.max(L[i + 1][j], L[i][j + 1]);
+  const out = [];
+  let i = 0, j = 0;
+  while (i < n || j < m) {
+    if (i < n && j < m && x[i] === y[j]) { out.push(["same", x[i]]); i++; j++; }
+    else if (j < m && (i === n || L[i][j + 1] >= L[i + 1][j])) { out.push(["add", y[j]]); j++; }
+    else { out.push(["del", x[i]]); i++; }
+  }
+  return out;
+}
+
+function diffHtml(a, b) {
+  const d = diffLines(a, b);
+  const changed = d.filter(([k]) => k !== "same").length;
+  return `<p class="muted" id="diff-count">${changed} line${changed === 1 ? "" : "s"} differ (− removed, + added)</p>
+    <pre class="diff" id="diff">${d.map(([k, t]) => `<span class="${k}">${k === "add" ? "+ " : k === "del" ? "− " : "  "}${esc(t)}</span>`).join("")}</pre>`;
+}
+
+async function ncPage(p) {
+  page().innerHTML = `<h1>NC history</h1><div id="nc-programs"><p>Loading…</p></div><div id="nc-out"></div>`;
+  let pushes;
+  try {
+    pushes = await api("/api/nc/history?limit=5000");
+  } catch (e) {
+    message(document.getElementById("nc-programs"), errorText(e), "error");
+    return;
+  }
+  const programs = [...new Set(pushes.map((x) => programOf(x.nc_file)))].sort();
+  const program = p.program || programs[0];
+  document.getElementById("nc-programs").innerHTML = programs.length === 0 ? `<div class="message">No curve table was written yet.</div>`
+    : `<div class="links">Program: ${programs.map((g) => g === program ? `<strong>${esc(g)}</strong>` : `<a href="${hashOf("/nc", {program: g})}">${esc(g)}</a>`).join(" ")}</div>`;
+  if (!program) return;
+  const out = document.getElementById("nc-out");
+  let history;
+  try {
+    history = await api("/api/nc/history?" + apiQuery({program, limit: 1000}));
+  } catch (e) {
+    message(out, errorText(e), "error");
+    return;
+  }
+  const newest = history.length ? history[0].table_version : 0;
+  const a = p.a || (history.length > 1 ? history[1].table_version : newest), b = p.b || newest;
+  out.innerHTML = `
+    <h2 id="nc-title">${esc(program)}: ${history.length} version${history.length === 1 ? "" : "s"}, version ${newest} in force</h2>
+    <form id="diff-form">
+    <div class="scroll"><table id="nc-history"><thead><tr><th>Version</th><th>Written (UTC)</th><th>Run</th><th>Why</th><th>Interpolation</th><th>Blocks</th><th>Command error</th><th>Diff from</th><th>to</th><th></th></tr></thead>
+    <tbody>${history.map((h) => `<tr data-version="${h.table_version}"><td>${h.table_version}</td><td>${utc(h.pushed_utc)}</td>
+      <td><a href="#/run/${h.run_id}">${h.run_id}</a></td><td>${esc(h.reason)}</td><td>${esc(h.interpolation ?? "–")}</td>
+      <td class="num">${esc(h.block_count ?? "–")}</td><td class="num">${um(h.command_error_um)}</td>
+      <td><input type="radio" name="a" value="${h.table_version}" ${String(a) === String(h.table_version) ? "checked" : ""}></td>
+      <td><input type="radio" name="b" value="${h.table_version}" ${String(b) === String(h.table_version) ? "checked" : ""}></td>
+      <td>${h.table_version === newest ? `<span class="muted">in force</span>` : `<button type="button" class="write rollback" data-version="${h.table_version}">${writeLabel("Roll back to this")}</button>`}</td></tr>`).join("")}</tbody></table></div>
+    <div class="pager"><button type="submit">Show the diff</button></div></form>
+    <div id="nc-message"></div>
+    <h2>Version ${esc(a)} → version ${esc(b)}</h2><div id="nc-diff"><p>Loading…</p></div>`;
+  document.getElementById("diff-form").addEventListener("submit", (ev) => {
+    ev.preventDefault();
+    const f = new FormData(ev.target);
+    location.hash = hashOf("/nc", {program, a: f.get("a"), b: f.get("b")});
+  });
+  out.querySelectorAll("button.rollback").forEach((btn) => btn.addEventListener("click", async () => {
+    if (!window.confirm(`Write the table of version ${btn.dataset.version} to the control again, as a new version of ${program}?`)) return;
+    const by = askName();
+    const msg = document.getElementById("nc-message");
+    if (by === null) { message(msg, "A rollback needs your name.", "error"); return; }
+    try {
+      const r = await write("/api/nc/rollback", {program, version: Number(btn.dataset.version), by});
+      message(msg, `Rolled back: version ${r.table_version} holds the table of version ${btn.dataset.version}.`, "ok");
+      msg.insertAdjacentHTML("beforeend", `<a id="nc-reload" href="${hashOf("/nc", {program, a: btn.dataset.version, b: r.table_version})}">Show version ${r.table_version}</a>`);
+    } catch (e) {
+      message(msg, errorText(e), "error");
+    }
+  }));
+  try {
+    const [ta, tb] = await Promise.all([api("/api/nc/table?" + apiQuery({program, version: a})), api("/api/nc/table?" + apiQuery({program, version: b}))]);
+    document.getElementById("nc-diff").innerHTML = ta.program_text === null || tb.program_text === null
+      ? `<div class="message">The text of one of these versions was not kept (written by an older gaugeloop).</div>`
+      : diffHtml(ta.program_text, tb.program_text);
+  } catch (e) {
+    message(document.getElementById("nc-diff"), errorText(e), "error");
+  }
+}
+
+// Who decides: asked once per browser session, like the token.
+function askName() {
+  let by = sessionStorage.getItem(BY_KEY) || "";
+  const field = document.getElementById("decided-by");
+  if (field && field.value.trim()) by = field.value.trim();
+  if (!by) {
+    by = (window.prompt("Your name, recorded with the decision:") || "").trim();
+    if (!by) return null;
+  }
+  sessionStorage.setItem(BY_KEY, by);
+  return by;
+}
+
+// ---- Pending tables ----
+
+async function pendingPage(p) {
+  const all = p.all === "true";
+  page().innerHTML = `<h1>Pending tables</h1>
+    <p class="muted">A table waits here when the service holds it (a large change, poor repeatability) or every table needs approval.
+      Approve writes it to the control; reject keeps the table in force.</p>
+    <div class="decide"><label>Decided by <input id="decided-by" value="${esc(sessionStorage.getItem(BY_KEY) || "")}" placeholder="your name"></label>
+      <a href="${hashOf("/pending", all ? {} : {all: "true"})}">${all ? "Show only pending" : "Show decided ones too"}</a></div>
+    <div id="pending-message"></div><div id="pending-out"><p>Loading…</p></div>`;
+  const out = document.getElementById("pending-out");
+  let tables;
+  try {
+    tables = await api("/api/nc/pending?" + apiQuery({all: all ? "true" : "", limit: 200}));
+  } catch (e) {
+    message(out, errorText(e), "error");
+    return;
+  }
+  if (tables.length === 0) { out.innerHTML = `<div class="message" id="no-pending">No table is waiting for a decision.</div>`; return; }
+  out.innerHTML = tables.map((t) => `
+    <div class="card pending" data-id="${t.id}" style="margin-bottom:10px">
+      <h2>Table ${t.id} for ${esc(programOf(t.nc_file))} ${verdict(t.status)}</h2>
+      <dl class="kv"><dt>Run</dt><dd><a href="#/run/${t.run_id}">${t.run_id}</a></dd><dt>Made (UTC)</dt><dd>${utc(t.created_utc)}</dd>
+        <dt>Why it waits</dt><dd>${t.verdict === "hold" ? "held: " + esc(t.reason) : "every table needs approval"}</dd>
+        <dt>Correction</dt><dd>${um(t.correction_max_um)} at most; ${esc(t.block_count ?? "–")} blocks, command error ${um(t.command_error_um)}</dd>
+        ${t.decided_by ? `<dt>Decided</dt><dd>by ${esc(t.decided_by)} at ${utc(t.decided_utc)} ${esc(t.note)}</dd>` : ""}</dl>
+      ${t.status === "pending" ? `<div class="decide" style="margin-top:6px">
+        <input class="note" placeholder="note (optional)">
+        <button class="write approve" data-id="${t.id}">${writeLabel("Approve and write")}</button>
+        <button class="danger reject" data-id="${t.id}">${writeLabel("Reject")}</button>
+        <button class="show-diff" data-id="${t.id}">Diff from the table in force</button></div>` : ""}
+      <div class="result"></div><div class="pending-diff"></div>
+    </div>`).join("");
+  out.querySelectorAll(".card.pending").forEach((cardEl) => {
+    const id = cardEl.dataset.id;
+    const result = cardEl.querySelector(".result");
+    const decide = async (verb) => {
+      const by = askName();
+      if (by === null) { message(result, "A decision needs your name.", "error"); return; }
+      const note = cardEl.querySelector(".note").value;
+      try {
+        const r = await write(`/api/nc/${verb}/${id}`, {by, note});
+        if (verb === "approve") {
+          message(result, `Approved: version ${r.table_version} of ${programOf(r.nc_file)} written to the control.`, "ok");
+          result.insertAdjacentHTML("beforeend", `<a class="nc-link" href="${hashOf("/nc", {program: programOf(r.nc_file)})}">NC history of ${esc(programOf(r.nc_file))}</a>`);
+        } else {
+          message(result, `Rejected: the table in force stays.`, "ok");
+        }
+        cardEl.querySelectorAll("button.approve, button.reject").forEach((b) => { b.disabled = true; });
+      } catch (e) {
+        message(result, errorText(e), "error");
+      }
+    };
+    cardEl.querySelector("button.approve")?.addEventListener("click", () => decide("approve"));
+    cardEl.querySelector("button.reject")?.addEventListener("click", () => decide("reject"));
+    cardEl.querySelector("button.show-diff")?.addEventListener("click", async () => {
+      const target = cardEl.querySelector(".pending-diff");
+      try {
+        const t = await api("/api/nc/pending/" + id);
+        let inForce = "";
+        try { inForce = (await api("/api/nc/table?" + apiQuery({program: t.nc_file}))).program_text || ""; } catch (e) { if (!(e instanceof ApiError && e.status === 404)) throw e; }
+        target.innerHTML = diffHtml(inForce, t.program_text);
+      } catch (e) {
+        message(target, errorText(e), "error");
+      }
+    });
+  });
+}
+
+// ---- Service state ----
+
+function kvList(obj) {
+  if (obj === null || obj === undefined) return `<span class="muted">not configured</span>`;
+  if (typeof obj !== "object") return esc(obj);
+  return `<dl class="kv">${Object.entries(obj).map(([k, v]) => `<dt>${esc(k.replaceAll("_", " "))}</dt><dd>${
+    v !== null && typeof v === "object" ? (Array.isArray(v) ? esc(JSON.stringify(v)) : kvList(v)) : esc(v ?? "–")}</dd>`).join("")}</dl>`;
+}
+
+async function statePage() {
+  page().innerHTML = `<h1>Service</h1><div id="state-out"><p>Loading…</p></div>
+    <h2>Measure now</h2><form class="filters" id="measure-form"><label>Lobe<select name="lobe-of" id="measure-lobe"></select></label>
+      <label>Serial<input name="serial"></label><label>Operator<input name="operator"></label><label>Note<input name="note"></label>
+      <button type="submit" class="write" id="measure-button">${writeLabel("Measure")}</button></form><div id="measure-message"></div>`;
+  let lobesFilled = false;
+  const refresh = async () => {
+    const out = document.getElementById("state-out");
+    if (!out) return;
+    try {
+      const [h, last] = await Promise.all([api("/api/health"), api("/api/runs?limit=1").catch(() => [])]);
+      const r = last[0];
+      out.innerHTML = `<div class="cards" id="state-cards">
+          ${card("State", esc(h.state ?? "–"))}${card("Machine", esc(h.machine ?? "–"))}
+          ${card("Gauge", esc(h.gauge ?? "–"))}
+          ${card("PLC link", h.plc ? esc(h.plc.connected === false ? "down" : h.plc.connected === true ? "up" : "configured") : "not configured")}
+          ${card("Last run", r ? `<a href="#/run/${r.id}">${r.id}</a> ${verdict(r.verdict)} <span class="muted">${utc(r.started_utc)}</span>` : "none yet")}
+          ${card("Database", h.database && h.database.available ? "available" : "not available")}
+          ${card("Writes", esc(h.writes))}
+          ${card("Version", esc(h.version))}
+        </div>
+        <p class="muted" id="state-time">As of ${utc(h.time_utc)} UTC; refreshed every 5 s.</p>
+        <h2>PLC</h2>${kvList(h.plc)}
+        <h2>Outbox</h2>${kvList(h.outbox)}
+        <h2>Database</h2>${kvList(h.database)}`;
+      if (!lobesFilled && Array.isArray(h.parts)) {
+        lobesFilled = true;
+        document.getElementById("measure-lobe").innerHTML = h.parts.map((x) => `<option value="${esc(x.part)}|${x.lobe}">${esc(x.part)} lobe ${x.lobe}</option>`).join("");
+      }
+    } catch (e) {
+      message(out, "The service does not answer: " + errorText(e), "error");
+    }
+  };
+  document.getElementById("measure-form").addEventListener("submit", async (ev) => {
+    ev.preventDefault();
+    const f = Object.fromEntries(new FormData(ev.target).entries());
+    const [part, lobe] = (f["lobe-of"] || "|").split("|");
+    const msg = document.getElementById("measure-message");
+    message(msg, "Measuring…");
+    try {
+      const r = await write("/api/measure", {part, lobe: Number(lobe), serial: f.serial, operator: f.operator, note: f.note});
+      message(msg, "Measured" + (r && r.run_id ? `: run ${r.run_id}` : "") + ".", "ok");
+      if (r && r.run_id) msg.insertAdjacentHTML("beforeend", `<a href="#/run/${r.run_id}">Show run ${r.run_id}</a>`);
+      refresh();
+    } catch (e) {
+      message(msg, errorText(e), "error");
+    }
+  });
+  await refresh();
+  refreshTimer = setInterval(refresh, 5000);
+}
+
+// ---- Token and routing ----
+
+function showToken() {
+  const on = token() !== "";
+  const state = document.getElementById("token-state");
+  state.textContent = on ? "writes enabled" : "read-only";
+  state.classList.toggle("on", on);
+  document.getElementById("token-input").hidden = on;
+  document.getElementById("token-use").hidden = on;
+  document.getElementById("token-forget").hidden = !on;
+}
+
+document.getElementById("token-form").addEventListener("submit", (ev) => {
+  ev.preventDefault();
+  const input = document.getElementById("token-input");
+  if (input.value.trim()) sessionStorage.setItem(TOKEN_KEY, input.value.trim());
+  input.value = "";
+  showToken();
+  route();
+});
+document.getElementById("token-forget").addEventListener("click", () => {
+  sessionStorage.removeItem(TOKEN_KEY);
+  showToken();
+  route();
+});
+
+function route() {
+  if (refreshTimer) { clearInterval(refreshTimer); refreshTimer = null; }
+  const hash = location.hash.replace(/^#/, "") || "/runs";
+  const [path, query] = hash.split("?");
+  const p = params(query);
+  const parts = path.split("/").filter((x) => x);
+  const name = parts[0] || "runs";
+  document.querySelectorAll("nav a").forEach((a) => a.classList.toggle("current", a.dataset.page === (name === "run" ? "runs" : name)));
+  const pages = {
+    runs: () => runsPage(p),
+    run: () => runPage(parts[1] || ""),
+    trend: () => trendPage(p),
+    shaft: () => shaftPage(p),
+    nc: () => ncPage(p),
+    pending: () => pendingPage(p),
+    state: () => statePage(),
+  };
+  if (!pages[name]) {
+    page().innerHTML = `<h1>No such page</h1><p><a href="#/runs">The run history</a></p>`;
+    return;
+  }
+  pages[name]();
+}
+
+window.addEventListener("hashchange", route);
+showToken();
+route();

@@ -1,0 +1,467 @@
+#!/usr/bin/python3
+"""The service's pages in a real browser: headless Chromium (through chromedriver) against
+`gaugeloop serve`, which measures a virtual grinder (`gaugeloop sim --grind`).
+
+Three runs are measured over the HTTP API with every table held for approval: intake lobe 1 of
+shaft S-1001 (its table approved here: version 1 of CAM_INTAKE_L1), then lobe 1 and lobe 2 of
+shaft S-1002 (two pending tables). The browser then looks at every page, approves the lobe 1
+table with the token (the NC history shows version 2 and its diff) and rejects the lobe 2 one,
+after both were refused without it. Screenshots of every page, at 1366x768 and 390x844, go to
+--screenshots. Exits 0 when every check holds; a failed check says what the page showed.
+"""
+
+import argparse
+import json
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import urllib.error
+import urllib.request
+
+from selenium import webdriver
+from selenium.common.exceptions import WebDriverException
+from selenium.webdriver.chrome.service import Service as DriverService
+from selenium.webdriver.common.by import By
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "examples"
+# A loaded 2-core machine runs a build beside this: every wait is for a condition, with room.
+DEADLINE_S = 90.0
+SIZES = {"desktop": (1366, 768), "phone": (390, 844)}
+
+
+class Failed(Exception):
+    pass
+
+
+def check(condition, what):
+    if not condition:
+        raise Failed(what)
+
+
+def wait_until(what, condition, deadline_s=DEADLINE_S):
+    """Polls `condition` until it returns something true; its last exception or value says why not."""
+    end = time.monotonic() + deadline_s
+    last = None
+    while time.monotonic() < end:
+        try:
+            value = condition()
+            if value:
+                return value
+            last = value
+        except (WebDriverException, Failed, urllib.error.URLError, KeyError, IndexError, ValueError) as e:
+            last = e
+        time.sleep(0.1)
+    raise Failed(f"timed out after {deadline_s:.0f} s waiting for {what}; last: {last!r}")
+
+
+def log(text):
+    print(f"[web test] {text}", flush=True)
+
+
+class Service:
+    """The virtual grinder and the service measuring it, in `work`."""
+
+    def __init__(self, gaugeloop, work):
+        self.gaugeloop = gaugeloop
+        self.work = work
+        self.procs = []
+        token_file = work / "token"
+        subprocess.run([gaugeloop, "token", "new", str(token_file)], check=True, stdout=subprocess.DEVNULL)
+        self.token = token_file.read_text().strip()
+        sim = self.start([gaugeloop, "sim", "--grind", "--port", "0", "--time-scale", "10", "--data-dir", str(work)],
+                         "sim.log")
+        sim_port = self.read_line(sim, lambda line: int(line.split()[1]) if line.startswith("port ") else None,
+                                  "the gauge simulator's port", work / "sim.log")
+        gauge = (EXAMPLES / "gauges/simulator.toml").read_text().replace("port = 1502", f"port = {sim_port}")
+        (work / "gauge.toml").write_text(gauge)
+        # Lobe 2 of the same shaft: the intake design again, its own program.
+        for name in ("intake_flat.toml", "intake_flat.csv"):
+            shutil.copy(EXAMPLES / name, work / name)
+        lobe2 = (work / "intake_flat.toml").read_text().replace("lobe = 1", "lobe = 2", 1)
+        (work / "intake_flat_l2.toml").write_text(lobe2.replace('"CAM_INTAKE_L1"', '"CAM_INTAKE_L2"', 1))
+        (work / "service.toml").write_text(f"""machine = "grinder-web"
+[gauge]
+config = "gauge.toml"
+revolutions = 3
+[[part]]
+file = "intake_flat.toml"
+[[part]]
+file = "intake_flat_l2.toml"
+[compensation]
+max_correction_um = 500.0
+[nc]
+dir = "nc"
+template = "{EXAMPLES}/sinumerik/cam_table.spf"
+main_template = "{EXAMPLES}/sinumerik/cam_main.mpf"
+require_approval = true
+[database]
+path = "gaugeloop.sqlite"
+[http]
+host = "127.0.0.1"
+port = 0
+token_file = "token"
+""")
+        serve = self.start([gaugeloop, "serve", "--config", str(work / "service.toml")], "serve.log")
+        self.port = self.read_line(
+            serve, lambda line: int(line.rsplit(":", 1)[1].split()[0].strip("/"))
+            if "listening on http://127.0.0.1:" in line else None, "the service's HTTP port", work / "serve.log")
+        self.base = f"http://127.0.0.1:{self.port}"
+
+    def start(self, argv, log_name):
+        p = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=open(self.work / log_name, "w"), text=True,
+                             cwd=self.work)
+        self.procs.append(p)
+        return p
+
+    @staticmethod
+    def read_line(proc, parse, what, log_file):
+        for line in proc.stdout:
+            value = parse(line)
+            if value is not None:
+                # Keep reading, so the child never blocks on a full pipe.
+                threading.Thread(target=lambda: [None for _ in proc.stdout], daemon=True).start()
+                return value
+        raise Failed(f"{what} was not printed; see {log_file}:\n{log_file.read_text()[-2000:]}")
+
+    def request(self, method, path, body=None, token=None):
+        headers = {"Content-Type": "application/json"} if body is not None else {}
+        if token:
+            headers["Authorization"] = f"Bearer {token}"
+        req = urllib.request.Request(self.base + path, method=method, headers=headers,
+                                     data=json.dumps(body).encode() if body is not None else None)
+        try:
+            with urllib.request.urlopen(req, timeout=DEADLINE_S) as r:
+                return r.status, r.read(), r.headers.get("Content-Type", "")
+        except urllib.error.HTTPError as e:
+            return e.code, e.read(), e.headers.get("Content-Type", "")
+
+    def get_json(self, path):
+        status, body, _ = self.request("GET", path)
+        check(status == 200, f"GET {path}: {status} {body[:300]!r}")
+        return json.loads(body)
+
+    def measure(self, lobe, serial):
+        status, body, _ = self.request("POST", "/api/measure",
+                                       {"part": "intake_flat", "lobe": lobe, "serial": serial, "operator": "anna"},
+                                       self.token)
+        check(status == 200, f"measuring lobe {lobe} of {serial}: {status} {body[:500]!r}")
+        return json.loads(body)
+
+    def stop(self):
+        for p in reversed(self.procs):
+            if p.poll() is None:
+                p.terminate()
+                try:
+                    p.wait(timeout=30)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+                    p.wait()
+
+
+class Browser:
+    def __init__(self, work):
+        options = webdriver.ChromeOptions()
+        options.binary_location = "/usr/bin/chromium"
+        options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+        for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                    f"--user-data-dir={work / 'chromium-profile'}", "--window-size=1366,768", "--lang=en-US"):
+            options.add_argument(arg)
+        self.driver = webdriver.Chrome(service=DriverService("/usr/bin/chromedriver"), options=options)
+        self.driver.set_page_load_timeout(DEADLINE_S)
+
+    def size(self, name):
+        w, h = SIZES[name]
+        # The viewport, not the window: screenshots are of what a screen that size shows.
+        self.driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride",
+                                    {"width": w, "height": h, "deviceScaleFactor": 1, "mobile": name == "phone"})
+
+    def text(self, css):
+        return self.driver.find_element(By.CSS_SELECTOR, css).text
+
+    def wait_text(self, css, fragment):
+        return wait_until(f"'{fragment}' in {css}", lambda: fragment in self.text(css) and self.text(css))
+
+    def count(self, css):
+        return len(self.driver.find_elements(By.CSS_SELECTOR, css))
+
+    def go(self, url):
+        self.driver.get(url)
+
+    def quit(self):
+        self.driver.quit()
+
+
+def screenshots(browser, out, name, ready):
+    """Each page at both sizes; `ready` is the condition the page is drawn."""
+    for size in SIZES:
+        browser.size(size)
+        wait_until(f"{name} drawn at {size}", ready)
+        browser.driver.save_screenshot(str(out / f"{name}_{size}.png"))
+    browser.size("desktop")
+
+
+def run_checks(svc, browser, shots):
+    b = browser
+    ui = svc.base + "/ui/"
+
+    # `/` leads to the pages.
+    b.go(svc.base + "/")
+    wait_until("/ to show the run history", lambda: "Run history" in b.text("h1"))
+
+    # ---- Run history: every run, then the filters narrow it ----
+    b.go(ui + "#/runs")
+    wait_until("3 runs listed", lambda: b.count("table#runs tbody tr") == 3)
+    table = b.text("table#runs")
+    for fragment in ("S-1001", "S-1002", "intake_flat", "grinder-web", "µm", "deg"):
+        check(fragment in table, f"the run history shows {fragment}: {table}")
+    screenshots(b, shots, "runs", lambda: b.count("table#runs tbody tr") == 3)
+    all_ids = [r.get_attribute("data-run") for r in b.driver.find_elements(By.CSS_SELECTOR, "table#runs tbody tr")]
+    check(all_ids == sorted(all_ids, key=int, reverse=True), f"newest first: {all_ids}")
+    # Paging, 2 runs a page: the older page holds the third.
+    b.go(ui + "#/runs?size=2")
+    wait_until("a page of 2 runs", lambda: b.count("table#runs tbody tr") == 2)
+    check(b.count("#older") == 1 and b.count("#newer") == 0, "the first page leads only to older runs")
+    b.driver.find_element(By.CSS_SELECTOR, "#older").click()
+    wait_until("the second page's 1 run", lambda: b.count("table#runs tbody tr") == 1)
+    check(b.count("#newer") == 1 and b.count("#older") == 0, "the last page leads only to newer runs")
+    last = b.driver.find_element(By.CSS_SELECTOR, "table#runs tbody tr").get_attribute("data-run")
+    check(last == all_ids[2], f"the second page holds the oldest run: {last}, not {all_ids[2]}")
+    check("runs 3–3" in b.text("#page-of"), b.text("#page-of"))
+    b.go(ui + "#/runs?serial=S-1002")
+    wait_until("the serial filter to leave 2 runs", lambda: b.count("table#runs tbody tr") == 2)
+    check("S-1001" not in b.text("table#runs"), "the serial filter leaves out S-1001")
+    # The form: lobe 2 only.
+    b.go(ui + "#/runs")
+    wait_until("3 runs listed again", lambda: b.count("table#runs tbody tr") == 3)
+    b.driver.find_element(By.CSS_SELECTOR, "#run-filters input[name=lobe]").send_keys("2")
+    b.driver.find_element(By.CSS_SELECTOR, "#run-filters button[type=submit]").click()
+    wait_until("the lobe filter to leave 1 run", lambda: b.count("table#runs tbody tr") == 1)
+    check("lobe=2" in b.driver.current_url, f"the filter is in the address: {b.driver.current_url}")
+    b.go(ui + "#/runs?since=2000-01-01&until=2000-01-02")
+    wait_until("a date range without runs", lambda: "No run matches" in b.text("#runs-out"))
+
+    # ---- One run: identity, figures with units, the SVG plot, the PDF link ----
+    runs = svc.get_json("/api/runs?serial=S-1002&lobe=1")
+    run_id = runs[0]["id"]
+    b.go(ui + f"#/run/{run_id}")
+    title = b.wait_text("#title", f"Run {run_id}")
+    check("intake_flat lobe 1" in title and "grinder-web" in title, f"the run page's title: {title}")
+    figures = b.wait_text("#figures", "Max lift error")
+    check("S-1002" in figures, f"the run page shows its serial: {figures}")
+    check(f"{runs[0]['max_abs_error_um']:.2f} µm" in figures, f"the max error with its unit: {figures}")
+    check("deg" in figures, f"the phase in deg: {figures}")
+    wait_until("the error plot's SVG", lambda: b.count("#plot svg") == 1)
+    check(b.count("table#characteristics tbody tr") > 0, "the run's characteristics")
+    pdf_href = b.driver.find_element(By.CSS_SELECTOR, "#report-pdf").get_attribute("href")
+    status, body, ctype = svc.request("GET", pdf_href.replace(svc.base, ""))
+    check(status == 200 and ctype == "application/pdf" and body.startswith(b"%PDF"),
+          f"the PDF link answers a PDF: {status} {ctype} {body[:20]!r}")
+    screenshots(b, shots, "run", lambda: b.count("#plot svg") == 1)
+    # The first run's table, approved: version 1 of CAM_INTAKE_L1.
+    first_id = svc.get_json("/api/runs?serial=S-1001")[0]["id"]
+    b.go(ui + f"#/run/{first_id}")
+    pushes = b.wait_text("table#run-pushes", "CAM_INTAKE_L1")
+    check("approved by setup" in pushes and "µm" in pushes, f"the run's pushes: {pushes}")
+
+    # ---- Trend of the lobe with its limits ----
+    b.go(ui + "#/trend?part=intake_flat&lobe=1")
+    wait_until("the trend plot", lambda: b.count("#trend-plot svg") == 1)
+    wait_until("2 runs in the trend", lambda: b.count("table#trend-runs tbody tr") == 2)
+    check("µm" in b.text("table#trend-runs"), "the trend's figures have units")
+    screenshots(b, shots, "trend", lambda: b.count("#trend-plot svg") == 1)
+    # Another characteristic of the run, chosen from those the lobe was judged on.
+    wait_until("the phase among the characteristics",
+               lambda: b.count("#trend-filters select[name=key] option[value=phase]") == 1)
+    lift_svg = b.driver.find_element(By.CSS_SELECTOR, "#trend-plot svg").get_attribute("outerHTML")
+    b.driver.execute_script("document.querySelector('#trend-filters select[name=key]').value = 'phase'")
+    b.driver.find_element(By.CSS_SELECTOR, "#trend-filters button[type=submit]").click()
+    b.wait_text("#trend-title", "phase per run")
+    wait_until("the phase's trend plot", lambda: b.count("#trend-plot svg") == 1
+               and b.driver.find_element(By.CSS_SELECTOR, "#trend-plot svg").get_attribute("outerHTML") != lift_svg)
+
+    # ---- A camshaft's lobes ----
+    b.go(ui + "#/shaft?serial=S-1002")
+    wait_until("both lobes of S-1002", lambda: b.count("table#shaft-lobes tbody tr") == 2)
+    check("2 lobes measured" in b.text("#shaft-title"), b.text("#shaft-title"))
+    screenshots(b, shots, "shaft", lambda: b.count("table#shaft-lobes tbody tr") == 2)
+    # This service knows no shaft file (/api/health "shafts" is empty), so the page lists the
+    # lobes by serial. A record as /api/shaft gives it, when one is known, drawn by the page's own code:
+    record = {"serial": "S-1002", "shaft": "sample camshaft", "reference_c_deg": 0.0, "index_tolerance_deg": 0.25,
+              "datum_lobe": 1, "verdict": "incomplete",
+              "lobes": [{"lobe": 1, "part": "intake_flat", "angle_deg": 0.0, "run_id": 2, "started_utc": "2026-12-02T10:00:00Z",
+                         "verdict": "in", "phase_deg": 0.0012, "nominal_c_deg": 0.0, "nose_c_deg": 0.0012,
+                         "index_error_deg": 0.0012, "relative_error_deg": 0.0, "index_verdict": "in", "note": ""},
+                        {"lobe": 2, "part": "exhaust_roller", "angle_deg": 110.0, "run_id": None, "started_utc": None,
+                         "verdict": "not_measured", "phase_deg": None, "nominal_c_deg": 110.0, "nose_c_deg": None,
+                         "index_error_deg": None, "relative_error_deg": None, "index_verdict": "not_judged",
+                         "note": "not measured"}]}
+    html = b.driver.execute_script("return shaftRecordHtml(arguments[0])", record)
+    for fragment in ("sample camshaft", "±0.250 deg", "110.000 deg", "0.001 deg", "not measured", "#/run/2"):
+        check(fragment in html, f"the shaft record shows {fragment}: {html}")
+
+    # ---- Pending tables: refused without the token ----
+    pending = svc.get_json("/api/nc/pending")
+    check(len(pending) == 2, f"two tables pending: {pending}")
+    by_file = {p["nc_file"].rsplit("/", 1)[-1]: p["id"] for p in pending}
+    approve_id, reject_id = by_file["CAM_INTAKE_L1.SPF"], by_file["CAM_INTAKE_L2.SPF"]
+    b.go(ui + "#/pending")
+    wait_until("two pending tables shown", lambda: b.count(".card.pending") == 2)
+    check("needs the token" in b.text(f".card.pending[data-id='{approve_id}'] button.approve"),
+          "the approve button says it needs the token")
+    b.driver.find_element(By.CSS_SELECTOR, "#decided-by").send_keys("anna")
+    b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{approve_id}'] button.approve").click()
+    b.wait_text(f".card.pending[data-id='{approve_id}'] .result", "Refused")
+    b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{reject_id}'] button.reject").click()
+    b.wait_text(f".card.pending[data-id='{reject_id}'] .result", "Refused")
+    check(len(svc.get_json("/api/nc/pending")) == 2, "nothing was decided without the token")
+    check(len(svc.get_json("/api/nc/history?program=CAM_INTAKE_L1")) == 1, "no version written without the token")
+    screenshots(b, shots, "pending", lambda: b.count(".card.pending") == 2)
+
+    # ---- A wrong token is refused too, and can be forgotten ----
+    b.driver.find_element(By.CSS_SELECTOR, "#token-input").send_keys("not-the-token")
+    b.driver.find_element(By.CSS_SELECTOR, "#token-use").click()
+    b.wait_text("#token-state", "writes enabled")
+    wait_until("the pending tables drawn again", lambda: b.count(f".card.pending[data-id='{approve_id}'] button.approve") == 1
+               and b.text(f".card.pending[data-id='{approve_id}'] button.approve") == "Approve and write")
+    b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{approve_id}'] button.approve").click()
+    refused = b.wait_text(f".card.pending[data-id='{approve_id}'] .result", "not the one configured")
+    check("Forget the token" in refused, refused)
+    check(len(svc.get_json("/api/nc/pending")) == 2, "nothing was decided with a wrong token")
+    b.driver.find_element(By.CSS_SELECTOR, "#token-forget").click()
+    b.wait_text("#token-state", "read-only")
+
+    # ---- The token, entered once for the session ----
+    wait_until("the token field back", lambda: b.driver.find_element(By.CSS_SELECTOR, "#token-input").is_displayed())
+    b.driver.find_element(By.CSS_SELECTOR, "#token-input").send_keys(svc.token)
+    b.driver.find_element(By.CSS_SELECTOR, "#token-use").click()
+    b.wait_text("#token-state", "writes enabled")
+    wait_until("the buttons to no longer ask for the token",
+               lambda: b.text(f".card.pending[data-id='{approve_id}'] button.approve") == "Approve and write")
+    # A diff of the pending table from the table in force.
+    b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{approve_id}'] button.show-diff").click()
+    b.wait_text(f".card.pending[data-id='{approve_id}'] #diff-count", "differ")
+    b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{approve_id}'] button.approve").click()
+    b.wait_text(f".card.pending[data-id='{approve_id}'] .result", "Approved: version 2 of CAM_INTAKE_L1")
+    b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{reject_id}'] button.reject").click()
+    b.wait_text(f".card.pending[data-id='{reject_id}'] .result", "Rejected")
+    check(svc.get_json("/api/nc/pending") == [], "no table is pending after the decisions")
+    decided = {p["id"]: p for p in svc.get_json("/api/nc/pending?all=true")}
+    check(decided[approve_id]["status"] == "approved" and decided[approve_id]["decided_by"] == "anna",
+          f"approved by anna: {decided[approve_id]}")
+    check(decided[reject_id]["status"] == "rejected" and decided[reject_id]["decided_by"] == "anna",
+          f"rejected by anna: {decided[reject_id]}")
+    # The token is kept for the session: a reload still writes.
+    b.driver.refresh()
+    b.wait_text("#token-state", "writes enabled")
+    wait_until("no pending table left", lambda: b.count("#no-pending") == 1)
+
+    # ---- NC history: version 2 is in force, and its diff from version 1 ----
+    b.go(ui + "#/nc?program=CAM_INTAKE_L1")
+    b.wait_text("#nc-title", "2 versions, version 2 in force")
+    wait_until("the NC history's rows", lambda: b.count("table#nc-history tbody tr") == 2)
+    b.wait_text("#diff-count", "differ")
+    check(b.count("#diff .add") > 0 and b.count("#diff .del") > 0, "the diff marks added and removed lines")
+    screenshots(b, shots, "nc", lambda: b.count("#diff .add") > 0)
+    # Roll back to version 1 (confirmed): version 3 holds its table, the same text.
+    b.driver.find_element(By.CSS_SELECTOR, "table#nc-history tr[data-version='1'] button.rollback").click()
+    wait_until("the rollback's question", lambda: b.driver.switch_to.alert).accept()
+    b.wait_text("#nc-message", "Rolled back: version 3 holds the table of version 1")
+    b.driver.find_element(By.CSS_SELECTOR, "#nc-reload").click()
+    b.wait_text("#nc-title", "3 versions, version 3 in force")
+    b.wait_text("#diff-count", "differ")
+    v1 = svc.get_json("/api/nc/table?program=CAM_INTAKE_L1&version=1")["program_text"]
+    v3 = svc.get_json("/api/nc/table?program=CAM_INTAKE_L1&version=3")["program_text"]
+    check(v3 != v1 and "rollback" in svc.get_json("/api/nc/history?program=CAM_INTAKE_L1")[0]["reason"],
+          "version 3 was written by the rollback")
+
+    # ---- Service state, refreshing itself ----
+    b.go(ui + "#/state")
+    cards = b.wait_text("#state-cards", "grinder-web")
+    check("idle" in cards and "Last run" in cards, f"the service state: {cards}")
+    first = b.text("#state-time")
+    wait_until("the state to refresh itself", lambda: b.text("#state-time") != first, deadline_s=30)
+    screenshots(b, shots, "state", lambda: b.count("#state-cards") == 1)
+    # Measure now, with the token still in the session.
+    before = len(svc.get_json("/api/runs"))
+    b.driver.find_element(By.CSS_SELECTOR, "#measure-form input[name=serial]").send_keys("S-1003")
+    b.driver.find_element(By.CSS_SELECTOR, "#measure-button").click()
+    b.wait_text("#measure-message", "Measured: run")
+    runs = svc.get_json("/api/runs")
+    check(len(runs) == before + 1 and runs[0]["serial"] == "S-1003", f"a run of S-1003 was measured: {runs[0]}")
+    b.driver.find_element(By.CSS_SELECTOR, "#measure-message a").click()
+    b.wait_text("#title", f"Run {runs[0]['id']}")
+
+    # ---- Every asset from the service itself, nothing from elsewhere ----
+    sources = b.driver.execute_script(
+        "return performance.getEntriesByType('resource').map(e => e.name)"
+        ".concat([...document.querySelectorAll('[src],[href]')].map(e => e.src || e.href))")
+    foreign = [s for s in sources if s.startswith("http") and not s.startswith(svc.base)]
+    check(foreign == [], f"every asset comes from the service: {foreign}")
+
+    # No script error or blocked resource on any page; the writes refused without the token
+    # (401) were meant.
+    errors = [e for e in b.driver.get_log("browser")
+              if e["level"] == "SEVERE" and "status of 401" not in e["message"]]
+    check(errors == [], f"the browser console holds errors: {errors}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--gaugeloop", required=True)
+    ap.add_argument("--screenshots", required=True, help="directory the screenshots are written to")
+    args = ap.parse_args()
+    shots = pathlib.Path(args.screenshots)
+    shots.mkdir(parents=True, exist_ok=True)
+    work = pathlib.Path(tempfile.mkdtemp(prefix="gaugeloop-web-"))
+    started = time.monotonic()
+    svc = None
+    browser = None
+    ok = False
+    try:
+        svc = Service(str(pathlib.Path(args.gaugeloop).resolve()), work)
+        log(f"service on {svc.base}, work in {work}")
+        wait_until("the service's health", lambda: svc.get_json("/api/health").get("state") == "idle")
+        svc.measure(1, "S-1001")
+        first = svc.get_json("/api/nc/pending")
+        check(len(first) == 1, f"the first run's table is pending: {first}")
+        status, body, _ = svc.request("POST", f"/api/nc/approve/{first[0]['id']}", {"by": "setup"}, svc.token)
+        check(status == 200, f"approving the first table: {status} {body!r}")
+        svc.measure(1, "S-1002")
+        svc.measure(2, "S-1002")
+        log(f"3 runs measured in {time.monotonic() - started:.1f} s")
+        try:
+            browser = Browser(work)
+        except (WebDriverException, OSError) as e:
+            raise Failed(f"cannot start headless Chromium ({e}); scripts/install-deps.sh installs chromium, "
+                         "chromium-driver and python3-selenium")
+        run_checks(svc, browser, shots)
+        ok = True
+    except Failed as e:
+        print(f"FAILED: {e}", file=sys.stderr)
+        if browser is not None:
+            try:
+                browser.driver.save_screenshot(str(shots / "failure.png"))
+                print(f"the page at the failure: {shots / 'failure.png'}", file=sys.stderr)
+            except WebDriverException:
+                pass
+    finally:
+        if browser is not None:
+            browser.quit()
+        if svc is not None:
+            svc.stop()
+        if ok:
+            shutil.rmtree(work, ignore_errors=True)
+        else:
+            print(f"work directory kept: {work}", file=sys.stderr)
+    log(f"{'passed' if ok else 'FAILED'} in {time.monotonic() - started:.1f} s; screenshots in {shots}")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
