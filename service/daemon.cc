@@ -77,6 +77,9 @@ Result<std::unique_ptr<HttpApi>> start_http(Service& service, PlcTrigger* plc, c
   writes.approve = [&service](std::int64_t id, const std::string& by, const std::string& note) {
     return service.approve(id, by, note);
   };
+  writes.reject = [&service](std::int64_t id, const std::string& by, const std::string& note) {
+    return service.reject(id, by, note);
+  };
   writes.rollback = [&service](const std::string& program, int version, const std::string& by) {
     return service.rollback(program, version, by);
   };

@@ -1122,13 +1122,14 @@ struct HttpApi::Impl {
     if (!by) return send_error(res, by.error());
     Result<std::string> note = string_field(*body, "note", false);
     if (!note) return send_error(res, note.error());
-    if (writes.reject) return answer(res, writes.reject(*id, *by, *note));
+    const auto hinted = [](Result<json> r) -> Result<json> {
+      if (r || r.error().code != ErrorCode::kNotFound) return r;
+      return make_error(ErrorCode::kNotFound, r.error().message + "; GET /api/nc/pending lists the ids");
+    };
+    if (writes.reject) return answer(res, hinted(writes.reject(*id, *by, *note)));
     with_store(res, [&](RunStore& store) -> Result<json> {
       Result<PendingTable> table = store.load_pending(*id);
-      if (!table) {
-        if (table.error().code != ErrorCode::kNotFound) return table.error();
-        return make_error(ErrorCode::kNotFound, table.error().message + "; GET /api/nc/pending lists the ids");
-      }
+      if (!table) return hinted(table.error());
       if (Status s = store.reject_pending(*id, *by, *note); !s) return s.error();
       spdlog::info("pending table {} of {} rejected by {}; the table in force stays", *id, table->nc_file, *by);
       return json{{"rejected", *id}, {"nc_file", table->nc_file}, {"by", *by}};

@@ -31,7 +31,8 @@ struct HttpWrites {
   std::function<Result<nlohmann::json>(std::int64_t pending_id, const std::string& by, const std::string& note)>
       approve;
   // Optional: without it the API rejects through its own connection (RunStore::reject_pending).
-  // A service sets it to serialise a rejection with the approvals it pushes (its push slot).
+  // The service sets it (Service::reject) to serialise a rejection with the approvals it
+  // pushes (its push slot).
   std::function<Result<nlohmann::json>(std::int64_t pending_id, const std::string& by, const std::string& note)> reject;
   // `program` as the client gave it: a program name (CAM_INTAKE_L1) or an NC file path.
   std::function<Result<nlohmann::json>(const std::string& program, int table_version, const std::string& by)> rollback;

@@ -417,6 +417,18 @@ Result<json> Service::approve(std::int64_t pending_id, const std::string& by, co
               {"decision_recorded", pushed->decision_recorded}};
 }
 
+Result<json> Service::reject(std::int64_t pending_id, const std::string& by, const std::string& note) {
+  const Result<RunReservation> held = wait_and_reserve();  // not between an approval's check and its push
+  if (!held) return held.error();
+  Result<RunStore> store = RunStore::open(config()->job.db_path);
+  if (!store) return store.error();
+  Result<PendingTable> table = store->load_pending(pending_id);
+  if (!table) return table.error();
+  if (Status s = store->reject_pending(pending_id, by, note); !s) return s.error();
+  spdlog::info("pending table {} of {} rejected by {}; the table in force stays", pending_id, table->nc_file, by);
+  return json{{"rejected", pending_id}, {"nc_file", table->nc_file}, {"by", by}};
+}
+
 Result<json> Service::rollback(const std::string& program, int table_version, const std::string& by) {
   const Result<RunReservation> held = wait_and_reserve();  // one push at a time
   if (!held) return held.error();

@@ -110,6 +110,10 @@ class Service {
   // A pending table approved over HTTP; the same as `gaugeloop nc approve` (no overwriting
   // of a hand-edited program over HTTP: that needs the command and its flag).
   Result<nlohmann::json> approve(std::int64_t pending_id, const std::string& by, const std::string& note);
+  // Rejects pending table `pending_id` (the table in force stays), holding the push slot as
+  // approve does, so a rejection never lands between an approval's check and its write.
+  // kNotFound for an unknown id, kRefused for a table no longer pending or while stopping.
+  Result<nlohmann::json> reject(std::int64_t pending_id, const std::string& by, const std::string& note);
 
   // `program`: a program name (CAM_INTAKE_L1, with or without .SPF) in the configured NC
   // directory, or the NC file's path.

@@ -28,6 +28,7 @@
 #include "service/plc_trigger.h"
 #include "storage/run_store.h"
 #include "tests/acquisition/scripted_gauge.h"
+#include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
@@ -464,12 +465,53 @@ TEST_F(ServiceStateTest, NoPushStartsOnceTheServiceStops) {
   Service service(config_, design_gauge());
   service.set_stopping();
   for (const Result<nlohmann::json>& r :
-       {service.approve(1, "anna", ""), service.rollback("CAM_INTAKE_L1", 1, "anna")}) {
+       {service.approve(1, "anna", ""), service.reject(1, "anna", ""), service.rollback("CAM_INTAKE_L1", 1, "anna")}) {
     ASSERT_FALSE(r.ok());
     EXPECT_EQ(r.error().code, ErrorCode::kRefused) << r.error().message;
     EXPECT_NE(r.error().message.find("stopping"), std::string::npos) << r.error().message;
   }
   EXPECT_FALSE(service.wait_and_reserve().ok());
+}
+
+// A rejection through the service: the table leaves pending, the table in force stays; an
+// unknown id and a second decision are refused, nothing written.
+TEST_F(ServiceStateTest, ARejectionLeavesTheTableInForceAndIsRefusedTwice) {
+  std::int64_t pending_id = 0;
+  {
+    Result<RunStore> store = RunStore::open(dir_ / "gaugeloop.sqlite");
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    Result<std::int64_t> run = store->insert_run(testing::sample_run("intake_flat", 1, "grinder-7", utc_now(), 4.0));
+    ASSERT_TRUE(run.ok()) << run.error().message;
+    PendingTable pending;
+    pending.run_id = *run;
+    pending.nc_file = (dir_ / "nc" / "CAM_INTAKE_L1.SPF").string();
+    pending.program_text = "; a table\nM17\n";
+    pending.reason = "approval required";
+    Result<std::int64_t> p = store->add_pending(pending);
+    ASSERT_TRUE(p.ok()) << p.error().message;
+    pending_id = *p;
+  }
+  Service service(config_, design_gauge());
+  Result<nlohmann::json> unknown = service.reject(pending_id + 7, "anna", "");
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_EQ(unknown.error().code, ErrorCode::kNotFound) << unknown.error().message;
+
+  Result<nlohmann::json> rejected = service.reject(pending_id, "anna", "flank error from a worn wheel");
+  ASSERT_TRUE(rejected.ok()) << rejected.error().message;
+  EXPECT_EQ((*rejected)["rejected"], pending_id);
+  EXPECT_EQ((*rejected)["by"], "anna");
+  Result<RunStore> store = RunStore::open_read_only(dir_ / "gaugeloop.sqlite");
+  ASSERT_TRUE(store.ok());
+  Result<PendingTable> after = store->load_pending(pending_id);
+  ASSERT_TRUE(after.ok()) << after.error().message;
+  EXPECT_EQ(after->status, PendingStatus::kRejected);
+  EXPECT_EQ(after->decided_by, "anna");
+  EXPECT_FALSE(fs::exists(dir_ / "nc" / "CAM_INTAKE_L1.SPF")) << "a rejection writes nothing to the control";
+
+  Result<nlohmann::json> again = service.reject(pending_id, "ben", "");
+  ASSERT_FALSE(again.ok());
+  EXPECT_EQ(again.error().code, ErrorCode::kRefused) << again.error().message;
+  EXPECT_EQ(gauges_made_, 0);
 }
 
 // SIGTERM while a run started over HTTP finishes, in the order service/daemon.cc stops: the
