@@ -13,6 +13,7 @@
 #include <set>
 
 #include "config/gauge_config.h"
+#include "config/shaft_file.h"
 #include "config/toml_reader.h"
 #include "core/text_file.h"
 #include "plant/central_history.h"
@@ -795,6 +796,33 @@ Status read_part_entries(const toml::table& table, TomlReader& top, const Config
   return {};
 }
 
+// [[shaft]]: each a shaft file (lobes and their angles), for the pages' camshaft record
+// (/api/shaft). Optional; checked now like the parts. Names are unique.
+Status read_shaft_entries(const toml::table& table, const ConfigFile& f, ServiceConfig& c) {
+  const toml::node* shafts = table.get("shaft");
+  if (shafts == nullptr) return {};
+  if (!shafts->is_array_of_tables()) {
+    return make_error(ErrorCode::kInvalidInput,
+                      f.source + ": `shaft` must be [[shaft]] entries, each `file = \"SHAFT.toml\"`");
+  }
+  for (const toml::node& node : *shafts->as_array()) {
+    TomlReader sr(*node.as_table(), f.source, "shaft.");
+    sr.allow_only({"file"});
+    const std::string file = sr.text("file", std::nullopt);
+    if (sr.error) return *sr.error;
+    Result<ShaftFile> shaft = read_shaft_file(f.resolve(file));
+    if (!shaft) return at_key(sr, "file", shaft.error());
+    for (const ShaftLayout& known : c.shafts) {
+      if (known.name == shaft->layout.name) {
+        return make_error(ErrorCode::kInvalidInput, sr.where("file") + ": shaft '" + known.name +
+                                                        "' is named twice; give each shaft file its own name");
+      }
+    }
+    c.shafts.push_back(std::move(shaft->layout));
+  }
+  return {};
+}
+
 }  // namespace
 
 // The tables are read in a fixed order and the first error is returned, except that the top
@@ -812,7 +840,8 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   if (!parsed) return parsed.error();
   const toml::table& table = *parsed;
   TomlReader top(table, f.source);
-  top.allow_only({"machine", "gauge", "part", "analysis", "compensation", "nc", "database", "http", "plc", "plant"});
+  top.allow_only(
+      {"machine", "gauge", "part", "shaft", "analysis", "compensation", "nc", "database", "http", "plc", "plant"});
 
   ServiceConfig c;
   c.source = path;
@@ -831,6 +860,7 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   c.plc = std::move(*plc);
   if (Status s = read_plant_table(top, f, c); !s) return s.error();
   if (Status s = read_part_entries(table, top, f, c); !s) return s.error();
+  if (Status s = read_shaft_entries(table, f, c); !s) return s.error();
   return c;
 }
 

@@ -17,6 +17,7 @@
 #include "job/measure_job.h"
 #include "plant/central_sync.h"
 #include "plant/mqtt_settings.h"
+#include "report/shaft.h"
 
 namespace gaugeloop {
 
@@ -81,6 +82,10 @@ struct ServiceConfig {
   // [plant.central]: the central history the service syncs its runs, pushes and events into
   // (docs/plant.md); absent: the service does not sync (`gaugeloop plant sync` may).
   std::optional<CentralSyncSettings> central;
+  // [[shaft]] file = "...": the camshafts whose lobes the service measures, for the camshaft
+  // record of a serial on the pages (/api/shaft); none: the pages list a serial's lobes
+  // without index errors.
+  std::vector<ShaftLayout> shafts;
 };
 
 // Reads and checks the whole file before anything uses it: every part file and lift table

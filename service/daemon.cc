@@ -86,6 +86,7 @@ Result<std::unique_ptr<HttpApi>> start_http(Service& service, PlcTrigger* plc, c
   HttpStatus status;
   status.health = [&service] { return service.health(); };
   status.extra_metrics = [&service, plc] { return service.metrics() + (plc ? plc->metrics() : ""); };
+  status.shafts = [&service] { return service.config()->shafts; };  // a reload's shaft files at once
   Result<std::unique_ptr<HttpApi>> started = HttpApi::start(settings, db_path, writes, status);
   if (!started) return not_starting(started.error(), "HTTP API not started");
   // One line on stdout for whoever started us (tests, scripts) to find the port.

@@ -214,6 +214,40 @@ TEST_F(ServiceConfigTest, TheExampleConfigReads) {
   ASSERT_TRUE(c.ok()) << c.error().message;
   EXPECT_EQ(configured_parts(*c), "intake_flat lobe 1, exhaust_roller lobe 2");
   EXPECT_EQ(c->gauge.port, 1502) << "from ../gauges/simulator.toml";
+  ASSERT_EQ(c->shafts.size(), 1u) << "[[shaft]] file = \"../camshaft.toml\"";
+  EXPECT_EQ(c->shafts[0].name, "sample camshaft");
+}
+
+// [[shaft]]: each a shaft file, relative to the config; a missing or bad file, a shaft named
+// twice and a key of another name are refused naming the file, the line and the key.
+TEST_F(ServiceConfigTest, ShaftFilesAreReadAndCheckedAtStart) {
+  const std::string base = "[gauge]\n" + kIntake + kNc;
+  Result<ServiceConfig> c = read(base);
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_TRUE(c->shafts.empty()) << "none without [[shaft]]";
+
+  const std::string shaft =
+      "name = \"cell camshaft\"\nindex_tolerance_deg = 0.25\n"
+      "[[lobe]]\npart = \"intake_flat.toml\"\nangle_deg = 0.0\n"
+      "[[lobe]]\npart = \"exhaust_roller.toml\"\nangle_deg = 110.0\n";
+  dir_.write("parts/shaft.toml", shaft);
+  // Lines: 1 [gauge], 2-3 the intake part, 4-5 [nc], 6 [[shaft]], 7 file.
+  c = read(base + "[[shaft]]\nfile = \"parts/shaft.toml\"\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  ASSERT_EQ(c->shafts.size(), 1u);
+  EXPECT_EQ(c->shafts[0].name, "cell camshaft");
+  ASSERT_EQ(c->shafts[0].lobes.size(), 2u);
+  EXPECT_EQ(c->shafts[0].lobes[1].angle_deg, 110.0);
+
+  EXPECT_TRUE(
+      refused(read(base + "[[shaft]]\nfile = \"parts/none.toml\"\n"), ErrorCode::kNotFound, at(7, "shaft.file")));
+  dir_.write("parts/bad_shaft.toml", "name = \"b\"\n");
+  EXPECT_TRUE(refused(read(base + "[[shaft]]\nfile = \"parts/bad_shaft.toml\"\n"), at(7, "shaft.file")));
+  EXPECT_TRUE(refused(read(base + "[[shaft]]\nfile = \"parts/shaft.toml\"\n[[shaft]]\nfile = "
+                                  "\"parts/shaft.toml\"\n"),
+                      "'cell camshaft' is named twice"));
+  EXPECT_TRUE(refused(read(base + "[[shaft]]\npath = \"parts/shaft.toml\"\n"), "path"));
+  EXPECT_TRUE(refused(read("shaft = \"parts/shaft.toml\"\n" + base), "[[shaft]] entries"));
 }
 
 // Paths in the file are relative to the file's directory, wherever the process runs; a part

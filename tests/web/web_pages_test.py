@@ -85,6 +85,17 @@ class Service:
             shutil.copy(EXAMPLES / name, work / name)
         lobe2 = (work / "intake_flat.toml").read_text().replace("lobe = 1", "lobe = 2", 1)
         (work / "intake_flat_l2.toml").write_text(lobe2.replace('"CAM_INTAKE_L1"', '"CAM_INTAKE_L2"', 1))
+        # The shaft the two lobes are on: the camshaft page gives each lobe's index error.
+        (work / "shaft.toml").write_text("""name = "web camshaft"
+reference_c_deg = 0.0
+index_tolerance_deg = 0.25
+[[lobe]]
+part = "intake_flat.toml"
+angle_deg = 0.0
+[[lobe]]
+part = "intake_flat_l2.toml"
+angle_deg = 110.0
+""")
         (work / "service.toml").write_text(f"""machine = "grinder-web"
 [gauge]
 config = "gauge.toml"
@@ -93,6 +104,8 @@ revolutions = 3
 file = "intake_flat.toml"
 [[part]]
 file = "intake_flat_l2.toml"
+[[shaft]]
+file = "shaft.toml"
 [compensation]
 max_correction_um = 500.0
 [nc]
@@ -286,24 +299,20 @@ def run_checks(svc, browser, shots):
                and b.driver.find_element(By.CSS_SELECTOR, "#trend-plot svg").get_attribute("outerHTML") != lift_svg)
 
     # ---- A camshaft's lobes ----
+    # The service knows the shaft file: the record gives each lobe's nominal angle and index error.
+    check(svc.get_json("/api/health")["shafts"] == ["web camshaft"], "the service names its shaft")
     b.go(ui + "#/shaft?serial=S-1002")
+    b.wait_text("#shaft-title", "Serial S-1002 on web camshaft")
     wait_until("both lobes of S-1002", lambda: b.count("table#shaft-lobes tbody tr") == 2)
-    check("2 lobes measured" in b.text("#shaft-title"), b.text("#shaft-title"))
+    shaft_text = b.text("#page")
+    for fragment in ("index tolerance ±0.250 deg", "110.000 deg", "0.000 deg"):
+        check(fragment in shaft_text, f"the shaft record shows {fragment}: {shaft_text}")
+    check(b.count("table#shaft-lobes tbody tr a[href^='#/run/']") == 2, "both lobes link their runs")
     screenshots(b, shots, "shaft", lambda: b.count("table#shaft-lobes tbody tr") == 2)
-    # This service knows no shaft file (/api/health "shafts" is empty), so the page lists the
-    # lobes by serial. A record as /api/shaft gives it, when one is known, drawn by the page's own code:
-    record = {"serial": "S-1002", "shaft": "sample camshaft", "reference_c_deg": 0.0, "index_tolerance_deg": 0.25,
-              "datum_lobe": 1, "verdict": "incomplete",
-              "lobes": [{"lobe": 1, "part": "intake_flat", "angle_deg": 0.0, "run_id": 2, "started_utc": "2026-12-02T10:00:00Z",
-                         "verdict": "in", "phase_deg": 0.0012, "nominal_c_deg": 0.0, "nose_c_deg": 0.0012,
-                         "index_error_deg": 0.0012, "relative_error_deg": 0.0, "index_verdict": "in", "note": ""},
-                        {"lobe": 2, "part": "exhaust_roller", "angle_deg": 110.0, "run_id": None, "started_utc": None,
-                         "verdict": "not_measured", "phase_deg": None, "nominal_c_deg": 110.0, "nose_c_deg": None,
-                         "index_error_deg": None, "relative_error_deg": None, "index_verdict": "not_judged",
-                         "note": "not measured"}]}
-    html = b.driver.execute_script("return shaftRecordHtml(arguments[0])", record)
-    for fragment in ("sample camshaft", "±0.250 deg", "110.000 deg", "0.001 deg", "not measured", "#/run/2"):
-        check(fragment in html, f"the shaft record shows {fragment}: {html}")
+    # A shaft the service does not know: the page says so and lists the serial's lobes instead.
+    b.go(ui + "#/shaft?serial=S-1002&shaft=no-such-shaft")
+    b.wait_text("#shaft-title", "2 lobes measured")
+    check("no-such-shaft" in b.text("#shaft-note"), b.text("#shaft-note"))
 
     # ---- Pending tables: refused without the token ----
     pending = svc.get_json("/api/nc/pending")
@@ -405,9 +414,10 @@ def run_checks(svc, browser, shots):
     check(foreign == [], f"every asset comes from the service: {foreign}")
 
     # No script error or blocked resource on any page; the writes refused without the token
-    # (401) were meant.
+    # (401) and the record of the shaft the service does not know (404) were meant.
     errors = [e for e in b.driver.get_log("browser")
-              if e["level"] == "SEVERE" and "status of 401" not in e["message"]]
+              if e["level"] == "SEVERE" and "status of 401" not in e["message"]
+              and not ("shaft=no-such-shaft" in e["message"] and "status of 404" in e["message"])]
     check(errors == [], f"the browser console holds errors: {errors}")
 
 
