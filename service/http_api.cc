@@ -910,25 +910,38 @@ struct HttpApi::Impl {
 
   // ---- Pictures and documents ----
 
-  void run_plot(const httplib::Request& req, httplib::Response& res) {
+  // The run the path names, for an answer made of it alone (no query parameters); nullopt when
+  // the error was sent.
+  std::optional<StoredRun> path_run(const httplib::Request& req, httplib::Response& res) {
     Result<Query> q = Query::of(req, {});
-    if (!q) return send_error(res, q.error());
+    if (!q) {
+      send_error(res, q.error());
+      return std::nullopt;
+    }
     Result<StorePool::Lease> store = stores.acquire();
-    if (!store) return send_error(res, store.error());
+    if (!store) {
+      send_error(res, store.error());
+      return std::nullopt;
+    }
     Result<StoredRun> run = load_run(**store, req.matches[1]);
-    if (!run) return fail_with_store(res, *store, run.error());
+    if (!run) {
+      fail_with_store(res, *store, run.error());
+      return std::nullopt;
+    }
+    return std::move(*run);
+  }
+
+  void run_plot(const httplib::Request& req, httplib::Response& res) {
+    const std::optional<StoredRun> run = path_run(req, res);
+    if (!run) return;
     res.status = 200;
     res.set_content(run_plot_svg(*run), "image/svg+xml");
   }
 
   // The cam report as `runs report` writes it, written to a file of its own and served from it.
   void run_report(const httplib::Request& req, httplib::Response& res) {
-    Result<Query> q = Query::of(req, {});
-    if (!q) return send_error(res, q.error());
-    Result<StorePool::Lease> store = stores.acquire();
-    if (!store) return send_error(res, store.error());
-    Result<StoredRun> run = load_run(**store, req.matches[1]);
-    if (!run) return fail_with_store(res, *store, run.error());
+    const std::optional<StoredRun> run = path_run(req, res);
+    if (!run) return;
     const std::string name = "run" + std::to_string(run->summary.id) + ".pdf";
     Result<std::string> pdf = file_written_by([&](const fs::path& out) { return write_cam_report(*run, out); }, name);
     if (!pdf) return send_error(res, pdf.error());

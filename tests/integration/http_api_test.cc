@@ -27,6 +27,8 @@
 // Last: httplib brings <resolv.h>, whose `res` macro breaks Eigen's headers.
 #include <httplib.h>
 
+#include "tests/support/http_answer.h"
+
 namespace gaugeloop {
 namespace {
 
@@ -133,22 +135,8 @@ class HttpApiTest : public ::testing::Test {
     return w;
   }
 
-  struct Answer {
-    int status = -1;
-    std::string body;
-    std::string content_type;
-    json j;  // discarded if the body is not JSON
-  };
-
-  static Answer answer_of(const httplib::Result& r) {
-    Answer a;
-    if (!r) return a;
-    a.status = r->status;
-    a.body = r->body;
-    a.content_type = r->get_header_value("Content-Type");
-    a.j = json::parse(r->body, nullptr, false);
-    return a;
-  }
+  using Answer = testing::HttpAnswer;
+  static Answer answer_of(const httplib::Result& r) { return testing::answer_of(r); }
 
   Answer get(const std::string& path) { return answer_of(client_->Get(path)); }
 

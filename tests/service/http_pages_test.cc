@@ -20,6 +20,8 @@
 // Last: httplib brings <resolv.h>, whose `res` macro breaks Eigen's headers.
 #include <httplib.h>
 
+#include "tests/support/http_answer.h"
+
 namespace gaugeloop {
 namespace {
 
@@ -75,24 +77,8 @@ class HttpPagesTest : public ::testing::Test {
     client_ = std::make_unique<httplib::Client>("127.0.0.1", api_->port());
   }
 
-  struct Answer {
-    int status = -1;
-    std::string body;
-    std::string content_type;
-    httplib::Headers headers;
-    json j;  // discarded if the body is not JSON
-  };
-
-  static Answer answer_of(const httplib::Result& r) {
-    Answer a;
-    if (!r) return a;
-    a.status = r->status;
-    a.body = r->body;
-    a.content_type = r->get_header_value("Content-Type");
-    a.headers = r->headers;
-    a.j = json::parse(r->body, nullptr, false);
-    return a;
-  }
+  using Answer = testing::HttpAnswer;
+  static Answer answer_of(const httplib::Result& r) { return testing::answer_of(r); }
 
   static std::string header(const Answer& a, const std::string& name) {
     const auto it = a.headers.find(name);
