@@ -594,7 +594,8 @@ async function statePage() {
         </div>
         <p class="muted" id="state-time">As of ${utc(h.time_utc)} UTC; refreshed every 5 s.</p>
         <h2>PLC</h2>${kvList(h.plc)}
-        <h2>Outbox</h2>${kvList(h.outbox)}
+        <h2>Outbox (plant broker)</h2>${kvList(h.outbox)}
+        <h2>Central history sync</h2>${kvList(h.central)}
         <h2>Database</h2>${kvList(h.database)}`;
       if (!lobesFilled && Array.isArray(h.parts)) {
         lobesFilled = true;

@@ -393,6 +393,11 @@ def run_checks(svc, browser, shots):
     b.go(ui + "#/state")
     cards = b.wait_text("#state-cards", "grinder-web")
     check("idle" in cards and "Last run" in cards, f"the service state: {cards}")
+    state = b.text("#state-out")
+    for section in ("Outbox (plant broker)", "Central history sync"):
+        at = state.find(section)
+        check(at >= 0 and "not configured" in state[at:at + len(section) + 40],
+              f"the state says {section} is not configured: {state}")
     first = b.text("#state-time")
     wait_until("the state to refresh itself", lambda: b.text("#state-time") != first, deadline_s=30)
     screenshots(b, shots, "state", lambda: b.count("#state-cards") == 1)
@@ -428,6 +433,8 @@ def main():
     args = ap.parse_args()
     shots = pathlib.Path(args.screenshots)
     shots.mkdir(parents=True, exist_ok=True)
+    for old in shots.glob("*.png"):  # what a person finds there is this run's
+        old.unlink()
     work = pathlib.Path(tempfile.mkdtemp(prefix="gaugeloop-web-"))
     started = time.monotonic()
     svc = None
