@@ -309,7 +309,7 @@ TEST_F(OutboxSenderTest, HealthIsDegradedWhileOldMessagesWaitForAnUnreachableBro
   ASSERT_TRUE(wait_until([&] { return sender->health()["depth"] == 1; })) << sender->health().dump();
   EXPECT_EQ(sender->health()["oldest_utc"], "2026-01-01T00:00:00Z");
   EXPECT_EQ(sender->health()["degraded"], true) << sender->health().dump();
-  EXPECT_TRUE(sender->health()["last_error"].is_string());
+  EXPECT_TRUE(wait_until([&] { return sender->health()["last_error"].is_string(); })) << sender->health().dump();
   ASSERT_TRUE(broker_->restart());
   ASSERT_TRUE(wait_until([&] { return sender->health()["depth"] == 0; })) << sender->health().dump();
   EXPECT_EQ(sender->health()["degraded"], false);

@@ -54,7 +54,10 @@ class MosquittoBroker {
       start();
     }
   }
-  ~MosquittoBroker() { stop(); }
+  ~MosquittoBroker() {
+    stop();
+    release_port();
+  }
   MosquittoBroker(const MosquittoBroker&) = delete;
   MosquittoBroker& operator=(const MosquittoBroker&) = delete;
 
@@ -62,13 +65,15 @@ class MosquittoBroker {
   int port() const { return port_; }
   const std::filesystem::path& dir() const { return dir_; }
 
-  // SIGTERM (mosquitto saves its persistence), then waits for the process.
+  // SIGTERM (mosquitto saves its persistence), then waits for the process. The port stays
+  // held until the broker starts again (see hold_port).
   void stop() {
     if (pid_ <= 0) return;
     ::kill(pid_, SIGCONT);  // a paused broker would never act on SIGTERM
     ::kill(pid_, SIGTERM);
     ::waitpid(pid_, nullptr, 0);
     pid_ = -1;
+    hold_port();
   }
   // SIGSTOP / SIGCONT: a broker that hangs, its socket still open; the kernel takes the
   // client's bytes and nothing answers.
@@ -80,6 +85,7 @@ class MosquittoBroker {
     ::kill(pid_, SIGKILL);
     ::waitpid(pid_, nullptr, 0);
     pid_ = -1;
+    hold_port();
   }
   // Again on the same port and directory; true once it accepts connections.
   bool restart() {
@@ -99,7 +105,28 @@ class MosquittoBroker {
  private:
   bool running() const { return pid_ > 0; }
 
+  // While the broker is down its port stays ours: bound, not listening, so a client is refused
+  // as by no broker, and no broker of another test running beside this one (ctest -j) can take
+  // the port and answer our client in its place.
+  void hold_port() {
+    release_port();
+    hold_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (hold_fd_ < 0) return;
+    const int one = 1;
+    ::setsockopt(hold_fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    a.sin_port = htons(static_cast<std::uint16_t>(port_));
+    if (::bind(hold_fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) release_port();  // best effort
+  }
+  void release_port() {
+    if (hold_fd_ >= 0) ::close(hold_fd_);
+    hold_fd_ = -1;
+  }
+
   void start() {
+    release_port();
     const std::filesystem::path conf = dir_ / "mosquitto.conf";
     {
       std::ofstream c(conf);
@@ -146,6 +173,7 @@ class MosquittoBroker {
   std::string listener_conf_;
   int port_ = 0;
   pid_t pid_ = -1;
+  int hold_fd_ = -1;  // the port, bound while the broker is down
 };
 
 struct Received {
