@@ -474,14 +474,8 @@ int cmd_plot(const PlotOptions& o) {
   Result<StoredRun> run = load(*store, o.id, o.paths);
   if (!run) return report_error(run.error());
   const RunSummary& s = run->summary;
-  ErrorPlot p;
-  p.title =
-      "Run " + std::to_string(s.id) + " \u00b7 " + s.part + " lobe " + std::to_string(s.lobe) + " \u00b7 " + s.machine;
-  p.subtitle = s.started_utc.substr(0, 10) + " " + s.started_utc.substr(11, 5) + " UTC \u00b7 " + s.status +
-               (s.note.empty() ? "" : " \u00b7 " + s.note);
-  p.error_um = run->analysis.error_um;
-  p.spread_um = run->analysis.spread_um;
-  if (!o.no_correction) p.correction_um = run->correction_um;
+  ErrorPlot p = run_error_plot(*run);
+  if (o.no_correction) p.correction_um.reset();
   if (o.tolerance_um > 0) p.tolerance_um = o.tolerance_um;
   p.footer = "RMS " + format_fixed(s.rms_error_um, 2) + " \u00b5m \u00b7 peak to valley " +
              format_fixed(s.peak_to_valley_um, 2) + " \u00b5m \u00b7 repeatability " +

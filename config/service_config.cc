@@ -689,7 +689,7 @@ Result<CentralSyncSettings> read_plant_central(const toml::table& t, const Confi
   if (cr.error) return *cr.error;
   Result<CentralUrl> url = parse_central_url(c.url);
   if (!url) return make_error(ErrorCode::kInvalidInput, cr.where("url") + ": " + url.error().message);
-  if (url->shown.find(":***@") != std::string::npos || c.url.find("password=") != std::string::npos) {
+  if (url->has_password) {
     return make_error(ErrorCode::kInvalidInput,
                       cr.where("url") +
                           ": a password written in the config is refused: the config is often readable by every user "

@@ -1,4 +1,5 @@
 // The central history's URL, connection and statement parameters.
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -67,7 +68,22 @@ Result<CentralUrl> parse_central_url(std::string_view url) {
       // Never print a password: the URL as shown keeps everything but it.
       const std::size_t start = (url.size() - rest.size()) + colon + 1;
       out.shown = std::string(url.substr(0, start)) + "***" + std::string(url.substr(start + (at - colon - 1)));
+      out.has_password = true;
     }
+  }
+  if (!query.empty()) {  // nor one given as ?password=...
+    std::string shown_query;
+    for (std::size_t from = 0; from <= query.size();) {
+      const std::size_t amp = std::min(query.find('&', from), query.size());
+      std::string_view pair = query.substr(from, amp - from);
+      if (pair.substr(0, 9) == "password=") {
+        pair = "password=***";
+        out.has_password = true;
+      }
+      shown_query += (from == 0 ? "" : "&") + std::string(pair);
+      from = amp + 1;
+    }
+    out.shown = out.shown.substr(0, out.shown.find('?') + 1) + shown_query;
   }
   if (!host_port.empty() && host_port.front() == '[') {
     const std::size_t close = host_port.find(']');

@@ -18,10 +18,11 @@ namespace gaugeloop {
 //   postgresql://[USER[:PASSWORD]@][HOST][:PORT]/DATABASE[?KEY=VALUE&...]
 // ("postgres://" too). The database is required; host empty: the local socket; port empty: 5432.
 struct CentralUrl {
-  std::string url;    // as given, for libpq (plus connect_timeout=10 unless given)
-  std::string shown;  // as given with the password replaced by "***": for messages and output
-  std::string host;   // "" for the local socket
-  std::string port;   // "5432" unless given
+  std::string url;            // as given, for libpq (plus connect_timeout=10 unless given)
+  std::string shown;          // as given with the password replaced by "***": for messages and output
+  bool has_password = false;  // the URL holds a password (USER:PASSWORD@ or ?password=)
+  std::string host;           // "" for the local socket
+  std::string port;           // "5432" unless given
   std::string database;
 };
 

@@ -479,4 +479,20 @@ std::string render_loop_plot_svg(const LoopPlot& p) {
   return svg;
 }
 
+ErrorPlot run_error_plot(const StoredRun& run) {
+  const RunSummary& s = run.summary;
+  ErrorPlot p;
+  p.title =
+      "Run " + std::to_string(s.id) + " \u00b7 " + s.part + " lobe " + std::to_string(s.lobe) + " \u00b7 " + s.machine;
+  // "2026-11-22T02:34:44Z" -> "2026-11-22 02:34 UTC"
+  const std::string& t = s.started_utc;
+  p.subtitle = t.substr(0, std::min<std::size_t>(10, t.size())) + (t.size() >= 16 ? " " + t.substr(11, 5) : "") +
+               " UTC \u00b7 " + s.status + (s.serial.empty() ? "" : " \u00b7 serial " + s.serial) +
+               (s.note.empty() ? "" : " \u00b7 " + s.note);
+  p.error_um = run.analysis.error_um;
+  p.spread_um = run.analysis.spread_um;
+  p.correction_um = run.correction_um;
+  return p;
+}
+
 }  // namespace gaugeloop

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/run.h"
+#include "storage/run_store.h"
 
 namespace gaugeloop {
 
@@ -27,6 +28,11 @@ struct ErrorPlot {
 // that prints on A4 landscape. Numbers use '.' whatever the C locale. Pure: no I/O.
 // Precondition: every value is finite.
 std::string render_error_plot_svg(const ErrorPlot& plot);
+
+// A stored run's error plot as `runs plot` and the run page draw it: title, subtitle (time,
+// status, serial and note) and the error, spread and correction curves. The tolerance band and
+// the footer are the caller's.
+ErrorPlot run_error_plot(const StoredRun& run);
 
 // Every part of a grinding loop on one sheet (gaugeloop demo --iterations): the lift error
 // profile of each part over the cam degrees, first to last from light to dark, and the

@@ -16,7 +16,6 @@
 #include <ctime>
 #include <exception>
 #include <fstream>
-#include <iterator>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -29,6 +28,7 @@
 #include <vector>
 
 #include "core/guarded_thread.h"
+#include "core/text_file.h"
 #include "core/utc_time.h"
 #include "report/cam_report.h"
 #include "report/run_json.h"
@@ -412,15 +412,7 @@ Result<std::string> resolve_program(const RunStore& store, const std::string& pr
 // run was judged against a symmetric one (the plot draws -t..+t only).
 std::string run_plot_svg(const StoredRun& run) {
   const RunSummary& s = run.summary;
-  ErrorPlot p;
-  p.title =
-      "Run " + std::to_string(s.id) + " \u00b7 " + s.part + " lobe " + std::to_string(s.lobe) + " \u00b7 " + s.machine;
-  p.subtitle = s.started_utc.substr(0, std::min<std::size_t>(10, s.started_utc.size())) + " " +
-               (s.started_utc.size() >= 16 ? s.started_utc.substr(11, 5) : std::string()) + " UTC \u00b7 " + s.status +
-               (s.serial.empty() ? "" : " \u00b7 serial " + s.serial);
-  p.error_um = run.analysis.error_um;
-  p.spread_um = run.analysis.spread_um;
-  p.correction_um = run.correction_um;
+  ErrorPlot p = run_error_plot(run);
   for (const Characteristic& c : run.characteristics) {
     if (c.key == "lift_error" && c.limits.upper && c.limits.lower && *c.limits.upper > 0 &&
         std::fabs(*c.limits.upper + *c.limits.lower) < 1e-9) {
@@ -459,13 +451,6 @@ class ScratchDir {
   explicit ScratchDir(fs::path path) : path_(std::move(path)) {}
   fs::path path_;
 };
-
-Result<std::string> read_whole_file(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (!in.good() && !in.eof()) return make_error(ErrorCode::kIo, "cannot read back " + path.string());
-  return text;
-}
 
 }  // namespace
 
@@ -892,10 +877,11 @@ struct HttpApi::Impl {
       for (const ShaftLayout* layout : named) {
         Result<ShaftRecord> record = load_shaft_record(store, *layout, serial);
         if (!record) return record.error();
-        const bool any = std::any_of(record->lobes.begin(), record->lobes.end(),
-                                     [](const ShaftLobeRecord& l) { return l.run.has_value(); });
-        if (named.size() == 1) return shaft_record_json(*record);
-        if (any) measured.push_back(std::move(*record));
+        if (named.size() == 1) return shaft_record_json(*record);  // the one asked for, measured or not
+        if (std::any_of(record->lobes.begin(), record->lobes.end(),
+                        [](const ShaftLobeRecord& l) { return l.run.has_value(); })) {
+          measured.push_back(std::move(*record));
+        }
       }
       if (measured.size() == 1) return shaft_record_json(measured.front());
       if (measured.empty()) {
@@ -986,7 +972,7 @@ struct HttpApi::Impl {
     if (!dir) return dir.error();
     const fs::path out = dir->path() / name;
     if (Status s = write(out); !s) return s.error();
-    return read_whole_file(out);
+    return read_regular_file(out, "the file written for the answer");
   }
 
   // ---- Pages ----
@@ -1097,17 +1083,30 @@ struct HttpApi::Impl {
     answer(res, writes.trigger_measure(*part, *lobe, *note, *serial, *operator_name));
   }
 
-  void approve(const httplib::Request& req, const std::string& text, httplib::Response& res) {
-    if (!writes.approve) return send_error(res, 501, "this service does not approve tables");
+  // Approve and reject take the same body; `hook` decides, and its errors are answered as they are.
+  using Decision = decltype(HttpWrites::approve);
+  void decide(const httplib::Request& req, const std::string& text, httplib::Response& res, const Decision& hook,
+              const char* not_offered, const char* example) {
+    if (!hook) return send_error(res, 501, not_offered);
     Result<std::int64_t> id = path_id(req.matches[1], "pending table id");
     if (!id) return send_error(res, id.error());
-    Result<json> body = body_object(text, {"by", "note"}, R"({"by": "anna", "note": "checked the lobe"})");
+    Result<json> body = body_object(text, {"by", "note"}, example);
     if (!body) return send_error(res, body.error());
     Result<std::string> by = string_field(*body, "by", true);
     if (!by) return send_error(res, by.error());
     Result<std::string> note = string_field(*body, "note", false);
     if (!note) return send_error(res, note.error());
-    answer(res, writes.approve(*id, *by, *note));
+    answer(res, hook(*id, *by, *note));
+  }
+
+  void approve(const httplib::Request& req, const std::string& text, httplib::Response& res) {
+    decide(req, text, res, writes.approve, "this service does not approve tables",
+           R"({"by": "anna", "note": "checked the lobe"})");
+  }
+
+  void reject(const httplib::Request& req, const std::string& text, httplib::Response& res) {
+    decide(req, text, res, writes.reject, "this service does not reject tables",
+           R"({"by": "anna", "note": "flank error from a worn wheel"})");
   }
 
   void rollback(const httplib::Request&, const std::string& text, httplib::Response& res) {
@@ -1122,31 +1121,6 @@ struct HttpApi::Impl {
     Result<std::string> by = string_field(*body, "by", true);
     if (!by) return send_error(res, by.error());
     answer(res, writes.rollback(*program, *version, *by));
-  }
-
-  // Without the service's hook, done here through the request's own store: rejecting writes
-  // nothing to the control, so it needs neither the service's configuration nor the control.
-  void reject(const httplib::Request& req, const std::string& text, httplib::Response& res) {
-    Result<std::int64_t> id = path_id(req.matches[1], "pending table id");
-    if (!id) return send_error(res, id.error());
-    Result<json> body = body_object(text, {"by", "note"}, R"({"by": "anna", "note": "flank error from a worn wheel"})");
-    if (!body) return send_error(res, body.error());
-    Result<std::string> by = string_field(*body, "by", true);
-    if (!by) return send_error(res, by.error());
-    Result<std::string> note = string_field(*body, "note", false);
-    if (!note) return send_error(res, note.error());
-    const auto hinted = [](Result<json> r) -> Result<json> {
-      if (r || r.error().code != ErrorCode::kNotFound) return r;
-      return make_error(ErrorCode::kNotFound, r.error().message + "; GET /api/nc/pending lists the ids");
-    };
-    if (writes.reject) return answer(res, hinted(writes.reject(*id, *by, *note)));
-    with_store(res, [&](RunStore& store) -> Result<json> {
-      Result<PendingTable> table = store.load_pending(*id);
-      if (!table) return hinted(table.error());
-      if (Status s = store.reject_pending(*id, *by, *note); !s) return s.error();
-      spdlog::info("pending table {} of {} rejected by {}; the table in force stays", *id, table->nc_file, *by);
-      return json{{"rejected", *id}, {"nc_file", table->nc_file}, {"by", *by}};
-    });
   }
 
   // ---- Helpers ----

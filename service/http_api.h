@@ -30,9 +30,8 @@ struct HttpWrites {
       trigger_measure;
   std::function<Result<nlohmann::json>(std::int64_t pending_id, const std::string& by, const std::string& note)>
       approve;
-  // Optional: without it the API rejects through its own connection (RunStore::reject_pending).
-  // The service sets it (Service::reject) to serialise a rejection with the approvals it
-  // pushes (its push slot).
+  // Service::reject: it takes the push slot, so a rejection never lands between an approval's
+  // check and its write.
   std::function<Result<nlohmann::json>(std::int64_t pending_id, const std::string& by, const std::string& note)> reject;
   // `program` as the client gave it: a program name (CAM_INTAKE_L1) or an NC file path.
   std::function<Result<nlohmann::json>(const std::string& program, int table_version, const std::string& by)> rollback;

@@ -398,6 +398,13 @@ MainProgramSource main_program_for_pushes(const ServiceConfig& c) {
   return m;
 }
 
+// Approvals and rejections come over the HTTP API: a pending table that is not there says where
+// the ids are.
+Error with_pending_ids_hint(Error e) {
+  if (e.code == ErrorCode::kNotFound) e.message += "; GET /api/nc/pending lists the ids";
+  return e;
+}
+
 }  // namespace
 
 Result<json> Service::approve(std::int64_t pending_id, const std::string& by, const std::string& note) {
@@ -407,7 +414,7 @@ Result<json> Service::approve(std::int64_t pending_id, const std::string& by, co
   if (!store) return store.error();
   Result<PushOutcome> pushed =
       approve_pending(*store, pending_id, by, note, /*overwrite_edited=*/false, main_program_for_pushes(*config()));
-  if (!pushed) return pushed.error();
+  if (!pushed) return with_pending_ids_hint(pushed.error());
   spdlog::info("pending table {} approved by {}: table version {} of run {} pushed to {}", pending_id, by,
                pushed->table_version, pushed->run_id, pushed->nc_file);
   tell_plant();
@@ -423,7 +430,7 @@ Result<json> Service::reject(std::int64_t pending_id, const std::string& by, con
   Result<RunStore> store = RunStore::open(config()->job.db_path);
   if (!store) return store.error();
   Result<PendingTable> table = store->load_pending(pending_id);
-  if (!table) return table.error();
+  if (!table) return with_pending_ids_hint(table.error());
   if (Status s = store->reject_pending(pending_id, by, note); !s) return s.error();
   spdlog::info("pending table {} of {} rejected by {}; the table in force stays", pending_id, table->nc_file, by);
   return json{{"rejected", pending_id}, {"nc_file", table->nc_file}, {"by", by}};

@@ -502,6 +502,16 @@ TEST_F(CentralTest, AUrlItCannotUseIsRefusedNamingTheWrongPart) {
   EXPECT_EQ(good->database, "plant");
   EXPECT_EQ(good->shown, "postgres://anna:***@[::1]:6543/plant?sslmode=disable");
   EXPECT_EQ(good->url, "postgres://anna:s3cret@[::1]:6543/plant?sslmode=disable&connect_timeout=10");
+  EXPECT_TRUE(good->has_password);
+  // Nor one given as a parameter.
+  Result<CentralUrl> in_query = parse_central_url("postgresql://anna@central/plant?sslmode=require&password=s3cret");
+  ASSERT_TRUE(in_query.ok()) << in_query.error().message;
+  EXPECT_EQ(in_query->shown, "postgresql://anna@central/plant?sslmode=require&password=***");
+  EXPECT_TRUE(in_query->has_password);
+  Result<CentralUrl> none = parse_central_url("postgresql://anna@central/plant?passfile=/etc/gaugeloop/pgpass");
+  ASSERT_TRUE(none.ok()) << none.error().message;
+  EXPECT_FALSE(none->has_password);
+  EXPECT_EQ(none->shown, "postgresql://anna@central/plant?passfile=/etc/gaugeloop/pgpass");
 }
 
 TEST_F(CentralTest, ACentralSchemaNewerThanThisGaugeloopIsRefused) {

@@ -495,6 +495,8 @@ TEST_F(ServiceStateTest, ARejectionLeavesTheTableInForceAndIsRefusedTwice) {
   Result<nlohmann::json> unknown = service.reject(pending_id + 7, "anna", "");
   ASSERT_FALSE(unknown.ok());
   EXPECT_EQ(unknown.error().code, ErrorCode::kNotFound) << unknown.error().message;
+  EXPECT_NE(unknown.error().message.find("GET /api/nc/pending lists the ids"), std::string::npos)
+      << unknown.error().message;
 
   Result<nlohmann::json> rejected = service.reject(pending_id, "anna", "flank error from a worn wheel");
   ASSERT_TRUE(rejected.ok()) << rejected.error().message;
