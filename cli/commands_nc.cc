@@ -11,6 +11,7 @@
 
 #include "cli/cli_common.h"
 #include "cli/embedded_defaults.h"
+#include "cli/measure_options.h"
 #include "core/number_text.h"
 #include "core/text_file.h"
 #include "job/nc_push.h"
@@ -92,9 +93,10 @@ int cmd_history(const HistoryOptions& o) {
   std::printf("%-16s %7s  %-20s  %6s  %-8s  %6s  %9s  %s\n", "program", "version", "pushed (UTC)", "run", "table",
               "blocks", "error um", "reason");
   for (const NcPush& p : *pushes) {
-    std::printf("%-16s %7d  %-20s  %6lld  %-8s  %6s  %9s  %s\n",
-                std::filesystem::path(p.nc_file).stem().string().c_str(), p.table_version, p.pushed_utc.c_str(),
-                static_cast<long long>(p.run_id), p.table.interpolation.empty() ? "-" : p.table.interpolation.c_str(),
+    // Run "-": a program written from the drawing (nc new).
+    std::printf("%-16s %7d  %-20s  %6s  %-8s  %6s  %9s  %s\n", std::filesystem::path(p.nc_file).stem().string().c_str(),
+                p.table_version, p.pushed_utc.c_str(), p.run_id != 0 ? std::to_string(p.run_id).c_str() : "-",
+                p.table.interpolation.empty() ? "-" : p.table.interpolation.c_str(),
                 p.table.block_count ? std::to_string(*p.table.block_count).c_str() : "-",
                 p.table.command_error_um ? format_fixed(*p.table.command_error_um, 3).c_str() : "-", p.reason.c_str());
   }
@@ -224,8 +226,8 @@ int cmd_rollback(const RollbackOptions& o) {
   if (!main) return report_error(main.error());
   Result<PushOutcome> pushed = rollback_to_version(*store, *file, o.version, person(o.by), *main);
   if (!pushed) return report_error(pushed.error());
-  std::printf("%s: table version %d written, the table of version %d (run %lld); it is now the table in force\n",
-              file->c_str(), pushed->table_version, o.version, static_cast<long long>(pushed->run_id));
+  std::printf("%s: table version %d written, the table of version %d (%s); it is now the table in force\n",
+              file->c_str(), pushed->table_version, o.version, origin_text(pushed->run_id).c_str());
   return kExitOk;
 }
 
@@ -258,8 +260,8 @@ int cmd_check(const NcOptions& o) {
         file->c_str(), i.push.table_version, static_cast<long long>(i.run_id), i.created_utc.c_str());
     return kExitOk;
   }
-  std::printf("%s: table version %d as pushed (run %lld, %s)\n", file->c_str(), *last ? (**last).table_version : 0,
-              *last ? static_cast<long long>((**last).run_id) : 0LL, *last ? (**last).pushed_utc.c_str() : "-");
+  std::printf("%s: table version %d as pushed (%s, %s)\n", file->c_str(), *last ? (**last).table_version : 0,
+              *last ? origin_text((**last).run_id).c_str() : "-", *last ? (**last).pushed_utc.c_str() : "-");
   return kExitOk;
 }
 
@@ -359,8 +361,10 @@ void add_decide_options(CLI::App& cmd, DecideOptions& o) {
 }  // namespace
 
 void add_nc_commands(CLI::App& app, CommandAction& action) {
-  CLI::App* nc = app.add_subcommand("nc", "Curve tables on the control: history, diff, rollback, approval.");
+  CLI::App* nc =
+      app.add_subcommand("nc", "Curve tables on the control: a new program, history, diff, rollback, approval.");
   nc->require_subcommand(1);
+  add_nc_new_command(*nc, action);
 
   auto history = std::make_shared<HistoryOptions>();
   CLI::App* history_cmd = nc->add_subcommand("history", "Every table pushed, newest first: version, run, reason.");

@@ -7,6 +7,7 @@
 #include "acquisition/modbus_gauge.h"
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
+#include "job/program_set.h"
 
 namespace gaugeloop {
 
@@ -22,6 +23,18 @@ Result<JobReport> measure_on_gauge_simulator(const Part& part, const LiftTable& 
   Result<JobReport> report = run_measure_job(client, job);
   (*sim)->stop();
   return report;
+}
+
+Result<NewProgramReport> write_first_program(const JobSettings& job, const std::string& part_file,
+                                             const std::function<void(const NewProgramReport&)>& seen) {
+  NewProgramOptions options;
+  options.replace = true;
+  options.by = "the grinding loop";
+  options.from_file = part_file.empty() ? std::string("the built-in sample") : part_file;
+  Result<NewProgramReport> first = write_new_program(job, options);
+  if (!first) return in_step("the first program", first.error());
+  if (seen) seen(*first);
+  return first;
 }
 
 Result<std::vector<LoopIteration>> run_grinding_loop(const LoopSettings& settings,
@@ -42,22 +55,19 @@ Result<std::vector<LoopIteration>> run_grinding_loop(const LoopSettings& setting
   const double window_centre = settings.job.analysis.base_circle_center_deg;
   const double window_half = settings.job.analysis.base_circle_half_width_deg;
 
+  Result<NewProgramReport> first = write_first_program(settings.job, settings.part_file, settings.on_new_program);
+  if (!first) return first.error();
   std::vector<LoopIteration> done;
-  std::filesystem::path table_in_force;  // the NC file last pushed by this loop
-  int version_in_force = 0;
+  std::filesystem::path table_in_force = first->nc_file;  // the NC file last pushed by this loop
+  int version_in_force = first->table_version;
   for (int i = 0; i <= settings.iterations; ++i) {
     LoopIteration it;
     it.iteration = i;
-    CommandedPath commanded = *design_path;
-    if (!table_in_force.empty()) {
-      Result<CommandedPath> from_nc = commanded_path_from_program(table_in_force);
-      if (!from_nc) return from_nc.error();
-      commanded = std::move(*from_nc);
-      it.ground_from = table_in_force.filename().string() + " v" + std::to_string(version_in_force);
-    } else {
-      it.ground_from = "design";
-    }
-    Result<GroundPart> ground = grind_part(part, commanded, settings.machine, i);
+    Result<CommandedPath> commanded = commanded_path_from_program(table_in_force);
+    if (!commanded) return commanded.error();
+    it.ground_from =
+        table_in_force.filename().string() + " v" + std::to_string(version_in_force) + (i == 0 ? " new" : "");
+    Result<GroundPart> ground = grind_part(part, *commanded, settings.machine, i);
     if (!ground) return ground.error();
     Result<GroundPart> floor = grind_part(part, *design_path, floor_model, i);
     if (!floor) return floor.error();
@@ -76,7 +86,7 @@ Result<std::vector<LoopIteration>> run_grinding_loop(const LoopSettings& setting
     gauge.seed = settings.gauge.seed + static_cast<std::uint64_t>(i);
     gauge.ground_reading_mm = ground->reading_mm;
     JobSettings job = settings.job;
-    job.build_on_table_in_force = !table_in_force.empty();
+    job.build_on_table_in_force = true;
     if (job.note.empty()) job.note = "virtual grinder part " + std::to_string(i) + ", ground from " + it.ground_from;
     Result<JobReport> report =
         measure_on_gauge_simulator(part, settings.job.design, gauge, settings.response_timeout, job);

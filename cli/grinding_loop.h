@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "job/measure_job.h"
+#include "job/nc_new.h"
 #include "simulator/gauge_simulator.h"
 #include "simulator/virtual_grinder.h"
 
@@ -26,12 +27,18 @@ struct LoopSettings {
   SimulatorSettings gauge;
   std::chrono::milliseconds response_timeout{200};
   int iterations = 3;  // compensation steps; iterations + 1 parts are ground and measured
+  // Part 0 is ground from the first program written from the drawing (write_new_program,
+  // replacing any history of the program, as a shop starting the part again would), read
+  // back from the NC directory as every later part's is. `on_new_program` (may be empty)
+  // sees it; `part_file` names the drawing in the history.
+  std::function<void(const NewProgramReport&)> on_new_program;
+  std::string part_file;
 };
 
 // One part of the loop.
 struct LoopIteration {
   int iteration = 0;        // 0: the first part, ground before any compensation
-  std::string ground_from;  // "design" or the NC file with its table version
+  std::string ground_from;  // the NC file with its table version ("new": written from the drawing)
   JobReport job;            // the measurement and what became of its table
   TrueLiftError part;       // the part as ground (no gauge noise)
   TrueLiftError floor;      // the same part ground from a perfect table: vibration only
@@ -47,6 +54,12 @@ struct LoopIteration {
 // simulator is stopped before returning. Errors: the simulator's and the job's.
 Result<JobReport> measure_on_gauge_simulator(const Part& part, const LiftTable& design, SimulatorSettings gauge,
                                              std::chrono::milliseconds response_timeout, const JobSettings& job);
+
+// A loop's first program: written from the drawing of `job`'s part into its NC directory
+// (write_new_program, replacing any history: the loop starts the part again), shown to `seen`
+// (may be empty). Its NC file and version are what part 0 is ground from.
+Result<NewProgramReport> write_first_program(const JobSettings& job, const std::string& part_file,
+                                             const std::function<void(const NewProgramReport&)>& seen);
 
 // Runs the loop; `on_part` (may be empty) sees each iteration as it ends. A held or refused
 // correction does not stop the loop: the next part is ground with the table in force, as on

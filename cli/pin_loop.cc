@@ -53,23 +53,20 @@ Result<std::vector<PinLoopIteration>> run_pin_grinding_loop(
   const PinMachineErrorModel floor_model = vibration_only(settings.machine);
   const PinGaugeFrame frame = pin_gauge_frame(settings.job);
 
+  Result<NewProgramReport> first = write_first_program(settings.job, settings.part_file, settings.on_new_program);
+  if (!first) return first.error();
   std::vector<PinLoopIteration> done;
-  std::filesystem::path table_in_force;  // the X table program last pushed by this loop
-  int version_in_force = 0;
+  std::filesystem::path table_in_force = first->nc_file;  // the X table program last pushed by this loop
+  int version_in_force = first->table_version;
   for (int i = 0; i <= settings.iterations; ++i) {
     PinLoopIteration it;
     it.iteration = i;
-    PinCommandedPath commanded = *design_path;
-    if (!table_in_force.empty()) {
-      Result<PinCommandedPath> from_nc =
-          pin_commanded_path_from_programs(pin, table_in_force, y_table_program_path(table_in_force));
-      if (!from_nc) return from_nc.error();
-      commanded = std::move(*from_nc);
-      it.ground_from = table_in_force.filename().string() + " v" + std::to_string(version_in_force);
-    } else {
-      it.ground_from = "design";
-    }
-    Result<GroundPin> ground = grind_pin(pin, commanded, settings.machine, i);
+    Result<PinCommandedPath> commanded =
+        pin_commanded_path_from_programs(pin, table_in_force, y_table_program_path(table_in_force));
+    if (!commanded) return commanded.error();
+    it.ground_from =
+        table_in_force.filename().string() + " v" + std::to_string(version_in_force) + (i == 0 ? " new" : "");
+    Result<GroundPin> ground = grind_pin(pin, *commanded, settings.machine, i);
     if (!ground) return ground.error();
     Result<GroundPin> floor = grind_pin(pin, *design_path, floor_model, i);
     if (!floor) return floor.error();
@@ -85,7 +82,7 @@ Result<std::vector<PinLoopIteration>> run_pin_grinding_loop(
     gauge.gauge_offset_mm = 0.0;
     gauge.ground_reading_mm = ground->gauge_reading_mm;
     JobSettings job = settings.job;
-    job.build_on_table_in_force = !table_in_force.empty();
+    job.build_on_table_in_force = true;
     if (job.note.empty()) job.note = "virtual grinder pin " + std::to_string(i) + ", ground from " + it.ground_from;
     Result<JobReport> report =
         measure_on_gauge_simulator(frame.part, frame.design, gauge, settings.response_timeout, job);

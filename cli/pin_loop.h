@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "job/measure_job.h"
+#include "job/nc_new.h"
 #include "simulator/gauge_simulator.h"
 #include "simulator/pin_grinder.h"
 
@@ -44,11 +45,15 @@ struct PinLoopSettings {
   SimulatorSettings gauge;
   std::chrono::milliseconds response_timeout{200};
   int iterations = 3;  // compensation steps; iterations + 1 pins are ground and measured
+  // Pin 0 is ground from the first program written from the drawing, as the lobe's loop
+  // (LoopSettings::on_new_program).
+  std::function<void(const NewProgramReport&)> on_new_program;
+  std::string part_file;
 };
 
 struct PinLoopIteration {
   int iteration = 0;
-  std::string ground_from;  // "design" or the NC file with its table version
+  std::string ground_from;  // the NC file with its table version ("new": written from the drawing)
   JobReport job;
   TruePinError part;             // the pin as ground (no gauge noise)
   TruePinError floor;            // the same pin ground from a perfect path: vibration only

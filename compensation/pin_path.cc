@@ -197,10 +197,15 @@ std::vector<double> pin_grinding_point_speed_mm_per_min(const PinPath& path, con
 Result<WorkSpeedPlan> plan_pin_work_speed(const PinPath& path, const PinGeometry& pin,
                                           const WorkSpeedSettings& settings) {
   if (Status s = validate(pin); !s.ok()) return s.error();
+  if (settings.hold != SpeedHold::kLobe) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "speed program: a pin has no flanks; hold its grinding-point speed all round with "
+                      "[speed] lobe_speed_mm_per_min (hold = \"lobe\")");
+  }
   const std::size_t n = path.size();
   SpeedPlanRows rows;
   rows.c_step_deg = path.c_step_deg;
-  rows.held.assign(n, true);  // a pin has no base circle: the whole turn is held
+  rows.target_mm_per_min.assign(n, settings.lobe_speed_mm_per_min);  // a pin has no base circle: all held
   rows.contact_arc_mm_per_deg.resize(n);
   for (std::size_t k = 0; k < n; ++k) {
     // v at 1 rpm is the arc per degree times 360.
@@ -212,7 +217,7 @@ Result<WorkSpeedPlan> plan_pin_work_speed(const PinPath& path, const PinGeometry
     rows.d_dc_mm_per_deg.push_back(path.dy_dc_mm_per_deg);
     rows.d2_dc2_mm_per_deg2.push_back(path.d2y_dc2_mm_per_deg2);
   }
-  return plan_work_speed_rows(rows, settings.lobe_speed_mm_per_min, settings);
+  return plan_work_speed_rows(rows, settings);
 }
 
 }  // namespace gaugeloop

@@ -78,12 +78,24 @@ Status validate(const WorkSpeedSettings& s) {
        {in_range(s.base_speed_rpm, 0.0, 1000.0, "[speed] base_speed_rpm", " rpm"),
         in_range(s.lobe_speed_mm_per_min, 0.0, 1e5, "[speed] lobe_speed_mm_per_min", " mm/min"),
         in_range(s.lobe_threshold_mm, 0.0, 10.0, "[speed] lobe_threshold_mm", " mm"),
+        in_range(s.grinding_point_speed_mm_per_min, 0.0, 1e5, "[speed] grinding_point_speed_mm_per_min", " mm/min"),
+        in_range(s.flank_speed_mm_per_min, 0.0, 1e5, "[speed] flank_speed_mm_per_min", " mm/min"),
         in_range(s.c_acceleration_max_deg_per_s2, 0.0, 1e7, "[speed] c_acceleration_max_deg_per_s2", " deg/s^2"),
         in_range(s.x_velocity_max_mm_per_s, 0.0, 1e6, "[nc] x_velocity_max_mm_per_s", " mm/s"),
         in_range(s.x_acceleration_max_mm_per_s2, 0.0, 1e8, "[nc] x_acceleration_max_mm_per_s2", " mm/s^2")}) {
     if (!st) return st;
   }
   return {};
+}
+
+std::string_view speed_hold_name(SpeedHold hold) {
+  switch (hold) {
+    case SpeedHold::kLobe:
+      return "lobe";
+    case SpeedHold::kFlanks:
+      return "flanks";
+  }
+  return "?";
 }
 
 double cycle_time_s(const WorkSpeedProgram& program) {
@@ -97,11 +109,11 @@ double cycle_time_s(const WorkSpeedProgram& program) {
   return t;
 }
 
-Result<WorkSpeedPlan> plan_work_speed_rows(const SpeedPlanRows& rows, double target_mm_per_min,
-                                           const WorkSpeedSettings& s) {
+Result<WorkSpeedPlan> plan_work_speed_rows(const SpeedPlanRows& rows, const WorkSpeedSettings& s) {
   if (Status st = validate(s); !st) return st.error();
   const size_t n = rows.contact_arc_mm_per_deg.size();
-  bool sizes_agree = rows.held.size() == n && rows.d_dc_mm_per_deg.size() == rows.d2_dc2_mm_per_deg2.size();
+  bool sizes_agree =
+      rows.target_mm_per_min.size() == n && rows.d_dc_mm_per_deg.size() == rows.d2_dc2_mm_per_deg2.size();
   for (size_t a = 0; sizes_agree && a < rows.d_dc_mm_per_deg.size(); ++a) {
     sizes_agree = rows.d_dc_mm_per_deg[a].size() == n && rows.d2_dc2_mm_per_deg2[a].size() == n;
   }
@@ -117,14 +129,14 @@ Result<WorkSpeedPlan> plan_work_speed_rows(const SpeedPlanRows& rows, double tar
   }
   const double a_half = 0.5 * s.x_acceleration_max_mm_per_s2;
   const double w_base = 6.0 * s.base_speed_rpm;
-  const double v_target_mm_per_s = target_mm_per_min / 60.0;
 
   // 1. The ceiling on omega^2, (deg/s)^2.
   std::vector<double> w2(n);
   for (size_t k = 0; k < n; ++k) {
     double cap = w_base * w_base;
     const double arc = rows.contact_arc_mm_per_deg[k];
-    if (rows.held[k] && arc > 0.0) cap = std::min(cap, std::pow(v_target_mm_per_s / arc, 2));
+    const double v_target_mm_per_s = rows.target_mm_per_min[k] / 60.0;
+    if (v_target_mm_per_s > 0.0 && arc > 0.0) cap = std::min(cap, std::pow(v_target_mm_per_s / arc, 2));
     for (size_t a = 0; a < rows.d_dc_mm_per_deg.size(); ++a) {
       const double v1 = std::abs(rows.d_dc_mm_per_deg[a][k]);
       if (v1 > 0.0) cap = std::min(cap, std::pow(s.x_velocity_max_mm_per_s / v1, 2));
@@ -195,16 +207,25 @@ Result<WorkSpeedPlan> plan_work_speed(const MachinePath& path, const Part& part,
   SpeedPlanRows rows;
   rows.c_step_deg = h;
   rows.contact_arc_mm_per_deg.resize(n);
-  rows.held.resize(n);
+  rows.target_mm_per_min.resize(n);
+  const double x_max = *std::max_element(path.x_mm.begin(), path.x_mm.end());
   for (size_t k = 0; k < n; ++k) {
     rows.contact_arc_mm_per_deg[k] =
         contact_arc_mm_per_deg(path.x_mm[k], path.dx_dc_mm_per_deg[k], path.d2x_dc2_mm_per_deg2[k],
                                part.base_circle_radius_mm, part.wheel_radius_mm);
-    rows.held[k] = path.x_mm[k] > s.lobe_threshold_mm;
+    switch (s.hold) {
+      case SpeedHold::kLobe:
+        rows.target_mm_per_min[k] = path.x_mm[k] > s.lobe_threshold_mm ? s.lobe_speed_mm_per_min : 0.0;
+        break;
+      case SpeedHold::kFlanks:
+        rows.target_mm_per_min[k] =
+            is_flank_row(path.x_mm[k], x_max) ? s.flank_speed_mm_per_min : s.grinding_point_speed_mm_per_min;
+        break;
+    }
   }
   rows.d_dc_mm_per_deg = {path.dx_dc_mm_per_deg};
   rows.d2_dc2_mm_per_deg2 = {path.d2x_dc2_mm_per_deg2};
-  return plan_work_speed_rows(rows, s.lobe_speed_mm_per_min, s);
+  return plan_work_speed_rows(rows, s);
 }
 
 }  // namespace gaugeloop

@@ -7,6 +7,7 @@
 // target there, which is what gives the flanks their finish (docs/variable_speed.md).
 #pragma once
 
+#include <string_view>
 #include <vector>
 
 #include "compensation/wheel_path.h"
@@ -45,16 +46,38 @@ std::vector<double> grinding_point_speed_mm_per_min(const MachinePath& path, con
 Result<std::vector<double>> grinding_point_speed_mm_per_min(const MachinePath& path, const Part& part,
                                                             const WorkSpeedProgram& program);
 
+// Where the speed program holds the grinding-point speed at a target.
+enum class SpeedHold {
+  // The whole lobe (X above lobe_threshold_mm: flanks and nose) at lobe_speed_mm_per_min; the
+  // base circle at base_speed_rpm.
+  kLobe,
+  // As the variable-speed camshaft paper ground: the whole turn at grinding_point_speed_mm_per_min
+  // (base circle and nose too), the flanks (rise and return: X between 5 % and 95 % of its
+  // largest value, is_flank_row) at flank_speed_mm_per_min. A flank speed equal to the other is
+  // the paper's baseline, one grinding-point speed all round.
+  kFlanks,
+};
+std::string_view speed_hold_name(SpeedHold hold);  // "lobe", "flanks"
+
+// The rise and return of a lobe: X between 5 % and 95 % of its largest value over the turn,
+// neither base circle nor nose. The flank figure of the surface model reads the same rows.
+inline bool is_flank_row(double x_mm, double x_max_mm) { return x_mm > 0.05 * x_max_mm && x_mm < 0.95 * x_max_mm; }
+
 // What the speed program is asked to do. Messages name the keys as the files have them: the
 // part file's `[speed]` for the lobe's settings, the service's `[nc]` for the slide's limits
 // (docs/variable_speed.md).
 struct WorkSpeedSettings {
+  SpeedHold hold = SpeedHold::kLobe;
   // C speed on the base circle, and the most C ever turns: the program only slows down.
   double base_speed_rpm = 60.0;
-  // The grinding-point speed held where the wheel is on the lobe (X above lobe_threshold_mm),
-  // flanks and nose; the variable-speed camshaft paper's slow-down took the flanks to 2000 mm/min.
+  // kLobe: the grinding-point speed held where the wheel is on the lobe (X above
+  // lobe_threshold_mm), flanks and nose; the variable-speed camshaft paper's slow-down took
+  // the flanks to 2000 mm/min.
   double lobe_speed_mm_per_min = 2000.0;
   double lobe_threshold_mm = 0.01;
+  // kFlanks: the grinding-point speed held on the base circle and the nose, and on the flanks.
+  double grinding_point_speed_mm_per_min = 8000.0;
+  double flank_speed_mm_per_min = 2000.0;
   // The work spindle's acceleration limit (either sense).
   double c_acceleration_max_deg_per_s2 = 1000.0;
   // The wheel slide's limits, as for the table guards.
@@ -80,8 +103,8 @@ struct WorkSpeedPlan {
 
 // The speed program for `path` (machine frame, with its derivatives, as compute_machine_path
 // gives it; uniform grid over one turn). In omega = dC/dt (deg/s), per row:
-//  1. a ceiling: 6 base_speed_rpm; on the lobe also lobe_speed / (ds/dC) (the target
-//     grinding-point speed); the slide's velocity |X'| omega <= v_max; and half the slide's
+//  1. a ceiling: 6 base_speed_rpm; where the speed is held (SpeedHold) also target / (ds/dC),
+//     the target grinding-point speed there; the slide's velocity |X'| omega <= v_max; and half the slide's
 //     acceleration from the path's curvature, |X''| omega^2 <= a_max / 2.
 //  2. the highest profile under that ceiling whose changes keep the acceleration of C,
 //     omega d(omega)/dC = d(omega^2)/dC / 2, within the C limit and within the other half of the
@@ -102,21 +125,21 @@ struct SpeedPlanRows {
   double c_step_deg = 0.0;
   // How far the grinding point runs over the work's surface per degree of C, mm/deg.
   std::vector<double> contact_arc_mm_per_deg;
-  // Rows where the grinding-point speed is held at the target (the lobe; every row of a pin).
-  std::vector<bool> held;
+  // The grinding-point speed held at each row, mm/min; 0 where none is (a lobe's base circle
+  // under SpeedHold::kLobe).
+  std::vector<double> target_mm_per_min;
   // The following axes' derivatives, per axis and row (X; X and Y for a C-X-Y pin). Each
   // axis is kept within the slide's limits of the settings: the slides share them.
   std::vector<std::vector<double>> d_dc_mm_per_deg;
   std::vector<std::vector<double>> d2_dc2_mm_per_deg2;
 };
 
-// The ceiling per row (6 base_speed_rpm; target / arc on the held rows; each axis's velocity
-// and half its acceleration), then the forward and backward passes on omega^2 as
+// The ceiling per row (6 base_speed_rpm; target / arc where a target is held; each axis's
+// velocity and half its acceleration), then the forward and backward passes on omega^2 as
 // plan_work_speed describes; the plan's largest_x_* figures are the largest over the axes.
-// `target_mm_per_min` is the grinding-point speed held. Errors: as validate; kInvalidInput
-// for rows of differing sizes, fewer than 4, or a step that does not make one turn.
-Result<WorkSpeedPlan> plan_work_speed_rows(const SpeedPlanRows& rows, double target_mm_per_min,
-                                           const WorkSpeedSettings& settings);
+// Errors: as validate; kInvalidInput for rows of differing sizes, fewer than 4, or a step
+// that does not make one turn.
+Result<WorkSpeedPlan> plan_work_speed_rows(const SpeedPlanRows& rows, const WorkSpeedSettings& settings);
 
 // One turn's time under `program`, s: the trapezoid rule over dt = dC / omega.
 double cycle_time_s(const WorkSpeedProgram& program);

@@ -1,6 +1,7 @@
 // toml++ reading of part files, with the file, line and key in every message.
 #include "config/part_file.h"
 
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <sstream>
@@ -8,6 +9,7 @@
 #include "compensation/pin_kinematics.h"
 #include "config/toml_reader.h"
 #include "core/text_file.h"
+#include "nc_out/infeed.h"
 
 namespace gaugeloop {
 namespace {
@@ -203,20 +205,71 @@ LobeTolerances read_tolerances(TomlReader& top, std::string_view source) {
   return t;
 }
 
-// [speed]: absent means one work speed. Ranges as validate(WorkSpeedSettings).
+// [speed]: absent means one work speed. Ranges as validate(WorkSpeedSettings). `hold` says
+// where the grinding-point speed is held: "lobe" (lobe_speed_mm_per_min on the lobe) or
+// "flanks" (grinding_point_speed_mm_per_min all round, flank_speed_mm_per_min on the rise and
+// return); the other hold's keys are refused by name.
 std::optional<WorkSpeedSettings> read_speed(TomlReader& top, std::string_view source) {
   const toml::table* table = top.subtable("speed");
   if (table == nullptr) return std::nullopt;
   TomlReader r(*table, source, "speed.");
-  r.allow_only({"base_speed_rpm", "lobe_speed_mm_per_min", "lobe_threshold_mm", "c_acceleration_max_deg_per_s2"});
+  r.allow_only({"hold", "base_speed_rpm", "lobe_speed_mm_per_min", "lobe_threshold_mm",
+                "grinding_point_speed_mm_per_min", "flank_speed_mm_per_min", "c_acceleration_max_deg_per_s2"});
   WorkSpeedSettings s;
+  const std::string hold = r.choice("hold", std::string("lobe"), {"lobe", "flanks"});
+  s.hold = hold == "flanks" ? SpeedHold::kFlanks : SpeedHold::kLobe;
   s.base_speed_rpm = r.number("base_speed_rpm", s.base_speed_rpm, 0.0, 1000.0, true);
-  s.lobe_speed_mm_per_min = r.number("lobe_speed_mm_per_min", std::nullopt, 0.0, 1e5, true);
-  s.lobe_threshold_mm = r.number("lobe_threshold_mm", s.lobe_threshold_mm, 0.0, 10.0, true);
+  const bool flanks = s.hold == SpeedHold::kFlanks;
+  const std::array<std::string_view, 2> lobe_keys{"lobe_speed_mm_per_min", "lobe_threshold_mm"};
+  const std::array<std::string_view, 2> flank_keys{"grinding_point_speed_mm_per_min", "flank_speed_mm_per_min"};
+  for (std::string_view key : flanks ? lobe_keys : flank_keys) {
+    if (r.has(key) && !r.error) {
+      r.fail(r.where(key) + ": not used with hold = \"" + hold + "\"; " +
+             (flanks ? "give grinding_point_speed_mm_per_min and flank_speed_mm_per_min"
+                     : "give lobe_speed_mm_per_min, or set hold = \"flanks\"") +
+             " (docs/variable_speed.md)");
+    }
+  }
+  if (flanks) {
+    s.grinding_point_speed_mm_per_min = r.number("grinding_point_speed_mm_per_min", std::nullopt, 0.0, 1e5, true);
+    s.flank_speed_mm_per_min = r.number("flank_speed_mm_per_min", std::nullopt, 0.0, 1e5, true);
+  } else {
+    s.lobe_speed_mm_per_min = r.number("lobe_speed_mm_per_min", std::nullopt, 0.0, 1e5, true);
+    s.lobe_threshold_mm = r.number("lobe_threshold_mm", s.lobe_threshold_mm, 0.0, 10.0, true);
+  }
   s.c_acceleration_max_deg_per_s2 =
       r.number("c_acceleration_max_deg_per_s2", s.c_acceleration_max_deg_per_s2, 0.0, 1e7, true);
   if (r.error) top.fail(r.error->message);
   return s;
+}
+
+// [grinding]: the allowance and the passes; absent: GrindingCycle's defaults. Ranges and
+// consistency as validate(GrindingCycle), with the file, line and key.
+GrindingCycle read_grinding(TomlReader& top, std::string_view source) {
+  GrindingCycle g;
+  const toml::table* table = top.subtable("grinding");
+  if (table == nullptr) return g;
+  TomlReader r(*table, source, "grinding.");
+  r.allow_only({"stock_mm", "air_gap_mm", "roughing_infeed_mm_per_turn", "finishing_stock_mm",
+                "finishing_infeed_mm_per_turn", "spark_out_turns"});
+  g.stock_mm = r.number("stock_mm", g.stock_mm, 0.0, 5.0);
+  g.air_gap_mm = r.number("air_gap_mm", g.air_gap_mm, 0.0, 5.0);
+  g.roughing_infeed_mm_per_turn =
+      r.number("roughing_infeed_mm_per_turn", g.roughing_infeed_mm_per_turn, 0.0, 1.0, true);
+  g.finishing_stock_mm = r.number("finishing_stock_mm", g.finishing_stock_mm, 0.0, 5.0);
+  g.finishing_infeed_mm_per_turn =
+      r.number("finishing_infeed_mm_per_turn", g.finishing_infeed_mm_per_turn, 0.0, 1.0, true);
+  g.spark_out_turns = static_cast<int>(r.integer("spark_out_turns", g.spark_out_turns, 0, 100));
+  if (!r.error && g.finishing_stock_mm > g.stock_mm) {
+    r.fail(r.where(r.has("finishing_stock_mm") ? "finishing_stock_mm" : "stock_mm") + ": finishing_stock_mm " +
+           number_text(g.finishing_stock_mm) + " mm is more than stock_mm " + number_text(g.stock_mm) +
+           " mm; the finishing stock is the last part of the stock: make it at most stock_mm");
+  }
+  if (!r.error) {
+    if (Status s = validate(g); !s) r.fail(at(source, *table) + ": " + s.error().message);
+  }
+  if (r.error) top.fail(r.error->message);
+  return g;
 }
 
 // [pin.tolerance]: absent means nothing is judged. Read as the lobe's [tolerance].
@@ -248,7 +301,7 @@ Result<PartFile> parse_pin_part(const toml::table& table, std::string_view sourc
     r.fail(r.where(key) + ": a lobe's key, and this file describes a crankpin ([pin]); " + instead +
            " (docs/parts.md)");
   }
-  r.allow_only({"name", "pin_number", "nc_program", "speed", "pin"});
+  r.allow_only({"name", "pin_number", "nc_program", "speed", "pin", "grinding"});
   PartFile out;
   Part& p = out.part;
   p.name = r.text("name", std::nullopt);
@@ -293,6 +346,12 @@ Result<PartFile> parse_pin_part(const toml::table& table, std::string_view sourc
            "speed program; remove [speed], or grind the pin with mode = \"c-x\"");
   }
   out.speed = read_speed(r, source);
+  out.grinding = read_grinding(r, source);
+  if (!r.error && out.speed && out.speed->hold != SpeedHold::kLobe) {
+    r.fail(r.where("speed") +
+           ": hold = \"flanks\" is for a cam lobe; a pin has no flanks: hold its grinding-point speed all round "
+           "with lobe_speed_mm_per_min");
+  }
   if (r.error) return *r.error;
   p.wheel_radius_mm = pin.wheel_radius_mm;
   out.pin = pin;
@@ -310,7 +369,7 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
   TomlReader r(table, source_name);
   r.allow_only({"name", "lobe", "lift_table", "follower", "follower_radius_mm", "base_circle_radius_mm",
                 "wheel_radius_mm", "rotation_sense", "c_offset_deg", "probe_offset_deg", "nc_program", "tolerance",
-                "speed"});
+                "speed", "grinding"});
   PartFile out;
   Part& p = out.part;
   p.name = r.text("name", std::nullopt);
@@ -340,6 +399,7 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
   }
   p.tolerances = read_tolerances(r, source_name);
   out.speed = read_speed(r, source_name);
+  out.grinding = read_grinding(r, source_name);
   if (r.error) return *r.error;
   const std::filesystem::path lt(table_path);
   p.lift_table = lt.is_absolute() ? lt : base_dir / lt;

@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "compensation/work_speed.h"
+#include "core/grinding_cycle.h"
 #include "core/part.h"
 #include "core/pin.h"
 #include "core/result.h"
@@ -27,6 +28,9 @@ struct PartFile {
   // table, follower and lobe tolerances are unset. A pin's [speed] is for C-X only, where the
   // grinding-point speed held is lobe_speed_mm_per_min (C-X-Y keeps it constant anyway).
   std::optional<PinGeometry> pin;
+  // [grinding]: the allowance per side and the passes that grind it off, rendered into the
+  // main program (docs/parts.md). Absent: the defaults of GrindingCycle.
+  GrindingCycle grinding;
 };
 
 // Parses part TOML. `source_name` is used in messages; a relative `lift_table` is resolved

@@ -921,6 +921,7 @@ JobSettings job_for(const ServiceConfig& config, const ServicePart& part) {
   js.design = part.design;
   js.nc_program = part.file.nc_program;
   js.speed = part.file.speed;
+  js.cycle = part.file.grinding;
   js.pin = part.file.pin;
   if (js.speed && !config.nc_main_speed_template.empty()) {
     js.nc_main_template = config.nc_main_speed_template;

@@ -29,6 +29,7 @@
 #include "core/verdict_text.h"
 #include "job/nc_push.h"
 #include "job/pin_files.h"
+#include "job/program_set.h"
 #include "job/speed_files.h"
 #include "job/tolerance_settings.h"
 #include "nc_out/main_program.h"
@@ -40,144 +41,6 @@
 namespace gaugeloop {
 namespace {
 
-// The exact wheel path the tables are chosen against and checked on: 36,000 rows.
-constexpr double kFinePathStepDeg = 0.01;
-
-Error in_step(const std::string& step, Error e) {
-  e.message = std::string(step) + ": " + e.message;
-  return e;
-}
-
-// The speed program is planned on the fine path (0.01 deg) and written from every 0.5 deg of
-// it: the feed blocks are tens of degrees long, and the writer's search over block ends grows
-// with the square of the points a block may span.
-constexpr double kSpeedProgramStepDeg = 0.5;
-
-// A speed program planned for a path, and its feed blocks as the control will run them.
-struct BuiltSpeed {
-  WorkSpeedPlan plan;
-  WorkSpeedProgram written;  // the plan's program on the kSpeedProgramStepDeg grid
-  SpeedProfile profile;
-};
-
-// A table and the exact path it was chosen against, and its speed program when there is one.
-struct BuiltTable {
-  SampledPath fine;
-  CurveTable table;
-  std::optional<BuiltSpeed> speed;
-  // A C-X-Y pin's Y table and the exact Y path it was chosen against.
-  std::optional<SampledPath> y_fine;
-  std::optional<CurveTable> y_table;
-};
-
-// The lobe's speed program on `path` (JobSettings::speed), within the slide's limits of the
-// axis guards. Errors: kInvalidInput for settings out of range (naming the key); kRefused
-// when no feed profile keeps the speed bound at the control's block rate.
-WorkSpeedSettings speed_settings(const JobSettings& s) {
-  WorkSpeedSettings ws = *s.speed;
-  ws.x_velocity_max_mm_per_s = s.axis_limits.x_velocity_max_mm_per_s;
-  ws.x_acceleration_max_mm_per_s2 = s.axis_limits.x_acceleration_max_mm_per_s2;
-  return ws;
-}
-
-// The feed blocks of a planned speed program.
-Result<BuiltSpeed> speed_from_plan(Result<WorkSpeedPlan> plan, const JobSettings& s) {
-  if (!plan) return plan.error();
-  BuiltSpeed out;
-  const auto every = static_cast<std::size_t>(std::lround(kSpeedProgramStepDeg / plan->program.c_step_deg));
-  out.written.c_step_deg = plan->program.c_step_deg * static_cast<double>(every);
-  for (std::size_t k = 0; k < plan->program.speed_rpm.size(); k += every) {
-    out.written.speed_rpm.push_back(plan->program.speed_rpm[k]);
-  }
-  Result<SpeedProfile> profile = write_speed_profile(out.written, s.speed_profile);
-  if (!profile) return profile.error();
-  out.plan = std::move(*plan);
-  out.profile = std::move(*profile);
-  return out;
-}
-
-// The wheel path of `lift_mm` on the fine C grid (compute_machine_path: exact rows), the
-// axis guards on it, the table the settings ask for, and the guards on the table as the NC
-// will interpolate it. Refusals (a wheel that does not fit, a limit broken) are kRefused.
-// The table the settings ask for on the exact path `fine` of one following axis, with the
-// axis guards on the path and on the table as the NC will interpolate it.
-Result<CurveTable> table_for_path(const SampledPath& fine, const AxisLimits& limits, const JobSettings& s,
-                                  const TablePointsInForce* in_force, const std::string& what) {
-  if (Status g = check_path_guards(fine, limits); !g) return in_step(what + " path", g.error());
-  const AdaptiveSettings adaptive{s.table_choice.bound_um, s.table_choice.max_step_deg};
-  Result<CurveTable> table = [&]() -> Result<CurveTable> {
-    switch (s.table_kind) {
-      case TableKind::kAuto:
-        return write_default_table(fine, s.table_choice, s.table_format, in_force);
-      case TableKind::kLinear:
-        return write_linear_table(fine, s.table_step_deg, s.table_format);
-      case TableKind::kSpline:
-        return write_spline_table(fine, s.table_step_deg, s.table_format);
-      case TableKind::kAdaptiveLinear:
-        return write_adaptive_linear_table(fine, adaptive, s.table_format);
-      case TableKind::kAdaptiveSpline:
-        return write_adaptive_spline_table(fine, adaptive, s.table_format);
-    }
-    return make_error(ErrorCode::kInternal, "unknown table kind");
-  }();
-  if (!table) return in_step(what + " table", table.error());
-  if (Status g = check_table_guards(*table, fine, limits); !g) return in_step(what + " table", g.error());
-  return table;
-}
-
-SampledPath fine_path(std::vector<double> x, std::vector<double> dx, std::vector<double> d2x) {
-  SampledPath out;
-  out.c_step_deg = kFinePathStepDeg;
-  out.x_mm = std::move(x);
-  out.dx_dc_mm_per_deg = std::move(dx);
-  out.d2x_dc2_mm_per_deg2 = std::move(d2x);
-  return out;
-}
-
-Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings& s,
-                               const TablePointsInForce* in_force = nullptr) {
-  Result<MachinePath> path = compute_machine_path(lift_mm, s.part, kFinePathStepDeg);
-  if (!path) return in_step("wheel path", path.error());
-  BuiltTable out;
-  if (s.speed) {
-    Result<BuiltSpeed> speed = speed_from_plan(plan_work_speed(*path, s.part, speed_settings(s)), s);
-    if (!speed) return in_step("speed program", speed.error());
-    out.speed = std::move(*speed);
-  }
-  out.fine = fine_path(std::move(path->x_mm), std::move(path->dx_dc_mm_per_deg), std::move(path->d2x_dc2_mm_per_deg2));
-  Result<CurveTable> table = table_for_path(out.fine, s.axis_limits, s, in_force, "wheel");
-  if (!table) return table.error();
-  out.table = std::move(*table);
-  return out;
-}
-
-// A pin's tables for `correction_um` (pin frame): the path moved along the grinding normal and
-// split onto X (and Y), the X table (keeping the points in force, as a lobe's), the Y table in
-// C-X-Y, and in C-X the speed program that holds the grinding-point speed.
-Result<BuiltTable> build_pin_table(const DegreeTable& correction_um, const JobSettings& s,
-                                   const TablePointsInForce* in_force = nullptr) {
-  Result<PinPath> path = corrected_pin_path(*s.pin, correction_um, kFinePathStepDeg);
-  if (!path) return in_step("pin path", path.error());
-  BuiltTable out;
-  if (s.speed) {
-    Result<BuiltSpeed> speed = speed_from_plan(plan_pin_work_speed(*path, *s.pin, speed_settings(s)), s);
-    if (!speed) return in_step("speed program", speed.error());
-    out.speed = std::move(*speed);
-  }
-  out.fine = fine_path(std::move(path->x_mm), std::move(path->dx_dc_mm_per_deg), std::move(path->d2x_dc2_mm_per_deg2));
-  Result<CurveTable> x = table_for_path(out.fine, s.axis_limits, s, in_force, "X");
-  if (!x) return x.error();
-  out.table = std::move(*x);
-  if (s.pin->mode == PinMode::kCXY) {
-    out.y_fine =
-        fine_path(std::move(path->y_mm), std::move(path->dy_dc_mm_per_deg), std::move(path->d2y_dc2_mm_per_deg2));
-    Result<CurveTable> y = table_for_path(*out.y_fine, s.y_axis_limits, s, nullptr, "Y");
-    if (!y) return y.error();
-    out.y_table = std::move(*y);
-  }
-  return out;
-}
-
 // "harmonics 0..27 fed back (above 0.052 um, 4 sigma of the gauge noise on the mean; cap 30)".
 std::string harmonics_text(const CompensationSettings& s, const HarmonicChoice& h) {
   std::string out = "harmonics 0.." + std::to_string(h.harmonics) + " fed back";
@@ -185,70 +48,6 @@ std::string harmonics_text(const CompensationSettings& s, const HarmonicChoice& 
   if (!(h.noise_um > 0.0)) return out + " (the cap: no spread to tell the noise)";
   return out + " (above " + format_fixed(h.threshold_um, 3) + " um, " + format_fixed(h.threshold_um / h.noise_um, 0) +
          " sigma of the gauge noise on the mean; cap " + std::to_string(s.max_harmonic) + ")";
-}
-
-std::map<std::string, std::string> template_values(const JobSettings& s) {
-  return {{"program_name", s.nc_program},
-          {"part", s.part.name},
-          {"lobe", std::to_string(s.part.lobe)},
-          {"version", GAUGELOOP_VERSION},
-          {"run_id", "0"},
-          {"created_utc", ""},
-          {"correction_max_um", "0"},
-          {"table_number", std::to_string(s.table_numbers[0])}};
-}
-
-// `program` (a rendered table program) with the archive header when the settings ask for it.
-Result<std::string> with_archive_header(const JobSettings& s, Result<std::string> program) {
-  if (!program || !s.nc_archive_header) return program;
-  Result<std::string> header = archive_header(s.nc_program, NcProgramKind::kSubprogram);
-  if (!header) return header.error();
-  return *header + *program;
-}
-
-// The speed subprogram for `speed`, from the settings' template, for run `run_id`.
-Result<std::string> render_speed(const JobSettings& s, const BuiltSpeed& speed, std::int64_t run_id,
-                                 const std::string& created_utc) {
-  std::map<std::string, std::string> values = template_values(s);
-  values["run_id"] = std::to_string(run_id);
-  values["created_utc"] = created_utc;
-  SpeedProvenance provenance;
-  provenance.run_id = run_id;
-  return render_speed_program(s.nc_speed_template, s.nc_speed_template_name, values, speed.profile, provenance);
-}
-
-// The main program's template and the part it grinds, for push_program.
-MainProgramSource main_source(const JobSettings& s, const std::string& created_utc) {
-  MainProgramSource m = main_program_source(s);
-  m.part = s.part.name;
-  m.lobe = s.part.lobe;
-  m.created_utc = created_utc;
-  if (s.pin && s.pin->mode == PinMode::kCXY) {
-    m.y_program_name = pin_y_program_name(s.nc_program);
-    m.y_table_numbers = s.y_table_numbers;
-  }
-  return m;
-}
-
-// The Y table program of a C-X-Y pin for a table version, from the settings' Y template.
-Result<std::string> render_y_table(const JobSettings& s, const CurveTable& y_table, std::int64_t run_id,
-                                   const std::string& created_utc, double correction_max_um, int table_version) {
-  std::map<std::string, std::string> values = template_values(s);
-  values["program_name"] = pin_y_program_name(s.nc_program);
-  values["run_id"] = std::to_string(run_id);
-  values["created_utc"] = created_utc;
-  values["correction_max_um"] = format_fixed(correction_max_um, 1);
-  values["table_number"] = std::to_string(s.y_table_numbers[0]);
-  TableProvenance provenance;
-  provenance.run_id = run_id;
-  provenance.table_version = table_version;
-  provenance.table_numbers = s.y_table_numbers;
-  Result<std::string> program =
-      render_table_program(s.nc_y_template, s.nc_y_template_name, values, y_table, provenance, s.table_format);
-  if (!program || !s.nc_archive_header) return program;
-  Result<std::string> header = archive_header(pin_y_program_name(s.nc_program), NcProgramKind::kSubprogram);
-  if (!header) return header.error();
-  return *header + *program;
 }
 
 // The settings a run was made with, one "key = value" a line in a fixed order, so that
@@ -317,8 +116,14 @@ std::string settings_text(const JobSettings& s) {
   if (s.speed) {
     // Only with a speed program, so the settings of a run at one speed hash as before.
     line("speed.base_speed_rpm", num(s.speed->base_speed_rpm));
-    line("speed.lobe_speed_mm_per_min", num(s.speed->lobe_speed_mm_per_min));
-    line("speed.lobe_threshold_mm", num(s.speed->lobe_threshold_mm));
+    if (s.speed->hold == SpeedHold::kFlanks) {
+      line("speed.hold", std::string(speed_hold_name(s.speed->hold)));
+      line("speed.grinding_point_speed_mm_per_min", num(s.speed->grinding_point_speed_mm_per_min));
+      line("speed.flank_speed_mm_per_min", num(s.speed->flank_speed_mm_per_min));
+    } else {
+      line("speed.lobe_speed_mm_per_min", num(s.speed->lobe_speed_mm_per_min));
+      line("speed.lobe_threshold_mm", num(s.speed->lobe_threshold_mm));
+    }
     line("speed.c_acceleration_max_deg_per_s2", num(s.speed->c_acceleration_max_deg_per_s2));
     line("nc.speed_template", s.nc_speed_template_name);
     line("nc.speed_error_bound_percent", num(s.speed_profile.bound_percent));
@@ -377,12 +182,10 @@ Status check_programs_render(const JobSettings& s, const BuiltTable& design_tabl
     TableProvenance provenance;
     provenance.table_version = version;
     provenance.table_numbers = s.table_numbers;
-    Result<std::string> program =
-        with_archive_header(s, render_table_program(s.nc_template, s.nc_template_name, template_values(s),
-                                                    design_table.table, provenance, s.table_format));
+    Result<std::string> program = render_x_table(s, design_table, 0, "", 0.0, version);
     if (!program) return program.error();
     if (design_table.y_table) {
-      Result<std::string> y = render_y_table(s, *design_table.y_table, 0, "", 0.0, version);
+      Result<std::string> y = render_y_table(s, *design_table.y_table, 0, "", version);
       if (!y) return y.error();
     }
     if (s.nc_main_template.empty()) continue;
@@ -467,30 +270,6 @@ Status check_room(const std::filesystem::path& dir, std::uintmax_t need, const s
   return {};
 }
 
-// The NC directory exists (made if need be) and takes a file: a probe named like our
-// temporary files (so a leftover is cleaned up with them) is made and removed.
-Status check_nc_directory(const std::filesystem::path& nc_dir, const std::filesystem::path& nc_file) {
-  std::error_code ec;
-  std::filesystem::create_directories(nc_dir, ec);
-  if (ec) return make_error(ErrorCode::kIo, "NC output directory " + nc_dir.string() + ": " + ec.message());
-  // Something other than a file where the program goes (a directory, a device) would fail
-  // the push after the run is stored.
-  if (std::filesystem::exists(nc_file, ec) && !std::filesystem::is_regular_file(nc_file, ec)) {
-    return make_error(ErrorCode::kIo, "NC program " + nc_file.string() +
-                                          " exists but is not a file (a directory?); gaugeloop writes the curve "
-                                          "table there: move it away, then measure");
-  }
-  std::string probe = (nc_dir / (atomic_temporary_prefix(nc_file) + "XXXXXX")).string();
-  const int fd = ::mkstemp(probe.data());
-  if (fd < 0) {
-    return make_error(ErrorCode::kIo, "NC output directory " + nc_dir.string() + " is not writable by this user (" +
-                                          std::strerror(errno) + "); fix its permissions or set another --nc-dir");
-  }
-  ::close(fd);
-  ::unlink(probe.c_str());
-  return check_room(nc_dir, kRoomForProgramBytes, "NC output directory");
-}
-
 // Which table ground the part, and the correction it carries (what a new one builds on).
 struct GroundWith {
   std::optional<int> version;  // of the NC file; empty: the design
@@ -528,6 +307,12 @@ Result<GroundWith> resolve_ground_with(const RunStore& store, const std::filesys
   if (*last_push && g.run_in_force && (**last_push).run_id == *g.run_in_force) {
     g.version_in_force = (**last_push).table_version;
   }
+  // The program on the control was written from the drawing (nc new): it carries no
+  // correction, and no run's table is in force after it.
+  if (*last_push && (**last_push).run_id == 0) {
+    g.run_in_force.reset();
+    g.version_in_force = (**last_push).table_version;
+  }
   std::optional<std::int64_t> run_id;
   if (!s.ground_with_version) {
     g.source = "assumed";
@@ -544,7 +329,7 @@ Result<GroundWith> resolve_ground_with(const RunStore& store, const std::filesys
         return e;
       }
       g.version = *s.ground_with_version;
-      run_id = push->run_id;
+      if (push->run_id != 0) run_id = push->run_id;  // 0: written by nc new, no correction
     }
   }
   Result<std::optional<StoredRun>> built_from = load_if(store, run_id, "correction in force");
@@ -667,6 +452,50 @@ Status check_name(std::string_view name, std::string_view what) {
   return {};
 }
 
+Status check_nc_directory(const std::filesystem::path& nc_dir, const std::filesystem::path& nc_file) {
+  std::error_code ec;
+  std::filesystem::create_directories(nc_dir, ec);
+  if (ec) return make_error(ErrorCode::kIo, "NC output directory " + nc_dir.string() + ": " + ec.message());
+  // Something other than a file where the program goes (a directory, a device) would fail
+  // the push after the run is stored.
+  if (std::filesystem::exists(nc_file, ec) && !std::filesystem::is_regular_file(nc_file, ec)) {
+    return make_error(ErrorCode::kIo, "NC program " + nc_file.string() +
+                                          " exists but is not a file (a directory?); gaugeloop writes the curve "
+                                          "table there: move it away, then measure");
+  }
+  std::string probe = (nc_dir / (atomic_temporary_prefix(nc_file) + "XXXXXX")).string();
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0) {
+    return make_error(ErrorCode::kIo, "NC output directory " + nc_dir.string() + " is not writable by this user (" +
+                                          std::strerror(errno) + "); fix its permissions or set another --nc-dir");
+  }
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return check_room(nc_dir, kRoomForProgramBytes, "NC output directory");
+}
+
+Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem::path& nc_file) {
+  if (Status d = check_nc_directory(s.nc_dir, nc_file); !d) return d.error();
+  if (s.db_path != ":memory:") {
+    const std::filesystem::path db_dir = std::filesystem::absolute(s.db_path).parent_path();
+    std::error_code ec;
+    std::filesystem::create_directories(db_dir, ec);  // RunStore::open would; the room is checked first
+    if (Status r = check_room(db_dir, kRoomForRunBytes, "database directory"); !r) return r.error();
+  }
+  Result<RunStore> store = RunStore::open(s.db_path);
+  if (!store) return store.error();
+  // A damaged file is refused before the gauge is read: a correction read from it could be
+  // anything, and a run stored into it could be lost.
+  if (s.check_integrity) {
+    if (Status sound = store->check_integrity(); !sound) return sound.error();
+  }
+  if (Status w = store->check_writable(); !w) return w.error();
+  // A push interrupted earlier is recorded or abandoned before the table in force is read.
+  NcFiles& files = s.nc_files ? *s.nc_files : real_nc_files();
+  if (Result<ReconcileReport> r = reconcile_pushes(*store, nc_file, files); !r) return r.error();
+  return store;
+}
+
 namespace {
 
 // The names first: cheap, and a bad one must not reach a file name or the database.
@@ -688,31 +517,6 @@ Status check_job_settings(const JobSettings& settings) {
 }
 
 namespace {
-
-// Everything that needs the database and the NC directory but not the gauge, before the
-// first poll: the NC directory takes a file, both file systems have room, the database is
-// sound and writable, and pushes interrupted earlier are reconciled.
-Result<RunStore> open_for_run(const JobSettings& s, const std::filesystem::path& nc_file) {
-  if (Status d = check_nc_directory(s.nc_dir, nc_file); !d) return d.error();
-  if (s.db_path != ":memory:") {
-    const std::filesystem::path db_dir = std::filesystem::absolute(s.db_path).parent_path();
-    std::error_code ec;
-    std::filesystem::create_directories(db_dir, ec);  // RunStore::open would; the room is checked first
-    if (Status r = check_room(db_dir, kRoomForRunBytes, "database directory"); !r) return r.error();
-  }
-  Result<RunStore> store = RunStore::open(s.db_path);
-  if (!store) return store.error();
-  // A damaged file is refused before the gauge is read: a correction read from it could be
-  // anything, and a run stored into it could be lost.
-  if (s.check_integrity) {
-    if (Status sound = store->check_integrity(); !sound) return sound.error();
-  }
-  if (Status w = store->check_writable(); !w) return w.error();
-  // A push interrupted earlier is recorded or abandoned before the table in force is read.
-  NcFiles& files = s.nc_files ? *s.nc_files : real_nc_files();
-  if (Result<ReconcileReport> r = reconcile_pushes(*store, nc_file, files); !r) return r.error();
-  return store;
-}
 
 // One run through the job's steps, in order: the table in force, acquire, analyse and
 // correct, store, then push the table or keep it. Each step leaves its results in members
@@ -966,16 +770,7 @@ class JobRun {
   }
 
   Result<std::string> render(int table_version) const {
-    std::map<std::string, std::string> values = template_values(s_);
-    values["run_id"] = std::to_string(report_.run_id);
-    values["created_utc"] = finished_utc_;
-    values["correction_max_um"] = format_fixed(correction_max_um_, 1);
-    TableProvenance provenance;
-    provenance.run_id = report_.run_id;
-    provenance.table_version = table_version;
-    provenance.table_numbers = s_.table_numbers;
-    return with_archive_header(s_, render_table_program(s_.nc_template, s_.nc_template_name, values, built_->table,
-                                                        provenance, s_.table_format));
+    return render_x_table(s_, *built_, report_.run_id, finished_utc_, correction_max_um_, table_version);
   }
 
   // What the push or the pending table records of the table built.
@@ -1020,19 +815,8 @@ class JobRun {
     PushOptions options;
     options.files = s_.nc_files.get();
     options.main = main_source(s_, finished_utc_);
-    const RenderForVersion render_table = [this](int table_version) { return render(table_version); };
-    Result<PushCompletion> version = [&]() -> Result<PushCompletion> {
-      if (built_->y_table) {
-        const RenderYForVersion render_y = [this](int table_version) {
-          return render_y_table(s_, *built_->y_table, report_.run_id, finished_utc_, correction_max_um_, table_version);
-        };
-        return push_pin_programs(store_, nc_file_, push_facts(), render_table, render_y, options);
-      }
-      if (!built_->speed) return push_program(store_, nc_file_, push_facts(), render_table, options);
-      Result<std::string> speed = render_speed(s_, *built_->speed, report_.run_id, finished_utc_);
-      if (!speed) return speed.error();
-      return push_program_with_speed(store_, nc_file_, push_facts(), render_table, *speed, options);
-    }();
+    Result<PushCompletion> version =
+        push_program_set(store_, nc_file_, push_facts(), *built_, s_, finished_utc_, correction_max_um_, options);
     if (!version) {
       // A table edited by hand on the control is not overwritten: a person decides.
       if (version.error().code == ErrorCode::kRefused)
@@ -1130,7 +914,7 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
   // Absolute, so the push history names one file whatever directory a command runs in.
   const std::filesystem::path nc_file =
       std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal();
-  Result<RunStore> store = open_for_run(s, nc_file);
+  Result<RunStore> store = open_store_for_push(s, nc_file);
   if (!store) return store.error();
   JobRun run(gauge, s, *prepared, *store, nc_file);
   Result<JobReport> result = run.run();

@@ -14,6 +14,7 @@
 #include "compensation/analysis.h"
 #include "compensation/correction.h"
 #include "compensation/work_speed.h"
+#include "core/grinding_cycle.h"
 #include "core/lift_table.h"
 #include "core/part.h"
 #include "core/pin.h"
@@ -102,6 +103,9 @@ struct JobSettings {
   // axis_limits) and rendered from nc_speed_template; the main program must call it
   // (docs/variable_speed.md, docs/nc_output.md "Variable work speed on the control").
   std::optional<WorkSpeedSettings> speed;
+  // The part file's [grinding]: the allowance and the passes the main program feeds the wheel
+  // by ({{infeed_blocks}}), at axis_limits.speed_rpm; carried in the table program's header.
+  GrindingCycle cycle;
   std::string nc_speed_template;       // template text, required with `speed`
   std::string nc_speed_template_name;  // for messages
   SpeedProfileSettings speed_profile;  // the feed blocks' speed error bound and block time
@@ -218,6 +222,18 @@ Status check_job_settings(const JobSettings& settings);
 // The main program's template of `settings`, for an approval or a rollback (the part and lobe
 // left to the run's): empty when the settings have none.
 MainProgramSource main_program_source(const JobSettings& settings);
+
+// The NC directory exists (made if need be) and takes a file, and has room for a program: a
+// probe named like our temporary files (so a leftover is cleaned up with them) is made and
+// removed. kIo naming the directory (or `nc_file`, if something other than a file is there).
+Status check_nc_directory(const std::filesystem::path& nc_dir, const std::filesystem::path& nc_file);
+
+// Everything a push needs of the database and the NC directory, before the gauge is read or
+// anything is written: the NC directory takes a file (check_nc_directory), the database's
+// directory has room for a run, the database opens (created and upgraded if need be), is
+// sound (with check_integrity) and writable, and pushes of `nc_file` interrupted earlier are
+// reconciled. Errors: kIo, kStorage, naming the file or directory.
+Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem::path& nc_file);
 
 // A part, machine or program name: 1 to 64 ASCII letters, digits, '_' or '-'. kInvalidInput
 // naming `what` and the offending character's position otherwise.

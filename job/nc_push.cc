@@ -8,6 +8,7 @@
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "core/utc_time.h"
+#include "nc_out/infeed.h"
 #include "nc_out/main_program.h"
 #include "nc_out/table_program.h"
 #include "report/run_json.h"
@@ -244,6 +245,26 @@ std::filesystem::path main_program_path(const std::filesystem::path& nc_file) {
   return nc_file.parent_path() / (nc_file.stem().string() + "_MAIN.MPF");
 }
 
+namespace {
+
+// True when the template names {{infeed_blocks}} or {{speed_infeed_blocks}} (any of Mustache's
+// forms): the main program feeds the wheel to size.
+bool has_infeed_placeholder(std::string_view text) {
+  for (std::string_view name : {"infeed_blocks", "speed_infeed_blocks"}) {
+    for (const std::string& tag :
+         {"{{" + std::string(name) + "}}", "{{{" + std::string(name) + "}}}", "{{&" + std::string(name) + "}}"}) {
+      if (text.find(tag) != std::string_view::npos) return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+std::string origin_text(std::int64_t run_id) {
+  return run_id != 0 ? "run " + std::to_string(run_id) : std::string("the drawing (no part measured yet)");
+}
+
 Result<std::string> render_main_for_table(const MainProgramSource& source, const std::filesystem::path& nc_file,
                                           std::string_view table_program) {
   Result<ParsedTable> t = parse_table_program(table_program, nc_file.string());
@@ -254,12 +275,39 @@ Result<std::string> render_main_for_table(const MainProgramSource& source, const
       {"lobe", std::to_string(source.lobe)},
       {"version", GAUGELOOP_VERSION},
       {"run_id", header_value(*t, "run_id")},
+      {"origin", header_value(*t, "run_id") == "0" ? origin_text(0) : "run " + header_value(*t, "run_id")},
       {"created_utc", source.created_utc.empty() ? utc_now() : source.created_utc},
       {"table_version", header_value(*t, "table_version")},
       {"table_number", std::to_string(t->table_number)},
       {"table_start_c_deg", format_fixed(t->points.front().c_deg, 3)},
       {"point_count", std::to_string(t->points.size())},
       {"interpolation", std::string(interpolation_name(t->interpolation))}};
+  // The passes from blank to size: the part's cycle as the table's header carries it (a table
+  // pushed before it did: the defaults at 60 rpm on the 0.1 um grid).
+  if (!has_infeed_placeholder(source.template_text)) {
+    return make_error(
+        ErrorCode::kInvalidInput,
+        source.template_name +
+            ": no {{infeed_blocks}} (or {{speed_infeed_blocks}} with a speed subprogram): the main program "
+            "would couple the wheel to the part and never feed it from the stock to size; put it after the "
+            "coupling, as examples/sinumerik/cam_main.mpf does (docs/nc_output.md, \"Allowance and infeed\")");
+  }
+  CycleOnControl cycle;
+  if (auto it = t->header.find("grinding_cycle"); it != t->header.end()) {
+    Result<CycleOnControl> read = read_grinding_cycle_text(it->second);
+    if (!read) return make_error(ErrorCode::kInvalidInput, nc_file.string() + ": " + read.error().message);
+    cycle = *read;
+  }
+  Result<InfeedPlan> infeed = plan_infeed(cycle.cycle, cycle.format);
+  if (!infeed) return infeed.error();
+  values["infeed_blocks"] = render_infeed_blocks(*infeed, cycle.work_speed_rpm, cycle.format);
+  values["speed_infeed_blocks"] = render_speed_infeed_blocks(*infeed, speed_program_name(nc_file.stem().string()));
+  values["start_offset_mm"] = format_fixed(infeed->start_offset_mm, cycle.format.x_decimals());
+  values["start_x_mm"] = format_fixed(t->points.front().x_mm + infeed->start_offset_mm, cycle.format.x_decimals());
+  Result<TableInterpolant> nc = TableInterpolant::of(t->points, t->interpolation);
+  if (!nc) return make_error(ErrorCode::kInvalidInput, nc_file.string() + ": " + nc.error().message);
+  values["start_x_at_c0_mm"] = format_fixed(nc->at(0.0).x_mm + infeed->start_offset_mm, cycle.format.x_decimals());
+  values["infeed_turns"] = std::to_string(infeed->turns());
   if (!source.y_program_name.empty()) {
     // The Y table of a version goes to the number of that version, as the X table does.
     const std::string version_text = header_value(*t, "table_version");
@@ -410,14 +458,41 @@ namespace {
 // run's part and lobe where it leaves them open. A C-X pin's table gets main.pin_cx_template
 // when there is one. A C-X-Y pin's table is refused: its Y table is written only with a
 // measurement, and the X table alone would run with a Y table of another version.
+// The part a program written from the drawing (run 0) grinds, from its header: a table
+// written before the header named it is taken for a lobe.
+RunPart part_of_program(std::string_view program_text, const std::string& nc_file, std::string& name, int& lobe) {
+  RunPart part;
+  Result<ParsedTable> t = parse_table_program(program_text, nc_file);
+  if (!t) return part;
+  name = header_value(*t, "part");
+  const std::string number = header_value(*t, "lobe");
+  std::from_chars(number.data(), number.data() + number.size(), lobe);
+  const std::string mode = header_value(*t, "pin_mode");
+  if (!mode.empty()) {
+    part.kind = PartKind::kPin;
+    part.pin_mode = pin_mode_from_name(mode);
+  }
+  return part;
+}
+
 Result<MainProgramSource> main_for_run(const RunStore& store, std::int64_t run_id, MainProgramSource main,
-                                       const std::string& nc_file, std::string_view what) {
-  Result<StoredRun> run = store.load_run(run_id);
-  if (!run) return run.error();
-  const RunPart part = run_part(*run);
+                                       const std::string& nc_file, std::string_view what,
+                                       std::string_view program_text = {}) {
+  std::string part_name;
+  int lobe = 0;
+  RunPart part;
+  if (run_id != 0) {
+    Result<StoredRun> run = store.load_run(run_id);
+    if (!run) return run.error();
+    part = run_part(*run);
+    part_name = run->summary.part;
+    lobe = run->summary.lobe;
+  } else {
+    part = part_of_program(program_text, nc_file, part_name, lobe);
+  }
   if (part.pin_mode == PinMode::kCXY) {
     return make_error(ErrorCode::kRefused,
-                      nc_file + " is the X table of a crankpin ground C-X-Y (run " + std::to_string(run_id) +
+                      nc_file + " is the X table of a crankpin ground C-X-Y (" + origin_text(run_id) +
                           "); it cannot be " + std::string(what) +
                           " alone: its Y table is written only with a measurement, and X would run with a Y table of "
                           "another version. Measure the pin again to push a matched pair");
@@ -427,8 +502,8 @@ Result<MainProgramSource> main_for_run(const RunStore& store, std::int64_t run_i
     main.template_name = main.pin_cx_template_name;
   }
   if (main.template_text.empty()) return main;
-  if (main.part.empty()) main.part = run->summary.part;
-  if (main.lobe == 0) main.lobe = run->summary.lobe;
+  if (main.part.empty()) main.part = part_name;
+  if (main.lobe == 0) main.lobe = lobe;
   return main;
 }
 
@@ -482,7 +557,7 @@ Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_f
   facts.table = old->table;
   const std::string& text = *old->program_text;
   PushOptions options;
-  Result<MainProgramSource> m = main_for_run(store, old->run_id, main, nc_file, "rolled back");
+  Result<MainProgramSource> m = main_for_run(store, old->run_id, main, nc_file, "rolled back", text);
   if (!m) return m.error();
   options.main = std::move(*m);
   Result<PushCompletion> pushed = push_program(

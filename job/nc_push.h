@@ -45,6 +45,10 @@ struct PushFacts {
 // version goes to: table_number_for_version, nc_out/table_program.h).
 using RenderForVersion = std::function<Result<std::string>(int table_version)>;
 
+// Where a program comes from, for its comment lines ({{origin}}): "run 12", or for run 0 "the
+// drawing (no part measured yet)", a program written by nc new.
+std::string origin_text(std::int64_t run_id);
+
 // The main program beside a table program: <stem>_MAIN.MPF in the same directory (CAM.SPF ->
 // CAM_MAIN.MPF).
 std::filesystem::path main_program_path(const std::filesystem::path& nc_file);

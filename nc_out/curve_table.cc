@@ -54,8 +54,10 @@ Status validate_curve_points(const std::vector<CurvePoint>& points) {
                         "curve table " + point_name(points, i) + ": C does not increase; nothing was written");
     }
   }
+  // One turn to well within C's resolution (0.001 deg): a start such as C179.99 read back from
+  // its text is not exactly 360 below the end's double.
   if (!(points.front().c_deg >= 0.0 && points.front().c_deg < 360.0) ||
-      points.back().c_deg != points.front().c_deg + 360.0) {
+      std::abs(points.back().c_deg - (points.front().c_deg + 360.0)) > 1e-6) {
     return make_error(ErrorCode::kInternal,
                       "a periodic curve table must run over one turn, from C0 to C360 or "
                       "from a start below C360 to 360 deg after it");

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "core/number_text.h"
+#include "nc_out/infeed.h"
 #include "nc_out/nc_template.h"
 #include "nc_out/nc_text.h"
 #include "nc_out/table_program.h"
@@ -16,6 +17,7 @@ namespace gaugeloop {
 namespace {
 
 using nc_text::lines_of;
+using nc_text::parse_number;
 using nc_text::trim;
 using nc_text::upper;
 
@@ -27,15 +29,6 @@ std::string deg_text(double c_deg) { return "C" + format_fixed(c_deg, 3); }
 double round_to(double value, int decimals) {
   const double scale = std::pow(10.0, decimals);
   return std::round(value * scale) / scale;
-}
-
-std::optional<double> parse_number(std::string_view s) {
-  s = trim(s);
-  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
-  double v = 0.0;
-  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
 }
 
 // Time to run `length_deg` with the feed linear in path from v0 to v1 (deg/s, both positive):
@@ -278,7 +271,10 @@ std::string render_speed_blocks(const std::vector<SpeedBlock>& blocks, const Spe
     const double end = round_to(blocks[k].c_end_deg, format.c_decimals);
     if (k > 0) out += '\n';
     if (k == 0) out += "G1 G64 G94 FLIN ";
-    out += "C=IC(" + format_fixed(end - last, format.c_decimals) + ") F" +
+    const std::string turn = format_fixed(end - last, format.c_decimals);
+    // The overlaid infeed: the main program sets the parameter to the infeed per turn before
+    // each call (render_speed_infeed_blocks), each block feeds its share of it.
+    out += "C=IC(" + turn + ") X=IC(" + std::string(kSpeedInfeedParameter) + "*" + turn + "/360) F" +
            format_fixed(blocks[k].feed_deg_per_min, format.feed_decimals);
     last = end;
   }
@@ -368,6 +364,7 @@ Result<ParsedSpeedProgram> parse_speed_program(std::string_view text, std::strin
     if (ended) return fail(i, "a block after M17: the speed subprogram ends with its blocks");
     std::optional<double> increment;
     std::optional<double> feed;
+    std::optional<double> share;
     for (size_t w = 0; w < words.size(); ++w) {
       const std::string u = upper(words[w]);
       if (w == 0 && u.size() > 1 && u[0] == 'N' && std::isdigit(static_cast<unsigned char>(u[1]))) continue;
@@ -386,6 +383,12 @@ Result<ParsedSpeedProgram> parse_speed_program(std::string_view text, std::strin
         increment = parse_number(std::string_view(u).substr(5, u.size() - 6));
         if (!increment || *increment <= 0.0)
           return fail(i, "'" + std::string(words[w]) + "' is not a positive turn of C");
+      } else if (u.rfind("X=IC(" + std::string(kSpeedInfeedParameter) + "*", 0) == 0 && u.size() > 10 &&
+                 u.compare(u.size() - 5, 5, "/360)") == 0) {
+        // The overlaid infeed's share of this block: its own turn of C over 360.
+        const std::size_t from = 6 + kSpeedInfeedParameter.size();
+        share = parse_number(std::string_view(u).substr(from, u.size() - 5 - from));
+        if (!share) return fail(i, "'" + std::string(words[w]) + "' is not X=IC(R1*<turn>/360)");
       } else if (u.size() > 1 && u[0] == 'F') {
         feed = parse_number(std::string_view(u).substr(u[1] == '=' ? 2 : 1));
         if (!feed || *feed <= 0.0) return fail(i, "'" + std::string(words[w]) + "' is not a positive feed");
@@ -400,6 +403,17 @@ Result<ParsedSpeedProgram> parse_speed_program(std::string_view text, std::strin
       return fail(i, "every speed block needs C=IC(..) and F..; gaugeloop writes both on each block");
     }
     if (!g1 || !g64 || !g94 || !flin) return fail(i, "the first speed block must set G1 G64 G94 FLIN");
+    // Every block feeds its own share of the infeed, or none does: a turn that fed by more or
+    // less than R1 would leave the part off size.
+    if (share && std::abs(*share - *increment) > 1e-9) {
+      return fail(i, "the block turns C by " + format_fixed(*increment, 3) + " deg but feeds X by R1*" +
+                         format_fixed(*share, 3) + "/360; each block feeds its own share of the turn's infeed");
+    }
+    if (!first_block) {
+      p.overlaid_infeed = share.has_value();
+    } else if (p.overlaid_infeed != share.has_value()) {
+      return fail(i, "some speed blocks feed X by R1 and some do not; a turn would not feed R1 in all");
+    }
     if (!first_block) first_block = i;
     c_end += *increment;
     p.blocks.push_back({c_end, *feed});

@@ -94,8 +94,10 @@ Result<SpeedProfileError> speed_profile_error(const WorkSpeedProgram& program, c
 Result<SpeedProfile> write_speed_profile(const WorkSpeedProgram& program, const SpeedProfileSettings& settings = {},
                                          const SpeedProfileFormat& format = {});
 
-// The blocks as NC text: the first carries G1 G64 G94 FLIN, each block C=IC(increment) F(feed),
-// increments the differences of the rounded end positions (so they add up to 360 exactly).
+// The blocks as NC text: the first carries G1 G64 G94 FLIN, each block
+// C=IC(increment) X=IC(R1*increment/360) F(feed): increments the differences of the rounded
+// end positions (so they add up to 360 exactly), and X fed its share of R1, the infeed per
+// turn the main program sets before each call (nc_out/infeed.h); R1=0 feeds nothing.
 // Blocks separated by newlines, none after the last.
 std::string render_speed_blocks(const std::vector<SpeedBlock>& blocks, const SpeedProfileFormat& format = {});
 
@@ -124,10 +126,13 @@ struct ParsedSpeedProgram {
   std::vector<int> block_lines;    // 1-based line of each block
   std::map<std::string, std::string> header;
   std::string body_checksum;  // computed over the blocks' lines as read
+  // Every block feeds X by its share of R1 (X=IC(R1*<its turn>/360)): one call feeds R1.
+  bool overlaid_infeed = false;
 };
 
 // Parses a speed subprogram: comment lines, blank lines, the feed blocks (an optional block
-// number, G1, G64, G94, FLIN, C=IC(value), F value or F=value; every block needs C and F; G1,
+// number, G1, G64, G94, FLIN, C=IC(value), X=IC(R1*value/360) with the block's own turn (in
+// every block or in none), F value or F=value; every block needs C and F; G1,
 // G64, G94 and FLIN set by the first), then M17 or RET. Anything else is refused with its line: gaugeloop
 // cannot say what the control would make of it. The increments must add up to 360 (0.0005 deg).
 Result<ParsedSpeedProgram> parse_speed_program(std::string_view text, std::string_view file_name);

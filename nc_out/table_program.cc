@@ -174,7 +174,14 @@ std::string render_table_header(const CurveTable& table, const TableProvenance& 
   line("block_count", std::to_string(table.block_count()));
   line("command_error_um", format_fixed(table.error.max_abs_um, 3));
   line("command_error_at_c_deg", format_fixed(table.error.at_c_deg, 3));
+  line("seam_c_deg", table.points.empty() ? std::string("0.000") : format_fixed(table.points.front().c_deg, 3));
   line("writer", table.writer);
+  if (!provenance.grinding_cycle.empty()) line("grinding_cycle", provenance.grinding_cycle);
+  if (!provenance.part.empty()) {
+    line("part", provenance.part);
+    line("lobe", std::to_string(provenance.lobe));
+  }
+  if (!provenance.pin_mode.empty()) line("pin_mode", provenance.pin_mode);
   line("body_checksum_fnv1a64", table_body_checksum(body));
   return out;
 }

@@ -7,7 +7,9 @@
 // Header: comment lines `; gaugeloop <key>: <value>` that the template places with
 // {{table_header}}. Keys: run_id, table_version, table_number and table_numbers (when the
 // table's pair of numbers is known), interpolation (linear | cspline), point_count,
-// block_count, command_error_um, command_error_at_c_deg, writer, body_checksum_fnv1a64.
+// block_count, command_error_um, command_error_at_c_deg, seam_c_deg (the table's first leading
+// value: where a periodic table closes on itself), writer, grinding_cycle (the main program's
+// passes, when known), part, lobe and pin_mode (when known), body_checksum_fnv1a64.
 //
 // Checksum: 64-bit FNV-1a (offset basis 14695981039346656037, prime 1099511628211) over the
 // bytes of the table body, i.e. the lines strictly between the CTABDEF line and the CTABEND
@@ -74,6 +76,15 @@ struct TableProvenance {
   // {0, 0}: not known (the header has no table_number lines, {{table_number}} is the
   // caller's). Otherwise {{table_number}} is table_number_for_version and the header names it.
   TableNumbers table_numbers{0, 0};
+  // The main program's passes from blank to size (grinding_cycle_text, nc_out/infeed.h), for a
+  // main program rendered from this table's text; empty: no such header line.
+  std::string grinding_cycle{};
+  // What the table grinds, for a main program rendered from the text alone (a rollback to a
+  // program written from the drawing, which has no run to ask): the part, its lobe or pin
+  // number, and for a crankpin its mode ("c-x", "c-x-y"). Empty: no such header lines.
+  std::string part{};
+  int lobe = 0;
+  std::string pin_mode{};
 };
 
 // The header comment block for `table` whose rendered body is `body`; lines joined with

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <limits>
 #include <optional>
 
@@ -15,6 +16,9 @@ constexpr double kUmPerMm = 1000.0;
 // How many more blocks than the fewest the points of the table in force may grow to before
 // the default choice starts afresh (write_default_table).
 constexpr double kKeptBlocksOverFewest = 1.25;
+// How far either side of a seam candidate its bend is looked at: natural ends force X'' = 0 at
+// the seam, and the spline's answer to a wrong end condition dies out over a few segments.
+constexpr double kSeamWindowDeg = 1.0;
 
 // Rounds as the table text does (%.*f rounds half away from zero on glibc's exact decimal
 // expansion; std::round on the scaled value agrees except at ties nobody can see in a table
@@ -146,7 +150,7 @@ std::size_t widest_rows(const SampledPath& path, const AdaptiveSettings& setting
 // C360, increasing, each on a row of `path` (a table written on another grid cannot be kept).
 Result<std::vector<std::size_t>> rows_of_points(const SampledPath& path, const TablePointsInForce& in_force) {
   const std::vector<double>& c = in_force.c_deg;
-  if (c.size() < 4 || c.front() != 0.0 || c.back() != 360.0) {
+  if (c.size() < 4 || c.front() != 0.0 || std::abs(c.back() - 360.0) > 1e-6) {
     return make_error(ErrorCode::kInvalidInput, "the table in force must have at least 4 points from C0 to C360");
   }
   std::vector<std::size_t> rows;
@@ -192,9 +196,9 @@ SampledPath turned(const SampledPath& path, std::size_t k0) {
 CurveTable moved_back(CurveTable t, double c0_deg, const CurveTableFormat& format) {
   if (c0_deg == 0.0) return t;
   for (CurvePoint& p : t.points) p.c_deg = round_to(p.c_deg + c0_deg, format.c_decimals);
-  t.points.back().c_deg = c0_deg + 360.0;
+  t.points.back().c_deg = t.points.front().c_deg + 360.0;
   t.error.at_c_deg = std::fmod(t.error.at_c_deg + c0_deg, 360.0);
-  t.writer += ", from C" + format_fixed(c0_deg, 0);
+  t.writer += ", from C" + format_fixed(c0_deg, std::fmod(c0_deg, 1.0) == 0.0 ? 0 : 2);
   return t;
 }
 
@@ -310,6 +314,19 @@ Result<CommandError> command_position_error(const SampledPath& path, const std::
   return summarise(path, *nc, row_errors_mm(path, *nc));
 }
 
+Result<std::vector<double>> command_error_per_degree_um(const SampledPath& path, const CurveTable& table) {
+  if (Status s = check_sampled_path_shape(path); !s) return s.error();
+  Result<TableInterpolant> nc = TableInterpolant::of(table.points, table.interpolation);
+  if (!nc) return nc.error();
+  const std::vector<double> e = row_errors_mm(path, *nc);
+  std::vector<double> out(360, 0.0);
+  for (std::size_t j = 0; j < path.size(); ++j) {
+    const auto d = std::min<std::size_t>(359, static_cast<std::size_t>(std::floor(path.c_deg(j) + 1e-9)));
+    out[d] = std::max(out[d], std::abs(e[j]) * kUmPerMm);
+  }
+  return out;
+}
+
 Result<CurveTable> write_linear_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format) {
   return write_uniform(path, c_step_deg, format, Interpolation::kLinear);
 }
@@ -317,26 +334,50 @@ Result<CurveTable> write_linear_table(const SampledPath& path, double c_step_deg
 double spline_start_c_deg(const SampledPath& path) {
   if (!check_sampled_path_shape(path)) return 0.0;
   const std::size_t n = path.size();
-  // Largest |X''| within 5 deg either side of C.
-  auto bend_near = [&](double c_deg) {
-    const std::optional<std::size_t> k = row_at(path, c_deg);
-    if (!k) return std::numeric_limits<double>::infinity();
-    const std::size_t w = static_cast<std::size_t>(std::llround(5.0 / path.c_step_deg));
-    double m = 0.0;
-    for (std::size_t j = 0; j <= 2 * w; ++j) m = std::max(m, std::abs(path.d2x_dc2_mm_per_deg2[(*k + n - w + j) % n]));
-    return m;
-  };
-  const double at_zero = bend_near(0.0);
-  double best_c = 0.0;
-  double best = at_zero;
-  for (double c : {180.0, 120.0, 240.0, 60.0, 300.0}) {
-    const double b = bend_near(c);
-    if (b < best) {
-      best = b;
-      best_c = c;
-    }
+  // Score of row k: the largest |X''| within kSeamWindowDeg either side, a sliding maximum over
+  // the periodic rows (a deque of candidate rows, each pushed and popped once).
+  const std::size_t w = std::min(n / 4, static_cast<std::size_t>(std::llround(kSeamWindowDeg / path.c_step_deg)));
+  auto bend = [&](std::size_t j) { return std::abs(path.d2x_dc2_mm_per_deg2[j % n]); };
+  std::vector<double> score(n);
+  std::deque<std::size_t> window;  // rows of the window, |X''| decreasing
+  for (std::size_t j = 0; j < n + 2 * w; ++j) {
+    while (!window.empty() && bend(window.back()) <= bend(j)) window.pop_back();
+    window.push_back(j);
+    if (j < 2 * w) continue;
+    while (window.front() + 2 * w < j) window.pop_front();
+    score[(j - w) % n] = bend(window.front());  // window centred on row j - w
   }
-  return best < 0.25 * at_zero ? best_c : 0.0;
+  double peak = 0.0;
+  double least = std::numeric_limits<double>::infinity();
+  for (double v : score) {
+    peak = std::max(peak, v);
+    least = std::min(least, v);
+  }
+  // Rows within a millionth of the largest bend of the least count as equally good: on a base
+  // circle the spline of the lift still rings by that little. The seam goes to the middle of
+  // the longest such run (the base circle's middle, furthest from either flank).
+  const double tie = least + 1e-6 * peak;
+  std::size_t start = 0;
+  while (start < n && score[start] <= tie) ++start;
+  if (start == n) return 0.0;  // the same bend everywhere: a circle; C0 is as good as any
+  std::size_t best_first = 0;
+  std::size_t best_length = 0;
+  std::size_t run_first = 0;
+  std::size_t run_length = 0;
+  for (std::size_t i = 1; i <= n; ++i) {
+    const std::size_t k = (start + i) % n;
+    if (i < n && score[k] <= tie) {
+      if (run_length == 0) run_first = k;
+      ++run_length;
+      continue;
+    }
+    if (run_length > best_length) {
+      best_first = run_first;
+      best_length = run_length;
+    }
+    run_length = 0;
+  }
+  return path.c_deg((best_first + (best_length - 1) / 2) % n);
 }
 
 Result<CurveTable> write_spline_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format) {
@@ -584,38 +625,63 @@ Result<CurveTable> refine_points_in_force(const SampledPath& path, const TablePo
 
 }  // namespace
 
-Result<CurveTable> write_default_table(const SampledPath& path, const TableChoiceSettings& settings,
-                                       const CurveTableFormat& format, const TablePointsInForce* in_force) {
+Result<std::vector<TableCandidate>> default_table_candidates(const SampledPath& path,
+                                                             const TableChoiceSettings& settings,
+                                                             const CurveTableFormat& format) {
   const AdaptiveSettings adaptive{settings.bound_um, settings.max_step_deg};
   if (Status s = check_inputs(path, format); !s) return s.error();
   if (Status s = check_adaptive(adaptive); !s) return s.error();
-  std::vector<Result<CurveTable>> candidates;
+  std::vector<TableCandidate> out;
+  auto add = [&out](std::string writer, Result<CurveTable> t) -> Status {
+    TableCandidate c;
+    c.writer = std::move(writer);
+    if (t) {
+      c.table = std::move(*t);
+    } else if (t.error().code == ErrorCode::kRefused) {
+      c.refused = t.error().message;
+    } else {
+      return t.error();
+    }
+    out.push_back(std::move(c));
+    return {};
+  };
+  auto step_text = [](double step) { return format_fixed(step, step < 0.5 ? 2 : (step < 1.0 ? 1 : 0)); };
   for (double step : {1.0, 0.5, 0.25, 0.2, 0.1}) {
-    if (rows_per_step(path, step) != 0) candidates.push_back(write_linear_table(path, step, format));
+    if (rows_per_step(path, step) == 0) continue;
+    if (Status s = add("linear " + step_text(step) + " deg", write_linear_table(path, step, format)); !s) {
+      return s.error();
+    }
   }
-  candidates.push_back(write_adaptive_linear_table(path, adaptive, format));
+  if (Status s = add("adaptive linear", write_adaptive_linear_table(path, adaptive, format)); !s) return s.error();
   if (settings.allow_spline) {
     for (double step : {5.0, 4.0, 3.0, 2.0, 1.0, 0.5}) {
-      if (step <= settings.max_step_deg && rows_per_step(path, step) != 0) {
-        candidates.push_back(write_spline_table(path, step, format));
+      if (step > settings.max_step_deg || rows_per_step(path, step) == 0) continue;
+      if (Status s = add("spline " + step_text(step) + " deg", write_spline_table(path, step, format)); !s) {
+        return s.error();
       }
     }
-    candidates.push_back(write_adaptive_spline_table(path, adaptive, format));
+    if (Status s = add("adaptive spline", write_adaptive_spline_table(path, adaptive, format)); !s) return s.error();
   }
+  return out;
+}
+
+Result<CurveTable> write_default_table(const SampledPath& path, const TableChoiceSettings& settings,
+                                       const CurveTableFormat& format, const TablePointsInForce* in_force) {
+  const AdaptiveSettings adaptive{settings.bound_um, settings.max_step_deg};
+  Result<std::vector<TableCandidate>> candidates = default_table_candidates(path, settings, format);
+  if (!candidates) return candidates.error();
   std::optional<CurveTable> best;
   CommandError closest;
   closest.max_abs_um = std::numeric_limits<double>::infinity();
-  for (Result<CurveTable>& c : candidates) {
-    if (!c) {
-      if (c.error().code != ErrorCode::kRefused) return c.error();
-      continue;
-    }
-    if (c->error.max_abs_um < closest.max_abs_um) closest = c->error;
-    if (c->error.max_abs_um > settings.bound_um) continue;
-    const bool fewer = !best || c->block_count() < best->block_count() ||
-                       (c->block_count() == best->block_count() && c->interpolation == Interpolation::kLinear &&
+  for (TableCandidate& candidate : *candidates) {
+    if (!candidate.table) continue;
+    CurveTable& c = *candidate.table;
+    if (c.error.max_abs_um < closest.max_abs_um) closest = c.error;
+    if (c.error.max_abs_um > settings.bound_um) continue;
+    const bool fewer = !best || c.block_count() < best->block_count() ||
+                       (c.block_count() == best->block_count() && c.interpolation == Interpolation::kLinear &&
                         best->interpolation != Interpolation::kLinear);
-    if (fewer) best = std::move(*c);
+    if (fewer) best = std::move(c);
   }
   if (!best) {
     return make_error(ErrorCode::kRefused, "no curve table keeps the command position error at or below " +

@@ -3,7 +3,7 @@
 //
 // Frame: machine frame. C (work spindle, leading axis) in degrees, X (wheel infeed,
 // following axis) in mm, 0 on the base circle. A table runs over one turn, from C0 to C360 or,
-// for a CSPLINE table, from a start on the base circle c0 to c0 + 360 (spline_start_c_deg); its
+// for a CSPLINE table, from its seam c0 (spline_start_c_deg) to c0 + 360; its
 // last point repeats the first X (periodic table, CTABDEF periodicity 1), and the control reads
 // any C modulo the table's range.
 //
@@ -22,6 +22,7 @@
 // Writers do not check values against axis limits: see table_guards.h.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -82,14 +83,20 @@ class TableInterpolant {
 Result<CommandError> command_position_error(const SampledPath& path, const std::vector<CurvePoint>& points,
                                             Interpolation interpolation);
 
+// The command position error of `table` per whole degree of C: entry d is the largest
+// |interpolated - exact X| over the fine rows in [d, d + 1), um. For the preview's picture.
+Result<std::vector<double>> command_error_per_degree_um(const SampledPath& path, const CurveTable& table);
+
 // G1 table at a uniform step: c_step_deg must divide 360 and be a whole multiple of the
 // path's step; points are the path's rows at those C.
 Result<CurveTable> write_linear_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format = {});
 
-// Where a CSPLINE table starts: the multiple of 60 deg (a point of every uniform step) with the
-// least |X''| within 5 deg, if that is under a quarter of the nose's at C0 (a start on the base
-// circle); otherwise 0. Natural ends force X'' = 0 at the start: true on the base circle, wrong
-// by the most at the nose. docs/nc_output.md has the figures.
+// Where a CSPLINE table starts (its seam): the row of the path whose largest |X''| within
+// 1 deg either side is least, any C on the path's grid; where many rows tie (a base circle),
+// the middle of the longest such run. Natural ends force X'' = 0 at the start: true on the
+// base circle and at a crankpin's inflection (X'' = 0 where the pin passes the wheel's
+// height), wrong by the most at a lobe's nose or a pin's turning point. docs/nc_output.md has
+// the figures.
 double spline_start_c_deg(const SampledPath& path);
 
 // CSPLINE table at a uniform step (same rules as write_linear_table), from spline_start_c_deg.
@@ -133,6 +140,21 @@ struct TablePointsInForce {
 // circle).
 Result<CurveTable> write_table_at_points(const SampledPath& path, const TablePointsInForce& in_force,
                                          const CurveTableFormat& format = {});
+
+// One table the default choice weighs: its writer ("linear 0.5 deg", "adaptive spline") and
+// the table, or why the writer refused (a fine step that breaks the bound by rounding alone).
+struct TableCandidate {
+  std::string writer;
+  std::optional<CurveTable> table;
+  std::string refused;  // set when table is empty
+};
+
+// The candidates of write_default_table, in its order, each with its blocks, seam (its first
+// point) and command position error: what an engineer reads to see why the default chose
+// what it chose. Errors as the writers' (kInvalidInput for bad settings).
+Result<std::vector<TableCandidate>> default_table_candidates(const SampledPath& path,
+                                                             const TableChoiceSettings& settings,
+                                                             const CurveTableFormat& format = {});
 
 // The default: of the candidates (G1 at 1, 0.5, 0.25, 0.2, 0.1 deg; adaptive G1; CSPLINE at
 // 5, 4, 3, 2, 1, 0.5 deg; adaptive CSPLINE), the one with the fewest blocks whose command

@@ -19,7 +19,7 @@ set(GAUGELOOP_DOCS
 list(TRANSFORM GAUGELOOP_DOCS PREPEND ${PROJECT_SOURCE_DIR}/docs/)
 install(FILES ${GAUGELOOP_DOCS} DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
 install(FILES ${PROJECT_SOURCE_DIR}/docs/img/cam_report.png ${PROJECT_SOURCE_DIR}/docs/img/crankpin_frames.svg
-              ${PROJECT_SOURCE_DIR}/docs/img/web_run_page.png
+              ${PROJECT_SOURCE_DIR}/docs/img/web_run_page.png ${PROJECT_SOURCE_DIR}/docs/img/new_program_preview.png
         DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs/img)
 # The service's example config and what its relative paths name (gauge config, parts and
 # their lift tables, the NC template), so `serve --check` passes on it as installed. Listed,

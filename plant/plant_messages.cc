@@ -86,6 +86,18 @@ Result<std::optional<PlantMessage>> render_message(const RunStore& store, const 
     return make_error(ErrorCode::kInvalidInput, "outbox message " + std::to_string(m.id) + " has the unknown topic \"" +
                                                     m.topic + "\"; this gaugeloop sends run, nc, verdict and state");
   }
+  if (m.topic == "nc" && m.run_id == 0) {
+    // A program written from the drawing (nc new): the push alone, this machine's, no run.
+    Result<std::optional<NcPush>> push = store.push_by_id(m.push_id);
+    if (!push) return push.error();
+    if (!push->has_value()) return std::optional<PlantMessage>();
+    json j = nc_push_json(**push);
+    j["machine"] = machine;
+    j["run_uuid"] = nullptr;
+    j["message_uuid"] = m.uuid;
+    out.payload = dump(j);
+    return std::optional<PlantMessage>(std::move(out));
+  }
   Result<std::optional<StoredRun>> run = run_of(store, m.run_id);
   if (!run) return run.error();
   if (!run->has_value()) return std::optional<PlantMessage>();

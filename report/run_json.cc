@@ -161,7 +161,7 @@ json nc_push_json(const NcPush& p) {
   json j{{"table_version", p.table_version},
          {"uuid", text_or_null(p.uuid)},
          {"pushed_utc", p.pushed_utc},
-         {"run_id", p.run_id},
+         {"run_id", p.run_id != 0 ? json(p.run_id) : json(nullptr)},  // null: written from the drawing
          {"reason", p.reason},
          {"nc_file", p.nc_file},
          {"program_hash", text_or_null(p.program_hash)}};

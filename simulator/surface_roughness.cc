@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "compensation/work_speed.h"
+
 namespace gaugeloop {
 
 double equivalent_chip_thickness_um(double grinding_point_speed_mm_per_min, const GrindingConditions& c) {
@@ -39,7 +41,7 @@ SurfaceFinish surface_finish(const MachinePath& path, const std::vector<double>&
   for (size_t k = 0; k < n; ++k) x_max = std::max(x_max, path.x_mm[k]);
   for (size_t k = 0; k < n; ++k) {
     f.ra_um[k] = roughness_ra_um(model, equivalent_chip_thickness_um(grinding_point_speed_mm_per_min[k], c));
-    const bool flank = path.x_mm[k] > 0.05 * x_max && path.x_mm[k] < 0.95 * x_max;
+    const bool flank = is_flank_row(path.x_mm[k], x_max);
     if (flank && f.ra_um[k] > f.flank_ra_um) {
       f.flank_ra_um = f.ra_um[k];
       f.flank_at_c_deg = k < path.c_deg.size() ? path.c_deg[k] : 0.0;

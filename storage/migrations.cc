@@ -726,8 +726,57 @@ END;
 )sql";
 #undef GL_SQL_UUID
 
-const std::array<Migration, 9>& all_migrations() {
-  static const std::array<Migration, 9> kMigrations{{
+// Version 10: a program written from a drawing, before any part was measured (`gaugeloop nc
+// new`), is pushed with no run behind it: nc_pushes.run_id and nc_push_intents.run_id may be
+// NULL. SQLite's own procedure for dropping a NOT NULL constraint (the ALTER TABLE page,
+// "making other kinds of table schema changes"): edit the table's CREATE text in
+// sqlite_schema and bump the schema cookie, inside the migration's transaction. A rebuild of
+// nc_pushes would fire the ON DELETE SET NULL of nc_pending.push_id while foreign keys are on.
+// The edit is refused (the transaction rolls back) unless each CREATE text holds the column
+// exactly as earlier versions wrote it.
+constexpr std::string_view kSchemaV10 = R"sql(
+PRAGMA writable_schema = ON;
+UPDATE sqlite_schema
+  SET sql = replace(sql, 'run_id            INTEGER NOT NULL REFERENCES runs (id) ON DELETE CASCADE,',
+                         'run_id            INTEGER REFERENCES runs (id) ON DELETE CASCADE,  -- NULL: written by nc new')
+  WHERE type = 'table' AND name = 'nc_pushes';
+UPDATE sqlite_schema
+  SET sql = replace(sql, 'run_id            INTEGER NOT NULL REFERENCES runs (id),',
+                         'run_id            INTEGER REFERENCES runs (id),  -- NULL: written by nc new')
+  WHERE type = 'table' AND name = 'nc_push_intents';
+PRAGMA writable_schema = OFF;
+)sql";
+
+// The schema cookie must change with the CREATE text, so every connection reads it again;
+// and both edits must have happened.
+Status bump_schema_cookie(Connection& conn) {
+  Result<Statement> count =
+      Statement::prepare(conn,
+                         "SELECT count(*) FROM sqlite_schema WHERE type = 'table' AND "
+                         "name IN ('nc_pushes', 'nc_push_intents') AND sql LIKE '%written by nc new%'",
+                         "migrate the schema to version 10");
+  if (!count.ok()) return count.error();
+  Result<bool> row = count->step();
+  if (!row.ok()) return row.error();
+  if (!*row || count->column<int>(0) != 2) {
+    return make_error(ErrorCode::kStorage,
+                      "migrate the schema to version 10: nc_pushes or nc_push_intents in " + conn.path.string() +
+                          " is not as gaugeloop created it (its run_id column was changed by hand); restore a backup "
+                          "or ask for help, nothing was changed");
+  }
+  std::int64_t next = 0;
+  {
+    Result<Statement> cookie = Statement::prepare(conn, "PRAGMA schema_version", "read the schema cookie");
+    if (!cookie.ok()) return cookie.error();
+    Result<bool> c = cookie->step();
+    if (!c.ok()) return c.error();
+    next = cookie->column<std::int64_t>(0) + 1;
+  }
+  return exec(conn, ("PRAGMA schema_version = " + std::to_string(next)).c_str(), "bump the schema cookie");
+}
+
+const std::array<Migration, 10>& all_migrations() {
+  static const std::array<Migration, 10> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -765,6 +814,11 @@ const std::array<Migration, 9>& all_migrations() {
        "one plant, many grinders: UUIDs on runs, pushes and events; the outbox of plant messages",
        kSchemaV9,
        nullptr,
+       {}},
+      {10,
+       "a program written from a drawing (nc new): a push and its intent with no run behind them",
+       std::string(kSchemaV10),
+       bump_schema_cookie,
        {}},
   }};
   return kMigrations;

@@ -120,11 +120,13 @@ struct TableFacts {
 
 // One NC program written to the control from a run, as nc_pushes keeps it.
 struct NcPush {
-  std::int64_t id = 0;      // read back (nc_pushes.id: push order); ignored when recording
-  std::string uuid;         // read back: the push's global identity; ignored when recording (a new one)
-  std::int64_t run_id = 0;  // read back; when recording, the run is an argument
-  std::string pushed_utc;   // ISO 8601 UTC; empty when recording: now
-  std::string nc_file;      // not empty; compared as text, so give every push of a file the same path
+  std::int64_t id = 0;  // read back (nc_pushes.id: push order); ignored when recording
+  std::string uuid;     // read back: the push's global identity; ignored when recording (a new one)
+  // Read back; when recording, the run is an argument. 0: none, a program written from a
+  // drawing (gaugeloop nc new) before any part was measured.
+  std::int64_t run_id = 0;
+  std::string pushed_utc;  // ISO 8601 UTC; empty when recording: now
+  std::string nc_file;     // not empty; compared as text, so give every push of a file the same path
   // 1, 2, 3... per nc_file in push order: the version the program's header carries. When
   // recording: 0 takes the next one (record_nc_file does); any other value must be
   // next_table_version(nc_file), so two writers cannot both claim a version.
@@ -146,7 +148,7 @@ struct NcPush {
 struct PushIntent {
   std::int64_t id = 0;      // read back; ignored by begin_push
   std::string created_utc;  // read back; begin_push: now
-  std::int64_t run_id = 0;  // the run whose table it is; must be stored
+  std::int64_t run_id = 0;  // the run whose table it is, stored; 0: none (nc new)
   // What the push records once completed. nc_file, table_version (the file's next version)
   // and program_text are required; reason empty: "run <run_id>".
   NcPush push;
@@ -473,6 +475,9 @@ class RunStore : public RunHistory {
   // The newest push of a file (the program the control should hold), with program_text;
   // empty if the file was never pushed.
   Result<std::optional<NcPush>> last_push(const std::string& nc_file) const;
+
+  // The push with nc_pushes.id `push_id`, without program_text; empty if there is none.
+  Result<std::optional<NcPush>> push_by_id(std::int64_t push_id) const;
 
   // Keeps a rendered table that was not written and returns its id. In the same transaction,
   // a table still pending for the same nc_file becomes kSuperseded (superseded_by: the new

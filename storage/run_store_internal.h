@@ -60,9 +60,14 @@ NcPush read_push(const Statement& s, bool with_text);
 // The next table version of `nc_file`: 1 + the highest recorded (1 if none).
 Result<int> next_version_of(Connection& conn, std::string_view nc_file, const std::string& operation);
 
+// A push's reason when none is given: "run <id>", or "new program" for run 0 (a program
+// written from a drawing by nc new, with no run behind it).
+std::string default_reason(std::int64_t run_id);
+
 // Records one push inside the caller's write transaction, which makes the version check and
-// the insert one step for other writers: marks the run pushed, takes (or checks) the file's
-// next table version and inserts the nc_pushes row. Returns its id. `push` was checked.
+// the insert one step for other writers: marks the run pushed (run 0: there is none; run_id is
+// stored NULL), takes (or checks) the file's next table version and inserts the nc_pushes row.
+// Returns its id. `push` was checked.
 Result<std::int64_t> insert_push(Connection& conn, std::int64_t run_id, const NcPush& push, std::string_view text,
                                  const std::string& operation);
 

@@ -81,25 +81,32 @@ Result<int> next_version_of(Connection& conn, std::string_view nc_file, const st
   return next->column<int>(0);
 }
 
+std::string default_reason(std::int64_t run_id) {
+  return run_id != 0 ? "run " + std::to_string(run_id) : std::string("new program");
+}
+
 Result<std::int64_t> insert_push(Connection& conn, std::int64_t run_id, const NcPush& push, std::string_view text,
                                  const std::string& operation) {
-  Result<Statement> upd = Statement::prepare(conn, kRecordNcFile, operation);
-  if (!upd.ok()) return upd.error();
-  upd->bind(":run_id", run_id);
-  upd->bind(":nc_file", push.nc_file);
-  if (Status s = upd->run(); !s.ok()) return s.error();
-  if (conn.changes() == 0) return run_not_found(conn, run_id, operation);
+  // Run 0: a program written from a drawing (nc new), with no run behind it.
+  if (run_id != 0) {
+    Result<Statement> upd = Statement::prepare(conn, kRecordNcFile, operation);
+    if (!upd.ok()) return upd.error();
+    upd->bind(":run_id", run_id);
+    upd->bind(":nc_file", push.nc_file);
+    if (Status s = upd->run(); !s.ok()) return s.error();
+    if (conn.changes() == 0) return run_not_found(conn, run_id, operation);
+  }
   Result<int> version = next_version_of(conn, push.nc_file, operation);
   if (!version.ok()) return version.error();
   if (Status s = check_claimed_version(push, *version, operation); !s.ok()) return s.error();
 
   Result<Statement> ins = Statement::prepare(conn, kInsertPush, operation);
   if (!ins.ok()) return ins.error();
-  ins->bind(":run_id", run_id);
+  ins->bind(":run_id", run_id != 0 ? std::optional<std::int64_t>(run_id) : std::nullopt);
   ins->bind(":pushed_utc", std::string_view(push.pushed_utc.empty() ? utc_now() : push.pushed_utc));
   ins->bind(":nc_file", push.nc_file);
   ins->bind(":table_version", *version);
-  ins->bind(":reason", std::string_view(push.reason.empty() ? "run " + std::to_string(run_id) : push.reason));
+  ins->bind(":reason", std::string_view(push.reason.empty() ? default_reason(run_id) : push.reason));
   storage_internal::bind_table_facts(*ins, push.table);
   const std::string hash = text.empty() ? push.program_hash : settings_hash(text);
   ins->bind(":program_hash", text_or_null(hash));
@@ -152,8 +159,8 @@ Result<std::vector<NcPush>> RunStore::list_pushes(const PushQuery& q) const {
   if (q.lobe > 0) where.add_literal("r.lobe = " + std::to_string(q.lobe));
   Result<Statement> st = Statement::prepare(*conn_,
                                             "SELECT " + std::string(storage_internal::kPushColumns) +
-                                                " FROM nc_pushes AS p JOIN runs AS r ON r.id = p.run_id" + where.sql() +
-                                                " ORDER BY p.id DESC LIMIT :limit",
+                                                " FROM nc_pushes AS p LEFT JOIN runs AS r ON r.id = p.run_id" +
+                                                where.sql() + " ORDER BY p.id DESC LIMIT :limit",
                                             "list NC pushes");
   if (!st.ok()) return st.error();
   st->bind(":limit", q.limit);
@@ -207,6 +214,15 @@ Result<NcPush> RunStore::load_push(const std::string& nc_file, int table_version
   return make_error(ErrorCode::kNotFound, "NC file " + nc_file + " has no table version " +
                                               std::to_string(table_version) + " in run database " + conn.path.string() +
                                               ": " + *versions);
+}
+
+Result<std::optional<NcPush>> RunStore::push_by_id(std::int64_t push_id) const {
+  Result<Statement> q = Statement::prepare(
+      *conn_, "SELECT " + std::string(storage_internal::kPushColumns) + " FROM nc_pushes AS p WHERE p.id = :id",
+      "load push " + std::to_string(push_id));
+  if (!q.ok()) return q.error();
+  q->bind(":id", push_id);
+  return q->first([](const Statement& s) { return storage_internal::read_push(s, false); });
 }
 
 Result<std::optional<NcPush>> RunStore::last_push(const std::string& nc_file) const {
@@ -306,10 +322,10 @@ Result<std::int64_t> insert_intent(Connection& conn, const PushIntent& intent, c
   Result<Statement> ins = Statement::prepare(conn, kInsertIntent, operation);
   if (!ins.ok()) return ins.error();
   ins->bind(":created_utc", std::string_view(utc_now()));
-  ins->bind(":run_id", intent.run_id);
+  ins->bind(":run_id", intent.run_id != 0 ? std::optional<std::int64_t>(intent.run_id) : std::nullopt);
   ins->bind(":nc_file", p.nc_file);
   ins->bind(":table_version", p.table_version);
-  ins->bind(":reason", std::string_view(p.reason.empty() ? "run " + std::to_string(intent.run_id) : p.reason));
+  ins->bind(":reason", std::string_view(p.reason.empty() ? storage_internal::default_reason(intent.run_id) : p.reason));
   storage_internal::bind_table_facts(*ins, p.table);
   ins->bind(":program_hash", std::string_view(settings_hash(*p.program_text)));
   ins->bind(":program_text", *p.program_text);
@@ -334,7 +350,9 @@ Result<std::int64_t> RunStore::begin_push(const PushIntent& intent) {
   Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
   if (!tx.ok()) return tx.error();
   if (Status s = require_no_open_intent(conn, p.nc_file, operation); !s.ok()) return s.error();
-  if (Status s = storage_internal::require_run(conn, intent.run_id, operation); !s.ok()) return s.error();
+  if (intent.run_id != 0) {
+    if (Status s = storage_internal::require_run(conn, intent.run_id, operation); !s.ok()) return s.error();
+  }
   Result<int> next = storage_internal::next_version_of(conn, p.nc_file, operation);
   if (!next.ok()) return next.error();
   if (*next != p.table_version) {

@@ -444,7 +444,7 @@ async function ncPage(p) {
     <form id="diff-form">
     <div class="scroll"><table id="nc-history"><thead><tr><th>Version</th><th>Written (UTC)</th><th>Run</th><th>Why</th><th>Interpolation</th><th>Blocks</th><th>Command error</th><th>Diff from</th><th>to</th><th></th></tr></thead>
     <tbody>${history.map((h) => `<tr data-version="${h.table_version}"><td>${h.table_version}</td><td>${utc(h.pushed_utc)}</td>
-      <td><a href="#/run/${h.run_id}">${h.run_id}</a></td><td>${esc(h.reason)}</td><td>${esc(h.interpolation ?? "–")}</td>
+      <td>${h.run_id ? `<a href="#/run/${h.run_id}">${h.run_id}</a>` : "–"}</td><td>${esc(h.reason)}</td><td>${esc(h.interpolation ?? "–")}</td>
       <td class="num">${esc(h.block_count ?? "–")}</td><td class="num">${um(h.command_error_um)}</td>
       <td><input type="radio" name="a" value="${h.table_version}" ${String(a) === String(h.table_version) ? "checked" : ""}></td>
       <td><input type="radio" name="b" value="${h.table_version}" ${String(b) === String(h.table_version) ? "checked" : ""}></td>

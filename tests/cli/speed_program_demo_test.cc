@@ -1,5 +1,6 @@
-// `gaugeloop demo --speed-program` as a user runs it: the loop at constant speed, then at the
-// work speed program, and the three figures that compare them.
+// `gaugeloop demo --speed-program` as a user runs it: the variable-speed camshaft paper's
+// comparison, the loop at one grinding-point speed all round, then with the flanks slowed, and
+// the three figures that compare them.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -47,23 +48,29 @@ TEST(SpeedProgramDemo, SlowsTheFlanksForTheirFinishWithoutLosingForm) {
   ASSERT_GT(cycle.program, 0.0) << r.output;
   ASSERT_GT(ra.program, 0.0) << r.output;
   ASSERT_GT(form.program, 0.0) << r.output;
-  // 60 rpm is a second a turn; slowing the lobe to 2000 mm/min costs more than that again.
-  EXPECT_NEAR(cycle.constant, 1.0, 1e-9);
-  EXPECT_GT(cycle.program, 1.5);
-  EXPECT_LT(cycle.program, 4.0);
-  // The paper's slow flank: 0.775 um at 2000 mm/min; the constant speed runs the flanks faster than 8000.
-  EXPECT_LT(ra.program, 0.8);
-  EXPECT_GT(ra.constant, 3.2);
+  // The paper's comparison: one grinding-point speed (8000 mm/min) against the flanks slowed to
+  // 2000; slowing them costs cycle time.
+  EXPECT_GT(cycle.constant, 0.5);
+  EXPECT_GT(cycle.program, cycle.constant + 0.5);
+  EXPECT_LT(cycle.program, 6.0);
+  // The model's two points: 0.775 um at 2000 mm/min, 3.2 um at 8000; the flanks are ground at
+  // most at those speeds, and the figure is taken where they are fastest (within the fitted range).
+  EXPECT_LE(ra.program, 0.78);
+  EXPECT_GT(ra.program, 0.7);
+  EXPECT_LE(ra.constant, 3.2 + 0.005);
+  EXPECT_GT(ra.constant, 3.0);
+  EXPECT_NE(r.output.find("within the 2000..8000 mm/min it was fitted on"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("Ra is a model, not a measurement"), std::string::npos) << r.output;
   EXPECT_LT(form.program, form.constant + 0.5) << r.output;
   EXPECT_LT(form.program, 2.6) << r.output;
 }
 
-TEST(SpeedProgramDemo, RefusesALobeSpeedOutOfRange) {
+TEST(SpeedProgramDemo, RefusesAFlankSpeedOutOfRange) {
   testing::TempDir dir("speed-demo-bad");
   const CommandResult r =
-      run_command("demo --speed-program --lobe-speed-mm-per-min 0 --data-dir " + dir.path().string());
+      run_command("demo --speed-program --flank-speed-mm-per-min 0 --data-dir " + dir.path().string());
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.output.find("--lobe-speed-mm-per-min"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--flank-speed-mm-per-min"), std::string::npos) << r.output;
 }
 
 }  // namespace

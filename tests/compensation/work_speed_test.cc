@@ -99,6 +99,46 @@ TEST(WorkSpeedPlan, HoldsTheTargetOnTheLobeAndTheBaseSpeedOnTheBaseCircle) {
               plan->constant_cycle_time_s, lobe_max, constant_lobe_max);
 }
 
+// The variable-speed camshaft paper's program: one grinding-point speed all round, the rise and
+// return (X between 5 % and 95 % of its largest value) slowed to the flank speed. No row faster
+// than its target; most of the flanks at the flank speed; the base circle reaching the other
+// where C has room to ramp (at 1000 deg/s^2 from the flank's 9 rpm to the base circle's 71 it
+// needs some 90 deg, so only the middle of the base circle gets there, and the short nose
+// between the two slow flanks not at all).
+TEST(WorkSpeedPlan, TheFlankHoldSlowsOnlyTheRiseAndReturn) {
+  const MachinePath path = intake_path(0.5);
+  WorkSpeedSettings s;
+  s.hold = SpeedHold::kFlanks;
+  s.base_speed_rpm = 1000.0;  // no cap of its own: the targets and the slide decide
+  s.grinding_point_speed_mm_per_min = 8000.0;
+  s.flank_speed_mm_per_min = 2000.0;
+  Result<WorkSpeedPlan> plan = plan_work_speed(path, testing::intake_flat_part(), s);
+  ASSERT_TRUE(plan.ok()) << plan.error().message;
+  const double x_max = *std::max_element(path.x_mm.begin(), path.x_mm.end());
+  int flank_rows = 0, flank_at_target = 0, base_at_target = 0, base_rows = 0;
+  for (size_t k = 0; k < path.x_mm.size(); ++k) {
+    const double v = plan->grinding_point_speed_mm_per_min[k];
+    if (is_flank_row(path.x_mm[k], x_max)) {
+      ++flank_rows;
+      EXPECT_LE(v, 2000.0 * (1 + 1e-9)) << "C " << path.c_deg[k];
+      if (v > 1999.0) ++flank_at_target;
+    } else {
+      EXPECT_LE(v, 8000.0 * (1 + 1e-9)) << "C " << path.c_deg[k];
+      if (path.x_mm[k] < 1e-6) {
+        ++base_rows;
+        if (v > 7999.0) ++base_at_target;
+      }
+    }
+  }
+  EXPECT_GT(flank_at_target, flank_rows * 6 / 10) << "the flanks are ground at the flank speed";
+  EXPECT_GT(base_at_target, base_rows / 5) << "the middle of the base circle reaches 8000";
+  // The baseline: the same hold with the flanks at 8000 too is faster round the turn.
+  s.flank_speed_mm_per_min = 8000.0;
+  Result<WorkSpeedPlan> baseline = plan_work_speed(path, testing::intake_flat_part(), s);
+  ASSERT_TRUE(baseline.ok());
+  EXPECT_LT(baseline->cycle_time_s, plan->cycle_time_s);
+}
+
 TEST(WorkSpeedPlan, ConstantWhenTheTargetIsNeverReached) {
   WorkSpeedSettings s;
   s.lobe_speed_mm_per_min = 1e5;

@@ -118,6 +118,55 @@ TEST(PartFile, ReadsTheSpeedProgramSectionAndRefusesItsMistakes) {
                       "part.toml:11: key `speed.x_velocity_max_mm_per_s`: unknown key"));
 }
 
+// The paper's program: one grinding-point speed all round, the rise and return slower; the
+// lobe hold's keys are refused under it by name, and the other way round.
+TEST(PartFile, ReadsTheFlankHoldAndRefusesTheOtherHoldsKeys) {
+  auto pf = parse(
+      flat_part("[speed]\nhold = \"flanks\"\ngrinding_point_speed_mm_per_min = 8000\nflank_speed_mm_per_min = 2000\n"));
+  ASSERT_TRUE(pf.ok()) << pf.error().message;
+  ASSERT_TRUE(pf->speed.has_value());
+  EXPECT_EQ(pf->speed->hold, SpeedHold::kFlanks);
+  EXPECT_EQ(pf->speed->grinding_point_speed_mm_per_min, 8000.0);
+  EXPECT_EQ(pf->speed->flank_speed_mm_per_min, 2000.0);
+  EXPECT_TRUE(refused(parse(flat_part("[speed]\nhold = \"flanks\"\ngrinding_point_speed_mm_per_min = 8000\n"
+                                      "flank_speed_mm_per_min = 2000\nlobe_speed_mm_per_min = 2000\n")),
+                      "part.toml:13: key `speed.lobe_speed_mm_per_min`: not used with hold = \"flanks\""));
+  EXPECT_TRUE(refused(parse(flat_part("[speed]\nlobe_speed_mm_per_min = 2000\nflank_speed_mm_per_min = 2000\n")),
+                      "part.toml:11: key `speed.flank_speed_mm_per_min`: not used with hold = \"lobe\""));
+  EXPECT_TRUE(refused(parse(flat_part("[speed]\nhold = \"flanks\"\nflank_speed_mm_per_min = 2000\n")),
+                      "key `speed.grinding_point_speed_mm_per_min` is missing"));
+  EXPECT_TRUE(refused(parse(flat_part("[speed]\nhold = \"nose\"\n")), "part.toml:10: key `speed.hold`"));
+}
+
+// [grinding]: the allowance and the passes, and each mistake named by file, line and key.
+TEST(PartFile, ReadsTheAllowanceAndRefusesABadOne) {
+  auto none = parse(flat_part());
+  ASSERT_TRUE(none.ok());
+  EXPECT_EQ(none->grinding.stock_mm, GrindingCycle{}.stock_mm) << "the defaults without [grinding]";
+  auto pf = parse(flat_part(
+      "[grinding]\nstock_mm = 0.3\nair_gap_mm = 0.1\nroughing_infeed_mm_per_turn = 0.03\nfinishing_stock_mm = 0.04\n"
+      "finishing_infeed_mm_per_turn = 0.004\nspark_out_turns = 3\n"));
+  ASSERT_TRUE(pf.ok()) << pf.error().message;
+  EXPECT_EQ(pf->grinding.stock_mm, 0.3);
+  EXPECT_EQ(pf->grinding.air_gap_mm, 0.1);
+  EXPECT_EQ(pf->grinding.roughing_infeed_mm_per_turn, 0.03);
+  EXPECT_EQ(pf->grinding.finishing_stock_mm, 0.04);
+  EXPECT_EQ(pf->grinding.finishing_infeed_mm_per_turn, 0.004);
+  EXPECT_EQ(pf->grinding.spark_out_turns, 3);
+  EXPECT_TRUE(refused(parse(flat_part("[grinding]\nstock_mm = 0.1\nfinishing_stock_mm = 0.2\n")),
+                      "part.toml:11: key `grinding.finishing_stock_mm`: finishing_stock_mm 0.2 mm is more than "
+                      "stock_mm 0.1 mm"));
+  EXPECT_TRUE(refused(parse(flat_part("[grinding]\nstock_mm = -0.1\n")),
+                      "part.toml:10: key `grinding.stock_mm`: -0.1 is out of range"));
+  EXPECT_TRUE(refused(parse(flat_part("[grinding]\nroughing_infeed_mm_per_turn = 0\n")),
+                      "part.toml:10: key `grinding.roughing_infeed_mm_per_turn`: 0 is out of range"));
+  EXPECT_TRUE(refused(parse(flat_part("[grinding]\nspark_out_turns = 1.5\n")), "key `grinding.spark_out_turns`"));
+  EXPECT_TRUE(
+      refused(parse(flat_part("[grinding]\nstock = 0.1\n")), "part.toml:10: key `grinding.stock`: unknown key"));
+  EXPECT_TRUE(
+      refused(parse(flat_part("[grinding]\nstock_mm = 5\nroughing_infeed_mm_per_turn = 0.001\n")), "more than 1000"));
+}
+
 TEST(PartFile, RefusesAnInvalidNcProgramName) {
   for (const char* name : {"1CAM", "CAM-1", "", "A234567890123456789012345"}) {
     std::string text = flat_part();

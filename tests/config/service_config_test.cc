@@ -414,7 +414,7 @@ TEST_F(ServiceConfigTest, TheControlsXResolutionAndTheArchiveHeaderAreRead) {
 }
 
 TEST_F(ServiceConfigTest, TheMainProgramTemplateIsReadWhenNamed) {
-  dir_.write("main.mpf", "N10 {{program_name}}\nN20 EGON(X,\"FINE\",C,{{table_number}},0)\nM30\n");
+  dir_.write("main.mpf", "N10 {{program_name}}\nN20 EGON(X,\"FINE\",C,{{table_number}},0)\n{{infeed_blocks}}\nM30\n");
   auto c = read("[gauge]\n" + kIntake + kNc + "main_template = \"main.mpf\"\n");
   ASSERT_TRUE(c.ok()) << c.error().message;
   EXPECT_EQ(c->job.nc_main_template_name, (dir_.path() / "main.mpf").string());

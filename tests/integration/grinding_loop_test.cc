@@ -91,8 +91,10 @@ TEST_F(GrindingLoopTest, DefaultMachineReachesTheSeedResultInOneStep) {
   EXPECT_LE(loop[3].part.max_abs_um, 2.6);
   // The floor is the vibration: 0.5 um RMS on the ground lift.
   EXPECT_NEAR(loop[3].floor.rms_um, 0.5, 0.1);
-  // Every part after the first was ground from the NC file pushed before it, read back.
-  EXPECT_EQ(loop[0].ground_from, "design");
+  // The first part was ground from the program written from the drawing, every later one from
+  // the NC file pushed before it, each read back.
+  EXPECT_EQ(loop[0].ground_from, "CAM_INTAKE_L1.SPF v1 new");
+  EXPECT_EQ(loop[0].job.ground_with_version.value_or(0), 1) << "the run knows part 0 was ground with the new program";
   EXPECT_EQ(loop[1].ground_from,
             loop[0].job.nc_file.filename().string() + " v" + std::to_string(loop[0].job.table_version));
   EXPECT_TRUE(fs::exists(loop[3].job.nc_file));
@@ -112,10 +114,10 @@ TEST_F(GrindingLoopTest, ThreeStepsReachTheFloor) {
   for (const LoopIteration& it : loop) EXPECT_TRUE(it.job.pushed()) << it.iteration << ": " << it.job.not_pushed_reason;
   EXPECT_LE(loop[1].part.max_abs_um, 2.6);
   EXPECT_LE(loop[3].part.max_abs_um, 1.2 * loop[3].floor.max_abs_um) << "floor " << loop[3].floor.max_abs_um << " um";
-  // The first table is the fewest blocks; later ones kept its points (a fresh choice is made
-  // only when keeping them would cost 25 % more blocks than the fewest).
-  EXPECT_EQ(loop[0].job.table_writer.find("table in force"), std::string::npos) << loop[0].job.table_writer;
-  const bool kept = std::any_of(loop.begin() + 1, loop.end(), [](const LoopIteration& it) {
+  // The first program (written from the drawing) is the fewest blocks; the tables after it
+  // kept its points (a fresh choice is made only when keeping them would cost 25 % more blocks
+  // than the fewest).
+  const bool kept = std::any_of(loop.begin(), loop.end(), [](const LoopIteration& it) {
     return it.job.table_writer.find("table in force") != std::string::npos;
   });
   EXPECT_TRUE(kept) << loop[1].job.table_writer;
@@ -225,8 +227,9 @@ TEST_F(GrindingLoopTest, DemoIterationsPrintsEveryPartAndPlotsThemOnOneSheet) {
   testing::CommandResult r = testing::run_command("demo --iterations 2 --plot " + svg.string() + data);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("virtual grinder: intake_flat lobe 1 at 60 rpm; servo 42 Hz"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("   0  design "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("   2  CAM_INTAKE_L1.SPF v2 "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("new program: CAM_INTAKE_L1.SPF v1 from the drawing"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("   0  CAM_INTAKE_L1.SPF v1 new "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("   2  CAM_INTAKE_L1.SPF v3 "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("after 1 iteration (published cam-grinding result: 2.6 um)"), std::string::npos) << r.output;
   const std::string text = testing::slurp(svg);
   EXPECT_EQ(text.rfind("<?xml", 0), 0u) << text.substr(0, 100);
@@ -245,7 +248,7 @@ TEST_F(GrindingLoopTest, DemoIterationsPrintsEveryPartAndPlotsThemOnOneSheet) {
   EXPECT_NE(r.output.find("report: " + (dir_ / "report.pdf").string() + " (run 3;"), std::string::npos) << r.output;
   EXPECT_EQ(testing::slurp(dir_ / "report.pdf").rfind("%PDF-", 0), 0u);
   r = testing::run_command("runs show 3 --data-dir " + dir_.string());
-  EXPECT_NE(r.output.find("virtual grinder part 2, ground from CAM_INTAKE_L1.SPF v2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("virtual grinder part 2, ground from CAM_INTAKE_L1.SPF v3"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("tolerances        in (lift error judged after the best-fit phase)"), std::string::npos)
       << r.output;
   r = testing::run_command("runs list --verdict out --data-dir " + dir_.string());

@@ -206,7 +206,8 @@ TEST_F(NcPushTest, WithASpeedProgramEachPushWritesTheSpeedSubprogramTheMainProgr
     const std::string speed = slurp(speed_file);
     EXPECT_NE(table.find("CTABDEF(X,C," + n + ",1)"), std::string::npos) << "version " << version;
     EXPECT_NE(main.find("EGON(X,\"FINE\",C," + n + ",0)"), std::string::npos) << main;
-    EXPECT_NE(main.find("\nN60 " + part_.nc_program + "_SPEED P10"), std::string::npos) << main;
+    EXPECT_NE(main.find("\n" + part_.nc_program + "_SPEED P12"), std::string::npos) << "roughing, 12 turns\n" << main;
+    EXPECT_NE(speed.find("table_version: " + std::to_string(version)), std::string::npos) << speed.substr(0, 600);
     for (const std::string* text : {&table, &main, &speed}) EXPECT_EQ(text->find("{{"), std::string::npos) << *text;
     EXPECT_NE(speed.find("run_id: " + std::to_string(r->run_id)), std::string::npos) << speed.substr(0, 600);
     Result<ParsedSpeedProgram> back = read_speed_program(nc_file());
@@ -354,7 +355,7 @@ TEST_F(NcPushTest, AMainTemplateWrongForEitherNumberIsRefusedBeforeMeasuring) {
   ASSERT_NE(shipped.find(coupled), std::string::npos);
   std::string fixed = shipped;
   fixed.replace(fixed.find(coupled), coupled.size(), "EGON(X,\"FINE\",C,1,0)");
-  for (const auto& [tmpl, expected] : {std::pair{fixed, std::string("couples curve table 1 at line 11, not table 2")},
+  for (const auto& [tmpl, expected] : {std::pair{fixed, std::string("couples curve table 1 at line 13, not table 2")},
                                        std::pair{shipped + "; {{wheel_speed}}\n", std::string("wheel_speed")}}) {
     js.nc_main_template = tmpl;
     auto report = measure(js);

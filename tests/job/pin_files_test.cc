@@ -50,6 +50,7 @@ Result<std::string> y_program_for(const std::string& y_template, std::int64_t ru
                                                {"lobe", "1"},
                                                {"version", "test"},
                                                {"run_id", std::to_string(run)},
+                                               {"origin", "run " + std::to_string(run)},
                                                {"created_utc", ""},
                                                {"correction_max_um", "0"},
                                                {"table_number", "3"}};

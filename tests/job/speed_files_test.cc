@@ -74,6 +74,7 @@ class SpeedFilesTest : public testing::StoreTest {
                                                        {"lobe", "1"},
                                                        {"version", "test"},
                                                        {"run_id", std::to_string(run_)},
+                                                       {"origin", "run " + std::to_string(run_)},
                                                        {"created_utc", "2026-12-01T08:05:00Z"}};
     Result<std::string> speed = render_speed_program(*speed_tmpl, "cam_speed.spf", values, *profile, {run_, 0});
     ASSERT_TRUE(speed.ok()) << speed.error().message;
@@ -125,7 +126,7 @@ TEST_F(SpeedFilesTest, TableSpeedAndMainProgramAreWrittenAndReadBack) {
     EXPECT_EQ(*coupled_table_number(main, main_file().string()), expected[version]) << main;
     EXPECT_TRUE(check_main_calls_speed_program(main, main_file().string(), "CAM_TEST_SPEED").ok()) << main;
     EXPECT_THAT(main, HasSubstr("\nN10 CAM_TEST "));
-    EXPECT_THAT(main, HasSubstr("\nN60 CAM_TEST_SPEED P10"));
+    EXPECT_THAT(main, HasSubstr("\nCAM_TEST_SPEED P12"));
 
     const std::string speed = *read_regular_file(speed_file(), "speed program");
     EXPECT_EQ(speed, speed_text_);

@@ -26,13 +26,14 @@ struct RefTable {
   std::vector<double> x;
 };
 
-// Blocks between CTABDEF and CTABEND: `C<number> X<number>`, CSPLINE anywhere switches mode.
-inline RefTable ref_parse(const std::string& program) {
+// Blocks between CTABDEF and CTABEND: `C<number> <axis><number>` (X, or Y for a crankpin's Y
+// table), CSPLINE anywhere switches mode.
+inline RefTable ref_parse(const std::string& program, char axis = 'X') {
   RefTable t;
   std::istringstream in(program);
   std::string line;
   bool inside = false;
-  const std::regex point(R"(C(-?[0-9]+\.[0-9]+) X(-?[0-9]+\.[0-9]+))");
+  const std::regex point(std::string(R"(C(-?[0-9]+\.[0-9]+) )") + axis + R"((-?[0-9]+\.[0-9]+))");
   while (std::getline(in, line)) {
     if (line.rfind("CTABDEF", 0) == 0) {
       inside = true;

@@ -44,8 +44,13 @@ SampledPath pin_y_path() {
 }
 
 std::map<std::string, std::string> table_values(const std::string& program) {
-  return {{"program_name", program},   {"part", "crankpin_cxy"}, {"lobe", "1"},
-          {"version", "0.1.0"},        {"run_id", "42"},         {"created_utc", "2026-12-01T10:00:00Z"},
+  return {{"program_name", program},
+          {"part", "crankpin_cxy"},
+          {"lobe", "1"},
+          {"version", "0.1.0"},
+          {"run_id", "42"},
+          {"origin", "run 42"},
+          {"created_utc", "2026-12-01T10:00:00Z"},
           {"correction_max_um", "3.2"}};
 }
 
@@ -58,7 +63,9 @@ TEST(PinYTable, RendersFromTheShippedTemplateAndReadsBackAsAYTable) {
                                                        table_values("CRANK_PIN1_XY_Y"), *table, {42, 3, {3, 4}});
     ASSERT_TRUE(program.ok()) << program.error().message;
     EXPECT_THAT(*program, HasSubstr("CTABDEF(Y,C,3,1)"));
-    EXPECT_THAT(*program, HasSubstr("C90.000 Y45.0000"));
+    // The spline closes where Y'' = -R sin t vanishes (C180 here), so its top is at C450.
+    EXPECT_THAT(*program,
+                HasSubstr(interpolation == Interpolation::kLinear ? "C90.000 Y45.0000" : "C450.000 Y45.0000"));
 
     Result<ParsedTable> back = parse_table_program(*program, "CRANK_PIN1_XY_Y.SPF");
     ASSERT_TRUE(back.ok()) << back.error().message;
@@ -97,6 +104,13 @@ std::map<std::string, std::string> main_values(const std::string& x_number) {
           {"lobe", "1"},
           {"version", "0.1.0"},
           {"run_id", "42"},
+          {"origin", "run 42"},
+          {"infeed_blocks", "FGROUP(C)\nG1 G91 C6480.000 X-0.2500 F21600.0\nG90\nFGROUP()"},
+          {"speed_infeed_blocks", "R1=-0.01388889\nCAM_INTAKE_L1_SPEED P18\nR1=0"},
+          {"start_offset_mm", "0.2500"},
+          {"start_x_mm", "0.2500"},
+          {"start_x_at_c0_mm", "8.7500"},
+          {"infeed_turns", "18"},
           {"created_utc", "2026-12-01T10:00:00Z"},
           {"table_version", "2"},
           {"table_number", x_number},

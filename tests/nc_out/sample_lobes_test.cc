@@ -34,6 +34,7 @@ std::map<std::string, std::string> template_values() {
           {"lobe", "1"},
           {"version", "test"},
           {"run_id", "7"},
+          {"origin", "run 7"},
           {"created_utc", "2024-01-01T00:00:00Z"},
           {"c_step_deg", "1.000"},
           {"correction_max_um", "0"},

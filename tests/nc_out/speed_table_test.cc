@@ -30,6 +30,7 @@ std::map<std::string, std::string> speed_values() {
           {"lobe", "1"},
           {"version", "0.1.0"},
           {"run_id", "42"},
+          {"origin", "run 42"},
           {"created_utc", "2026-12-01T10:00:00Z"}};
 }
 
@@ -70,7 +71,8 @@ TEST(SpeedTable, AConstantProgramGivesAConstantFeed) {
   EXPECT_NEAR(profile->error.max_timing_error_deg, 0.0, 1e-9);
   EXPECT_NEAR(profile->error.turn_time_s, 1.0, 1e-12);  // one turn at 60 rpm
   const std::string blocks = render_speed_blocks(profile->blocks);
-  EXPECT_THAT(blocks, HasSubstr("G1 G64 G94 FLIN C=IC(30.000) F21600.0\nC=IC(30.000) F21600.0\n"));
+  EXPECT_THAT(blocks, HasSubstr("G1 G64 G94 FLIN C=IC(30.000) X=IC(R1*30.000/360) F21600.0\n"
+                                "C=IC(30.000) X=IC(R1*30.000/360) F21600.0\n"));
 }
 
 TEST(SpeedTable, ASlowFlankReadsBackWithinTheBound) {
@@ -233,6 +235,12 @@ TEST(SpeedTable, TheShippedSpeedMainProgramCallsTheSpeedSubprogramAndCouplesTheT
   values["point_count"] = "91";
   values["interpolation"] = "cspline";
   values["table_start_c_deg"] = "180.000";
+  values["infeed_blocks"] = "FGROUP(C)\nG1 G91 C6480.000 X-0.2500 F21600.0\nG90\nFGROUP()";
+  values["speed_infeed_blocks"] = "R1=-0.01388889\nCAM_INTAKE_L1_SPEED P18\nR1=0";
+  values["start_offset_mm"] = "0.2500";
+  values["start_x_mm"] = "0.2500";
+  values["start_x_at_c0_mm"] = "8.7500";
+  values["infeed_turns"] = "18";
   Result<std::string> main = render_main_program(shipped("cam_main_speed.mpf"), "cam_main_speed.mpf", values);
   ASSERT_TRUE(main.ok()) << main.error().message;
   EXPECT_EQ(main->find("{{"), std::string::npos) << *main;

@@ -106,11 +106,19 @@ TEST(TableGuards, RefusesATablePointOutsideTheLimits) {
 }
 
 TEST(TableGuards, RefusesASplineWhoseAccelerationBreaksTheLimitWhereThePathKeepsIt) {
-  // Natural ends force S'' = 0 at C0, where X'' is largest; the spline makes up for it with
+  // A 5 deg spline closed at C0 (the writers no longer close it there: spline_start_c_deg):
+  // natural ends force S'' = 0 at C0, where X'' is largest; the spline makes up for it with
   // more curvature one segment in: ~200 mm/s^2 near C5 against the path's 157.9.
   const SampledPath p = testing::analytic_path(4.0, 0.0);
-  Result<CurveTable> t = write_spline_table(p, 5.0);
-  ASSERT_TRUE(t.ok());
+  Result<CurveTable> t = CurveTable{};
+  t->interpolation = Interpolation::kCubicSpline;
+  const CurveTableFormat format;
+  for (int k = 0; k <= 72; ++k) {
+    t->points.push_back({5.0 * k, format.round_x_mm(p.x_mm[static_cast<std::size_t>(k % 72) * 500])});
+  }
+  Result<CommandError> e = command_position_error(p, t->points, t->interpolation);
+  ASSERT_TRUE(e.ok());
+  t->error = *e;
   AxisLimits l = roomy();
   l.x_acceleration_max_mm_per_s2 = 180.0;
   EXPECT_TRUE(check_path_guards(p, l).ok());

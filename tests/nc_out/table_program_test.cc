@@ -58,7 +58,8 @@ TEST(TableProgram, RoundTripGivesTheSamePointsAndHeader) {
     EXPECT_EQ(back->leading_axis, "C");
     EXPECT_EQ(back->table_number, 3);
     EXPECT_EQ(back->periodicity, 1);
-    EXPECT_EQ(back->ctabdef_line, 11);  // after 1 comment line and 9 header lines
+    EXPECT_EQ(back->ctabdef_line, 12);  // after 1 comment line and 10 header lines
+    EXPECT_EQ(back->header.at("seam_c_deg"), format_fixed(t.points.front().c_deg, 3));
     EXPECT_EQ(back->header.at("run_id"), "42");
     EXPECT_EQ(back->header.at("table_version"), "7");
     EXPECT_EQ(back->header.at("interpolation"), interpolation_name(kind));
@@ -72,18 +73,18 @@ TEST(TableProgram, RoundTripGivesTheSamePointsAndHeader) {
   }
 }
 
-// The spline starts where X bends least (spline_start_c_deg; for this path C120, where its
-// X'' is an eighth of that at C0) and runs one turn from there.
+// The spline starts where X bends least (spline_start_c_deg; for this path, X'' = 4 cos C -
+// 2.8 sin 2C per rad^2, at C90, where X'' is 0) and runs one turn from there.
 TEST(TableProgram, SplineBodyStartsWithG1ThenNaturalCspline) {
   const CurveTable t = table(Interpolation::kCubicSpline);
   const double c0 = spline_start_c_deg(testing::analytic_path(4.0, 0.7));
-  EXPECT_EQ(c0, 120.0);
+  EXPECT_EQ(c0, 90.0);
   EXPECT_EQ(t.points.front().c_deg, c0);
   EXPECT_EQ(t.points.back().c_deg, c0 + 360.0);
   const std::string p = program(t);
-  EXPECT_THAT(p, HasSubstr("CTABDEF(X,C,3,1)\nG1 C120.000 X"));
-  EXPECT_THAT(p, HasSubstr("\nBNAT ENAT CSPLINE C124.000 X"));
-  EXPECT_THAT(p, HasSubstr("\nC480.000 X" + format_fixed(t.points.front().x_mm, 4) + "\nCTABEND\nM17\n"));
+  EXPECT_THAT(p, HasSubstr("CTABDEF(X,C,3,1)\nG1 C90.000 X"));
+  EXPECT_THAT(p, HasSubstr("\nBNAT ENAT CSPLINE C94.000 X"));
+  EXPECT_THAT(p, HasSubstr("\nC450.000 X" + format_fixed(t.points.front().x_mm, 4) + "\nCTABEND\nM17\n"));
 }
 
 TEST(TableProgram, AHandEditedXIsDetectedWithItsLine) {
@@ -99,7 +100,7 @@ TEST(TableProgram, AHandEditedXIsDetectedWithItsLine) {
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().code, ErrorCode::kRefused);
   EXPECT_THAT(s.error().message, HasSubstr("was edited by hand"));
-  EXPECT_THAT(s.error().message, HasSubstr("lines 12..192"));
+  EXPECT_THAT(s.error().message, HasSubstr("lines 13..193"));
   // Against the pushed points: the line and both values.
   Status c = compare_table_points(*back, t.points, "CAM.SPF");
   ASSERT_FALSE(c.ok());
@@ -193,6 +194,7 @@ TEST(TableProgram, TheExampleTemplatesRenderWithTheDocumentedPlaceholders) {
                                                {"lobe", "1"},
                                                {"version", "0.1.0"},
                                                {"run_id", "42"},
+                                               {"origin", "run 42"},
                                                {"created_utc", "2024-05-01T10:00:00Z"},
                                                {"correction_max_um", "3.2"},
                                                {"table_number", "1"}};
@@ -210,6 +212,10 @@ TEST(TableProgram, TheExampleTemplatesRenderWithTheDocumentedPlaceholders) {
       main_values["interpolation"] = "cspline";
       main_values["table_version"] = "7";
       main_values["table_start_c_deg"] = "180.000";
+      main_values["infeed_blocks"] = "FGROUP(C)\nG1 G91 C6480.000 X-0.2500 F21600.0\nG90\nFGROUP()";
+      main_values["start_offset_mm"] = "0.2500";
+      main_values["start_x_mm"] = "0.2500";
+      main_values["infeed_turns"] = "18";
       Result<std::string> r = render_nc_template(ss.str(), file, main_values);
       ASSERT_TRUE(r.ok()) << r.error().message;
       EXPECT_THAT(*r, HasSubstr("N10 CAM_INTAKE_L1 "));

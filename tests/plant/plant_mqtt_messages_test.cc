@@ -115,6 +115,25 @@ TEST_F(PlantMessagesTest, APushIsItsNcHistoryJsonWithMachineAndRunUuid) {
   EXPECT_EQ(nc["message_uuid"], rows[0].uuid);
 }
 
+// A program written from the drawing (nc new) has no run: its message is the push with this
+// machine's name and no run UUID, not a message dropped.
+TEST_F(PlantMessagesTest, APushWithNoRunIsSentWithTheMachineAndNoRunUuid) {
+  NcPush p;
+  p.nc_file = "/nc/INTAKE.SPF";
+  p.reason = "new program from intake.toml by anna";
+  ASSERT_TRUE(store_->record_push(0, p, "CTABDEF(X,C,1,1)\nCTABEND\n").ok());
+  const std::vector<OutboxMessage> rows = waiting();
+  ASSERT_EQ(rows.size(), 1u);
+  ASSERT_EQ(rows[0].topic, "nc");
+  EXPECT_EQ(rows[0].run_id, 0);
+  const json nc = render(rows[0]);
+  EXPECT_EQ(nc["machine"], "grinder-1");
+  EXPECT_TRUE(nc["run_uuid"].is_null());
+  EXPECT_EQ(nc["table_version"], 1);
+  EXPECT_EQ(nc["reason"], "new program from intake.toml by anna");
+  EXPECT_EQ(nc["message_uuid"], rows[0].uuid);
+}
+
 TEST_F(PlantMessagesTest, AStateIsItsStoredPayload) {
   Result<std::int64_t> id = store_->enqueue_state(state_payload("grinder-1", "started", "version 1"));
   ASSERT_TRUE(id.ok());

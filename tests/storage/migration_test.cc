@@ -384,5 +384,43 @@ TEST(Characteristics, ARunWithANonFiniteOrRepeatedCharacteristicIsRefusedAndNoth
   EXPECT_TRUE(runs->empty());
 }
 
+// Version 9 to 10: a push may have no run behind it (a program written from the drawing). The
+// pushes, pending tables and intents a version-9 file holds are kept as they were, with their
+// links, and the file then takes a push of run 0 and lists it.
+TEST(MigrationFromV9, KeepsEveryPushAndTakesOneWithNoRun) {
+  TempDir dir;
+  ASSERT_NO_FATAL_FAILURE(write_old_database_with_run_5(db_in(dir), 9));
+  {
+    RawDb raw(db_in(dir));
+    ASSERT_EQ(raw.exec("INSERT INTO nc_pushes (id, run_id, pushed_utc, nc_file, table_version, reason, program_text)"
+                       " VALUES (7, 5, '2026-11-21T08:01:00Z', '/nc/CAM.SPF', 1, 'run 5', 'text 1')"),
+              SQLITE_OK);
+    ASSERT_EQ(raw.exec("INSERT INTO nc_pending (id, run_id, created_utc, nc_file, program_text, verdict, reason,"
+                       " status, decided_utc, decided_by, push_id) VALUES (3, 5, '2026-11-21T08:01:00Z',"
+                       " '/nc/CAM.SPF', 'text 1', 'hold', 'held', 'approved', '2026-11-21T08:02:00Z', 'anna', 7)"),
+              SQLITE_OK);
+  }
+  Result<RunStore> store = RunStore::open(db_in(dir));
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  RawDb raw(db_in(dir));
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM nc_pushes WHERE id = 7 AND run_id = 5 AND uuid IS NOT NULL"), 1);
+  EXPECT_EQ(raw.query_int("SELECT push_id FROM nc_pending WHERE id = 3"), 7) << "the approval still names its push";
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM pragma_foreign_key_check"), 0);
+  NcPush authored;
+  authored.nc_file = "/nc/CAM.SPF";
+  authored.reason = "new program from cam.toml by ben";
+  ASSERT_TRUE(store->record_push(0, authored, "text 2").ok());
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM nc_pushes WHERE run_id IS NULL AND table_version = 2"), 1);
+  Result<std::vector<NcPush>> history = store->list_pushes({});
+  ASSERT_TRUE(history.ok()) << history.error().message;
+  ASSERT_EQ(history->size(), 2u);
+  EXPECT_EQ((*history)[0].run_id, 0);
+  EXPECT_EQ((*history)[0].reason, "new program from cam.toml by ben");
+  EXPECT_EQ((*history)[1].run_id, 5);
+  // A run that never was is still refused: only run 0 means none.
+  EXPECT_FALSE(store->record_push(99, authored, "text 3").ok());
+}
+
 }  // namespace
 }  // namespace gaugeloop

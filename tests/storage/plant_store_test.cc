@@ -223,7 +223,7 @@ TEST(PlantStoreMigration, Version9GivesEveryOlderRecordAUniqueUuid) {
   Result<RunStore> store = RunStore::open(db);
   ASSERT_TRUE(store.ok()) << store.error().message;
   RawDb raw(db);
-  EXPECT_EQ(raw.query_int("PRAGMA user_version"), 9);
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
   EXPECT_EQ(raw.query_int("SELECT count(DISTINCT uuid) FROM runs"), 50);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM runs WHERE uuid LIKE '________-____-4___-____-____________'"
                           " AND substr(uuid, 20, 1) IN ('8', '9', 'a', 'b') AND uuid = lower(uuid)"),

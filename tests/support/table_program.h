@@ -36,6 +36,7 @@ inline Result<std::string> program_for(std::int64_t run, int version, double str
                                                {"lobe", "1"},
                                                {"version", "test"},
                                                {"run_id", std::to_string(run)},
+                                               {"origin", "run " + std::to_string(run)},
                                                {"created_utc", ""},
                                                {"correction_max_um", "0"},
                                                {"table_number", "1"}};
