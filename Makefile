@@ -6,7 +6,7 @@ TSAN_DIR ?= build-tsan
 JOBS ?= $(shell nproc)
 CMAKE_GEN := -G Ninja
 
-# The tests that time live polling against a real clock (SERIAL: about 280 s run alone). They
+# The tests that time live polling against a real clock (SERIAL: about 245 s run alone). They
 # run in the normal build only: under a sanitizer's slowdown they test the machine, not the code.
 REALTIME_TESTS := ^(LiveLink\.|PymodbusPeer\.|SimulatorFaults/LiveOutageTest\.)
 # A plant of grinders, a broker and PostgreSQL as processes, through outages (examples/plant):
