@@ -4,12 +4,16 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdlib>
+#include <iostream>
+#include <nlohmann/json.hpp>
 
 #include "cli/embedded_defaults.h"
 #include "core/text_file.h"
 #include "plant/central_history.h"
 
 namespace gaugeloop {
+
+void print_json(const nlohmann::json& j) { std::cout << j.dump(2) << "\n"; }
 
 int exit_code_for(ErrorCode code) {
   switch (code) {

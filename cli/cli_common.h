@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <string_view>
 
@@ -96,6 +97,9 @@ Result<LoadedPart> load_lobe_part(const std::string& part_path, std::string_view
 // The main program's template from `path` (`--main-template`), or (empty path) the embedded
 // examples/sinumerik/cam_main.mpf; `name` is set for messages.
 Result<std::string> load_main_template(const std::string& path, std::string& name);
+
+// `j` on stdout, indented by 2, with a newline: what every --json prints.
+void print_json(const nlohmann::json& j);
 
 // The command the user chose, run after parsing; returns the exit code.
 using CommandAction = std::function<int()>;

@@ -56,8 +56,6 @@ std::size_t argmax(const DegreeTable& t) {
   return static_cast<std::size_t>(std::max_element(t.begin(), t.end()) - t.begin());
 }
 
-void print_json(const json& j) { std::cout << j.dump(2) << "\n"; }
-
 // ---- runs list ----
 
 struct ListOptions {

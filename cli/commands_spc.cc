@@ -20,8 +20,6 @@ namespace {
 
 using nlohmann::json;
 
-void print_json(const json& j) { std::cout << j.dump(2) << "\n"; }
-
 // ---- runs spc ----
 
 struct SpcOptions {

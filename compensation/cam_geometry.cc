@@ -2,6 +2,7 @@
 #include "compensation/cam_geometry.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -51,7 +52,7 @@ FlatLobeMinima flat_lobe_minima(const PeriodicSpline& lift_mm, double rb_mm) {
   FlatLobeMinima m;
   m.radius_of_curvature_mm = std::numeric_limits<double>::infinity();
   m.support_mm = std::numeric_limits<double>::infinity();
-  for (Eigen::Index i = 0; i < lift_mm.size(); ++i) {
+  for (std::ptrdiff_t i = 0; i < lift_mm.size(); ++i) {
     const PeriodicSpline::Piece p = lift_mm.piece(i);
     double value = 0.0;
     double at = 0.0;
@@ -94,12 +95,12 @@ Result<FollowerGeometry> follower_geometry(const Part& part) {
 }
 
 std::vector<double> dense_angle_grid_deg(const PeriodicSpline& spline, double max_spacing_deg) {
-  const Eigen::VectorXd& knots = spline.knots_deg();
-  const Eigen::Index n = knots.size();
+  const std::vector<double>& knots = spline.knots_deg();
+  const size_t n = knots.size();
   std::vector<double> grid;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double from = knots(i);
-    const double to = (i + 1 < n) ? knots(i + 1) : knots(0) + PeriodicSpline::kPeriodDeg;
+  for (size_t i = 0; i < n; ++i) {
+    const double from = knots[i];
+    const double to = (i + 1 < n) ? knots[i + 1] : knots[0] + PeriodicSpline::kPeriodDeg;
     const int pieces = std::max(2, static_cast<int>(std::ceil((to - from) / max_spacing_deg)));
     for (int k = 0; k < pieces; ++k) grid.push_back(from + (to - from) * k / pieces);
   }

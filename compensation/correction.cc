@@ -390,10 +390,9 @@ Result<PeriodicSpline> corrected_lift(const LiftTable& design, const DesignReadi
   const FollowerGeometry& g = reading.geometry();
   const size_t n = design.angle_deg.size();
   bool same = geometry->kind == g.kind && geometry->base_circle_radius_mm == g.base_circle_radius_mm &&
-              geometry->roller_radius_mm == g.roller_radius_mm && static_cast<Eigen::Index>(n) == lift->size();
+              geometry->roller_radius_mm == g.roller_radius_mm && static_cast<std::ptrdiff_t>(n) == lift->size();
   for (size_t i = 0; i < n && same; ++i) {
-    const Eigen::Index k = static_cast<Eigen::Index>(i);
-    same = design.angle_deg[i] == lift->knots_deg()(k) && design.lift_mm[i] == lift->knot_values()(k);
+    same = design.angle_deg[i] == lift->knots_deg()[i] && design.lift_mm[i] == lift->knot_values()[i];
   }
   if (!same) {
     return make_error(ErrorCode::kInvalidInput, "corrected lift: the design reading of part '" + part.name +

@@ -6,6 +6,8 @@
 #include <numbers>
 #include <string>
 
+#include <Eigen/Core>
+
 #include "compensation/message_text.h"
 
 namespace gaugeloop {
@@ -61,28 +63,26 @@ Result<PeriodicSpline> PeriodicSpline::fit(const std::vector<double>& angle_deg,
                                                       " deg; angles must be strictly increasing");
     }
   }
-  Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(angle_deg.data(), static_cast<Eigen::Index>(angle_deg.size()));
-  Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(value.data(), static_cast<Eigen::Index>(value.size()));
-  return PeriodicSpline(std::move(x), std::move(y));
+  return PeriodicSpline(angle_deg, value);
 }
 
 PeriodicSpline PeriodicSpline::fit(const DegreeTable& value) {
-  Eigen::VectorXd x(kDegreesPerRevolution);
-  Eigen::VectorXd y(kDegreesPerRevolution);
-  for (int i = 0; i < kDegreesPerRevolution; ++i) {
-    x(i) = i;
-    y(i) = value[static_cast<size_t>(i)];
+  std::vector<double> x(kDegreesPerRevolution);
+  std::vector<double> y(kDegreesPerRevolution);
+  for (size_t i = 0; i < x.size(); ++i) {
+    x[i] = static_cast<double>(i);
+    y[i] = value[i];
   }
   return PeriodicSpline(std::move(x), std::move(y));
 }
 
-PeriodicSpline::PeriodicSpline(Eigen::VectorXd knot_deg, Eigen::VectorXd value)
+PeriodicSpline::PeriodicSpline(std::vector<double> knot_deg, std::vector<double> value)
     : knot_deg_(std::move(knot_deg)), a_(std::move(value)) {
-  const Eigen::Index n = knot_deg_.size();
+  const Eigen::Index n = size();
   // h(i): width of interval i, from knot i to knot i+1 (the last one wraps across 360).
   Eigen::VectorXd h(n);
-  for (Eigen::Index i = 0; i + 1 < n; ++i) h(i) = knot_deg_(i + 1) - knot_deg_(i);
-  h(n - 1) = knot_deg_(0) + kPeriodDeg - knot_deg_(n - 1);
+  for (Eigen::Index i = 0; i + 1 < n; ++i) h(i) = knot_deg_[i + 1] - knot_deg_[i];
+  h(n - 1) = knot_deg_[0] + kPeriodDeg - knot_deg_[n - 1];
   auto prev = [n](Eigen::Index i) { return (i + n - 1) % n; };
   auto next = [n](Eigen::Index i) { return (i + 1) % n; };
 
@@ -96,7 +96,7 @@ PeriodicSpline::PeriodicSpline(Eigen::VectorXd knot_deg, Eigen::VectorXd value)
     sub(i) = hp;
     diag(i) = 2.0 * (hp + h(i));
     sup(i) = h(i);
-    rhs(i) = 6.0 * ((a_(next(i)) - a_(i)) / h(i) - (a_(i) - a_(prev(i))) / hp);
+    rhs(i) = 6.0 * ((a_[next(i)] - a_[i]) / h(i) - (a_[i] - a_[prev(i)]) / hp);
   }
   // Sherman-Morrison: A = B + u v^T where B is tridiagonal, u = (gamma, 0, ..., 0, corner_low),
   // v = (1, 0, ..., 0, corner_high / gamma). gamma = -diag(0) keeps B diagonally dominant.
@@ -118,61 +118,61 @@ PeriodicSpline::PeriodicSpline(Eigen::VectorXd knot_deg, Eigen::VectorXd value)
   for (Eigen::Index i = 1; i < n && uniform; ++i) uniform = std::abs(h(i) - h(0)) <= 1e-12;
   if (uniform) uniform_step_deg_ = h(0);
 
-  b_.resize(n);
-  c_.resize(n);
-  d_.resize(n);
+  b_.resize(knot_deg_.size());
+  c_.resize(knot_deg_.size());
+  d_.resize(knot_deg_.size());
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::Index j = next(i);
-    b_(i) = (a_(j) - a_(i)) / h(i) - h(i) * (2.0 * m(i) + m(j)) / 6.0;
-    c_(i) = 0.5 * m(i);
-    d_(i) = (m(j) - m(i)) / (6.0 * h(i));
+    b_[i] = (a_[j] - a_[i]) / h(i) - h(i) * (2.0 * m(i) + m(j)) / 6.0;
+    c_[i] = 0.5 * m(i);
+    d_[i] = (m(j) - m(i)) / (6.0 * h(i));
   }
 }
 
-void PeriodicSpline::locate(double angle_deg, Eigen::Index& i, double& t) const {
+void PeriodicSpline::locate(double angle_deg, std::ptrdiff_t& i, double& t) const {
   double a = angle_deg;
   if (!(a >= 0.0 && a < kPeriodDeg)) {
     a = std::fmod(angle_deg, kPeriodDeg);
     if (a < 0.0) a += kPeriodDeg;
     if (a >= kPeriodDeg) a -= kPeriodDeg;  // -1e-17 + 360 rounds to 360
   }
-  const Eigen::Index n = knot_deg_.size();
-  if (a < knot_deg_(0)) {
+  const Eigen::Index n = size();
+  if (a < knot_deg_[0]) {
     // Before the first knot: the wrap interval from the last knot across 360.
     i = n - 1;
-    t = a + kPeriodDeg - knot_deg_(n - 1);
+    t = a + kPeriodDeg - knot_deg_[n - 1];
     return;
   }
   if (uniform_step_deg_ > 0.0) {
     // k >= 0 here, so truncation is the floor (one instruction; std::floor is a library call
     // without SSE4.1). A NaN angle lands here as i = 0, t = NaN: NaN values, as promised.
-    const double k = (a - knot_deg_(0)) / uniform_step_deg_;
+    const double k = (a - knot_deg_[0]) / uniform_step_deg_;
     i = (k >= static_cast<double>(n - 1)) ? n - 1 : (k > 0.0 ? static_cast<Eigen::Index>(k) : 0);
-    t = a - knot_deg_(i);
+    t = a - knot_deg_[i];
     return;
   }
   const double* begin = knot_deg_.data();
   const double* found = std::upper_bound(begin, begin + n, a);
   i = static_cast<Eigen::Index>(found - begin) - 1;
-  t = a - knot_deg_(i);
+  t = a - knot_deg_[i];
 }
 
 double PeriodicSpline::value(double angle_deg) const {
   Eigen::Index i = 0;
   double t = 0.0;
   locate(angle_deg, i, t);
-  return a_(i) + t * (b_(i) + t * (c_(i) + t * d_(i)));
+  return a_[i] + t * (b_[i] + t * (c_[i] + t * d_[i]));
 }
 
-PeriodicSpline::Piece PeriodicSpline::piece(Eigen::Index i) const {
-  const Eigen::Index n = knot_deg_.size();
+PeriodicSpline::Piece PeriodicSpline::piece(std::ptrdiff_t i) const {
+  const Eigen::Index n = size();
   Piece p;
-  p.knot_deg = knot_deg_(i);
-  p.width_deg = (i + 1 < n) ? knot_deg_(i + 1) - knot_deg_(i) : knot_deg_(0) + kPeriodDeg - knot_deg_(i);
-  p.a = a_(i);
-  p.b = b_(i);
-  p.c = c_(i);
-  p.d = d_(i);
+  p.knot_deg = knot_deg_[i];
+  p.width_deg = (i + 1 < n) ? knot_deg_[i + 1] - knot_deg_[i] : knot_deg_[0] + kPeriodDeg - knot_deg_[i];
+  p.a = a_[i];
+  p.b = b_[i];
+  p.c = c_[i];
+  p.d = d_[i];
   return p;
 }
 
@@ -181,9 +181,9 @@ PeriodicSpline::Point PeriodicSpline::evaluate(double angle_deg) const {
   double t = 0.0;
   locate(angle_deg, i, t);
   Point p;
-  p.value = a_(i) + t * (b_(i) + t * (c_(i) + t * d_(i)));
-  p.d1 = (b_(i) + t * (2.0 * c_(i) + 3.0 * t * d_(i))) * kDegPerRad;
-  p.d2 = (2.0 * c_(i) + 6.0 * t * d_(i)) * kDegPerRad * kDegPerRad;
+  p.value = a_[i] + t * (b_[i] + t * (c_[i] + t * d_[i]));
+  p.d1 = (b_[i] + t * (2.0 * c_[i] + 3.0 * t * d_[i])) * kDegPerRad;
+  p.d2 = (2.0 * c_[i] + 6.0 * t * d_[i]) * kDegPerRad * kDegPerRad;
   return p;
 }
 
@@ -191,14 +191,14 @@ double PeriodicSpline::d1(double angle_deg) const {
   Eigen::Index i = 0;
   double t = 0.0;
   locate(angle_deg, i, t);
-  return (b_(i) + t * (2.0 * c_(i) + 3.0 * t * d_(i))) * kDegPerRad;
+  return (b_[i] + t * (2.0 * c_[i] + 3.0 * t * d_[i])) * kDegPerRad;
 }
 
 double PeriodicSpline::d2(double angle_deg) const {
   Eigen::Index i = 0;
   double t = 0.0;
   locate(angle_deg, i, t);
-  return (2.0 * c_(i) + 6.0 * t * d_(i)) * kDegPerRad * kDegPerRad;
+  return (2.0 * c_[i] + 6.0 * t * d_[i]) * kDegPerRad * kDegPerRad;
 }
 
 }  // namespace gaugeloop

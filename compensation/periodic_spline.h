@@ -1,9 +1,8 @@
 // Periodic C2 cubic spline over one turn of the cam, the smooth lift model the kinematics need.
 #pragma once
 
+#include <cstddef>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/result.h"
 #include "core/run.h"
@@ -53,26 +52,28 @@ class PeriodicSpline {
     double c = 0.0;
     double d = 0.0;
   };
-  Piece piece(Eigen::Index i) const;
+  // Indices are std::ptrdiff_t, the type Eigen::Index is: the fit solves with Eigen, but Eigen
+  // stays out of this header, which most of the product includes (docs/building.md).
+  Piece piece(std::ptrdiff_t i) const;
 
   // The knots as fitted, strictly increasing in [0, 360), and the values there.
-  const Eigen::VectorXd& knots_deg() const { return knot_deg_; }
-  const Eigen::VectorXd& knot_values() const { return a_; }
-  Eigen::Index size() const { return knot_deg_.size(); }
+  const std::vector<double>& knots_deg() const { return knot_deg_; }
+  const std::vector<double>& knot_values() const { return a_; }
+  std::ptrdiff_t size() const { return static_cast<std::ptrdiff_t>(knot_deg_.size()); }
 
  private:
-  PeriodicSpline(Eigen::VectorXd knot_deg, Eigen::VectorXd value);
+  PeriodicSpline(std::vector<double> knot_deg, std::vector<double> value);
 
   // Interval index i and offset t = angle - knot i in degrees, t in [0, h_i) (to rounding).
   // O(1) on uniform knots, a binary search otherwise.
-  void locate(double angle_deg, Eigen::Index& i, double& t) const;
+  void locate(double angle_deg, std::ptrdiff_t& i, double& t) const;
 
   // On interval i: s(t) = a_i + b_i t + c_i t^2 + d_i t^3, t in degrees from knot i.
-  Eigen::VectorXd knot_deg_;
-  Eigen::VectorXd a_;
-  Eigen::VectorXd b_;
-  Eigen::VectorXd c_;
-  Eigen::VectorXd d_;
+  std::vector<double> knot_deg_;
+  std::vector<double> a_;
+  std::vector<double> b_;
+  std::vector<double> c_;
+  std::vector<double> d_;
   double uniform_step_deg_ = 0.0;  // the knot spacing when all are equal (1e-12 deg), else 0
 };
 

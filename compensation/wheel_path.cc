@@ -2,6 +2,7 @@
 #include "compensation/wheel_path.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <cmath>
 #include <iterator>
 #include <limits>
@@ -343,7 +344,7 @@ Result<PathSampler> PathSampler::make(const PeriodicSpline& lift_mm, const Part&
     const double rb = g.base_circle_radius_mm;
     bool bad_shape = false;
     bool any_stall = false;
-    for (Eigen::Index i = 0; i < lift_mm.size(); ++i) {
+    for (std::ptrdiff_t i = 0; i < lift_mm.size(); ++i) {
       const PeriodicSpline::Piece piece = lift_mm.piece(i);
       if (kin.roller_piece_is_clear(piece)) continue;
       const int pieces = std::max(2, static_cast<int>(std::ceil(piece.width_deg / kShapeCheckSpacingDeg)));

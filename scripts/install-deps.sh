@@ -7,6 +7,7 @@ set -euo pipefail
 packages=(
   # toolchain
   g++ cmake ninja-build make pkgconf
+  ccache             # the compiler cache (CMakeLists.txt): a rebuild of what was built before is a cache hit
   # libraries the product links
   libmodbus-dev      # gauge link and simulator (Modbus TCP/RTU)
   libeigen3-dev      # spline, kinematics, FFT
