@@ -2,8 +2,8 @@
 #include "compensation/cam_geometry.h"
 
 #include <algorithm>
-#include <cstddef>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <numbers>
 #include <string>

@@ -2,8 +2,8 @@
 #include "compensation/wheel_path.h"
 
 #include <algorithm>
-#include <cstddef>
 #include <cmath>
+#include <cstddef>
 #include <iterator>
 #include <limits>
 #include <numbers>

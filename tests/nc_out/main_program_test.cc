@@ -12,6 +12,8 @@
 #include "nc_out/table_program.h"
 #include "tests/nc_out/analytic_path.h"
 
+#include "infeed_values.h"
+
 namespace gaugeloop {
 namespace {
 
@@ -25,24 +27,20 @@ std::string shipped_main_template() {
 }
 
 std::map<std::string, std::string> main_values(const std::string& table_number) {
-  return {{"program_name", "CAM_INTAKE_L1"},
-          {"part", "intake_flat"},
-          {"lobe", "1"},
-          {"version", "0.1.0"},
-          {"run_id", "42"},
-          {"origin", "run 42"},
-          {"infeed_blocks", "FGROUP(C)\nG1 G91 C6480.000 X-0.2500 F21600.0\nG90\nFGROUP()"},
-          {"speed_infeed_blocks", "R1=-0.01388889\nCAM_INTAKE_L1_SPEED P18\nR1=0"},
-          {"start_offset_mm", "0.2500"},
-          {"start_x_mm", "0.2500"},
-          {"start_x_at_c0_mm", "8.7500"},
-          {"infeed_turns", "18"},
-          {"created_utc", "2026-12-01T10:00:00Z"},
-          {"table_version", "3"},
-          {"table_number", table_number},
-          {"table_start_c_deg", "180.000"},
-          {"point_count", "91"},
-          {"interpolation", "cspline"}};
+  std::map<std::string, std::string> v{{"program_name", "CAM_INTAKE_L1"},
+                                       {"part", "intake_flat"},
+                                       {"lobe", "1"},
+                                       {"version", "0.1.0"},
+                                       {"run_id", "42"},
+                                       {"origin", "run 42"},
+                                       {"created_utc", "2026-12-01T10:00:00Z"},
+                                       {"table_version", "3"},
+                                       {"table_number", table_number},
+                                       {"table_start_c_deg", "180.000"},
+                                       {"point_count", "91"},
+                                       {"interpolation", "cspline"}};
+  testing::add_infeed_values(v);
+  return v;
 }
 
 TEST(MainProgram, TheShippedTemplateFillsEveryPlaceholderAndCouplesTheTableNamed) {

@@ -12,6 +12,8 @@
 
 #include "nc_out/main_program.h"
 
+#include "infeed_values.h"
+
 namespace gaugeloop {
 namespace {
 
@@ -235,12 +237,7 @@ TEST(SpeedTable, TheShippedSpeedMainProgramCallsTheSpeedSubprogramAndCouplesTheT
   values["point_count"] = "91";
   values["interpolation"] = "cspline";
   values["table_start_c_deg"] = "180.000";
-  values["infeed_blocks"] = "FGROUP(C)\nG1 G91 C6480.000 X-0.2500 F21600.0\nG90\nFGROUP()";
-  values["speed_infeed_blocks"] = "R1=-0.01388889\nCAM_INTAKE_L1_SPEED P18\nR1=0";
-  values["start_offset_mm"] = "0.2500";
-  values["start_x_mm"] = "0.2500";
-  values["start_x_at_c0_mm"] = "8.7500";
-  values["infeed_turns"] = "18";
+  testing::add_infeed_values(values);
   Result<std::string> main = render_main_program(shipped("cam_main_speed.mpf"), "cam_main_speed.mpf", values);
   ASSERT_TRUE(main.ok()) << main.error().message;
   EXPECT_EQ(main->find("{{"), std::string::npos) << *main;

@@ -11,6 +11,8 @@
 #include "nc_out/nc_template.h"
 #include "tests/nc_out/analytic_path.h"
 
+#include "infeed_values.h"
+
 namespace gaugeloop {
 namespace {
 
@@ -212,10 +214,7 @@ TEST(TableProgram, TheExampleTemplatesRenderWithTheDocumentedPlaceholders) {
       main_values["interpolation"] = "cspline";
       main_values["table_version"] = "7";
       main_values["table_start_c_deg"] = "180.000";
-      main_values["infeed_blocks"] = "FGROUP(C)\nG1 G91 C6480.000 X-0.2500 F21600.0\nG90\nFGROUP()";
-      main_values["start_offset_mm"] = "0.2500";
-      main_values["start_x_mm"] = "0.2500";
-      main_values["infeed_turns"] = "18";
+      testing::add_infeed_values(main_values);
       Result<std::string> r = render_nc_template(ss.str(), file, main_values);
       ASSERT_TRUE(r.ok()) << r.error().message;
       EXPECT_THAT(*r, HasSubstr("N10 CAM_INTAKE_L1 "));
