@@ -77,48 +77,13 @@ void print_preview(const ProgramPreview& p, const JobSettings& s) {
               p.cycle_time_s);
 }
 
-// RFC 4180, header first: one row per whole degree of C.
-std::string preview_csv(const ProgramPreview& p) {
-  const bool y = p.built.y_table.has_value();
-  std::string out = "c_deg,x_mm,dx_mm_per_deg,d2x_mm_per_deg2," + std::string(y ? "y_mm," : "") +
-                    "c_speed_rpm,grinding_point_speed_mm_per_min,x_nc_mm,command_error_um" +
-                    (y ? ",y_command_error_um" : "") + "\n";
-  for (const PreviewRow& r : p.rows) {
-    out += std::to_string(r.c_deg) + "," + fixed(r.x_mm, 6) + "," + fixed(r.dx_mm_per_deg, 8) + "," +
-           fixed(r.d2x_mm_per_deg2, 10) + "," + (y ? fixed(r.y_mm.value_or(0.0), 6) + "," : std::string()) +
-           fixed(r.c_speed_rpm, 3) + "," + fixed(r.grinding_point_speed_mm_per_min, 1) + "," + fixed(r.x_nc_mm, 6) +
-           "," + fixed(r.command_error_um, 4) + (y ? "," + fixed(r.y_command_error_um.value_or(0.0), 4) : "") + "\n";
-  }
-  return out;
-}
-
 Status write_preview_files(const NewOptions& o, const ProgramPreview& p, const JobSettings& s) {
   if (!o.csv_path.empty()) {
     if (Status w = write_file_atomically(o.csv_path, preview_csv(p)); !w) return w;
     std::printf("  preview CSV      %s\n", o.csv_path.c_str());
   }
   if (o.plot_path.empty()) return {};
-  ProgramPreviewPage page;
-  page.title =
-      "New program " + s.nc_program + ": " + s.part.name + (s.pin ? " pin " : " lobe ") + std::to_string(s.part.lobe);
-  const CurveTable& t = p.built.table;
-  page.subtitle = std::to_string(t.block_count()) + " blocks (" + t.writer + "), seam C" +
-                  fixed(t.points.front().c_deg, 3) + ", command position error " + fixed(t.error.max_abs_um, 3) +
-                  " um (bound " + fixed(s.table_choice.bound_um, 3) + " um); " + std::to_string(p.infeed.turns()) +
-                  " turns, " + fixed(p.cycle_time_s, 1) + " s";
-  page.footer = "machine frame, C the work spindle; resolution " + fixed(s.table_format.x_increments_per_mm, 0) +
-                " increments/mm \u00b7 gaugeloop " + GAUGELOOP_VERSION;
-  page.command_error_bound_um = s.table_choice.bound_um;
-  for (const PreviewRow& r : p.rows) {
-    page.x_mm.push_back(r.x_mm);
-    page.dx_mm_per_deg.push_back(r.dx_mm_per_deg);
-    page.d2x_mm_per_deg2.push_back(r.d2x_mm_per_deg2);
-    if (r.y_mm) page.y_mm.push_back(*r.y_mm);
-    page.c_speed_rpm.push_back(r.c_speed_rpm);
-    page.grinding_point_speed_mm_per_min.push_back(r.grinding_point_speed_mm_per_min);
-    page.command_error_um.push_back(r.command_error_um);
-    if (r.y_command_error_um) page.y_command_error_um.push_back(*r.y_command_error_um);
-  }
+  const ProgramPreviewPage page = preview_page(p, s);
   if (Status w = write_program_preview(page, o.plot_path); !w) return w;
   std::printf("  preview picture  %s\n", o.plot_path.c_str());
   return {};

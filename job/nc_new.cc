@@ -148,8 +148,8 @@ Result<NewProgramReport> write_new_program(const JobSettings& s, const NewProgra
                           "). A new program starts a part from its drawing and would throw away what the loop has "
                           "learnt; `gaugeloop nc history --program " +
                           s.nc_program +
-                          "` shows it. To start again from the drawing all the same, give --replace (the history "
-                          "stays; the new program becomes version " +
+                          "` shows it. To start again from the drawing all the same, replace it (--replace; over "
+                          "the HTTP API \"replace\": true): the history stays and the new program becomes version " +
                           std::to_string(p.table_version + 1) + ")");
   }
 
@@ -212,6 +212,46 @@ Result<NewProgramReport> write_new_program(const JobSettings& s, const NewProgra
                   " blocks, command position error " + format_fixed(built.table.error.max_abs_um, 3) + " um";
   (void)store->record_event(event);  // the push is recorded; the event only tells it again
   return report;
+}
+
+std::string preview_csv(const ProgramPreview& p) {
+  const bool y = p.built.y_table.has_value();
+  auto fixed = [](double v, int d) { return format_fixed(v, d); };
+  std::string out = "c_deg,x_mm,dx_mm_per_deg,d2x_mm_per_deg2," + std::string(y ? "y_mm," : "") +
+                    "c_speed_rpm,grinding_point_speed_mm_per_min,x_nc_mm,command_error_um" +
+                    (y ? ",y_command_error_um" : "") + "\n";
+  for (const PreviewRow& r : p.rows) {
+    out += std::to_string(r.c_deg) + "," + fixed(r.x_mm, 6) + "," + fixed(r.dx_mm_per_deg, 8) + "," +
+           fixed(r.d2x_mm_per_deg2, 10) + "," + (y ? fixed(r.y_mm.value_or(0.0), 6) + "," : std::string()) +
+           fixed(r.c_speed_rpm, 3) + "," + fixed(r.grinding_point_speed_mm_per_min, 1) + "," + fixed(r.x_nc_mm, 6) +
+           "," + fixed(r.command_error_um, 4) + (y ? "," + fixed(r.y_command_error_um.value_or(0.0), 4) : "") + "\n";
+  }
+  return out;
+}
+
+ProgramPreviewPage preview_page(const ProgramPreview& p, const JobSettings& s) {
+  ProgramPreviewPage page;
+  page.title =
+      "New program " + s.nc_program + ": " + s.part.name + (s.pin ? " pin " : " lobe ") + std::to_string(s.part.lobe);
+  const CurveTable& t = p.built.table;
+  page.subtitle = std::to_string(t.block_count()) + " blocks (" + t.writer + "), seam C" +
+                  format_fixed(t.points.front().c_deg, 3) + ", command position error " +
+                  format_fixed(t.error.max_abs_um, 3) + " um (bound " + format_fixed(s.table_choice.bound_um, 3) +
+                  " um); " + std::to_string(p.infeed.turns()) + " turns, " + format_fixed(p.cycle_time_s, 1) + " s";
+  page.footer = "machine frame, C the work spindle; resolution " + format_fixed(s.table_format.x_increments_per_mm, 0) +
+                " increments/mm \u00b7 gaugeloop " + GAUGELOOP_VERSION;
+  page.command_error_bound_um = s.table_choice.bound_um;
+  for (const PreviewRow& r : p.rows) {
+    page.x_mm.push_back(r.x_mm);
+    page.dx_mm_per_deg.push_back(r.dx_mm_per_deg);
+    page.d2x_mm_per_deg2.push_back(r.d2x_mm_per_deg2);
+    if (r.y_mm) page.y_mm.push_back(*r.y_mm);
+    page.c_speed_rpm.push_back(r.c_speed_rpm);
+    page.grinding_point_speed_mm_per_min.push_back(r.grinding_point_speed_mm_per_min);
+    page.command_error_um.push_back(r.command_error_um);
+    if (r.y_command_error_um) page.y_command_error_um.push_back(*r.y_command_error_um);
+  }
+  return page;
 }
 
 }  // namespace gaugeloop

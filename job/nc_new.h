@@ -14,6 +14,7 @@
 #include "job/program_set.h"
 #include "nc_out/infeed.h"
 #include "nc_out/table_writer.h"
+#include "report/program_preview.h"
 
 namespace gaugeloop {
 
@@ -52,6 +53,14 @@ struct ProgramPreview {
 // candidates weighed and the passes. Nothing is written. Errors: as check_job_settings, and
 // kRefused when no table keeps the command error bound or a guard refuses the design.
 Result<ProgramPreview> preview_new_program(const JobSettings& s);
+
+// The preview as CSV (RFC 4180, header first): one row per whole degree of C with X, X', X'',
+// (Y), the speeds, what the NC interpolates and the command error.
+std::string preview_csv(const ProgramPreview& p);
+
+// The preview's page (report/program_preview.h) with its title, the table chosen in the
+// subtitle and the control's resolution in the footer.
+ProgramPreviewPage preview_page(const ProgramPreview& p, const JobSettings& s);
 
 struct NewProgramOptions {
   // A program with a push history, or a file there that gaugeloop did not write, is refused

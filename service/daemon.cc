@@ -83,7 +83,13 @@ Result<std::unique_ptr<HttpApi>> start_http(Service& service, PlcTrigger* plc, c
   writes.rollback = [&service](const std::string& program, int version, const std::string& by) {
     return service.rollback(program, version, by);
   };
+  writes.new_program = [&service](const std::string& part, int lobe, const std::string& by, bool replace) {
+    return service.new_program(part, lobe, by, replace);
+  };
   HttpStatus status;
+  status.program_preview = [&service](const std::string& part, int lobe) {
+    return service.preview_program(part, lobe);
+  };
   status.health = [&service] { return service.health(); };
   status.extra_metrics = [&service, plc] { return service.metrics() + (plc ? plc->metrics() : ""); };
   status.shafts = [&service] { return service.config()->shafts; };  // a reload's shaft files at once

@@ -31,6 +31,7 @@
 #include "core/text_file.h"
 #include "core/utc_time.h"
 #include "report/cam_report.h"
+#include "report/program_preview.h"
 #include "report/run_json.h"
 #include "report/svg_plot.h"
 #include "service/metrics_text.h"
@@ -254,6 +255,15 @@ Result<int> int_field(const json& body, const std::string& name, int min, int ma
                        std::to_string(max) + ", not " + it->dump(-1, ' ', false, json::error_handler_t::replace));
   }
   return static_cast<int>(it->get<double>());
+}
+
+// An optional boolean field: false when missing or null.
+Result<bool> bool_field(const json& body, const std::string& name) {
+  const auto it = body.find(name);
+  if (it == body.end() || it->is_null()) return false;
+  if (!it->is_boolean())
+    return bad_request("`" + name + "` must be true or false, not " + std::string(it->type_name()));
+  return it->get<bool>();
 }
 
 bool iequals(std::string_view a, std::string_view b) {
@@ -1123,6 +1133,62 @@ struct HttpApi::Impl {
     answer(res, writes.rollback(*program, *version, *by));
   }
 
+  // ---- New programs ----
+
+  // The part and lobe a preview is of, from ?part=&lobe=.
+  Result<std::pair<std::string, int>> preview_query(const httplib::Request& req) const {
+    Result<Query> q = Query::of(req, {"part", "lobe"});
+    if (!q) return q.error();
+    Result<int> lobe = q->integer("lobe", 0, 1, kMaxLobe);
+    if (!lobe) return lobe.error();
+    if (q->text("part").empty() || *lobe == 0) {
+      return bad_request(
+          "a new program is of one configured part: give `part` and `lobe`, e.g. "
+          "?part=intake_flat&lobe=1 (GET /api/health lists the parts)");
+    }
+    return std::make_pair(q->text("part"), *lobe);
+  }
+
+  Result<NewProgramPreview> program_preview(const httplib::Request& req) const {
+    Result<std::pair<std::string, int>> q = preview_query(req);
+    if (!q) return q.error();
+    return status.program_preview(q->first, q->second);
+  }
+
+  void new_program_preview(const httplib::Request& req, httplib::Response& res) {
+    if (!status.program_preview) return send_error(res, 501, "this service does not preview new programs");
+    Result<NewProgramPreview> p = program_preview(req);
+    if (!p) return send_error(res, p.error());
+    send_json(res, 200, p->body);
+  }
+
+  void new_program_plot(const httplib::Request& req, httplib::Response& res) {
+    if (!status.program_preview) return send_error(res, 501, "this service does not preview new programs");
+    Result<NewProgramPreview> p = program_preview(req);
+    if (!p) return send_error(res, p.error());
+    Result<std::string> svg =
+        file_written_by([&](const fs::path& out) { return write_program_preview(p->page, out); }, "preview.svg");
+    if (!svg) return send_error(res, svg.error());
+    res.status = 200;
+    res.set_content(std::move(*svg), "image/svg+xml");
+  }
+
+  void new_program(const httplib::Request&, const std::string& text, httplib::Response& res) {
+    if (!writes.new_program) return send_error(res, 501, "this service does not write new programs");
+    Result<json> body = body_object(text, {"part", "lobe", "by", "replace"},
+                                    R"({"part": "intake_flat", "lobe": 1, "by": "anna", "replace": false})");
+    if (!body) return send_error(res, body.error());
+    Result<std::string> part = string_field(*body, "part", true);
+    if (!part) return send_error(res, part.error());
+    Result<int> lobe = int_field(*body, "lobe", 1, kMaxLobe);
+    if (!lobe) return send_error(res, lobe.error());
+    Result<std::string> by = string_field(*body, "by", true);
+    if (!by) return send_error(res, by.error());
+    Result<bool> replace = bool_field(*body, "replace");
+    if (!replace) return send_error(res, replace.error());
+    answer(res, writes.new_program(*part, *lobe, *by, *replace));
+  }
+
   // ---- Helpers ----
 
   // Answers with what `read` builds from a pooled store, or with its error.
@@ -1229,6 +1295,8 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
   s.route("/api/runs/([^/]+)/plot.svg", [&s](R q, W a) { s.run_plot(q, a); });
   s.route("/api/runs/([^/]+)/report.pdf", [&s](R q, W a) { s.run_report(q, a); });
   s.route("/api/trend.svg", [&s](R q, W a) { s.trend_plot(q, a); });
+  s.route("/api/nc/new", [&s](R q, W a) { s.new_program_preview(q, a); });
+  s.route("/api/nc/new/plot.svg", [&s](R q, W a) { s.new_program_plot(q, a); });
   s.route("/api/shaft", [&s](R q, W a) { s.shaft(q, a); });
   s.route("/metrics", [&s](R q, W a) { s.metrics(q, a); });
   s.route("/", &Impl::redirect_to_pages);
@@ -1238,6 +1306,7 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
   s.route_write("/api/nc/approve/([^/]+)", [&s](R q, B b, W a) { s.approve(q, b, a); });
   s.route_write("/api/nc/rollback", [&s](R q, B b, W a) { s.rollback(q, b, a); });
   s.route_write("/api/nc/reject/([^/]+)", [&s](R q, B b, W a) { s.reject(q, b, a); });
+  s.route_write("/api/nc/new", [&s](R q, B b, W a) { s.new_program(q, b, a); });
   s.server->set_pre_routing_handler([&s](R q, W a) { return s.before_body(q, a); });
   s.server->set_error_handler([&s](R q, W a) { s.fill_error(q, a); });
   s.server->set_exception_handler([](R q, W a, std::exception_ptr ep) { Impl::internal_error(q, a, std::move(ep)); });

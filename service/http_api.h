@@ -13,6 +13,7 @@
 
 #include "config/service_config.h"
 #include "core/result.h"
+#include "report/program_preview.h"
 #include "report/shaft.h"
 
 namespace gaugeloop {
@@ -35,6 +36,17 @@ struct HttpWrites {
   std::function<Result<nlohmann::json>(std::int64_t pending_id, const std::string& by, const std::string& note)> reject;
   // `program` as the client gave it: a program name (CAM_INTAKE_L1) or an NC file path.
   std::function<Result<nlohmann::json>(const std::string& program, int table_version, const std::string& by)> rollback;
+  // The first program of a configured part (POST /api/nc/new), as `gaugeloop nc new`:
+  // `replace` writes it over a program with a history.
+  std::function<Result<nlohmann::json>(const std::string& part, int lobe, const std::string& by, bool replace)>
+      new_program;
+};
+
+// A new program's preview before anything is written: the JSON GET /api/nc/new answers, and
+// the page GET /api/nc/new/plot.svg draws.
+struct NewProgramPreview {
+  nlohmann::json body;
+  ProgramPreviewPage page;
 };
 
 // What the service adds to /api/health and /metrics. Same threads as HttpWrites.
@@ -48,6 +60,9 @@ struct HttpStatus {
   // /api/shaft: a serial's newest run of each lobe and its index error. Empty hook, or none
   // returned: /api/shaft answers 404 and the pages list a serial's lobes without index errors.
   std::function<std::vector<ShaftLayout>()> shafts;
+  // The preview of a configured part's first program (GET /api/nc/new, no token: nothing is
+  // written). Empty hook: 501.
+  std::function<Result<NewProgramPreview>(const std::string& part, int lobe)> program_preview;
 };
 
 // cpp-httplib's server on a thread of its own (and its worker threads): HTTPS when the settings

@@ -20,6 +20,7 @@
 #include "config/service_config.h"
 #include "core/result.h"
 #include "job/measure_job.h"
+#include "service/http_api.h"
 #include "storage/run_store.h"
 
 namespace gaugeloop {
@@ -119,6 +120,15 @@ class Service {
   // directory, or the NC file's path.
   Result<nlohmann::json> rollback(const std::string& program, int table_version, const std::string& by);
 
+  // The first program of configured part `part_name` lobe (or pin) `lobe`, previewed: nothing
+  // is written. The last preview is kept for the configuration in force, so the page's JSON and
+  // its picture cost one computation; previews are computed one at a time. kNotFound for a part
+  // the service does not know; the refusals of nc new's preview.
+  Result<NewProgramPreview> preview_program(const std::string& part_name, int lobe);
+  // Writes it, as `gaugeloop nc new` (job/nc_new.h), holding the push slot as approve does:
+  // refused (kRefused) over a program with a history unless `replace`.
+  Result<nlohmann::json> new_program(const std::string& part_name, int lobe, const std::string& by, bool replace);
+
   // Keeps a step of the service in the database (`gaugeloop events`), without waiting for the
   // database: the event is stamped now and queued; the service's event writer (a thread with
   // one connection open) writes the events in the order they were recorded. A database that
@@ -191,7 +201,15 @@ class Service {
   std::function<nlohmann::json()> plc_status_;
   OutboxSender* outbox_ = nullptr;
   CentralSyncer* central_ = nullptr;
-  std::unique_ptr<EventWriter> events_;  // last: its thread ends first
+  struct CachedPreview {
+    std::shared_ptr<const ServiceConfig> config;  // the configuration it was computed with
+    std::string part;
+    int lobe = 0;
+    NewProgramPreview preview;
+  };
+  std::mutex preview_mutex_;                   // one preview computed at a time
+  std::optional<CachedPreview> last_preview_;  // guarded by preview_mutex_
+  std::unique_ptr<EventWriter> events_;        // last: its thread ends first
 };
 
 }  // namespace gaugeloop

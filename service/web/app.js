@@ -562,6 +562,87 @@ async function pendingPage(p) {
   });
 }
 
+// ---- New program ----
+
+// The first program of a configured part, from its drawing: previewed here, written to the
+// control only when a person with the token asks.
+async function newPage(p) {
+  page().innerHTML = `<h1>New program</h1>
+    <p class="muted">The first program of a part from its drawing: the table(s), the speed program and the main program with its passes,
+      written as a push writes them. Preview it first; nothing goes to the control until you write it.</p>
+    <form class="filters" id="new-form"><label>Part<select name="part-of" id="new-part"></select></label>
+      <button type="submit">Preview</button></form>
+    <div id="new-out"></div>`;
+  const select = document.getElementById("new-part");
+  try {
+    const h = await api("/api/health");
+    const parts = Array.isArray(h.parts) ? h.parts : [];
+    select.innerHTML = parts.map((x) => `<option value="${esc(x.part)}|${x.lobe}" ${x.part === p.part && String(x.lobe) === String(p.lobe) ? "selected" : ""}>${esc(x.part)} lobe ${x.lobe}</option>`).join("");
+  } catch (e) {
+    message(document.getElementById("new-out"), "The service does not answer: " + errorText(e), "error");
+    return;
+  }
+  document.getElementById("new-form").addEventListener("submit", (ev) => {
+    ev.preventDefault();
+    const [part, lobe] = (new FormData(ev.target).get("part-of") || "|").split("|");
+    location.hash = hashOf("/new", {part, lobe});
+  });
+  if (!p.part || !p.lobe) return;
+  const out = document.getElementById("new-out");
+  message(out, "Computing the preview…");
+  const q = apiQuery({part: p.part, lobe: p.lobe});
+  let v;
+  try {
+    v = await api("/api/nc/new?" + q);
+  } catch (e) {
+    message(out, errorText(e), "error");
+    return;
+  }
+  const t = v.table;
+  const tableText = (x) => `${x.blocks} blocks ${esc(x.interpolation)}, seam C${fig(x.seam_c_deg, "", 3)}`;
+  const umCmd = (x) => fig(x, "µm", 3);  // the command error beside its bound: 0.499 is not 0.50
+  const passes = v.passes.map((x) => `${esc(x.name)} ${x.turns} turn${x.turns === 1 ? "" : "s"}${x.infeed_mm > 0 ? " " + fig(x.infeed_mm, "mm", 4) : ""}`).join(", ");
+  out.innerHTML = `<h2 id="new-title">${esc(v.program)}: ${esc(v.part)} ${esc(v.kind)} ${esc(v.lobe)}</h2>
+    <div class="cards" id="new-cards">
+      ${card(v.y_table ? "X table" : "Table", tableText(t))}
+      ${card("Command position error", `${umCmd(t.command_error_um)} <span class="muted">bound ${umCmd(v.command_error_bound_um)}</span>`)}
+      ${v.y_table ? card("Y table", `${tableText(v.y_table)}; ${umCmd(v.y_table.command_error_um)}`) : ""}
+      ${card("Work spindle", v.speed_program ? `speed program, ${v.speed_program.feed_blocks} blocks` : fig(v.work_speed_rpm, "rpm", 0))}
+      ${card("Cycle", `${v.turns} turns, ${fig(v.cycle_time_s, "s", 1)}`)}
+      ${card("Start offset", `${fig(v.start_offset_mm, "mm", 4)} <span class="muted">stock ${fig(v.stock_mm, "", 4)} + air ${fig(v.air_gap_mm, "", 4)}</span>`)}
+    </div>
+    <p class="muted">Passes: ${passes || "none"}. Written to ${esc(v.nc_file)}.</p>
+    <div id="new-plot"><p>Loading the picture…</p></div>
+    <h2>Tables weighed</h2>
+    <div class="scroll"><table id="new-choices"><thead><tr><th>Axis</th><th>Writer</th><th>Interpolation</th><th>Seam C</th><th>Blocks</th><th>Command error</th><th></th></tr></thead>
+    <tbody>${v.choices.map((c) => c.refused !== undefined
+      ? `<tr><td>${esc(c.axis)}</td><td>${esc(c.writer)}</td><td colspan="5" class="muted">refused: ${esc(c.refused)}</td></tr>`
+      : `<tr class="${c.chosen ? "chosen" : ""}"><td>${esc(c.axis)}</td><td>${esc(c.writer)}</td><td>${esc(c.interpolation)}</td><td class="num">${fig(c.seam_c_deg, "", 3)}</td>
+         <td class="num">${c.blocks}</td><td class="num">${umCmd(c.command_error_um)}${c.command_error_um > v.command_error_bound_um ? " <span class=\"muted\">over the bound</span>" : ""}</td>
+         <td>${c.chosen ? "<strong>chosen</strong>" : ""}</td></tr>`).join("")}</tbody></table></div>
+    <h2>Write it to the control</h2>
+    <div class="decide"><label>Written by <input id="decided-by" value="${esc(sessionStorage.getItem(BY_KEY) || "")}" placeholder="your name"></label>
+      <label><input type="checkbox" id="new-replace"> replace a program that has a history</label>
+      <button class="write" id="new-write">${writeLabel("Write the new program")}</button></div>
+    <div id="new-message"></div>`;
+  showSvg(document.getElementById("new-plot"), "/api/nc/new/plot.svg?" + q);
+  document.getElementById("new-write").addEventListener("click", async () => {
+    const msg = document.getElementById("new-message");
+    const by = askName();
+    if (by === null) { message(msg, "Writing a program needs your name.", "error"); return; }
+    const replace = document.getElementById("new-replace").checked;
+    if (replace && !window.confirm(`Start ${v.program} again from the drawing? Its history stays; what the loop has learnt is no longer in force.`)) return;
+    message(msg, "Writing…");
+    try {
+      const r = await write("/api/nc/new", {part: v.part, lobe: Number(v.lobe), by, replace});
+      message(msg, `Written: version ${r.table_version} of ${programOf(r.nc_file)}, ${r.files.length} files, each read back.`, "ok");
+      msg.insertAdjacentHTML("beforeend", `<a id="new-history" href="${hashOf("/nc", {program: programOf(r.nc_file)})}">NC history of ${esc(programOf(r.nc_file))}</a>`);
+    } catch (e) {
+      message(msg, errorText(e), "error");
+    }
+  });
+}
+
 // ---- Service state ----
 
 function kvList(obj) {
@@ -665,6 +746,7 @@ function route() {
     shaft: () => shaftPage(p),
     nc: () => ncPage(p),
     pending: () => pendingPage(p),
+    new: () => newPage(p),
     state: () => statePage(),
   };
   if (!pages[name]) {

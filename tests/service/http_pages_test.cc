@@ -317,6 +317,78 @@ TEST_F(HttpPagesTest, RejectIsRefusedWhenTheApiIsReadOnly) {
   EXPECT_EQ(pending_status(), "pending");
 }
 
+// A preview as the service answers it, its page one value per degree.
+NewProgramPreview sample_preview() {
+  NewProgramPreview p;
+  p.body = json{{"part", "intake_flat"}, {"lobe", 1}, {"table", {{"blocks", 73}}}};
+  p.page.title = "New program CAM_INTAKE_L1: intake_flat lobe 1";
+  for (int c = 0; c < 360; ++c) {
+    const double u = c * M_PI / 180.0;
+    p.page.x_mm.push_back(std::sin(u));
+    p.page.dx_mm_per_deg.push_back(std::cos(u));
+    p.page.d2x_mm_per_deg2.push_back(-std::sin(u));
+    p.page.c_speed_rpm.push_back(60.0);
+    p.page.grinding_point_speed_mm_per_min.push_back(8000.0);
+    p.page.command_error_um.push_back(0.1);
+  }
+  return p;
+}
+
+TEST_F(HttpPagesTest, ANewProgramIsPreviewedWithoutTheTokenAndWrittenWithIt) {
+  std::vector<std::string> previews;
+  std::vector<std::string> written;
+  HttpStatus status;
+  status.program_preview = [&previews](const std::string& part, int lobe) -> Result<NewProgramPreview> {
+    previews.push_back(part + " " + std::to_string(lobe));
+    if (part != "intake_flat") return make_error(ErrorCode::kNotFound, "no part " + part + " lobe 1 is configured");
+    return sample_preview();
+  };
+  HttpWrites writes;
+  writes.new_program = [&written](const std::string& part, int lobe, const std::string& by,
+                                  bool replace) -> Result<json> {
+    written.push_back(part + " " + std::to_string(lobe) + " " + by + (replace ? " replace" : ""));
+    return json{{"table_version", 1}};
+  };
+  start("secret", status, writes);
+
+  Answer preview = get("/api/nc/new?part=intake_flat&lobe=1");
+  ASSERT_EQ(preview.status, 200) << preview.body;
+  EXPECT_EQ(preview.j["table"]["blocks"], 73);
+  Answer plot = get("/api/nc/new/plot.svg?part=intake_flat&lobe=1");
+  ASSERT_EQ(plot.status, 200) << plot.body;
+  EXPECT_EQ(plot.content_type, "image/svg+xml");
+  EXPECT_TRUE(has(plot.body, "<svg")) << plot.body.substr(0, 200);
+  EXPECT_EQ(previews, (std::vector<std::string>{"intake_flat 1", "intake_flat 1"}));
+  EXPECT_TRUE(has(error_of(get("/api/nc/new?part=exhaust&lobe=1"), 404), "no part exhaust"));
+  EXPECT_TRUE(has(error_of(get("/api/nc/new?lobe=1"), 400), "give `part` and `lobe`"));
+  EXPECT_TRUE(has(error_of(get("/api/nc/new?part=intake_flat&lobe=0"), 400), "`lobe`"));
+  EXPECT_TRUE(has(error_of(get("/api/nc/new?part=intake_flat&lobe=1&pin=2"), 400), "unknown query parameter `pin`"));
+  EXPECT_EQ(previews.size(), 3u) << "a bad query never reaches the hook";
+
+  const std::string body = R"({"part": "intake_flat", "lobe": 1, "by": "anna"})";
+  EXPECT_TRUE(has(error_of(post("/api/nc/new", body), 401), "Authorization: Bearer <token>"));
+  EXPECT_TRUE(has(error_of(post("/api/nc/new", R"({"part": "intake_flat", "lobe": 1})", "secret"), 400), "`by`"));
+  EXPECT_TRUE(has(
+      error_of(post("/api/nc/new", R"({"part": "intake_flat", "lobe": 1, "by": "anna", "replace": "yes"})", "secret"),
+               400),
+      "`replace` must be true or false"));
+  EXPECT_TRUE(written.empty()) << "nothing written without the token or with a bad body";
+  ASSERT_EQ(post("/api/nc/new", body, "secret").status, 200);
+  Answer replaced =
+      post("/api/nc/new", R"({"part": "intake_flat", "lobe": 1, "by": "anna", "replace": true})", "secret");
+  ASSERT_EQ(replaced.status, 200) << replaced.body;
+  EXPECT_EQ(replaced.j["table_version"], 1);
+  EXPECT_EQ(written, (std::vector<std::string>{"intake_flat 1 anna", "intake_flat 1 anna replace"}));
+}
+
+TEST_F(HttpPagesTest, WithoutTheHooksNewProgramsAreNotOffered) {
+  start("secret");
+  EXPECT_TRUE(has(error_of(get("/api/nc/new?part=intake_flat&lobe=1"), 501), "does not preview"));
+  EXPECT_TRUE(has(error_of(get("/api/nc/new/plot.svg?part=intake_flat&lobe=1"), 501), "does not preview"));
+  EXPECT_TRUE(has(error_of(post("/api/nc/new", R"({"part": "intake_flat", "lobe": 1, "by": "anna"})", "secret"), 501),
+                  "does not write new programs"));
+}
+
 // Intake lobe 1 at 0 deg (the datum) and lobe 2 at 110 deg, +-0.5 deg.
 ShaftLayout sample_shaft(const std::string& name) {
   ShaftLayout shaft;

@@ -320,6 +320,54 @@ TEST_F(ServiceStateTest, ARunIsMeasuredStoredPushedAndCounted) {
   EXPECT_TRUE(service.reserve_run().ok()) << "the run's reservation ended with it";
 }
 
+TEST_F(ServiceStateTest, ANewProgramIsPreviewedWrittenOnceAndTheFirstRunBuildsOnIt) {
+  Service service(config_, design_gauge());
+  const fs::path nc_file = dir_ / "nc" / "CAM_INTAKE_L1.SPF";
+  Result<NewProgramPreview> preview = service.preview_program("intake_flat", 1);
+  ASSERT_TRUE(preview.ok()) << preview.error().message;
+  const nlohmann::json& p = preview->body;
+  EXPECT_EQ(p["program"], "CAM_INTAKE_L1");
+  EXPECT_EQ(p["profile"]["c_deg"].size(), 360u);
+  EXPECT_EQ(preview->page.command_error_um.size(), 360u);
+  EXPECT_LE(p["table"]["command_error_um"].get<double>(), p["command_error_bound_um"].get<double>());
+  int chosen = 0;
+  for (const nlohmann::json& c : p["choices"]) chosen += c.value("chosen", false) ? 1 : 0;
+  EXPECT_EQ(chosen, 1) << p["choices"].dump();
+  EXPECT_GT(p["cycle_time_s"].get<double>(), 0.0);
+  EXPECT_FALSE(fs::exists(nc_file)) << "a preview writes nothing";
+  Result<NewProgramPreview> unknown = service.preview_program("exhaust_roller", 1);
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_EQ(unknown.error().code, ErrorCode::kNotFound);
+
+  Result<nlohmann::json> written = service.new_program("intake_flat", 1, "anna", false);
+  ASSERT_TRUE(written.ok()) << written.error().message;
+  EXPECT_EQ((*written)["table_version"], 1);
+  EXPECT_EQ((*written)["table"]["blocks"], p["table"]["blocks"]) << "what was previewed is what was written";
+  EXPECT_TRUE(fs::exists(nc_file));
+  Result<nlohmann::json> again = service.new_program("intake_flat", 1, "anna", false);
+  ASSERT_FALSE(again.ok());
+  EXPECT_EQ(again.error().code, ErrorCode::kRefused);
+  EXPECT_NE(again.error().message.find("\"replace\": true"), std::string::npos) << again.error().message;
+  Result<nlohmann::json> replaced = service.new_program("intake_flat", 1, "anna", true);
+  ASSERT_TRUE(replaced.ok()) << replaced.error().message;
+  EXPECT_EQ((*replaced)["table_version"], 2);
+  EXPECT_TRUE(service.reserve_run().ok()) << "the push slot was released";
+
+  Result<nlohmann::json> run = service.measure("intake_flat", 1, "");
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ((*run)["table_version"], 3) << "the first run's table follows the new program's versions";
+  Result<RunStore> store = RunStore::open_read_only(db());
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  PushQuery q;
+  q.nc_file = fs::absolute(nc_file).lexically_normal().string();
+  Result<std::vector<NcPush>> pushes = store->list_pushes(q);
+  ASSERT_TRUE(pushes.ok()) << pushes.error().message;
+  ASSERT_EQ(pushes->size(), 3u);
+  int without_run = 0;
+  for (const NcPush& push : *pushes) without_run += push.run_id == 0 ? 1 : 0;
+  EXPECT_EQ(without_run, 2) << "the new programs have no run behind them";
+}
+
 TEST_F(ServiceStateTest, AnUnknownPartIsRefusedBeforeTheGaugeAndKeptAsAnEvent) {
   Service service(config_, design_gauge());
   Result<nlohmann::json> r = service.measure("exhaust_roller", 1, "");

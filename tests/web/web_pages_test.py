@@ -6,7 +6,8 @@ Three runs are measured over the HTTP API with every table held for approval: in
 shaft S-1001 (its table approved here: version 1 of CAM_INTAKE_L1), then lobe 1 and lobe 2 of
 shaft S-1002 (two pending tables). The browser then looks at every page, approves the lobe 1
 table with the token (the NC history shows version 2 and its diff) and rejects the lobe 2 one,
-after both were refused without it. Screenshots of every page, at 1366x768 and 390x844, go to
+after both were refused without it; then previews lobe 2's first program and writes it (lobe
+1's, which has a history, is refused). Screenshots of every page, at 1366x768 and 390x844, go to
 --screenshots. Exits 0 when every check holds; a failed check says what the page showed.
 """
 
@@ -389,6 +390,34 @@ def run_checks(svc, browser, shots):
     check(v3 != v1 and "rollback" in svc.get_json("/api/nc/history?program=CAM_INTAKE_L1")[0]["reason"],
           "version 3 was written by the rollback")
 
+    # ---- A new program from the drawing: previewed, then written ----
+    # Lobe 2's only table was rejected: CAM_INTAKE_L2 has no history, and its first program is
+    # written here. Lobe 1's program has one, and is refused without "replace".
+    b.go(ui + "#/new")
+    wait_until("the parts to choose from", lambda: b.count("#new-part option") == 2)
+    b.driver.execute_script("document.querySelector('#new-part').value = 'intake_flat|2'")
+    b.driver.find_element(By.CSS_SELECTOR, "#new-form button[type=submit]").click()
+    b.wait_text("#new-title", "CAM_INTAKE_L2: intake_flat lobe 2")
+    check("part=intake_flat" in b.driver.current_url and "lobe=2" in b.driver.current_url,
+          f"the preview is a link: {b.driver.current_url}")
+    cards = b.wait_text("#new-cards", "Command position error")
+    check("blocks" in cards and "µm" in cards and "turns" in cards, f"the preview's cards: {cards}")
+    wait_until("the preview picture", lambda: b.count("#new-plot svg") == 1)
+    check(b.count("table#new-choices tr.chosen") == 1, "one table of those weighed is marked chosen")
+    check(svc.request("GET", "/api/nc/history?program=CAM_INTAKE_L2")[0] == 404, "a preview writes nothing")
+    screenshots(b, shots, "new", lambda: b.count("#new-plot svg") == 1)
+    b.driver.find_element(By.CSS_SELECTOR, "#new-write").click()
+    b.wait_text("#new-message", "Written: version 1 of CAM_INTAKE_L2")
+    written = svc.get_json("/api/nc/history?program=CAM_INTAKE_L2")
+    check(len(written) == 1 and written[0]["run_id"] is None and "new program" in written[0]["reason"],
+          f"version 1 with no run behind it: {written}")
+    b.go(ui + "#/new?part=intake_flat&lobe=1")
+    b.wait_text("#new-title", "CAM_INTAKE_L1")
+    b.driver.find_element(By.CSS_SELECTOR, "#new-write").click()
+    refused = b.wait_text("#new-message", "has a history")
+    check("replace" in refused, f"the refusal says how to replace it: {refused}")
+    check(len(svc.get_json("/api/nc/history?program=CAM_INTAKE_L1")) == 3, "the refused program is unchanged")
+
     # ---- Service state, refreshing itself ----
     b.go(ui + "#/state")
     cards = b.wait_text("#state-cards", "grinder-web")
@@ -419,10 +448,12 @@ def run_checks(svc, browser, shots):
     check(foreign == [], f"every asset comes from the service: {foreign}")
 
     # No script error or blocked resource on any page; the writes refused without the token
-    # (401) and the record of the shaft the service does not know (404) were meant.
+    # (401), the record of the shaft the service does not know (404) and the new program refused
+    # over a history (409) were meant.
     errors = [e for e in b.driver.get_log("browser")
               if e["level"] == "SEVERE" and "status of 401" not in e["message"]
-              and not ("shaft=no-such-shaft" in e["message"] and "status of 404" in e["message"])]
+              and not ("shaft=no-such-shaft" in e["message"] and "status of 404" in e["message"])
+              and not ("/api/nc/new" in e["message"] and "status of 409" in e["message"])]
     check(errors == [], f"the browser console holds errors: {errors}")
 
 
