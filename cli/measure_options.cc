@@ -43,10 +43,11 @@ void add_program_options(CLI::App& cmd, MeasureOptions& o) {
   cmd.add_option(
          "--table", o.table,
          "Curve table: auto (fewest blocks within --command-error-um; the next keeps the points of the table in "
-         "force), linear or spline (at --table-step-deg), adaptive-linear, adaptive-spline; see docs/nc_output.md")
-      ->check(CLI::IsMember({"auto", "linear", "spline", "adaptive-linear", "adaptive-spline"}))
+         "force), linear, spline or poly (at --table-step-deg; poly is never chosen by auto), adaptive-linear, "
+         "adaptive-spline; see docs/nc_output.md")
+      ->check(CLI::IsMember(table_kind_names()))
       ->capture_default_str();
-  cmd.add_option("--table-step-deg", o.table_step_deg, "C step of a linear or spline table, degrees")
+  cmd.add_option("--table-step-deg", o.table_step_deg, "C step of a linear, spline or poly table, degrees")
       ->capture_default_str();
   cmd.add_option("--command-error-um", o.command_error_um,
                  "Largest command position error (NC interpolation against the exact path) auto and adaptive "
@@ -119,11 +120,7 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
   js.cycle = lp.file.grinding;
   if (lp.file.pin) set_pin_job(js, *lp.file.pin, /*main_template_given=*/!o.main_template_path.empty());
   js.table_step_deg = o.table_step_deg;
-  js.table_kind = o.table == "linear"            ? TableKind::kLinear
-                  : o.table == "spline"          ? TableKind::kSpline
-                  : o.table == "adaptive-linear" ? TableKind::kAdaptiveLinear
-                  : o.table == "adaptive-spline" ? TableKind::kAdaptiveSpline
-                                                 : TableKind::kAuto;
+  js.table_kind = table_kind_named(o.table);
   // Without the option: TableChoiceSettings' 0.5 um for a lobe, set_pin_job's for a pin.
   js.table_choice.bound_um = o.command_error_um.value_or(js.table_choice.bound_um);
   js.table_format.x_increments_per_mm = o.int_incr_per_mm;

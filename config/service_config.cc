@@ -151,18 +151,9 @@ Status read_compensation_table(TomlReader& top, const ConfigFile& f, JobSettings
   return {};
 }
 
-TableKind table_kind(const std::string& name) {
-  return name == "linear"            ? TableKind::kLinear
-         : name == "spline"          ? TableKind::kSpline
-         : name == "adaptive-linear" ? TableKind::kAdaptiveLinear
-         : name == "adaptive-spline" ? TableKind::kAdaptiveSpline
-                                     : TableKind::kAuto;
-}
-
 // The keys of [nc] that shape the table and bound the infeed axis.
 void read_nc_table_keys(TomlReader& nr, JobSettings& job) {
-  job.table_kind =
-      table_kind(nr.choice("table", "auto", {"auto", "linear", "spline", "adaptive-linear", "adaptive-spline"}));
+  job.table_kind = table_kind_named(nr.choice("table", "auto", table_kind_names()));
   job.table_step_deg = nr.number("table_step_deg", 1.0, 0.0, 10.0, true);
   job.table_choice.bound_um = nr.number("command_error_um", 0.5, 0.0, 100.0, true);
   job.table_choice.max_step_deg = nr.number("max_segment_deg", 10.0, 0.0, 90.0, true);

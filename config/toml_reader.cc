@@ -113,13 +113,18 @@ long long TomlReader::integer(std::string_view key, std::optional<long long> fal
 
 std::string TomlReader::choice(std::string_view key, std::optional<std::string> fallback,
                                std::initializer_list<std::string_view> choices) {
+  return choice(key, std::move(fallback), std::vector<std::string>(choices.begin(), choices.end()));
+}
+
+std::string TomlReader::choice(std::string_view key, std::optional<std::string> fallback,
+                               const std::vector<std::string>& choices) {
   const std::string v = text(key, std::move(fallback));
   if (error) return v;
-  for (std::string_view c : choices) {
+  for (const std::string& c : choices) {
     if (c == v) return v;
   }
   std::string list;
-  for (std::string_view c : choices) list += (list.empty() ? "" : ", ") + std::string(c);
+  for (const std::string& c : choices) list += (list.empty() ? "" : ", ") + c;
   fail(where(key) + ": `" + v + "` is not one of " + list);
   return v;
 }

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/result.h"
 
@@ -41,6 +42,8 @@ class TomlReader {
   // One of `choices`, as written.
   std::string choice(std::string_view key, std::optional<std::string> fallback,
                      std::initializer_list<std::string_view> choices);
+  std::string choice(std::string_view key, std::optional<std::string> fallback,
+                     const std::vector<std::string>& choices);
 
   void fail(std::string message);
   std::optional<Error> error;

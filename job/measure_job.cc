@@ -227,7 +227,7 @@ Result<Prepared> prepare_pin(const JobSettings& s) {
 // Checks that need no gauge, so bad input costs no measurement: the design must make a
 // table within the axis limits, and the template must render it.
 Result<Prepared> prepare(const JobSettings& s) {
-  if (s.table_kind == TableKind::kLinear || s.table_kind == TableKind::kSpline) {
+  if (s.table_kind == TableKind::kLinear || s.table_kind == TableKind::kSpline || s.table_kind == TableKind::kPoly) {
     const double steps = 360.0 / s.table_step_deg;
     if (!(s.table_step_deg > 0.0) || std::abs(steps - std::round(steps)) > 1e-9 || steps < 36) {
       return make_error(ErrorCode::kInvalidInput, "table step " + format_fixed(s.table_step_deg, 4) +
@@ -934,8 +934,27 @@ std::string_view table_kind_name(TableKind kind) {
       return "adaptive-linear";
     case TableKind::kAdaptiveSpline:
       return "adaptive-spline";
+    case TableKind::kPoly:
+      return "poly";
   }
   return "?";
+}
+
+std::vector<std::string> table_kind_names() {
+  std::vector<std::string> out;
+  for (TableKind k : {TableKind::kAuto, TableKind::kLinear, TableKind::kSpline, TableKind::kAdaptiveLinear,
+                      TableKind::kAdaptiveSpline, TableKind::kPoly}) {
+    out.emplace_back(table_kind_name(k));
+  }
+  return out;
+}
+
+TableKind table_kind_named(std::string_view name) {
+  for (TableKind k : {TableKind::kLinear, TableKind::kSpline, TableKind::kAdaptiveLinear, TableKind::kAdaptiveSpline,
+                      TableKind::kPoly}) {
+    if (table_kind_name(k) == name) return k;
+  }
+  return TableKind::kAuto;
 }
 
 }  // namespace gaugeloop

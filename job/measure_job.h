@@ -37,8 +37,13 @@ enum class TableKind {
   kSpline,          // CSPLINE at table_step_deg
   kAdaptiveLinear,  // G1, dense only where X bends
   kAdaptiveSpline,  // CSPLINE, dense only where X bends
+  kPoly,            // POLY cubic segments at table_step_deg; asked for, never chosen by auto
 };
 std::string_view table_kind_name(TableKind kind);  // "auto", "linear", "spline", "adaptive-linear", ...
+// Every kind's name, in the order of the enum: what --table and [nc] table take.
+std::vector<std::string> table_kind_names();
+// The kind named so (table_kind_name), or kAuto for a name that is none.
+TableKind table_kind_named(std::string_view name);
 
 // A step of the measuring cycle that went through, in the order they come:
 //  - "acquired": the revolutions measured, how long it took, polls, reconnects;

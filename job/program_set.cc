@@ -66,6 +66,8 @@ Result<CurveTable> table_for_path(const SampledPath& fine, const AxisLimits& lim
         return write_adaptive_linear_table(fine, adaptive, s.table_format);
       case TableKind::kAdaptiveSpline:
         return write_adaptive_spline_table(fine, adaptive, s.table_format);
+      case TableKind::kPoly:
+        return write_poly_table(fine, s.table_step_deg, s.table_format);
     }
     return make_error(ErrorCode::kInternal, "unknown table kind");
   }();

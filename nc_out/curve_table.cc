@@ -28,6 +28,12 @@ double CurveTableFormat::round_x_mm(double x_mm) const {
   return r == 0.0 ? 0.0 : r;
 }
 
+double CurveTableFormat::round_coefficient_mm(double a_mm) const {
+  const double q = std::pow(10.0, coefficient_decimals());
+  const double r = std::round(a_mm * q) / q;
+  return r == 0.0 ? 0.0 : r;
+}
+
 Status check_x_resolution(double x_increments_per_mm, std::string_view where) {
   if (!(x_increments_per_mm >= 1.0 && x_increments_per_mm <= 1e6) ||
       x_increments_per_mm != std::round(x_increments_per_mm)) {
@@ -45,7 +51,8 @@ Status validate_curve_points(const std::vector<CurvePoint>& points) {
                                                     " points; a periodic table needs at least 4");
   }
   for (size_t i = 0; i < points.size(); ++i) {
-    if (!std::isfinite(points[i].c_deg) || !std::isfinite(points[i].x_mm)) {
+    if (!std::isfinite(points[i].c_deg) || !std::isfinite(points[i].x_mm) || !std::isfinite(points[i].a2_mm) ||
+        !std::isfinite(points[i].a3_mm)) {
       return make_error(ErrorCode::kRefused,
                         "curve table " + point_name(points, i) + " has NaN or infinity; nothing was written");
     }
@@ -69,7 +76,15 @@ Status validate_curve_points(const std::vector<CurvePoint>& points) {
 }
 
 std::string_view interpolation_name(Interpolation interpolation) {
-  return interpolation == Interpolation::kLinear ? "linear" : "cspline";
+  switch (interpolation) {
+    case Interpolation::kLinear:
+      return "linear";
+    case Interpolation::kCubicSpline:
+      return "cspline";
+    case Interpolation::kPoly:
+      return "poly";
+  }
+  return "linear";
 }
 
 std::string render_curve_blocks(const std::vector<CurvePoint>& points, const CurveTableFormat& format) {
@@ -82,14 +97,22 @@ std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpola
   out.reserve(points.size() * 24 + 32);
   for (size_t i = 0; i < points.size(); ++i) {
     if (i > 0) out += '\n';
+    // A tiny negative infeed prints as 0.0000, not as a signed zero (format_fixed).
+    const std::string c = format_fixed(points[i].c_deg, format.c_decimals);
+    const std::string x = format_fixed(format.round_x_mm(points[i].x_mm), format.x_decimals());
+    if (i > 0 && interpolation == Interpolation::kPoly) {
+      const int ad = format.coefficient_decimals();
+      out += std::string(i == 1 ? "POLY " : "") + "PO[C]=(" + c + ") PO[" + std::string(following_axis) + "]=(" + x +
+             "," + format_fixed(format.round_coefficient_mm(points[i].a2_mm), ad) + "," +
+             format_fixed(format.round_coefficient_mm(points[i].a3_mm), ad) + ")";
+      continue;
+    }
     if (i == 0) {
       out += "G1 ";
     } else if (i == 1 && interpolation == Interpolation::kCubicSpline) {
       out += "BNAT ENAT CSPLINE ";
     }
-    // A tiny negative infeed prints as 0.0000, not as a signed zero (format_fixed).
-    out += "C" + format_fixed(points[i].c_deg, format.c_decimals) + " " + std::string(following_axis) +
-           format_fixed(format.round_x_mm(points[i].x_mm), format.x_decimals());
+    out += "C" + c + " " + std::string(following_axis) + x;
   }
   return out;
 }

@@ -17,6 +17,11 @@ namespace gaugeloop {
 struct CurvePoint {
   double c_deg = 0.0;
   double x_mm = 0.0;
+  // kPoly only: the segment that ends at this point, as `PO[X]=(x_mm, a2, a3)` writes it:
+  // X(p) = X_before + a1 p + a2 p^2 + a3 p^3, p = 0 .. 1 across the segment's C, a1 derived by
+  // the control so that X(1) = x_mm. 0 on the first point and under the other interpolations.
+  double a2_mm = 0.0;
+  double a3_mm = 0.0;
 };
 
 // How the table's values are written. X is rounded to the control's computational resolution
@@ -36,6 +41,11 @@ struct CurveTableFormat {
   int x_decimals() const;
   // X on the control's grid: the nearest whole increment, never a signed zero.
   double round_x_mm(double x_mm) const;
+  // A POLY segment's coefficients a2, a3 (mm) are not positions and are not rounded to the
+  // grid by the control; they are written with two decimals more than X, so that their
+  // rounding moves the segment by at most 0.64 * 0.5e-(x_decimals + 2) mm between its ends.
+  int coefficient_decimals() const { return x_decimals() + 2; }
+  double round_coefficient_mm(double a_mm) const;
 };
 
 // kInvalidInput unless `x_increments_per_mm` is a whole number 1..1000000 (six decimals at
@@ -46,9 +56,10 @@ Status check_x_resolution(double x_increments_per_mm, std::string_view where);
 enum class Interpolation {
   kLinear,       // G1
   kCubicSpline,  // CSPLINE with BNAT ENAT (natural ends), see docs/nc_output.md
+  kPoly,         // POLY: one cubic per segment in the segment's normalised C, see docs/nc_output.md
 };
 
-// "linear" or "cspline": as written in the table header and read back.
+// "linear", "cspline" or "poly": as written in the table header and read back.
 std::string_view interpolation_name(Interpolation interpolation);
 
 // Checks a periodic table before anything is written: at least 4 points, C strictly
@@ -72,7 +83,13 @@ std::string render_curve_blocks(const std::vector<CurvePoint>& points, const Cur
 //   C2.000 X0.0011
 // `following_axis` is the word the following values are written under: X for the wheel
 // infeed, Y for the wheel height of a crankpin ground C-X-Y (its values then are Y in mm,
-// rounded on the same linear grid). Call validate_curve_points first.
+// rounded on the same linear grid). kPoly: the first block sets the start point with G1, the
+// second switches to POLY, each segment gives C's end point (C moves linearly in p) and the
+// following axis' end point with a2 and a3 (PL not programmed: 1):
+//   G1 C0.000 X0.0000
+//   POLY PO[C]=(1.000) PO[X]=(0.0003,0.000012,-0.000004)
+//   PO[C]=(2.000) PO[X]=(0.0011,0.000010,-0.000003)
+// Call validate_curve_points first.
 std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpolation interpolation,
                                 const CurveTableFormat& format = {}, std::string_view following_axis = "X");
 

@@ -104,7 +104,7 @@ Status check_table_guards(const CurveTable& table, const SampledPath& path, cons
   if (Status s = validate_curve_points(table.points); !s) return s;
   Result<TableInterpolant> nc = TableInterpolant::of(table.points, table.interpolation);
   if (!nc) return nc.error();
-  const bool spline = table.interpolation == Interpolation::kCubicSpline;
+  const bool spline = table.interpolation != Interpolation::kLinear;  // a smooth table: its X' and X'' count
   for (std::size_t k = 0; k <= path.size(); ++k) {
     const double c = k == path.size() ? 360.0 : path.c_deg(k);
     const TableInterpolant::Value v = nc->at(c);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <optional>
+#include <variant>
 
 #include "core/number_text.h"
 #include "nc_out/nc_template.h"
@@ -265,9 +266,35 @@ struct SplineEnds {
 
 // One block between CTABDEF and CTABEND: its point (if it has one) appended to `t`, line
 // `line` (1-based) kept with it. Returns why it cannot be read; empty when it was.
+// `PO[axis]=(end[,a2[,a3]])` of a POLY block: the axis and its values, or why not.
+struct PolyWord {
+  std::string axis;
+  std::vector<double> values;
+};
+std::variant<PolyWord, std::string> read_poly_word(std::string_view w) {
+  const std::string u = upper(w);
+  const std::size_t close = u.find("]=(");
+  if (close == std::string::npos || u.back() != ')') return "`" + std::string(w) + "`: expected PO[axis]=(end,a2,a3)";
+  PolyWord out;
+  out.axis = u.substr(3, close - 3);
+  std::string_view rest = w.substr(close + 3, w.size() - close - 4);
+  while (true) {
+    const std::size_t comma = rest.find(',');
+    const std::optional<double> v = parse_number(trim(rest.substr(0, comma)));
+    if (!v) return "`" + std::string(w) + "`: not a number in the polynomial's values";
+    out.values.push_back(*v);
+    if (comma == std::string_view::npos) break;
+    rest = rest.substr(comma + 1);
+  }
+  if (out.values.size() > 3) return "`" + std::string(w) + "`: a cubic has the end point, a2 and a3 at most";
+  return out;
+}
+
 std::string read_table_block(const std::vector<std::string_view>& words, int line, ParsedTable& t, SplineEnds& ends) {
   std::optional<double> c;
   std::optional<double> x;
+  double a2 = 0.0;
+  double a3 = 0.0;
   std::optional<Interpolation> mode;
   for (std::string_view w : words) {
     const std::string u = upper(w);
@@ -275,6 +302,25 @@ std::string read_table_block(const std::vector<std::string_view>& words, int lin
       mode = Interpolation::kLinear;
     } else if (u == "CSPLINE") {
       mode = Interpolation::kCubicSpline;
+    } else if (u == "POLY") {
+      mode = Interpolation::kPoly;
+    } else if (u.rfind("PO[", 0) == 0) {
+      std::variant<PolyWord, std::string> po = read_poly_word(w);
+      if (const std::string* why = std::get_if<std::string>(&po)) return *why;
+      const PolyWord& pw = std::get<PolyWord>(po);
+      if (pw.axis == t.leading_axis) {
+        if (pw.values.size() != 1) {
+          return "`" + std::string(w) + "`: the leading axis is given by its end point alone (it moves linearly)";
+        }
+        c = pw.values[0];
+      } else if (pw.axis == t.following_axis) {
+        x = pw.values[0];
+        a2 = pw.values.size() > 1 ? pw.values[1] : 0.0;
+        a3 = pw.values.size() > 2 ? pw.values[2] : 0.0;
+      } else {
+        return "`" + std::string(w) + "`: neither the leading axis " + t.leading_axis + " nor the following axis " +
+               t.following_axis;
+      }
     } else if (u == "BNAT" || u == "ENAT" || u == "BAUTO" || u == "EAUTO" || u == "BTAN" || u == "ETAN") {
       // Only BNAT + ENAT is modelled; the others are read so that natural_ends says no.
       if (u[0] == 'B') ends.bnat = u == "BNAT";
@@ -293,8 +339,8 @@ std::string read_table_block(const std::vector<std::string_view>& words, int lin
         }
       }
       if (!read) {
-        return "`" + std::string(w) + "` in the curve table: gaugeloop reads only G1, CSPLINE, BNAT/ENAT, block " +
-               "numbers, " + t.leading_axis + " and " + t.following_axis;
+        return "`" + std::string(w) + "` in the curve table: gaugeloop reads only G1, CSPLINE, BNAT/ENAT, POLY " +
+               "with PO[axis]=(...) (PL not programmed), block numbers, " + t.leading_axis + " and " + t.following_axis;
       }
     }
   }
@@ -305,12 +351,19 @@ std::string read_table_block(const std::vector<std::string_view>& words, int lin
   if (t.points.size() == 1) {
     t.interpolation = block_mode;
   } else if (t.points.size() > 1 && block_mode != t.interpolation) {
-    return "the table mixes G1 and CSPLINE segments; gaugeloop models one kind per table";
+    auto word = [](Interpolation i) {
+      return i == Interpolation::kLinear ? "G1" : i == Interpolation::kCubicSpline ? "CSPLINE" : "POLY";
+    };
+    return std::string("the table mixes ") + word(t.interpolation) + " and " + word(block_mode) +
+           " segments; gaugeloop models one kind per table";
   }
   if (!t.points.empty() && !(*c > t.points.back().c_deg)) {
     return t.leading_axis + " " + format_fixed(*c, 3) + " does not increase";
   }
-  t.points.push_back({*c, x ? *x : t.points.back().x_mm});
+  if ((a2 != 0.0 || a3 != 0.0) && block_mode != Interpolation::kPoly) {
+    return "polynomial coefficients outside POLY: the block is not a cubic segment";
+  }
+  t.points.push_back({*c, x ? *x : t.points.back().x_mm, t.points.empty() ? 0.0 : a2, t.points.empty() ? 0.0 : a3});
   t.point_lines.push_back(line);
   return "";
 }
@@ -397,14 +450,22 @@ Status compare_table_points(const ParsedTable& table, const std::vector<CurvePoi
     // Compare as written: the decimals the table carries, X on the control's grid. format_fixed
     // never writes a signed zero, so -0.0000 and 0.0000 compare equal.
     const std::string bx = format_fixed(format.round_x_mm(b.x_mm), xd);
+    const int ad = format.coefficient_decimals();
+    auto coefficients = [&](const CurvePoint& p) {
+      return format_fixed(format.round_coefficient_mm(p.a2_mm), ad) + "," +
+             format_fixed(format.round_coefficient_mm(p.a3_mm), ad);
+    };
     if (format_fixed(a.c_deg, format.c_decimals) != format_fixed(b.c_deg, format.c_decimals) ||
-        format_fixed(a.x_mm, xd) != bx) {
-      return make_error(ErrorCode::kRefused, std::string(file_name) + ":" + std::to_string(table.point_lines[i]) +
-                                                 ": point " + std::to_string(i) + " reads C" +
-                                                 format_fixed(a.c_deg, format.c_decimals) + " " + table.following_axis +
-                                                 format_fixed(a.x_mm, xd) + ", the pushed table has C" +
-                                                 format_fixed(b.c_deg, format.c_decimals) + " " + table.following_axis +
-                                                 bx + "; edited by hand");
+        format_fixed(a.x_mm, xd) != bx || coefficients(a) != coefficients(b)) {
+      return make_error(ErrorCode::kRefused,
+                        std::string(file_name) + ":" + std::to_string(table.point_lines[i]) + ": point " +
+                            std::to_string(i) + " reads C" + format_fixed(a.c_deg, format.c_decimals) + " " +
+                            table.following_axis + format_fixed(a.x_mm, xd) + ", the pushed table has C" +
+                            format_fixed(b.c_deg, format.c_decimals) + " " + table.following_axis + bx +
+                            (coefficients(a) != coefficients(b)
+                                 ? " (a2,a3 read " + coefficients(a) + ", pushed " + coefficients(b) + ")"
+                                 : std::string()) +
+                            "; edited by hand");
     }
   }
   if (table.points.size() != expected.size()) {

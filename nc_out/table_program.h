@@ -121,10 +121,11 @@ struct ParsedTable {
 };
 
 // Parses a program holding exactly one CTABDEF .. CTABEND. Inside, blocks may carry a block
-// number (N10), G1, CSPLINE, BNAT/ENAT/BAUTO/EAUTO/BTAN/ETAN, the leading and following axis
-// with a value (C12.5 or C=12.5) and a comment after ';'. X is modal (a block without it
-// keeps the last X); every block needs C. Anything else is refused with its line: gaugeloop
-// cannot say what the control would make of it. Mixed G1 and CSPLINE segments are refused.
+// number (N10), G1, CSPLINE, BNAT/ENAT/BAUTO/EAUTO/BTAN/ETAN, POLY, the leading and following
+// axis with a value (C12.5 or C=12.5) or as a polynomial (PO[C]=(end), PO[X]=(end,a2,a3)) and a
+// comment after ';'. X is modal (a block without it keeps the last X); every block needs C.
+// Anything else (PL among it) is refused with its line: gaugeloop cannot say what the control
+// would make of it. Mixed interpolations (G1 and CSPLINE, ...) are refused.
 Result<ParsedTable> parse_table_program(std::string_view text, std::string_view file_name);
 
 // Refuses (kRefused) a table whose body does not match the checksum in its header, or whose

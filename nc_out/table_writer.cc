@@ -52,9 +52,14 @@ Status check_format(const SampledPath& path, const CurveTableFormat& format) {
   return {};
 }
 
-// Table points at fine-grid rows `rows` (first 0, last n = one turn).
+// Table points at fine-grid rows `rows` (first 0, last n = one turn). Under kPoly each segment
+// is the cubic Hermite through its end points as written (on the grid) with the path's exact
+// slopes there, in the segment's normalised C p = 0..1 (slope h dX/dC for a segment h wide):
+// a2 = 3 d - 2 m0 - m1, a3 = m0 + m1 - 2 d, d the rise; the control derives a1 = d - a2 - a3,
+// which is m0 up to the coefficients' rounding.
 std::vector<CurvePoint> points_at_rows(const SampledPath& path, const std::vector<std::size_t>& rows,
-                                       const CurveTableFormat& format) {
+                                       const CurveTableFormat& format,
+                                       Interpolation interpolation = Interpolation::kLinear) {
   const std::size_t n = path.size();
   std::vector<CurvePoint> out;
   out.reserve(rows.size());
@@ -62,6 +67,16 @@ std::vector<CurvePoint> points_at_rows(const SampledPath& path, const std::vecto
     out.push_back({round_to(path.c_deg(k), format.c_decimals), format.round_x_mm(path.x_mm[k % n])});
   }
   out.back().c_deg = 360.0;
+  if (interpolation == Interpolation::kPoly) {
+    for (std::size_t i = 1; i < out.size(); ++i) {
+      const double h = out[i].c_deg - out[i - 1].c_deg;
+      const double m0 = h * path.dx_dc_mm_per_deg[rows[i - 1] % n];
+      const double m1 = h * path.dx_dc_mm_per_deg[rows[i] % n];
+      const double d = out[i].x_mm - out[i - 1].x_mm;
+      out[i].a2_mm = format.round_coefficient_mm(3.0 * d - 2.0 * m0 - m1);
+      out[i].a3_mm = format.round_coefficient_mm(m0 + m1 - 2.0 * d);
+    }
+  }
   return out;
 }
 
@@ -95,7 +110,7 @@ Result<CurveTable> table_at_rows(const SampledPath& path, const std::vector<std:
                                  Interpolation interpolation, const CurveTableFormat& format, std::string writer) {
   CurveTable t;
   t.interpolation = interpolation;
-  t.points = points_at_rows(path, rows, format);
+  t.points = points_at_rows(path, rows, format, interpolation);
   t.writer = std::move(writer);
   Result<TableInterpolant> nc = TableInterpolant::of(t.points, interpolation);
   if (!nc) return nc.error();
@@ -123,7 +138,9 @@ Result<CurveTable> write_uniform(const SampledPath& path, double c_step_deg, con
     return make_error(ErrorCode::kInvalidInput,
                       "table step " + format_fixed(c_step_deg, 4) + " deg gives fewer than 4 points");
   }
-  const std::string kind = interpolation == Interpolation::kLinear ? "linear " : "spline ";
+  const std::string kind = interpolation == Interpolation::kLinear        ? "linear "
+                           : interpolation == Interpolation::kCubicSpline ? "spline "
+                                                                          : "poly ";
   return table_at_rows(path, rows, interpolation, format, kind + format_fixed(c_step_deg, 3) + " deg");
 }
 
@@ -238,6 +255,10 @@ Result<TableInterpolant> TableInterpolant::of(const std::vector<CurvePoint>& poi
     }
     t.c_deg_.push_back(points[i].c_deg);
     t.x_mm_.push_back(points[i].x_mm);
+    if (interpolation == Interpolation::kPoly) {
+      t.a2_mm_.push_back(points[i].a2_mm);
+      t.a3_mm_.push_back(points[i].a3_mm);
+    }
   }
   t.moment_.assign(m, 0.0);
   if (interpolation == Interpolation::kCubicSpline && m > 2) {
@@ -289,6 +310,17 @@ TableInterpolant::Value TableInterpolant::at(double c_deg) const {
     v.x_mm = y0 + v.dx_dc_mm_per_deg * (c - c_deg_[i]);
     return v;
   }
+  if (interpolation_ == Interpolation::kPoly) {
+    // The segment ending at point i + 1, in p = 0..1 (PL 1); a1 as the control derives it.
+    const double a2 = a2_mm_[i + 1];
+    const double a3 = a3_mm_[i + 1];
+    const double a1 = y1 - y0 - a2 - a3;
+    const double p = (c - c_deg_[i]) / h;
+    v.x_mm = y0 + p * (a1 + p * (a2 + p * a3));
+    v.dx_dc_mm_per_deg = (a1 + p * (2.0 * a2 + 3.0 * p * a3)) / h;
+    v.d2x_dc2_mm_per_deg2 = (2.0 * a2 + 6.0 * p * a3) / (h * h);
+    return v;
+  }
   const double a = (c_deg_[i + 1] - c) / h;
   const double b = (c - c_deg_[i]) / h;
   const double m0 = moment_[i];
@@ -302,6 +334,11 @@ TableInterpolant::Value TableInterpolant::at(double c_deg) const {
 double TableInterpolant::max_abs_d2_mm_per_deg2() const {
   double m = 0.0;
   for (double v : moment_) m = std::max(m, std::abs(v));
+  // POLY: X'' is linear across a segment, largest at one of its ends.
+  for (std::size_t i = 1; i < a2_mm_.size(); ++i) {
+    const double h = c_deg_[i] - c_deg_[i - 1];
+    m = std::max({m, std::abs(2.0 * a2_mm_[i]) / (h * h), std::abs(2.0 * a2_mm_[i] + 6.0 * a3_mm_[i]) / (h * h)});
+  }
   return m;
 }
 
@@ -325,6 +362,10 @@ Result<std::vector<double>> command_error_per_degree_um(const SampledPath& path,
     out[d] = std::max(out[d], std::abs(e[j]) * kUmPerMm);
   }
   return out;
+}
+
+Result<CurveTable> write_poly_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format) {
+  return write_uniform(path, c_step_deg, format, Interpolation::kPoly);
 }
 
 Result<CurveTable> write_linear_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format) {
@@ -594,7 +635,8 @@ Result<CurveTable> refine_points_in_force(const SampledPath& path, const TablePo
   const double bound_mm = settings.bound_um / kUmPerMm;
   const std::size_t max_rows = widest_rows(path, settings);
   for (int round = 0; round < 40; ++round) {
-    Result<TableInterpolant> nc = TableInterpolant::of(points_at_rows(path, rows, format), in_force.interpolation);
+    Result<TableInterpolant> nc =
+        TableInterpolant::of(points_at_rows(path, rows, format, in_force.interpolation), in_force.interpolation);
     if (!nc) return nc.error();
     const std::vector<double> e = row_errors_mm(path, *nc);
     std::vector<std::size_t> next{rows.front()};

@@ -16,6 +16,9 @@
 //    over C, curvature continuous at inner points, zero curvature at the first and last point
 //    (natural ends). Started on the base circle, where X'' is 0 anyway, the natural ends cost
 //    nothing. See docs/nc_output.md for where this comes from and what it assumes.
+//  - kPoly (POLY, PO[C]=(c_end) PO[X]=(x_end,a2,a3)): in each segment the cubic of the
+//    normalised leading value p = (C - C_start) / (C_end - C_start), a1 derived so that it
+//    ends at x_end. Never chosen by the default (docs/nc_output.md: what the manual confirms).
 //
 // Errors: kInvalidInput for a step or setting out of range (named); kRefused when no table of
 // the kind asked for keeps the bound (the message gives the best error reached and where).
@@ -75,7 +78,8 @@ class TableInterpolant {
   Interpolation interpolation_ = Interpolation::kLinear;
   std::vector<double> c_deg_;
   std::vector<double> x_mm_;
-  std::vector<double> moment_;  // spline: S'' at each point (natural ends: 0 at both ends)
+  std::vector<double> moment_;         // spline: S'' at each point (natural ends: 0 at both ends)
+  std::vector<double> a2_mm_, a3_mm_;  // POLY: each point's segment coefficients (CurvePoint)
 };
 
 // The command position error of `points` against `path`. Points need not lie on the fine
@@ -101,6 +105,13 @@ double spline_start_c_deg(const SampledPath& path);
 
 // CSPLINE table at a uniform step (same rules as write_linear_table), from spline_start_c_deg.
 Result<CurveTable> write_spline_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format = {});
+
+// POLY table at a uniform step from C0 (same rules as write_linear_table): each segment the
+// cubic Hermite of its end points (on the control's grid) and the path's exact slopes there;
+// a POLY table has no end condition, so no seam to place. Error of the cubic Hermite: at most
+// h^4 / 384 max|X4| within a segment of h deg (X4 the fourth C-derivative), plus the grid's
+// rounding.
+Result<CurveTable> write_poly_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format = {});
 
 struct AdaptiveSettings {
   double bound_um = 0.5;       // largest command position error allowed

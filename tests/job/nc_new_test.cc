@@ -176,6 +176,29 @@ TEST_F(NcNewTest, APinsXTableAtOneDegreeKeepsANanometreAndNamesItsSeam) {
   }
 }
 
+// A POLY program, asked for: both tables of the C-X-Y pin at 1 degree and 1e-6 mm, written,
+// read back by the job, and read independently (the manual's polynomial from the text)
+// against the closed form within the grid's half increment plus the cubic's own 1e-5 um and
+// the coefficients' rounding (tests/nc_out/pin_seam_test.cc): 0.000515 um.
+TEST_F(NcNewTest, APinsPolyProgramReachesTheGridsHalfIncrement) {
+  testing::TempDir dir("nc-new-poly");
+  MeasureOptions o;
+  o.paths.data_dir = dir.path().string();
+  o.table = "poly";
+  o.table_step_deg = 1.0;
+  o.int_incr_per_mm = 1000000;
+  const JobSettings js = settings_for("crankpin_cxy.toml", o);
+  Result<NewProgramReport> r = write_new_program(js, {});
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const std::string x = read_text(r->nc_file);
+  const std::string y = read_text(y_table_program_path(r->nc_file));
+  EXPECT_NE(x.find("interpolation: poly"), std::string::npos) << x.substr(0, 800);
+  EXPECT_NE(x.find("POLY PO[C]=(1.000) PO[X]=("), std::string::npos) << x.substr(0, 1600);
+  const double r_throw = 45.0;
+  EXPECT_LE(independent_error_um(x, 'X', [&](double c) { return r_throw * std::cos(c * kRad) + r_throw; }), 0.000515);
+  EXPECT_LE(independent_error_um(y, 'Y', [&](double c) { return r_throw * std::sin(c * kRad); }), 0.000515);
+}
+
 TEST_F(NcNewTest, IsVersionOneWithNoRunBehindItAndTheHistorySaysSo) {
   const JobSettings js = settings_for("intake_flat.toml");
   NewProgramOptions options;

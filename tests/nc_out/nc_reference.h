@@ -1,7 +1,8 @@
 // Test-side reference for what the NC interpolates, written apart from nc_out's own code:
-// reads the table blocks from the program TEXT with a regex and evaluates G1 as chords and
+// reads the table blocks from the program TEXT with a regex and evaluates G1 as chords,
 // CSPLINE (BNAT ENAT) as the natural cubic spline solved in slopes (not moments) with
-// Eigen's sparse LU, so a mistake in the writer's evaluation cannot hide in both.
+// Eigen's sparse LU, and POLY as the manual's polynomial in p = 0..1, so a mistake in the
+// writer's evaluation cannot hide in both.
 #pragma once
 
 #include <Eigen/Sparse>
@@ -22,18 +23,23 @@ namespace gaugeloop::testing {
 
 struct RefTable {
   bool spline = false;
+  bool poly = false;
   std::vector<double> c;
   std::vector<double> x;
+  std::vector<double> a2, a3;  // POLY: the segment ending at each point (0 for the first)
 };
 
 // Blocks between CTABDEF and CTABEND: `C<number> <axis><number>` (X, or Y for a crankpin's Y
-// table), CSPLINE anywhere switches mode.
+// table), CSPLINE anywhere switches mode; POLY blocks `PO[C]=(c) PO[<axis>]=(x,a2,a3)`.
 inline RefTable ref_parse(const std::string& program, char axis = 'X') {
   RefTable t;
   std::istringstream in(program);
   std::string line;
   bool inside = false;
   const std::regex point(std::string(R"(C(-?[0-9]+\.[0-9]+) )") + axis + R"((-?[0-9]+\.[0-9]+))");
+  const std::string num = R"((-?[0-9]+\.[0-9]+))";
+  const std::regex poly(R"(PO\[C\]=\()" + num + R"(\) PO\[)" + std::string(1, axis) + R"(\]=\()" + num + "," + num +
+                        "," + num + R"(\))");
   while (std::getline(in, line)) {
     if (line.rfind("CTABDEF", 0) == 0) {
       inside = true;
@@ -43,9 +49,17 @@ inline RefTable ref_parse(const std::string& program, char axis = 'X') {
     if (!inside) continue;
     if (line.find("CSPLINE") != std::string::npos) t.spline = true;
     std::smatch m;
-    if (std::regex_search(line, m, point)) {
+    if (std::regex_search(line, m, poly)) {
+      t.poly = true;
       t.c.push_back(std::stod(m[1]));
       t.x.push_back(std::stod(m[2]));
+      t.a2.push_back(std::stod(m[3]));
+      t.a3.push_back(std::stod(m[4]));
+    } else if (std::regex_search(line, m, point)) {
+      t.c.push_back(std::stod(m[1]));
+      t.x.push_back(std::stod(m[2]));
+      t.a2.push_back(0.0);
+      t.a3.push_back(0.0);
     }
   }
   return t;
@@ -92,6 +106,12 @@ inline std::function<double(double)> ref_interpolant(const RefTable& t) {
     i = std::min(i == 0 ? 0 : i - 1, t.c.size() - 2);
     const double h = t.c[i + 1] - t.c[i];
     const double u = (c - t.c[i]) / h;
+    if (t.poly) {
+      // f(u) = a0 + a1 u + a2 u^2 + a3 u^3 from the segment's start, a1 such that f(1) is its end.
+      const double a2 = t.a2[i + 1], a3 = t.a3[i + 1];
+      const double a1 = t.x[i + 1] - t.x[i] - a2 - a3;
+      return t.x[i] + a1 * u + a2 * std::pow(u, 2) + a3 * std::pow(u, 3);
+    }
     if (!t.spline) return t.x[i] + (t.x[i + 1] - t.x[i]) * u;
     // Cubic Hermite on [c_i, c_i+1] with the spline's slopes.
     const double h00 = 2 * u * u * u - 3 * u * u + 1, h10 = u * u * u - 2 * u * u + u;

@@ -109,6 +109,39 @@ TEST(PinSeam, EveryPinTableAtOneDegreeKeepsANanometreAtFineResolution) {
   }
 }
 
+// POLY segments at 1 deg, each the cubic Hermite of the exact path, reach the crankpin paper's
+// 5e-7 mm at a resolution of 1e-6 mm on each of the pin's paths. The tolerance is what the
+// table cannot avoid: half an increment at the points (0.0005 um), the cubic Hermite's own
+// error h^4/384 max|X| (1 deg, |X| <= R = 45 mm per rad^4: 1.1e-5 um) and the
+// coefficients' rounding (0.64 * 0.5e-8 mm: 3.2e-6 um), so 0.000515 um.
+TEST(PinSeam, PolySegmentsAtOneDegreeKeepTheGridsHalfIncrement) {
+  CurveTableFormat fine;
+  fine.x_increments_per_mm = 1000000.0;
+  struct Case {
+    const char* what;
+    ClosedForm f;
+    char axis;
+  };
+  for (const Case& c :
+       {Case{"C-X X", cx_infeed(), 'X'}, Case{"C-X-Y X", cxy_infeed(), 'X'}, Case{"C-X-Y Y", cxy_height(), 'Y'}}) {
+    SCOPED_TRACE(c.what);
+    const SampledPath path = sampled(c.f);
+    Result<CurveTable> t = write_poly_table(path, 1.0, fine);
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    EXPECT_EQ(t->interpolation, Interpolation::kPoly);
+    EXPECT_EQ(t->block_count(), 361);
+    const std::string program = rendered(*t, c.axis, fine);
+    ASSERT_NE(program.find("POLY PO[C]=(1.000) PO["), std::string::npos) << program.substr(0, 600);
+    const double measured = error_against_closed_form_um(program, c.axis, c.f);
+    EXPECT_LE(measured, 0.000515);
+    EXPECT_NEAR(t->error.max_abs_um, measured, 0.0001) << "the writer's own figure agrees";
+    Result<ParsedTable> back = parse_table_program(program, "pin.spf");
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    EXPECT_EQ(back->interpolation, Interpolation::kPoly);
+    EXPECT_TRUE(compare_table_points(*back, t->points, "pin.spf", fine).ok());
+  }
+}
+
 // The seam is where the path's curvature vanishes: X'' = -R cos t + ... is 0 near t = 90 and
 // 270 (C-X-Y exactly), Y'' = -R sin t at 0 and 180; not at a multiple of 60 degrees.
 TEST(PinSeam, TheSeamIsWhereThePathBendsLeastAndTheHeaderSaysWhere) {

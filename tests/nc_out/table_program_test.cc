@@ -175,6 +175,68 @@ TEST(TableParser, RefusesMixedSegmentsAndAnOpenTable) {
   EXPECT_THAT(back.error().message, HasSubstr("CAM.SPF:4: C 1.000 does not increase"));
 }
 
+// POLY blocks as the manual writes them: the leading axis by its end point, the following by
+// its end point with a2 and a3; an axis by its end point alone moves linearly (a2 = a3 = 0).
+TEST(TableParser, ReadsPolyBlocksAndRefusesWhatItCannotModel) {
+  Result<ParsedTable> t = parse_table_program(
+      "CTABDEF(X,C,1,1)\nG1 C0 X0\nPOLY PO[C]=(90.0) PO[X]=(45.0,135.0,-90)\nPO[C]=(180) PO[X]=(0.5)\n"
+      "C270 X0.25\nPO[C]=(360) PO[X]=(0,1.5,-2.5) ; last\nCTABEND\n",
+      "CAM.SPF");
+  ASSERT_TRUE(t.ok()) << t.error().message;
+  EXPECT_EQ(t->interpolation, Interpolation::kPoly);
+  ASSERT_EQ(t->points.size(), 5u);
+  EXPECT_EQ(t->points[1].c_deg, 90.0);
+  EXPECT_EQ(t->points[1].x_mm, 45.0);
+  EXPECT_EQ(t->points[1].a2_mm, 135.0);
+  EXPECT_EQ(t->points[1].a3_mm, -90.0);
+  EXPECT_EQ(t->points[2].a2_mm, 0.0) << "an end point alone: a linear segment";
+  EXPECT_EQ(t->points[3].x_mm, 0.25);
+  EXPECT_EQ(t->points[4].a3_mm, -2.5);
+  // The manual's segment (0 -> 45 over 90 deg, a2 135, a3 -90: a1 = 0) read as the NC reads it:
+  // X(p) = 135 p^2 - 90 p^3, at C45 (p = 0.5) 33.75 - 11.25 = 22.5, slope 0 at both ends.
+  Result<TableInterpolant> nc = TableInterpolant::of(t->points, t->interpolation);
+  ASSERT_TRUE(nc.ok()) << nc.error().message;
+  EXPECT_NEAR(nc->at(45.0).x_mm, 22.5, 1e-12);
+  EXPECT_NEAR(nc->at(0.0).dx_dc_mm_per_deg, 0.0, 1e-12);
+  EXPECT_NEAR(nc->at(90.0 - 1e-9).dx_dc_mm_per_deg, 0.0, 1e-6);
+  EXPECT_NEAR(nc->at(135.0).x_mm, 45.0 + 0.5 * (0.5 - 45.0), 1e-12) << "the linear segment";
+
+  for (const auto& [body, why] : std::vector<std::pair<std::string, std::string>>{
+           {"G1 C0 X0\nPOLY PO[C]=(90) PO[X]=(1,2,3) PL=2\n", "`PL=2`"},
+           {"G1 C0 X0\nC90 PO[X]=(1,2,3)\n", "polynomial coefficients outside POLY"},
+           {"G1 C0 X0\nPOLY PO[C]=(90,1) PO[X]=(1)\n", "by its end point alone"},
+           {"G1 C0 X0\nPOLY PO[C]=(90) PO[Z]=(1)\n", "neither the leading axis C nor the following axis X"},
+           {"G1 C0 X0\nPOLY PO[C]=(90) PO[X]=(1,2,3,4)\n", "the end point, a2 and a3 at most"},
+           {"G1 C0 X0\nPOLY PO[C]=(90) PO[X]=(1,x)\n", "not a number"},
+           {"G1 C0 X0\nPOLY PO[C]=(90) PO[X]=(1)\nG1 C180 X0\n", "the table mixes POLY and G1"},
+       }) {
+    Result<ParsedTable> bad = parse_table_program("CTABDEF(X,C,1,1)\n" + body + "CTABEND\n", "CAM.SPF");
+    ASSERT_FALSE(bad.ok()) << body;
+    EXPECT_THAT(bad.error().message, HasSubstr(why)) << body;
+    EXPECT_THAT(bad.error().message, HasSubstr("CAM.SPF:")) << "names the line";
+  }
+}
+
+// A POLY table written, rendered and read back: the same points and coefficients, and a hand
+// edit of one coefficient is caught by the points (even with the checksum fixed).
+TEST(TableProgram, APolyTableRoundTripsAndAnEditedCoefficientIsCaught) {
+  const SampledPath p = testing::analytic_path(4.0, 0.7);
+  Result<CurveTable> t = write_poly_table(p, 5.0);
+  ASSERT_TRUE(t.ok()) << t.error().message;
+  const std::string text = program(*t);
+  Result<ParsedTable> back = parse_table_program(text, "CAM.SPF");
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->interpolation, Interpolation::kPoly);
+  EXPECT_EQ(back->header.at("interpolation"), "poly");
+  EXPECT_TRUE(compare_table_points(*back, t->points, "CAM.SPF").ok());
+  EXPECT_TRUE(verify_table_checksum(*back, "CAM.SPF").ok());
+  ParsedTable edited = *back;
+  edited.points[3].a2_mm += 0.001;
+  Status s = compare_table_points(edited, t->points, "CAM.SPF");
+  ASSERT_FALSE(s.ok());
+  EXPECT_THAT(s.error().message, HasSubstr("a2,a3 read"));
+}
+
 TEST(TableProgram, RefusesATemplateThatPutsTextInsideTheTable) {
   const std::string bad = "{{table_header}}\nCTABDEF(X,C,1,1)\nG1 C0 X0\n{{table_blocks}}\nCTABEND\n";
   Result<std::string> r = render_table_program(bad, "bad.spf", {}, table(Interpolation::kLinear), {1, 1});
