@@ -113,5 +113,6 @@ void add_serve_commands(CLI::App& app, CommandAction& action);    // serve
 void add_db_commands(CLI::App& app, CommandAction& action);       // db ...
 void add_token_commands(CLI::App& app, CommandAction& action);    // token new
 void add_plant_commands(CLI::App& app, CommandAction& action);    // plant sync
+void add_gear_commands(CLI::App& app, CommandAction& action);     // gear coupling
 
 }  // namespace gaugeloop

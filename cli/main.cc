@@ -65,6 +65,7 @@ int main(int argc, char** argv) {
   add_db_commands(app, action);
   add_token_commands(app, action);
   add_plant_commands(app, action);
+  add_gear_commands(app, action);
 
   try {
     app.parse(argc, argv);

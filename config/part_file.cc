@@ -12,15 +12,15 @@
 #include "nc_out/infeed.h"
 
 namespace gaugeloop {
-namespace {
-
-bool valid_program_name(const std::string& name) {
+bool valid_program_name(std::string_view name) {
   if (name.empty() || name.size() > 24 || !std::isalpha(static_cast<unsigned char>(name[0]))) return false;
   for (char c : name) {
     if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
   }
   return true;
 }
+
+namespace {
 
 std::string number_text(double v) {
   std::ostringstream os;
@@ -365,6 +365,13 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
   Result<toml::table> parsed = parse_toml(text, source_name);
   if (!parsed) return parsed.error();
   const toml::table& table = *parsed;
+  if (table.contains("gear")) {
+    return make_error(ErrorCode::kInvalidInput,
+                      std::string(source_name) +
+                          ": a gear part ([gear]): measure, demo and nc new take cam lobes and crankpins; `gaugeloop "
+                          "gear coupling --part " +
+                          std::string(source_name) + "` derives its electronic gearbox (docs/gears.md)");
+  }
   if (table.contains("pin")) return parse_pin_part(table, source_name);
   TomlReader r(table, source_name);
   r.allow_only({"name", "lobe", "lift_table", "follower", "follower_radius_mm", "base_circle_radius_mm",

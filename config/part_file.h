@@ -42,7 +42,11 @@ struct PartFile {
 Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_name,
                                  const std::filesystem::path& base_dir);
 
-// Reads a part file; a missing file is kNotFound naming the path.
+// An NC program name: up to 24 letters, digits and '_', starting with a letter.
+bool valid_program_name(std::string_view name);
+
+// Reads a part file; a missing file is kNotFound naming the path. A gear part ([gear]) is
+// refused, pointing to config/gear_file.h's reader.
 Result<PartFile> read_part_file(const std::filesystem::path& path);
 
 }  // namespace gaugeloop

@@ -13,13 +13,14 @@ install(FILES ${PROJECT_SOURCE_DIR}/packaging/tmpfiles.conf DESTINATION lib/tmpf
 # The docs as in the source tree, so their links hold: README.md, docs/*.md, examples/ beside.
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
 set(GAUGELOOP_DOCS
-  PERFORMANCE.md acquisition.md aqdef.md architecture.md building.md compensation.md gauge.md http_api.md
+  PERFORMANCE.md acquisition.md aqdef.md architecture.md building.md compensation.md gauge.md gears.md http_api.md
   crankpins.md nc_output.md parts.md plant.md reports.md service.md simulator.md spc_and_shafts.md storage.md
   variable_speed.md virtual_grinder.md)
 list(TRANSFORM GAUGELOOP_DOCS PREPEND ${PROJECT_SOURCE_DIR}/docs/)
 install(FILES ${GAUGELOOP_DOCS} DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
 install(FILES ${PROJECT_SOURCE_DIR}/docs/img/cam_report.png ${PROJECT_SOURCE_DIR}/docs/img/crankpin_frames.svg
               ${PROJECT_SOURCE_DIR}/docs/img/web_run_page.png ${PROJECT_SOURCE_DIR}/docs/img/new_program_preview.png
+              ${PROJECT_SOURCE_DIR}/docs/img/gear_axes.svg
         DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs/img)
 # The service's example config and what its relative paths name (gauge config, parts and
 # their lift tables, the NC template), so `serve --check` passes on it as installed. Listed,
@@ -29,6 +30,7 @@ set(GAUGELOOP_EXAMPLES
   intake_flat_half_degree.toml)
 list(APPEND GAUGELOOP_EXAMPLES camshaft.toml)  # names intake_flat.toml and exhaust_roller.toml
 list(APPEND GAUGELOOP_EXAMPLES crankpin_cx.toml crankpin_cxy.toml)  # the sample crankpin, C-X and C-X-Y
+list(APPEND GAUGELOOP_EXAMPLES gear_71.toml)  # the generating grinder's test gear
 list(TRANSFORM GAUGELOOP_EXAMPLES PREPEND ${PROJECT_SOURCE_DIR}/examples/)
 install(FILES ${GAUGELOOP_EXAMPLES} DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples)
 install(FILES ${PROJECT_SOURCE_DIR}/examples/gauges/simulator.toml ${PROJECT_SOURCE_DIR}/examples/gauges/other_amplifier.toml

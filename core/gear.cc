@@ -1,0 +1,14 @@
+// Names of the helix hands.
+#include "core/gear.h"
+
+namespace gaugeloop {
+
+std::string_view hand_name(Hand hand) { return hand == Hand::kRight ? "right" : "left"; }
+
+std::optional<Hand> hand_from_name(std::string_view name) {
+  if (name == "right") return Hand::kRight;
+  if (name == "left") return Hand::kLeft;
+  return std::nullopt;
+}
+
+}  // namespace gaugeloop

@@ -1,0 +1,94 @@
+// Gear part files: the example read back, every key, and each refusal naming the file, the line
+// and the key; a gear part is not taken for a lobe.
+#include "config/gear_file.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "config/part_file.h"
+#include "tests/support/refused.h"
+
+namespace gaugeloop {
+namespace {
+
+using testing::refused;
+
+// A complete gear part; `gear_extra` goes at the end of [gear] (line 10), `worm` replaces
+// [gear.worm]'s keys (from line 12), `stroke` [gear.stroke]'s.
+std::string gear_part(const std::string& gear_extra = {},
+                      const std::string& worm = "starts = 2\npitch_diameter_mm = 250.0\nhand = \"left\"\n",
+                      const std::string& stroke = "z_start_mm = -14.0\nz_end_mm = 16.0\nspline_step_mm = 0.5\n") {
+  return "name = \"gear_71\"\n"
+         "nc_program = \"GEAR_71\"\n"
+         "[gear]\n"
+         "normal_module_mm = 2.25\n"
+         "teeth = 71\n"
+         "pressure_angle_deg = 20.0\n"
+         "helix_angle_deg = 21.8\n"
+         "hand = \"left\"\n"
+         "face_width_mm = 24.0\n" +
+         gear_extra + "[gear.worm]\n" + worm + "[gear.stroke]\n" + stroke;
+}
+
+Result<GearPartFile> parse(const std::string& text) { return parse_gear_part_toml(text, "gear.toml"); }
+
+TEST(GearPartFile, ReadsEveryKey) {
+  Result<GearPartFile> g = parse(gear_part());
+  ASSERT_TRUE(g.ok()) << g.error().message;
+  EXPECT_EQ(g->name, "gear_71");
+  EXPECT_EQ(g->nc_program, "GEAR_71");
+  EXPECT_EQ(g->part.gear.normal_module_mm, 2.25);
+  EXPECT_EQ(g->part.gear.teeth, 71);
+  EXPECT_EQ(g->part.gear.pressure_angle_deg, 20.0);
+  EXPECT_EQ(g->part.gear.helix_angle_deg, 21.8);
+  EXPECT_EQ(g->part.gear.hand, Hand::kLeft);
+  EXPECT_EQ(g->part.gear.face_width_mm, 24.0);
+  EXPECT_EQ(g->part.worm.starts, 2);
+  EXPECT_EQ(g->part.worm.pitch_diameter_mm, 250.0);
+  EXPECT_EQ(g->part.worm.hand, Hand::kLeft);
+  EXPECT_EQ(g->part.stroke.z_start_mm, -14.0);
+  EXPECT_EQ(g->part.stroke.z_end_mm, 16.0);
+  EXPECT_EQ(g->part.stroke.spline_step_mm, 0.5);
+}
+
+TEST(GearPartFile, TheExampleIsThePapersGear) {
+  Result<GearPartFile> g = read_gear_part_file(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/gear_71.toml");
+  ASSERT_TRUE(g.ok()) << g.error().message;
+  EXPECT_EQ(g->part.gear.teeth, 71);
+  EXPECT_EQ(g->part.gear.helix_angle_deg, 21.8);
+  EXPECT_EQ(g->part.gear.hand, Hand::kRight);
+  EXPECT_EQ(g->part.worm.starts, 1);
+}
+
+TEST(GearPartFile, EachRefusalNamesTheFileLineAndKey) {
+  EXPECT_TRUE(refused(parse(gear_part("teeth_count = 3\n")), "gear.toml:10: key `gear.teeth_count`"));
+  EXPECT_TRUE(
+      refused(parse(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\nhand = \"up\"\n")), "gear.worm.hand"));
+  EXPECT_TRUE(refused(parse(gear_part("", "starts = 0\npitch_diameter_mm = 275.0\n")), "gear.worm.starts"));
+  // The worm's lead angle, given, must be the one its starts and diameter make: named with its line.
+  EXPECT_TRUE(refused(parse(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\nlead_angle_deg = 2.0\n")),
+                      "gear.toml:13: [gear.worm] lead_angle_deg = 2"));
+  EXPECT_TRUE(refused(parse(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\nlead_angle_deg = 2.0\n")),
+                      "disagrees with the 0.4688 deg"));
+  EXPECT_TRUE(
+      refused(parse(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\n", "z_start_mm = 5.0\nz_end_mm = -5.0\n")),
+              "gear.toml:15: [gear.stroke] z_end_mm = -5"));
+  EXPECT_TRUE(refused(parse("name = \"g\"\nnc_program = \"G\"\n[gear]\nnormal_module_mm = 2.0\n"), "gear.teeth"));
+  EXPECT_TRUE(refused(parse("name = \"g\"\nnc_program = \"G\"\n"), "no [gear] section"));
+  std::string no_worm = gear_part();
+  no_worm = no_worm.substr(0, no_worm.find("[gear.worm]")) + "[gear.stroke]\nz_start_mm = 0.0\nz_end_mm = 5.0\n";
+  EXPECT_TRUE(refused(parse(no_worm), "no [gear.worm] section"));
+  std::string bad_program = gear_part();
+  bad_program.replace(bad_program.find("\"GEAR_71\""), 9, "\"7GEAR\"");
+  EXPECT_TRUE(refused(parse(bad_program), "gear.toml:2: key `nc_program`"));
+}
+
+// Measure, demo and nc new read part files as lobes or pins: a gear file is refused there,
+// saying where gears are served, never read as a lobe with defaults.
+TEST(GearPartFile, APartFileReaderRefusesAGearSayingWhere) {
+  EXPECT_TRUE(refused(parse_part_toml(gear_part(), "gear.toml", "/parts"), "gaugeloop gear coupling --part gear.toml"));
+}
+
+}  // namespace
+}  // namespace gaugeloop
