@@ -1,5 +1,6 @@
 // gear ...: the worm-wheel generating grinder's gearbox for a gear part (docs/gears.md).
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -7,6 +8,7 @@
 #include "cli/cli_common.h"
 #include "compensation/gear_coupling.h"
 #include "config/gear_file.h"
+#include "job/gear_stroke.h"
 
 namespace gaugeloop {
 namespace {
@@ -53,6 +55,43 @@ int cmd_gear_coupling(const CouplingOptions& o) {
   return kExitOk;
 }
 
+struct StrokeOptions {
+  std::string part_path;
+  std::string errors_path;
+  std::string out_path;
+  double feed_mm_per_min = 300.0;
+  double int_incr_per_mm = 10000.0;
+  double int_incr_per_deg = 1000.0;
+};
+
+int cmd_gear_stroke(const StrokeOptions& o) {
+  Result<GearPartFile> gf = read_gear_part_file(o.part_path);
+  if (!gf) return report_error(gf.error());
+  Result<StrokeAxisErrors> errors = read_axis_errors_csv(o.errors_path);
+  if (!errors) return report_error(errors.error());
+  GearStrokeSettings s;
+  s.part_name = gf->name;
+  s.program_name = gf->nc_program;
+  s.out_file =
+      o.out_path.empty() ? std::filesystem::path(gf->nc_program + "_STROKE.SPF") : std::filesystem::path(o.out_path);
+  s.feed_mm_per_min = o.feed_mm_per_min;
+  s.format.z_increments_per_mm = o.int_incr_per_mm;
+  s.format.sim_increments_per_deg = o.int_incr_per_deg;
+  Result<GearStrokeReport> r = write_gear_stroke(gf->part, *errors, s);
+  if (!r) return report_error(r.error());
+  std::printf("stroke of %s: %zu spline points from Z %.3f to %.3f mm, SIM1 up to %.6f deg (%s)\n", gf->name.c_str(),
+              r->points.size(), r->points.front().z_mm, r->points.back().z_mm, r->sim_max_abs_deg,
+              o.errors_path.c_str());
+  std::printf("  %-10s %12s %12s %12s %12s %12s\n", "Z mm", "e_Y um", "e_Z um", "e_B deg", "e_C deg", "SIM1 deg");
+  for (const StrokeSimPoint& p : r->points) {
+    std::printf("  %-10.3f %12.3f %12.3f %12.6f %12.6f %12.6f\n", p.z_mm, p.errors.y_mm * 1000.0,
+                p.errors.z_mm * 1000.0, p.errors.b_deg, p.errors.c_deg, p.sim_deg);
+  }
+  std::printf("written %s, read back\n", s.out_file.string().c_str());
+  std::printf("the main program couples C to B, Z, Y and SIM1 with:\n%s\n", r->coupling_lines.c_str());
+  return kExitOk;
+}
+
 }  // namespace
 
 void add_gear_commands(CLI::App& app, CommandAction& action) {
@@ -67,6 +106,29 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
   cmd->add_option("--part", o->part_path, "Gear part file (TOML with [gear]), e.g. examples/gear_71.toml")->required();
   cmd->add_flag("--json", o->json, "Print the factors as JSON");
   cmd->callback([&action, o] { action = [o] { return cmd_gear_coupling(*o); }; });
+
+  auto so = std::make_shared<StrokeOptions>();
+  CLI::App* stroke = gear->add_subcommand(
+      "stroke",
+      "Write the stroke program for the axes' errors along the stroke: Z through the spline points, SIM1 at each "
+      "where it puts the gear back in mesh (dSIM = S_YC e_Y + S_ZC e_Z + S_BC e_B - e_C); written atomically and "
+      "read back, and the EGDEF/EGON lines that couple it. Not pushed: the file goes where --out says");
+  stroke->add_option("--part", so->part_path, "Gear part file (TOML with [gear])")->required();
+  stroke
+      ->add_option("--errors", so->errors_path,
+                   "Axis errors along the stroke, CSV: z_mm, y_error_um, z_error_um, b_error_deg, c_error_deg")
+      ->required();
+  stroke->add_option("--out", so->out_path, "Where to write the stroke program [<nc_program>_STROKE.SPF]");
+  stroke->add_option("--feed-mm-per-min", so->feed_mm_per_min, "Stroke feed along Z")->capture_default_str();
+  stroke->add_option("--int-incr-per-mm", so->int_incr_per_mm, "The control's MD10200 (Z's grid)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1e6));
+  stroke
+      ->add_option("--int-incr-per-deg", so->int_incr_per_deg,
+                   "The control's MD10210 (SIM1's grid; the control's default 1000 puts C back to 0.0005 deg)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1e6));
+  stroke->callback([&action, so] { action = [so] { return cmd_gear_stroke(*so); }; });
 }
 
 }  // namespace gaugeloop

@@ -1,6 +1,7 @@
 // Coupling factors of the generating gearbox and the equivalent compensation through SIM1.
 #include "compensation/gear_coupling.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -93,6 +94,50 @@ GearCoupling gear_coupling(const GearPart& part) {
 
 double equivalent_sim_deg(const GearCoupling& k, const AxisErrors& e) {
   return k.s_yc_deg_per_mm * e.y_mm + k.s_zc_deg_per_mm * e.z_mm + k.s_bc * e.b_deg - e.c_deg;
+}
+
+Result<std::vector<StrokeSimPoint>> stroke_sim_points(const GearPart& part, const GearCoupling& k,
+                                                      const StrokeAxisErrors& e) {
+  const std::size_t n = e.z_mm.size();
+  auto refuse = [&](const std::string& why) { return make_error(ErrorCode::kInvalidInput, e.source + ": " + why); };
+  if (n < 2) return refuse("needs at least two rows of axis errors along Z");
+  for (const std::vector<double>* column : {&e.y_error_um, &e.z_error_um, &e.b_error_deg, &e.c_error_deg}) {
+    if (column->size() != n) return refuse("every row needs all four axis errors");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    for (double v : {e.z_mm[i], e.y_error_um[i], e.z_error_um[i], e.b_error_deg[i], e.c_error_deg[i]}) {
+      if (!std::isfinite(v)) return refuse("row " + std::to_string(i + 1) + " is not all finite numbers");
+    }
+    if (i > 0 && !(e.z_mm[i] > e.z_mm[i - 1])) {
+      return refuse("row " + std::to_string(i + 1) + ": Z " + format_fixed(e.z_mm[i], 3) +
+                    " mm does not increase; give the rows from the bottom of the stroke up");
+    }
+  }
+  const GearStroke& s = part.stroke;
+  constexpr double kSlack = 1e-9;
+  if (e.z_mm.front() > s.z_start_mm + kSlack || e.z_mm.back() < s.z_end_mm - kSlack) {
+    return refuse("the errors are known from Z " + format_fixed(e.z_mm.front(), 3) + " to " +
+                  format_fixed(e.z_mm.back(), 3) + " mm, the stroke runs from " + format_fixed(s.z_start_mm, 3) +
+                  " to " + format_fixed(s.z_end_mm, 3) + " mm; measure (or model) the whole stroke");
+  }
+  const double length = s.z_end_mm - s.z_start_mm;
+  const auto steps = static_cast<std::size_t>(std::ceil(length / s.spline_step_mm - 1e-9));
+  std::vector<StrokeSimPoint> out;
+  out.reserve(steps + 1);
+  std::size_t row = 0;
+  for (std::size_t j = 0; j <= steps; ++j) {
+    const double z = j == steps ? s.z_end_mm : s.z_start_mm + static_cast<double>(j) * s.spline_step_mm;
+    while (row + 2 < n && e.z_mm[row + 1] < z) ++row;
+    const double t = std::clamp((z - e.z_mm[row]) / (e.z_mm[row + 1] - e.z_mm[row]), 0.0, 1.0);
+    auto lerp = [&](const std::vector<double>& v) { return v[row] + t * (v[row + 1] - v[row]); };
+    StrokeSimPoint p;
+    p.z_mm = z;
+    p.errors =
+        AxisErrors{lerp(e.y_error_um) / 1000.0, lerp(e.z_error_um) / 1000.0, lerp(e.b_error_deg), lerp(e.c_error_deg)};
+    p.sim_deg = equivalent_sim_deg(k, p.errors);
+    out.push_back(p);
+  }
+  return out;
 }
 
 }  // namespace gaugeloop

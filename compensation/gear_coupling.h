@@ -5,6 +5,9 @@
 // derivation (generating condition on the pitch plane): docs/gears.md.
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "core/gear.h"
 #include "core/result.h"
 
@@ -63,5 +66,29 @@ struct AxisErrors {
 // (The generating paper writes the same sum of compensation amounts, dY S_YC + dZ S_ZC +
 // dB S_BC + dC; with its amounts as corrections of C it is this.)
 double equivalent_sim_deg(const GearCoupling& k, const AxisErrors& e);
+
+// The axes' errors along the stroke, one row per Z (increasing), as measured or from an
+// identified error model (docs/gears.md): Y and Z in um, B and C in degrees, each where the
+// axis is less where it was commanded with the worm at that Z.
+struct StrokeAxisErrors {
+  std::vector<double> z_mm;
+  std::vector<double> y_error_um, z_error_um, b_error_deg, c_error_deg;
+  std::string source;  // for messages: the file
+};
+
+// One spline point of the stroke: Z and where SIM1 stands there (degrees of C).
+struct StrokeSimPoint {
+  double z_mm = 0.0;
+  double sim_deg = 0.0;
+  AxisErrors errors;  // the axes' errors at that Z (Y, Z in mm), linear between the rows
+};
+
+// The spline points of the part's stroke (z_start_mm, then every spline_step_mm, the last at
+// z_end_mm) with the SIM1 position that compensates the errors there (equivalent_sim_deg).
+// The errors are linear in Z between rows; kInvalidInput naming the source when the rows are
+// not increasing in Z, are not all finite, or do not cover the stroke (no extrapolation: an
+// error model is only known where it was measured).
+Result<std::vector<StrokeSimPoint>> stroke_sim_points(const GearPart& part, const GearCoupling& k,
+                                                      const StrokeAxisErrors& errors);
 
 }  // namespace gaugeloop

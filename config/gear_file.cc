@@ -1,6 +1,12 @@
 // Gear part files.
 #include "config/gear_file.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
 #include "compensation/gear_coupling.h"
 #include "config/part_file.h"
 #include "config/toml_reader.h"
@@ -86,6 +92,87 @@ Result<GearPartFile> parse_gear_part_toml(std::string_view text, std::string_vie
                       where_validate_points(table, source_name, s.error().message) + ": " + s.error().message);
   }
   return out;
+}
+
+Result<StrokeAxisErrors> parse_axis_errors_csv(std::string_view text, std::string_view source_name) {
+  StrokeAxisErrors out;
+  out.source = std::string(source_name);
+  const std::vector<std::string> names{"z_mm", "y_error_um", "z_error_um", "b_error_deg", "c_error_deg"};
+  std::vector<std::vector<double>*> columns{&out.z_mm, &out.y_error_um, &out.z_error_um, &out.b_error_deg,
+                                            &out.c_error_deg};
+  std::vector<int> order;  // file column -> our column
+  int line_no = 0;
+  auto fail = [&](const std::string& why) {
+    return make_error(ErrorCode::kInvalidInput, std::string(source_name) + ":" + std::to_string(line_no) + ": " + why);
+  };
+  auto cells_of = [](std::string_view line) {
+    std::vector<std::string> cells;
+    std::size_t pos = 0;
+    while (true) {
+      const std::size_t comma = line.find(',', pos);
+      std::string cell(line.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos));
+      while (!cell.empty() && (cell.back() == ' ' || cell.back() == '\r' || cell.back() == '\t')) cell.pop_back();
+      while (!cell.empty() && (cell.front() == ' ' || cell.front() == '\t')) cell.erase(cell.begin());
+      cells.push_back(cell);
+      if (comma == std::string_view::npos) break;
+      pos = comma + 1;
+    }
+    return cells;
+  };
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const std::size_t nl = text.find('\n', pos);
+    std::string_view line = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
+    pos = nl == std::string_view::npos ? text.size() + 1 : nl + 1;
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line.find_first_not_of(" \t") == std::string_view::npos || line.front() == '#') continue;
+    const std::vector<std::string> cells = cells_of(line);
+    if (order.empty()) {
+      for (const std::string& c : cells) {
+        const auto it = std::find(names.begin(), names.end(), c);
+        if (it == names.end()) {
+          return fail("unknown column `" + c +
+                      "`; the columns are z_mm, y_error_um, z_error_um, b_error_deg, "
+                      "c_error_deg");
+        }
+        if (std::find(order.begin(), order.end(), it - names.begin()) != order.end()) {
+          return fail("column `" + c + "` is given twice");
+        }
+        order.push_back(static_cast<int>(it - names.begin()));
+      }
+      if (order.size() != names.size()) {
+        return fail(
+            "the header must name all five columns z_mm, y_error_um, z_error_um, b_error_deg, c_error_deg "
+            "(an axis without errors: a column of zeros)");
+      }
+      continue;
+    }
+    if (cells.size() != order.size()) {
+      return fail(std::to_string(cells.size()) + " values, the header names " + std::to_string(order.size()));
+    }
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      char* end = nullptr;
+      const double v = std::strtod(cells[c].c_str(), &end);
+      if (cells[c].empty() || end != cells[c].c_str() + cells[c].size() || !std::isfinite(v)) {
+        return fail("column " + names[static_cast<std::size_t>(order[c])] + ": `" + cells[c] + "` is not a number");
+      }
+      columns[static_cast<std::size_t>(order[c])]->push_back(v);
+    }
+  }
+  if (order.empty()) {
+    return make_error(ErrorCode::kInvalidInput, std::string(source_name) +
+                                                    ": empty; expected a header line naming "
+                                                    "z_mm, y_error_um, z_error_um, b_error_deg, "
+                                                    "c_error_deg and one row per Z");
+  }
+  return out;
+}
+
+Result<StrokeAxisErrors> read_axis_errors_csv(const std::filesystem::path& path) {
+  Result<std::string> text = read_regular_file(path, "axis error table");
+  if (!text) return text.error();
+  return parse_axis_errors_csv(without_utf8_bom(*text), path.string());
 }
 
 Result<GearPartFile> read_gear_part_file(const std::filesystem::path& path) {

@@ -6,6 +6,7 @@
 #include <string>
 #include <string_view>
 
+#include "compensation/gear_coupling.h"
 #include "core/gear.h"
 #include "core/result.h"
 
@@ -24,5 +25,13 @@ Result<GearPartFile> parse_gear_part_toml(std::string_view text, std::string_vie
 
 // Reads a gear part file; a missing file is kNotFound naming the path.
 Result<GearPartFile> read_gear_part_file(const std::filesystem::path& path);
+
+// The axes' errors along the stroke as CSV (docs/gears.md): a header line naming the columns
+// z_mm, y_error_um, z_error_um, b_error_deg, c_error_deg (in any order; no others), then one
+// row per Z; blank lines and lines starting with '#' are skipped. kInvalidInput naming the
+// line and column of a value that is not a number, a missing or unknown column, a short row.
+// Whether the rows increase and cover the stroke is stroke_sim_points' to say.
+Result<StrokeAxisErrors> parse_axis_errors_csv(std::string_view text, std::string_view source_name);
+Result<StrokeAxisErrors> read_axis_errors_csv(const std::filesystem::path& path);
 
 }  // namespace gaugeloop

@@ -30,7 +30,7 @@ set(GAUGELOOP_EXAMPLES
   intake_flat_half_degree.toml)
 list(APPEND GAUGELOOP_EXAMPLES camshaft.toml)  # names intake_flat.toml and exhaust_roller.toml
 list(APPEND GAUGELOOP_EXAMPLES crankpin_cx.toml crankpin_cxy.toml)  # the sample crankpin, C-X and C-X-Y
-list(APPEND GAUGELOOP_EXAMPLES gear_71.toml)  # the generating grinder's test gear
+list(APPEND GAUGELOOP_EXAMPLES gear_71.toml gear_71_axis_errors.csv)  # the generating grinder's test gear
 list(TRANSFORM GAUGELOOP_EXAMPLES PREPEND ${PROJECT_SOURCE_DIR}/examples/)
 install(FILES ${GAUGELOOP_EXAMPLES} DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples)
 install(FILES ${PROJECT_SOURCE_DIR}/examples/gauges/simulator.toml ${PROJECT_SOURCE_DIR}/examples/gauges/other_amplifier.toml

@@ -45,5 +45,24 @@ TEST(GearCommand, ABadGearFileExits2NamingTheKey) {
   EXPECT_NE(r.output.find("gear.teeth"), std::string::npos) << r.output;
 }
 
+TEST(GearCommand, WritesTheStrokeProgramAndPrintsTheCoupling) {
+  testing::TempDir dir("gear-stroke-cmd");
+  const auto out = dir.path() / "GEAR_71_STROKE.SPF";
+  testing::CommandResult r =
+      testing::run_command("gear stroke --part " + kExample + " --errors " + std::string(GAUGELOOP_SOURCE_DIR) +
+                           "/examples/gear_71_axis_errors.csv --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("31 spline points"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("EGDEF(C,B,1,Z,1,Y,1,SIM1,1)"), std::string::npos) << r.output;
+  EXPECT_NE(testing::slurp(out).find("FGROUP(Z)"), std::string::npos);
+  const auto bad = dir.path() / "bad.csv";
+  std::ofstream(bad) << "z_mm,y_error_um,z_error_um,b_error_deg,c_error_deg\n0,1,1,0,zero\n";
+  testing::CommandResult b = testing::run_command("gear stroke --part " + kExample + " --errors " + bad.string() +
+                                                  " --out " + (dir.path() / "B.SPF").string());
+  EXPECT_EQ(b.exit_code, 2) << b.output;
+  EXPECT_NE(b.output.find("bad.csv:2: column c_error_deg"), std::string::npos) << b.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "B.SPF"));
+}
+
 }  // namespace
 }  // namespace gaugeloop

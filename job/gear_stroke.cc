@@ -1,0 +1,65 @@
+// The gear's stroke program, written and read back.
+#include "job/gear_stroke.h"
+
+#include <cmath>
+
+#include "core/atomic_file.h"
+#include "core/number_text.h"
+#include "core/text_file.h"
+#include "core/utc_time.h"
+
+namespace gaugeloop {
+
+Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxisErrors& errors,
+                                           const GearStrokeSettings& s) {
+  if (Status v = validate(part); !v) return v.error();
+  GearStrokeReport r;
+  r.coupling = gear_coupling(part);
+  Result<std::vector<StrokeSimPoint>> points = stroke_sim_points(part, r.coupling, errors);
+  if (!points) return points.error();
+  r.points = std::move(*points);
+  const GearCoupling& k = r.coupling;
+  // B's factor as the whole ratio the gearbox needs: -h_w starts over teeth.
+  GearboxFactors factors;
+  factors.b_numerator = static_cast<int>(std::lround(k.s_bc * part.gear.teeth));
+  factors.b_denominator = part.gear.teeth;
+  factors.z_deg_per_mm = k.s_zc_deg_per_mm;
+  factors.y_deg_per_mm = k.s_yc_deg_per_mm;
+  r.coupling_lines = render_gearbox_coupling(factors);
+  std::vector<StrokeProgramPoint> program_points;
+  for (const StrokeSimPoint& p : r.points) {
+    program_points.push_back({p.z_mm, p.sim_deg});
+    r.sim_max_abs_deg = std::max(r.sim_max_abs_deg, std::abs(s.format.round_sim_deg(p.sim_deg)));
+  }
+  const std::map<std::string, std::string> header{
+      {"part", s.part_name},
+      {"program", s.program_name},
+      {"created_utc", utc_now()},
+      {"axis_errors", errors.source},
+      {"s_bc", std::to_string(factors.b_numerator) + "/" + std::to_string(factors.b_denominator)},
+      {"s_zc_deg_per_mm", format_fixed(k.s_zc_deg_per_mm, 12)},
+      {"s_yc_deg_per_mm", format_fixed(k.s_yc_deg_per_mm, 12)},
+  };
+  Result<std::string> text = render_stroke_program(s.program_name, header, program_points, s.feed_mm_per_min, s.format);
+  if (!text) return text.error();
+  if (Status w = write_file_atomically(s.out_file, *text); !w) return w.error();
+  // What the control would read: parsed, checksummed, every point as written.
+  Result<std::string> back = read_regular_file(s.out_file, "stroke program");
+  if (!back) return back.error();
+  Result<ParsedStrokeProgram> parsed = parse_stroke_program(*back, s.out_file.string());
+  if (!parsed) {
+    return make_error(ErrorCode::kIo, s.out_file.string() + " does not read back: " + parsed.error().message);
+  }
+  for (std::size_t i = 0; i < program_points.size(); ++i) {
+    const StrokeProgramPoint& a = parsed->points[i];
+    if (a.z_mm != s.format.round_z_mm(program_points[i].z_mm) ||
+        a.sim_deg != s.format.round_sim_deg(program_points[i].sim_deg)) {
+      return make_error(ErrorCode::kIo, s.out_file.string() + ":" + std::to_string(parsed->point_lines[i]) +
+                                            ": reads back Z" + format_fixed(a.z_mm, 4) +
+                                            " SIM1=" + format_fixed(a.sim_deg, 6) + ", not what was written");
+    }
+  }
+  return r;
+}
+
+}  // namespace gaugeloop
