@@ -16,7 +16,7 @@ PROCESS_TESTS := ^(PlantRun|WebPages)\.
 # The tests of the service's threads (HTTP server, PLC trigger and handshake, the run) and of
 # the guard every thread starts through, the systemd watchdog's, the outbox sender's and the
 # central sync's: the ones ThreadSanitizer runs.
-TSAN_TESTS := ^(GuardedThread|OutboxSenderTest|CentralSyncerTest|PlantServiceTest|PlantServeTest|PlcHandshakeTest|PlcServiceWords|PlcServiceTest|HttpApiTest|ServiceTest|ServiceStateTest|ServiceConfigFile|ServiceWatchdog|ServiceNotifyEnv)\.
+TSAN_TESTS := ^(GuardedThread|IntegrityWatchTest|OutboxSenderTest|CentralSyncerTest|PlantServiceTest|PlantServeTest|PlcHandshakeTest|PlcServiceWords|PlcServiceTest|HttpApiTest|ServiceTest|ServiceStateTest|ServiceConfigFile|ServiceWatchdog|ServiceNotifyEnv)\.
 TSAN_TARGETS := core_test plant_mqtt_test plant_mqtt_service_test plant_central_test service_unit_test service_integration_test packaging_test gaugeloop
 
 .PHONY: all deps configure build build-asan build-tsan demo check test test-normal test-asan test-tsan package test-package bench clean

@@ -369,12 +369,13 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
 }
 
 // [database]: the run database's path, writable by this user (also when left at its default).
-Status read_database_table(TomlReader& top, const ConfigFile& f, JobSettings& job) {
+Status read_database_table(TomlReader& top, const ConfigFile& f, JobSettings& job, int& integrity_check_hours) {
   job.db_path = f.resolve("gaugeloop.sqlite");
   if (const toml::table* t = top.subtable("database")) {
     TomlReader dr(*t, f.source, "database.");
-    dr.allow_only({"path"});
+    dr.allow_only({"path", "integrity_check_hours"});
     job.db_path = f.resolve(dr.text("path", "gaugeloop.sqlite"));
+    integrity_check_hours = static_cast<int>(dr.integer("integrity_check_hours", 24, 1, 8760));
     if (dr.error) return *dr.error;
     if (Status w = check_writable_database(job.db_path); !w) return at_key(dr, "path", w.error());
   } else if (Status w = check_writable_database(job.db_path); !w) {
@@ -842,7 +843,7 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   if (Status s = read_analysis_table(top, f, c.job.analysis); !s) return s.error();
   if (Status s = read_compensation_table(top, f, c.job); !s) return s.error();
   if (Status s = read_nc_table(top, f, c); !s) return s.error();
-  if (Status s = read_database_table(top, f, c.job); !s) return s.error();
+  if (Status s = read_database_table(top, f, c.job, c.integrity_check_hours); !s) return s.error();
   Result<std::optional<HttpSettings>> http = read_http_table(top, f);
   if (!http) return http.error();
   c.http = std::move(*http);

@@ -57,6 +57,9 @@ struct ServiceConfig {
   // Everything a job needs except the part: poller, analysis, compensation, NC output,
   // database (JobSettings' part, design and nc_program are filled per part by job_for).
   JobSettings job;
+  // [database] integrity_check_hours: how often the service checks the run database whole on
+  // a thread of its own (service/integrity_watch.h), and at once after a stop that was not clean.
+  int integrity_check_hours = 24;
   // For the parts with a speed program (their part file's [speed]): [nc] main_speed_template,
   // the main program that calls the speed subprogram, used instead of [nc] main_template;
   // the speed subprogram's template, [nc] speed_template, is job.nc_speed_template.

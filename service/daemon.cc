@@ -15,6 +15,7 @@
 #include "plant/central_syncer.h"
 #include "plant/outbox_sender.h"
 #include "service/http_api.h"
+#include "service/integrity_watch.h"
 #include "service/plc_trigger.h"
 #include "service/service.h"
 #include "service/systemd_notify.h"
@@ -37,10 +38,19 @@ Error not_starting(const Error& e, const std::string& what) {
   return Error{e.code, what + ", not starting: " + e.message};
 }
 
-// The database checked whole (a damaged one refused), upgraded if older, and the pushes a
-// power cut interrupted finished, before anything else reads the tables.
+// The database's header and schema checked (a file that is no database refused), upgraded if
+// older (checked whole first: an upgrade reads it all anyway), and the pushes a power cut
+// interrupted finished, before anything else reads the tables. The whole file is checked
+// beside the service (IntegrityWatch), so a large one does not keep the grinder waiting.
 Status prepare_database(const std::filesystem::path& db_path) {
-  Result<RunStore> store = open_checked_for_writing(db_path);
+  Result<RunStore> store = [&]() -> Result<RunStore> {
+    if (!std::filesystem::exists(db_path)) return RunStore::open(db_path);
+    if (Status h = check_database_header(db_path); !h) return h.error();
+    Result<int> version = database_schema_version(db_path);
+    if (!version) return version.error();
+    if (*version < latest_database_schema_version()) return open_checked_for_writing(db_path);
+    return RunStore::open(db_path);
+  }();
   if (!store) return not_starting(Error{ErrorCode::kInvalidInput, store.error().message}, "database refused");
   if (const std::optional<SchemaUpgrade> upgrade = store->schema_upgrade()) {
     spdlog::info("database {} upgraded from schema version {}; the file as it was is kept in {}", db_path.string(),
@@ -222,6 +232,9 @@ Status run_service(const std::filesystem::path& config_path) {
   const std::optional<HttpSettings>& http_settings = started.http;
   const std::optional<PlcSettings>& plc_settings = started.plc;
   const std::filesystem::path& db_path = started.db_path;
+  // Taken away now, left again by a clean stop: missing at the next start means this run of the
+  // service did not end cleanly, and the database is checked whole at once.
+  const bool stopped_cleanly = take_clean_shutdown_marker(db_path);
   if (Status s = prepare_database(db_path); !s) return s;
   if (Status s = configure_plant_outbox(db_path, started.mqtt); !s) return s;
   // Before the service, so that it outlives every thread that tells it something; its end
@@ -258,6 +271,11 @@ Status run_service(const std::filesystem::path& config_path) {
     service.plant_state("started", describe_service_config(*service.config()));
   }
   spdlog::info("starting: {}", describe_service_config(*service.config()));
+  IntegrityWatch integrity(
+      IntegrityWatch::Settings{db_path, !stopped_cleanly, std::chrono::hours(service.config()->integrity_check_hours)},
+      [&service](const std::string& message) { service.set_database_damaged(message); }, on_fault);
+  service.set_integrity_watch(&integrity);
+  if (!stopped_cleanly) spdlog::info("the last stop was not clean: the database is checked whole beside the service");
 
   // Before the HTTP API, which reports its status; started after it.
   std::unique_ptr<PlcTrigger> plc;
@@ -301,6 +319,9 @@ Status run_service(const std::filesystem::path& config_path) {
     if (plc) plc->stop();
     service.stop();  // the run in progress if no PLC waited for it, then the events still waiting
     if (http) http->stop();
+    integrity.stop();
+    service.set_integrity_watch(nullptr);
+    leave_clean_shutdown_marker(db_path);
     spdlog::info("stopped");
     return {};
   }

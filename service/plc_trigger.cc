@@ -97,7 +97,12 @@ std::optional<PlcCycleOutcome> ServiceCycleRunner::start(const PlcRequestWords& 
   Result<PlcIdentity> identity = plc_identity(request, base_address_);
   if (!identity) return PlcCycleOutcome{PlcResultCode::kBadIdentity, 0, 0, identity.error().message};
   Result<RunReservation> reservation = service_.reserve_run();
-  if (!reservation) return PlcCycleOutcome{PlcResultCode::kNotNow, 0, 0, reservation.error().message};
+  if (!reservation) {
+    // A damaged database refuses every run until a person restores it: a fault, not "ask again".
+    const PlcResultCode code =
+        reservation.error().code == ErrorCode::kStorage ? PlcResultCode::kStorageFault : PlcResultCode::kNotNow;
+    return PlcCycleOutcome{code, 0, 0, reservation.error().message};
+  }
   if (worker_.joinable()) worker_.join();
   {
     std::lock_guard<std::mutex> lock(mutex_);

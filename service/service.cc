@@ -15,6 +15,7 @@
 #include "plant/central_syncer.h"
 #include "plant/outbox_sender.h"
 #include "report/run_json.h"
+#include "service/integrity_watch.h"
 
 namespace gaugeloop {
 
@@ -236,6 +237,7 @@ void Service::replace_config(ServiceConfig config) {
 Result<RunReservation> Service::reserve_run() {
   std::lock_guard<std::mutex> lock(slot_mutex_);
   if (stopping_) return make_error(ErrorCode::kRefused, "the service is stopping; no new run is started");
+  if (!database_damaged_.empty()) return make_error(ErrorCode::kStorage, database_damaged_);
   if (slot_taken_) {
     return make_error(ErrorCode::kRefused, "a run is in progress; ask again when it is done (GET /api/health)");
   }
@@ -247,6 +249,7 @@ Result<RunReservation> Service::wait_and_reserve() {
   std::unique_lock<std::mutex> lock(slot_mutex_);
   slot_free_.wait(lock, [this] { return stopping_ || !slot_taken_; });
   if (stopping_) return make_error(ErrorCode::kRefused, "the service is stopping; nothing new is pushed");
+  if (!database_damaged_.empty()) return make_error(ErrorCode::kStorage, database_damaged_);
   slot_taken_ = true;
   return RunReservation(this);
 }
@@ -254,6 +257,14 @@ Result<RunReservation> Service::wait_and_reserve() {
 bool Service::run_in_progress() const {
   std::lock_guard<std::mutex> lock(slot_mutex_);
   return slot_taken_;
+}
+
+void Service::set_database_damaged(const std::string& message) {
+  {
+    std::lock_guard<std::mutex> lock(slot_mutex_);
+    database_damaged_ = message;
+  }
+  record_event(EventKind::kFault, "database damaged", "", 0, std::nullopt, message);
 }
 
 void Service::release_run() {
@@ -473,7 +484,8 @@ json Service::health() const {
           {"thread_faults", thread_faults_.load()},
           {"plc", plc_status_ ? plc_status_() : json(nullptr)},
           {"outbox", outbox_ != nullptr ? outbox_->health() : json(nullptr)},
-          {"central", central_ != nullptr ? central_->health() : json(nullptr)}};
+          {"central", central_ != nullptr ? central_->health() : json(nullptr)},
+          {"integrity", integrity_ != nullptr ? integrity_->health() : json(nullptr)}};
 }
 
 void Service::tell_plant() const {
@@ -507,6 +519,7 @@ std::string Service::metrics() const {
   m += "gaugeloop_service_events_dropped_total " + std::to_string(events_->dropped()) + "\n";
   if (outbox_ != nullptr) m += outbox_->metrics();
   if (central_ != nullptr) m += central_->metrics();
+  if (integrity_ != nullptr) m += integrity_->metrics();
   return m;
 }
 

@@ -28,6 +28,7 @@ namespace gaugeloop {
 class Service;
 class EventWriter;
 class CentralSyncer;
+class IntegrityWatch;
 class OutboxSender;
 
 // The one run (or push) at a time, held: whoever holds it may run; it is released when the
@@ -169,6 +170,12 @@ class Service {
   // The sync into the plant's central history ([plant.central]); null: none. As set_outbox:
   // /api/health gets its "central", /metrics its series, and it is told after every run and push.
   void set_central_sync(CentralSyncer* syncer) { central_ = syncer; }
+  // The run database's full check beside the service (service/integrity_watch.h); null: none.
+  // As set_outbox: /api/health gets its "integrity", /metrics its series.
+  void set_integrity_watch(IntegrityWatch* watch) { integrity_ = watch; }
+  // The full check found the database damaged: from now on every run and push is refused with
+  // `message` (what is wrong and what to do), the grinder goes on without gaugeloop's tables.
+  void set_database_damaged(const std::string& message);
   // A state change for the plant's broker ("started", "stopping", "plc link down"...): queued
   // in the outbox by the sender's thread. Nothing without a sender. Any thread.
   void plant_state(const std::string& state, const std::string& detail = {}) const;
@@ -201,6 +208,8 @@ class Service {
   std::function<nlohmann::json()> plc_status_;
   OutboxSender* outbox_ = nullptr;
   CentralSyncer* central_ = nullptr;
+  IntegrityWatch* integrity_ = nullptr;
+  std::string database_damaged_;  // guarded by slot_mutex_: why runs and pushes are refused
   struct CachedPreview {
     std::shared_ptr<const ServiceConfig> config;  // the configuration it was computed with
     std::string part;

@@ -248,6 +248,11 @@ Error damaged_database(const std::filesystem::path& db_path, const std::vector<s
 }
 
 Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path, IntegrityCheck depth) {
+  return check_database_file(db_path, depth, {});
+}
+
+Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path, IntegrityCheck depth,
+                                            const std::function<bool()>& cancelled) {
   if (!std::filesystem::exists(db_path)) {
     return make_error(ErrorCode::kNotFound, "no run database at " + db_path.string());
   }
@@ -255,10 +260,31 @@ Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path
   Result<std::unique_ptr<storage_internal::Connection>> conn =
       storage_internal::connect_for_checking(db_path, report.constraints_checked);
   if (!conn.ok()) return conn.error();
+  // SQLite calls this every few thousand virtual machine steps; non-zero interrupts the statement.
+  auto ask = [](void* fn) -> int { return (*static_cast<const std::function<bool()>*>(fn))() ? 1 : 0; };
+  if (cancelled) sqlite3_progress_handler((*conn)->db, 10000, ask, const_cast<std::function<bool()>*>(&cancelled));
   Result<std::vector<std::string>> problems = storage_internal::find_problems(**conn, depth);
+  if (cancelled) sqlite3_progress_handler((*conn)->db, 0, nullptr, nullptr);
+  if (cancelled && cancelled()) {
+    return make_error(ErrorCode::kRefused, "the check of " + db_path.string() + " was cancelled");
+  }
   if (!problems.ok()) return problems.error();
   report.problems = std::move(*problems);
   return report;
+}
+
+Status check_database_header(const std::filesystem::path& db_path) {
+  if (!std::filesystem::exists(db_path)) {
+    return make_error(ErrorCode::kNotFound, "no run database at " + db_path.string());
+  }
+  Result<std::unique_ptr<storage_internal::Connection>> conn = storage_internal::connect_read_only(db_path);
+  if (!conn.ok()) return conn.error();
+  Result<std::int64_t> tables =
+      storage_internal::query_number(**conn, "SELECT count(*) FROM sqlite_schema", "read the database's schema");
+  if (!tables.ok()) return tables.error();
+  Result<int> version = storage_internal::schema_version_not_newer(**conn);
+  if (!version.ok()) return version.error();
+  return {};
 }
 
 Status backup_database_file(const std::filesystem::path& db_path, const std::filesystem::path& dest, bool overwrite) {
@@ -272,6 +298,8 @@ Result<int> database_schema_version(const std::filesystem::path& db_path) {
   if (!conn.ok()) return conn.error();
   return storage_internal::schema_version_not_newer(**conn);
 }
+
+int latest_database_schema_version() { return storage_internal::latest_schema_version(); }
 
 Status RunStore::check_integrity(IntegrityCheck depth) const {
   Result<std::vector<std::string>> problems = storage_internal::find_problems(*conn_, depth);

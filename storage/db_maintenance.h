@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,18 @@ struct IntegrityReport {
 // Errors: kNotFound if there is no file; kStorage if it cannot be read at all.
 Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path,
                                             IntegrityCheck depth = IntegrityCheck::kFull);
+// The same, asking `cancelled` every few thousand steps of SQLite's work: once it says true the
+// check stops and returns kRefused ("cancelled"), so a check of a large file never holds up a
+// service that is stopping.
+Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path, IntegrityCheck depth,
+                                            const std::function<bool()>& cancelled);
+
+// What a service checks at start, in a moment at any size: the file is a SQLite database whose
+// header and schema read (sqlite_schema and user_version), of a schema this gaugeloop knows.
+// Reads a few pages, never the whole file: the whole check runs later, beside the service
+// (check_database_file). Errors: kNotFound if there is no file; kStorage naming the file for
+// one SQLite cannot read as a database.
+Status check_database_header(const std::filesystem::path& db_path);
 
 // "database <db> is damaged: <the first three problems> (and N more); ..." with what to do:
 // stop gaugeloop, and restore the last sound backup. kStorage.
@@ -49,6 +62,8 @@ Status backup_database_file(const std::filesystem::path& db_path, const std::fil
 // The schema version of the file (PRAGMA user_version), read-only; 0 for a file without a
 // gaugeloop schema. For `gaugeloop db upgrade` and reports. Errors as check_database_file.
 Result<int> database_schema_version(const std::filesystem::path& db_path);
+// The schema version this gaugeloop writes: a file below it is upgraded when opened for writing.
+int latest_database_schema_version();
 
 // What the service does at start and `db upgrade` does: an existing file is checked whole
 // (integrity_check; a damaged one is refused, kStorage, and nothing is upgraded), then opened

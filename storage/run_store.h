@@ -310,7 +310,7 @@ struct EventQuery {
 enum class IntegrityCheck {
   kQuick,  // PRAGMA quick_check: b-tree pages, records, NOT NULL; O(pages). Before a run.
   kFull,   // PRAGMA integrity_check: also that every index matches its table and UNIQUE holds;
-           // O(rows log rows). `gaugeloop db check`, the service's start, every backup.
+           // O(rows log rows). `gaugeloop db check`, the service's check beside the runs, every backup.
 };
 
 // The newest run (by started_utc, then id, as list_runs orders) of one machine, part and lobe.

@@ -78,6 +78,7 @@ TEST_F(ServiceConfigTest, AMinimalFileTakesTheDocumentedDefaults) {
   EXPECT_EQ(c->job.compensation.max_repeatability_um, 2.0);
   EXPECT_EQ(c->job.compensation.max_phase_deg, 0.5);
   EXPECT_TRUE(c->job.build_on_table_in_force);
+  EXPECT_EQ(c->integrity_check_hours, 24);
   EXPECT_EQ(c->job.nc_dir, dir_.path() / "nc");
   EXPECT_EQ(c->job.table_kind, TableKind::kAuto);
   EXPECT_EQ(c->job.table_step_deg, 1.0);
@@ -252,6 +253,15 @@ TEST_F(ServiceConfigTest, ShaftFilesAreReadAndCheckedAtStart) {
 
 // Paths in the file are relative to the file's directory, wherever the process runs; a part
 // file's lift table is relative to the part file.
+TEST_F(ServiceConfigTest, TheDatabasesIntegrityCheckIntervalIsReadAndBounded) {
+  const std::string base = "[gauge]\n" + kIntake + kNc;
+  Result<ServiceConfig> c = read(base + "[database]\nintegrity_check_hours = 6\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->integrity_check_hours, 6);
+  EXPECT_TRUE(refused(read(base + "[database]\nintegrity_check_hours = 0\n"), "database.integrity_check_hours"));
+  EXPECT_TRUE(refused(read(base + "[database]\nintegrity_check_days = 1\n"), "integrity_check_days"));
+}
+
 TEST_F(ServiceConfigTest, RelativePathsAreResolvedAgainstTheConfigsDirectory) {
   dir_.write("etc/gauge.toml", "[link]\nport = 1602\n");
   write_secret("etc/keys/token", kStrongToken);

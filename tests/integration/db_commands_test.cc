@@ -147,7 +147,9 @@ TEST_F(DbCommandsTest, CheckAndBackupTakeTheServicesConfig) {
   EXPECT_TRUE(has(r.output, "--data-dir excludes --config")) << r.output;
 }
 
-TEST_F(DbCommandsTest, ADamagedDatabaseIsRefusedByCheckAndByTheServiceAtStart) {
+// (The service starts beside a damaged file and finds it with its check on a thread of its own:
+// ServiceTest.ADamagedDatabaseIsFoundBesideTheRunningServiceAndRunsAreRefused.)
+TEST_F(DbCommandsTest, ADamagedDatabaseIsRefusedByCheck) {
   ASSERT_TRUE(testing::damage_runs_table(db_));
   ASSERT_NE(testing::sqlite_text(db_, "PRAGMA integrity_check"), "ok") << "the damage did not show";
 
@@ -155,20 +157,6 @@ TEST_F(DbCommandsTest, ADamagedDatabaseIsRefusedByCheckAndByTheServiceAtStart) {
   EXPECT_EQ(check.exit_code, 4) << check.output;
   EXPECT_TRUE(has(check.output, "database " + db_.string() + " is damaged: ")) << check.output;
   EXPECT_TRUE(has(check.output, "gaugeloop db backup")) << check.output;
-
-  const fs::path examples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
-  const fs::path config = dir_ / "gaugeloop.toml";
-  std::ofstream(config) << "[gauge]\n[[part]]\nfile = \"" << (examples / "intake_flat.toml").string()
-                        << "\"\n[nc]\ndir = \"nc\"\ntemplate = \""
-                        << (examples / "sinumerik" / "cam_table.spf").string() << "\"\n[database]\npath = \""
-                        << db_.string() << "\"\n[http]\nport = 0\n";
-  // A service that started would wait for a signal: the guard kills it, and the test fails.
-  CommandResult serve =
-      run_shell("timeout -s KILL 120 " + testing::gaugeloop_binary() + " serve --config " + config.string());
-  EXPECT_EQ(serve.exit_code, 2) << serve.output;
-  EXPECT_TRUE(has(serve.output, "database refused, not starting: database " + db_.string() + " is damaged"))
-      << serve.output;
-  EXPECT_FALSE(has(serve.output, "listening on")) << serve.output;
 }
 
 TEST_F(DbCommandsTest, ABackupHoldsTheSameRunsAndIsNeverOverwrittenUnlessTold) {

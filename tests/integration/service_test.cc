@@ -30,7 +30,9 @@
 #include "simulator/virtual_grinder.h"
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
+#include "tests/support/damaged_database.h"
 #include "tests/support/raw_http.h"
+#include "tests/support/sample_runs.h"
 #include "tests/support/service_process.h"
 #include "tests/support/temp_dir.h"
 
@@ -125,6 +127,49 @@ bool wait_for_health(httplib::Client& cli, Pred done) {
     std::this_thread::yield();
   }
   return false;
+}
+
+// The service starts without reading the whole database: its header and schema are checked,
+// the whole file beside it. After a stop that left no clean-shutdown marker the check runs at
+// once; a damaged file is reported in health and /metrics and every run is refused naming the
+// damage. A clean stop leaves the marker, and the next start waits with its check.
+TEST_F(ServiceTest, ADamagedDatabaseIsFoundBesideTheRunningServiceAndRunsAreRefused) {
+  {
+    auto store = RunStore::open(dir_ / "runs.sqlite");
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    for (int i = 0; i < 3; ++i) {
+      ASSERT_TRUE(
+          store->insert_run(testing::sample_run("intake_flat", 1, "grinder-7", "2026-11-20T08:00:00Z", 5.0)).ok());
+    }
+  }
+  ASSERT_TRUE(testing::damage_runs_table(dir_ / "runs.sqlite"));
+  {
+    ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
+    const int port = service.port();
+    ASSERT_GT(port, 0) << "started without checking the file whole\n" << log();
+    httplib::Client cli("127.0.0.1", port);
+    cli.set_read_timeout(120, 0);
+    ASSERT_TRUE(wait_for_health(cli, [](const json& h) { return h["integrity"]["state"] == "damaged"; })) << log();
+    auto metrics = cli.Get("/metrics");
+    ASSERT_TRUE(metrics);
+    EXPECT_NE(metrics->body.find("gaugeloop_database_integrity_sound 0\n"), std::string::npos);
+    auto run = cli.Post("/api/measure", bearer(kToken), R"({"part": "intake_flat", "lobe": 1})", "application/json");
+    ASSERT_TRUE(run);
+    EXPECT_EQ(run->status, 503) << run->body;
+    EXPECT_NE(run->body.find("is damaged"), std::string::npos) << run->body;
+    EXPECT_FALSE(fs::exists(dir_ / "nc" / "CAM_INTAKE_L1.SPF"));
+    service.signal(SIGTERM);
+    EXPECT_EQ(service.wait(), 0) << log();
+  }
+  EXPECT_TRUE(fs::exists(dir_ / "runs.sqlite.clean-shutdown")) << "a clean stop leaves its marker";
+  ServiceProcess again(dir_ / "gaugeloop.toml", dir_ / "serve.log");
+  const int port = again.port();
+  ASSERT_GT(port, 0) << log();
+  httplib::Client cli("127.0.0.1", port);
+  auto health = cli.Get("/api/health");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(json::parse(health->body)["integrity"]["state"], "waiting") << health->body;
+  EXPECT_FALSE(fs::exists(dir_ / "runs.sqlite.clean-shutdown")) << "taken at start";
 }
 
 TEST_F(ServiceTest, RequestRunNcFileAndTheHttpApi) {

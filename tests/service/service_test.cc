@@ -368,6 +368,32 @@ TEST_F(ServiceStateTest, ANewProgramIsPreviewedWrittenOnceAndTheFirstRunBuildsOn
   EXPECT_EQ(without_run, 2) << "the new programs have no run behind them";
 }
 
+// Once the database is found damaged, every run and push is refused with what to do, also on
+// the PLC's side (a storage fault, not "ask again"), and the damage is kept as a fault event.
+TEST_F(ServiceStateTest, ADamagedDatabaseRefusesRunsPushesAndThePlc) {
+  Service service(config_, design_gauge());
+  service.set_database_damaged("database x is damaged: page 3; put the last sound backup in its place");
+  Result<RunReservation> run = service.reserve_run();
+  ASSERT_FALSE(run.ok());
+  EXPECT_EQ(run.error().code, ErrorCode::kStorage);
+  EXPECT_NE(run.error().message.find("last sound backup"), std::string::npos);
+  Result<nlohmann::json> rollback = service.rollback("CAM_INTAKE_L1", 1, "anna");
+  ASSERT_FALSE(rollback.ok());
+  EXPECT_EQ(rollback.error().code, ErrorCode::kStorage);
+  EXPECT_EQ(gauges_made_, 0);
+  ServiceCycleRunner runner(service);
+  PlcRequestWords request;
+  request.part_number = 1;
+  request.lobe = 1;
+  const std::optional<PlcCycleOutcome> outcome = runner.start(request);
+  ASSERT_TRUE(outcome.has_value()) << "answered at once";
+  EXPECT_EQ(outcome->code, PlcResultCode::kStorageFault) << outcome->message;
+  ASSERT_TRUE(service.flush_events());
+  bool recorded = false;
+  for (const StoredEvent& e : stored_events(db())) recorded = recorded || e.event.code == "database damaged";
+  EXPECT_TRUE(recorded);
+}
+
 TEST_F(ServiceStateTest, AnUnknownPartIsRefusedBeforeTheGaugeAndKeptAsAnEvent) {
   Service service(config_, design_gauge());
   Result<nlohmann::json> r = service.measure("exhaust_roller", 1, "");
