@@ -747,6 +747,12 @@ UPDATE sqlite_schema
 PRAGMA writable_schema = OFF;
 )sql";
 
+// Runs stored before version 8 were never judged: their verdict says so from version 11, so that
+// filtering by verdict is one comparison runs_by_verdict serves (NULL is outside that index).
+constexpr std::string_view kSchemaV11 = R"sql(
+UPDATE runs SET verdict = 'not_judged' WHERE verdict IS NULL;
+)sql";
+
 // The schema cookie must change with the CREATE text, so every connection reads it again;
 // and both edits must have happened.
 Status bump_schema_cookie(Connection& conn) {
@@ -775,8 +781,8 @@ Status bump_schema_cookie(Connection& conn) {
   return exec(conn, ("PRAGMA schema_version = " + std::to_string(next)).c_str(), "bump the schema cookie");
 }
 
-const std::array<Migration, 10>& all_migrations() {
-  static const std::array<Migration, 10> kMigrations{{
+const std::array<Migration, 11>& all_migrations() {
+  static const std::array<Migration, 11> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -819,6 +825,11 @@ const std::array<Migration, 10>& all_migrations() {
        "a program written from a drawing (nc new): a push and its intent with no run behind them",
        std::string(kSchemaV10),
        bump_schema_cookie,
+       {}},
+      {11,
+       "runs stored before version 8 say `not_judged`, so the verdict filter is served by its index",
+       std::string(kSchemaV11),
+       nullptr,
        {}},
   }};
   return kMigrations;

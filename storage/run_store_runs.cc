@@ -593,8 +593,9 @@ Result<storage_internal::WhereClause> run_filter(const RunQuery& q) {
   if (q.lobe > 0) where.add_literal("r.lobe = " + std::to_string(q.lobe));
   if (!q.machine.empty()) where.add("r.machine =", q.machine);
   if (!q.serial.empty()) where.add("r.serial =", q.serial);
-  // Runs stored before schema 8 (NULL) are not judged.
-  if (q.verdict) where.add("coalesce(r.verdict, 'not_judged') =", std::string(verdict_name(*q.verdict)));
+  // Every run has a verdict from schema 11 (the older ones `not_judged`): one comparison, which
+  // runs_by_verdict serves with the sort.
+  if (q.verdict) where.add("r.verdict =", std::string(verdict_name(*q.verdict)));
   if (!q.status.empty()) where.add("r.status =", q.status);
   if (!q.since_utc.empty()) where.add("r.started_utc >=", q.since_utc);
   if (!q.until_utc.empty()) where.add("r.started_utc <", q.until_utc);

@@ -365,6 +365,28 @@ TEST(MigrationFromV7, OldRunsAreNotJudgedAndNewRunsKeepTheirCharacteristics) {
   }
 }
 
+// Version 10 to 11: a run stored before version 8 (no verdict) says `not_judged`, and the
+// verdict filter finds it with the runs judged so since.
+TEST(MigrationFromV10, AnOldRunWithoutAVerdictIsNotJudgedAndFilteredSo) {
+  TempDir dir;
+  ASSERT_NO_FATAL_FAILURE(write_old_database_with_run_5(db_in(dir), 10));
+  {
+    RawDb raw(db_in(dir));
+    ASSERT_EQ(raw.exec("UPDATE runs SET verdict = NULL WHERE id = 5"), SQLITE_OK);
+  }
+  Result<RunStore> store = RunStore::open(db_in(dir));
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  RawDb raw(db_in(dir));
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM runs WHERE verdict IS NULL"), 0);
+  RunQuery q;
+  q.verdict = Verdict::kNotJudged;
+  Result<std::vector<RunSummary>> runs = store->list_runs(q);
+  ASSERT_TRUE(runs.ok()) << runs.error().message;
+  ASSERT_EQ(runs->size(), 1u);
+  EXPECT_EQ((*runs)[0].id, 5);
+}
+
 TEST(Characteristics, ARunWithANonFiniteOrRepeatedCharacteristicIsRefusedAndNothingWritten) {
   TempDir dir;
   Result<RunStore> store = RunStore::open(db_in(dir));

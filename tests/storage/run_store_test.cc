@@ -231,6 +231,42 @@ TEST_F(RunStoreTest, ListBySerialMatchesExactly) {
   EXPECT_NE(plan.find("runs_by_serial"), std::string::npos) << plan;
 }
 
+// The verdict filter, every value of it, is one index seek with the sort (runs_by_verdict),
+// however long the history: the plan SQLite makes for list_runs' query, and the runs it finds.
+TEST_F(RunStoreTest, TheVerdictFilterIsServedByItsIndex) {
+  RunRecord judged = make_record("intake", "2026-11-22T01:00:00Z");
+  judged.verdict = Verdict::kOut;
+  ASSERT_TRUE(store().insert_run(judged).ok());
+  ASSERT_TRUE(store().insert_run(make_record("intake", "2026-11-22T02:00:00Z")).ok());
+  for (const Verdict v : {Verdict::kIn, Verdict::kOut, Verdict::kNotJudged}) {
+    RunQuery q;
+    q.verdict = v;
+    Result<std::vector<RunSummary>> runs = store().list_runs(q);
+    ASSERT_TRUE(runs.ok()) << runs.error().message;
+    for (const RunSummary& r : *runs) EXPECT_EQ(r.verdict, v);
+    sqlite3* handle = nullptr;
+    ASSERT_EQ(sqlite3_open(db_in(dir_).c_str(), &handle), SQLITE_OK);
+    sqlite3_stmt* st = nullptr;
+    const std::string sql = "EXPLAIN QUERY PLAN SELECT id FROM runs AS r WHERE r.verdict = '" +
+                            std::string(verdict_name(v)) + "' ORDER BY r.started_utc DESC, r.id DESC LIMIT 50";
+    ASSERT_EQ(sqlite3_prepare_v2(handle, sql.c_str(), -1, &st, nullptr), SQLITE_OK);
+    std::string plan;
+    while (sqlite3_step(st) == SQLITE_ROW)
+      plan += reinterpret_cast<const char*>(sqlite3_column_text(st, 3)) + std::string("\n");
+    sqlite3_finalize(st);
+    sqlite3_close(handle);
+    EXPECT_NE(plan.find("INDEX runs_by_verdict (verdict=?)"), std::string::npos) << plan;
+    EXPECT_EQ(plan.find("TEMP B-TREE"), std::string::npos) << "the index gives the order too\n" << plan;
+  }
+  Result<std::vector<RunSummary>> out = store().list_runs([] {
+    RunQuery q;
+    q.verdict = Verdict::kOut;
+    return q;
+  }());
+  ASSERT_TRUE(out.ok());
+  EXPECT_EQ(out->size(), 1u);
+}
+
 TEST_F(RunStoreTest, SerialAndOperatorOverSixtyFourCharactersOrWithControlsAreRefused) {
   RunRecord r = make_record("intake", "2026-11-22T01:00:00Z");
   r.serial = std::string(64, 'S');
