@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/number_text.h"
+#include "nc_out/curve_table.h"
 #include "nc_out/nc_text.h"
 #include "nc_out/table_program.h"
 
@@ -16,11 +17,12 @@ using nc_text::parse_number;
 using nc_text::trim;
 using nc_text::upper;
 
-int decimals_for(double increments) { return std::max(0, static_cast<int>(std::ceil(std::log10(increments) - 1e-9))); }
-
-double round_to_grid(double v, double increments) {
-  const double r = std::round(v * increments) / increments;
-  return r == 0.0 ? 0.0 : r;
+// A grid of `increments` per unit, as the control's for X (curve_table.h): the same rounding and
+// decimals for Z (per mm) and SIM1 (per degree).
+CurveTableFormat grid(double increments) {
+  CurveTableFormat f;
+  f.x_increments_per_mm = increments;
+  return f;
 }
 
 std::string_view code_of(std::string_view line) {
@@ -43,10 +45,10 @@ std::vector<std::string_view> words_of(std::string_view code) {
 
 }  // namespace
 
-int StrokeProgramFormat::z_decimals() const { return decimals_for(z_increments_per_mm); }
-int StrokeProgramFormat::sim_decimals() const { return decimals_for(sim_increments_per_deg); }
-double StrokeProgramFormat::round_z_mm(double z) const { return round_to_grid(z, z_increments_per_mm); }
-double StrokeProgramFormat::round_sim_deg(double sim) const { return round_to_grid(sim, sim_increments_per_deg); }
+int StrokeProgramFormat::z_decimals() const { return grid(z_increments_per_mm).x_decimals(); }
+int StrokeProgramFormat::sim_decimals() const { return grid(sim_increments_per_deg).x_decimals(); }
+double StrokeProgramFormat::round_z_mm(double z) const { return grid(z_increments_per_mm).round_x_mm(z); }
+double StrokeProgramFormat::round_sim_deg(double sim) const { return grid(sim_increments_per_deg).round_x_mm(sim); }
 
 std::string render_gearbox_coupling(const GearboxFactors& f) {
   return "EGDEF(C,B,1,Z,1,Y,1,SIM1,1)\nEGON(C,\"FINE\",B," + std::to_string(f.b_numerator) + "," +

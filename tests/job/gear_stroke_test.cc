@@ -56,16 +56,22 @@ std::vector<std::array<double, 5>> csv_rows(const fs::path& p) {
   return rows;
 }
 
+// The example gear's stroke settings, written into `dir`.
+GearStrokeSettings settings_for(const GearPartFile& gf, const testing::TempDir& dir) {
+  GearStrokeSettings s;
+  s.part_name = gf.name;
+  s.program_name = gf.nc_program;
+  s.out_file = dir.path() / "GEAR_71_STROKE.SPF";
+  return s;
+}
+
 TEST(GearStroke, TheProgramHoldsDsimReDerivedFromThePerAxisErrors) {
   Result<GearPartFile> gf = read_gear_part_file(kExamples / "gear_71.toml");
   ASSERT_TRUE(gf.ok()) << gf.error().message;
   Result<StrokeAxisErrors> errors = read_axis_errors_csv(kExamples / "gear_71_axis_errors.csv");
   ASSERT_TRUE(errors.ok()) << errors.error().message;
   testing::TempDir dir("gear-stroke");
-  GearStrokeSettings s;
-  s.part_name = gf->name;
-  s.program_name = gf->nc_program;
-  s.out_file = dir.path() / "GEAR_71_STROKE.SPF";
+  GearStrokeSettings s = settings_for(*gf, dir);
   s.format.sim_increments_per_deg = 1e6;
   Result<GearStrokeReport> r = write_gear_stroke(gf->part, *errors, s);
   ASSERT_TRUE(r.ok()) << r.error().message;
@@ -106,10 +112,7 @@ TEST(GearStroke, ErrorsThatDoNotCoverTheStrokeOrABadPartWriteNothing) {
   Result<GearPartFile> gf = read_gear_part_file(kExamples / "gear_71.toml");
   ASSERT_TRUE(gf.ok()) << gf.error().message;
   testing::TempDir dir("gear-stroke-bad");
-  GearStrokeSettings s;
-  s.part_name = gf->name;
-  s.program_name = gf->nc_program;
-  s.out_file = dir.path() / "GEAR_71_STROKE.SPF";
+  const GearStrokeSettings s = settings_for(*gf, dir);
   Result<StrokeAxisErrors> short_errors = parse_axis_errors_csv(
       "z_mm,y_error_um,z_error_um,b_error_deg,c_error_deg\n-10,1,1,0,0\n10,1,1,0,0\n", "short.csv");
   ASSERT_TRUE(short_errors.ok()) << short_errors.error().message;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
@@ -75,6 +76,16 @@ double error_against_closed_form_um(const std::string& program, char axis, const
   return worst;
 }
 
+// Each following axis of the sample pin: C-X's X, C-X-Y's X and Y.
+struct PinPath {
+  const char* what;
+  ClosedForm f;
+  char axis;
+};
+std::vector<PinPath> pin_paths() {
+  return {{"C-X X", cx_infeed(), 'X'}, {"C-X-Y X", cxy_infeed(), 'X'}, {"C-X-Y Y", cxy_height(), 'Y'}};
+}
+
 std::string rendered(const CurveTable& t, char axis, const CurveTableFormat& f) {
   const std::string tmpl =
       std::string("{{table_header}}\nCTABDEF(") + axis + ",C,1,1)\n{{table_blocks}}\nCTABEND\nM17\n";
@@ -90,13 +101,7 @@ std::string rendered(const CurveTable& t, char axis, const CurveTableFormat& f) 
 TEST(PinSeam, EveryPinTableAtOneDegreeKeepsANanometreAtFineResolution) {
   CurveTableFormat fine;
   fine.x_increments_per_mm = 1000000.0;
-  struct Case {
-    const char* what;
-    ClosedForm f;
-    char axis;
-  };
-  for (const Case& c :
-       {Case{"C-X X", cx_infeed(), 'X'}, Case{"C-X-Y X", cxy_infeed(), 'X'}, Case{"C-X-Y Y", cxy_height(), 'Y'}}) {
+  for (const PinPath& c : pin_paths()) {
     SCOPED_TRACE(c.what);
     const SampledPath path = sampled(c.f);
     Result<CurveTable> t = write_spline_table(path, 1.0, fine);
@@ -112,18 +117,12 @@ TEST(PinSeam, EveryPinTableAtOneDegreeKeepsANanometreAtFineResolution) {
 // POLY segments at 1 deg, each the cubic Hermite of the exact path, reach the crankpin paper's
 // 5e-7 mm at a resolution of 1e-6 mm on each of the pin's paths. The tolerance is what the
 // table cannot avoid: half an increment at the points (0.0005 um), the cubic Hermite's own
-// error h^4/384 max|X| (1 deg, |X| <= R = 45 mm per rad^4: 1.1e-5 um) and the
+// error h^4/384 max|X''''| (1 deg, |X''''| <= R = 45 mm per rad^4: 1.1e-5 um) and the
 // coefficients' rounding (0.64 * 0.5e-8 mm: 3.2e-6 um), so 0.000515 um.
 TEST(PinSeam, PolySegmentsAtOneDegreeKeepTheGridsHalfIncrement) {
   CurveTableFormat fine;
   fine.x_increments_per_mm = 1000000.0;
-  struct Case {
-    const char* what;
-    ClosedForm f;
-    char axis;
-  };
-  for (const Case& c :
-       {Case{"C-X X", cx_infeed(), 'X'}, Case{"C-X-Y X", cxy_infeed(), 'X'}, Case{"C-X-Y Y", cxy_height(), 'Y'}}) {
+  for (const PinPath& c : pin_paths()) {
     SCOPED_TRACE(c.what);
     const SampledPath path = sampled(c.f);
     Result<CurveTable> t = write_poly_table(path, 1.0, fine);
