@@ -19,9 +19,9 @@ Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxi
   if (!points) return points.error();
   r.points = std::move(*points);
   const GearCoupling& k = r.coupling;
-  // B's factor as the whole ratio the gearbox needs: -h_w starts over teeth.
+  // B's factor as the whole ratio the gearbox needs: -h_w starts over teeth (S_BC exactly).
   GearboxFactors factors;
-  factors.b_numerator = static_cast<int>(std::lround(k.s_bc * part.gear.teeth));
+  factors.b_numerator = -hand_sign(part.worm.hand) * part.worm.starts;
   factors.b_denominator = part.gear.teeth;
   factors.z_deg_per_mm = k.s_zc_deg_per_mm;
   factors.y_deg_per_mm = k.s_yc_deg_per_mm;

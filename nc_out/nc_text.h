@@ -49,4 +49,30 @@ inline std::vector<std::string_view> lines_of(std::string_view text) {
   return out;
 }
 
+// The code of a block: before any ';' comment, trimmed.
+inline std::string_view code_of(std::string_view line) {
+  const size_t semi = line.find(';');
+  return trim(semi == std::string_view::npos ? line : line.substr(0, semi));
+}
+
+// The words of a block's code, split on blanks; a block number N<digits> at the front is dropped.
+inline std::vector<std::string_view> words_of(std::string_view code) {
+  std::vector<std::string_view> words;
+  size_t pos = 0;
+  while (pos < code.size()) {
+    while (pos < code.size() && (code[pos] == ' ' || code[pos] == '\t')) ++pos;
+    size_t end = pos;
+    while (end < code.size() && code[end] != ' ' && code[end] != '\t') ++end;
+    if (end > pos) words.push_back(code.substr(pos, end - pos));
+    pos = end;
+  }
+  if (!words.empty()) {
+    const std::string_view first = words.front();
+    const bool block_number = first.size() > 1 && (first[0] == 'N' || first[0] == 'n') &&
+                              first.find_first_not_of("0123456789", 1) == std::string_view::npos;
+    if (block_number) words.erase(words.begin());
+  }
+  return words;
+}
+
 }  // namespace gaugeloop::nc_text

@@ -12,10 +12,12 @@
 namespace gaugeloop {
 namespace {
 
+using nc_text::code_of;
 using nc_text::lines_of;
 using nc_text::parse_number;
 using nc_text::trim;
 using nc_text::upper;
+using nc_text::words_of;
 
 // A grid of `increments` per unit, as the control's for X (curve_table.h): the same rounding and
 // decimals for Z (per mm) and SIM1 (per degree).
@@ -23,24 +25,6 @@ CurveTableFormat grid(double increments) {
   CurveTableFormat f;
   f.x_increments_per_mm = increments;
   return f;
-}
-
-std::string_view code_of(std::string_view line) {
-  const std::size_t semi = line.find(';');
-  return trim(semi == std::string_view::npos ? line : line.substr(0, semi));
-}
-
-std::vector<std::string_view> words_of(std::string_view code) {
-  std::vector<std::string_view> words;
-  std::size_t pos = 0;
-  while (pos < code.size()) {
-    while (pos < code.size() && (code[pos] == ' ' || code[pos] == '\t')) ++pos;
-    std::size_t end = pos;
-    while (end < code.size() && code[end] != ' ' && code[end] != '\t') ++end;
-    if (end > pos) words.push_back(code.substr(pos, end - pos));
-    pos = end;
-  }
-  return words;
 }
 
 }  // namespace
@@ -123,10 +107,7 @@ Result<ParsedStrokeProgram> parse_stroke_program(std::string_view text, std::str
     bool sim_given = false;
     for (std::string_view w : words) {
       const std::string u = upper(w);
-      if (u == "G1" || u == "G01" || u == "G90" || u == "FGROUP(Z)" ||
-          (u.size() > 1 && u[0] == 'N' && parse_number(u.substr(1)))) {
-        continue;
-      }
+      if (u == "G1" || u == "G01" || u == "G90" || u == "FGROUP(Z)") continue;
       if (u.size() > 1 && u[0] == 'F' && parse_number(u.substr(1))) continue;
       if (u.rfind("SIM1=", 0) == 0) {
         const std::optional<double> v = parse_number(w.substr(5));

@@ -11,9 +11,13 @@
 
 #include "core/number_text.h"
 #include "nc_out/nc_template.h"
+#include "nc_out/nc_text.h"
 
 namespace gaugeloop {
 namespace {
+
+using nc_text::code_of;
+using nc_text::words_of;
 
 constexpr std::string_view kHeaderPrefix = "; gaugeloop ";
 
@@ -59,30 +63,6 @@ std::optional<int> parse_int(std::string_view s) {
   auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
   return v;
-}
-
-// The code of a block: before any ';' comment, trimmed.
-std::string_view code_of(std::string_view line) {
-  const size_t semi = line.find(';');
-  return trim(semi == std::string_view::npos ? line : line.substr(0, semi));
-}
-
-// Splits on blanks; a block number N<digits> at the front is dropped.
-std::vector<std::string_view> words_of(std::string_view code) {
-  std::vector<std::string_view> words;
-  size_t pos = 0;
-  while (pos < code.size()) {
-    while (pos < code.size() && (code[pos] == ' ' || code[pos] == '\t')) ++pos;
-    size_t end = pos;
-    while (end < code.size() && code[end] != ' ' && code[end] != '\t') ++end;
-    if (end > pos) words.push_back(code.substr(pos, end - pos));
-    pos = end;
-  }
-  if (!words.empty() && words.front().size() > 1 && (words.front()[0] == 'N' || words.front()[0] == 'n') &&
-      parse_int(words.front().substr(1))) {
-    words.erase(words.begin());
-  }
-  return words;
 }
 
 // The following axis the template's CTABDEF names (its first argument, upper case), so that

@@ -67,8 +67,9 @@ json passes_json(const InfeedPlan& plan) {
   return out;
 }
 
-// The preview as GET /api/nc/new answers it (docs/http_api.md).
-json preview_json(const ProgramPreview& p, const JobSettings& s) {
+// The preview as GET /api/nc/new answers it (docs/http_api.md); without the profile per degree
+// for the answer of a write.
+json preview_json(const ProgramPreview& p, const JobSettings& s, bool with_profile = true) {
   const BuiltTable& b = p.built;
   json choices = json::array();
   add_choices(choices, "X", p.x_candidates, b.table);
@@ -100,7 +101,7 @@ json preview_json(const ProgramPreview& p, const JobSettings& s) {
           {"turns", p.infeed.turns()},
           {"turn_time_s", p.turn_time_s},
           {"cycle_time_s", p.cycle_time_s},
-          {"profile", profile_json(p)}};
+          {"profile", with_profile ? profile_json(p) : json(nullptr)}};
 }
 
 }  // namespace
@@ -142,8 +143,8 @@ Result<json> Service::new_program(const std::string& part_name, int lobe, const 
   tell_plant();
   json files = json::array();
   for (const std::filesystem::path& f : r->files) files.push_back(f.string());
-  json out = preview_json(r->preview, js);
-  out.erase("profile");  // the preview has it; the answer says what was written
+  json out = preview_json(r->preview, js, /*with_profile=*/false);  // the preview has it
+  out.erase("profile");
   out["table_version"] = r->table_version;
   out["files"] = std::move(files);
   return out;
