@@ -3,12 +3,16 @@
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "cli/cli_common.h"
+#include "cli/embedded_defaults.h"
 #include "compensation/gear_coupling.h"
 #include "config/gear_file.h"
+#include "core/text_file.h"
 #include "job/gear_stroke.h"
+#include "job/measure_job.h"
 
 namespace gaugeloop {
 namespace {
@@ -56,9 +60,12 @@ int cmd_gear_coupling(const CouplingOptions& o) {
 }
 
 struct StrokeOptions {
+  DataPaths paths;
   std::string part_path;
   std::string errors_path;
   std::string out_path;
+  std::string main_template_path;
+  bool overwrite_edited = false;
   double feed_mm_per_min = 300.0;
   double int_incr_per_mm = 10000.0;
   double int_incr_per_deg = 1000.0;
@@ -72,11 +79,33 @@ int cmd_gear_stroke(const StrokeOptions& o) {
   GearStrokeSettings s;
   s.part_name = gf->name;
   s.program_name = gf->nc_program;
-  s.out_file =
-      o.out_path.empty() ? std::filesystem::path(gf->nc_program + "_STROKE.SPF") : std::filesystem::path(o.out_path);
   s.feed_mm_per_min = o.feed_mm_per_min;
   s.format.z_increments_per_mm = o.int_incr_per_mm;
   s.format.sim_increments_per_deg = o.int_incr_per_deg;
+  std::optional<RunStore> store;
+  if (!o.out_path.empty()) {
+    s.out_file = o.out_path;
+  } else {
+    // Pushed as a measurement pushes a cam's table: <nc-dir>/<nc_program>.SPF, with its history.
+    s.nc_file = std::filesystem::absolute(o.paths.nc() / (gf->nc_program + ".SPF")).lexically_normal();
+    JobSettings js;
+    js.db_path = o.paths.db();
+    js.nc_dir = o.paths.nc();
+    Result<RunStore> opened = open_store_for_push(js, s.nc_file);
+    if (!opened) return report_error(opened.error());
+    store.emplace(std::move(*opened));
+    s.store = &*store;
+    s.overwrite_edited = o.overwrite_edited;
+    if (o.main_template_path.empty()) {
+      s.main.gear_template_text = std::string(embedded::kGearMainTemplate);
+      s.main.gear_template_name = "embedded:gear_main.mpf";
+    } else {
+      Result<std::string> text = read_regular_file(o.main_template_path, "main program template");
+      if (!text) return report_error(text.error());
+      s.main.gear_template_text = std::move(*text);
+      s.main.gear_template_name = o.main_template_path;
+    }
+  }
   Result<GearStrokeReport> r = write_gear_stroke(gf->part, *errors, s);
   if (!r) return report_error(r.error());
   std::printf("stroke of %s: %zu spline points from Z %.3f to %.3f mm, SIM1 up to %.6f deg (%s)\n", gf->name.c_str(),
@@ -87,8 +116,14 @@ int cmd_gear_stroke(const StrokeOptions& o) {
     std::printf("  %-10.3f %12.3f %12.3f %12.6f %12.6f %12.6f\n", p.z_mm, p.errors.y_mm * 1000.0,
                 p.errors.z_mm * 1000.0, p.errors.b_deg, p.errors.c_deg, p.sim_deg);
   }
-  std::printf("written %s, read back\n", s.out_file.string().c_str());
-  std::printf("the main program couples C to B, Z, Y and SIM1 with:\n%s\n", r->coupling_lines.c_str());
+  if (r->version == 0) {
+    std::printf("written %s, read back (not pushed: no history, no main program)\n", r->written.string().c_str());
+    std::printf("the main program couples C to B, Z, Y and SIM1 with:\n%s\n", r->coupling_lines.c_str());
+    return kExitOk;
+  }
+  std::printf("pushed %s as stroke version %d, read back; main program %s couples C to B, Z, Y and SIM1 with:\n%s\n",
+              r->written.string().c_str(), r->version, main_program_path(r->written).string().c_str(),
+              r->coupling_lines.c_str());
   return kExitOk;
 }
 
@@ -111,14 +146,30 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
   CLI::App* stroke = gear->add_subcommand(
       "stroke",
       "Write the stroke program for the axes' errors along the stroke: Z through the spline points, SIM1 at each "
-      "where it puts the gear back in mesh (dSIM = S_YC e_Y + S_ZC e_Z + S_BC e_B - e_C); written atomically and "
-      "read back, and the EGDEF/EGON lines that couple it. Not pushed: the file goes where --out says");
+      "where it puts the gear back in mesh (dSIM = S_YC e_Y + S_ZC e_Z + S_BC e_B - e_C). Pushed to "
+      "<nc-dir>/<nc_program>.SPF as a measurement pushes a cam's table (version, history, hand-edit check, "
+      "`nc rollback`), with <nc_program>_MAIN.MPF coupling C to B, Z, Y and SIM1; or, with --out, written to a "
+      "file alone. Read back either way");
   stroke->add_option("--part", so->part_path, "Gear part file (TOML with [gear])")->required();
+  add_data_options(*stroke, so->paths);
+  stroke->add_option("--nc-dir", so->paths.nc_dir, "Directory the stroke program is pushed to [<data-dir>/nc]");
   stroke
       ->add_option("--errors", so->errors_path,
                    "Axis errors along the stroke, CSV: z_mm, y_error_um, z_error_um, b_error_deg, c_error_deg")
       ->required();
-  stroke->add_option("--out", so->out_path, "Where to write the stroke program [<nc_program>_STROKE.SPF]");
+  stroke
+      ->add_option("--out", so->out_path,
+                   "Write the stroke program to this file alone: not pushed, no history, no main program")
+      ->excludes("--nc-dir");
+  stroke
+      ->add_option("--main-template", so->main_template_path,
+                   "Main program template: must hold {{gearbox_coupling}} before the call of {{program_name}} "
+                   "[built-in examples/sinumerik/gear_main.mpf]")
+      ->excludes("--out");
+  stroke
+      ->add_flag("--overwrite-edited", so->overwrite_edited,
+                 "Overwrite a stroke program on the control that was edited by hand (it is refused otherwise)")
+      ->excludes("--out");
   stroke->add_option("--feed-mm-per-min", so->feed_mm_per_min, "Stroke feed along Z")->capture_default_str();
   stroke->add_option("--int-incr-per-mm", so->int_incr_per_mm, "The control's MD10200 (Z's grid)")
       ->capture_default_str()

@@ -15,6 +15,7 @@
 #include "core/number_text.h"
 #include "core/text_file.h"
 #include "job/nc_push.h"
+#include "nc_out/stroke_program.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
 #include "report/run_json.h"
@@ -112,7 +113,8 @@ struct DiffOptions : NcOptions {
   double threshold_um = 0.1;
 };
 
-Result<ParsedTable> pushed_table(const RunStore& store, const std::string& file, int version, NcPush& push) {
+// Version `version` of `file` as pushed, with its program text.
+Result<NcPush> pushed_program(const RunStore& store, const std::string& file, int version) {
   Result<NcPush> p = store.load_push(file, version);
   if (!p) return p.error();
   if (!p->program_text) {
@@ -120,8 +122,59 @@ Result<ParsedTable> pushed_table(const RunStore& store, const std::string& file,
                                                 " was pushed before gaugeloop kept program texts; it cannot be "
                                                 "compared or rolled back to");
   }
+  return p;
+}
+
+Result<ParsedTable> pushed_table(const RunStore& store, const std::string& file, int version, NcPush& push) {
+  Result<NcPush> p = pushed_program(store, file, version);
+  if (!p) return p.error();
   push = *p;
   return parse_table_program(*p->program_text, file + " version " + std::to_string(version));
+}
+
+// Two versions of a gear's stroke: SIM1 at each spline point of both, and the difference.
+int diff_strokes(const DiffOptions& o, const std::string& file, const NcPush& pa, const NcPush& pb) {
+  Result<ParsedStrokeProgram> sa = parse_stroke_program(*pa.program_text, file + " version " + std::to_string(o.a));
+  if (!sa) return report_error(sa.error());
+  Result<ParsedStrokeProgram> sb = parse_stroke_program(*pb.program_text, file + " version " + std::to_string(o.b));
+  if (!sb) return report_error(sb.error());
+  if (sa->points.size() != sb->points.size()) {
+    return report_error(make_error(ErrorCode::kInvalidInput, file + ": version " + std::to_string(o.a) + " has " +
+                                                                 std::to_string(sa->points.size()) +
+                                                                 " spline points, version " + std::to_string(o.b) +
+                                                                 " " + std::to_string(sb->points.size())));
+  }
+  json rows = json::array();
+  double worst = 0.0;
+  for (std::size_t i = 0; i < sa->points.size(); ++i) {
+    const StrokeProgramPoint& a = sa->points[i];
+    const StrokeProgramPoint& b = sb->points[i];
+    if (a.z_mm != b.z_mm) {
+      return report_error(make_error(ErrorCode::kInvalidInput, file + ": spline point " + std::to_string(i + 1) +
+                                                                   " is at Z" + format_fixed(a.z_mm, 4) +
+                                                                   " in one version, Z" + format_fixed(b.z_mm, 4) +
+                                                                   " in the other"));
+    }
+    if (std::abs(b.sim_deg - a.sim_deg) > std::abs(worst)) worst = b.sim_deg - a.sim_deg;
+    rows.push_back(
+        {{"z_mm", a.z_mm}, {"sim_a_deg", a.sim_deg}, {"sim_b_deg", b.sim_deg}, {"dsim_deg", b.sim_deg - a.sim_deg}});
+  }
+  if (o.json_out) {
+    print_json(json{{"nc_file", file},
+                    {"a", nc_push_json(pa)},
+                    {"b", nc_push_json(pb)},
+                    {"largest_dsim_deg", worst},
+                    {"points", rows}});
+    return kExitOk;
+  }
+  std::printf("%s: stroke version %d -> version %d, %zu spline points, SIM1(B) - SIM1(A) largest %+.6f deg\n",
+              file.c_str(), o.a, o.b, sa->points.size(), worst);
+  std::printf("  %10s  %12s  %12s  %12s\n", "Z mm", "SIM1 A deg", "SIM1 B deg", "dSIM deg");
+  for (const json& r : rows) {
+    std::printf("  %10.4f  %12.6f  %12.6f  %+12.6f\n", r["z_mm"].get<double>(), r["sim_a_deg"].get<double>(),
+                r["sim_b_deg"].get<double>(), r["dsim_deg"].get<double>());
+  }
+  return kExitOk;
 }
 
 int cmd_diff(const DiffOptions& o) {
@@ -131,6 +184,15 @@ int cmd_diff(const DiffOptions& o) {
   if (!file) return report_error(file.error());
   NcPush pa;
   NcPush pb;
+  {
+    Result<NcPush> a = pushed_program(*store, *file, o.a);
+    if (!a) return report_error(a.error());
+    Result<NcPush> b = pushed_program(*store, *file, o.b);
+    if (!b) return report_error(b.error());
+    if (is_stroke_program(*a->program_text) && is_stroke_program(*b->program_text)) {
+      return diff_strokes(o, *file, *a, *b);
+    }
+  }
   Result<ParsedTable> ta = pushed_table(*store, *file, o.a, pa);
   if (!ta) return report_error(ta.error());
   Result<ParsedTable> tb = pushed_table(*store, *file, o.b, pb);
@@ -204,7 +266,8 @@ constexpr const char* kMainTemplateHelp =
     "[built-in Sinumerik 840D main program]";
 
 // The main program's template as the option names it; its part and lobe are the run's.
-// Without --main-template, a crankpin ground C-X gets the built-in pin main program.
+// Without --main-template, a crankpin ground C-X gets the built-in pin main program, a gear's
+// stroke the built-in gear main program.
 Result<MainProgramSource> main_source(const std::string& path) {
   MainProgramSource m;
   Result<std::string> text = load_main_template(path, m.template_name);
@@ -213,6 +276,8 @@ Result<MainProgramSource> main_source(const std::string& path) {
   if (path.empty()) {
     m.pin_cx_template_text = std::string(embedded::kPinMainCxTemplate);
     m.pin_cx_template_name = "embedded:pin_main_cx.mpf";
+    m.gear_template_text = std::string(embedded::kGearMainTemplate);
+    m.gear_template_name = "embedded:gear_main.mpf";
   }
   return m;
 }
@@ -226,6 +291,11 @@ int cmd_rollback(const RollbackOptions& o) {
   if (!main) return report_error(main.error());
   Result<PushOutcome> pushed = rollback_to_version(*store, *file, o.version, person(o.by), *main);
   if (!pushed) return report_error(pushed.error());
+  if (pushed->stroke) {
+    std::printf("%s: stroke version %d written, the stroke of version %d; it is now the stroke in force\n",
+                file->c_str(), pushed->table_version, o.version);
+    return kExitOk;
+  }
   std::printf("%s: table version %d written, the table of version %d (%s); it is now the table in force\n",
               file->c_str(), pushed->table_version, o.version, origin_text(pushed->run_id).c_str());
   return kExitOk;
@@ -258,6 +328,11 @@ int cmd_check(const NcOptions& o) {
         "%s: table version %d as written for run %lld (%s); its push was interrupted before it was "
         "recorded: `gaugeloop nc reconcile` or the next push records it\n",
         file->c_str(), i.push.table_version, static_cast<long long>(i.run_id), i.created_utc.c_str());
+    return kExitOk;
+  }
+  if (is_stroke_program(*on_disk)) {
+    std::printf("%s: stroke version %d as pushed (%s, %s)\n", file->c_str(), *last ? (**last).table_version : 0,
+                *last ? (**last).reason.c_str() : "-", *last ? (**last).pushed_utc.c_str() : "-");
     return kExitOk;
   }
   std::printf("%s: table version %d as pushed (%s, %s)\n", file->c_str(), *last ? (**last).table_version : 0,

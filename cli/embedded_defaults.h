@@ -17,5 +17,7 @@ extern const std::string_view kNcMainSpeedTemplate;  // examples/sinumerik/cam_m
 extern const std::string_view kPinYTableTemplate;  // examples/sinumerik/pin_y_table.spf
 extern const std::string_view kPinMainTemplate;    // examples/sinumerik/pin_main.mpf
 extern const std::string_view kPinMainCxTemplate;  // examples/sinumerik/pin_main_cx.mpf
+// Gears: the main program coupling C to B, Z, Y and SIM1 and calling the stroke.
+extern const std::string_view kGearMainTemplate;  // examples/sinumerik/gear_main.mpf
 
 }  // namespace gaugeloop::embedded

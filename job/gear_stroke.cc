@@ -34,6 +34,8 @@ Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxi
   const std::map<std::string, std::string> header{
       {"part", s.part_name},
       {"program", s.program_name},
+      {"run_id", "0"},
+      {"table_version", "0"},
       {"created_utc", utc_now()},
       {"axis_errors", errors.source},
       {"s_bc", std::to_string(factors.b_numerator) + "/" + std::to_string(factors.b_denominator)},
@@ -42,19 +44,37 @@ Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxi
   };
   Result<std::string> text = render_stroke_program(s.program_name, header, program_points, s.feed_mm_per_min, s.format);
   if (!text) return text.error();
-  if (Status w = write_file_atomically(s.out_file, *text); !w) return w.error();
+  if (s.store != nullptr) {
+    PushFacts facts;
+    facts.reason = "stroke from " + errors.source;
+    facts.table.interpolation = "stroke";
+    facts.table.point_count = static_cast<int>(program_points.size());
+    facts.table.block_count = static_cast<int>(program_points.size());
+    PushOptions options;
+    options.overwrite_edited = s.overwrite_edited;
+    options.main = s.main;
+    const std::string& program = *text;
+    Result<PushCompletion> pushed = push_program(
+        *s.store, s.nc_file, facts, [&program](int version) { return with_table_version(program, version); }, options);
+    if (!pushed) return pushed.error();
+    r.version = pushed->table_version;
+    r.written = s.nc_file;
+  } else {
+    if (Status w = write_file_atomically(s.out_file, *text); !w) return w.error();
+    r.written = s.out_file;
+  }
   // What the control would read: parsed, checksummed, every point as written.
-  Result<std::string> back = read_regular_file(s.out_file, "stroke program");
+  Result<std::string> back = read_regular_file(r.written, "stroke program");
   if (!back) return back.error();
-  Result<ParsedStrokeProgram> parsed = parse_stroke_program(*back, s.out_file.string());
+  Result<ParsedStrokeProgram> parsed = parse_stroke_program(*back, r.written.string());
   if (!parsed) {
-    return make_error(ErrorCode::kIo, s.out_file.string() + " does not read back: " + parsed.error().message);
+    return make_error(ErrorCode::kIo, r.written.string() + " does not read back: " + parsed.error().message);
   }
   for (std::size_t i = 0; i < program_points.size(); ++i) {
     const StrokeProgramPoint& a = parsed->points[i];
     if (a.z_mm != s.format.round_z_mm(program_points[i].z_mm) ||
         a.sim_deg != s.format.round_sim_deg(program_points[i].sim_deg)) {
-      return make_error(ErrorCode::kIo, s.out_file.string() + ":" + std::to_string(parsed->point_lines[i]) +
+      return make_error(ErrorCode::kIo, r.written.string() + ":" + std::to_string(parsed->point_lines[i]) +
                                             ": reads back Z" + format_fixed(a.z_mm, 4) +
                                             " SIM1=" + format_fixed(a.sim_deg, 6) + ", not what was written");
     }

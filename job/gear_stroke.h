@@ -1,7 +1,8 @@
 // A gear's stroke program written from the axes' errors along the stroke: the SIM1 position at
 // every spline point (compensation/gear_coupling.h), the program text (nc_out/stroke_program.h)
-// written atomically and read back. docs/gears.md. Not yet through the push journal and its
-// history: the file is written where it is asked to be, never into the NC directory by itself.
+// pushed into the NC directory through the push journal as the cam tables are (version, hand-edit
+// check, main program, history, rollback), or written to a file alone; read back either way.
+// docs/gears.md.
 #pragma once
 
 #include <filesystem>
@@ -10,16 +11,25 @@
 
 #include "compensation/gear_coupling.h"
 #include "core/result.h"
+#include "job/nc_push.h"
 #include "nc_out/stroke_program.h"
 
 namespace gaugeloop {
 
 struct GearStrokeSettings {
   std::string part_name;
-  std::string program_name;  // the part file's nc_program; the file's header names it
-  std::filesystem::path out_file;
+  std::string program_name;        // the part file's nc_program; the file's header names it
   double feed_mm_per_min = 300.0;  // the stroke's feed along Z
   StrokeProgramFormat format;
+  // Where the program goes. With a store: pushed to nc_file (push_program, job/nc_push.h) with
+  // the main program `main` beside it (its gear_template_text; empty: none), a hand-edited
+  // program overwritten only with overwrite_edited. Without: written to out_file alone, no
+  // history and no main program.
+  RunStore* store = nullptr;
+  std::filesystem::path nc_file;
+  MainProgramSource main;
+  bool overwrite_edited = false;
+  std::filesystem::path out_file;
 };
 
 struct GearStrokeReport {
@@ -27,12 +37,15 @@ struct GearStrokeReport {
   std::vector<StrokeSimPoint> points;
   std::string coupling_lines;  // EGDEF and EGON for the main program
   double sim_max_abs_deg = 0.0;
+  std::filesystem::path written;  // the stroke program's file
+  int version = 0;                // the stroke version pushed; 0: written to a file, not pushed
 };
 
-// The points, the program, written atomically to settings.out_file and read back: it must parse,
-// match its checksum and hold every point as written (on the control's grid). Errors: validate's
-// and stroke_sim_points' kInvalidInput; kIo for a file that cannot be written; kIo for a file that
-// does not read back as written.
+// The points and the program, pushed (settings.store) or written atomically to settings.out_file,
+// then read back: it must parse, match its checksum and hold every point as written (on the
+// control's grid). Errors: validate's and stroke_sim_points' kInvalidInput; push_program's (a
+// hand-edited program kRefused, a main template without the gearbox kInvalidInput, both before
+// anything is written); kIo for a file that cannot be written or does not read back as written.
 Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxisErrors& errors,
                                            const GearStrokeSettings& settings);
 

@@ -10,6 +10,8 @@
 #include "core/utc_time.h"
 #include "nc_out/infeed.h"
 #include "nc_out/main_program.h"
+#include "nc_out/nc_text.h"
+#include "nc_out/stroke_program.h"
 #include "nc_out/table_program.h"
 #include "report/run_json.h"
 
@@ -18,22 +20,87 @@ namespace {
 
 constexpr std::string_view kVersionLine = "; gaugeloop table_version: ";
 
-Error refused(const std::filesystem::path& nc_file, const std::string& what, const std::string& last) {
-  return make_error(
-      ErrorCode::kRefused,
-      "NC program " + nc_file.string() + " " + what + last +
-          ". gaugeloop does not overwrite it: to keep the change, copy the file elsewhere; then remove it and "
-          "push again, or approve the pending table with `gaugeloop nc approve ID --overwrite-edited` "
-          "(`gaugeloop nc pending` lists them)");
+Error refused(const std::filesystem::path& nc_file, const std::string& what, const std::string& last,
+              bool stroke = false) {
+  return make_error(ErrorCode::kRefused,
+                    "NC program " + nc_file.string() + " " + what + last +
+                        ". gaugeloop does not overwrite it: to keep the change, copy the file elsewhere; then remove "
+                        "it and push again, or " +
+                        (stroke ? std::string("push the stroke with `gaugeloop gear stroke --overwrite-edited`")
+                                : std::string("approve the pending table with `gaugeloop nc approve ID "
+                                              "--overwrite-edited` (`gaugeloop nc pending` lists them)")));
 }
 
 }  // namespace
 
 namespace {
 
-std::string header_value(const ParsedTable& t, const std::string& key) {
-  auto it = t.header.find(key);
-  return it == t.header.end() ? std::string("?") : it->second;
+std::string header_value(const std::map<std::string, std::string>& header, const std::string& key) {
+  auto it = header.find(key);
+  return it == header.end() ? std::string("?") : it->second;
+}
+
+std::string header_value(const ParsedTable& t, const std::string& key) { return header_value(t.header, key); }
+
+// A program on the control, or as pushed, read for the hand-edit check: a curve table or a
+// gear's stroke.
+struct ProgramRead {
+  std::map<std::string, std::string> header;
+  std::optional<ParsedTable> table;
+  std::optional<ParsedStrokeProgram> stroke;
+};
+
+// Reads `text` as the program it says it is. `edited` is set when it reads but its body does
+// not match its checksum (or, for a stroke, its point count): a hand edit rather than a file
+// gaugeloop never wrote.
+Result<ProgramRead> read_program(std::string_view text, const std::string& name, bool& edited) {
+  edited = false;
+  ProgramRead r;
+  if (is_stroke_program(text)) {
+    Result<ParsedStrokeProgram> p = parse_stroke_program(text, name);
+    if (!p) {
+      edited = p.error().code == ErrorCode::kRefused;
+      return p.error();
+    }
+    r.header = p->header;
+    r.stroke = std::move(*p);
+    return r;
+  }
+  Result<ParsedTable> t = parse_table_program(text, name);
+  if (!t) return t.error();
+  if (Status v = verify_table_checksum(*t, name); !v) {
+    edited = true;
+    return v.error();
+  }
+  r.header = t->header;
+  r.table = std::move(*t);
+  return r;
+}
+
+// Whether `here` holds the points `pushed` holds: a table as compare_table_points compares
+// them, a stroke point for point as written.
+Status compare_points(const ProgramRead& here, const ProgramRead& pushed, const std::string& name) {
+  if (here.table && pushed.table) return compare_table_points(*here.table, pushed.table->points, name);
+  if (!here.stroke || !pushed.stroke) {
+    return make_error(ErrorCode::kRefused, name + " holds a " + (here.stroke ? "stroke program" : "curve table") +
+                                               " where a " + (pushed.stroke ? "stroke program" : "curve table") +
+                                               " was pushed");
+  }
+  const std::vector<StrokeProgramPoint>& a = here.stroke->points;
+  const std::vector<StrokeProgramPoint>& b = pushed.stroke->points;
+  if (a.size() != b.size()) {
+    return make_error(ErrorCode::kRefused, name + " has " + std::to_string(a.size()) +
+                                               " spline points, the push wrote " + std::to_string(b.size()));
+  }
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].z_mm != b[i].z_mm || a[i].sim_deg != b[i].sim_deg) {
+      return make_error(ErrorCode::kRefused, name + ":" + std::to_string(here.stroke->point_lines[i]) + ": Z" +
+                                                 format_fixed(a[i].z_mm, 4) + " SIM1=" + format_fixed(a[i].sim_deg, 6) +
+                                                 " where the push wrote Z" + format_fixed(b[i].z_mm, 4) +
+                                                 " SIM1=" + format_fixed(b[i].sim_deg, 6));
+    }
+  }
+  return {};
 }
 
 }  // namespace
@@ -55,31 +122,33 @@ Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::pa
                                         std::to_string((**last).run_id) + ")"
                                   : "";
   const std::string name = nc_file.string();
-  Result<ParsedTable> on_control = parse_table_program(text, name);
+  bool edited = false;
+  Result<ProgramRead> on_control = read_program(text, name, edited);
   if (!on_control) {
-    return refused(nc_file, *last ? "was changed by hand" : "was not written by gaugeloop",
-                   since + " (" + on_control.error().message + ")");
-  }
-  if (Status v = verify_table_checksum(*on_control, name); !v) {
-    return refused(nc_file, "was edited by hand", since + " (" + v.error().message + ")");
+    return refused(nc_file,
+                   edited ? "was edited by hand" : (*last ? "was changed by hand" : "was not written by gaugeloop"),
+                   since + " (" + on_control.error().message + ")", is_stroke_program(text));
   }
   if (*last && (**last).program_text) {
-    Result<ParsedTable> pushed = parse_table_program(*(**last).program_text, name + " as pushed");
+    Result<ProgramRead> pushed = read_program(*(**last).program_text, name + " as pushed", edited);
     if (!pushed) return pushed.error();
-    // Its identity first: a gaugeloop table of another run or version copied in is not the
-    // table last pushed, even with the same points.
+    // Its identity first: a gaugeloop program of another run or version copied in is not the
+    // program last pushed, even with the same points.
+    const std::string thing = on_control->stroke ? "stroke program" : "table";
     for (const char* key : {"run_id", "table_version", "body_checksum_fnv1a64"}) {
-      const std::string here = header_value(*on_control, key);
-      const std::string pushed_value = header_value(*pushed, key);
+      const std::string here = header_value(on_control->header, key);
+      const std::string pushed_value = header_value(pushed->header, key);
       if (here != pushed_value) {
-        return refused(nc_file, "is not the table last pushed",
+        return refused(nc_file, "is not the " + thing + " last pushed",
                        since + " (its header says " + key + " " + here + ", the push recorded " + pushed_value +
-                           "; it holds table version " + header_value(*on_control, "table_version") + " of run " +
-                           header_value(*on_control, "run_id") + ")");
+                           "; it holds " + thing + " version " + header_value(on_control->header, "table_version") +
+                           " of run " + header_value(on_control->header, "run_id") + ")",
+                       on_control->stroke.has_value());
       }
     }
-    if (Status c = compare_table_points(*on_control, pushed->points, name); !c) {
-      return refused(nc_file, "is not the table last pushed", since + " (" + c.error().message + ")");
+    if (Status c = compare_points(*on_control, *pushed, name); !c) {
+      return refused(nc_file, "is not the " + thing + " last pushed", since + " (" + c.error().message + ")",
+                     on_control->stroke.has_value());
     }
   }
   return {};
@@ -324,6 +393,44 @@ Result<std::string> render_main_for_table(const MainProgramSource& source, const
   return *header + *main;
 }
 
+Result<std::string> render_main_for_stroke(const MainProgramSource& source, const std::filesystem::path& nc_file,
+                                           std::string_view stroke_program) {
+  Result<ParsedStrokeProgram> p = parse_stroke_program(stroke_program, nc_file.string());
+  if (!p) return make_error(ErrorCode::kInvalidInput, p.error().message);
+  const std::map<std::string, std::string>& h = p->header;
+  auto missing = [&nc_file](const std::string& key) {
+    return make_error(ErrorCode::kInvalidInput, nc_file.string() + ": the stroke program's header has no readable `" +
+                                                    key + "`; the main program's gearbox cannot be written from it");
+  };
+  GearboxFactors f;
+  const std::string s_bc = header_value(h, "s_bc");
+  if (std::sscanf(s_bc.c_str(), "%d/%d", &f.b_numerator, &f.b_denominator) != 2 || f.b_denominator <= 0) {
+    return missing("s_bc");
+  }
+  const std::optional<double> z = nc_text::parse_number(header_value(h, "s_zc_deg_per_mm"));
+  if (!z) return missing("s_zc_deg_per_mm");
+  const std::optional<double> y = nc_text::parse_number(header_value(h, "s_yc_deg_per_mm"));
+  if (!y) return missing("s_yc_deg_per_mm");
+  f.z_deg_per_mm = *z;
+  f.y_deg_per_mm = *y;
+  const std::string run_id = header_value(h, "run_id");
+  const std::map<std::string, std::string> values = {
+      {"program_name", nc_file.stem().string()},
+      {"part", source.part.empty() ? header_value(h, "part") : source.part},
+      {"version", GAUGELOOP_VERSION},
+      {"run_id", run_id},
+      {"origin",
+       run_id == "0" || run_id == "?" ? std::string("the axes' errors (no gear measured yet)") : "run " + run_id},
+      {"created_utc", source.created_utc.empty() ? utc_now() : source.created_utc},
+      {"table_version", header_value(h, "table_version")},
+      {"point_count", std::to_string(p->points.size())},
+      {"sim_max_abs_deg", header_value(h, "sim_max_abs_deg")},
+      {"gearbox_coupling", render_gearbox_coupling(f)}};
+  const bool gear = !source.gear_template_text.empty();
+  return render_gear_main_program(gear ? source.gear_template_text : source.template_text,
+                                  gear ? source.gear_template_name : source.template_name, values);
+}
+
 namespace {
 
 // Before a table goes to `number`: a main program on the control that couples `number` (its
@@ -366,19 +473,25 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   if (!version) return version.error();
   Result<std::string> program = render(*version);
   if (!program) return program.error();
-  const bool with_main = !options.main.template_text.empty();
+  // A gear's stroke couples no curve table: its main program has no table number to alternate.
+  const bool stroke = is_stroke_program(*program);
+  const bool with_main = !options.main.template_text.empty() || (stroke && !options.main.gear_template_text.empty());
   const std::filesystem::path main_file = main_program_path(nc_file);
   std::string main_text;
   int number = 0;
   if (with_main) {
-    Result<std::string> m = render_main_for_table(options.main, nc_file, *program);
+    Result<std::string> m = stroke ? render_main_for_stroke(options.main, nc_file, *program)
+                                   : render_main_for_table(options.main, nc_file, *program);
     if (!m) return m.error();
     main_text = std::move(*m);
-    Result<int> n = coupled_table_number(main_text, main_file.string());
-    if (!n) return n.error();
-    number = *n;
+    if (!stroke) {
+      Result<int> n = coupled_table_number(main_text, main_file.string());
+      if (!n) return n.error();
+      number = *n;
+    }
   }
-  const std::string what = "run " + std::to_string(facts.run_id) + ": table version " + std::to_string(*version);
+  const std::string what = "run " + std::to_string(facts.run_id) + (stroke ? ": stroke version " : ": table version ") +
+                           std::to_string(*version);
   auto not_pushed = [&what](Error e) {
     e.message = what + " was not pushed (the program on the control is unchanged): " + e.message;
     return e;
@@ -394,7 +507,7 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   intent.pending_id = facts.pending_id;
   intent.approved_by = facts.approved_by;
   intent.note = facts.note;
-  if (with_main) {
+  if (with_main && !stroke) {
     if (Status r = repoint_stale_main(store, nc_file, options.main, number, files); !r) {
       Error e = r.error();
       e.message = "main program " + main_file.string() + " couples table " + std::to_string(number) +
@@ -462,6 +575,11 @@ namespace {
 // written before the header named it is taken for a lobe.
 RunPart part_of_program(std::string_view program_text, const std::string& nc_file, std::string& name, int& lobe) {
   RunPart part;
+  if (is_stroke_program(program_text)) {
+    if (Result<ParsedStrokeProgram> p = parse_stroke_program(program_text, nc_file))
+      name = header_value(p->header, "part");
+    return part;
+  }
   Result<ParsedTable> t = parse_table_program(program_text, nc_file);
   if (!t) return part;
   name = header_value(*t, "part");
@@ -563,7 +681,7 @@ Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_f
   Result<PushCompletion> pushed = push_program(
       store, nc_file, facts, [&text](int version) { return with_table_version(text, version); }, options);
   if (!pushed) return pushed.error();
-  return PushOutcome{nc_file, pushed->table_version, old->run_id, true};
+  return PushOutcome{nc_file, pushed->table_version, old->run_id, true, is_stroke_program(text)};
 }
 
 }  // namespace gaugeloop

@@ -1,6 +1,6 @@
-// Writing a curve-table program to the control: the one way every push goes (a measured run,
-// an approval, a rollback), so each is checked, versioned, written atomically and recorded
-// alike.
+// Writing a curve-table program (or a gear's stroke program) to the control: the one way every
+// push goes (a measured run, an approval, a rollback, a stroke), so each is checked, versioned,
+// written atomically and recorded alike.
 #pragma once
 
 #include <cstdint>
@@ -69,6 +69,11 @@ struct MainProgramSource {
   // settings say so), used instead of template_text; empty: template_text for every part.
   std::string pin_cx_template_text;
   std::string pin_cx_template_name;
+  // For a gear's stroke program (nc_out/stroke_program.h): the main program coupling C to B, Z,
+  // Y and SIM1 (examples/sinumerik/gear_main.mpf), used instead of template_text; empty:
+  // template_text for every program.
+  std::string gear_template_text;
+  std::string gear_template_name;
 };
 
 // The main program for `table_program` (version and table number set, as pushed to
@@ -81,6 +86,16 @@ struct MainProgramSource {
 // template that does not render.
 Result<std::string> render_main_for_table(const MainProgramSource& source, const std::filesystem::path& nc_file,
                                           std::string_view table_program);
+
+// The main program for a gear's stroke program (as pushed to `nc_file`), rendered with
+// render_gear_main_program (nc_out/main_program.h) from source.gear_template_text (or
+// template_text when that is empty): program_name is nc_file's stem, the gearbox's lines are
+// built from the factors the stroke program's header carries (s_bc, s_zc_deg_per_mm,
+// s_yc_deg_per_mm), and run_id, table_version, point_count, sim_max_abs_deg and part are its
+// header's too (part: source.part when given). kInvalidInput for a stroke that does not parse,
+// a header without the factors or a template that does not render.
+Result<std::string> render_main_for_stroke(const MainProgramSource& source, const std::filesystem::path& nc_file,
+                                           std::string_view stroke_program);
 
 // The steps of a push, in order; a test seam to interrupt one between any two.
 enum class PushStep {
@@ -151,6 +166,7 @@ struct PushOutcome {
   // Approval only: false if the table stopped pending between the check and the write (a
   // newer measurement superseded it); the push is then recorded alone.
   bool decision_recorded = true;
+  bool stroke = false;  // a gear's stroke program (nc_out/stroke_program.h), not a curve table
 };
 
 // `gaugeloop nc approve` and POST /api/nc/approve: pushes pending table `pending_id` (still

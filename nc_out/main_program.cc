@@ -82,6 +82,14 @@ std::vector<Coupling> couplings_on(std::string_view code, std::string& error) {
   }
 }
 
+// Whether the block's first word (or EXTCALL's quoted argument) calls `name`.
+bool calls_program(std::string_view code, const std::string& name) {
+  const std::string_view first = code.substr(0, code.find_first_of(" \t("));
+  if (upper(first) == upper(name)) return true;
+  // Execution from external source: EXTCALL("<name>") runs the subprogram from a drive.
+  return upper(first) == "EXTCALL" && upper(code).find("\"" + upper(name) + "\"") != std::string::npos;
+}
+
 }  // namespace
 
 Result<int> coupled_table_number(std::string_view program, std::string_view file_name) {
@@ -147,13 +155,6 @@ Result<std::string> render_main_program(std::string_view template_text, std::str
     return refuse("would couple X and Y through the same curve table " + number +
                   "; give the Y table its own pair of table numbers");
   }
-  // Whether the block's first word (or EXTCALL's quoted argument) calls `name`.
-  auto calls_program = [](std::string_view code, const std::string& name) {
-    const std::string_view first = code.substr(0, code.find_first_of(" \t("));
-    if (upper(first) == upper(name)) return true;
-    // Execution from external source: EXTCALL("<name>") runs the table subprogram from a drive.
-    return upper(first) == "EXTCALL" && upper(code).find("\"" + upper(name) + "\"") != std::string::npos;
-  };
   bool calls = false;
   bool calls_y = false;
   int x_line = 0;  // 1-based line of the first coupling of X (with Y) or of any coupling (without)
@@ -207,6 +208,73 @@ Result<std::string> render_main_program(std::string_view template_text, std::str
   }
   if (x_line == 0) return refuse("does not couple X to curve table " + number);
   if (y_line == 0) return refuse("does not couple Y to curve table " + y_number);
+  return program;
+}
+
+namespace {
+
+// A block's code without blanks, upper case: `EGON(C, "FINE", B,...)` as `EGON(C,"FINE",B,...)`.
+std::string squeezed(std::string_view code) {
+  std::string out;
+  for (const char c : upper(code)) {
+    if (c != ' ' && c != '\t') out += c;
+  }
+  return out;
+}
+
+// Whether a block defines or switches a coupling of any axis.
+bool is_coupling_block(std::string_view code) {
+  const std::string u = squeezed(code);
+  for (const char* word : {"EGDEF(", "EGON(", "EGONSYN(", "EGONSYNE(", "LEADON(", "TRAILON("}) {
+    if (u.find(word) != std::string::npos) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+Result<std::string> render_gear_main_program(std::string_view template_text, std::string_view template_name,
+                                             const std::map<std::string, std::string>& values) {
+  Result<std::string> program = render_nc_template(template_text, template_name, values);
+  if (!program) return program.error();
+  const std::string& subprogram = values.at("program_name");
+  std::vector<std::string> coupling;
+  for (const std::string_view line : lines_of(values.at("gearbox_coupling"))) coupling.push_back(squeezed(line));
+  auto refuse = [&](const std::string& why) {
+    return make_error(ErrorCode::kInvalidInput,
+                      std::string(template_name) + ": the rendered main program " + why +
+                          "; put {{gearbox_coupling}} on a line of its own before the block that calls the stroke "
+                          "subprogram {{program_name}}, as examples/sinumerik/gear_main.mpf does (docs/gears.md)");
+  };
+  std::size_t coupled = 0;  // lines of the gearbox coupling found, in order
+  bool calls = false;
+  const std::vector<std::string_view> lines = lines_of(*program);
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const std::string_view code = code_of(lines[i]);
+    const std::string where = "line " + std::to_string(i + 1);
+    if (is_coupling_block(code)) {
+      if (coupled == coupling.size() || squeezed(code) != coupling[coupled]) {
+        return refuse("makes a coupling of its own at " + where + " (`" + std::string(code) +
+                      "`): the gearbox with SIM1 is written by gaugeloop with the part's factors, and a second "
+                      "one would fight it");
+      }
+      ++coupled;
+      continue;
+    }
+    if (calls_program(code, subprogram)) {
+      if (coupled < coupling.size()) {
+        return refuse("calls the stroke subprogram " + subprogram + " at " + where +
+                      " before C is coupled to B, Z, Y and SIM1: the stroke's SIM1 would move nothing");
+      }
+      calls = true;
+    }
+  }
+  if (coupled < coupling.size()) {
+    return refuse(
+        "does not couple C to B, Z, Y and SIM1 (no {{gearbox_coupling}}): the stroke's SIM1 would move "
+        "nothing and the gear would be ground uncompensated");
+  }
+  if (!calls) return refuse("does not call the stroke subprogram " + subprogram);
   return program;
 }
 

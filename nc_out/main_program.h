@@ -53,4 +53,14 @@ Status check_main_calls_speed_program(std::string_view program, std::string_view
 // naming `file_name` and the line if it has none or it cannot be read.
 Result<int> coupled_table_number(std::string_view program, std::string_view file_name);
 
+// The main program of a gear's stroke (docs/gears.md): `values` must hold "program_name" (the
+// stroke subprogram) and "gearbox_coupling" (render_gearbox_coupling's EGDEF and EGON lines,
+// nc_out/stroke_program.h), and may hold part, version, run_id, origin, created_utc,
+// table_version, point_count and sim_max_abs_deg. The rendered program must hold the gearbox's
+// lines as blocks, in order, before the block that calls program_name, and make no other
+// coupling (EGDEF, EGON, EGONSYN, LEADON, TRAILON), so a template without {{gearbox_coupling}},
+// or with a gearbox of its own, never ships. kInvalidInput naming the template and line.
+Result<std::string> render_gear_main_program(std::string_view template_text, std::string_view template_name,
+                                             const std::map<std::string, std::string>& values);
+
 }  // namespace gaugeloop

@@ -40,6 +40,23 @@ std::string render_gearbox_coupling(const GearboxFactors& f) {
          format_fixed(f.y_deg_per_mm, 12) + ",1,SIM1,1,1)";
 }
 
+namespace {
+constexpr std::string_view kStrokeKind = "gear stroke";
+}  // namespace
+
+bool is_stroke_program(std::string_view text) {
+  for (const std::string_view line : lines_of(text)) {
+    std::map<std::string, std::string> header;
+    const std::string_view l = trim(line);
+    if (!read_header_line(l, header)) {
+      if (l.empty() || l.front() == ';') continue;
+      return false;  // the body: a stroke program's header comes before it
+    }
+    if (auto it = header.find("kind"); it != header.end()) return it->second == kStrokeKind;
+  }
+  return false;
+}
+
 Result<std::string> render_stroke_program(std::string_view program_name,
                                           const std::map<std::string, std::string>& header,
                                           const std::vector<StrokeProgramPoint>& points, double feed_mm_per_min,
@@ -70,6 +87,7 @@ Result<std::string> render_stroke_program(std::string_view program_name,
     if (i == 0) body += " F" + format_fixed(feed_mm_per_min, 1);
   }
   std::string out = "; " + std::string(program_name) + ": the gear's stroke, SIM1 compensating the gearbox's axes";
+  append_header_line(out, "kind", std::string(kStrokeKind));
   for (const auto& [key, value] : header) append_header_line(out, key, value);
   append_header_line(out, "point_count", std::to_string(points.size()));
   append_header_line(out, "sim_max_abs_deg", format_fixed(sim_max, format.sim_decimals()));

@@ -49,7 +49,7 @@ struct GearboxFactors {
 };
 std::string render_gearbox_coupling(const GearboxFactors& factors);
 
-// The stroke subprogram: header lines (`; gaugeloop key: value`, `header` in order of key, then
+// The stroke subprogram: header lines (`; gaugeloop key: value`: kind "gear stroke", `header` in order of key, then
 // the point count, the largest |SIM1| and the body's FNV-1a 64 checksum), then the body:
 //   FGROUP(Z)                        ; the feed is along Z; SIM1 moves with it
 //   G1 G90 Z-15.0000 SIM1=0.001 F300
@@ -61,6 +61,10 @@ Result<std::string> render_stroke_program(std::string_view program_name,
                                           const std::map<std::string, std::string>& header,
                                           const std::vector<StrokeProgramPoint>& points, double feed_mm_per_min,
                                           const StrokeProgramFormat& format = {});
+
+// Whether `text` is a stroke program: its header (before the first block) holds
+// `; gaugeloop kind: gear stroke`, as render_stroke_program writes it. A curve-table program is not.
+bool is_stroke_program(std::string_view text);
 
 // A stroke program read back.
 struct ParsedStrokeProgram {

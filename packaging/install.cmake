@@ -39,7 +39,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/examples/service/gaugeloop.toml DESTINATION 
 install(FILES ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_main.mpf ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_table.spf
               ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_main_speed.mpf ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_speed.spf
               ${PROJECT_SOURCE_DIR}/examples/sinumerik/pin_main.mpf ${PROJECT_SOURCE_DIR}/examples/sinumerik/pin_main_cx.mpf
-              ${PROJECT_SOURCE_DIR}/examples/sinumerik/pin_y_table.spf
+              ${PROJECT_SOURCE_DIR}/examples/sinumerik/pin_y_table.spf ${PROJECT_SOURCE_DIR}/examples/sinumerik/gear_main.mpf
         DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples/sinumerik)
 
 # The unit names the binary by its installed path. The prefix is known for certain only when

@@ -1,5 +1,6 @@
-// `gaugeloop gear coupling` as a user runs it: the factors of the example gear as text and JSON,
-// and a bad gear file refused with exit 2 naming its key.
+// `gaugeloop gear coupling` and `gear stroke` as a user runs them: the factors of the example gear
+// as text and JSON, a bad gear file refused with exit 2 naming its key, the stroke written to a
+// file or pushed with its history, diff, check and rollback.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -62,6 +63,42 @@ TEST(GearCommand, WritesTheStrokeProgramAndPrintsTheCoupling) {
   EXPECT_EQ(b.exit_code, 2) << b.output;
   EXPECT_NE(b.output.find("bad.csv:2: column c_error_deg"), std::string::npos) << b.output;
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "B.SPF"));
+}
+
+TEST(GearCommand, PushesTheStrokeWithItsHistoryDiffCheckAndRollback) {
+  testing::TempDir dir("gear-push-cmd");
+  const std::string data = " --data-dir " + (dir.path() / "data").string();
+  const std::string errors = std::string(GAUGELOOP_SOURCE_DIR) + "/examples/gear_71_axis_errors.csv";
+  const std::string stroke = "gear stroke --part " + kExample + " --errors " + errors + data;
+  testing::CommandResult v1 = testing::run_command(stroke + " --int-incr-per-deg 1000");
+  ASSERT_EQ(v1.exit_code, 0) << v1.output;
+  EXPECT_NE(v1.output.find("as stroke version 1"), std::string::npos) << v1.output;
+  const auto nc = dir.path() / "data" / "nc";
+  EXPECT_NE(testing::slurp(nc / "GEAR_71_MAIN.MPF").find("EGDEF(C,B,1,Z,1,Y,1,SIM1,1)"), std::string::npos);
+  // Finer SIM1 grid: the same stroke to six decimals instead of three.
+  testing::CommandResult v2 = testing::run_command(stroke + " --int-incr-per-deg 1000000");
+  ASSERT_EQ(v2.exit_code, 0) << v2.output;
+  testing::CommandResult history = testing::run_command("nc history" + data);
+  ASSERT_EQ(history.exit_code, 0) << history.output;
+  EXPECT_NE(history.output.find("GEAR_71                2"), std::string::npos) << history.output;
+  EXPECT_NE(history.output.find("stroke"), std::string::npos) << history.output;
+  testing::CommandResult diff = testing::run_command("nc diff 1 2" + data);
+  ASSERT_EQ(diff.exit_code, 0) << diff.output;
+  EXPECT_NE(diff.output.find("stroke version 1 -> version 2, 31 spline points"), std::string::npos) << diff.output;
+  // SIM1 rounded to 0.001 deg against 0.000001: no point differs by more than half the coarse step.
+  testing::CommandResult json = testing::run_command("nc diff 1 2 --json" + data);
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  const nlohmann::json j = nlohmann::json::parse(json.output);
+  EXPECT_LE(std::abs(j["largest_dsim_deg"].get<double>()), 0.0005 + 1e-12);
+  EXPECT_GT(std::abs(j["largest_dsim_deg"].get<double>()), 0.0) << "the grids differ";
+  testing::CommandResult check = testing::run_command("nc check" + data);
+  ASSERT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find("stroke version 2 as pushed"), std::string::npos) << check.output;
+  testing::CommandResult rollback = testing::run_command("nc rollback 1 --by anna" + data);
+  ASSERT_EQ(rollback.exit_code, 0) << rollback.output;
+  EXPECT_NE(rollback.output.find("stroke version 3 written, the stroke of version 1"), std::string::npos)
+      << rollback.output;
+  EXPECT_NE(testing::slurp(nc / "GEAR_71_MAIN.MPF").find("with stroke version 3 "), std::string::npos);
 }
 
 }  // namespace

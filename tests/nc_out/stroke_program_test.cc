@@ -36,6 +36,15 @@ TEST(StrokeProgram, ReadsBackOnTheControlsGrid) {
   EXPECT_EQ(f->points[1].sim_deg, -0.0004);
 }
 
+TEST(StrokeProgram, SaysItIsAStrokeAndACurveTableIsNot) {
+  EXPECT_TRUE(is_stroke_program(program()));
+  EXPECT_TRUE(is_stroke_program("; G\r\n; gaugeloop kind: gear stroke\r\nFGROUP(Z)\r\n")) << "a Windows share's lines";
+  EXPECT_FALSE(is_stroke_program("; CAM\n; gaugeloop table_version: 1\nCTABDEF(X,C,1,1)\nCTABEND\nM17\n"));
+  // The kind is read from the header only: the words in the body or another kind do not count.
+  EXPECT_FALSE(is_stroke_program("; G\nFGROUP(Z)\n; gaugeloop kind: gear stroke\n"));
+  EXPECT_FALSE(is_stroke_program("; gaugeloop kind: curve table\n"));
+}
+
 TEST(StrokeProgram, TheGearboxCouplesFourLeadingAxes) {
   GearboxFactors g{-1, 71, -0.266388852882, 0.717294043564};
   EXPECT_EQ(render_gearbox_coupling(g),
@@ -55,7 +64,7 @@ TEST(StrokeProgram, RefusesAHandEditAndWhatItCannotModel) {
   foreign.replace(foreign.find("Z0.0000 SIM1=0.000"), 18, "Z0.0000 X5");
   Result<ParsedStrokeProgram> f = parse_stroke_program(foreign, "S.SPF");
   ASSERT_FALSE(f.ok());
-  EXPECT_NE(f.error().message.find("S.SPF:8: `X5`"), std::string::npos) << f.error().message;
+  EXPECT_NE(f.error().message.find("S.SPF:9: `X5`"), std::string::npos) << f.error().message;
 
   std::string back = program();
   back.replace(back.find("Z1.0000"), 7, "Z-2.000");
