@@ -8,6 +8,7 @@
 
 #include "cli/cli_common.h"
 #include "cli/embedded_defaults.h"
+#include "cli/gear_loop.h"
 #include "compensation/gear_coupling.h"
 #include "config/gear_file.h"
 #include "core/text_file.h"
@@ -128,6 +129,76 @@ int cmd_gear_stroke(const StrokeOptions& o) {
 }
 
 }  // namespace
+
+int run_gear_demo(const GearDemoOptions& o) {
+  Result<GearPartFile> gf = read_gear_part_file(o.part_path);
+  if (!gf) return report_error(gf.error());
+  GearLoopSettings ls;
+  ls.part = *gf;
+  ls.machine = seeded_gear_machine(o.machine_seed);
+  ls.iterations = o.iterations;
+  GearStrokeSettings& s = ls.stroke;
+  s.part_name = gf->name;
+  s.program_name = gf->nc_program;
+  s.format.z_increments_per_mm = o.z_increments_per_mm;
+  // A generating grinder's rotary axes are set finer than the control's default 1000 per degree.
+  s.format.sim_increments_per_deg = 100000.0;
+  s.nc_file = std::filesystem::absolute(o.paths.nc() / (gf->nc_program + ".SPF")).lexically_normal();
+  JobSettings js;
+  js.db_path = o.paths.db();
+  js.nc_dir = o.paths.nc();
+  Result<RunStore> store = open_store_for_push(js, s.nc_file);
+  if (!store) return report_error(store.error());
+  s.store = &*store;
+  s.main.gear_template_text = std::string(embedded::kGearMainTemplate);
+  s.main.gear_template_name = "embedded:gear_main.mpf";
+  const GearCoupling k = gear_coupling(gf->part);
+  const GearMachineErrors& m = ls.machine;
+  std::printf("virtual gear grinder: %s, %d teeth, module %.4g mm, helix %.4g deg, face %.4g mm; machine seed %llu\n",
+              gf->name.c_str(), gf->part.gear.teeth, gf->part.gear.normal_module_mm, gf->part.gear.helix_angle_deg,
+              gf->part.gear.face_width_mm, static_cast<unsigned long long>(o.machine_seed));
+  std::printf(
+      "  axis errors over the stroke: Y bow %.1f um, Z screw %.1f um / %.1f mm, B drift %.4f deg, C drive %.4f deg / "
+      "%.1f mm; checker noise %.1f um\n",
+      std::abs(m.y_mm.bow_per_mm2) * 15.0 * 15.0 * 1000.0, m.z_mm.slow * 1000.0, m.z_mm.slow_pitch_mm,
+      std::abs(m.b_deg.linear_per_mm) * 30.0, m.c_deg.slow, m.c_deg.slow_pitch_mm, m.checker_noise_um);
+  std::printf("  gearbox: S_BC %+.9f, S_ZC %+.9f deg/mm, S_YC %+.9f deg/mm; the checker measures gaps", k.s_bc,
+              k.s_zc_deg_per_mm, k.s_yc_deg_per_mm);
+  for (int gap : ls.gaps) std::printf(" %d", gap);
+  std::printf(", both flanks, every %.1f mm\n", ls.lead_step_mm);
+  std::fflush(stdout);
+  auto on_gear = [](const GearLoopIteration& g) {
+    std::printf(
+        "gear %d (stroke version %d): F_beta %.2f um mean, %.2f max (ISO 1328-1 class %d); f_f_beta %.2f, |f_H_beta| "
+        "%.2f um; as ground F_beta %.2f um\n",
+        g.iteration, g.ground_from_version, g.measured.total_mean_um, g.measured.total_max_um,
+        g.measured.tolerance_class, g.measured.form_mean_um, g.measured.slope_mean_abs_um, g.ground.total_mean_um);
+    if (g.identified) {
+      std::printf(
+          "  mesh error identified at %zu spline points (%d traces, %d samples, residual %.2f um RMS); "
+          "stroke version %d pushed, SIM1 up to %.5f deg\n",
+          g.identified->z_mm.size(), g.identified->traces, g.identified->samples, g.identified->residual_rms_um,
+          g.pushed_version, g.sim_max_abs_deg);
+    }
+    std::fflush(stdout);
+  };
+  Result<std::vector<GearLoopIteration>> r = run_gear_loop(ls, on_gear);
+  if (!r) return report_error(r.error());
+  const GearLoopIteration& a = r->front();
+  const GearLoopIteration& b = r->back();
+  std::printf(
+      "lead F_beta (mean of %zu flanks): %.2f -> %.2f um measured (%.1f times), %.2f -> %.2f um as ground; "
+      "class %d -> %d\n",
+      ls.gaps.size() * 2, a.measured.total_mean_um, b.measured.total_mean_um,
+      a.measured.total_mean_um / std::max(1e-9, b.measured.total_mean_um), a.ground.total_mean_um,
+      b.ground.total_mean_um, a.measured.tolerance_class, b.measured.tolerance_class);
+  std::printf(
+      "the lead sees only the sum of the axes' errors through the gearbox (dSIM): Y, Z, B and C are not "
+      "separable from it\n");
+  std::printf("stroke program %s, main program %s\n", s.nc_file.string().c_str(),
+              main_program_path(s.nc_file).string().c_str());
+  return kExitOk;
+}
 
 void add_gear_commands(CLI::App& app, CommandAction& action) {
   CLI::App* gear = app.add_subcommand(

@@ -16,6 +16,7 @@
 #include "acquisition/tcp_endpoint.h"
 #include "cli/cli_common.h"
 #include "cli/embedded_defaults.h"
+#include "cli/gear_loop.h"
 #include "cli/grinding_loop.h"
 #include "cli/measure_options.h"
 #include "cli/pin_loop.h"
@@ -25,6 +26,7 @@
 #include "compensation/wheel_path.h"
 #include "compensation/work_speed.h"
 #include "config/gauge_config.h"
+#include "config/gear_file.h"
 #include "config/service_config.h"
 #include "core/atomic_file.h"
 #include "core/number_text.h"
@@ -162,7 +164,23 @@ struct LoopOptions {
 int cmd_pin_demo_loop(const MeasureOptions& o, const LoadedPart& lp, const SimulatorSettings& sim_settings,
                       const LoopOptions& lo);
 
+// demo --part <gear>: the gear's loop on the virtual gear grinder (docs/gears.md); -1: not a gear.
+int gear_demo_if_gear(const MeasureOptions& o, const LoopOptions& lo) {
+  if (o.part_path.empty()) return -1;
+  Result<bool> gear = is_gear_part_file(o.part_path);
+  if (!gear) return report_error(gear.error());
+  if (!*gear) return -1;
+  GearDemoOptions g;
+  g.paths = o.paths;
+  g.part_path = o.part_path;
+  g.iterations = lo.iterations > 0 ? lo.iterations : 2;
+  g.machine_seed = lo.machine.seed;
+  g.z_increments_per_mm = o.int_incr_per_mm;
+  return run_gear_demo(g);
+}
+
 int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings, const LoopOptions& lo) {
+  if (const int gear = gear_demo_if_gear(o, lo); gear >= 0) return gear;
   Result<LoadedPart> lp = load_part(o.part_path);
   if (!lp) return report_error(lp.error());
   // A pin is always ground on the virtual grinder: the simulator has no built-in pin.
@@ -360,6 +378,7 @@ int cmd_pin_demo_loop(const MeasureOptions& o, const LoadedPart& lp, const Simul
 }
 
 int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings, const LoopOptions& lo) {
+  if (const int gear = gear_demo_if_gear(o, lo); gear >= 0) return gear;
   Result<LoadedPart> lp = load_part(o.part_path);
   if (!lp) return report_error(lp.error());
   if (lp->file.pin) return cmd_pin_demo_loop(o, *lp, sim_settings, lo);
@@ -678,7 +697,9 @@ void add_demo_command(CLI::App& app, CommandAction& action) {
       "Start the built-in gauge simulator on a free loopback port, measure the sample intake lobe through it, "
       "store the run and write the corrected curve table. Needs no files.");
   add_measure_options(*demo, *demo_opts);
-  demo->add_option("--part", demo_opts->part_path, "Part file to simulate and measure [built-in intake_flat]");
+  demo->add_option("--part", demo_opts->part_path,
+                   "Part file to simulate and measure [built-in intake_flat]; a gear part ([gear]) closes the gear's "
+                   "loop on the virtual gear grinder (docs/gears.md; --iterations, 2 if 0, and --machine-seed apply)");
   add_simulator_options(*demo, *demo_sim, "[1: the demo repeats; give another for other noise]");
   demo->add_option("--time-scale", demo_sim->time_scale, "Simulated seconds per real second")->capture_default_str();
   auto loop = std::make_shared<LoopOptions>();

@@ -181,4 +181,12 @@ Result<GearPartFile> read_gear_part_file(const std::filesystem::path& path) {
   return parse_gear_part_toml(without_utf8_bom(*text), path.string());
 }
 
+Result<bool> is_gear_part_file(const std::filesystem::path& path) {
+  Result<std::string> text = read_regular_file(path, "part file");
+  if (!text) return text.error();
+  Result<toml::table> parsed = parse_toml(without_utf8_bom(*text), path.string());
+  if (!parsed) return parsed.error();
+  return parsed->contains("gear");
+}
+
 }  // namespace gaugeloop

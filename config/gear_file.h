@@ -26,6 +26,10 @@ Result<GearPartFile> parse_gear_part_toml(std::string_view text, std::string_vie
 // Reads a gear part file; a missing file is kNotFound naming the path.
 Result<GearPartFile> read_gear_part_file(const std::filesystem::path& path);
 
+// Whether the part file at `path` describes a gear (it has a [gear] table), so a command that
+// takes any part knows which reader to use; errors: the file's reading and TOML errors.
+Result<bool> is_gear_part_file(const std::filesystem::path& path);
+
 // The axes' errors along the stroke as CSV (docs/gears.md): a header line naming the columns
 // z_mm, y_error_um, z_error_um, b_error_deg, c_error_deg (in any order; no others), then one
 // row per Z; blank lines and lines starting with '#' are skipped. kInvalidInput naming the

@@ -368,9 +368,10 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
   if (table.contains("gear")) {
     return make_error(ErrorCode::kInvalidInput,
                       std::string(source_name) +
-                          ": a gear part ([gear]): measure, demo and nc new take cam lobes and crankpins; `gaugeloop "
+                          ": a gear part ([gear]): measure and nc new take cam lobes and crankpins; `gaugeloop "
                           "gear coupling --part " +
-                          std::string(source_name) + "` derives its electronic gearbox (docs/gears.md)");
+                          std::string(source_name) + "` derives its electronic gearbox, `gaugeloop demo --part " +
+                          std::string(source_name) + "` grinds it on the virtual gear grinder (docs/gears.md)");
   }
   if (table.contains("pin")) return parse_pin_part(table, source_name);
   TomlReader r(table, source_name);

@@ -13,11 +13,17 @@ namespace gaugeloop {
 Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxisErrors& errors,
                                            const GearStrokeSettings& s) {
   if (Status v = validate(part); !v) return v.error();
+  Result<std::vector<StrokeSimPoint>> points = stroke_sim_points(part, gear_coupling(part), errors);
+  if (!points) return points.error();
+  return push_gear_stroke(part, std::move(*points), errors.source, s);
+}
+
+Result<GearStrokeReport> push_gear_stroke(const GearPart& part, std::vector<StrokeSimPoint> points,
+                                          const std::string& source, const GearStrokeSettings& s) {
+  if (Status v = validate(part); !v) return v.error();
   GearStrokeReport r;
   r.coupling = gear_coupling(part);
-  Result<std::vector<StrokeSimPoint>> points = stroke_sim_points(part, r.coupling, errors);
-  if (!points) return points.error();
-  r.points = std::move(*points);
+  r.points = std::move(points);
   const GearCoupling& k = r.coupling;
   // B's factor as the whole ratio the gearbox needs: -h_w starts over teeth (S_BC exactly).
   GearboxFactors factors;
@@ -37,7 +43,7 @@ Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxi
       {"run_id", "0"},
       {"table_version", "0"},
       {"created_utc", utc_now()},
-      {"axis_errors", errors.source},
+      {"source", source},
       {"s_bc", std::to_string(factors.b_numerator) + "/" + std::to_string(factors.b_denominator)},
       {"s_zc_deg_per_mm", format_fixed(k.s_zc_deg_per_mm, 12)},
       {"s_yc_deg_per_mm", format_fixed(k.s_yc_deg_per_mm, 12)},
@@ -46,7 +52,7 @@ Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxi
   if (!text) return text.error();
   if (s.store != nullptr) {
     PushFacts facts;
-    facts.reason = "stroke from " + errors.source;
+    facts.reason = "stroke from " + source;
     facts.table.interpolation = "stroke";
     facts.table.point_count = static_cast<int>(program_points.size());
     facts.table.block_count = static_cast<int>(program_points.size());

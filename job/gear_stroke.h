@@ -49,4 +49,10 @@ struct GearStrokeReport {
 Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxisErrors& errors,
                                            const GearStrokeSettings& settings);
 
+// write_gear_stroke for SIM1 positions already known at the spline points (a stroke corrected
+// from a measured gear): `source` says where they come from (the program's header, the push's
+// reason). kInvalidInput for fewer than 2 points.
+Result<GearStrokeReport> push_gear_stroke(const GearPart& part, std::vector<StrokeSimPoint> points,
+                                          const std::string& source, const GearStrokeSettings& settings);
+
 }  // namespace gaugeloop

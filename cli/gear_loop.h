@@ -1,0 +1,68 @@
+// The closed loop for a gear on the virtual gear grinder: grind -> measure the lead -> identify
+// the mesh error along the stroke -> push the corrected stroke -> grind (docs/gears.md, "The
+// loop"). Each gear is ground from the stroke program in force, read back from the NC
+// directory as the control reads it; the first from a stroke without compensation.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cli/cli_common.h"
+#include "compensation/gear_lead.h"
+#include "config/gear_file.h"
+#include "job/gear_stroke.h"
+#include "simulator/gear_grinder.h"
+
+namespace gaugeloop {
+
+struct GearLoopSettings {
+  GearPartFile part;
+  GearMachineErrors machine;
+  int iterations = 2;                       // corrections; iterations + 1 gears are ground
+  std::vector<int> gaps = {1, 20, 40, 60};  // the tooth gaps the checker measures, both flanks
+  double lead_step_mm = 0.5;                // the checker's spacing across the face
+  GearStrokeSettings stroke;                // store, nc_file, main program, grids, feed
+};
+
+// What ISO 1328-1 makes of a gear's lead traces, over every trace measured.
+struct GearLeadSummary {
+  double total_mean_um = 0.0;  // F_beta
+  double total_max_um = 0.0;
+  double form_mean_um = 0.0;       // f_f_beta
+  double slope_mean_abs_um = 0.0;  // |f_H_beta|
+  int tolerance_class = 0;         // of total_max_um (helix_tolerance_class)
+};
+
+struct GearLoopIteration {
+  int iteration = 0;
+  int ground_from_version = 0;                   // the stroke version in force when it was ground
+  GearLeadSummary measured;                      // as the checker measured it (its noise included)
+  GearLeadSummary ground;                        // the gear as ground: the same traces without the checker's noise
+  std::optional<MeshIdentification> identified;  // not after the last gear
+  int pushed_version = 0;                        // the corrected stroke's version; 0: none
+  double sim_max_abs_deg = 0.0;                  // of the corrected stroke
+};
+
+// Summarises traces with lead_figures; errors: lead_figures'.
+Result<GearLeadSummary> summarize_lead(const std::vector<LeadTrace>& traces, const GearGeometry& gear,
+                                       double pitch_diameter_mm);
+
+// Runs the loop; `on_gear` (may be empty) sees each gear as it is measured (and corrected).
+// Errors: the part's, the push's (push_gear_stroke), the grinder's reading of the stroke.
+Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& settings,
+                                                     const std::function<void(const GearLoopIteration&)>& on_gear);
+
+// `gaugeloop demo --part <gear file>`: the loop above on a machine drawn from machine_seed, into
+// the data directory's database and NC directory, every gear printed; returns the exit status.
+struct GearDemoOptions {
+  DataPaths paths;
+  std::string part_path;
+  int iterations = 2;
+  std::uint64_t machine_seed = 1;
+  double z_increments_per_mm = 10000.0;
+};
+int run_gear_demo(const GearDemoOptions& o);
+
+}  // namespace gaugeloop

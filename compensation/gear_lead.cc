@@ -1,0 +1,201 @@
+// Lead traces: ISO 1328-1 figures and the mesh error identified from them.
+#include "compensation/gear_lead.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "core/number_text.h"
+
+namespace gaugeloop {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kRadPerDeg = kPi / 180.0;
+
+Status check_trace(const LeadTrace& t) {
+  const std::string which =
+      "lead trace of gap " + std::to_string(t.gap) + ", " + std::string(flank_name(t.flank)) + " flank";
+  if (t.z_mm.size() != t.deviation_um.size()) {
+    return make_error(ErrorCode::kInvalidInput, which + ": " + std::to_string(t.z_mm.size()) + " positions but " +
+                                                    std::to_string(t.deviation_um.size()) + " deviations");
+  }
+  for (std::size_t i = 0; i < t.z_mm.size(); ++i) {
+    if (!std::isfinite(t.z_mm[i]) || !std::isfinite(t.deviation_um[i])) {
+      return make_error(ErrorCode::kInvalidInput, which + ": point " + std::to_string(i + 1) + " is not finite");
+    }
+    if (i > 0 && !(t.z_mm[i] > t.z_mm[i - 1])) {
+      return make_error(ErrorCode::kInvalidInput, which + ": Z " + format_fixed(t.z_mm[i], 3) +
+                                                      " mm does not increase (point " + std::to_string(i + 1) + ")");
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+std::string_view flank_name(Flank flank) { return flank == Flank::kLeft ? "left" : "right"; }
+
+double base_radius_mm(const GearGeometry& g) {
+  const double beta = g.helix_angle_deg * kRadPerDeg;
+  const double alpha_t = std::atan(std::tan(g.pressure_angle_deg * kRadPerDeg) / std::cos(beta));
+  return g.teeth * g.normal_module_mm / std::cos(beta) / 2.0 * std::cos(alpha_t);
+}
+
+Result<LeadFigures> lead_figures(const LeadTrace& t, const GearGeometry& g) {
+  if (Status c = check_trace(t); !c) return c.error();
+  const double b = g.face_width_mm;
+  const double trim = std::min(0.05 * b, g.normal_module_mm);
+  LeadFigures f;
+  f.from_mm = -b / 2.0 + trim;
+  f.to_mm = b / 2.0 - trim;
+  std::vector<double> z;
+  std::vector<double> d;
+  for (std::size_t i = 0; i < t.z_mm.size(); ++i) {
+    if (t.z_mm[i] >= f.from_mm - 1e-9 && t.z_mm[i] <= f.to_mm + 1e-9) {
+      z.push_back(t.z_mm[i]);
+      d.push_back(t.deviation_um[i]);
+    }
+  }
+  f.points = static_cast<int>(z.size());
+  if (z.size() < 3) {
+    return make_error(ErrorCode::kInvalidInput, "lead trace of gap " + std::to_string(t.gap) + ", " +
+                                                    std::string(flank_name(t.flank)) +
+                                                    " flank: " + std::to_string(z.size()) +
+                                                    " points in the evaluation range " + format_fixed(f.from_mm, 2) +
+                                                    " .. " + format_fixed(f.to_mm, 2) + " mm; at least 3 are needed");
+  }
+  // The design helix of an unmodified flank has the trace's nominal direction: deviation 0.
+  const auto [lo, hi] = std::minmax_element(d.begin(), d.end());
+  f.total_um = *hi - *lo;
+  // The mean helix: the least-squares line.
+  const double n = static_cast<double>(z.size());
+  double sz = 0.0, sd = 0.0, szz = 0.0, szd = 0.0;
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    sz += z[i];
+    sd += d[i];
+    szz += z[i] * z[i];
+    szd += z[i] * d[i];
+  }
+  const double slope = (n * szd - sz * sd) / (n * szz - sz * sz);
+  const double intercept = (sd - slope * sz) / n;
+  double rmin = 0.0, rmax = 0.0;
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    const double r = d[i] - (intercept + slope * z[i]);
+    rmin = std::min(rmin, r);
+    rmax = std::max(rmax, r);
+  }
+  f.form_um = rmax - rmin;
+  f.slope_um = slope * (f.to_mm - f.from_mm);
+  return f;
+}
+
+double helix_tolerance_um(int tolerance_class, double d, double b) {
+  return (0.1 * std::sqrt(d) + 0.63 * std::sqrt(b) + 4.2) * std::pow(std::sqrt(2.0), tolerance_class - 5);
+}
+
+int helix_tolerance_class(double total_um, double d, double b) {
+  for (int a = 1; a <= 11; ++a) {
+    if (total_um <= helix_tolerance_um(a, d, b)) return a;
+  }
+  return 12;
+}
+
+Result<MeshIdentification> identify_mesh_error(const std::vector<LeadTrace>& traces,
+                                               const std::vector<double>& spline_z, double r_b) {
+  if (traces.empty()) return make_error(ErrorCode::kInvalidInput, "no lead trace to identify the mesh error from");
+  if (spline_z.size() < 2) return make_error(ErrorCode::kInvalidInput, "the stroke needs at least 2 spline points");
+  for (const LeadTrace& t : traces) {
+    if (Status c = check_trace(t); !c) return c.error();
+  }
+  const std::size_t k_count = spline_z.size();
+  // The span of spline point k: its hat function N_k, 1 at z_k, 0 at its neighbours.
+  auto hat = [&](std::size_t k, double z) {
+    if (k > 0 && z >= spline_z[k - 1] && z <= spline_z[k])
+      return (z - spline_z[k - 1]) / (spline_z[k] - spline_z[k - 1]);
+    if (k + 1 < k_count && z >= spline_z[k] && z <= spline_z[k + 1]) {
+      return (spline_z[k + 1] - z) / (spline_z[k + 1] - spline_z[k]);
+    }
+    return 0.0;
+  };
+  // Which spline points the traces see.
+  MeshIdentification m;
+  m.z_mm = spline_z;
+  m.observed.assign(k_count, false);
+  for (const LeadTrace& t : traces) {
+    bool on_stroke = false;
+    for (double z : t.z_mm) {
+      if (z < spline_z.front() || z > spline_z.back()) continue;
+      on_stroke = true;
+      for (std::size_t k = 0; k < k_count; ++k) m.observed[k] = m.observed[k] || hat(k, z) > 1e-12;
+    }
+    if (!on_stroke) {
+      return make_error(ErrorCode::kInvalidInput,
+                        "lead trace of gap " + std::to_string(t.gap) + ", " + std::string(flank_name(t.flank)) +
+                            " flank: no point on the stroke (Z " + format_fixed(spline_z.front(), 3) + " .. " +
+                            format_fixed(spline_z.back(), 3) + " mm)");
+    }
+  }
+  std::vector<int> column(k_count, -1);
+  int columns = 0;
+  for (std::size_t k = 0; k < k_count; ++k) {
+    if (m.observed[k]) column[k] = columns++;
+  }
+  const int observed_count = columns;
+  columns += static_cast<int>(traces.size());
+  int rows = 0;
+  for (const LeadTrace& t : traces) {
+    for (double z : t.z_mm) rows += (z >= spline_z.front() && z <= spline_z.back()) ? 1 : 0;
+  }
+  // deviation_um = sign r_b 1000 rad(mesh) + offset_t, mesh in degrees.
+  const double um_per_deg = r_b * 1000.0 * kRadPerDeg;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(rows, columns);
+  Eigen::VectorXd y(rows);
+  int row = 0;
+  for (std::size_t ti = 0; ti < traces.size(); ++ti) {
+    const LeadTrace& t = traces[ti];
+    for (std::size_t i = 0; i < t.z_mm.size(); ++i) {
+      const double z = t.z_mm[i];
+      if (z < spline_z.front() || z > spline_z.back()) continue;
+      for (std::size_t k = 0; k < k_count; ++k) {
+        const double w = hat(k, z);
+        if (w > 0.0) a(row, column[k]) += flank_sign(t.flank) * um_per_deg * w;
+      }
+      a(row, observed_count + static_cast<int>(ti)) = 1.0;
+      y(row) = t.deviation_um[i];
+      ++row;
+    }
+  }
+  // Rank-deficient by design (the mean mesh error and the offsets trade off): the minimum-norm
+  // least-squares solution, then the mean moved out of the mesh error, which leaves the fit as it is.
+  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a);
+  const Eigen::VectorXd x = cod.solve(y);
+  m.rank = static_cast<int>(cod.rank());
+  m.unknowns = columns;
+  m.traces = static_cast<int>(traces.size());
+  m.samples = rows;
+  const Eigen::VectorXd r = a * x - y;
+  m.residual_rms_um = rows > 0 ? std::sqrt(r.squaredNorm() / rows) : 0.0;
+  double mean = 0.0;
+  for (int c = 0; c < observed_count; ++c) mean += x(c);
+  mean /= std::max(1, observed_count);
+  m.mesh_deg.assign(k_count, 0.0);
+  for (std::size_t k = 0; k < k_count; ++k) {
+    if (column[k] >= 0) m.mesh_deg[k] = x(column[k]) - mean;
+  }
+  // Points beyond the traces: held at the nearest observed one, so SIM1 does not jump there.
+  for (std::size_t k = 0; k < k_count; ++k) {
+    if (m.observed[k]) continue;
+    std::size_t best = k_count;
+    for (std::size_t j = 0; j < k_count; ++j) {
+      if (m.observed[j] &&
+          (best == k_count || std::abs(spline_z[j] - spline_z[k]) < std::abs(spline_z[best] - spline_z[k]))) {
+        best = j;
+      }
+    }
+    if (best < k_count) m.mesh_deg[k] = m.mesh_deg[best];
+  }
+  return m;
+}
+
+}  // namespace gaugeloop

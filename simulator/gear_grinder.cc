@@ -1,0 +1,140 @@
+// The virtual gear grinder and its gear checker.
+#include "simulator/gear_grinder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "core/text_file.h"
+#include "simulator/seeded_random.h"
+
+namespace gaugeloop {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A uniform deviate in [lo, hi) from (seed, index).
+double uniform(std::uint64_t seed, std::uint64_t index, double lo, double hi) {
+  return lo + (hi - lo) * seeded::unit_uniform(seeded::mix(seeded::mix(seed) ^ (index * 0x9e3779b97f4a7c15ULL)));
+}
+
+// A standard normal deviate (Box-Muller) from (seed, index).
+double normal(std::uint64_t seed, std::uint64_t index) {
+  const double u1 = seeded::unit_uniform(seeded::mix(seed ^ seeded::mix(2 * index)));
+  const double u2 = seeded::unit_uniform(seeded::mix(seed ^ seeded::mix(2 * index + 1)));
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+}
+
+// A sign drawn from (seed, index).
+double sign(std::uint64_t seed, std::uint64_t index) { return uniform(seed, index, 0.0, 1.0) < 0.5 ? -1.0 : 1.0; }
+
+// The phase at which gap `gap` meets a spindle's once-per-turn error: the golden angle apart.
+double gap_phase(int gap) { return gap * 2.399963229728653; }
+
+}  // namespace
+
+double AxisErrorTerms::at(double z, double gap_phase_rad) const {
+  return offset + linear_per_mm * z + bow_per_mm2 * z * z +
+         slow * std::sin(2.0 * kPi * z / slow_pitch_mm + slow_phase_rad) +
+         fast * std::sin(2.0 * kPi * z / fast_pitch_mm + fast_phase_rad + gap_phase_rad);
+}
+
+AxisErrors GearMachineErrors::at(double z, int gap) const {
+  const double phase = gap_phase(gap);
+  return {y_mm.at(z, phase), z_mm.at(z, phase), b_deg.at(z, phase), c_deg.at(z, phase)};
+}
+
+GearMachineErrors seeded_gear_machine(std::uint64_t seed) {
+  GearMachineErrors m;
+  m.seed = seed;
+  std::uint64_t i = 0;
+  auto u = [&](double lo, double hi) { return uniform(seed, ++i, lo, hi); };
+  auto s = [&] { return sign(seed, ++i); };
+  // Y: the shift slide's guide, bowed over the stroke, and its squareness to Z.
+  m.y_mm.offset = u(-0.003, 0.003);
+  m.y_mm.bow_per_mm2 = s() * u(10e-3, 25e-3) / (15.0 * 15.0);
+  m.y_mm.linear_per_mm = s() * u(3e-4, 6e-4);
+  m.y_mm.fast = u(0.0002, 0.0004);
+  m.y_mm.fast_pitch_mm = u(0.3, 0.5);
+  m.y_mm.fast_phase_rad = u(0.0, 2.0 * kPi);
+  // Z: the stroke's ball screw, its scale and lag.
+  m.z_mm.offset = u(-0.005, 0.005);
+  m.z_mm.linear_per_mm = s() * u(30e-6, 60e-6);
+  m.z_mm.slow = u(0.003, 0.006);
+  m.z_mm.slow_pitch_mm = u(10.0, 16.0);
+  m.z_mm.slow_phase_rad = u(0.0, 2.0 * kPi);
+  // B: the worm spindle, its lag and a thermal drift, and once per worm turn.
+  m.b_deg.offset = u(-0.005, 0.005);
+  m.b_deg.linear_per_mm = s() * u(0.004, 0.008) / 30.0;
+  m.b_deg.fast = u(0.01, 0.02);  // times S_BC (1/71): a few ten-thousandths of a degree of C
+  m.b_deg.fast_pitch_mm = u(0.2, 0.3);
+  m.b_deg.fast_phase_rad = u(0.0, 2.0 * kPi);
+  // C: the table's drive, periodic over the stroke, and once per table turn.
+  m.c_deg.offset = u(-0.003, 0.003);
+  m.c_deg.slow = u(0.003, 0.006);
+  m.c_deg.slow_pitch_mm = u(20.0, 30.0);
+  m.c_deg.slow_phase_rad = u(0.0, 2.0 * kPi);
+  m.c_deg.fast = u(0.0002, 0.0004);
+  m.c_deg.fast_pitch_mm = u(0.5, 0.8);
+  m.c_deg.fast_phase_rad = u(0.0, 2.0 * kPi);
+  return m;
+}
+
+GroundGear::GroundGear(GearPart part, GearCoupling coupling, GearMachineErrors machine,
+                       std::vector<StrokeProgramPoint> stroke)
+    : part_(std::move(part)), coupling_(coupling), machine_(std::move(machine)), stroke_(std::move(stroke)) {}
+
+double GroundGear::sim_deg(double z) const {
+  if (z <= stroke_.front().z_mm) return stroke_.front().sim_deg;
+  if (z >= stroke_.back().z_mm) return stroke_.back().sim_deg;
+  const auto it = std::upper_bound(stroke_.begin(), stroke_.end(), z,
+                                   [](double v, const StrokeProgramPoint& p) { return v < p.z_mm; });
+  const StrokeProgramPoint& b = *it;
+  const StrokeProgramPoint& a = *(it - 1);
+  return a.sim_deg + (z - a.z_mm) / (b.z_mm - a.z_mm) * (b.sim_deg - a.sim_deg);
+}
+
+double GroundGear::mesh_error_deg(double z, int gap) const {
+  return sim_deg(z) - equivalent_sim_deg(coupling_, machine_.at(z, gap));
+}
+
+Result<GroundGear> grind_gear(const GearPart& part, const GearMachineErrors& machine, const std::string& stroke_file) {
+  if (Status v = validate(part); !v) return v.error();
+  Result<std::string> text = read_regular_file(stroke_file, "stroke program");
+  if (!text) return text.error();
+  Result<ParsedStrokeProgram> p = parse_stroke_program(*text, stroke_file);
+  if (!p) return p.error();
+  return GroundGear(part, gear_coupling(part), machine, std::move(p->points));
+}
+
+std::vector<LeadTrace> measure_lead(const GroundGear& gear, const std::vector<int>& gaps, double step_mm,
+                                    std::uint64_t measurement) {
+  const GearGeometry& g = gear.part().gear;
+  const double r_b = base_radius_mm(g);
+  const double um_per_deg = r_b * 1000.0 * kPi / 180.0;
+  const int n = static_cast<int>(std::floor(g.face_width_mm / step_mm + 1e-9)) + 1;
+  std::vector<LeadTrace> out;
+  std::uint64_t index = 0;
+  const std::uint64_t noise_seed = seeded::mix(gear.machine_seed() ^ seeded::mix(measurement + 0x51ed));
+  for (int gap : gaps) {
+    for (Flank f : {Flank::kLeft, Flank::kRight}) {
+      LeadTrace t;
+      t.gap = gap;
+      t.flank = f;
+      for (int i = 0; i < n; ++i) {
+        const double z = -g.face_width_mm / 2.0 + i * step_mm;
+        t.z_mm.push_back(z);
+        t.deviation_um.push_back(flank_sign(f) * um_per_deg * gear.mesh_error_deg(z, gap) +
+                                 gear.checker_noise_um() * normal(noise_seed, ++index));
+      }
+      double mean = 0.0;
+      for (double d : t.deviation_um) mean += d;
+      mean /= static_cast<double>(t.deviation_um.size());
+      for (double& d : t.deviation_um) d -= mean;
+      out.push_back(std::move(t));
+    }
+  }
+  return out;
+}
+
+}  // namespace gaugeloop

@@ -1,0 +1,94 @@
+// The virtual gear grinder: a worm-wheel generating grinder whose axes Y, Z, B and C stand off
+// their commands by stated errors along the stroke, grinding a gear from the stroke program in
+// the NC directory (read back as the control would) with SIM1 moving C between the spline
+// points; and the gear checker that measures the lead of a few tooth gaps on both flanks.
+// docs/gears.md, "The virtual gear grinder".
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "compensation/gear_coupling.h"
+#include "compensation/gear_lead.h"
+#include "core/gear.h"
+#include "core/result.h"
+#include "nc_out/stroke_program.h"
+
+namespace gaugeloop {
+
+// One axis' error with the worm at stroke position z (mm): where the axis stands less where it
+// was commanded, in the axis' unit (mm for Y and Z, degrees for B and C).
+//   offset                       constant: a servo's lag at the stroke's constant speed, a
+//                                position offset
+//   + linear_per_mm z            a scale error, a squareness, a thermal drift over the stroke
+//   + bow_per_mm2 z^2            a guide's straightness
+//   + slow sin(2 pi z / slow_pitch_mm + slow_phase)
+//                                a ball screw's or a drive's periodic error, slower than the
+//                                spline points
+//   + fast sin(2 pi z / fast_pitch_mm + fast_phase + gap phase)
+//                                a spindle's once-per-turn error (the worm's, the table's drive):
+//                                faster than the spline points can follow, and met by each tooth
+//                                gap at another phase
+struct AxisErrorTerms {
+  double offset = 0.0;
+  double linear_per_mm = 0.0;
+  double bow_per_mm2 = 0.0;
+  double slow = 0.0;
+  double slow_pitch_mm = 10.0;
+  double slow_phase_rad = 0.0;
+  double fast = 0.0;
+  double fast_pitch_mm = 0.4;
+  double fast_phase_rad = 0.0;
+  double at(double z_mm, double gap_phase_rad = 0.0) const;
+};
+
+struct GearMachineErrors {
+  AxisErrorTerms y_mm;
+  AxisErrorTerms z_mm;
+  AxisErrorTerms b_deg;
+  AxisErrorTerms c_deg;
+  double checker_noise_um = 0.3;  // the gear checker's probe, one sigma
+  std::uint64_t seed = 1;
+  // The axes' errors at z for gap `gap` (its phase for the fast terms).
+  AxisErrors at(double z_mm, int gap) const;
+};
+
+// A machine drawn from `seed` within stated ranges (docs/gears.md): Y's guide bowed 3-8 um over
+// the stroke and squareness 0.1-0.2 um/mm, Z's screw 1.5-3 um at a 10-16 mm pitch and 10-30 ppm,
+// B drifting 0.001-0.002 deg over the stroke, C's drive 0.001-0.002 deg at a 20-30 mm period;
+// the fast terms 0.2-0.4 um equivalent on Y and a few ten-thousandths of a degree on B and C; the
+// checker's noise 0.3 um. Lags and offsets of a few um and thousandths of a degree.
+GearMachineErrors seeded_gear_machine(std::uint64_t seed);
+
+// The gear as ground: at each height z of the face and tooth gap, how far C stood ahead of where
+// the worm needed it (degrees): SIM1 (linear in Z between the stroke's spline points, as the
+// control moves it under FGROUP(Z)) less dSIM of the axes' errors there.
+class GroundGear {
+ public:
+  GroundGear(GearPart part, GearCoupling coupling, GearMachineErrors machine, std::vector<StrokeProgramPoint> stroke);
+  double mesh_error_deg(double z_mm, int gap) const;
+  const GearPart& part() const { return part_; }
+  std::uint64_t machine_seed() const { return machine_.seed; }
+  double checker_noise_um() const { return machine_.checker_noise_um; }
+
+ private:
+  double sim_deg(double z_mm) const;
+  GearPart part_;
+  GearCoupling coupling_;
+  GearMachineErrors machine_;
+  std::vector<StrokeProgramPoint> stroke_;
+};
+
+// Grinds a gear from the stroke program at `stroke_file` (parse_stroke_program: a program that
+// does not read back, or was edited by hand, is refused as the control's reader would).
+Result<GroundGear> grind_gear(const GearPart& part, const GearMachineErrors& machine, const std::string& stroke_file);
+
+// The gear checker: the lead of each gap in `gaps` (1-based), left and right flank, at every
+// step_mm across the face (from -b/2 to +b/2), with the checker's noise (seeded by the machine's
+// seed, `measurement` and the point), each trace aligned on its tooth (its mean taken out, as a
+// checker's alignment does). The deviation of flank f is flank_sign(f) r_b mesh (radians).
+std::vector<LeadTrace> measure_lead(const GroundGear& gear, const std::vector<int>& gaps, double step_mm,
+                                    std::uint64_t measurement);
+
+}  // namespace gaugeloop
