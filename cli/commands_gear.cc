@@ -60,11 +60,10 @@ int cmd_gear_coupling(const CouplingOptions& o) {
   return kExitOk;
 }
 
-struct StrokeOptions {
+// What `gear stroke` and `gear correct` push with.
+struct PushTargetOptions {
   DataPaths paths;
   std::string part_path;
-  std::string errors_path;
-  std::string out_path;
   std::string main_template_path;
   bool overwrite_edited = false;
   double feed_mm_per_min = 300.0;
@@ -72,40 +71,64 @@ struct StrokeOptions {
   double int_incr_per_deg = 1000.0;
 };
 
+struct StrokeOptions : PushTargetOptions {
+  std::string errors_path;
+  std::string out_path;
+};
+
+struct CorrectOptions : PushTargetOptions {
+  std::string lead_path;
+};
+
+// Sets `s` up to push gf's stroke into <nc-dir>/<nc_program>.SPF, as a measurement pushes a
+// cam's table: the database opened into `store` (and interrupted pushes reconciled), the main
+// program from `main_template_path` or the built-in gear_main.mpf.
+Status open_push_target(const DataPaths& paths, const std::string& main_template_path, const GearPartFile& gf,
+                        GearStrokeSettings& s, std::optional<RunStore>& store) {
+  s.part_name = gf.name;
+  s.program_name = gf.nc_program;
+  s.nc_file = std::filesystem::absolute(paths.nc() / (gf.nc_program + ".SPF")).lexically_normal();
+  JobSettings js;
+  js.db_path = paths.db();
+  js.nc_dir = paths.nc();
+  Result<RunStore> opened = open_store_for_push(js, s.nc_file);
+  if (!opened) return opened.error();
+  store.emplace(std::move(*opened));
+  s.store = &*store;
+  if (main_template_path.empty()) {
+    s.main.gear_template_text = std::string(embedded::kGearMainTemplate);
+    s.main.gear_template_name = "embedded:gear_main.mpf";
+    return {};
+  }
+  Result<std::string> text = read_regular_file(main_template_path, "main program template");
+  if (!text) return text.error();
+  s.main.gear_template_text = std::move(*text);
+  s.main.gear_template_name = main_template_path;
+  return {};
+}
+
+// `o`'s grids, feed and overwrite flag in `s`.
+void apply_push_options(const PushTargetOptions& o, GearStrokeSettings& s) {
+  s.feed_mm_per_min = o.feed_mm_per_min;
+  s.format.z_increments_per_mm = o.int_incr_per_mm;
+  s.format.sim_increments_per_deg = o.int_incr_per_deg;
+  s.overwrite_edited = o.overwrite_edited;
+}
+
 int cmd_gear_stroke(const StrokeOptions& o) {
   Result<GearPartFile> gf = read_gear_part_file(o.part_path);
   if (!gf) return report_error(gf.error());
   Result<StrokeAxisErrors> errors = read_axis_errors_csv(o.errors_path);
   if (!errors) return report_error(errors.error());
   GearStrokeSettings s;
-  s.part_name = gf->name;
-  s.program_name = gf->nc_program;
-  s.feed_mm_per_min = o.feed_mm_per_min;
-  s.format.z_increments_per_mm = o.int_incr_per_mm;
-  s.format.sim_increments_per_deg = o.int_incr_per_deg;
+  apply_push_options(o, s);
   std::optional<RunStore> store;
   if (!o.out_path.empty()) {
+    s.part_name = gf->name;
+    s.program_name = gf->nc_program;
     s.out_file = o.out_path;
-  } else {
-    // Pushed as a measurement pushes a cam's table: <nc-dir>/<nc_program>.SPF, with its history.
-    s.nc_file = std::filesystem::absolute(o.paths.nc() / (gf->nc_program + ".SPF")).lexically_normal();
-    JobSettings js;
-    js.db_path = o.paths.db();
-    js.nc_dir = o.paths.nc();
-    Result<RunStore> opened = open_store_for_push(js, s.nc_file);
-    if (!opened) return report_error(opened.error());
-    store.emplace(std::move(*opened));
-    s.store = &*store;
-    s.overwrite_edited = o.overwrite_edited;
-    if (o.main_template_path.empty()) {
-      s.main.gear_template_text = std::string(embedded::kGearMainTemplate);
-      s.main.gear_template_name = "embedded:gear_main.mpf";
-    } else {
-      Result<std::string> text = read_regular_file(o.main_template_path, "main program template");
-      if (!text) return report_error(text.error());
-      s.main.gear_template_text = std::move(*text);
-      s.main.gear_template_name = o.main_template_path;
-    }
+  } else if (Status t = open_push_target(o.paths, o.main_template_path, *gf, s, store); !t) {
+    return report_error(t.error());
   }
   Result<GearStrokeReport> r = write_gear_stroke(gf->part, *errors, s);
   if (!r) return report_error(r.error());
@@ -128,6 +151,76 @@ int cmd_gear_stroke(const StrokeOptions& o) {
   return kExitOk;
 }
 
+int cmd_gear_correct(const CorrectOptions& o) {
+  Result<GearPartFile> gf = read_gear_part_file(o.part_path);
+  if (!gf) return report_error(gf.error());
+  Result<std::vector<LeadTrace>> traces = read_lead_traces_csv(o.lead_path);
+  if (!traces) return report_error(traces.error());
+  const GearGeometry& g = gf->part.gear;
+  const double d = gear_coupling(gf->part).gear_pitch_diameter_mm;
+  // Every trace judged before anything is written: one too short for ISO 1328-1 is refused.
+  std::vector<LeadFigures> figures;
+  for (const LeadTrace& t : *traces) {
+    Result<LeadFigures> f = lead_figures(t, g);
+    if (!f) return report_error(make_error(f.error().code, o.lead_path + ": " + f.error().message));
+    figures.push_back(*f);
+  }
+  GearStrokeSettings s;
+  apply_push_options(o, s);
+  std::optional<RunStore> store;
+  if (Status t = open_push_target(o.paths, o.main_template_path, *gf, s, store); !t) return report_error(t.error());
+  Result<GearCorrection> c = correct_gear_stroke(gf->part, *traces, "lead traces " + o.lead_path, s);
+  if (!c) return report_error(c.error());
+  std::printf("lead of %s as measured (%s; ISO 1328-1 over %.2f .. %.2f mm):\n", gf->name.c_str(), o.lead_path.c_str(),
+              figures.front().from_mm, figures.front().to_mm);
+  std::printf("  %5s  %-6s  %10s  %10s  %10s  %6s\n", "gap", "flank", "F_beta um", "f_f_beta", "f_H_beta", "class");
+  for (std::size_t i = 0; i < traces->size(); ++i) {
+    const LeadFigures& f = figures[i];
+    std::printf("  %5d  %-6s  %10.2f  %10.2f  %+10.2f  %6d\n", (*traces)[i].gap,
+                std::string(flank_name((*traces)[i].flank)).c_str(), f.total_um, f.form_um, f.slope_um,
+                helix_tolerance_class(f.total_um, d, g.face_width_mm));
+  }
+  const MeshIdentification& m = c->identification;
+  int held = 0;
+  for (const bool seen : m.observed) held += seen ? 0 : 1;
+  std::printf(
+      "mesh error identified at %zu spline points (%d beyond the face held), %d traces, %d samples: residual "
+      "%.2f um RMS, rank %d of %d (the mean is tooth thickness, not lead)\n",
+      m.z_mm.size(), held, m.traces, m.samples, m.residual_rms_um, m.rank, m.unknowns);
+  std::printf(
+      "the lead sees only dSIM, the sum of the axes' errors through the gearbox: Y, Z, B and C are not "
+      "separable from it\n");
+  std::printf("  %-10s %14s %14s\n", "Z mm", "mesh deg", "SIM1 deg");
+  for (std::size_t k = 0; k < m.z_mm.size(); ++k) {
+    std::printf("  %-10.3f %14.6f %14.6f%s\n", m.z_mm[k], m.mesh_deg[k], c->pushed.points[k].sim_deg,
+                m.observed[k] ? "" : "  (held)");
+  }
+  std::printf("pushed %s as stroke version %d (from version %d), read back; main program %s\n",
+              c->pushed.written.string().c_str(), c->pushed.version, c->from_version,
+              main_program_path(c->pushed.written).string().c_str());
+  return kExitOk;
+}
+
+// The options `gear stroke` and `gear correct` share: where and how the stroke is pushed.
+void add_push_target_options(CLI::App& cmd, PushTargetOptions& o) {
+  cmd.add_option("--part", o.part_path, "Gear part file (TOML with [gear])")->required();
+  add_data_options(cmd, o.paths);
+  cmd.add_option("--nc-dir", o.paths.nc_dir, "Directory the stroke program is pushed to [<data-dir>/nc]");
+  cmd.add_option("--main-template", o.main_template_path,
+                 "Main program template: must hold {{gearbox_coupling}} before the call of {{program_name}} "
+                 "[built-in examples/sinumerik/gear_main.mpf]");
+  cmd.add_flag("--overwrite-edited", o.overwrite_edited,
+               "Overwrite a stroke program on the control that was edited by hand (it is refused otherwise)");
+  cmd.add_option("--feed-mm-per-min", o.feed_mm_per_min, "Stroke feed along Z")->capture_default_str();
+  cmd.add_option("--int-incr-per-mm", o.int_incr_per_mm, "The control's MD10200 (Z's grid)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1e6));
+  cmd.add_option("--int-incr-per-deg", o.int_incr_per_deg,
+                 "The control's MD10210 (SIM1's grid; the control's default 1000 puts C back to 0.0005 deg)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1e6));
+}
+
 }  // namespace
 
 int run_gear_demo(const GearDemoOptions& o) {
@@ -138,20 +231,11 @@ int run_gear_demo(const GearDemoOptions& o) {
   ls.machine = seeded_gear_machine(o.machine_seed);
   ls.iterations = o.iterations;
   GearStrokeSettings& s = ls.stroke;
-  s.part_name = gf->name;
-  s.program_name = gf->nc_program;
   s.format.z_increments_per_mm = o.z_increments_per_mm;
   // A generating grinder's rotary axes are set finer than the control's default 1000 per degree.
   s.format.sim_increments_per_deg = 100000.0;
-  s.nc_file = std::filesystem::absolute(o.paths.nc() / (gf->nc_program + ".SPF")).lexically_normal();
-  JobSettings js;
-  js.db_path = o.paths.db();
-  js.nc_dir = o.paths.nc();
-  Result<RunStore> store = open_store_for_push(js, s.nc_file);
-  if (!store) return report_error(store.error());
-  s.store = &*store;
-  s.main.gear_template_text = std::string(embedded::kGearMainTemplate);
-  s.main.gear_template_name = "embedded:gear_main.mpf";
+  std::optional<RunStore> store;
+  if (Status t = open_push_target(o.paths, "", *gf, s, store); !t) return report_error(t.error());
   const GearCoupling k = gear_coupling(gf->part);
   const GearMachineErrors& m = ls.machine;
   std::printf("virtual gear grinder: %s, %d teeth, module %.4g mm, helix %.4g deg, face %.4g mm; machine seed %llu\n",
@@ -221,9 +305,7 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
       "<nc-dir>/<nc_program>.SPF as a measurement pushes a cam's table (version, history, hand-edit check, "
       "`nc rollback`), with <nc_program>_MAIN.MPF coupling C to B, Z, Y and SIM1; or, with --out, written to a "
       "file alone. Read back either way");
-  stroke->add_option("--part", so->part_path, "Gear part file (TOML with [gear])")->required();
-  add_data_options(*stroke, so->paths);
-  stroke->add_option("--nc-dir", so->paths.nc_dir, "Directory the stroke program is pushed to [<data-dir>/nc]");
+  add_push_target_options(*stroke, *so);
   stroke
       ->add_option("--errors", so->errors_path,
                    "Axis errors along the stroke, CSV: z_mm, y_error_um, z_error_um, b_error_deg, c_error_deg")
@@ -231,26 +313,21 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
   stroke
       ->add_option("--out", so->out_path,
                    "Write the stroke program to this file alone: not pushed, no history, no main program")
-      ->excludes("--nc-dir");
-  stroke
-      ->add_option("--main-template", so->main_template_path,
-                   "Main program template: must hold {{gearbox_coupling}} before the call of {{program_name}} "
-                   "[built-in examples/sinumerik/gear_main.mpf]")
-      ->excludes("--out");
-  stroke
-      ->add_flag("--overwrite-edited", so->overwrite_edited,
-                 "Overwrite a stroke program on the control that was edited by hand (it is refused otherwise)")
-      ->excludes("--out");
-  stroke->add_option("--feed-mm-per-min", so->feed_mm_per_min, "Stroke feed along Z")->capture_default_str();
-  stroke->add_option("--int-incr-per-mm", so->int_incr_per_mm, "The control's MD10200 (Z's grid)")
-      ->capture_default_str()
-      ->check(CLI::Range(1.0, 1e6));
-  stroke
-      ->add_option("--int-incr-per-deg", so->int_incr_per_deg,
-                   "The control's MD10210 (SIM1's grid; the control's default 1000 puts C back to 0.0005 deg)")
-      ->capture_default_str()
-      ->check(CLI::Range(1.0, 1e6));
+      ->excludes("--nc-dir")
+      ->excludes("--main-template")
+      ->excludes("--overwrite-edited");
   stroke->callback([&action, so] { action = [so] { return cmd_gear_stroke(*so); }; });
+
+  auto co = std::make_shared<CorrectOptions>();
+  CLI::App* correct = gear->add_subcommand(
+      "correct",
+      "Correct the stroke in force from a measured gear: read the lead traces a gear checker exported (CSV: gap, "
+      "flank, z_mm, deviation_um), report ISO 1328-1's helix deviations of each, identify the gearbox's mesh error "
+      "at the stroke's spline points by least squares, and push the stroke in force less it as the next version");
+  add_push_target_options(*correct, *co);
+  correct->add_option("--lead", co->lead_path, "Lead traces, CSV: gap, flank (left/right), z_mm, deviation_um")
+      ->required();
+  correct->callback([&action, co] { action = [co] { return cmd_gear_correct(*co); }; });
 }
 
 }  // namespace gaugeloop

@@ -31,7 +31,6 @@ Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& set
   const GearPart& part = settings.part.part;
   if (Status v = validate(part); !v) return v.error();
   const GearCoupling coupling = gear_coupling(part);
-  const double r_b = base_radius_mm(part.gear);
   // The first stroke: SIM1 at 0 at every spline point, no compensation yet.
   StrokeAxisErrors none;
   none.z_mm = {part.stroke.z_start_mm, part.stroke.z_end_mm};
@@ -66,26 +65,18 @@ Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& set
     if (!ground) return ground.error();
     g.ground = *ground;
     if (it < settings.iterations) {
-      // The stroke in force, as the control holds it, less the mesh error identified at each point.
-      std::vector<double> z;
-      for (const StrokeSimPoint& p : pushed->points) z.push_back(p.z_mm);
-      Result<MeshIdentification> m = identify_mesh_error(traces, z, r_b);
-      if (!m) return m.error();
-      std::vector<StrokeSimPoint> next = pushed->points;
-      for (std::size_t k = 0; k < next.size(); ++k) {
-        next[k].sim_deg = settings.stroke.format.round_sim_deg(next[k].sim_deg) - m->mesh_deg[k];
-      }
       std::string gaps;
       for (int gap : settings.gaps) gaps += (gaps.empty() ? "" : ", ") + std::to_string(gap);
-      pushed = push_gear_stroke(part, std::move(next),
-                                "lead of gaps " + gaps + " of gear " + std::to_string(it) + " (stroke version " +
-                                    std::to_string(version) + "): mesh error identified",
-                                settings.stroke);
-      if (!pushed) return pushed.error();
-      version = pushed->version;
-      g.identified = std::move(*m);
+      Result<GearCorrection> c =
+          correct_gear_stroke(part, traces,
+                              "lead of gaps " + gaps + " of gear " + std::to_string(it) + " (stroke version " +
+                                  std::to_string(version) + "): mesh error identified",
+                              settings.stroke);
+      if (!c) return c.error();
+      version = c->pushed.version;
+      g.identified = std::move(c->identification);
       g.pushed_version = version;
-      g.sim_max_abs_deg = pushed->sim_max_abs_deg;
+      g.sim_max_abs_deg = c->pushed.sim_max_abs_deg;
     }
     if (on_gear) on_gear(g);
     out.push_back(std::move(g));

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -94,30 +95,41 @@ Result<GearPartFile> parse_gear_part_toml(std::string_view text, std::string_vie
   return out;
 }
 
-Result<StrokeAxisErrors> parse_axis_errors_csv(std::string_view text, std::string_view source_name) {
-  StrokeAxisErrors out;
-  out.source = std::string(source_name);
-  const std::vector<std::string> names{"z_mm", "y_error_um", "z_error_um", "b_error_deg", "c_error_deg"};
-  std::vector<std::vector<double>*> columns{&out.z_mm, &out.y_error_um, &out.z_error_um, &out.b_error_deg,
-                                            &out.c_error_deg};
-  std::vector<int> order;  // file column -> our column
+namespace {
+
+// The cells of one CSV line, blanks around each trimmed.
+std::vector<std::string> cells_of(std::string_view line) {
+  std::vector<std::string> cells;
+  std::size_t pos = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', pos);
+    std::string cell(line.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos));
+    while (!cell.empty() && (cell.back() == ' ' || cell.back() == '\r' || cell.back() == '\t')) cell.pop_back();
+    while (!cell.empty() && (cell.front() == ' ' || cell.front() == '\t')) cell.erase(cell.begin());
+    cells.push_back(cell);
+    if (comma == std::string_view::npos) break;
+    pos = comma + 1;
+  }
+  return cells;
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+// A CSV table whose header names every one of `names` once, in any order, and no other: calls
+// `row` with each data line's number and its cells in the order of `names`. Blank lines and
+// lines starting with '#' are skipped. kInvalidInput naming the line for an unknown, repeated or
+// missing column, a row of another length, an empty table; `row`'s errors as it gives them.
+Status for_each_row(std::string_view text, std::string_view source_name, const std::vector<std::string>& names,
+                    std::string_view what,
+                    const std::function<Status(int line_no, const std::vector<std::string>& cells)>& row) {
+  std::vector<std::size_t> order;  // file column -> index in names
   int line_no = 0;
   auto fail = [&](const std::string& why) {
     return make_error(ErrorCode::kInvalidInput, std::string(source_name) + ":" + std::to_string(line_no) + ": " + why);
-  };
-  auto cells_of = [](std::string_view line) {
-    std::vector<std::string> cells;
-    std::size_t pos = 0;
-    while (true) {
-      const std::size_t comma = line.find(',', pos);
-      std::string cell(line.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos));
-      while (!cell.empty() && (cell.back() == ' ' || cell.back() == '\r' || cell.back() == '\t')) cell.pop_back();
-      while (!cell.empty() && (cell.front() == ' ' || cell.front() == '\t')) cell.erase(cell.begin());
-      cells.push_back(cell);
-      if (comma == std::string_view::npos) break;
-      pos = comma + 1;
-    }
-    return cells;
   };
   std::size_t pos = 0;
   while (pos <= text.size()) {
@@ -131,42 +143,123 @@ Result<StrokeAxisErrors> parse_axis_errors_csv(std::string_view text, std::strin
     if (order.empty()) {
       for (const std::string& c : cells) {
         const auto it = std::find(names.begin(), names.end(), c);
-        if (it == names.end()) {
-          return fail("unknown column `" + c +
-                      "`; the columns are z_mm, y_error_um, z_error_um, b_error_deg, "
-                      "c_error_deg");
-        }
-        if (std::find(order.begin(), order.end(), it - names.begin()) != order.end()) {
+        if (it == names.end()) return fail("unknown column `" + c + "`; the columns are " + joined(names));
+        const auto index = static_cast<std::size_t>(it - names.begin());
+        if (std::find(order.begin(), order.end(), index) != order.end()) {
           return fail("column `" + c + "` is given twice");
         }
-        order.push_back(static_cast<int>(it - names.begin()));
+        order.push_back(index);
       }
       if (order.size() != names.size()) {
-        return fail(
-            "the header must name all five columns z_mm, y_error_um, z_error_um, b_error_deg, c_error_deg "
-            "(an axis without errors: a column of zeros)");
+        return fail("the header must name all " + std::to_string(names.size()) + " columns " + joined(names) + " (" +
+                    std::string(what) + ")");
       }
       continue;
     }
     if (cells.size() != order.size()) {
       return fail(std::to_string(cells.size()) + " values, the header names " + std::to_string(order.size()));
     }
-    for (std::size_t c = 0; c < cells.size(); ++c) {
-      char* end = nullptr;
-      const double v = std::strtod(cells[c].c_str(), &end);
-      if (cells[c].empty() || end != cells[c].c_str() + cells[c].size() || !std::isfinite(v)) {
-        return fail("column " + names[static_cast<std::size_t>(order[c])] + ": `" + cells[c] + "` is not a number");
-      }
-      columns[static_cast<std::size_t>(order[c])]->push_back(v);
-    }
+    std::vector<std::string> ordered(names.size());
+    for (std::size_t c = 0; c < cells.size(); ++c) ordered[order[c]] = cells[c];
+    if (Status r = row(line_no, ordered); !r) return r;
   }
   if (order.empty()) {
-    return make_error(ErrorCode::kInvalidInput, std::string(source_name) +
-                                                    ": empty; expected a header line naming "
-                                                    "z_mm, y_error_um, z_error_um, b_error_deg, "
-                                                    "c_error_deg and one row per Z");
+    return make_error(ErrorCode::kInvalidInput, std::string(source_name) + ": empty; expected a header line naming " +
+                                                    joined(names) + " and " + std::string(what));
   }
+  return {};
+}
+
+// Cell `c` of `cells` as a finite number, or kInvalidInput naming the line and column.
+Result<double> number_cell(std::string_view source_name, int line_no, const std::vector<std::string>& names,
+                           const std::vector<std::string>& cells, std::size_t c) {
+  char* end = nullptr;
+  const double v = std::strtod(cells[c].c_str(), &end);
+  if (cells[c].empty() || end != cells[c].c_str() + cells[c].size() || !std::isfinite(v)) {
+    return make_error(ErrorCode::kInvalidInput, std::string(source_name) + ":" + std::to_string(line_no) + ": column " +
+                                                    names[c] + ": `" + cells[c] + "` is not a number");
+  }
+  return v;
+}
+
+}  // namespace
+
+Result<StrokeAxisErrors> parse_axis_errors_csv(std::string_view text, std::string_view source_name) {
+  StrokeAxisErrors out;
+  out.source = std::string(source_name);
+  const std::vector<std::string> names{"z_mm", "y_error_um", "z_error_um", "b_error_deg", "c_error_deg"};
+  std::vector<std::vector<double>*> columns{&out.z_mm, &out.y_error_um, &out.z_error_um, &out.b_error_deg,
+                                            &out.c_error_deg};
+  Status read = for_each_row(text, source_name, names, "one row per Z; an axis without errors: a column of zeros",
+                             [&](int line_no, const std::vector<std::string>& cells) -> Status {
+                               for (std::size_t c = 0; c < cells.size(); ++c) {
+                                 Result<double> v = number_cell(source_name, line_no, names, cells, c);
+                                 if (!v) return v.error();
+                                 columns[c]->push_back(*v);
+                               }
+                               return {};
+                             });
+  if (!read) return read.error();
   return out;
+}
+
+Result<std::vector<LeadTrace>> parse_lead_traces_csv(std::string_view text, std::string_view source_name) {
+  const std::vector<std::string> names{"gap", "flank", "z_mm", "deviation_um"};
+  std::vector<LeadTrace> traces;
+  std::vector<int> last_line;  // per trace: the line of its last point, for messages
+  Status read =
+      for_each_row(text, source_name, names, "one row per point of a trace",
+                   [&](int line_no, const std::vector<std::string>& cells) -> Status {
+                     auto fail = [&](const std::string& why) {
+                       return make_error(ErrorCode::kInvalidInput,
+                                         std::string(source_name) + ":" + std::to_string(line_no) + ": " + why);
+                     };
+                     char* end = nullptr;
+                     const long gap = std::strtol(cells[0].c_str(), &end, 10);
+                     if (cells[0].empty() || end != cells[0].c_str() + cells[0].size() || gap < 1 || gap > 1000) {
+                       return fail("column gap: `" + cells[0] + "` is not a tooth gap number (1 to 1000)");
+                     }
+                     Flank flank = Flank::kLeft;
+                     if (cells[1] == "left" || cells[1] == "L" || cells[1] == "l") {
+                       flank = Flank::kLeft;
+                     } else if (cells[1] == "right" || cells[1] == "R" || cells[1] == "r") {
+                       flank = Flank::kRight;
+                     } else {
+                       return fail("column flank: `" + cells[1] + "`; expected left or right (L, R)");
+                     }
+                     Result<double> z = number_cell(source_name, line_no, names, cells, 2);
+                     if (!z) return z.error();
+                     Result<double> d = number_cell(source_name, line_no, names, cells, 3);
+                     if (!d) return d.error();
+                     auto it = std::find_if(traces.begin(), traces.end(),
+                                            [&](const LeadTrace& t) { return t.gap == gap && t.flank == flank; });
+                     if (it == traces.end()) {
+                       traces.push_back(LeadTrace{static_cast<int>(gap), flank, {}, {}});
+                       last_line.push_back(0);
+                       it = traces.end() - 1;
+                     }
+                     const std::size_t i = static_cast<std::size_t>(it - traces.begin());
+                     if (!it->z_mm.empty() && !(*z > it->z_mm.back())) {
+                       return fail("gap " + std::to_string(gap) + ", " + std::string(flank_name(flank)) + " flank: Z " +
+                                   cells[2] + " mm does not increase after line " + std::to_string(last_line[i]) +
+                                   " (the points of a trace go up the face)");
+                     }
+                     it->z_mm.push_back(*z);
+                     it->deviation_um.push_back(*d);
+                     last_line[i] = line_no;
+                     return {};
+                   });
+  if (!read) return read.error();
+  if (traces.empty()) {
+    return make_error(ErrorCode::kInvalidInput, std::string(source_name) + ": no lead trace (a header and no rows)");
+  }
+  return traces;
+}
+
+Result<std::vector<LeadTrace>> read_lead_traces_csv(const std::filesystem::path& path) {
+  Result<std::string> text = read_regular_file(path, "lead traces");
+  if (!text) return text.error();
+  return parse_lead_traces_csv(without_utf8_bom(*text), path.string());
 }
 
 Result<StrokeAxisErrors> read_axis_errors_csv(const std::filesystem::path& path) {

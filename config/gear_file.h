@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "compensation/gear_coupling.h"
+#include "compensation/gear_lead.h"
 #include "core/gear.h"
 #include "core/result.h"
 
@@ -37,5 +38,13 @@ Result<bool> is_gear_part_file(const std::filesystem::path& path);
 // Whether the rows increase and cover the stroke is stroke_sim_points' to say.
 Result<StrokeAxisErrors> parse_axis_errors_csv(std::string_view text, std::string_view source_name);
 Result<StrokeAxisErrors> read_axis_errors_csv(const std::filesystem::path& path);
+
+// Lead traces as a gear checker exports them, CSV (docs/gears.md): a header naming gap, flank,
+// z_mm, deviation_um (any order), then one row per point; the rows of a trace (one gap, one
+// flank: left or right, or L and R) go up the face, traces may follow each other or interleave.
+// kInvalidInput naming the line and column of what is wrong, or a Z that does not increase
+// within its trace (naming the line before it).
+Result<std::vector<LeadTrace>> parse_lead_traces_csv(std::string_view text, std::string_view source_name);
+Result<std::vector<LeadTrace>> read_lead_traces_csv(const std::filesystem::path& path);
 
 }  // namespace gaugeloop

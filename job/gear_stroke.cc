@@ -7,6 +7,7 @@
 #include "core/number_text.h"
 #include "core/text_file.h"
 #include "core/utc_time.h"
+#include "nc_out/stroke_program.h"
 
 namespace gaugeloop {
 
@@ -86,6 +87,42 @@ Result<GearStrokeReport> push_gear_stroke(const GearPart& part, std::vector<Stro
     }
   }
   return r;
+}
+
+Result<GearCorrection> correct_gear_stroke(const GearPart& part, const std::vector<LeadTrace>& traces,
+                                           const std::string& source, const GearStrokeSettings& s) {
+  if (s.store == nullptr) {
+    return make_error(ErrorCode::kInvalidInput, "a stroke is corrected from the one in force: it needs the history");
+  }
+  if (Status v = validate(part); !v) return v.error();
+  Result<std::optional<NcPush>> last = s.store->last_push(s.nc_file.string());
+  if (!last) return last.error();
+  if (!*last || !(**last).program_text || !is_stroke_program(*(**last).program_text)) {
+    return make_error(ErrorCode::kNotFound, s.nc_file.string() +
+                                                ": no stroke program was pushed there, so there is none in force to "
+                                                "correct; push the first with `gaugeloop gear stroke` (an axis error "
+                                                "table, or one of zeros)");
+  }
+  Result<ParsedStrokeProgram> in_force = parse_stroke_program(*(**last).program_text, s.nc_file.string());
+  if (!in_force) return in_force.error();
+  GearCorrection c;
+  c.from_version = (**last).table_version;
+  std::vector<double> z;
+  for (const StrokeProgramPoint& p : in_force->points) z.push_back(p.z_mm);
+  Result<MeshIdentification> m = identify_mesh_error(traces, z, base_radius_mm(part.gear));
+  if (!m) return m.error();
+  std::vector<StrokeSimPoint> next;
+  for (std::size_t k = 0; k < z.size(); ++k) {
+    StrokeSimPoint p;
+    p.z_mm = z[k];
+    p.sim_deg = in_force->points[k].sim_deg - m->mesh_deg[k];
+    next.push_back(p);
+  }
+  Result<GearStrokeReport> pushed = push_gear_stroke(part, std::move(next), source, s);
+  if (!pushed) return pushed.error();
+  c.identification = std::move(*m);
+  c.pushed = std::move(*pushed);
+  return c;
 }
 
 }  // namespace gaugeloop

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "compensation/gear_coupling.h"
+#include "compensation/gear_lead.h"
 #include "core/result.h"
 #include "job/nc_push.h"
 #include "nc_out/stroke_program.h"
@@ -54,5 +55,20 @@ Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxi
 // reason). kInvalidInput for fewer than 2 points.
 Result<GearStrokeReport> push_gear_stroke(const GearPart& part, std::vector<StrokeSimPoint> points,
                                           const std::string& source, const GearStrokeSettings& settings);
+
+// A stroke corrected from a measured gear.
+struct GearCorrection {
+  int from_version = 0;  // the stroke in force that ground the gear
+  MeshIdentification identification;
+  GearStrokeReport pushed;
+};
+
+// The stroke in force (the version last pushed to settings.nc_file, its SIM1 as the control
+// holds it) less the mesh error identify_mesh_error finds in `traces` at its spline points,
+// pushed as the next version with `source` as its origin. kInvalidInput without a store;
+// kNotFound when no stroke was pushed to the file (push one with write_gear_stroke first);
+// identify_mesh_error's and push_gear_stroke's errors. Nothing is written on an error.
+Result<GearCorrection> correct_gear_stroke(const GearPart& part, const std::vector<LeadTrace>& traces,
+                                           const std::string& source, const GearStrokeSettings& settings);
 
 }  // namespace gaugeloop

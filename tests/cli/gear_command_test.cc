@@ -101,5 +101,63 @@ TEST(GearCommand, PushesTheStrokeWithItsHistoryDiffCheckAndRollback) {
   EXPECT_NE(testing::slurp(nc / "GEAR_71_MAIN.MPF").find("with stroke version 3 "), std::string::npos);
 }
 
+// A checker's export of a mesh error growing 0.0001 deg per mm (left flank +r_b dC, right -r_b
+// dC, 0.5 um of alignment offset): `gear correct` pushes the stroke in force less it.
+TEST(GearCommand, CorrectsTheStrokeInForceFromACheckersLeadTraces) {
+  testing::TempDir dir("gear-correct-cmd");
+  const std::string data = " --data-dir " + (dir.path() / "data").string();
+  const auto zero = dir.path() / "zero.csv";
+  std::ofstream(zero) << "z_mm,y_error_um,z_error_um,b_error_deg,c_error_deg\n-15,0,0,0,0\n15,0,0,0,0\n";
+  const auto lead = dir.path() / "lead.csv";
+  {
+    Result<GearPartFile> g = read_gear_part_file(kExample);
+    ASSERT_TRUE(g.ok());
+    // r_b = d2 / 2 cos(alpha_t), computed here apart: 80.0931 mm.
+    const double beta = 21.8 * M_PI / 180.0;
+    const double alpha_t = std::atan(std::tan(20.0 * M_PI / 180.0) / std::cos(beta));
+    const double um_per_deg = 71 * 2.25 / std::cos(beta) / 2.0 * std::cos(alpha_t) * 1000.0 * M_PI / 180.0;
+    std::ofstream out(lead);
+    out << "gap,flank,z_mm,deviation_um\n";
+    for (int gap : {1, 40}) {
+      for (const char* flank : {"left", "right"}) {
+        const double sign = std::string(flank) == "left" ? 1.0 : -1.0;
+        for (int i = 0; i <= 48; ++i) {
+          const double z = -12.0 + 0.5 * i;
+          out << gap << ',' << flank << ',' << z << ',' << sign * um_per_deg * 0.0001 * z + 0.5 << '\n';
+        }
+      }
+    }
+  }
+  const std::string correct =
+      "gear correct --part " + kExample + " --lead " + lead.string() + " --int-incr-per-deg 1000000" + data;
+  testing::CommandResult none = testing::run_command(correct);
+  EXPECT_EQ(none.exit_code, 2) << none.output;
+  EXPECT_NE(none.output.find("no stroke program was pushed there"), std::string::npos) << none.output;
+
+  ASSERT_EQ(testing::run_command("gear stroke --part " + kExample + " --errors " + zero.string() +
+                                 " --int-incr-per-deg 1000000" + data)
+                .exit_code,
+            0);
+  testing::CommandResult r = testing::run_command(correct);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("pushed "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("as stroke version 2 (from version 1)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("not separable"), std::string::npos) << r.output;
+  // SIM1 takes the mesh error back: -0.0001 deg per mm about the face's middle, held beyond it.
+  const std::string text = testing::slurp(dir.path() / "data" / "nc" / "GEAR_71.SPF");
+  EXPECT_NE(text.find("\nZ-5.0000 SIM1=0.000500\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("\nZ12.0000 SIM1=-0.001200\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("\nZ15.0000 SIM1=-0.001200\n"), std::string::npos) << text;
+
+  // A trace that goes back is refused, naming the line, and nothing is pushed.
+  std::ofstream(lead, std::ios::app) << "1,left,0,0.1\n";
+  testing::CommandResult bad = testing::run_command(correct);
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("lead.csv:198: gap 1, left flank: Z 0 mm does not increase"), std::string::npos)
+      << bad.output;
+  testing::CommandResult history = testing::run_command("nc history" + data);
+  EXPECT_EQ(history.output.find("GEAR_71                3"), std::string::npos) << history.output;
+}
+
 }  // namespace
 }  // namespace gaugeloop

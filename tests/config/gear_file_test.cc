@@ -90,5 +90,46 @@ TEST(GearPartFile, APartFileReaderRefusesAGearSayingWhere) {
   EXPECT_TRUE(refused(parse_part_toml(gear_part(), "gear.toml", "/parts"), "gaugeloop gear coupling --part gear.toml"));
 }
 
+TEST(LeadTracesCsv, TracesInAnyColumnOrderInterleavedOrOneAfterTheOther) {
+  Result<std::vector<LeadTrace>> t = parse_lead_traces_csv(
+      "# checker export\nflank,gap,deviation_um,z_mm\nleft,1,0.5,-10\nR,1,-0.5,-10\nleft,1,0.7,0\n"
+      "right,1,-0.7,0\nL,20,0.1,-10\nL,20,0.2,10\n",
+      "lead.csv");
+  ASSERT_TRUE(t.ok()) << t.error().message;
+  ASSERT_EQ(t->size(), 3u);
+  EXPECT_EQ((*t)[0].gap, 1);
+  EXPECT_EQ((*t)[0].flank, Flank::kLeft);
+  EXPECT_EQ((*t)[0].z_mm, (std::vector<double>{-10.0, 0.0}));
+  EXPECT_EQ((*t)[0].deviation_um, (std::vector<double>{0.5, 0.7}));
+  EXPECT_EQ((*t)[1].flank, Flank::kRight);
+  EXPECT_EQ((*t)[1].deviation_um, (std::vector<double>{-0.5, -0.7}));
+  EXPECT_EQ((*t)[2].gap, 20);
+  EXPECT_EQ((*t)[2].z_mm, (std::vector<double>{-10.0, 10.0}));
+}
+
+TEST(LeadTracesCsv, WhatIsWrongIsNamedByLineAndColumn) {
+  const std::string head = "gap,flank,z_mm,deviation_um\n";
+  struct Case {
+    std::string text;
+    std::string message;
+  };
+  for (const Case& c : std::vector<Case>{
+           {head + "1,left,0,0.1\n1,middle,1,0.2\n", "lead.csv:3: column flank: `middle`; expected left or right"},
+           {head + "0,left,0,0.1\n", "lead.csv:2: column gap: `0` is not a tooth gap number"},
+           {head + "1,left,0,x\n", "lead.csv:2: column deviation_um: `x` is not a number"},
+           {head + "1,left,0,0.1\n1,right,0,0.1\n1,left,0,0.2\n",
+            "lead.csv:4: gap 1, left flank: Z 0 mm does not increase after line 2"},
+           {"gap,flank,z_mm\n", "lead.csv:1: the header must name all 4 columns gap, flank, z_mm, deviation_um"},
+           {"gap,flank,z_mm,deviation_um,temp\n", "lead.csv:1: unknown column `temp`"},
+           {head, "lead.csv: no lead trace"},
+           {"", "lead.csv: empty"},
+       }) {
+    Result<std::vector<LeadTrace>> t = parse_lead_traces_csv(c.text, "lead.csv");
+    ASSERT_FALSE(t.ok()) << c.text;
+    EXPECT_EQ(t.error().code, ErrorCode::kInvalidInput);
+    EXPECT_NE(t.error().message.find(c.message), std::string::npos) << t.error().message;
+  }
+}
+
 }  // namespace
 }  // namespace gaugeloop
