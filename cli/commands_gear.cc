@@ -1,4 +1,5 @@
 // gear ...: the worm-wheel generating grinder's gearbox for a gear part (docs/gears.md).
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -10,10 +11,14 @@
 #include "cli/embedded_defaults.h"
 #include "cli/gear_loop.h"
 #include "compensation/gear_coupling.h"
+#include "compensation/gear_identification.h"
 #include "config/gear_file.h"
+#include "core/atomic_file.h"
+#include "core/number_text.h"
 #include "core/text_file.h"
 #include "job/gear_stroke.h"
 #include "job/measure_job.h"
+#include "nc_out/stroke_program.h"
 
 namespace gaugeloop {
 namespace {
@@ -201,6 +206,95 @@ int cmd_gear_correct(const CorrectOptions& o) {
   return kExitOk;
 }
 
+struct IdentifyOptions {
+  DataPaths paths;
+  std::string part_path;
+  std::string lead_path;
+  std::string ballbar_path;
+  double ballbar_radius_mm = 100.0;
+  std::string terms;
+  std::string out_path;
+  bool uncompensated = false;
+};
+
+// The stroke the measured gear was ground with: the one in force in the history, or none.
+Result<std::vector<StrokeSimPoint>> stroke_in_force(const IdentifyOptions& o, const GearPartFile& gf) {
+  if (o.uncompensated) return std::vector<StrokeSimPoint>{};
+  Result<RunStore> store = open_history_read_only(o.paths);
+  if (!store) return store.error();
+  const std::string nc_file =
+      std::filesystem::absolute(o.paths.nc() / (gf.nc_program + ".SPF")).lexically_normal().string();
+  Result<std::optional<NcPush>> last = store->last_push(nc_file);
+  if (!last) return last.error();
+  if (!*last || !(**last).program_text || !is_stroke_program(*(**last).program_text)) {
+    return make_error(ErrorCode::kNotFound, nc_file +
+                                                ": no stroke in force in the history, so the SIM1 the gear was "
+                                                "ground with is not known; if it was ground without one, say "
+                                                "--uncompensated");
+  }
+  Result<ParsedStrokeProgram> p = parse_stroke_program(*(**last).program_text, nc_file);
+  if (!p) return p.error();
+  std::vector<StrokeSimPoint> out;
+  for (const StrokeProgramPoint& q : p->points) {
+    StrokeSimPoint s;
+    s.z_mm = q.z_mm;
+    s.sim_deg = q.sim_deg;
+    out.push_back(s);
+  }
+  return out;
+}
+
+int cmd_gear_identify(const IdentifyOptions& o) {
+  Result<GearPartFile> gf = read_gear_part_file(o.part_path);
+  if (!gf) return report_error(gf.error());
+  Result<std::vector<ErrorTerm>> terms = parse_error_terms(o.terms);
+  if (!terms) return report_error(terms.error());
+  Result<std::vector<LeadTrace>> traces = read_lead_traces_csv(o.lead_path);
+  if (!traces) return report_error(traces.error());
+  std::optional<BallbarCircle> ballbar;
+  if (!o.ballbar_path.empty()) {
+    Result<BallbarCircle> b = read_ballbar_csv(o.ballbar_path, o.ballbar_radius_mm);
+    if (!b) return report_error(b.error());
+    ballbar = std::move(*b);
+  }
+  Result<std::vector<StrokeSimPoint>> sim = stroke_in_force(o, *gf);
+  if (!sim) return report_error(sim.error());
+  const GearCoupling k = gear_coupling(gf->part);
+  Result<AxisIdentification> id =
+      identify_axis_errors(k, base_radius_mm(gf->part.gear), *terms, *traces, *sim, ballbar ? &*ballbar : nullptr);
+  if (!id) return report_error(id.error());
+  std::printf("%s: %d lead samples (%zu traces)%s, %zu terms; condition %.3g\n", gf->name.c_str(), id->lead_samples,
+              traces->size(), ballbar ? (", " + std::to_string(id->ballbar_samples) + " ballbar points").c_str() : "",
+              id->terms.size(), id->condition);
+  std::printf("  %-22s %16s %12s\n", "term", "value", "phase deg");
+  for (const IdentifiedTerm& t : id->terms) {
+    const bool linear_axis = t.term.axis == 'Y' || t.term.axis == 'Z';
+    const std::string unit = t.term.kind == ErrorTermKind::kLinear ? (linear_axis ? " um/mm" : " deg/mm")
+                             : t.term.kind == ErrorTermKind::kBow  ? (linear_axis ? " um/mm2" : " deg/mm2")
+                                                                   : (linear_axis ? " um" : " deg");
+    const double value = linear_axis ? t.value * 1000.0 : t.value;
+    std::printf("  %-22s %16.6g%-7s", t.term.name().c_str(), value, unit.c_str());
+    if (t.term.kind == ErrorTermKind::kPeriodic) std::printf(" %8.2f", t.phase_rad * 180.0 / 3.14159265358979323846);
+    std::printf("\n");
+  }
+  std::printf("residual: lead %.3f um RMS", id->lead_residual_rms_um);
+  if (ballbar) std::printf(", ballbar %.3f um RMS", id->ballbar_residual_rms_um);
+  std::printf("\n");
+  if (o.out_path.empty()) return kExitOk;
+  // The model along the stroke, in the table `gear stroke --errors` reads.
+  std::string csv = "# " + gf->name + ": axis errors identified from " + o.lead_path +
+                    (ballbar ? " and " + o.ballbar_path : std::string()) + " (" + o.terms + ")\n" +
+                    "z_mm,y_error_um,z_error_um,b_error_deg,c_error_deg\n";
+  for (const double z : stroke_spline_points_mm(gf->part.stroke)) {
+    const AxisErrors e = id->at(z);
+    csv += format_fixed(z, 4) + "," + format_fixed(e.y_mm * 1000.0, 4) + "," + format_fixed(e.z_mm * 1000.0, 4) + "," +
+           format_fixed(e.b_deg, 7) + "," + format_fixed(e.c_deg, 7) + "\n";
+  }
+  if (Status w = write_file_atomically(o.out_path, csv); !w) return report_error(w.error());
+  std::printf("written %s: the errors along the stroke, for `gaugeloop gear stroke --errors`\n", o.out_path.c_str());
+  return kExitOk;
+}
+
 // The options `gear stroke` and `gear correct` share: where and how the stroke is pushed.
 void add_push_target_options(CLI::App& cmd, PushTargetOptions& o) {
   cmd.add_option("--part", o.part_path, "Gear part file (TOML with [gear])")->required();
@@ -328,6 +422,32 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
   correct->add_option("--lead", co->lead_path, "Lead traces, CSV: gap, flank (left/right), z_mm, deviation_um")
       ->required();
   correct->callback([&action, co] { action = [co] { return cmd_gear_correct(*co); }; });
+
+  auto io = std::make_shared<IdentifyOptions>();
+  CLI::App* identify = gear->add_subcommand(
+      "identify",
+      "Fit a per-axis error model to a measured gear's lead traces (and a ZY ballbar circle) by least squares: the "
+      "terms' values, the residuals, and a refusal naming the terms the data cannot tell apart; --out writes the "
+      "errors along the stroke for `gear stroke --errors`");
+  identify->add_option("--part", io->part_path, "Gear part file (TOML with [gear])")->required();
+  identify->add_option("--lead", io->lead_path, "Lead traces, CSV: gap, flank (left/right), z_mm, deviation_um")
+      ->required();
+  identify
+      ->add_option("--terms", io->terms,
+                   "The model: <axis>:<kind>,... with axis y, z, b, c and kind linear, bow or periodic@<pitch mm>, "
+                   "e.g. y:bow,z:periodic@12,c:periodic@24")
+      ->required();
+  identify->add_option("--ballbar", io->ballbar_path, "Ballbar circle in ZY, CSV: angle_deg, radial_um");
+  identify->add_option("--ballbar-radius-mm", io->ballbar_radius_mm, "The ballbar circle's radius")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1000.0));
+  identify->add_option("--out", io->out_path, "Write the identified errors along the stroke here (CSV)");
+  add_data_options(*identify, io->paths);
+  identify->add_option("--nc-dir", io->paths.nc_dir, "Directory of the stroke in force [<data-dir>/nc]");
+  identify->add_flag("--uncompensated", io->uncompensated,
+                     "The gear was ground without a stroke from gaugeloop (SIM1 0); otherwise the stroke in force "
+                     "is read from the history");
+  identify->callback([&action, io] { action = [io] { return cmd_gear_identify(*io); }; });
 }
 
 }  // namespace gaugeloop

@@ -120,13 +120,9 @@ Result<std::vector<StrokeSimPoint>> stroke_sim_points(const GearPart& part, cons
                   format_fixed(e.z_mm.back(), 3) + " mm, the stroke runs from " + format_fixed(s.z_start_mm, 3) +
                   " to " + format_fixed(s.z_end_mm, 3) + " mm; measure (or model) the whole stroke");
   }
-  const double length = s.z_end_mm - s.z_start_mm;
-  const auto steps = static_cast<std::size_t>(std::ceil(length / s.spline_step_mm - 1e-9));
   std::vector<StrokeSimPoint> out;
-  out.reserve(steps + 1);
   std::size_t row = 0;
-  for (std::size_t j = 0; j <= steps; ++j) {
-    const double z = j == steps ? s.z_end_mm : s.z_start_mm + static_cast<double>(j) * s.spline_step_mm;
+  for (const double z : stroke_spline_points_mm(s)) {
     while (row + 2 < n && e.z_mm[row + 1] < z) ++row;
     const double t = std::clamp((z - e.z_mm[row]) / (e.z_mm[row + 1] - e.z_mm[row]), 0.0, 1.0);
     auto lerp = [&](const std::vector<double>& v) { return v[row] + t * (v[row + 1] - v[row]); };
@@ -138,6 +134,17 @@ Result<std::vector<StrokeSimPoint>> stroke_sim_points(const GearPart& part, cons
     out.push_back(p);
   }
   return out;
+}
+
+std::vector<double> stroke_spline_points_mm(const GearStroke& s) {
+  const double length = s.z_end_mm - s.z_start_mm;
+  const auto steps = static_cast<std::size_t>(std::ceil(length / s.spline_step_mm - 1e-9));
+  std::vector<double> z;
+  z.reserve(steps + 1);
+  for (std::size_t j = 0; j <= steps; ++j) {
+    z.push_back(j == steps ? s.z_end_mm : s.z_start_mm + static_cast<double>(j) * s.spline_step_mm);
+  }
+  return z;
 }
 
 }  // namespace gaugeloop

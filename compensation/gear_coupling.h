@@ -83,6 +83,10 @@ struct StrokeSimPoint {
   AxisErrors errors;  // the axes' errors at that Z (Y, Z in mm), linear between the rows
 };
 
+// The Z of the stroke's spline points: z_start_mm, then every spline_step_mm, the last at
+// z_end_mm (a shorter last step where the stroke is not a whole number of steps).
+std::vector<double> stroke_spline_points_mm(const GearStroke& stroke);
+
 // The spline points of the part's stroke (z_start_mm, then every spline_step_mm, the last at
 // z_end_mm) with the SIM1 position that compensates the errors there (equivalent_sim_deg).
 // The errors are linear in Z between rows; kInvalidInput naming the source when the rows are

@@ -256,6 +256,30 @@ Result<std::vector<LeadTrace>> parse_lead_traces_csv(std::string_view text, std:
   return traces;
 }
 
+Result<BallbarCircle> parse_ballbar_csv(std::string_view text, std::string_view source_name, double radius_mm) {
+  const std::vector<std::string> names{"angle_deg", "radial_um"};
+  BallbarCircle b;
+  b.radius_mm = radius_mm;
+  Status read = for_each_row(text, source_name, names, "one row per point of the circle",
+                             [&](int line_no, const std::vector<std::string>& cells) -> Status {
+                               Result<double> a = number_cell(source_name, line_no, names, cells, 0);
+                               if (!a) return a.error();
+                               Result<double> r = number_cell(source_name, line_no, names, cells, 1);
+                               if (!r) return r.error();
+                               b.angle_deg.push_back(*a);
+                               b.radial_um.push_back(*r);
+                               return {};
+                             });
+  if (!read) return read.error();
+  return b;
+}
+
+Result<BallbarCircle> read_ballbar_csv(const std::filesystem::path& path, double radius_mm) {
+  Result<std::string> text = read_regular_file(path, "ballbar circle");
+  if (!text) return text.error();
+  return parse_ballbar_csv(without_utf8_bom(*text), path.string(), radius_mm);
+}
+
 Result<std::vector<LeadTrace>> read_lead_traces_csv(const std::filesystem::path& path) {
   Result<std::string> text = read_regular_file(path, "lead traces");
   if (!text) return text.error();

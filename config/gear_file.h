@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "compensation/gear_coupling.h"
+#include "compensation/gear_identification.h"
 #include "compensation/gear_lead.h"
 #include "core/gear.h"
 #include "core/result.h"
@@ -46,5 +47,11 @@ Result<StrokeAxisErrors> read_axis_errors_csv(const std::filesystem::path& path)
 // within its trace (naming the line before it).
 Result<std::vector<LeadTrace>> parse_lead_traces_csv(std::string_view text, std::string_view source_name);
 Result<std::vector<LeadTrace>> read_lead_traces_csv(const std::filesystem::path& path);
+
+// A ballbar circle in the ZY plane as its software lists it, CSV: a header naming angle_deg and
+// radial_um (the angle from +Y towards +Z, the bar's length less its nominal), then one row per
+// point; `radius_mm` is the circle's. kInvalidInput naming the line and column of what is wrong.
+Result<BallbarCircle> parse_ballbar_csv(std::string_view text, std::string_view source_name, double radius_mm);
+Result<BallbarCircle> read_ballbar_csv(const std::filesystem::path& path, double radius_mm);
 
 }  // namespace gaugeloop

@@ -159,5 +159,47 @@ TEST(GearCommand, CorrectsTheStrokeInForceFromACheckersLeadTraces) {
   EXPECT_EQ(history.output.find("GEAR_71                3"), std::string::npos) << history.output;
 }
 
+// A checker's export of a gear ground without compensation on a machine whose C drive runs
+// ahead 0.0001 deg per mm of stroke: `gear identify` names that term and writes the errors
+// along the stroke in the table `gear stroke` reads; a model whose terms act alike on the lead
+// is refused and writes nothing.
+TEST(GearCommand, IdentifiesTheAxesErrorsAndRefusesTermsThatActAlike) {
+  testing::TempDir dir("gear-identify-cmd");
+  const auto lead = dir.path() / "lead.csv";
+  {
+    const double beta = 21.8 * M_PI / 180.0;
+    const double alpha_t = std::atan(std::tan(20.0 * M_PI / 180.0) / std::cos(beta));
+    const double um_per_deg = 71 * 2.25 / std::cos(beta) / 2.0 * std::cos(alpha_t) * 1000.0 * M_PI / 180.0;
+    std::ofstream out(lead);
+    out << "gap,flank,z_mm,deviation_um\n";
+    for (const char* flank : {"left", "right"}) {
+      const double sign = std::string(flank) == "left" ? 1.0 : -1.0;
+      for (int i = 0; i <= 48; ++i) {
+        const double z = -12.0 + 0.5 * i;
+        // Without SIM1 the mesh error is C's own: the left flank r_b e_C.
+        out << 1 << ',' << flank << ',' << z << ',' << sign * um_per_deg * 0.0001 * z << '\n';
+      }
+    }
+  }
+  const auto errors = dir.path() / "errors.csv";
+  const std::string identify = "gear identify --part " + kExample + " --lead " + lead.string() + " --uncompensated";
+  testing::CommandResult alike = testing::run_command(identify + " --terms y:linear,c:linear --out " + errors.string());
+  EXPECT_EQ(alike.exit_code, 2) << alike.output;
+  EXPECT_NE(alike.output.find("Y linear and C linear act alike"), std::string::npos) << alike.output;
+  EXPECT_FALSE(std::filesystem::exists(errors));
+
+  testing::CommandResult r = testing::run_command(identify + " --terms c:linear,y:bow --out " + errors.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("C linear"), std::string::npos) << r.output;
+  const std::string table = testing::slurp(errors);
+  EXPECT_NE(table.find("\n10.0000,0.0000,0.0000,0.0000000,0.0010000\n"), std::string::npos) << table;
+  testing::CommandResult stroke =
+      testing::run_command("gear stroke --part " + kExample + " --errors " + errors.string() + " --out " +
+                           (dir.path() / "S.SPF").string() + " --int-incr-per-deg 1000000");
+  ASSERT_EQ(stroke.exit_code, 0) << stroke.output;
+  // SIM1 takes C's error back: -0.001 deg at Z 10.
+  EXPECT_NE(testing::slurp(dir.path() / "S.SPF").find("\nZ10.0000 SIM1=-0.001000\n"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace gaugeloop

@@ -131,5 +131,17 @@ TEST(LeadTracesCsv, WhatIsWrongIsNamedByLineAndColumn) {
   }
 }
 
+TEST(BallbarCsv, AngleAndRadialErrorPerPointOrTheLineThatIsWrong) {
+  Result<BallbarCircle> b = parse_ballbar_csv("# QC10 export\nradial_um,angle_deg\n1.5,0\n-0.5,90\n", "bb.csv", 100.0);
+  ASSERT_TRUE(b.ok()) << b.error().message;
+  EXPECT_EQ(b->radius_mm, 100.0);
+  EXPECT_EQ(b->angle_deg, (std::vector<double>{0.0, 90.0}));
+  EXPECT_EQ(b->radial_um, (std::vector<double>{1.5, -0.5}));
+  Result<BallbarCircle> bad = parse_ballbar_csv("angle_deg,radial_um\n0,1\n90,one\n", "bb.csv", 100.0);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("bb.csv:3: column radial_um: `one` is not a number"), std::string::npos)
+      << bad.error().message;
+}
+
 }  // namespace
 }  // namespace gaugeloop
