@@ -218,30 +218,16 @@ struct IdentifyOptions {
 };
 
 // The stroke the measured gear was ground with: the one in force in the history, or none.
-Result<std::vector<StrokeSimPoint>> stroke_in_force(const IdentifyOptions& o, const GearPartFile& gf) {
+Result<std::vector<StrokeSimPoint>> ground_with(const IdentifyOptions& o, const GearPartFile& gf) {
   if (o.uncompensated) return std::vector<StrokeSimPoint>{};
   Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return store.error();
-  const std::string nc_file =
-      std::filesystem::absolute(o.paths.nc() / (gf.nc_program + ".SPF")).lexically_normal().string();
-  Result<std::optional<NcPush>> last = store->last_push(nc_file);
-  if (!last) return last.error();
-  if (!*last || !(**last).program_text || !is_stroke_program(*(**last).program_text)) {
-    return make_error(ErrorCode::kNotFound, nc_file +
-                                                ": no stroke in force in the history, so the SIM1 the gear was "
-                                                "ground with is not known; if it was ground without one, say "
-                                                "--uncompensated");
-  }
-  Result<ParsedStrokeProgram> p = parse_stroke_program(*(**last).program_text, nc_file);
-  if (!p) return p.error();
-  std::vector<StrokeSimPoint> out;
-  for (const StrokeProgramPoint& q : p->points) {
-    StrokeSimPoint s;
-    s.z_mm = q.z_mm;
-    s.sim_deg = q.sim_deg;
-    out.push_back(s);
-  }
-  return out;
+  Result<StrokeInForce> s = stroke_in_force(
+      *store, std::filesystem::absolute(o.paths.nc() / (gf.nc_program + ".SPF")).lexically_normal(),
+      "the SIM1 the gear was ground with is not known; if it was ground without a stroke from gaugeloop, say "
+      "--uncompensated");
+  if (!s) return s.error();
+  return std::move(s->points);
 }
 
 int cmd_gear_identify(const IdentifyOptions& o) {
@@ -257,7 +243,7 @@ int cmd_gear_identify(const IdentifyOptions& o) {
     if (!b) return report_error(b.error());
     ballbar = std::move(*b);
   }
-  Result<std::vector<StrokeSimPoint>> sim = stroke_in_force(o, *gf);
+  Result<std::vector<StrokeSimPoint>> sim = ground_with(o, *gf);
   if (!sim) return report_error(sim.error());
   const GearCoupling k = gear_coupling(gf->part);
   Result<AxisIdentification> id =

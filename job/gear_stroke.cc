@@ -89,26 +89,40 @@ Result<GearStrokeReport> push_gear_stroke(const GearPart& part, std::vector<Stro
   return r;
 }
 
+Result<StrokeInForce> stroke_in_force(const RunStore& store, const std::filesystem::path& nc_file,
+                                      const std::string& advice) {
+  Result<std::optional<NcPush>> last = store.last_push(nc_file.string());
+  if (!last) return last.error();
+  if (!*last || !(**last).program_text || !is_stroke_program(*(**last).program_text)) {
+    return make_error(ErrorCode::kNotFound,
+                      nc_file.string() + ": no stroke program was pushed there, so there is none in force; " + advice);
+  }
+  Result<ParsedStrokeProgram> p = parse_stroke_program(*(**last).program_text, nc_file.string());
+  if (!p) return p.error();
+  StrokeInForce out;
+  out.version = (**last).table_version;
+  for (const StrokeProgramPoint& q : p->points) {
+    StrokeSimPoint point;
+    point.z_mm = q.z_mm;
+    point.sim_deg = q.sim_deg;
+    out.points.push_back(point);
+  }
+  return out;
+}
+
 Result<GearCorrection> correct_gear_stroke(const GearPart& part, const std::vector<LeadTrace>& traces,
                                            const std::string& source, const GearStrokeSettings& s) {
   if (s.store == nullptr) {
     return make_error(ErrorCode::kInvalidInput, "a stroke is corrected from the one in force: it needs the history");
   }
   if (Status v = validate(part); !v) return v.error();
-  Result<std::optional<NcPush>> last = s.store->last_push(s.nc_file.string());
-  if (!last) return last.error();
-  if (!*last || !(**last).program_text || !is_stroke_program(*(**last).program_text)) {
-    return make_error(ErrorCode::kNotFound, s.nc_file.string() +
-                                                ": no stroke program was pushed there, so there is none in force to "
-                                                "correct; push the first with `gaugeloop gear stroke` (an axis error "
-                                                "table, or one of zeros)");
-  }
-  Result<ParsedStrokeProgram> in_force = parse_stroke_program(*(**last).program_text, s.nc_file.string());
+  Result<StrokeInForce> in_force = stroke_in_force(
+      *s.store, s.nc_file, "push the first with `gaugeloop gear stroke` (an axis error table, or one of zeros)");
   if (!in_force) return in_force.error();
   GearCorrection c;
-  c.from_version = (**last).table_version;
+  c.from_version = in_force->version;
   std::vector<double> z;
-  for (const StrokeProgramPoint& p : in_force->points) z.push_back(p.z_mm);
+  for (const StrokeSimPoint& p : in_force->points) z.push_back(p.z_mm);
   Result<MeshIdentification> m = identify_mesh_error(traces, z, base_radius_mm(part.gear));
   if (!m) return m.error();
   std::vector<StrokeSimPoint> next;

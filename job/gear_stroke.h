@@ -56,6 +56,18 @@ Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxi
 Result<GearStrokeReport> push_gear_stroke(const GearPart& part, std::vector<StrokeSimPoint> points,
                                           const std::string& source, const GearStrokeSettings& settings);
 
+// The stroke in force: the version last pushed to a file, SIM1 at its spline points as the
+// control holds them.
+struct StrokeInForce {
+  int version = 0;
+  std::vector<StrokeSimPoint> points;  // z_mm and sim_deg; no axis errors
+};
+
+// kNotFound naming `nc_file` when no stroke program was pushed there (`advice` says what to do);
+// kStorage for the database's errors.
+Result<StrokeInForce> stroke_in_force(const RunStore& store, const std::filesystem::path& nc_file,
+                                      const std::string& advice);
+
 // A stroke corrected from a measured gear.
 struct GearCorrection {
   int from_version = 0;  // the stroke in force that ground the gear
