@@ -215,6 +215,25 @@ Params& Params::null() {
   return *this;
 }
 
+Params& Params::append(const Params& other) {
+  values_.insert(values_.end(), other.values_.begin(), other.values_.end());
+  return *this;
+}
+
+std::string values_list(std::size_t rows, std::size_t width) {
+  std::string out;
+  out.reserve(rows * width * 6);
+  std::size_t n = 0;
+  for (std::size_t r = 0; r < rows; ++r) {
+    out += r == 0 ? "(" : ", (";
+    for (std::size_t c = 0; c < width; ++c) {
+      out += (c == 0 ? "$" : ", $") + std::to_string(++n);
+    }
+    out += ")";
+  }
+  return out;
+}
+
 std::vector<const char*> Params::pointers() const {
   std::vector<const char*> out;
   out.reserve(values_.size());

@@ -41,6 +41,9 @@ class Params {
   Params& number(double v);
   Params& number(std::optional<double> v);
   Params& null();
+  // `other`'s values after these: the parameters of one more row of a multi-row statement.
+  Params& append(const Params& other);
+  std::size_t size() const { return values_.size(); }
   // For exec_params / exec_prepared: NULL is a null pointer.
   std::vector<const char*> pointers() const;
 
@@ -49,6 +52,13 @@ class Params {
 };
 
 pqxx::result exec(pqxx::transaction_base& tx, const std::string& sql, const Params& params);
+
+// The multi-row VALUES list of `rows` rows of `width` parameters each, numbered from $1 row by
+// row: "($1, $2), ($3, $4)" for 2 rows of 2.
+std::string values_list(std::size_t rows, std::size_t width);
+
+// PostgreSQL takes at most 65,535 parameters in one statement.
+constexpr std::size_t kMaxParameters = 65535;
 
 // A float8 column read back exactly (PostgreSQL prints the shortest text that reads back as
 // the same double).

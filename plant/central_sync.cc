@@ -2,6 +2,7 @@
 // progress it makes in one PostgreSQL transaction.
 #include "plant/central_sync.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <optional>
 #include <utility>
@@ -19,7 +20,9 @@ using central_internal::Params;
 
 namespace {
 
-constexpr std::string_view kInsertRun = R"sql(
+// Each INSERT is a head, the multi-row VALUES list (central_internal::values_list) and a tail:
+// a batch's records go in a few statements, not one round trip each.
+constexpr std::string_view kInsertRunHead = R"sql(
 INSERT INTO runs (uuid, source_machine, source, local_id, started_utc, finished_utc, machine, part, lobe, gauge,
                   note, status, revolutions, degrees_captured, polls, reconnects, discarded_revolutions,
                   zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um, repeatability_um, nc_file,
@@ -27,24 +30,24 @@ INSERT INTO runs (uuid, source_machine, source, local_id, started_utc, finished_
                   settings_hash, settings, raw_pruned_utc, ground_with_version, ground_with_source, inspection,
                   serial, operator, verdict, lift_error_reference, max_abs_residual_um, rms_residual_um,
                   peak_to_valley_residual_um, dial_runout_um, roundness_um, synced_utc)
-VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21, $22, $23,
-        $24, $25, $26, $27, $28, $29, $30, $31, $32, $33, $34, $35, $36, $37, $38, $39, $40, $41, $42, $43)
-ON CONFLICT (uuid) DO NOTHING
-RETURNING 1)sql";
+VALUES )sql";
+constexpr std::size_t kRunWidth = 43;
+constexpr std::string_view kInsertRunTail = " ON CONFLICT (uuid) DO NOTHING RETURNING 1";
 
-constexpr std::string_view kInsertCharacteristic = R"sql(
+constexpr std::string_view kInsertCharacteristicHead = R"sql(
 INSERT INTO run_characteristics (run_uuid, position, key, unit, value, min_value, max_value, lower_limit,
                                  upper_limit, verdict, from_deg, to_deg)
-VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12)
-ON CONFLICT (run_uuid, position) DO NOTHING)sql";
+VALUES )sql";
+constexpr std::size_t kCharacteristicWidth = 12;
+constexpr std::string_view kInsertCharacteristicTail = " ON CONFLICT (run_uuid, position) DO NOTHING";
 
-constexpr std::string_view kInsertPush = R"sql(
+constexpr std::string_view kInsertPushHead = R"sql(
 INSERT INTO nc_pushes (uuid, run_uuid, machine, source_machine, source, local_id, local_run_id, pushed_utc, nc_file,
                        table_version, reason, interpolation, block_count, command_error_um, point_count,
                        correction_max_um, program_hash, synced_utc)
-VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18)
-ON CONFLICT (uuid) DO NOTHING
-RETURNING 1)sql";
+VALUES )sql";
+constexpr std::size_t kPushWidth = 18;
+constexpr std::string_view kInsertPushTail = " ON CONFLICT (uuid) DO NOTHING RETURNING run_uuid";
 
 // As RunStore::record_push does to the local row: the run is pushed, and its nc_file is the
 // program last pushed from it.
@@ -53,12 +56,32 @@ UPDATE runs SET status = 'pushed',
                 nc_file = (SELECT p.nc_file FROM nc_pushes AS p WHERE p.run_uuid = $1 ORDER BY p.local_id DESC LIMIT 1)
 WHERE uuid = $1)sql";
 
-constexpr std::string_view kInsertEvent = R"sql(
+constexpr std::string_view kInsertEventHead = R"sql(
 INSERT INTO events (uuid, source_machine, source, local_id, at_utc, kind, code, machine, part, lobe, local_run_id,
                     message, synced_utc)
-VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13)
-ON CONFLICT (uuid) DO NOTHING
-RETURNING 1)sql";
+VALUES )sql";
+constexpr std::size_t kEventWidth = 13;
+constexpr std::string_view kInsertEventTail = " ON CONFLICT (uuid) DO NOTHING RETURNING 1";
+
+// Inserts `rows` (each `width` parameters) in as few statements as PostgreSQL's limit on
+// parameters allows; the rows the statements returned.
+pqxx::result::size_type insert_rows(pqxx::work& tx, std::string_view head, std::string_view tail, std::size_t width,
+                                    const std::vector<Params>& rows, std::vector<std::string>* returned = nullptr) {
+  const std::size_t per_statement = std::max<std::size_t>(1, central_internal::kMaxParameters / width);
+  pqxx::result::size_type count = 0;
+  for (std::size_t from = 0; from < rows.size(); from += per_statement) {
+    const std::size_t n = std::min(per_statement, rows.size() - from);
+    Params all;
+    for (std::size_t i = from; i < from + n; ++i) all.append(rows[i]);
+    const pqxx::result r = central_internal::exec(
+        tx, std::string(head) + central_internal::values_list(n, width) + std::string(tail), all);
+    count += r.size();
+    if (returned != nullptr) {
+      for (const auto& row : r) returned->push_back(central_internal::text_of(row[0]));
+    }
+  }
+  return count;
+}
 
 std::string harmonics_json(const LobeAnalysis& a) {
   std::string out = "[";
@@ -70,65 +93,88 @@ std::string harmonics_json(const LobeAnalysis& a) {
   return out + "]";
 }
 
-bool insert_run(pqxx::work& tx, const StoredRun& run, const std::string& machine, const std::string& source,
-                const std::string& now) {
-  const RunSummary& s = run.summary;
-  const LobeAnalysis& a = run.analysis;
-  Params p;
-  p.text(s.uuid).text(machine).text(source).integer(s.id).text(s.started_utc).text(run.finished_utc);
-  p.text(s.machine).text(s.part).integer(std::int64_t{s.lobe}).text(run.gauge).text(s.note).text(s.status);
-  p.integer(std::int64_t{s.revolutions}).integer(std::int64_t{s.degrees_captured}).integer(run.polls);
-  p.integer(run.reconnects).integer(run.discarded_revolutions).number(a.zero_offset_mm).number(s.max_abs_error_um);
-  p.number(s.rms_error_um).number(s.peak_to_valley_um).number(s.repeatability_um).text_or_null(s.nc_file);
-  p.number(s.phase_error_deg).number(s.base_circle_runout_um).text(harmonics_json(a));
-  p.integer(run.correction_in_force_run).text_or_null(s.settings_hash).text_or_null(run.settings);
-  p.text_or_null(s.raw_pruned_utc);
-  p.integer(run.ground_with_version ? std::optional<std::int64_t>(*run.ground_with_version) : std::nullopt);
-  p.text_or_null(run.ground_with_source).text(run.inspection ? "true" : "false");
-  p.text_or_null(s.serial).text_or_null(s.operator_name).text(verdict_name(s.verdict));
-  p.text(run.lift_error_reference == LiftErrorReference::kNominal ? "nominal" : "best_fit");
-  p.number(a.max_abs_residual_um).number(a.rms_residual_um).number(a.peak_to_valley_residual_um);
-  p.number(a.dial_runout_um).number(a.roundness_um).text(now);
-  if (central_internal::exec(tx, std::string(kInsertRun), p).empty()) return false;
-  for (std::size_t i = 0; i < run.characteristics.size(); ++i) {
-    const Characteristic& c = run.characteristics[i];
-    Params cp;
-    cp.text(s.uuid).integer(static_cast<std::int64_t>(i)).text(c.key).text(c.unit).number(c.value).number(c.min);
-    cp.number(c.max).number(c.limits.lower).number(c.limits.upper).text(verdict_name(c.verdict));
-    cp.integer(c.from_deg ? std::optional<std::int64_t>(*c.from_deg) : std::nullopt);
-    cp.integer(c.to_deg ? std::optional<std::int64_t>(*c.to_deg) : std::nullopt);
-    central_internal::exec(tx, std::string(kInsertCharacteristic), cp);
+// The runs, and their characteristics (a run already there keeps its own: DO NOTHING); the
+// runs that were new.
+std::int64_t insert_runs(pqxx::work& tx, const std::vector<StoredRun>& runs, const std::string& machine,
+                         const std::string& source, const std::string& now) {
+  std::vector<Params> rows;
+  std::vector<Params> characteristics;
+  rows.reserve(runs.size());
+  for (const StoredRun& run : runs) {
+    const RunSummary& s = run.summary;
+    const LobeAnalysis& a = run.analysis;
+    Params p;
+    p.text(s.uuid).text(machine).text(source).integer(s.id).text(s.started_utc).text(run.finished_utc);
+    p.text(s.machine).text(s.part).integer(std::int64_t{s.lobe}).text(run.gauge).text(s.note).text(s.status);
+    p.integer(std::int64_t{s.revolutions}).integer(std::int64_t{s.degrees_captured}).integer(run.polls);
+    p.integer(run.reconnects).integer(run.discarded_revolutions).number(a.zero_offset_mm).number(s.max_abs_error_um);
+    p.number(s.rms_error_um).number(s.peak_to_valley_um).number(s.repeatability_um).text_or_null(s.nc_file);
+    p.number(s.phase_error_deg).number(s.base_circle_runout_um).text(harmonics_json(a));
+    p.integer(run.correction_in_force_run).text_or_null(s.settings_hash).text_or_null(run.settings);
+    p.text_or_null(s.raw_pruned_utc);
+    p.integer(run.ground_with_version ? std::optional<std::int64_t>(*run.ground_with_version) : std::nullopt);
+    p.text_or_null(run.ground_with_source).text(run.inspection ? "true" : "false");
+    p.text_or_null(s.serial).text_or_null(s.operator_name).text(verdict_name(s.verdict));
+    p.text(run.lift_error_reference == LiftErrorReference::kNominal ? "nominal" : "best_fit");
+    p.number(a.max_abs_residual_um).number(a.rms_residual_um).number(a.peak_to_valley_residual_um);
+    p.number(a.dial_runout_um).number(a.roundness_um).text(now);
+    rows.push_back(std::move(p));
+    for (std::size_t i = 0; i < run.characteristics.size(); ++i) {
+      const Characteristic& c = run.characteristics[i];
+      Params cp;
+      cp.text(s.uuid).integer(static_cast<std::int64_t>(i)).text(c.key).text(c.unit).number(c.value).number(c.min);
+      cp.number(c.max).number(c.limits.lower).number(c.limits.upper).text(verdict_name(c.verdict));
+      cp.integer(c.from_deg ? std::optional<std::int64_t>(*c.from_deg) : std::nullopt);
+      cp.integer(c.to_deg ? std::optional<std::int64_t>(*c.to_deg) : std::nullopt);
+      characteristics.push_back(std::move(cp));
+    }
   }
-  return true;
+  const auto inserted = insert_rows(tx, kInsertRunHead, kInsertRunTail, kRunWidth, rows);
+  insert_rows(tx, kInsertCharacteristicHead, kInsertCharacteristicTail, kCharacteristicWidth, characteristics);
+  return static_cast<std::int64_t>(inserted);
 }
 
-bool insert_push(pqxx::work& tx, const ReplicatedPush& r, const std::string& machine, const std::string& source,
-                 const std::string& now) {
-  const NcPush& push = r.push;
+// The pushes, and each run a new push came from marked pushed; the pushes that were new.
+std::int64_t insert_pushes(pqxx::work& tx, const std::vector<ReplicatedPush>& pushes, const std::string& machine,
+                           const std::string& source, const std::string& now) {
   auto optional_int = [](std::optional<int> v) {
     return v ? std::optional<std::int64_t>(*v) : std::optional<std::int64_t>();
   };
-  Params p;
-  p.text(push.uuid).text(r.run_uuid).text(r.machine).text(machine).text(source).integer(push.id).integer(push.run_id);
-  p.text(push.pushed_utc).text(push.nc_file).integer(std::int64_t{push.table_version}).text_or_null(push.reason);
-  p.text_or_null(push.table.interpolation).integer(optional_int(push.table.block_count));
-  p.number(push.table.command_error_um).integer(optional_int(push.table.point_count));
-  p.number(push.table.correction_max_um).text_or_null(push.program_hash).text(now);
-  if (central_internal::exec(tx, std::string(kInsertPush), p).empty()) return false;
-  Params mark;
-  mark.text(r.run_uuid);
-  central_internal::exec(tx, std::string(kMarkPushed), mark);
-  return true;
+  std::vector<Params> rows;
+  for (const ReplicatedPush& r : pushes) {
+    const NcPush& push = r.push;
+    Params p;
+    p.text(push.uuid).text(r.run_uuid).text(r.machine).text(machine).text(source).integer(push.id);
+    p.integer(push.run_id).text(push.pushed_utc).text(push.nc_file).integer(std::int64_t{push.table_version});
+    p.text_or_null(push.reason).text_or_null(push.table.interpolation).integer(optional_int(push.table.block_count));
+    p.number(push.table.command_error_um).integer(optional_int(push.table.point_count));
+    p.number(push.table.correction_max_um).text_or_null(push.program_hash).text(now);
+    rows.push_back(std::move(p));
+  }
+  std::vector<std::string> runs;
+  const auto inserted = insert_rows(tx, kInsertPushHead, kInsertPushTail, kPushWidth, rows, &runs);
+  std::sort(runs.begin(), runs.end());
+  runs.erase(std::unique(runs.begin(), runs.end()), runs.end());
+  for (const std::string& run_uuid : runs) {
+    Params mark;
+    mark.text(run_uuid);
+    central_internal::exec(tx, std::string(kMarkPushed), mark);
+  }
+  return static_cast<std::int64_t>(inserted);
 }
 
-bool insert_event(pqxx::work& tx, const StoredEvent& e, const std::string& machine, const std::string& source,
-                  const std::string& now) {
-  const EventRecord& ev = e.event;
-  Params p;
-  p.text(ev.uuid).text(machine).text(source).integer(e.id).text(ev.at_utc).text(event_kind_name(ev.kind));
-  p.text(ev.code).text(ev.machine).text(ev.part).integer(std::int64_t{ev.lobe}).integer(ev.run_id).text(ev.message);
-  p.text(now);
-  return !central_internal::exec(tx, std::string(kInsertEvent), p).empty();
+std::int64_t insert_events(pqxx::work& tx, const std::vector<StoredEvent>& events, const std::string& machine,
+                           const std::string& source, const std::string& now) {
+  std::vector<Params> rows;
+  for (const StoredEvent& e : events) {
+    const EventRecord& ev = e.event;
+    Params p;
+    p.text(ev.uuid).text(machine).text(source).integer(e.id).text(ev.at_utc).text(event_kind_name(ev.kind));
+    p.text(ev.code).text(ev.machine).text(ev.part).integer(std::int64_t{ev.lobe}).integer(ev.run_id).text(ev.message);
+    p.text(now);
+    rows.push_back(std::move(p));
+  }
+  return static_cast<std::int64_t>(insert_rows(tx, kInsertEventHead, kInsertEventTail, kEventWidth, rows));
 }
 
 // One table's records as the sync reads them from the file.
@@ -140,8 +186,9 @@ struct TableReader {
   std::function<Result<std::vector<Record>>(std::int64_t after_id, int limit)> read;
   std::function<std::int64_t(const Record&)> id;
   std::function<std::string(const Record&)> uuid;
-  std::function<bool(pqxx::work&, const Record&, const std::string& machine, const std::string& source,
-                     const std::string& now)>
+  // Inserts a batch's records; the number that were new (the rest were there by UUID).
+  std::function<std::int64_t(pqxx::work&, const std::vector<Record>&, const std::string& machine,
+                             const std::string& source, const std::string& now)>
       insert;
 };
 
@@ -191,10 +238,7 @@ class Syncer {
           return true;  // nothing left: the transaction rolls back, nothing was written
         }
         const std::string now = utc_now();
-        std::int64_t inserted = 0;
-        for (const Record& r : *records) {
-          if (reader.insert(tx, r, machine_, source_, now)) ++inserted;
-        }
+        const std::int64_t inserted = reader.insert(tx, *records, machine_, source_, now);
         const Record& last = records->back();
         Params moved;
         moved.integer(reader.id(last))
@@ -309,7 +353,7 @@ Result<CentralSyncCounts> sync_to_central(const RunStore& local, const std::stri
         std::vector<StoredRun> out;
         out.reserve(ids->size());
         for (std::int64_t id : *ids) {
-          Result<StoredRun> run = local.load_run(id);
+          Result<StoredRun> run = local.load_run_record(id);
           if (!run.ok()) return run.error();
           out.push_back(std::move(*run));
         }
@@ -317,7 +361,7 @@ Result<CentralSyncCounts> sync_to_central(const RunStore& local, const std::stri
       },
       [](const StoredRun& r) { return r.summary.id; },
       [](const StoredRun& r) { return r.summary.uuid; },
-      insert_run,
+      insert_runs,
   };
   const TableReader<ReplicatedPush> pushes{
       "nc_pushes",
@@ -325,7 +369,7 @@ Result<CentralSyncCounts> sync_to_central(const RunStore& local, const std::stri
       [&local](std::int64_t after, int limit) { return local.pushes_after(after, limit); },
       [](const ReplicatedPush& p) { return p.push.id; },
       [](const ReplicatedPush& p) { return p.push.uuid; },
-      insert_push,
+      insert_pushes,
   };
   const TableReader<StoredEvent> events{
       "events",
@@ -333,7 +377,7 @@ Result<CentralSyncCounts> sync_to_central(const RunStore& local, const std::stri
       [&local](std::int64_t after, int limit) { return local.events_after(after, limit); },
       [](const StoredEvent& e) { return e.id; },
       [](const StoredEvent& e) { return e.event.uuid; },
-      insert_event,
+      insert_events,
   };
 
   Result<bool> done = syncer.sync(runs, counts.runs);

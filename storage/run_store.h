@@ -565,6 +565,11 @@ class RunStore : public RunHistory {
   // One run, read in a single snapshot. kNotFound if absent.
   Result<StoredRun> load_run(std::int64_t run_id) const;
 
+  // load_run without what is kept per degree (the raw revolutions, and the design, mean, error,
+  // correction and residual of the profile) and without its pushes: the run's record, its
+  // details and characteristics, which is what the central history copies. kNotFound if absent.
+  Result<StoredRun> load_run_record(std::int64_t run_id) const;
+
   // ---- the outbox (schema 9; docs/plant.md) ----
   // Turns queuing on or off and sets the bound. Messages already waiting stay.
   Status configure_outbox(const OutboxSettings& settings);

@@ -1,6 +1,7 @@
 // RunStore's runs: storing a measurement run whole, reading it back, listing and pruning runs.
 #include <array>
 #include <cstdio>
+#include <initializer_list>
 #include <utility>
 
 #include "core/utc_time.h"
@@ -548,18 +549,33 @@ Status read_pushes_of(Connection& conn, std::int64_t run_id, StoredRun& out, con
 
 }  // namespace
 
-Result<StoredRun> RunStore::load_run(std::int64_t run_id) const {
-  Connection& conn = *conn_;
+namespace {
+
+using RunPartReader = Status (*)(Connection&, std::int64_t, StoredRun&, const std::string&);
+
+// The parts of run `run_id` that `readers` read, in one snapshot, so a concurrent writer cannot
+// split the run.
+Result<StoredRun> load_parts(Connection& conn, std::int64_t run_id, std::initializer_list<RunPartReader> readers) {
   const std::string operation = "load run " + std::to_string(run_id);
-  // One snapshot for every SELECT, so a concurrent writer cannot split the run.
   Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kRead, operation);
   if (!tx.ok()) return tx.error();
   StoredRun out;
-  for (auto read : {read_summary_of_run, read_details, read_raw, read_profile, read_pushes_of, read_characteristics}) {
+  for (RunPartReader read : readers) {
     if (Status s = read(conn, run_id, out, operation); !s.ok()) return s.error();
   }
   if (Status s = tx->commit(); !s.ok()) return s.error();
   return out;
+}
+
+}  // namespace
+
+Result<StoredRun> RunStore::load_run(std::int64_t run_id) const {
+  return load_parts(*conn_, run_id,
+                    {read_summary_of_run, read_details, read_raw, read_profile, read_pushes_of, read_characteristics});
+}
+
+Result<StoredRun> RunStore::load_run_record(std::int64_t run_id) const {
+  return load_parts(*conn_, run_id, {read_summary_of_run, read_details, read_characteristics});
 }
 
 Status check_run_query(const RunQuery& q) {

@@ -62,11 +62,11 @@ fs::path scratch(const std::string& name) {
 }
 
 // A run as the job stores it, with the six characteristics of a judged lobe.
-RunRecord bench_run(int i, const std::string& machine) {
+RunRecord bench_run(int i, const std::string& machine, int characteristics = 6) {
   RunRecord r =
       testing::sample_run("cam_" + std::to_string(i % 5), 1 + i % 8, machine,
                           format_utc(static_cast<std::time_t>(1767225600 + 60 * i)), 2.0 + 0.001 * (i % 1000));
-  for (int k = 0; k < 6; ++k) {
+  for (int k = 0; k < characteristics; ++k) {
     Characteristic c;
     c.key = "lift_error_" + std::to_string(k);
     c.unit = "um";
@@ -81,12 +81,12 @@ RunRecord bench_run(int i, const std::string& machine) {
   return r;
 }
 
-RunStore store_with_runs(const fs::path& db, int runs, bool outbox) {
+RunStore store_with_runs(const fs::path& db, int runs, bool outbox, int characteristics = 6) {
   Result<RunStore> store = RunStore::open(db);
   if (!store) die(store.error().message);
   if (outbox && !store->configure_outbox({true, 1000000}).ok()) die("cannot enable the outbox");
   for (int i = 0; i < runs; ++i) {
-    Result<std::int64_t> id = store->insert_run(bench_run(i, "grinder-01"));
+    Result<std::int64_t> id = store->insert_run(bench_run(i, "grinder-01", characteristics));
     if (!id) die(id.error().message);
   }
   return std::move(store).value();
@@ -214,12 +214,14 @@ BENCHMARK(BM_BareMosquittoQos1)->UseManualTime()->Iterations(3)->Unit(benchmark:
 
 // ---- the sync into PostgreSQL ----
 
+// state.range(0): characteristics per run.
 void BM_SyncIntoCentral(benchmark::State& state) {
-  const fs::path db = scratch("sync") / "runs.sqlite";
-  RunStore store = store_with_runs(db, kSyncRuns, false);
+  const int characteristics = static_cast<int>(state.range(0));
+  const fs::path db = scratch("sync_" + std::to_string(characteristics)) / "runs.sqlite";
+  RunStore store = store_with_runs(db, kSyncRuns, false, characteristics);
   int iteration = 0;
   for (auto _ : state) {
-    const std::string url = new_database("sync_" + std::to_string(iteration++));
+    const std::string url = new_database("sync_" + std::to_string(characteristics) + "_" + std::to_string(iteration++));
     const auto start = std::chrono::steady_clock::now();
     Result<CentralSyncCounts> counts = sync_to_central(store, url, "grinder-01");
     if (!counts) die(counts.error().message);
@@ -228,14 +230,16 @@ void BM_SyncIntoCentral(benchmark::State& state) {
     state.SetItemsProcessed(state.items_processed() + kSyncRuns);
   }
 }
-BENCHMARK(BM_SyncIntoCentral)->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SyncIntoCentral)->Arg(6)->Arg(25)->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
 
-// As many rows of the central runs table's width (45 columns) and 6 characteristic rows each,
-// inserted by prepared statements, 200 runs per transaction.
+// As many rows of the central runs table's width (45 columns) and state.range(0)
+// characteristic rows each, inserted by prepared statements one row each, 200 runs per
+// transaction.
 void BM_BarePqxxInsert(benchmark::State& state) {
+  const int characteristics = static_cast<int>(state.range(0));
   int iteration = 0;
   for (auto _ : state) {
-    const std::string url = new_database("bare_" + std::to_string(iteration++));
+    const std::string url = new_database("bare_" + std::to_string(characteristics) + "_" + std::to_string(iteration++));
     pqxx::connection c(url);
     {
       pqxx::work w(c);
@@ -259,7 +263,7 @@ void BM_BarePqxxInsert(benchmark::State& state) {
         std::vector<std::string> v{uuid};
         for (int k = 0; k < 44; ++k) v.push_back(k % 2 ? std::to_string(1.5 * k) : "text-" + std::to_string(k));
         w.exec_prepared("run", pqxx::prepare::make_dynamic_params(v));
-        for (int p = 0; p < 6; ++p) w.exec_prepared("char", uuid, p, "lift_error", 1.0 + p);
+        for (int p = 0; p < characteristics; ++p) w.exec_prepared("char", uuid, p, "lift_error", 1.0 + p);
       }
       w.commit();
     }
@@ -267,7 +271,7 @@ void BM_BarePqxxInsert(benchmark::State& state) {
     state.SetItemsProcessed(state.items_processed() + kSyncRuns);
   }
 }
-BENCHMARK(BM_BarePqxxInsert)->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BarePqxxInsert)->Arg(6)->Arg(25)->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
 
 // ---- cross-machine queries at 1,000,000 central runs ----
 

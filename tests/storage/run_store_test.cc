@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -109,6 +110,39 @@ TEST_F(RunStoreTest, InsertThenLoadReturnsTheSameRunToATenthOfANanometre) {
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   EXPECT_EQ(loaded->summary.id, id);
   expect_same_run(*loaded, record);
+}
+
+// What the central history copies: the whole record, its details and characteristics as
+// load_run has them, and nothing of what is kept per degree.
+TEST_F(RunStoreTest, TheRunsRecordIsTheRunWithoutWhatIsKeptPerDegree) {
+  RunRecord record = make_record("intake-flat", "2026-11-22T02:34:44Z", 4);
+  Characteristic c;
+  c.key = "lift_error";
+  c.unit = "um";
+  c.value = 3.5;
+  c.limits.upper = 12.0;
+  c.verdict = Verdict::kIn;
+  record.characteristics.push_back(c);
+  const std::int64_t id = insert_ok(store(), record);
+  Result<StoredRun> whole = store().load_run(id);
+  ASSERT_TRUE(whole.ok()) << whole.error().message;
+  Result<StoredRun> rec = store().load_run_record(id);
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  EXPECT_EQ(rec->summary.uuid, whole->summary.uuid);
+  EXPECT_EQ(rec->summary.max_abs_error_um, whole->summary.max_abs_error_um);
+  EXPECT_EQ(rec->finished_utc, whole->finished_utc);
+  EXPECT_EQ(rec->settings, whole->settings);
+  EXPECT_EQ(rec->analysis.harmonic_amplitude_um, whole->analysis.harmonic_amplitude_um);
+  EXPECT_EQ(rec->analysis.zero_offset_mm, whole->analysis.zero_offset_mm);
+  EXPECT_EQ(rec->analysis.roundness_um, whole->analysis.roundness_um);
+  ASSERT_EQ(rec->characteristics.size(), 1u);
+  EXPECT_EQ(rec->characteristics[0].value, 3.5);
+  EXPECT_FALSE(whole->revolutions.empty());
+  EXPECT_TRUE(rec->revolutions.empty());
+  auto all_zero = [](const auto& v) { return std::all_of(v.begin(), v.end(), [](double x) { return x == 0.0; }); };
+  EXPECT_FALSE(all_zero(whole->analysis.error_um));
+  EXPECT_TRUE(all_zero(rec->analysis.error_um)) << "the profile is not read";
+  EXPECT_EQ(store().load_run_record(id + 100).error().code, ErrorCode::kNotFound);
 }
 
 TEST_F(RunStoreTest, ReopeningTheFileKeepsTheRun) {
