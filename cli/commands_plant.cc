@@ -37,8 +37,13 @@ int cmd_sync(const SyncOptions& o) {
   std::printf("synced %s (machine %s) to the central history at %s\n", synced->source.c_str(), machine.c_str(),
               url ? url->shown.c_str() : "");
   auto line = [](const char* what, const CentralSyncTableCounts& c) {
-    std::printf("  %-10s %lld copied, %lld already there (up to id %lld)\n", what, static_cast<long long>(c.inserted),
+    std::printf("  %-10s %lld copied, %lld already there (up to id %lld", what, static_cast<long long>(c.inserted),
                 static_cast<long long>(c.already_there), static_cast<long long>(c.last_local_id));
+    if (c.resumed_after > 0) {
+      std::printf("; resumed after id %lld, where a sync from the start stopped",
+                  static_cast<long long>(c.resumed_after));
+    }
+    std::printf(")\n");
   };
   line("runs", synced->runs);
   line("NC pushes", synced->pushes);

@@ -143,8 +143,15 @@ CREATE TABLE sync_progress (
 );
 )sql";
 
-constexpr std::array<CentralMigration, 1> kMigrations{{
+// A sync from the start keeps its own place, so one stopped part-way resumes there and never
+// moves the plain sync's progress back (NULL: no such sync under way).
+constexpr std::string_view kCentralV2 = R"sql(
+ALTER TABLE sync_progress ADD COLUMN rescan_local_id bigint, ADD COLUMN rescan_uuid text COLLATE "C";
+)sql";
+
+constexpr std::array<CentralMigration, 2> kMigrations{{
     {1, "runs, run_characteristics, nc_pushes, events and sync_progress", kCentralV1},
+    {2, "sync_progress: where a sync from the start stands (rescan_local_id, rescan_uuid)", kCentralV2},
 }};
 
 // Any 64-bit number of our own: held by whoever migrates, so two grinders syncing into an

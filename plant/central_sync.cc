@@ -199,11 +199,18 @@ class Syncer {
       : c_(c), machine_(std::move(machine)), source_(std::move(source)), options_(options), counts_(counts) {}
 
   // Copies one table; false when max_batches stopped it.
+  //
+  // A plain sync goes on after last_local_id and moves it. A sync from the start goes on after
+  // rescan_local_id (where a sync from the start stopped before; none: the first record) and
+  // moves that; it moves last_local_id only forward, and to where it ends when it reaches the
+  // file's last record (the file may have been replaced by a shorter one), so stopping it
+  // part-way never sends the plain sync back over what it had copied.
   template <typename Record>
   Result<bool> sync(const TableReader<Record>& reader, CentralSyncTableCounts& counts) {
-    std::optional<std::int64_t> position;  // from_start: where this sync stands, ignoring the stored progress
-    if (options_.from_start) position = 0;
-    bool anchor_checked = options_.from_start;
+    const bool rescan = options_.from_start;
+    std::optional<std::int64_t> position;  // rescan: where this sync stands
+    std::string position_uuid;             // the UUID of the record at `position`
+    bool anchor_checked = false;
     for (;;) {
       if (options_.max_batches > 0 && counts_.batches >= options_.max_batches) return false;
       const std::string operation = "copy " + std::string(reader.table) + " of " + source_;
@@ -221,35 +228,57 @@ class Syncer {
         // from where this batch ends.
         pqxx::result progress = central_internal::exec(
             tx,
-            "SELECT last_local_id, last_uuid FROM sync_progress WHERE machine = $1 AND source = $2 "
-            "AND table_name = $3 FOR UPDATE",
+            "SELECT last_local_id, last_uuid, rescan_local_id, rescan_uuid FROM sync_progress WHERE machine = $1 "
+            "AND source = $2 AND table_name = $3 FOR UPDATE",
             key);
         const std::int64_t stored = progress[0][0].as<std::int64_t>();
         const std::string stored_uuid = central_internal::text_of(progress[0][1]);
         if (!anchor_checked) {
-          if (Status s = check_anchor(reader, stored, stored_uuid); !s.ok()) return s.error();
           anchor_checked = true;
+          if (!rescan) {
+            if (Status s = check_anchor(reader, stored, stored_uuid); !s.ok()) return s.error();
+          } else if (!progress[0][2].is_null()) {
+            // A sync from the start stopped before: on from there, if its record is still the same.
+            const std::int64_t was = progress[0][2].as<std::int64_t>();
+            const std::string was_uuid = central_internal::text_of(progress[0][3]);
+            if (check_anchor(reader, was, was_uuid).ok()) {
+              position = was;
+              position_uuid = was_uuid;
+              counts.resumed_after = was;
+            }
+          }
+          if (rescan && !position) position = 0;
         }
         const std::int64_t after = position.value_or(stored);
         Result<std::vector<Record>> records = reader.read(after, options_.batch_size);
         if (!records.ok()) return records.error();
         if (records->empty()) {
           counts.last_local_id = after;
-          return true;  // nothing left: the transaction rolls back, nothing was written
+          if (!rescan) return true;  // nothing left: the transaction rolls back, nothing was written
+          // The whole file seen: the plain sync goes on from its last record, this file's.
+          Params done;
+          done.integer(after).text_or_null(position_uuid).text(utc_now()).append(key);
+          central_internal::exec(tx,
+                                 "UPDATE sync_progress SET last_local_id = $1, last_uuid = $2, updated_utc = $3, "
+                                 "rescan_local_id = NULL, rescan_uuid = NULL "
+                                 "WHERE machine = $4 AND source = $5 AND table_name = $6",
+                                 done);
+          tx.commit();
+          return true;
         }
         const std::string now = utc_now();
         const std::int64_t inserted = reader.insert(tx, *records, machine_, source_, now);
         const Record& last = records->back();
         Params moved;
-        moved.integer(reader.id(last))
-            .text(reader.uuid(last))
-            .text(now)
-            .text(machine_)
-            .text(source_)
-            .text(reader.table);
+        moved.integer(reader.id(last)).text(reader.uuid(last)).text(now).append(key);
         central_internal::exec(tx,
-                               "UPDATE sync_progress SET last_local_id = $1, last_uuid = $2, updated_utc = $3 "
-                               "WHERE machine = $4 AND source = $5 AND table_name = $6",
+                               rescan ? "UPDATE sync_progress SET rescan_local_id = $1, rescan_uuid = $2, "
+                                        "updated_utc = $3, "
+                                        "last_uuid = CASE WHEN $1 >= last_local_id THEN $2 ELSE last_uuid END, "
+                                        "last_local_id = GREATEST(last_local_id, $1) "
+                                        "WHERE machine = $4 AND source = $5 AND table_name = $6"
+                                      : "UPDATE sync_progress SET last_local_id = $1, last_uuid = $2, updated_utc = $3 "
+                                        "WHERE machine = $4 AND source = $5 AND table_name = $6",
                                moved);
         if (options_.before_commit) {
           if (Status s = options_.before_commit(reader.table, counts_.batches + 1); !s.ok()) {
@@ -261,7 +290,10 @@ class Syncer {
         counts.inserted += inserted;
         counts.already_there += static_cast<std::int64_t>(records->size()) - inserted;
         counts.last_local_id = reader.id(last);
-        if (position) position = reader.id(last);
+        if (position) {
+          position = reader.id(last);
+          position_uuid = reader.uuid(last);
+        }
       } catch (const std::exception& e) {
         return committed_before(central_internal::database_error(c_.url, operation, e));
       }

@@ -41,6 +41,9 @@ struct CentralSyncTableCounts {
   std::int64_t inserted = 0;       // copied by this sync
   std::int64_t already_there = 0;  // found by UUID (an earlier sync, or another grinder's copy)
   std::int64_t last_local_id = 0;  // where the sync of this table stands now
+  // --from-start only: the id a sync from the start stopped at before and this one went on
+  // from (0: it began at the first record).
+  std::int64_t resumed_after = 0;
 };
 
 struct CentralSyncCounts {

@@ -372,6 +372,74 @@ TEST_F(CentralTest, AReplacedFileIsRefusedUntilSyncedFromTheStart) {
   EXPECT_EQ(next->runs.inserted, 0);
 }
 
+// A sync from the start stopped part-way keeps its own place: the plain sync's progress stays
+// where it was (not sent back over what it had copied), and the next sync from the start goes
+// on from where the stopped one ended.
+TEST_F(CentralTest, ASyncFromTheStartStoppedPartWayResumesAndNeverMovesTheProgressBack) {
+  auto g = std::make_unique<Grinder>("central-rescan");
+  fill(*g->store, "g1", "2026-11-22", 10);
+  ASSERT_TRUE(sync_to_central(*g->store, url_, "g1").ok());
+  auto progress = [&] {
+    return sql(
+        "SELECT last_local_id || ' ' || coalesce(rescan_local_id::text, '-') FROM sync_progress "
+        "WHERE table_name = 'runs'");
+  };
+  EXPECT_TRUE(has(progress(), "10 -")) << progress();
+
+  CentralSyncOptions o;
+  o.from_start = true;
+  o.batch_size = 2;
+  o.max_batches = 2;
+  Result<CentralSyncCounts> part = sync_to_central(*g->store, url_, "g1", o);
+  ASSERT_TRUE(part.ok()) << part.error().message;
+  EXPECT_FALSE(part->caught_up);
+  EXPECT_EQ(part->runs.already_there, 4);
+  EXPECT_TRUE(has(progress(), "10 4")) << progress();
+
+  // A plain sync meanwhile goes on from run 10: nothing to read again.
+  fill(*g->store, "g1", "2026-11-23", 1, 10);
+  Result<CentralSyncCounts> plain = sync_to_central(*g->store, url_, "g1");
+  ASSERT_TRUE(plain.ok()) << plain.error().message;
+  EXPECT_EQ(plain->runs.inserted, 1);
+  EXPECT_EQ(plain->runs.already_there, 0);
+  EXPECT_TRUE(has(progress(), "11 4")) << progress();
+
+  o.max_batches = 0;
+  Result<CentralSyncCounts> rest = sync_to_central(*g->store, url_, "g1", o);
+  ASSERT_TRUE(rest.ok()) << rest.error().message;
+  EXPECT_EQ(rest->runs.resumed_after, 4);
+  EXPECT_EQ(rest->runs.already_there, 7) << "runs 5 to 11";
+  EXPECT_EQ(rest->runs.inserted, 0);
+  EXPECT_TRUE(has(progress(), "11 -")) << progress();
+
+  // Finished, the next sync from the start reads the whole file again.
+  Result<CentralSyncCounts> again = sync_to_central(*g->store, url_, "g1", o);
+  ASSERT_TRUE(again.ok()) << again.error().message;
+  EXPECT_EQ(again->runs.resumed_after, 0);
+  EXPECT_EQ(again->runs.already_there, 11);
+  EXPECT_EQ(count("SELECT count(*) FROM runs"), 11);
+}
+
+// A central history made by a gaugeloop of schema 1 is
+// brought to the latest schema by the next sync, which then keeps its progress there.
+TEST_F(CentralTest, ASchemaOneHistoryIsMigratedBySyncingIntoIt) {
+  const CentralMigration& v1 = central_migrations()[0];
+  ASSERT_EQ(v1.version, 1);
+  sql("CREATE TABLE central_schema_version (version integer PRIMARY KEY, applied_utc text NOT NULL, "
+      "description text NOT NULL)");
+  sql(std::string(v1.sql));
+  sql("INSERT INTO central_schema_version VALUES (1, '2026-11-01T00:00:00Z', 'v1')");
+  auto g = std::make_unique<Grinder>("central-v1");
+  fill(*g->store, "g1", "2026-11-22", 3);
+  Result<CentralSyncCounts> first = sync_to_central(*g->store, url_, "g1");
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  EXPECT_EQ(count("SELECT max(version) FROM central_schema_version"), latest_central_schema_version());
+  EXPECT_GE(latest_central_schema_version(), 2);
+  EXPECT_TRUE(has(sql("SELECT last_local_id || ' ' || coalesce(rescan_local_id::text, '-') FROM sync_progress "
+                      "WHERE table_name = 'runs'"),
+                  "3 -"));
+}
+
 // ---- queries ----
 
 TEST_F(CentralTest, EveryQueryAnswersWithTheLocalFilesRowsInItsOrder) {
