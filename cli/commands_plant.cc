@@ -79,7 +79,8 @@ void add_plant_commands(CLI::App& app, CommandAction& action) {
       ->check(CLI::Range(0, 1000000000));
   sync_cmd->add_flag("--from-start", sync->sync.from_start,
                      "Read the file from its first record again (after it was replaced or restored from a backup); "
-                     "records already there are found by UUID and not copied twice");
+                     "records already there are found by UUID and not copied twice, and one stopped part-way resumes "
+                     "where it stopped");
   sync_cmd->callback([&action, sync] { action = [sync] { return cmd_sync(*sync); }; });
 }
 
