@@ -13,6 +13,7 @@
 #include "tests/support/dfq_reader.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -24,7 +25,7 @@ using testing::DfqFile;
 using testing::read_dfq;
 using testing::run_command;
 
-bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 // Runs stored without characteristics, as runs measured before the part file had tolerances
 // are; their harmonics (0.1 um * order) are in the analysis.

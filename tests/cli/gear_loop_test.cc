@@ -21,7 +21,7 @@ namespace gaugeloop {
 namespace {
 
 namespace fs = std::filesystem;
-const fs::path kExample = fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "gear_71.toml";
+const fs::path kGearExample = fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "gear_71.toml";
 
 // The lead (F_beta, mean over the loop's flanks, no checker noise) of a gear ground from the
 // perfect stroke: SIM1 = dSIM of the slow errors at every spline point.
@@ -53,7 +53,7 @@ double perfect_lead_um(const GearLoopSettings& s, const testing::TempDir& dir) {
 }
 
 TEST(GearLoop, ComesToThePerfectStrokeWithinTheCheckersNoiseOnSeveralMachines) {
-  Result<GearPartFile> gf = read_gear_part_file(kExample);
+  Result<GearPartFile> gf = read_gear_part_file(kGearExample);
   ASSERT_TRUE(gf.ok()) << gf.error().message;
   for (std::uint64_t seed : {1u, 2u, 3u, 4u, 5u}) {
     testing::TempDir dir("gear-loop");
@@ -99,7 +99,7 @@ TEST(GearLoop, TheDemoClosesTheLoopOnTheExampleGear) {
   testing::TempDir dir("gear-demo");
   const std::string data = " --data-dir " + (dir.path() / "data").string();
   testing::CommandResult r =
-      testing::run_command("demo --part " + kExample.string() + " --iterations 1 --machine-seed 2" + data);
+      testing::run_command("demo --part " + kGearExample.string() + " --iterations 1 --machine-seed 2" + data);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("gear 0 (stroke version 1)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("gear 1 (stroke version 2)"), std::string::npos) << r.output;

@@ -10,6 +10,7 @@
 #include "tests/support/cli.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -20,7 +21,7 @@ using testing::CommandResult;
 using testing::run_command;
 using testing::slurp;
 
-bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 class ReportCommand : public ::testing::Test {
  protected:

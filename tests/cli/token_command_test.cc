@@ -8,6 +8,7 @@
 
 #include "tests/support/cli.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -19,7 +20,7 @@ using testing::run_command;
 using testing::run_shell;
 using testing::slurp;
 
-bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 unsigned mode_of(const fs::path& p) {
   struct stat st {};

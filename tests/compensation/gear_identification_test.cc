@@ -9,11 +9,12 @@
 #include <functional>
 
 #include "tests/compensation/generating_model.h"
+#include "tests/support/angles.h"
 
 namespace gaugeloop {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using testing::kPi;
 
 // A machine of known terms: each axis' error as a function of z.
 struct KnownMachine {

@@ -2,6 +2,7 @@
 // tolerance classes at their boundaries, and the mesh error identified from traces built from a
 // known mesh error (with each trace's own offset, as a checker's alignment leaves it).
 #include "compensation/gear_lead.h"
+#include "tests/support/angles.h"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +12,7 @@
 namespace gaugeloop {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using testing::kPi;
 
 GearGeometry example_gear() { return GearGeometry{}; }  // module 2.25, 71 teeth, 20 deg, 21.8 deg, 24 mm
 

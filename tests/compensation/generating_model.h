@@ -10,11 +10,9 @@
 #include <functional>
 
 #include "core/gear.h"
+#include "tests/support/angles.h"
 
 namespace gaugeloop::testing {
-
-inline constexpr double kPi = 3.14159265358979323846;
-inline constexpr double kRad = kPi / 180.0;
 
 using Vec = std::array<double, 3>;
 inline Vec add(Vec a, Vec b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
@@ -55,7 +53,7 @@ class GeneratingModel {
  public:
   explicit GeneratingModel(const GearPart& p) : p_(p) {
     const double mn = p.gear.normal_module_mm;
-    beta_ = p.gear.helix_angle_deg * kRad;
+    beta_ = p.gear.helix_angle_deg * kRadPerDeg;
     hg_ = p.gear.helix_angle_deg == 0.0 ? 0.0 : (p.gear.hand == Hand::kRight ? 1.0 : -1.0);
     hw_ = p.worm.hand == Hand::kRight ? 1.0 : -1.0;
     r0_ = p.worm.pitch_diameter_mm / 2.0;
@@ -79,11 +77,11 @@ class GeneratingModel {
           const Vec tg = tangent([&](double z) { return tooth(z, 0.0); }, 0.0);
           return cross(tw, tg)[0];
         },
-        -89.0 * kRad, 89.0 * kRad);
+        -89.0 * kRadPerDeg, 89.0 * kRadPerDeg);
     eta_ = setting_rad_;
   }
 
-  double setting_angle_deg() const { return setting_rad_ / kRad; }
+  double setting_angle_deg() const { return setting_rad_ / kRadPerDeg; }
   double lead_mm() const { return lead_; }
 
   // C (deg) that meshes the gear with the worm standing at B (deg), Y, Z (mm), near C = 0.
@@ -112,7 +110,7 @@ class GeneratingModel {
     const Vec a = axis();
     const Vec wx{-1.0, 0.0, 0.0};
     const Vec wy = cross(a, wx);
-    const double at = u + b_deg * kRad;  // the body turned by B
+    const double at = u + b_deg * kRadPerDeg;  // the body turned by B
     Vec p = add(centre(z_mm), scale(a, y_mm + hw_ * lead_ / (2.0 * kPi) * u));
     p = add(p, scale(wx, r0_ * std::cos(at)));
     return add(p, scale(wy, r0_ * std::sin(at)));
@@ -123,14 +121,14 @@ class GeneratingModel {
   double thread_at_contact(double y_mm, double z_mm, double b_deg) const {
     const Vec a = axis();
     const Vec wy = cross(a, {-1.0, 0.0, 0.0});
-    const double guess = -b_deg * kRad;
+    const double guess = -b_deg * kRadPerDeg;
     return bisect([&](double u) { return dot(sub(thread(u, y_mm, z_mm, b_deg), centre(z_mm)), wy); }, guess - 1.0,
                   guess + 1.0);
   }
 
   // Tooth space 0 of the gear turned by C, at height z: a right-hand helix turns +C as z rises.
   Vec tooth(double z_mm, double c_deg) const {
-    const double angle = c_deg * kRad + hg_ * z_mm * std::tan(beta_) / r2_;
+    const double angle = c_deg * kRadPerDeg + hg_ * z_mm * std::tan(beta_) / r2_;
     return {r2_ * std::cos(angle), r2_ * std::sin(angle), z_mm};
   }
 

@@ -1,6 +1,7 @@
 // Tests of the inspection figures: velocity and acceleration error and their noise, dial
 // runout and roundness of the base circle, on error tables whose answer is known.
 #include "compensation/inspection.h"
+#include "tests/support/angles.h"
 
 #include <cmath>
 #include <functional>
@@ -14,11 +15,11 @@
 namespace gaugeloop {
 namespace {
 
+using testing::kRadPerDeg;
+
 using ::testing::HasSubstr;
 
-constexpr double kRad = std::numbers::pi / 180.0;
-
-DegreeTable table_of(const std::function<double(double)>& f_of_deg) {
+DegreeTable table_of_fn(const std::function<double(double)>& f_of_deg) {
   DegreeTable t{};
   for (int d = 0; d < 360; ++d) t[static_cast<size_t>(d)] = f_of_deg(d);
   return t;
@@ -28,31 +29,31 @@ DegreeTable table_of(const std::function<double(double)>& f_of_deg) {
 // FFT's rounding: 1e-9 of the figure is far above it and far below any wrong factor.
 TEST(InspectionDerivatives, ThirdHarmonicGivesItsVelocityAndAcceleration) {
   const double a_um = 4.0;
-  const DegreeTable error = table_of([&](double d) { return 1.5 + a_um * std::sin(3.0 * d * kRad); });
+  const DegreeTable error = table_of_fn([&](double d) { return 1.5 + a_um * std::sin(3.0 * d * kRadPerDeg); });
   const Result<ErrorDerivatives> r = error_derivatives(error);
   ASSERT_TRUE(r.ok()) << r.error().message;
-  const double v_max = 3.0 * a_um * kRad / 1000.0;           // mm/deg, at 0 deg
-  const double acc_max = 9.0 * a_um * kRad * kRad / 1000.0;  // mm/deg^2, at 30 deg
+  const double v_max = 3.0 * a_um * kRadPerDeg / 1000.0;                 // mm/deg, at 0 deg
+  const double acc_max = 9.0 * a_um * kRadPerDeg * kRadPerDeg / 1000.0;  // mm/deg^2, at 30 deg
   EXPECT_NEAR(r->max_abs_velocity_error_mm_per_deg, v_max, 1e-9 * v_max);
   EXPECT_NEAR(r->max_abs_acceleration_error_mm_per_deg2, acc_max, 1e-9 * acc_max);
   // The extremes repeat every 60 degrees; rounding picks which is reported.
   EXPECT_EQ(r->max_velocity_error_deg % 60, 0);
   EXPECT_EQ(r->max_acceleration_error_deg % 60, 30);
   for (size_t d = 0; d < 360; ++d) {
-    const double theta = static_cast<double>(d) * kRad;
+    const double theta = static_cast<double>(d) * kRadPerDeg;
     EXPECT_NEAR(r->velocity_error_mm_per_deg[d], v_max * std::cos(3.0 * theta), 1e-9 * v_max) << d;
     EXPECT_NEAR(r->acceleration_error_mm_per_deg2[d], -acc_max * std::sin(3.0 * theta), 1e-9 * acc_max) << d;
   }
 }
 
 TEST(InspectionDerivatives, HarmonicsAboveTheCutoffAreFilteredOut) {
-  const DegreeTable error = table_of([](double d) { return 2.0 * std::sin(40.0 * d * kRad); });
+  const DegreeTable error = table_of_fn([](double d) { return 2.0 * std::sin(40.0 * d * kRadPerDeg); });
   const Result<ErrorDerivatives> default_cut = error_derivatives(error);
   ASSERT_TRUE(default_cut.ok());
   EXPECT_LT(default_cut->max_abs_velocity_error_mm_per_deg, 1e-15);
   const Result<ErrorDerivatives> wide = error_derivatives(error, InspectionSettings{.max_harmonic = 40});
   ASSERT_TRUE(wide.ok());
-  const double v_max = 40.0 * 2.0 * kRad / 1000.0;  // at 0 deg, where cos(40 theta) = 1
+  const double v_max = 40.0 * 2.0 * kRadPerDeg / 1000.0;  // at 0 deg, where cos(40 theta) = 1
   EXPECT_NEAR(wide->max_abs_velocity_error_mm_per_deg, v_max, 1e-9 * v_max);
 }
 
@@ -119,32 +120,32 @@ TEST(InspectionDerivatives, NoiseFigureFollowsTheCutoffAndRefusesBadInput) {
 TEST(InspectionBaseCircle, DialRunoutOfAnEccentricityOverAWindow) {
   const double e_um = 2.5;
   const AnalysisSettings window{.base_circle_center_deg = 180.0, .base_circle_half_width_deg = 30.0};
-  const double w = 30.0 * kRad;
+  const double w = 30.0 * kRadPerDeg;
   // High point at the window centre: from e at the centre down to e cos(w) at the ends.
-  const Result<BaseCircleInspection> centred =
-      inspect_base_circle(table_of([&](double d) { return 0.7 + e_um * std::cos((d - 180.0) * kRad); }), window);
+  const Result<BaseCircleInspection> centred = inspect_base_circle(
+      table_of_fn([&](double d) { return 0.7 + e_um * std::cos((d - 180.0) * kRadPerDeg); }), window);
   ASSERT_TRUE(centred.ok()) << centred.error().message;
   EXPECT_NEAR(centred->dial_runout_um, e_um * (1.0 - std::cos(w)), 1e-9);
   EXPECT_EQ(centred->degrees_used, 61);
   // High point 90 degrees away: the slope of the eccentricity across the window, 2 e sin(w).
   const Result<BaseCircleInspection> across =
-      inspect_base_circle(table_of([&](double d) { return e_um * std::cos((d - 270.0) * kRad); }), window);
+      inspect_base_circle(table_of_fn([&](double d) { return e_um * std::cos((d - 270.0) * kRadPerDeg); }), window);
   ASSERT_TRUE(across.ok());
   EXPECT_NEAR(across->dial_runout_um, 2.0 * e_um * std::sin(w), 1e-9);
   // A window that wraps through 0 deg.
   const AnalysisSettings wrapped{.base_circle_center_deg = 0.0, .base_circle_half_width_deg = 40.0};
   const Result<BaseCircleInspection> wraps =
-      inspect_base_circle(table_of([&](double d) { return e_um * std::cos((d - 90.0) * kRad); }), wrapped);
+      inspect_base_circle(table_of_fn([&](double d) { return e_um * std::cos((d - 90.0) * kRadPerDeg); }), wrapped);
   ASSERT_TRUE(wraps.ok());
-  EXPECT_NEAR(wraps->dial_runout_um, 2.0 * e_um * std::sin(40.0 * kRad), 1e-9);
+  EXPECT_NEAR(wraps->dial_runout_um, 2.0 * e_um * std::sin(40.0 * kRadPerDeg), 1e-9);
   EXPECT_EQ(wraps->degrees_used, 81);
 }
 
 // The least-squares fit holds the mean and the eccentricity exactly: nothing is left.
 TEST(InspectionBaseCircle, RoundnessOfAnEccentricCircleIsZero) {
   const AnalysisSettings window{.base_circle_center_deg = 180.0, .base_circle_half_width_deg = 30.0};
-  const Result<BaseCircleInspection> r =
-      inspect_base_circle(table_of([](double d) { return -1.2 + 3.0 * std::cos((d - 200.0) * kRad); }), window);
+  const Result<BaseCircleInspection> r = inspect_base_circle(
+      table_of_fn([](double d) { return -1.2 + 3.0 * std::cos((d - 200.0) * kRadPerDeg); }), window);
   ASSERT_TRUE(r.ok());
   EXPECT_GT(r->dial_runout_um, 0.5);
   EXPECT_LT(r->roundness_um, 1e-9);
@@ -155,9 +156,11 @@ TEST(InspectionBaseCircle, RoundnessOfAnEccentricCircleIsZero) {
 TEST(InspectionBaseCircle, RoundnessOfAThirdHarmonicIsItsPeakToValley) {
   const double a_um = 1.5;
   const AnalysisSettings window{.base_circle_center_deg = 180.0, .base_circle_half_width_deg = 179.0};
-  const Result<BaseCircleInspection> r = inspect_base_circle(
-      table_of([&](double d) { return 0.4 + a_um * std::sin(3.0 * d * kRad) + 2.0 * std::cos((d - 60.0) * kRad); }),
-      window);
+  const Result<BaseCircleInspection> r = inspect_base_circle(table_of_fn([&](double d) {
+                                                               return 0.4 + a_um * std::sin(3.0 * d * kRadPerDeg) +
+                                                                      2.0 * std::cos((d - 60.0) * kRadPerDeg);
+                                                             }),
+                                                             window);
   ASSERT_TRUE(r.ok());
   EXPECT_EQ(r->degrees_used, 359);
   EXPECT_NEAR(r->roundness_um, 2.0 * a_um, 1e-9);

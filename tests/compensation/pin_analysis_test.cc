@@ -15,13 +15,14 @@
 
 #include "compensation/pin_kinematics.h"
 #include "core/tolerance.h"
+#include "tests/support/angles.h"
 
 namespace gaugeloop {
 namespace {
 
-using ::testing::HasSubstr;
+using testing::kRadPerDeg;
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+using ::testing::HasSubstr;
 
 // A pin as ground, in the pin frame: radius error a0, centre moved a1 along the crank radius
 // and b1 across it, ovality and three lobes. What the gauge reads at pin-frame angle psi (um).

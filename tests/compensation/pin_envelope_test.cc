@@ -16,7 +16,7 @@ namespace {
 constexpr double kStepDeg = 0.1;
 constexpr int kRows = 3600;
 
-PinGeometry sample_pin(PinMode mode, double pin_angle_deg) {
+PinGeometry envelope_pin(PinMode mode, double pin_angle_deg) {
   PinGeometry pin;  // R 45, r 25, rw 300
   pin.mode = mode;
   pin.pin_angle_deg = pin_angle_deg;
@@ -47,7 +47,7 @@ class PinEnvelopeRoundTrip : public ::testing::TestWithParam<std::tuple<PinMode,
 // The figure is 1e-4 mm; the parabola refinement keeps the 0.1 deg grid far below it.
 TEST_P(PinEnvelopeRoundTrip, DesignPathGrindsARoundPinOfRadiusR) {
   const auto [mode, angle_deg] = GetParam();
-  const PinGeometry pin = sample_pin(mode, angle_deg);
+  const PinGeometry pin = envelope_pin(mode, angle_deg);
   const Path p = design_path(pin, pin);
   Result<DegreeTable> error = ground_pin_radius_error_mm(pin, kStepDeg, p.x_mm, p.y_mm);
   ASSERT_TRUE(error) << error.error().message;
@@ -66,7 +66,7 @@ class PinEnvelopeOtherPin : public ::testing::TestWithParam<PinMode> {};
 // design path is the design formula with throw |R + dx, dy| and the angle turned by
 // atan2(dy, R + dx). Its support function about the nominal centre is r + dr + (dx, dy).u(psi).
 TEST_P(PinEnvelopeOtherPin, RadiusErrorIsTheOtherPinsOffsetCircle) {
-  const PinGeometry pin = sample_pin(GetParam(), 37.0);
+  const PinGeometry pin = envelope_pin(GetParam(), 37.0);
   const double dr_mm = 0.012, dx_mm = 0.008, dy_mm = -0.005;
   PinGeometry other = pin;
   other.pin_radius_mm += dr_mm;
@@ -85,7 +85,7 @@ TEST_P(PinEnvelopeOtherPin, RadiusErrorIsTheOtherPinsOffsetCircle) {
 INSTANTIATE_TEST_SUITE_P(BothModes, PinEnvelopeOtherPin, ::testing::Values(PinMode::kCX, PinMode::kCXY));
 
 TEST(PinEnvelope, AnyAngleAgreesWithTheWholeDegrees) {
-  const PinGeometry pin = sample_pin(PinMode::kCX, 0.0);
+  const PinGeometry pin = envelope_pin(PinMode::kCX, 0.0);
   Path p = design_path(pin, pin);
   for (int k = 0; k < kRows; ++k)
     p.x_mm[static_cast<size_t>(k)] += 0.003 * std::cos(3.0 * k * kStepDeg * std::numbers::pi / 180.0);
@@ -99,7 +99,7 @@ TEST(PinEnvelope, AnyAngleAgreesWithTheWholeDegrees) {
 }
 
 TEST(PinEnvelope, RefusesABadPath) {
-  const PinGeometry pin = sample_pin(PinMode::kCX, 0.0);
+  const PinGeometry pin = envelope_pin(PinMode::kCX, 0.0);
   Path p = design_path(pin, pin);
   EXPECT_FALSE(ground_pin_radius_error_mm(pin, 0.7, p.x_mm, p.y_mm));  // does not divide 360
   EXPECT_FALSE(ground_pin_radius_error_mm(pin, 0.2, p.x_mm, p.y_mm));  // wrong row count

@@ -11,13 +11,14 @@
 #include "compensation/pin_path.h"
 #include "compensation/wheel_path.h"
 #include "test_lobes.h"
+#include "tests/support/angles.h"
 
 namespace gaugeloop {
 namespace {
 
-constexpr double kRad = std::numbers::pi / 180.0;
+using testing::kRadPerDeg;
 
-PinGeometry sample_pin(PinMode mode, double pin_angle_deg = 0.0) {
+PinGeometry kinematics_pin(PinMode mode, double pin_angle_deg = 0.0) {
   PinGeometry pin;  // R 45, r 25, rw 300: the shop's sample pin
   pin.mode = mode;
   pin.pin_angle_deg = pin_angle_deg;
@@ -26,13 +27,13 @@ PinGeometry sample_pin(PinMode mode, double pin_angle_deg = 0.0) {
 
 // The BRIEF's eccentric disc: X = e cos psi + sqrt((rc + rw)^2 - e^2 sin^2 psi) - rw - (rc - e).
 double disc_x_mm(double e, double rc, double rw, double psi_deg) {
-  const double s = e * std::sin(psi_deg * kRad);
-  return e * std::cos(psi_deg * kRad) + std::sqrt((rc + rw) * (rc + rw) - s * s) - rw - (rc - e);
+  const double s = e * std::sin(psi_deg * kRadPerDeg);
+  return e * std::cos(psi_deg * kRadPerDeg) + std::sqrt((rc + rw) * (rc + rw) - s * s) - rw - (rc - e);
 }
 
 TEST(PinKinematics, CxMatchesTheEccentricDiscClosedForm) {
   for (double pin_angle : {0.0, 72.5}) {
-    const PinGeometry pin = sample_pin(PinMode::kCX, pin_angle);
+    const PinGeometry pin = kinematics_pin(PinMode::kCX, pin_angle);
     double worst = 0.0;
     for (int i = 0; i < 3600; ++i) {
       const double c = 0.1 * i;
@@ -44,7 +45,7 @@ TEST(PinKinematics, CxMatchesTheEccentricDiscClosedForm) {
     EXPECT_LT(worst, 1e-11) << "pin_angle " << pin_angle;
   }
   // The infeed's zero: X = 0 with the pin farthest from the wheel, 2R nearest.
-  const PinGeometry pin = sample_pin(PinMode::kCX);
+  const PinGeometry pin = kinematics_pin(PinMode::kCX);
   EXPECT_NEAR(design_pin_pose(pin, 180.0).x_mm, 0.0, 1e-12);
   EXPECT_NEAR(design_pin_pose(pin, 0.0).x_mm, 90.0, 1e-12);
 }
@@ -61,14 +62,15 @@ TEST(PinKinematics, CxMatchesTheCamKinematicsOfTheEccentricDiscLobe) {
   const double rc = 25.0;
   const double rw = 300.0;
   const double pin_angle = 37.5;
-  PinGeometry pin = sample_pin(PinMode::kCX, pin_angle);
+  PinGeometry pin = kinematics_pin(PinMode::kCX, pin_angle);
   pin.throw_mm = e;
   pin.pin_radius_mm = rc;
   pin.wheel_radius_mm = rw;
   Part part = testing::make_part(FollowerKind::kFlat, rc - e, 0.0, rw);
   part.rotation_sense = -1;
   part.c_offset_deg = -pin_angle;
-  const PeriodicSpline lift = testing::spline_sampled([&](double b) { return e * (1.0 + std::cos(b * kRad)); }, 0.1);
+  const PeriodicSpline lift =
+      testing::spline_sampled([&](double b) { return e * (1.0 + std::cos(b * kRadPerDeg)); }, 0.1);
   Result<MachinePath> cam = compute_machine_path(lift, part, 0.5);
   ASSERT_TRUE(cam.ok()) << cam.error().message;
   Result<PinPath> path = compute_pin_path(pin, 0.5);
@@ -89,7 +91,7 @@ TEST(PinKinematics, CxMatchesTheCamKinematicsOfTheEccentricDiscLobe) {
 
 TEST(PinKinematics, DpsiDcIsTheSlopeOfTheContactAngle) {
   for (PinMode mode : {PinMode::kCX, PinMode::kCXY}) {
-    const PinGeometry pin = sample_pin(mode, 15.0);
+    const PinGeometry pin = kinematics_pin(mode, 15.0);
     const double h = 1e-3;
     double worst = 0.0;
     for (int i = 0; i < 720; ++i) {
@@ -118,30 +120,30 @@ double speed_ratio_over_a_turn(const PinGeometry& pin) {
 TEST(PinKinematics, GrindingPointSpeedVariesByTheIssuesRatioInCxAndNotInCxy) {
   // (r + rw + R) / (r + rw - R) = 370 / 280 = 1.32143: the extremes at t = 0 and 180, both
   // on the 0.1 deg grid, so only rounding separates them.
-  EXPECT_NEAR(speed_ratio_over_a_turn(sample_pin(PinMode::kCX)), 370.0 / 280.0, 1e-9);
-  EXPECT_NEAR(speed_ratio_over_a_turn(sample_pin(PinMode::kCX)), 1.3214, 5e-5);
-  EXPECT_NEAR(speed_ratio_over_a_turn(sample_pin(PinMode::kCXY)), 1.0, 1e-12);
+  EXPECT_NEAR(speed_ratio_over_a_turn(kinematics_pin(PinMode::kCX)), 370.0 / 280.0, 1e-9);
+  EXPECT_NEAR(speed_ratio_over_a_turn(kinematics_pin(PinMode::kCX)), 1.3214, 5e-5);
+  EXPECT_NEAR(speed_ratio_over_a_turn(kinematics_pin(PinMode::kCXY)), 1.0, 1e-12);
   // C-X-Y at 60 rpm: the pin's circumference once a turn, 2 pi r 60 mm/min.
-  EXPECT_NEAR(pin_grinding_point_speed_mm_per_min(sample_pin(PinMode::kCXY), 33.0, 60.0),
+  EXPECT_NEAR(pin_grinding_point_speed_mm_per_min(kinematics_pin(PinMode::kCXY), 33.0, 60.0),
               2.0 * std::numbers::pi * 25.0 * 60.0, 1e-9);
 }
 
 TEST(PinKinematics, WheelTouchesThePinAlongTheNormalInBothModes) {
   for (PinMode mode : {PinMode::kCX, PinMode::kCXY}) {
-    const PinGeometry pin = sample_pin(mode, -20.0);
+    const PinGeometry pin = kinematics_pin(mode, -20.0);
     const double reach = pin.pin_radius_mm + pin.wheel_radius_mm;
     double worst_distance = 0.0;
     double worst_normal = 0.0;
     for (int i = 0; i < 3600; ++i) {
       const double c = 0.1 * i;
       const PinPose pose = design_pin_pose(pin, c);
-      const double t = crank_angle_deg(pin, c) * kRad;
+      const double t = crank_angle_deg(pin, c) * kRadPerDeg;
       // core/pin.h: the wheel centre at X + (r + rw - R) on X (and Y in C-X-Y).
       const double dx = pose.x_mm + reach - pin.throw_mm - pin.throw_mm * std::cos(t);
       const double dy = pose.y_mm - pin.throw_mm * std::sin(t);
       worst_distance = std::max(worst_distance, std::abs(std::hypot(dx, dy) - reach));
-      const double phi = mode == PinMode::kCXY ? 0.0 : -std::asin(pin.throw_mm * std::sin(t) / reach) / kRad;
-      worst_normal = std::max(worst_normal, std::abs(std::atan2(dy, dx) / kRad - pose.normal_deg));
+      const double phi = mode == PinMode::kCXY ? 0.0 : -std::asin(pin.throw_mm * std::sin(t) / reach) / kRadPerDeg;
+      worst_normal = std::max(worst_normal, std::abs(std::atan2(dy, dx) / kRadPerDeg - pose.normal_deg));
       worst_normal = std::max(worst_normal, std::abs(pose.normal_deg - phi));
       if (mode == PinMode::kCXY) {
         EXPECT_EQ(pose.normal_deg, 0.0);

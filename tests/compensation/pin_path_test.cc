@@ -11,15 +11,16 @@
 #include <gtest/gtest.h>
 
 #include "compensation/pin_kinematics.h"
+#include "tests/support/angles.h"
 
 namespace gaugeloop {
 namespace {
 
+using testing::kRadPerDeg;
+
 using ::testing::HasSubstr;
 
-constexpr double kRad = std::numbers::pi / 180.0;
-
-PinGeometry sample_pin(PinMode mode, double pin_angle_deg = 20.0) {
+PinGeometry path_pin(PinMode mode, double pin_angle_deg = 20.0) {
   PinGeometry pin;  // R 45, r 25, rw 300
   pin.mode = mode;
   pin.pin_angle_deg = pin_angle_deg;
@@ -62,7 +63,7 @@ constexpr double kSecondTolerance = 2e-8;
 
 TEST(PinPath, DerivativesMatchCentralDifferencesInBothModes) {
   for (PinMode mode : {PinMode::kCX, PinMode::kCXY}) {
-    const PinGeometry pin = sample_pin(mode);
+    const PinGeometry pin = path_pin(mode);
     const PinPath path = path_of(pin, 0.01);
     ASSERT_EQ(path.size(), 36000u);
     const DerivativeGap gx = gap(path.x_mm, path.dx_dc_mm_per_deg, path.d2x_dc2_mm_per_deg2, 0.01);
@@ -81,18 +82,18 @@ TEST(PinPath, DerivativesMatchCentralDifferencesInBothModes) {
     }
   }
   // C-X leaves Y alone.
-  const PinPath cx = path_of(sample_pin(PinMode::kCX), 1.0);
+  const PinPath cx = path_of(path_pin(PinMode::kCX), 1.0);
   EXPECT_TRUE(std::all_of(cx.y_mm.begin(), cx.y_mm.end(), [](double y) { return y == 0.0; }));
 }
 
 TEST(PinPath, RefusesAStepThatDoesNotMakeATurnAndABadPin) {
   for (double step : {0.0, -0.5, 0.7, 2.0, std::numeric_limits<double>::quiet_NaN()}) {
-    Result<PinPath> p = compute_pin_path(sample_pin(PinMode::kCX), step);
+    Result<PinPath> p = compute_pin_path(path_pin(PinMode::kCX), step);
     ASSERT_FALSE(p.ok()) << step;
     EXPECT_EQ(p.error().code, ErrorCode::kInvalidInput);
     EXPECT_THAT(p.error().message, HasSubstr("c_step_deg"));
   }
-  PinGeometry pin = sample_pin(PinMode::kCX);
+  PinGeometry pin = path_pin(PinMode::kCX);
   pin.throw_mm = 400.0;
   Result<PinPath> p = compute_pin_path(pin, 1.0);
   ASSERT_FALSE(p.ok());
@@ -106,7 +107,7 @@ TEST(SplitAlongDirection, TheMovesProjectionOnTheDirectionIsTheDisplacement) {
       Result<std::vector<double>> u = split_along_direction(0.037, n, axes);
       ASSERT_TRUE(u.ok()) << u.error().message;
       double projection = 0.0;
-      for (size_t k = 0; k < axes.size(); ++k) projection += (*u)[k] * std::cos((axes[k] - n) * kRad);
+      for (size_t k = 0; k < axes.size(); ++k) projection += (*u)[k] * std::cos((axes[k] - n) * kRadPerDeg);
       EXPECT_NEAR(projection, 0.037, 1e-15) << n;  // rounding of a few terms of 0.04 mm
     }
   }
@@ -117,12 +118,12 @@ TEST(SplitAlongDirection, XAndYGiveTheDirectionCosinesAndXAloneTheSecant) {
   const double n = -8.0;
   Result<std::vector<double>> xy = split_along_direction(d, n, {0.0, 90.0});
   ASSERT_TRUE(xy.ok());
-  EXPECT_NEAR((*xy)[0], d * std::cos(n * kRad), 1e-16);
-  EXPECT_NEAR((*xy)[1], d * std::sin(n * kRad), 1e-16);
+  EXPECT_NEAR((*xy)[0], d * std::cos(n * kRadPerDeg), 1e-16);
+  EXPECT_NEAR((*xy)[1], d * std::sin(n * kRadPerDeg), 1e-16);
   Result<std::vector<double>> x = split_along_direction(d, n, {0.0});
   ASSERT_TRUE(x.ok());
   ASSERT_EQ(x->size(), 1u);
-  EXPECT_NEAR((*x)[0], d / std::cos(n * kRad), 1e-16);
+  EXPECT_NEAR((*x)[0], d / std::cos(n * kRadPerDeg), 1e-16);
 }
 
 TEST(SplitAlongDirection, RefusesADirectionNoAxisCanMoveAlong) {
@@ -142,14 +143,14 @@ PinPath corrected(const PinGeometry& pin, const DegreeTable& c_um, double step_d
 
 // The distance from the wheel centre to the pin's nominal centre at row k (core/pin.h).
 double centre_distance_mm(const PinGeometry& pin, const PinPath& path, size_t k) {
-  const double t = crank_angle_deg(pin, path.c_deg(k)) * kRad;
+  const double t = crank_angle_deg(pin, path.c_deg(k)) * kRadPerDeg;
   const double dx = path.x_mm[k] + pin.pin_radius_mm + pin.wheel_radius_mm - pin.throw_mm - pin.throw_mm * std::cos(t);
   return std::hypot(dx, path.y_mm[k] - pin.throw_mm * std::sin(t));
 }
 
 TEST(CorrectedPinPath, ZeroCorrectionIsTheDesignBitForBit) {
   for (PinMode mode : {PinMode::kCX, PinMode::kCXY}) {
-    const PinGeometry pin = sample_pin(mode);
+    const PinGeometry pin = path_pin(mode);
     const PinPath design = path_of(pin, 0.1);
     const PinPath moved = corrected(pin, DegreeTable{}, 0.1);
     EXPECT_EQ(moved.x_mm, design.x_mm);
@@ -165,7 +166,7 @@ TEST(CorrectedPinPath, ZeroCorrectionIsTheDesignBitForBit) {
 
 TEST(CorrectedPinPath, AConstantCorrectionBringsTheWheelInByItInBothModes) {
   for (PinMode mode : {PinMode::kCX, PinMode::kCXY}) {
-    const PinGeometry pin = sample_pin(mode);
+    const PinGeometry pin = path_pin(mode);
     const PinPath design = path_of(pin, 0.1);
     for (double c_um : {1.0, 20.0}) {
       DegreeTable table;
@@ -191,22 +192,22 @@ TEST(CorrectedPinPath, AConstantCorrectionBringsTheWheelInByItInBothModes) {
 
 DegreeTable cos2(double amplitude_um) {
   DegreeTable t;
-  for (size_t i = 0; i < t.size(); ++i) t[i] = amplitude_um * std::cos(2.0 * static_cast<double>(i) * kRad);
+  for (size_t i = 0; i < t.size(); ++i) t[i] = amplitude_um * std::cos(2.0 * static_cast<double>(i) * kRadPerDeg);
   return t;
 }
 
 TEST(CorrectedPinPath, TheMoveAlongTheNormalIsTheCorrectionAtTheContactAngle) {
   const double amplitude_um = 20.0;
   for (PinMode mode : {PinMode::kCX, PinMode::kCXY}) {
-    const PinGeometry pin = sample_pin(mode);
+    const PinGeometry pin = path_pin(mode);
     const PinPath design = path_of(pin, 0.1);
     const PinPath moved = corrected(pin, cos2(amplitude_um), 0.1);
     double worst = 0.0;
     for (size_t k = 0; k < design.size(); ++k) {
-      const double n = design.normal_deg[k] * kRad;
+      const double n = design.normal_deg[k] * kRadPerDeg;
       const double along =
           (moved.x_mm[k] - design.x_mm[k]) * std::cos(n) + (moved.y_mm[k] - design.y_mm[k]) * std::sin(n);
-      const double want = -amplitude_um * std::cos(2.0 * design.contact_psi_deg[k] * kRad) / 1000.0;
+      const double want = -amplitude_um * std::cos(2.0 * design.contact_psi_deg[k] * kRadPerDeg) / 1000.0;
       worst = std::max(worst, std::abs(along - want));
     }
     // The whole-degree periodic spline of A cos 2 psi is off by at most ~5/384 h^4 |c''''|
@@ -218,9 +219,9 @@ TEST(CorrectedPinPath, TheMoveAlongTheNormalIsTheCorrectionAtTheContactAngle) {
 
 TEST(CorrectedPinPath, DerivativesMatchCentralDifferencesInBothModes) {
   for (PinMode mode : {PinMode::kCX, PinMode::kCXY}) {
-    const PinGeometry pin = sample_pin(mode);
+    const PinGeometry pin = path_pin(mode);
     DegreeTable c = cos2(20.0);
-    for (size_t i = 0; i < c.size(); ++i) c[i] += 5.0 * std::sin(3.0 * static_cast<double>(i) * kRad) + 3.0;
+    for (size_t i = 0; i < c.size(); ++i) c[i] += 5.0 * std::sin(3.0 * static_cast<double>(i) * kRadPerDeg) + 3.0;
     const PinPath moved = corrected(pin, c, 0.01);
     const DerivativeGap gx = gap(moved.x_mm, moved.dx_dc_mm_per_deg, moved.d2x_dc2_mm_per_deg2, 0.01);
     const DerivativeGap gy = gap(moved.y_mm, moved.dy_dc_mm_per_deg, moved.d2y_dc2_mm_per_deg2, 0.01);
@@ -243,14 +244,14 @@ TEST(CorrectedPinPath, DerivativesMatchCentralDifferencesInBothModes) {
 TEST(CorrectedPinPath, RefusesANonFiniteCorrection) {
   DegreeTable c{};
   c[123] = std::numeric_limits<double>::infinity();
-  Result<PinPath> p = corrected_pin_path(sample_pin(PinMode::kCX), c, 0.1);
+  Result<PinPath> p = corrected_pin_path(path_pin(PinMode::kCX), c, 0.1);
   ASSERT_FALSE(p.ok());
   EXPECT_EQ(p.error().code, ErrorCode::kInvalidInput);
   EXPECT_THAT(p.error().message, HasSubstr("pin degree 123"));
 }
 
 TEST(PinWorkSpeed, CxHoldsTheTargetAndTakesLongerThanTheBaseSpeed) {
-  const PinGeometry pin = sample_pin(PinMode::kCX);
+  const PinGeometry pin = path_pin(PinMode::kCX);
   const PinPath path = path_of(pin, 0.1);
   WorkSpeedSettings s;  // 60 rpm base, 2000 mm/min target, 1000 deg/s^2, 300 mm/s, 20000 mm/s^2
   const std::vector<double> at_base = pin_grinding_point_speed_mm_per_min(path, pin, s.base_speed_rpm);
@@ -277,7 +278,7 @@ TEST(PinWorkSpeed, CxHoldsTheTargetAndTakesLongerThanTheBaseSpeed) {
 }
 
 TEST(PinWorkSpeed, CxyProgramIsConstant) {
-  const PinGeometry pin = sample_pin(PinMode::kCXY);
+  const PinGeometry pin = path_pin(PinMode::kCXY);
   const PinPath path = path_of(pin, 0.1);
   WorkSpeedSettings s;
   Result<WorkSpeedPlan> plan = plan_pin_work_speed(path, pin, s);
@@ -292,7 +293,7 @@ TEST(PinWorkSpeed, CxyProgramIsConstant) {
 TEST(PinWorkSpeed, TheSlideLimitsOfYBindInCxy) {
   // C-X-Y moves Y as much as X: a Y speed limit the slides share slows C where Y runs
   // fastest (t = 0 and 180), which a planner that only looked at X would miss.
-  const PinGeometry pin = sample_pin(PinMode::kCXY, 0.0);
+  const PinGeometry pin = path_pin(PinMode::kCXY, 0.0);
   const PinPath path = path_of(pin, 0.1);
   WorkSpeedSettings s;
   s.lobe_speed_mm_per_min = 1e5;  // no target below the base speed
@@ -301,13 +302,13 @@ TEST(PinWorkSpeed, TheSlideLimitsOfYBindInCxy) {
   Result<WorkSpeedPlan> plan = plan_pin_work_speed(path, pin, s);
   ASSERT_TRUE(plan.ok()) << plan.error().message;
   // |Y'| = R pi/180 mm/deg at t = 0, where X' = 0: omega <= 100 / 0.785 = 127 deg/s.
-  const double w_limit = 100.0 / (pin.throw_mm * kRad);
+  const double w_limit = 100.0 / (pin.throw_mm * kRadPerDeg);
   EXPECT_NEAR(6.0 * plan->program.speed_rpm[0], w_limit, 1e-6);
   EXPECT_LE(plan->largest_x_velocity_mm_per_s, 100.0 * (1.0 + 1e-9));
 }
 
 TEST(PinWorkSpeed, RefusesBadSettingsAndABadPath) {
-  const PinGeometry pin = sample_pin(PinMode::kCX);
+  const PinGeometry pin = path_pin(PinMode::kCX);
   WorkSpeedSettings s;
   s.base_speed_rpm = -1.0;
   EXPECT_FALSE(plan_pin_work_speed(path_of(pin, 1.0), pin, s).ok());

@@ -16,10 +16,9 @@
 #include "core/lift_table.h"
 #include "core/part.h"
 #include "core/run.h"
+#include "tests/support/angles.h"
 
 namespace gaugeloop::testing {
-
-inline constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
 // Knots at 0, step, 2 step, ... < 360 with values f(angle in degrees).
 inline PeriodicSpline spline_sampled(const std::function<double(double)>& f_of_deg, double step_deg) {

@@ -9,15 +9,16 @@
 
 #include "compensation/wheel_path.h"
 #include "test_lobes.h"
+#include "tests/support/angles.h"
 
 namespace gaugeloop {
 namespace {
 
+using testing::kPi;
+
 using testing::Disc;
 using ::testing::HasSubstr;
 using testing::make_part;
-
-constexpr double kPi = std::numbers::pi;
 
 MachinePath intake_path(double step_deg) {
   Result<MachinePath> p = compute_machine_path(testing::spline_of(testing::example_table("intake_flat.csv")),

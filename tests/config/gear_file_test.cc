@@ -31,10 +31,10 @@ std::string gear_part(const std::string& gear_extra = {},
          gear_extra + "[gear.worm]\n" + worm + "[gear.stroke]\n" + stroke;
 }
 
-Result<GearPartFile> parse(const std::string& text) { return parse_gear_part_toml(text, "gear.toml"); }
+Result<GearPartFile> parse_gear(const std::string& text) { return parse_gear_part_toml(text, "gear.toml"); }
 
 TEST(GearPartFile, ReadsEveryKey) {
-  Result<GearPartFile> g = parse(gear_part());
+  Result<GearPartFile> g = parse_gear(gear_part());
   ASSERT_TRUE(g.ok()) << g.error().message;
   EXPECT_EQ(g->name, "gear_71");
   EXPECT_EQ(g->nc_program, "GEAR_71");
@@ -62,26 +62,26 @@ TEST(GearPartFile, TheExampleIsThePapersGear) {
 }
 
 TEST(GearPartFile, EachRefusalNamesTheFileLineAndKey) {
-  EXPECT_TRUE(refused(parse(gear_part("teeth_count = 3\n")), "gear.toml:10: key `gear.teeth_count`"));
+  EXPECT_TRUE(refused(parse_gear(gear_part("teeth_count = 3\n")), "gear.toml:10: key `gear.teeth_count`"));
   EXPECT_TRUE(
-      refused(parse(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\nhand = \"up\"\n")), "gear.worm.hand"));
-  EXPECT_TRUE(refused(parse(gear_part("", "starts = 0\npitch_diameter_mm = 275.0\n")), "gear.worm.starts"));
+      refused(parse_gear(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\nhand = \"up\"\n")), "gear.worm.hand"));
+  EXPECT_TRUE(refused(parse_gear(gear_part("", "starts = 0\npitch_diameter_mm = 275.0\n")), "gear.worm.starts"));
   // The worm's lead angle, given, must be the one its starts and diameter make: named with its line.
-  EXPECT_TRUE(refused(parse(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\nlead_angle_deg = 2.0\n")),
+  EXPECT_TRUE(refused(parse_gear(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\nlead_angle_deg = 2.0\n")),
                       "gear.toml:13: [gear.worm] lead_angle_deg = 2"));
-  EXPECT_TRUE(refused(parse(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\nlead_angle_deg = 2.0\n")),
+  EXPECT_TRUE(refused(parse_gear(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\nlead_angle_deg = 2.0\n")),
                       "disagrees with the 0.4688 deg"));
-  EXPECT_TRUE(
-      refused(parse(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\n", "z_start_mm = 5.0\nz_end_mm = -5.0\n")),
-              "gear.toml:15: [gear.stroke] z_end_mm = -5"));
-  EXPECT_TRUE(refused(parse("name = \"g\"\nnc_program = \"G\"\n[gear]\nnormal_module_mm = 2.0\n"), "gear.teeth"));
-  EXPECT_TRUE(refused(parse("name = \"g\"\nnc_program = \"G\"\n"), "no [gear] section"));
+  EXPECT_TRUE(refused(
+      parse_gear(gear_part("", "starts = 1\npitch_diameter_mm = 275.0\n", "z_start_mm = 5.0\nz_end_mm = -5.0\n")),
+      "gear.toml:15: [gear.stroke] z_end_mm = -5"));
+  EXPECT_TRUE(refused(parse_gear("name = \"g\"\nnc_program = \"G\"\n[gear]\nnormal_module_mm = 2.0\n"), "gear.teeth"));
+  EXPECT_TRUE(refused(parse_gear("name = \"g\"\nnc_program = \"G\"\n"), "no [gear] section"));
   std::string no_worm = gear_part();
   no_worm = no_worm.substr(0, no_worm.find("[gear.worm]")) + "[gear.stroke]\nz_start_mm = 0.0\nz_end_mm = 5.0\n";
-  EXPECT_TRUE(refused(parse(no_worm), "no [gear.worm] section"));
+  EXPECT_TRUE(refused(parse_gear(no_worm), "no [gear.worm] section"));
   std::string bad_program = gear_part();
   bad_program.replace(bad_program.find("\"GEAR_71\""), 9, "\"7GEAR\"");
-  EXPECT_TRUE(refused(parse(bad_program), "gear.toml:2: key `nc_program`"));
+  EXPECT_TRUE(refused(parse_gear(bad_program), "gear.toml:2: key `nc_program`"));
 }
 
 // Measure, demo and nc new read part files as lobes or pins: a gear file is refused there,

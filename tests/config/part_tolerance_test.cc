@@ -30,7 +30,7 @@ std::string part_with(const std::string& tolerance) {
          tolerance;
 }
 
-Result<PartFile> parse(const std::string& text) { return parse_part_toml(text, "part.toml", "/parts"); }
+Result<PartFile> parse_tolerances(const std::string& text) { return parse_part_toml(text, "part.toml", "/parts"); }
 
 void expect_limits(const Limits& l, std::optional<double> lower, std::optional<double> upper, const char* what) {
   EXPECT_EQ(l.lower, lower) << what;
@@ -38,7 +38,7 @@ void expect_limits(const Limits& l, std::optional<double> lower, std::optional<d
 }
 
 TEST(PartTolerance, NoToleranceJudgesNothing) {
-  auto pf = parse(part_with(""));
+  auto pf = parse_tolerances(part_with(""));
   ASSERT_TRUE(pf.ok()) << pf.error().message;
   const LobeTolerances& t = pf->part.tolerances;
   EXPECT_EQ(t.lift_error_reference, LiftErrorReference::kBestFit);
@@ -51,7 +51,7 @@ TEST(PartTolerance, NoToleranceJudgesNothing) {
   EXPECT_TRUE(t.zones.empty());
   EXPECT_EQ(tolerances_settings_text(t), "") << "a part without tolerances keeps the settings it had";
 
-  auto empty = parse(part_with("[tolerance]\n"));
+  auto empty = parse_tolerances(part_with("[tolerance]\n"));
   ASSERT_TRUE(empty.ok()) << empty.error().message;
   EXPECT_EQ(empty->part.tolerances.lift_error_reference, LiftErrorReference::kBestFit) << "the default";
   EXPECT_FALSE(empty->part.tolerances.lift_error_um.any());
@@ -59,27 +59,27 @@ TEST(PartTolerance, NoToleranceJudgesNothing) {
 
 TEST(PartTolerance, ReadsEachFormIntoItsLimits) {
   auto pf =
-      parse(part_with("[tolerance]\n"
-                      "lift_error = \"nominal\"\n"
-                      "lift_error_um = 20\n"                           // an integer is a number too
-                      "velocity_error_mm_per_deg = [-0.001, 0.003]\n"  // asymmetric
-                      "acceleration_error_mm_per_deg2 = 0.0005\n"
-                      "phase_deg = [-0.5, 0.25]\n"
-                      "base_circle_runout_um = 8.0\n"
-                      "roundness_um = 5\n"
-                      "[[tolerance.zone]]\n"
-                      "zone = \"opening_flank\"\n"
-                      "angle_deg = [-70.0, -20.0]\n"
-                      "lift_error_um = 12.0\n"
-                      "[[tolerance.zone]]\n"
-                      "zone = \"base_circle\"\n"
-                      "lift_mm = [0, 0.05]\n"
-                      "lift_error_um = [-5, 10]\n"
-                      "velocity_error_mm_per_deg = 0.001\n"
-                      "acceleration_error_mm_per_deg2 = [-0.0003, 0.0002]\n"
-                      "[[tolerance.zone]]\n"
-                      "zone = \"nose\"\n"
-                      "angle_deg = [170, -170]\n"));  // wraps through 180; no limits of its own
+      parse_tolerances(part_with("[tolerance]\n"
+                                 "lift_error = \"nominal\"\n"
+                                 "lift_error_um = 20\n"                           // an integer is a number too
+                                 "velocity_error_mm_per_deg = [-0.001, 0.003]\n"  // asymmetric
+                                 "acceleration_error_mm_per_deg2 = 0.0005\n"
+                                 "phase_deg = [-0.5, 0.25]\n"
+                                 "base_circle_runout_um = 8.0\n"
+                                 "roundness_um = 5\n"
+                                 "[[tolerance.zone]]\n"
+                                 "zone = \"opening_flank\"\n"
+                                 "angle_deg = [-70.0, -20.0]\n"
+                                 "lift_error_um = 12.0\n"
+                                 "[[tolerance.zone]]\n"
+                                 "zone = \"base_circle\"\n"
+                                 "lift_mm = [0, 0.05]\n"
+                                 "lift_error_um = [-5, 10]\n"
+                                 "velocity_error_mm_per_deg = 0.001\n"
+                                 "acceleration_error_mm_per_deg2 = [-0.0003, 0.0002]\n"
+                                 "[[tolerance.zone]]\n"
+                                 "zone = \"nose\"\n"
+                                 "angle_deg = [170, -170]\n"));  // wraps through 180; no limits of its own
   ASSERT_TRUE(pf.ok()) << pf.error().message;
   const LobeTolerances& t = pf->part.tolerances;
   EXPECT_EQ(t.lift_error_reference, LiftErrorReference::kNominal);
@@ -200,7 +200,7 @@ TEST(PartTolerance, RefusesMistakesNamingFileLineAndKey) {
        "part.toml:16: key `tolerance.zone.zone`: zone `nose` is given twice (first at part.toml:10); one "
        "[[tolerance.zone]] per zone"},
   };
-  for (const Case& c : cases) EXPECT_TRUE(refused(parse(part_with(c.tolerance)), c.expected)) << c.tolerance;
+  for (const Case& c : cases) EXPECT_TRUE(refused(parse_tolerances(part_with(c.tolerance)), c.expected)) << c.tolerance;
 }
 
 // The lead's example of the format, as docs/parts.md shows it, read and written back as
@@ -227,7 +227,7 @@ TEST(PartTolerance, TheDocumentedExampleReadsAndGivesCanonicalSettings) {
       "lift_error_um = 12.0\n"
       "velocity_error_mm_per_deg = 0.001\n"
       "acceleration_error_mm_per_deg2 = 0.0003\n";
-  auto pf = parse(part_with(example));
+  auto pf = parse_tolerances(part_with(example));
   ASSERT_TRUE(pf.ok()) << pf.error().message;
   const std::string expected =
       "tolerance.lift_error = best_fit\n"
@@ -248,30 +248,30 @@ TEST(PartTolerance, TheDocumentedExampleReadsAndGivesCanonicalSettings) {
   // Written another way: keys reordered, the default reference left out, symmetric limits as
   // [lower, upper], zones in the other order. Judged alike, so the same settings.
   auto same =
-      parse(part_with("[[tolerance.zone]]\n"
-                      "zone = \"opening_flank\"\n"
-                      "acceleration_error_mm_per_deg2 = [-0.0003, 0.0003]\n"
-                      "velocity_error_mm_per_deg = 0.001\n"
-                      "lift_error_um = [-12, 12]\n"
-                      "angle_deg = [-70, -20]\n"
-                      "[[tolerance.zone]]\n"
-                      "zone = \"closing_flank\"\n"
-                      "lift_error_um = [-10, 15]\n"
-                      "lift_mm = [0.3, 7.5]\n"
-                      "[tolerance]\n"
-                      "roundness_um = 5\n"
-                      "base_circle_runout_um = 8\n"
-                      "phase_deg = [-0.25, 0.25]\n"
-                      "acceleration_error_mm_per_deg2 = 0.0005\n"
-                      "velocity_error_mm_per_deg = 0.002\n"
-                      "lift_error_um = 20\n"));
+      parse_tolerances(part_with("[[tolerance.zone]]\n"
+                                 "zone = \"opening_flank\"\n"
+                                 "acceleration_error_mm_per_deg2 = [-0.0003, 0.0003]\n"
+                                 "velocity_error_mm_per_deg = 0.001\n"
+                                 "lift_error_um = [-12, 12]\n"
+                                 "angle_deg = [-70, -20]\n"
+                                 "[[tolerance.zone]]\n"
+                                 "zone = \"closing_flank\"\n"
+                                 "lift_error_um = [-10, 15]\n"
+                                 "lift_mm = [0.3, 7.5]\n"
+                                 "[tolerance]\n"
+                                 "roundness_um = 5\n"
+                                 "base_circle_runout_um = 8\n"
+                                 "phase_deg = [-0.25, 0.25]\n"
+                                 "acceleration_error_mm_per_deg2 = 0.0005\n"
+                                 "velocity_error_mm_per_deg = 0.002\n"
+                                 "lift_error_um = 20\n"));
   ASSERT_TRUE(same.ok()) << same.error().message;
   EXPECT_EQ(tolerances_settings_text(same->part.tolerances), expected);
 
   // A change of one limit shows.
   std::string tighter = example;
   tighter.replace(tighter.find("phase_deg = 0.25"), 16, "phase_deg = 0.2");
-  auto changed = parse(part_with(tighter));
+  auto changed = parse_tolerances(part_with(tighter));
   ASSERT_TRUE(changed.ok()) << changed.error().message;
   const std::string text = tolerances_settings_text(changed->part.tolerances);
   EXPECT_NE(text, expected);

@@ -38,11 +38,11 @@ std::string pin_part(const std::string& mode = "c-x", const std::string& extra_t
          extra_pin;
 }
 
-Result<PartFile> parse(const std::string& text) { return parse_part_toml(text, "pin.toml", "/parts"); }
+Result<PartFile> parse_pin(const std::string& text) { return parse_part_toml(text, "pin.toml", "/parts"); }
 
 TEST(PinPartFile, ReadsEveryKeyInBothModes) {
   for (const auto& [name, mode] : {std::pair{"c-x", PinMode::kCX}, std::pair{"c-x-y", PinMode::kCXY}}) {
-    Result<PartFile> pf = parse(pin_part(name));
+    Result<PartFile> pf = parse_pin(pin_part(name));
     ASSERT_TRUE(pf.ok()) << pf.error().message;
     ASSERT_TRUE(pf->pin.has_value());
     const PinGeometry& pin = *pf->pin;
@@ -70,20 +70,20 @@ TEST(PinPartFile, ReadsEveryKeyInBothModes) {
 }
 
 TEST(PinPartFile, AGaugeOffsetAndACxSpeedProgramAreRead) {
-  Result<PartFile> pf = parse(pin_part("c-x", "", "[speed]\nlobe_speed_mm_per_min = 20000.0\n"));
+  Result<PartFile> pf = parse_pin(pin_part("c-x", "", "[speed]\nlobe_speed_mm_per_min = 20000.0\n"));
   ASSERT_TRUE(pf.ok()) << pf.error().message;
   ASSERT_TRUE(pf->speed.has_value());
   EXPECT_EQ(pf->speed->lobe_speed_mm_per_min, 20000.0);
 
   std::string text = pin_part();
   text.insert(text.find("[pin.tolerance]"), "gauge_offset_deg = 90.0\n");
-  Result<PartFile> offset = parse(text);
+  Result<PartFile> offset = parse_pin(text);
   ASSERT_TRUE(offset.ok()) << offset.error().message;
   EXPECT_EQ(offset->pin->gauge_offset_deg, 90.0);
 }
 
 TEST(PinPartFile, ALobeFileHasNoPin) {
-  Result<PartFile> pf = parse(
+  Result<PartFile> pf = parse_pin(
       "name = \"intake\"\nlift_table = \"intake.csv\"\nfollower = \"flat\"\nbase_circle_radius_mm = 18.0\n"
       "wheel_radius_mm = 200.0\nnc_program = \"CAM\"\n");
   ASSERT_TRUE(pf.ok()) << pf.error().message;
@@ -147,25 +147,25 @@ TEST(PinPartFile, RefusesMistakesNamingFileLineAndKey) {
        "so it has no speed program; remove [speed], or grind the pin with mode = \"c-x\""},
       {bad_program, "pin.toml:3: key `nc_program`: `9PIN` is not a valid NC program name"},
   };
-  for (const Case& c : cases) EXPECT_TRUE(refused(parse(c.text), c.expected)) << c.text;
+  for (const Case& c : cases) EXPECT_TRUE(refused(parse_pin(c.text), c.expected)) << c.text;
 }
 
 TEST(PinPartFile, RefusesABadToleranceNamingItsLineAndKey) {
   std::string range = pin_part();
   range.replace(range.find("roundness_um = 4.0"), 18, "roundness_um = [-1.0, 4.0]");
-  EXPECT_TRUE(refused(parse(range),
+  EXPECT_TRUE(refused(parse_pin(range),
                       "pin.toml:11: key `pin.tolerance.roundness_um`: [lower, upper] is not allowed "
                       "here; it has an upper limit only"));
   std::string reversed = pin_part();
   reversed.replace(reversed.find("[-5.0, 8.0]"), 11, "[8.0, -5.0]");
-  EXPECT_TRUE(refused(parse(reversed),
+  EXPECT_TRUE(refused(parse_pin(reversed),
                       "pin.toml:12: key `pin.tolerance.diameter_error_um`: lower limit 8 is not "
                       "below upper limit -5"));
   std::string negative = pin_part();
   negative.replace(negative.find("stroke_error_um = 25.0"), 22, "stroke_error_um = -25.0");
-  EXPECT_TRUE(refused(parse(negative), "pin.toml:13: key `pin.tolerance.stroke_error_um`: -25 is not a tolerance"));
+  EXPECT_TRUE(refused(parse_pin(negative), "pin.toml:13: key `pin.tolerance.stroke_error_um`: -25 is not a tolerance"));
   std::string unknown = pin_part("c-x", "", "lift_error_um = 5.0\n");
-  EXPECT_TRUE(refused(parse(unknown),
+  EXPECT_TRUE(refused(parse_pin(unknown),
                       "pin.toml:15: key `pin.tolerance.lift_error_um`: unknown key; known keys: "
                       "roundness_um, diameter_error_um, stroke_error_um, index_error_deg"));
 }
@@ -173,12 +173,12 @@ TEST(PinPartFile, RefusesABadToleranceNamingItsLineAndKey) {
 TEST(PinPartFile, APinTheWheelCannotReachIsRefusedWithTheFileAndTheThrowsLine) {
   std::string text = pin_part();
   text.replace(text.find("throw_mm = 45.0"), 15, "throw_mm = 400.0");
-  EXPECT_TRUE(refused(parse(text),
+  EXPECT_TRUE(refused(parse_pin(text),
                       "pin.toml:5: pin: throw_mm = 400.0000 must be less than pin_radius_mm + "
                       "wheel_radius_mm = 325.0000"));
   std::string zero = pin_part();
   zero.replace(zero.find("pin_radius_mm = 25.0"), 20, "pin_radius_mm = 0.0");
-  EXPECT_TRUE(refused(parse(zero), "pin.toml:6: key `pin.pin_radius_mm`"));
+  EXPECT_TRUE(refused(parse_pin(zero), "pin.toml:6: key `pin.pin_radius_mm`"));
 }
 
 }  // namespace

@@ -17,7 +17,7 @@ using testing::refused;
 
 namespace fs = std::filesystem;
 
-const fs::path kExamples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
+const fs::path kPinExamples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
 
 // Line 1 [gauge], 2-3 a C-X pin, 4-5 a C-X-Y pin; [nc] starts at line 6.
 const std::string kPins =
@@ -25,7 +25,7 @@ const std::string kPins =
     "[[part]]\nfile = \"parts/crankpin_cx.toml\"\n"
     "[[part]]\nfile = \"parts/crankpin_cxy.toml\"\n";
 // Lines 6-13: the X slide of a crankpin grinder (it swings twice the 45 mm throw each turn).
-const std::string kNc =
+const std::string kPinNc =
     "[nc]\n"
     "template = \"table.spf\"\n"
     "pin_main_template = \"pin_main_cx.mpf\"\n"
@@ -40,11 +40,11 @@ class ServicePinTest : public ::testing::Test {
   void SetUp() override {
     fs::create_directories(dir_.path() / "parts");
     for (const char* name : {"crankpin_cx.toml", "crankpin_cxy.toml"}) {
-      fs::copy_file(kExamples / name, dir_.path() / "parts" / name);
+      fs::copy_file(kPinExamples / name, dir_.path() / "parts" / name);
     }
-    fs::copy_file(kExamples / "sinumerik" / "cam_table.spf", dir_.path() / "table.spf");
+    fs::copy_file(kPinExamples / "sinumerik" / "cam_table.spf", dir_.path() / "table.spf");
     for (const char* name : {"pin_y_table.spf", "pin_main.mpf", "pin_main_cx.mpf"}) {
-      fs::copy_file(kExamples / "sinumerik" / name, dir_.path() / name);
+      fs::copy_file(kPinExamples / "sinumerik" / name, dir_.path() / name);
     }
   }
 
@@ -59,7 +59,7 @@ class ServicePinTest : public ::testing::Test {
 };
 
 TEST_F(ServicePinTest, PinPartsAreReadWithTheYTableAndTheMainProgramOfTheirMode) {
-  auto c = read(kPins + kNc +
+  auto c = read(kPins + kPinNc +
                 "y_template = \"pin_y_table.spf\"\n"
                 "y_table_numbers = [7, 8]\n"
                 "y_min_mm = -50.0\n"
@@ -94,7 +94,7 @@ TEST_F(ServicePinTest, PinPartsAreReadWithTheYTableAndTheMainProgramOfTheirMode)
 }
 
 TEST_F(ServicePinTest, WithoutPinKeysTheYTableTakesItsDefaults) {
-  auto c = read("[gauge]\n[[part]]\nfile = \"parts/crankpin_cx.toml\"\n" + kNc);
+  auto c = read("[gauge]\n[[part]]\nfile = \"parts/crankpin_cx.toml\"\n" + kPinNc);
   ASSERT_TRUE(c.ok()) << c.error().message;
   EXPECT_EQ(c->job.y_table_numbers, (TableNumbers{3, 4}));
   EXPECT_EQ(c->job.y_axis_limits.x_min_mm, -60.0);
@@ -103,29 +103,29 @@ TEST_F(ServicePinTest, WithoutPinKeysTheYTableTakesItsDefaults) {
 }
 
 TEST_F(ServicePinTest, YTableNumbersThatOverlapTheXTablesAreRefusedNamingTheKeyAndLine) {
-  EXPECT_TRUE(refused(read(kPins + kNc + "y_template = \"pin_y_table.spf\"\ny_table_numbers = [2, 5]\n"),
+  EXPECT_TRUE(refused(read(kPins + kPinNc + "y_template = \"pin_y_table.spf\"\ny_table_numbers = [2, 5]\n"),
                       at(15, "nc.y_table_numbers") + ": table 2 would hold both a pin's X table and its Y table"));
 }
 
 // The Y tables' numbers left at their default (3 and 4) bind only a C-X-Y pin: a service with
 // a C-X pin alone may give its X tables 3, one with a C-X-Y pin may not.
 TEST_F(ServicePinTest, DefaultYTableNumbersUnderTheXTablesAreRefusedOnlyForACxyPin) {
-  auto cx = read("[gauge]\n[[part]]\nfile = \"parts/crankpin_cx.toml\"\n" + kNc + "table_numbers = [3, 9]\n");
+  auto cx = read("[gauge]\n[[part]]\nfile = \"parts/crankpin_cx.toml\"\n" + kPinNc + "table_numbers = [3, 9]\n");
   ASSERT_TRUE(cx.ok()) << cx.error().message;
   EXPECT_EQ(cx->job.table_numbers, (TableNumbers{3, 9}));
-  EXPECT_TRUE(refused(read(kPins + kNc + "y_template = \"pin_y_table.spf\"\ntable_numbers = [3, 9]\n"),
+  EXPECT_TRUE(refused(read(kPins + kPinNc + "y_template = \"pin_y_table.spf\"\ntable_numbers = [3, 9]\n"),
                       at(5, "part.file") +
                           ": part crankpin_cxy is a C-X-Y pin, and its Y tables would go to table 3, which [nc] "
                           "table_numbers gives the X tables; give [nc] y_table_numbers two numbers"));
 }
 
 TEST_F(ServicePinTest, AYSlideWhoseMaximumIsNotAboveItsMinimumIsRefused) {
-  EXPECT_TRUE(refused(read(kPins + kNc + "y_template = \"pin_y_table.spf\"\ny_min_mm = 10.0\ny_max_mm = 10.0\n"),
+  EXPECT_TRUE(refused(read(kPins + kPinNc + "y_template = \"pin_y_table.spf\"\ny_min_mm = 10.0\ny_max_mm = 10.0\n"),
                       at(16, "nc.y_max_mm") + ": must be above y_min_mm"));
 }
 
 TEST_F(ServicePinTest, ACxyPinWithoutAYTemplateIsRefusedAtReadingSayingWhatToGive) {
-  auto c = read(kPins + kNc);
+  auto c = read(kPins + kPinNc);
   EXPECT_TRUE(refused(c, at(5, "part.file")));
   EXPECT_TRUE(refused(c, "crankpin_cxy is a C-X-Y pin, but no Y table template is set"));
   EXPECT_TRUE(refused(c, "give one (examples/sinumerik/pin_y_table.spf, [nc] y_template)"));
@@ -134,12 +134,12 @@ TEST_F(ServicePinTest, ACxyPinWithoutAYTemplateIsRefusedAtReadingSayingWhatToGiv
 // A pin's tables keep their own command position error bound, 0.1 um unless [nc]
 // pin_command_error_um says otherwise; the lobes keep [nc] command_error_um.
 TEST_F(ServicePinTest, PinTablesKeepTheirOwnCommandErrorBound) {
-  auto c = read(kPins + kNc + "y_template = \"pin_y_table.spf\"\ncommand_error_um = 0.4\n");
+  auto c = read(kPins + kPinNc + "y_template = \"pin_y_table.spf\"\ncommand_error_um = 0.4\n");
   ASSERT_TRUE(c.ok()) << c.error().message;
   EXPECT_EQ(c->job.table_choice.bound_um, 0.4);
   EXPECT_EQ(job_for(*c, c->parts[0]).table_choice.bound_um, kPinCommandErrorBoundUm);
   EXPECT_EQ(job_for(*c, c->parts[1]).table_choice.bound_um, kPinCommandErrorBoundUm);
-  auto set = read(kPins + kNc + "y_template = \"pin_y_table.spf\"\npin_command_error_um = 0.25\n");
+  auto set = read(kPins + kPinNc + "y_template = \"pin_y_table.spf\"\npin_command_error_um = 0.25\n");
   ASSERT_TRUE(set.ok()) << set.error().message;
   EXPECT_EQ(job_for(*set, set->parts[1]).table_choice.bound_um, 0.25);
 }

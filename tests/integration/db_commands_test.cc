@@ -17,6 +17,7 @@
 #include "tests/support/damaged_database.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -27,7 +28,7 @@ using testing::CommandResult;
 using testing::run_command;
 using testing::run_shell;
 
-bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 class DbCommandsTest : public ::testing::Test {
  protected:

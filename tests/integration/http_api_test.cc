@@ -28,6 +28,7 @@
 #include <httplib.h>
 
 #include "tests/support/http_answer.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -35,7 +36,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 RunRecord record(const std::string& part, int lobe, const std::string& machine, const std::string& started,
                  double max_um) {

@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 using testing::ServiceProcess;
 using testing::slurp;
 
-constexpr const char* kToken = "0123456789abcdef0123456789abcdef";
+constexpr const char* kLimitsToken = "0123456789abcdef0123456789abcdef";
 constexpr std::uint64_t kHugeBodyBytes = 300ull * 1024 * 1024;
 constexpr long kAllowedGrowthKb = 16 * 1024;
 
@@ -79,7 +79,7 @@ class HttpApiLimitsTest : public ::testing::Test {
         << (examples / "sinumerik" / "cam_table.spf").string()
         << "\"\n[database]\npath = \"runs.sqlite\"\n[http]\nport = 0\ntoken_file = \"token\"\n";
     // Readable by its owner only, as the service insists of a token file.
-    std::ofstream(dir_ / "token") << kToken << "\n";
+    std::ofstream(dir_ / "token") << kLimitsToken << "\n";
     fs::permissions(dir_ / "token", fs::perms::owner_read | fs::perms::owner_write);
   }
 
@@ -108,7 +108,7 @@ TEST_F(HttpApiLimitsTest, AHugeChunkedBodyCostsTheServiceUnder16MegabytesWithOrW
   EXPECT_FALSE(no_token.all_sent) << "the service closes the connection instead of reading the body";
 
   const testing::RawExchange with_token =
-      send_chunked(port, post + "Authorization: Bearer " + kToken + "\r\n\r\n", kHugeBodyBytes);
+      send_chunked(port, post + "Authorization: Bearer " + kLimitsToken + "\r\n\r\n", kHugeBodyBytes);
   EXPECT_EQ(with_token.answer.rfind("HTTP/1.1 413", 0), 0u) << with_token.answer.substr(0, 400);
   EXPECT_NE(with_token.answer.find("larger than 64 KiB"), std::string::npos) << with_token.answer;
   EXPECT_FALSE(with_token.all_sent);

@@ -251,9 +251,9 @@ TEST_F(LoopGuardsTest, ARunTheDatabaseRefusesAfterMeasuringIsKeptInAFile) {
   ASSERT_NE(at, std::string::npos) << m;
   const fs::path kept = m.substr(at + std::string("the measurement is kept in ").size());
   ASSERT_TRUE(fs::is_regular_file(kept)) << kept;
-  const std::string json = slurp(kept);
-  EXPECT_NE(json.find("\"revolutions\""), std::string::npos);
-  EXPECT_NE(json.find("\"intake_flat\""), std::string::npos);
+  const std::string kept_json = slurp(kept);
+  EXPECT_NE(kept_json.find("\"revolutions\""), std::string::npos);
+  EXPECT_NE(kept_json.find("\"intake_flat\""), std::string::npos);
   EXPECT_EQ(kept.parent_path(), dir_ / "unstored-runs");
 }
 

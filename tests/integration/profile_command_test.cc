@@ -18,6 +18,7 @@
 #include "compensation/wheel_path.h"
 #include "core/lift_table.h"
 #include "core/part.h"
+#include "tests/support/cli.h"
 #include "tests/support/csv_reader.h"
 #include "tests/support/temp_dir.h"
 
@@ -27,23 +28,9 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-struct CommandResult {
-  int exit_code = -1;
-  std::string output;  // stdout, and stderr when asked for
-};
-
-CommandResult run_command(const std::string& args, bool with_stderr = true) {
-  const std::string cmd =
-      std::string(GAUGELOOP_BINARY_DIR) + "/bin/gaugeloop " + args + (with_stderr ? " 2>&1" : " 2>/dev/null");
-  CommandResult r;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (pipe == nullptr) return r;
-  char buf[1024];
-  while (std::fgets(buf, sizeof buf, pipe) != nullptr) r.output += buf;
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using testing::CommandResult;
+using testing::run_command;
+using testing::run_command_stdout;
 
 std::string example(const std::string& file) { return std::string(GAUGELOOP_SOURCE_DIR) + "/examples/" + file; }
 
@@ -88,7 +75,7 @@ class ProfileCommandTest : public ::testing::Test {
 };
 
 TEST_F(ProfileCommandTest, PrintsTheWheelPathAsCsvAtTheStepAsked) {
-  CommandResult r = run_command("profile --part " + example("intake_flat.toml") + " --step-deg 0.5", false);
+  CommandResult r = run_command_stdout("profile --part " + example("intake_flat.toml") + " --step-deg 0.5");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Csv csv = parse_csv(r.output);
   EXPECT_EQ(csv.header, "psi_deg,x_mm,dx_dpsi_mm_per_deg,d2x_dpsi2_mm_per_deg2");
@@ -111,7 +98,7 @@ TEST_F(ProfileCommandTest, PrintsTheWheelPathAsCsvAtTheStepAsked) {
 TEST_F(ProfileCommandTest, AddsSlideVelocityAndAccelerationAtAWorkSpeed) {
   // 60 rpm: C turns 360 deg/s, so v = 360 dX/dpsi (rotation_sense 1), a = 360^2 d2X/dpsi2.
   CommandResult r =
-      run_command("profile --part " + example("exhaust_roller.toml") + " --step-deg 1 --speed-rpm 60", false);
+      run_command_stdout("profile --part " + example("exhaust_roller.toml") + " --step-deg 1 --speed-rpm 60");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Csv csv = parse_csv(r.output);
   EXPECT_EQ(csv.header,
@@ -129,8 +116,8 @@ TEST_F(ProfileCommandTest, AddsSlideVelocityAndAccelerationAtAWorkSpeed) {
 }
 
 TEST_F(ProfileCommandTest, PrintsJsonWithThePartAndThePeaks) {
-  CommandResult r = run_command(
-      "profile --part " + example("intake_flat.toml") + " --step-deg 1 --format json --speed-rpm -30", false);
+  CommandResult r = run_command_stdout("profile --part " + example("intake_flat.toml") +
+                                       " --step-deg 1 --format json --speed-rpm -30");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j["part"], "intake_flat");
@@ -153,8 +140,8 @@ TEST_F(ProfileCommandTest, MachineFrameRowsAreTheCamRowsAtPsiFromC) {
   const std::string part = write_part("turned", "intake_flat.csv",
                                       "follower = \"flat\"\nbase_circle_radius_mm = 18.0\nwheel_radius_mm = 200.0\n"
                                       "rotation_sense = -1\nc_offset_deg = 37.0\n");
-  CommandResult cam = run_command("profile --part " + part + " --step-deg 1", false);
-  CommandResult machine = run_command("profile --part " + part + " --step-deg 1 --frame machine", false);
+  CommandResult cam = run_command_stdout("profile --part " + part + " --step-deg 1");
+  CommandResult machine = run_command_stdout("profile --part " + part + " --step-deg 1 --frame machine");
   ASSERT_EQ(cam.exit_code, 0) << cam.output;
   ASSERT_EQ(machine.exit_code, 0) << machine.output;
   const Csv by_psi = parse_csv(cam.output);
@@ -183,7 +170,7 @@ TEST_F(ProfileCommandTest, RefusesAWheelTooLargeForTheExhaustRollersConcaveFlank
   EXPECT_THAT(r.output, HasSubstr("largest wheel that fits"));
   EXPECT_THAT(r.output, ::testing::Not(HasSubstr("psi_deg")));  // no half a table
 
-  CommandResult fits = run_command("profile --part " + example("exhaust_roller.toml") + " --step-deg 1", false);
+  CommandResult fits = run_command_stdout("profile --part " + example("exhaust_roller.toml") + " --step-deg 1");
   EXPECT_EQ(fits.exit_code, 0);
 }
 

@@ -23,6 +23,7 @@
 #include "tests/support/csv_reader.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -32,7 +33,7 @@ namespace fs = std::filesystem;
 using testing::CommandResult;
 using testing::run_command;
 
-bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 using testing::raw_mm;
 

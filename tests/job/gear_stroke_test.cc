@@ -19,6 +19,7 @@
 #include "storage/run_store.h"
 #include "tests/compensation/generating_model.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -26,17 +27,12 @@ namespace {
 namespace fs = std::filesystem;
 const fs::path kExamples = fs::path(GAUGELOOP_SOURCE_DIR) / "examples";
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing::slurp;
 
 // The example's rows, read here apart from the product's reader: z, eY um, eZ um, eB deg, eC deg.
 std::vector<std::array<double, 5>> csv_rows(const fs::path& p) {
   std::vector<std::array<double, 5>> rows;
-  std::istringstream in(read_text(p));
+  std::istringstream in(slurp(p));
   std::string line;
   bool header = true;
   while (std::getline(in, line)) {
@@ -115,7 +111,7 @@ TEST(GearStroke, TheProgramHoldsDsimReDerivedFromThePerAxisErrors) {
   Result<GearStrokeReport> r = write_gear_stroke(gf->part, *errors, s);
   ASSERT_TRUE(r.ok()) << r.error().message;
 
-  const std::string text = read_text(s.out_file);
+  const std::string text = slurp(s.out_file);
   expect_dsim_of_the_axis_errors(text, *gf, kExamples / "gear_71_axis_errors.csv");
   EXPECT_NE(text.find("; gaugeloop body_checksum_fnv1a64: "), std::string::npos);
   EXPECT_NE(r->coupling_lines.find("EGON(C,\"FINE\",B,-1,71,Z,"), std::string::npos) << r->coupling_lines;
@@ -185,12 +181,12 @@ TEST(GearStroke, PushedWithItsVersionsAMainProgramCouplingSim1AndARollback) {
   Result<GearStrokeReport> v1 = write_gear_stroke(gf->part, *errors, s);
   ASSERT_TRUE(v1.ok()) << v1.error().message;
   EXPECT_EQ(v1->version, 1);
-  const std::string text1 = read_text(s.nc_file);
+  const std::string text1 = slurp(s.nc_file);
   expect_dsim_of_the_axis_errors(text1, *gf, example);
   EXPECT_NE(text1.find("; gaugeloop table_version: 1\n"), std::string::npos) << text1;
 
   // The main program: the gearbox with the part's factors (the model's, to 1e-9), then the stroke.
-  const std::string main1 = read_text(dir.path() / "nc" / "GEAR_71_MAIN.MPF");
+  const std::string main1 = slurp(dir.path() / "nc" / "GEAR_71_MAIN.MPF");
   const std::regex egon(R"(\nEGON\(C,"FINE",B,(-?[0-9]+),([0-9]+),Z,(-?[0-9.]+),1,Y,(-?[0-9.]+),1,SIM1,1,1\)\n)");
   std::smatch m;
   ASSERT_TRUE(std::regex_search(main1, m, egon)) << main1;
@@ -210,7 +206,7 @@ TEST(GearStroke, PushedWithItsVersionsAMainProgramCouplingSim1AndARollback) {
   Result<GearStrokeReport> v2 = write_gear_stroke(gf->part, *twice, s);
   ASSERT_TRUE(v2.ok()) << v2.error().message;
   EXPECT_EQ(v2->version, 2);
-  const std::string text2 = read_text(s.nc_file);
+  const std::string text2 = slurp(s.nc_file);
   expect_dsim_of_the_axis_errors(text2, *gf, doubled);
   Result<std::optional<NcPush>> last = store->last_push(s.nc_file.string());
   ASSERT_TRUE(last.ok() && last->has_value());
@@ -223,10 +219,10 @@ TEST(GearStroke, PushedWithItsVersionsAMainProgramCouplingSim1AndARollback) {
   ASSERT_TRUE(back.ok()) << back.error().message;
   EXPECT_EQ(back->table_version, 3);
   EXPECT_TRUE(back->stroke);
-  const std::string text3 = read_text(s.nc_file);
+  const std::string text3 = slurp(s.nc_file);
   EXPECT_EQ(stroke_points(text3), stroke_points(text1));
   EXPECT_NE(text3.find("; gaugeloop table_version: 3\n"), std::string::npos) << text3;
-  EXPECT_NE(read_text(dir.path() / "nc" / "GEAR_71_MAIN.MPF").find("with stroke version 3 "), std::string::npos);
+  EXPECT_NE(slurp(dir.path() / "nc" / "GEAR_71_MAIN.MPF").find("with stroke version 3 "), std::string::npos);
 }
 
 TEST(GearStroke, AHandEditOrAnotherVersionCopiedInIsNotOverwritten) {
@@ -239,9 +235,9 @@ TEST(GearStroke, AHandEditOrAnotherVersionCopiedInIsNotOverwritten) {
   Result<StrokeAxisErrors> errors = read_axis_errors_csv(kExamples / "gear_71_axis_errors.csv");
   ASSERT_TRUE(errors.ok());
   ASSERT_TRUE(write_gear_stroke(gf->part, *errors, s).ok());
-  const std::string v1 = read_text(s.nc_file);
+  const std::string v1 = slurp(s.nc_file);
   ASSERT_TRUE(write_gear_stroke(gf->part, *errors, s).ok());
-  const std::string v2 = read_text(s.nc_file);
+  const std::string v2 = slurp(s.nc_file);
 
   // One SIM1 value changed on the control.
   std::string edited = v2;
@@ -253,7 +249,7 @@ TEST(GearStroke, AHandEditOrAnotherVersionCopiedInIsNotOverwritten) {
   EXPECT_EQ(r.error().code, ErrorCode::kRefused);
   EXPECT_NE(r.error().message.find("was edited by hand since version 2"), std::string::npos) << r.error().message;
   EXPECT_NE(r.error().message.find("gear stroke --overwrite-edited"), std::string::npos) << r.error().message;
-  EXPECT_EQ(read_text(s.nc_file), edited) << "the hand edit stays";
+  EXPECT_EQ(slurp(s.nc_file), edited) << "the hand edit stays";
 
   // Version 1 copied back by hand: a stroke gaugeloop wrote, but not the one last pushed.
   std::ofstream(s.nc_file, std::ios::binary) << v1;

@@ -20,21 +20,18 @@
 #include "nc_out/table_program.h"
 #include "storage/run_store.h"
 #include "tests/nc_out/nc_reference.h"
+#include "tests/support/angles.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
 
+using testing::kRadPerDeg;
+
 namespace fs = std::filesystem;
 
-constexpr double kRad = 3.14159265358979323846 / 180.0;
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing::slurp;
 
 class NcNewTest : public ::testing::Test {
  protected:
@@ -86,7 +83,7 @@ TEST_F(NcNewTest, TheLobesProgramsReadBackWithinTheirStatedCommandError) {
     ASSERT_TRUE(r.ok()) << r.error().message;
     EXPECT_EQ(r->table_version, 1);
     ASSERT_EQ(r->files.size(), 2u);  // the table and the main program
-    const std::string program = read_text(r->nc_file);
+    const std::string program = slurp(r->nc_file);
     const double stated = header_number(program, "command_error_um");
     EXPECT_LE(stated, js.table_choice.bound_um);
     Result<PeriodicSpline> lift = PeriodicSpline::fit(js.design.angle_deg, js.design.lift_mm);
@@ -98,7 +95,7 @@ TEST_F(NcNewTest, TheLobesProgramsReadBackWithinTheirStatedCommandError) {
     });
     EXPECT_LE(measured, stated + kReaderToleranceUm);
     // The main program couples the table just written and starts off the stock.
-    const std::string main = read_text(main_program_path(r->nc_file));
+    const std::string main = slurp(main_program_path(r->nc_file));
     EXPECT_NE(main.find("EGON(X,\"FINE\",C,1,0)"), std::string::npos) << main;
     EXPECT_NE(main.find("X-0.2300"), std::string::npos) << "roughing: 0.05 air gap + 0.2 - 0.02 stock\n" << main;
     EXPECT_EQ(main.find("{{"), std::string::npos);
@@ -111,12 +108,12 @@ TEST_F(NcNewTest, ThePinsProgramsReadBackWithinTheirStatedCommandErrorAgainstThe
   const double r_throw = 45.0, r_pin = 25.0, r_wheel = 300.0;
   const double a = (r_pin + r_wheel) * (r_pin + r_wheel);
   auto cx = [&](double c) {
-    const double t = c * kRad;
+    const double t = c * kRadPerDeg;
     return r_throw * std::cos(t) + std::sqrt(a - r_throw * r_throw * std::sin(t) * std::sin(t)) -
            (r_pin + r_wheel - r_throw);
   };
-  auto cxy_x = [&](double c) { return r_throw * std::cos(c * kRad) + r_throw; };
-  auto cxy_y = [&](double c) { return r_throw * std::sin(c * kRad); };
+  auto cxy_x = [&](double c) { return r_throw * std::cos(c * kRadPerDeg) + r_throw; };
+  auto cxy_y = [&](double c) { return r_throw * std::sin(c * kRadPerDeg); };
   {
     testing::TempDir dir("nc-new-cx");
     MeasureOptions o;
@@ -124,7 +121,7 @@ TEST_F(NcNewTest, ThePinsProgramsReadBackWithinTheirStatedCommandErrorAgainstThe
     const JobSettings js = settings_for("crankpin_cx.toml", o);
     Result<NewProgramReport> r = write_new_program(js, {});
     ASSERT_TRUE(r.ok()) << r.error().message;
-    const std::string x = read_text(r->nc_file);
+    const std::string x = slurp(r->nc_file);
     const double stated = header_number(x, "command_error_um");
     EXPECT_LE(stated, kPinCommandErrorBoundUm);
     EXPECT_LE(independent_error_um(x, 'X', cx), stated + kReaderToleranceUm);
@@ -137,11 +134,11 @@ TEST_F(NcNewTest, ThePinsProgramsReadBackWithinTheirStatedCommandErrorAgainstThe
     Result<NewProgramReport> r = write_new_program(js, {});
     ASSERT_TRUE(r.ok()) << r.error().message;
     ASSERT_EQ(r->files.size(), 3u);  // X, Y and the main program
-    const std::string x = read_text(r->nc_file);
-    const std::string y = read_text(y_table_program_path(r->nc_file));
+    const std::string x = slurp(r->nc_file);
+    const std::string y = slurp(y_table_program_path(r->nc_file));
     EXPECT_LE(independent_error_um(x, 'X', cxy_x), header_number(x, "command_error_um") + kReaderToleranceUm);
     EXPECT_LE(independent_error_um(y, 'Y', cxy_y), header_number(y, "command_error_um") + kReaderToleranceUm);
-    const std::string main = read_text(main_program_path(r->nc_file));
+    const std::string main = slurp(main_program_path(r->nc_file));
     EXPECT_NE(main.find("EGON(Y,\"FINE\",C,3,0)"), std::string::npos) << main;
   }
 }
@@ -162,13 +159,13 @@ TEST_F(NcNewTest, APinsXTableAtOneDegreeKeepsANanometreAndNamesItsSeam) {
     const JobSettings js = settings_for(example, o);
     Result<NewProgramReport> r = write_new_program(js, {});
     ASSERT_TRUE(r.ok()) << r.error().message;
-    const std::string x = read_text(r->nc_file);
+    const std::string x = slurp(r->nc_file);
     const double seam = header_number(x, "seam_c_deg");
     EXPECT_GT(std::abs(std::fmod(seam, 60.0)), 1.0) << seam;  // not the old multiples of 60
     const bool cxy = example == "crankpin_cxy.toml";
     const double a = 325.0 * 325.0;
     const double measured = independent_error_um(x, 'X', [&](double c) {
-      const double t = c * kRad;
+      const double t = c * kRadPerDeg;
       return cxy ? r_throw * std::cos(t) + r_throw
                  : r_throw * std::cos(t) + std::sqrt(a - r_throw * r_throw * std::sin(t) * std::sin(t)) - 280.0;
     });
@@ -190,13 +187,14 @@ TEST_F(NcNewTest, APinsPolyProgramReachesTheGridsHalfIncrement) {
   const JobSettings js = settings_for("crankpin_cxy.toml", o);
   Result<NewProgramReport> r = write_new_program(js, {});
   ASSERT_TRUE(r.ok()) << r.error().message;
-  const std::string x = read_text(r->nc_file);
-  const std::string y = read_text(y_table_program_path(r->nc_file));
+  const std::string x = slurp(r->nc_file);
+  const std::string y = slurp(y_table_program_path(r->nc_file));
   EXPECT_NE(x.find("interpolation: poly"), std::string::npos) << x.substr(0, 800);
   EXPECT_NE(x.find("POLY PO[C]=(1.000) PO[X]=("), std::string::npos) << x.substr(0, 1600);
   const double r_throw = 45.0;
-  EXPECT_LE(independent_error_um(x, 'X', [&](double c) { return r_throw * std::cos(c * kRad) + r_throw; }), 0.000515);
-  EXPECT_LE(independent_error_um(y, 'Y', [&](double c) { return r_throw * std::sin(c * kRad); }), 0.000515);
+  EXPECT_LE(independent_error_um(x, 'X', [&](double c) { return r_throw * std::cos(c * kRadPerDeg) + r_throw; }),
+            0.000515);
+  EXPECT_LE(independent_error_um(y, 'Y', [&](double c) { return r_throw * std::sin(c * kRadPerDeg); }), 0.000515);
 }
 
 TEST_F(NcNewTest, IsVersionOneWithNoRunBehindItAndTheHistorySaysSo) {
@@ -213,7 +211,7 @@ TEST_F(NcNewTest, IsVersionOneWithNoRunBehindItAndTheHistorySaysSo) {
   EXPECT_EQ((**last).run_id, 0);
   EXPECT_EQ((**last).table_version, 1);
   EXPECT_EQ((**last).reason, "new program from intake_flat.toml by anna");
-  EXPECT_EQ(*(**last).program_text, read_text(r->nc_file));
+  EXPECT_EQ(*(**last).program_text, slurp(r->nc_file));
   RunQuery all;
   Result<std::vector<RunSummary>> runs = store->list_runs(all);
   ASSERT_TRUE(runs.ok());
@@ -222,22 +220,22 @@ TEST_F(NcNewTest, IsVersionOneWithNoRunBehindItAndTheHistorySaysSo) {
   Result<std::vector<NcPush>> history = store->list_pushes(pushes);
   ASSERT_TRUE(history.ok());
   ASSERT_EQ(history->size(), 1u) << "the history lists a push with no run";
-  EXPECT_NE(read_text(r->nc_file).find("; gaugeloop run_id: 0"), std::string::npos);
+  EXPECT_NE(slurp(r->nc_file).find("; gaugeloop run_id: 0"), std::string::npos);
 }
 
 TEST_F(NcNewTest, AProgramWithAHistoryIsRefusedUnlessReplacedAndNothingChanges) {
   const JobSettings js = settings_for("intake_flat.toml");
   Result<NewProgramReport> first = write_new_program(js, {});
   ASSERT_TRUE(first.ok()) << first.error().message;
-  const std::string table = read_text(first->nc_file);
-  const std::string main = read_text(main_program_path(first->nc_file));
+  const std::string table = slurp(first->nc_file);
+  const std::string main = slurp(main_program_path(first->nc_file));
   Result<NewProgramReport> again = write_new_program(js, {});
   ASSERT_FALSE(again.ok());
   EXPECT_EQ(again.error().code, ErrorCode::kRefused);
   EXPECT_NE(again.error().message.find("has a history: version 1"), std::string::npos) << again.error().message;
   EXPECT_NE(again.error().message.find("--replace"), std::string::npos) << again.error().message;
-  EXPECT_EQ(read_text(first->nc_file), table);
-  EXPECT_EQ(read_text(main_program_path(first->nc_file)), main);
+  EXPECT_EQ(slurp(first->nc_file), table);
+  EXPECT_EQ(slurp(main_program_path(first->nc_file)), main);
   {
     Result<RunStore> store = RunStore::open(js.db_path);
     ASSERT_TRUE(store.ok());
@@ -251,7 +249,7 @@ TEST_F(NcNewTest, AProgramWithAHistoryIsRefusedUnlessReplacedAndNothingChanges) 
   ASSERT_TRUE(replaced.ok()) << replaced.error().message;
   EXPECT_EQ(replaced->table_version, 2);
   // Version 2 goes to the other table number: the coupling's table is never redefined.
-  EXPECT_NE(read_text(replaced->nc_file).find("CTABDEF(X,C,2,1)"), std::string::npos);
+  EXPECT_NE(slurp(replaced->nc_file).find("CTABDEF(X,C,2,1)"), std::string::npos);
 }
 
 TEST_F(NcNewTest, AFileGaugeloopDidNotWriteIsRefusedUntouchedUnlessReplaced) {
@@ -263,13 +261,13 @@ TEST_F(NcNewTest, AFileGaugeloopDidNotWriteIsRefusedUntouchedUnlessReplaced) {
   Result<NewProgramReport> r = write_new_program(js, {});
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, ErrorCode::kRefused) << r.error().message;
-  EXPECT_EQ(read_text(file), by_hand);
+  EXPECT_EQ(slurp(file), by_hand);
   EXPECT_FALSE(fs::exists(main_program_path(file)));
   NewProgramOptions replace;
   replace.replace = true;
   Result<NewProgramReport> replaced = write_new_program(js, replace);
   ASSERT_TRUE(replaced.ok()) << replaced.error().message;
-  EXPECT_NE(read_text(file), by_hand);
+  EXPECT_NE(slurp(file), by_hand);
 }
 
 TEST_F(NcNewTest, AMainTemplateWithoutTheInfeedIsRefusedBeforeAnythingIsWritten) {
@@ -316,7 +314,7 @@ TEST_F(NcNewTest, AWorkSpeedProgramIsWrittenBesideTheTableAndTheMainProgramFeeds
   ASSERT_TRUE(speed.ok()) << speed.error().message;
   EXPECT_TRUE(speed->overlaid_infeed);
   EXPECT_EQ(speed->header.at("table_version"), "1");
-  const std::string main = read_text(main_program_path(r->nc_file));
+  const std::string main = slurp(main_program_path(r->nc_file));
   EXPECT_NE(main.find("R1=-0.01916667"), std::string::npos) << "roughing 0.23 mm over 12 turns\n" << main;
   EXPECT_NE(main.find("CAM_INTAKE_L1_SPEED P12"), std::string::npos) << main;
   EXPECT_NE(main.find("R1=0"), std::string::npos) << main;

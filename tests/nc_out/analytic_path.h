@@ -6,10 +6,9 @@
 #include <numbers>
 
 #include "nc_out/sampled_path.h"
+#include "tests/support/angles.h"
 
 namespace gaugeloop::testing {
-
-inline constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
 inline SampledPath analytic_path(double a_mm, double b_mm, double step_deg = 0.01) {
   SampledPath p;

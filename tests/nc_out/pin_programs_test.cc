@@ -17,18 +17,14 @@
 #include "nc_out/table_writer.h"
 
 #include "infeed_values.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
 
 using ::testing::HasSubstr;
 
-std::string shipped(const std::string& name) {
-  std::ifstream in(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/sinumerik/" + name);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing::shipped;
 
 // The wheel height of the sample pin ground C-X-Y: Y = R sin C, R = 45 mm, pin angle 0.
 SampledPath pin_y_path() {
@@ -100,7 +96,7 @@ TEST(PinYTable, AHandEditIsReportedUnderTheYAxis) {
   EXPECT_THAT(points.error().message, HasSubstr("reads C90.000 Y45.0010, the pushed table has C90.000 Y45.0000"));
 }
 
-std::map<std::string, std::string> main_values(const std::string& x_number) {
+std::map<std::string, std::string> pin_main_values(const std::string& x_number) {
   std::map<std::string, std::string> v{{"program_name", "CRANK_PIN1_XY"},
                                        {"part", "crankpin_cxy"},
                                        {"lobe", "1"},
@@ -118,7 +114,7 @@ std::map<std::string, std::string> main_values(const std::string& x_number) {
 }
 
 std::map<std::string, std::string> main_values_xy(const std::string& x_number, const std::string& y_number) {
-  std::map<std::string, std::string> v = main_values(x_number);
+  std::map<std::string, std::string> v = pin_main_values(x_number);
   v["y_program_name"] = pin_y_program_name("CRANK_PIN1_XY");
   v["y_table_number"] = y_number;
   return v;
@@ -139,7 +135,7 @@ TEST(PinMainProgram, TheCxyTemplateCallsBothTablesAndCouplesEachAxisToItsOwn) {
 }
 
 TEST(PinMainProgram, TheCxTemplateRendersAsALobesDoes) {
-  Result<std::string> r = render_main_program(shipped("pin_main_cx.mpf"), "pin_main_cx.mpf", main_values("1"));
+  Result<std::string> r = render_main_program(shipped("pin_main_cx.mpf"), "pin_main_cx.mpf", pin_main_values("1"));
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_EQ(r->find("{{"), std::string::npos) << *r;
   EXPECT_THAT(*r, HasSubstr("EGON(X,\"FINE\",C,1,0)"));
@@ -199,7 +195,7 @@ TEST(PinMainProgram, AnAxisLeftUncoupledOrOneTableForBothIsRefused) {
 }
 
 TEST(PinMainProgram, OnlyOneOfTheYValuesIsRefused) {
-  std::map<std::string, std::string> v = main_values("1");
+  std::map<std::string, std::string> v = pin_main_values("1");
   v["y_table_number"] = "3";
   Result<std::string> r = render_main_program(shipped("pin_main.mpf"), "pin_main.mpf", v);
   ASSERT_FALSE(r.ok());

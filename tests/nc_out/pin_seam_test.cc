@@ -10,11 +10,12 @@
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
 #include "nc_reference.h"
+#include "tests/support/angles.h"
 
 namespace gaugeloop {
 namespace {
 
-constexpr double kRad = 3.14159265358979323846 / 180.0;
+using testing::kRadPerDeg;
 
 // The sample pin: throw R 45, pin radius r 25, wheel radius rw 300 mm (examples/crankpin_*.toml).
 constexpr double kThrowMm = 45.0;
@@ -56,10 +57,10 @@ SampledPath sampled(const ClosedForm& f) {
   SampledPath p;
   p.c_step_deg = 0.01;
   for (int i = 0; i < 36000; ++i) {
-    const double t = i * 0.01 * kRad;
+    const double t = i * 0.01 * kRadPerDeg;
     p.x_mm.push_back(f.x(t));
-    p.dx_dc_mm_per_deg.push_back(f.dx(t) * kRad);
-    p.d2x_dc2_mm_per_deg2.push_back(f.d2x(t) * kRad * kRad);
+    p.dx_dc_mm_per_deg.push_back(f.dx(t) * kRadPerDeg);
+    p.d2x_dc2_mm_per_deg2.push_back(f.d2x(t) * kRadPerDeg * kRadPerDeg);
   }
   return p;
 }
@@ -71,7 +72,7 @@ double error_against_closed_form_um(const std::string& program, char axis, const
   double worst = 0.0;
   for (int j = 0; j <= 72000; ++j) {
     const double c = j * 0.005;
-    worst = std::max(worst, std::abs(nc(c) - f.x(c * kRad)) * 1000.0);
+    worst = std::max(worst, std::abs(nc(c) - f.x(c * kRadPerDeg)) * 1000.0);
   }
   return worst;
 }
@@ -150,7 +151,7 @@ TEST(PinSeam, TheSeamIsWhereThePathBendsLeastAndTheHeaderSaysWhere) {
   EXPECT_TRUE(std::abs(y_seam - 0.0) < 0.011 || std::abs(y_seam - 180.0) < 0.011) << y_seam;
   const ClosedForm cx = cx_infeed();
   const double cx_seam = spline_start_c_deg(sampled(cx));
-  EXPECT_LT(std::abs(cx.d2x(cx_seam * kRad)), 0.01 * kThrowMm) << cx_seam;
+  EXPECT_LT(std::abs(cx.d2x(cx_seam * kRadPerDeg)), 0.01 * kThrowMm) << cx_seam;
   EXPECT_GT(std::abs(std::fmod(cx_seam, 60.0)), 0.5) << "not a multiple of 60 deg: " << cx_seam;
 
   CurveTableFormat fine;

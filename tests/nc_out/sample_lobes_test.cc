@@ -10,6 +10,7 @@
 #include "nc_out/table_writer.h"
 #include "tests/nc_out/nc_reference.h"
 #include "tests/nc_out/sample_lobes.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -17,16 +18,9 @@ namespace {
 using testing::ref_error_um;
 using testing::sample_path;
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing::slurp;
 
-std::string table_template() {
-  return read_text(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/sinumerik/cam_table.spf");
-}
+std::string table_template() { return slurp(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/sinumerik/cam_table.spf"); }
 
 std::map<std::string, std::string> template_values() {
   return {{"program_name", "CAM_TEST"},
@@ -88,7 +82,7 @@ TEST_P(SampleLobes, ReportedErrorMatchesAnIndependentEvaluationOfTheWrittenProgr
 // docs/nc_output.md tabulates these figures; the doc must say what the code produces.
 // Tolerance: block counts exact; errors 0.002 um (the doc writes 3 decimals) and C 0.01 deg.
 TEST_P(SampleLobes, FiguresInTheDocAreWhatTheCodeProduces) {
-  const std::string doc = read_text(std::string(GAUGELOOP_SOURCE_DIR) + "/docs/nc_output.md");
+  const std::string doc = slurp(std::string(GAUGELOOP_SOURCE_DIR) + "/docs/nc_output.md");
   ASSERT_FALSE(doc.empty()) << "docs/nc_output.md is missing";
   for (Figure& f : figures_of(GetParam())) {
     ASSERT_TRUE(f.table.ok()) << f.table.error().message;

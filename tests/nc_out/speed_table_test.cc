@@ -13,18 +13,14 @@
 #include "nc_out/main_program.h"
 
 #include "infeed_values.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
 
 using ::testing::HasSubstr;
 
-std::string shipped(const std::string& name) {
-  std::ifstream in(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/sinumerik/" + name);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing::shipped;
 
 std::map<std::string, std::string> speed_values() {
   return {{"program_name", "CAM_INTAKE_L1"},

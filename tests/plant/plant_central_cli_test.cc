@@ -17,6 +17,7 @@
 #include "tests/support/postgres_server.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -25,7 +26,7 @@ using testing::CommandResult;
 using testing::run_command;
 using testing::shared_postgres;
 
-bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 class CentralCliTest : public ::testing::Test {
  protected:

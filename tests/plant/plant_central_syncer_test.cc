@@ -17,6 +17,7 @@
 #include "tests/support/sample_runs.h"
 #include "tests/support/service_process.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 #include "tests/support/wait_until.h"
 
 namespace gaugeloop {
@@ -29,7 +30,7 @@ using testing::PostgresServer;
 using testing::shared_postgres;
 using testing::wait_until;
 
-bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 // Generous: a sync on a loaded 2-core machine, with PostgreSQL beside it, is slow.
 constexpr seconds kWithin{90};

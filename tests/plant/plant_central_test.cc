@@ -17,6 +17,7 @@
 #include "tests/support/postgres_server.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -25,7 +26,7 @@ using testing::PostgresServer;
 using testing::shared_postgres;
 using testing::TempDir;
 
-bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 // Every field of a summary, numbers to 17 digits: equal texts mean equal rows.
 std::string describe(const RunSummary& r) {

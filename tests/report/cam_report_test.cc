@@ -16,16 +16,17 @@
 #include <vector>
 
 #include "core/tolerance.h"
+#include "tests/support/angles.h"
 #include "tests/support/cli.h"
 #include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
 
+using testing::kPi;
+
 namespace fs = std::filesystem;
 using testing::slurp;
-
-constexpr double kPi = 3.14159265358979323846;
 
 // A nose-centred cam angle (-180..180) as the cam frame index.
 std::size_t index_of(int x_deg) { return static_cast<std::size_t>((x_deg % 360 + 360) % 360); }

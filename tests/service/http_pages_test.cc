@@ -21,6 +21,7 @@
 #include <httplib.h>
 
 #include "tests/support/http_answer.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -28,7 +29,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-bool has(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 const char* const kProgramV1 = "; CAM_INTAKE_L1 version 1\r\nCTABDEF(1,1)\r\nC0 X0\r\nCTABEND\r\n";
 const char* const kProgramV2 = "; CAM_INTAKE_L1 version 2\r\nCTABDEF(1,1)\r\nC0 X0.0010\r\nCTABEND\r\n";

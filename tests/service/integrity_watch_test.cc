@@ -21,7 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 // Far beyond what checking a small file takes on a loaded machine; reached only when it never ends.
-constexpr std::chrono::seconds kGenerous{60};
+constexpr std::chrono::seconds kWatchGenerous{60};
 
 class IntegrityWatchTest : public ::testing::Test {
  protected:
@@ -40,7 +40,7 @@ class IntegrityWatchTest : public ::testing::Test {
 TEST_F(IntegrityWatchTest, AfterAStopThatWasNotCleanASoundFileIsCheckedAtOnce) {
   std::atomic<int> damaged{0};
   IntegrityWatch watch({db(), true, std::chrono::hours(24)}, [&](const std::string&) { ++damaged; }, {});
-  ASSERT_TRUE(watch.wait_for_first_check(kGenerous));
+  ASSERT_TRUE(watch.wait_for_first_check(kWatchGenerous));
   const nlohmann::json h = watch.health();
   EXPECT_EQ(h["state"], "sound") << h.dump();
   EXPECT_EQ(h["checks"], 1);
@@ -71,7 +71,7 @@ TEST_F(IntegrityWatchTest, ADamagedFileIsReportedWithWhatToDo) {
                          told = message;
                        },
                        {});
-  ASSERT_TRUE(watch.wait_for_first_check(kGenerous));
+  ASSERT_TRUE(watch.wait_for_first_check(kWatchGenerous));
   const nlohmann::json h = watch.health();
   EXPECT_EQ(h["state"], "damaged") << h.dump();
   EXPECT_NE(h["problem"].get<std::string>().find("is damaged"), std::string::npos) << h.dump();

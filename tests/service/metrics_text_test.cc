@@ -25,6 +25,7 @@
 #include "storage/run_store.h"
 #include "tests/support/sample_runs.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -175,7 +176,7 @@ void fill(const fs::path& db) {
   ASSERT_TRUE(store->add_pending(t).ok());
 }
 
-bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using testing::has;
 
 TEST(MetricsText, TheDatabaseSeriesAreValidAndInBaseUnits) {
   testing::TempDir dir;

@@ -11,12 +11,13 @@
 #include <string>
 
 #include "tests/compensation/generating_model.h"
+#include "tests/support/angles.h"
 #include "tests/support/temp_dir.h"
 
 namespace gaugeloop {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using testing::kPi;
 
 // A stroke program file from `points`, on a fine SIM1 grid.
 std::string stroke_file(const testing::TempDir& dir, const std::vector<StrokeProgramPoint>& points) {

@@ -14,6 +14,7 @@
 #include "storage_test_support.h"
 #include "tests/support/cli.h"
 #include "tests/support/damaged_database.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -24,7 +25,7 @@ using testing::make_record;
 using testing::RawDb;
 using testing::TempDir;
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using testing::has;
 
 // The files in `dir` whose names start with `prefix`.
 std::vector<std::string> files_starting(const fs::path& dir, const std::string& prefix) {
@@ -83,10 +84,10 @@ TEST_F(DbMaintenance, FlippedBytesInTheRunsTableAreFoundByEveryCheck) {
     Status s = store->check_integrity(depth);
     ASSERT_FALSE(s.ok()) << "a damaged database passed the check";
     EXPECT_EQ(s.error().code, ErrorCode::kStorage);
-    EXPECT_TRUE(contains(s.error().message, "database " + db_in(dir_).string() + " is damaged: ")) << s.error().message;
-    EXPECT_TRUE(contains(s.error().message, report->problems.front())) << s.error().message;
-    EXPECT_TRUE(contains(s.error().message, "restore the last sound backup") ||
-                contains(s.error().message, "put the last sound backup in its place"))
+    EXPECT_TRUE(has(s.error().message, "database " + db_in(dir_).string() + " is damaged: ")) << s.error().message;
+    EXPECT_TRUE(has(s.error().message, report->problems.front())) << s.error().message;
+    EXPECT_TRUE(has(s.error().message, "restore the last sound backup") ||
+                has(s.error().message, "put the last sound backup in its place"))
         << s.error().message;
   }
 }
@@ -106,7 +107,7 @@ TEST_F(DbMaintenance, AFileThatIsNotADatabaseIsReportedNotFailed) {
   Result<IntegrityReport> report = check_database_file(junk);
   ASSERT_TRUE(report.ok()) << report.error().message;
   ASSERT_FALSE(report->sound());
-  EXPECT_TRUE(contains(report->problems.front(), "not a database")) << report->problems.front();
+  EXPECT_TRUE(has(report->problems.front(), "not a database")) << report->problems.front();
 }
 
 TEST_F(DbMaintenance, ARowPointingAtAMissingRunIsAProblem) {
@@ -165,8 +166,8 @@ TEST_F(DbMaintenance, ABackupNeverReplacesAFileUnlessTold) {
   Status s = backup_database_file(db_in(dir_), copy, false);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().code, ErrorCode::kInvalidInput);
-  EXPECT_TRUE(contains(s.error().message, copy.string() + " exists already")) << s.error().message;
-  EXPECT_TRUE(contains(s.error().message, "--force")) << s.error().message;
+  EXPECT_TRUE(has(s.error().message, copy.string() + " exists already")) << s.error().message;
+  EXPECT_TRUE(has(s.error().message, "--force")) << s.error().message;
   EXPECT_EQ(testing::slurp(copy), "last week's backup");
   EXPECT_EQ(files_starting(dir_.path(), "copy"), std::vector<std::string>{"copy.sqlite"});
 
@@ -178,7 +179,7 @@ TEST_F(DbMaintenance, ABackupNeverReplacesAFileUnlessTold) {
 TEST_F(DbMaintenance, ABackupOntoTheDatabaseItselfIsRefused) {
   Status s = backup_database_file(db_in(dir_), db_in(dir_), true);
   ASSERT_FALSE(s.ok());
-  EXPECT_TRUE(contains(s.error().message, "is the database itself")) << s.error().message;
+  EXPECT_TRUE(has(s.error().message, "is the database itself")) << s.error().message;
   EXPECT_EQ(testing::sqlite_text(db_in(dir_), "SELECT count(*) FROM runs"), "3");
 }
 
@@ -188,7 +189,7 @@ TEST_F(DbMaintenance, ABackupOfADamagedDatabaseLeavesNothingBehind) {
   Status s = backup_database_file(db_in(dir_), copy, false);
   ASSERT_FALSE(s.ok()) << "a damaged database was backed up as if sound";
   EXPECT_EQ(s.error().code, ErrorCode::kStorage);
-  EXPECT_TRUE(contains(s.error().message, "not written, the copy is not sound")) << s.error().message;
+  EXPECT_TRUE(has(s.error().message, "not written, the copy is not sound")) << s.error().message;
   EXPECT_EQ(files_starting(dir_.path(), "copy"), std::vector<std::string>{});
 }
 

@@ -10,6 +10,7 @@
 #include "storage/run_store.h"
 #include "storage/sqlite_db.h"
 #include "storage_test_support.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -18,7 +19,7 @@ using testing::make_record;
 using testing::RawDb;
 using testing::TempDir;
 
-bool contains(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 // A program as the Sinumerik template renders it: CRLF, tabs, a degree sign, trailing blanks
 // and no final newline, so any normalisation of the text shows.
@@ -96,9 +97,9 @@ TEST_F(NcPushTest, AVersionThatIsNotNextIsRefusedAndRecordsNothing) {
     Status s = store().record_push(other, p, "CTABDEF(X,C,1,1)\n");
     ASSERT_FALSE(s.ok()) << "version " << claimed;
     EXPECT_EQ(s.error().code, ErrorCode::kInvalidInput);
-    EXPECT_TRUE(contains(s.error().message, "/nc/A.SPF")) << s.error().message;
+    EXPECT_TRUE(has(s.error().message, "/nc/A.SPF")) << s.error().message;
     if (claimed > 0) {
-      EXPECT_TRUE(contains(s.error().message, "the next is 2")) << s.error().message;
+      EXPECT_TRUE(has(s.error().message, "the next is 2")) << s.error().message;
     }
   }
   RawDb raw(db_in(dir_));
@@ -202,12 +203,12 @@ TEST_F(NcPushTest, ListLoadAndLastPush) {
   Result<NcPush> missing = store().load_push("/nc/L2.SPF", 7);
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.error().code, ErrorCode::kNotFound);
-  EXPECT_TRUE(contains(missing.error().message, "/nc/L2.SPF")) << missing.error().message;
-  EXPECT_TRUE(contains(missing.error().message, "version 7")) << missing.error().message;
-  EXPECT_TRUE(contains(missing.error().message, "1 to 2")) << missing.error().message;
+  EXPECT_TRUE(has(missing.error().message, "/nc/L2.SPF")) << missing.error().message;
+  EXPECT_TRUE(has(missing.error().message, "version 7")) << missing.error().message;
+  EXPECT_TRUE(has(missing.error().message, "1 to 2")) << missing.error().message;
   Result<NcPush> never = store().load_push("/nc/NEVER.SPF", 1);
   ASSERT_FALSE(never.ok());
-  EXPECT_TRUE(contains(never.error().message, "nothing was ever pushed")) << never.error().message;
+  EXPECT_TRUE(has(never.error().message, "nothing was ever pushed")) << never.error().message;
 
   Result<std::optional<NcPush>> last = store().last_push("/nc/L2.SPF");
   ASSERT_TRUE(last.ok()) << last.error().message;
@@ -348,8 +349,8 @@ TEST_F(NcPushTest, RejectingIsOnlyFromPendingAndARefusalChangesNothing) {
   s = store().reject_pending(*a, "bert", "again");
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().code, ErrorCode::kRefused);
-  EXPECT_TRUE(contains(s.error().message, "already rejected")) << s.error().message;
-  EXPECT_TRUE(contains(s.error().message, "anna")) << s.error().message;
+  EXPECT_TRUE(has(s.error().message, "already rejected")) << s.error().message;
+  EXPECT_TRUE(has(s.error().message, "anna")) << s.error().message;
   s = store().record_approved_push(*a, NcPush{}, "bert");
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().code, ErrorCode::kRefused);
@@ -413,7 +414,7 @@ TEST_F(NcPushTest, AFailedApprovedPushLeavesTheTablePendingAndNoPush) {
   s = store().record_approved_push(*a, elsewhere, "anna");
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().code, ErrorCode::kInvalidInput);
-  EXPECT_TRUE(contains(s.error().message, "/nc/A.SPF")) << s.error().message;
+  EXPECT_TRUE(has(s.error().message, "/nc/A.SPF")) << s.error().message;
 
   EXPECT_EQ(pending_row(raw, *a), before);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM nc_pushes"), 0);
@@ -425,8 +426,8 @@ TEST_F(NcPushTest, AFailedApprovedPushLeavesTheTablePendingAndNoPush) {
   s = store().record_approved_push(*a, NcPush{}, "anna");
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().code, ErrorCode::kRefused);
-  EXPECT_TRUE(contains(s.error().message, "superseded")) << s.error().message;
-  EXPECT_TRUE(contains(s.error().message, "pending table " + std::to_string(*b))) << s.error().message;
+  EXPECT_TRUE(has(s.error().message, "superseded")) << s.error().message;
+  EXPECT_TRUE(has(s.error().message, "pending table " + std::to_string(*b))) << s.error().message;
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM nc_pushes"), 0);
 }
 

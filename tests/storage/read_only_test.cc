@@ -11,6 +11,7 @@
 #include "storage/sqlite_db.h"
 #include "storage_test_support.h"
 #include "tests/support/cli.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -22,7 +23,7 @@ using testing::make_record;
 using testing::RawDb;
 using testing::TempDir;
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using testing::has;
 
 // What a reader must leave as it found: the bytes, the modification time, and no new file.
 struct FileState {
@@ -89,7 +90,7 @@ TEST_F(ReadOnlyStore, ReadsAFileWithoutWritePermissionAndLeavesItAsItWas) {
   Result<std::int64_t> written = store->record_event(e);
   ASSERT_FALSE(written.ok()) << "a read-only store wrote an event";
   EXPECT_EQ(written.error().code, ErrorCode::kStorage);
-  EXPECT_TRUE(contains(written.error().message, "opened for reading only")) << written.error().message;
+  EXPECT_TRUE(has(written.error().message, "opened for reading only")) << written.error().message;
   EXPECT_EQ(differences(before, state_of(db_in(dir_))), "");
   EXPECT_FALSE(fs::exists(db_in(dir_).string() + "-wal"));
   EXPECT_FALSE(fs::exists(db_in(dir_).string() + "-shm"));
@@ -141,8 +142,8 @@ TEST_F(ReadOnlyStore, RefusesAnOlderSchemaNamingTheCommandThatUpgradesIt) {
   Result<RunStore> store = RunStore::open_read_only(db_in(old));
   ASSERT_FALSE(store.ok()) << "read a version-3 database as if it were current";
   EXPECT_EQ(store.error().code, ErrorCode::kStorage);
-  EXPECT_TRUE(contains(store.error().message, "schema version 3")) << store.error().message;
-  EXPECT_TRUE(contains(store.error().message, "`gaugeloop db upgrade --db " + db_in(old).string() + "`"))
+  EXPECT_TRUE(has(store.error().message, "schema version 3")) << store.error().message;
+  EXPECT_TRUE(has(store.error().message, "`gaugeloop db upgrade --db " + db_in(old).string() + "`"))
       << store.error().message;
   EXPECT_EQ(differences(before, state_of(db_in(old))), "") << "neither upgraded nor backed up";
   EXPECT_EQ(RawDb(db_in(old)).query_int("PRAGMA user_version"), 3);
@@ -153,8 +154,8 @@ TEST_F(ReadOnlyStore, RefusesANewerSchemaAsOpenDoes) {
   Result<RunStore> store = RunStore::open_read_only(db_in(dir_));
   ASSERT_FALSE(store.ok());
   EXPECT_EQ(store.error().code, ErrorCode::kStorage);
-  EXPECT_TRUE(contains(store.error().message, "schema version 99")) << store.error().message;
-  EXPECT_TRUE(contains(store.error().message, "newer")) << store.error().message;
+  EXPECT_TRUE(has(store.error().message, "schema version 99")) << store.error().message;
+  EXPECT_TRUE(has(store.error().message, "newer")) << store.error().message;
 }
 
 TEST_F(ReadOnlyStore, NeverCreatesAFile) {
@@ -162,7 +163,7 @@ TEST_F(ReadOnlyStore, NeverCreatesAFile) {
   Result<RunStore> store = RunStore::open_read_only(missing);
   ASSERT_FALSE(store.ok());
   EXPECT_EQ(store.error().code, ErrorCode::kNotFound);
-  EXPECT_TRUE(contains(store.error().message, missing.string())) << store.error().message;
+  EXPECT_TRUE(has(store.error().message, missing.string())) << store.error().message;
   EXPECT_FALSE(fs::exists(missing.parent_path()));
 }
 
@@ -171,7 +172,7 @@ TEST_F(ReadOnlyStore, AnEmptyFileHasNoSchemaToRead) {
   std::ofstream{empty};
   Result<RunStore> store = RunStore::open_read_only(empty);
   ASSERT_FALSE(store.ok());
-  EXPECT_TRUE(contains(store.error().message, "no gaugeloop schema")) << store.error().message;
+  EXPECT_TRUE(has(store.error().message, "no gaugeloop schema")) << store.error().message;
   EXPECT_EQ(fs::file_size(empty), 0u);
 }
 
@@ -182,7 +183,7 @@ TEST_F(ReadOnlyStore, OpenForWritingRefusesAFileWithoutWritePermissionEvenForRoo
   Result<RunStore> store = RunStore::open(db_in(dir_));
   ASSERT_FALSE(store.ok());
   EXPECT_EQ(store.error().code, ErrorCode::kStorage);
-  EXPECT_TRUE(contains(store.error().message, "read-only")) << store.error().message;
+  EXPECT_TRUE(has(store.error().message, "read-only")) << store.error().message;
   EXPECT_EQ(differences(before, state_of(db_in(dir_))), "");
 }
 

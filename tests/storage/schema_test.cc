@@ -11,6 +11,7 @@
 #include "storage/migrations.h"
 #include "storage/run_store.h"
 #include "storage_test_support.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -23,7 +24,7 @@ using testing::run_unprivileged;
 using testing::sample_lift_mm;
 using testing::TempDir;
 
-bool contains(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 TEST(Migrations, AreNumberedOneUpInOrder) {
   int expected = 1;
@@ -92,8 +93,8 @@ TEST(Schema, RefusesADatabaseFromANewerGaugeloop) {
   Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_FALSE(store.ok());
   EXPECT_EQ(store.error().code, ErrorCode::kStorage);
-  EXPECT_TRUE(contains(store.error().message, "schema version 99")) << store.error().message;
-  EXPECT_TRUE(contains(store.error().message, db_in(dir).string()));
+  EXPECT_TRUE(has(store.error().message, "schema version 99")) << store.error().message;
+  EXPECT_TRUE(has(store.error().message, db_in(dir).string()));
 }
 
 TEST(Schema, ProfileColumnsRefuseNull) {
@@ -258,8 +259,8 @@ TEST(OpenFailure, ParentThatIsAFileIsAClearIoError) {
   Result<RunStore> store = RunStore::open(db);
   ASSERT_FALSE(store.ok());
   EXPECT_EQ(store.error().code, ErrorCode::kIo);
-  EXPECT_TRUE(contains(store.error().message, db.string())) << store.error().message;
-  EXPECT_TRUE(contains(store.error().message, "--data-dir is writable")) << store.error().message;
+  EXPECT_TRUE(has(store.error().message, db.string())) << store.error().message;
+  EXPECT_TRUE(has(store.error().message, "--data-dir is writable")) << store.error().message;
 }
 
 TEST(OpenFailure, PathThatIsADirectoryIsAClearStorageError) {
@@ -283,8 +284,8 @@ TEST(OpenFailure, UnwritableDirectoryIsAClearStorageError) {
     Result<RunStore> store = RunStore::open(ro / "runs.sqlite");
     if (store.ok()) return "opened a database in a read-only directory";
     if (store.error().code != ErrorCode::kStorage) return "wrong code: " + store.error().message;
-    if (!contains(store.error().message, "cannot open run database " + (ro / "runs.sqlite").string()) ||
-        !contains(store.error().message, "writable")) {
+    if (!has(store.error().message, "cannot open run database " + (ro / "runs.sqlite").string()) ||
+        !has(store.error().message, "writable")) {
       return "unclear message: " + store.error().message;
     }
     return "";
@@ -303,7 +304,7 @@ TEST(OpenFailure, ReadOnlyFileIsRefusedAtOpenNotAtTheFirstInsert) {
     Result<RunStore> store = RunStore::open(db_in(dir));
     if (store.ok()) return "opened a read-only database for writing";
     if (store.error().code != ErrorCode::kStorage) return "wrong code: " + store.error().message;
-    if (!contains(store.error().message, "read-only")) return "unclear message: " + store.error().message;
+    if (!has(store.error().message, "read-only")) return "unclear message: " + store.error().message;
     return "";
   });
   EXPECT_EQ(failure, "");
@@ -316,8 +317,8 @@ TEST(OpenFailure, AFileThatIsNotADatabaseSaysSo) {
   Result<RunStore> store = RunStore::open(db_in(dir));
   ASSERT_FALSE(store.ok());
   EXPECT_EQ(store.error().code, ErrorCode::kStorage);
-  EXPECT_TRUE(contains(store.error().message, "not a database")) << store.error().message;
-  EXPECT_TRUE(contains(store.error().message, db_in(dir).string())) << store.error().message;
+  EXPECT_TRUE(has(store.error().message, "not a database")) << store.error().message;
+  EXPECT_TRUE(has(store.error().message, db_in(dir).string())) << store.error().message;
 }
 
 TEST(OpenFailure, EmptyPathIsInvalidInput) {

@@ -10,13 +10,14 @@
 #include <string>
 
 #include "storage_test_support.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop::storage_internal {
 namespace {
 
 using testing::TempDir;
 
-bool contains(const std::string& text, const std::string& fragment) { return text.find(fragment) != std::string::npos; }
+using testing::has;
 
 // The first column of the one row `sql` returns, as text.
 std::string query_text(Connection& conn, const char* sql) {
@@ -55,7 +56,7 @@ TEST(SqliteDb, TheCheckerNeverCreatesAFile) {
   Result<std::unique_ptr<Connection>> conn = Connection::open(file.string(), OpenMode::kChecker, file);
   ASSERT_FALSE(conn.ok());
   EXPECT_EQ(conn.error().code, ErrorCode::kStorage);
-  EXPECT_TRUE(contains(conn.error().message, "cannot open the file to check it")) << conn.error().message;
+  EXPECT_TRUE(has(conn.error().message, "cannot open the file to check it")) << conn.error().message;
   EXPECT_FALSE(std::filesystem::exists(file));
 }
 
@@ -109,8 +110,8 @@ TEST(SqliteDb, AnUnknownParameterNameIsReportedByStepNamingIt) {
   Status s = ins->run();
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().code, ErrorCode::kStorage);
-  EXPECT_TRUE(contains(s.error().message, "cannot insert a named row")) << s.error().message;
-  EXPECT_TRUE(contains(s.error().message, ":nmae")) << s.error().message;
+  EXPECT_TRUE(has(s.error().message, "cannot insert a named row")) << s.error().message;
+  EXPECT_TRUE(has(s.error().message, ":nmae")) << s.error().message;
   EXPECT_EQ(conn->changes(), 0);
 }
 

@@ -4,10 +4,9 @@
 #include <sys/wait.h>
 
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
+
+#include "tests/support/text.h"
 
 namespace gaugeloop::testing {
 
@@ -19,10 +18,11 @@ struct CommandResult {
 // The gaugeloop binary of the build tree.
 inline std::string gaugeloop_binary() { return std::string(GAUGELOOP_BINARY_DIR) + "/bin/gaugeloop"; }
 
-// A shell command line, stderr with stdout; -1 if it did not exit normally.
-inline CommandResult run_shell(const std::string& script) {
+// A shell command line, stderr with stdout unless `stderr_to` (a shell redirection target,
+// such as /dev/null) says otherwise; -1 if it did not exit normally.
+inline CommandResult run_shell(const std::string& script, const std::string& stderr_to = "&1") {
   CommandResult r;
-  FILE* pipe = ::popen((script + " 2>&1").c_str(), "r");
+  FILE* pipe = ::popen((script + " 2>" + stderr_to).c_str(), "r");
   if (pipe == nullptr) return r;
   char buf[4096];
   while (std::fgets(buf, sizeof buf, pipe) != nullptr) r.output += buf;
@@ -34,12 +34,9 @@ inline CommandResult run_shell(const std::string& script) {
 // `gaugeloop ARGS` from the build tree, through the shell; -1 if it did not exit normally.
 inline CommandResult run_command(const std::string& args) { return run_shell(gaugeloop_binary() + " " + args); }
 
-// The whole file, bytes as they are; empty if it cannot be read.
-inline std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
+// As run_command, stdout alone (stderr discarded): for output a test parses.
+inline CommandResult run_command_stdout(const std::string& args) {
+  return run_shell(gaugeloop_binary() + " " + args, "/dev/null");
 }
 
 }  // namespace gaugeloop::testing
