@@ -19,7 +19,7 @@ PROCESS_TESTS := ^(PlantRun|WebPages)\.
 TSAN_TESTS := ^(GuardedThread|IntegrityWatchTest|OutboxSenderTest|CentralSyncerTest|PlantServiceTest|PlantServeTest|PlcHandshakeTest|PlcServiceWords|PlcServiceTest|HttpApiTest|ServiceTest|ServiceStateTest|ServiceConfigFile|ServiceWatchdog|ServiceNotifyEnv)\.
 TSAN_TARGETS := core_test plant_mqtt_test plant_mqtt_service_test plant_central_test service_unit_test service_integration_test packaging_test gaugeloop
 
-.PHONY: all deps configure build build-asan build-tsan demo check test test-normal test-asan test-tsan package test-package bench clean
+.PHONY: all deps configure configure-asan configure-tsan build build-asan build-tsan demo check test test-normal test-asan test-tsan run-normal run-asan run-tsan package test-package bench clean
 
 all: build
 
@@ -30,31 +30,53 @@ deps:
 configure: deps
 	cmake -S . -B $(BUILD_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Release -DGAUGELOOP_WERROR=ON
 
+configure-asan: deps
+	cmake -S . -B $(ASAN_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DGAUGELOOP_SANITIZE=ON -DGAUGELOOP_BENCH=OFF -DGAUGELOOP_WERROR=ON
+
+configure-tsan: deps
+	cmake -S . -B $(TSAN_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DGAUGELOOP_TSAN=ON -DGAUGELOOP_BENCH=OFF -DGAUGELOOP_WERROR=ON
+
 # Everything: the binary, every test and every benchmark.
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
-build-asan: deps
-	cmake -S . -B $(ASAN_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DGAUGELOOP_SANITIZE=ON -DGAUGELOOP_BENCH=OFF -DGAUGELOOP_WERROR=ON
+build-asan: configure-asan
 	cmake --build $(ASAN_DIR) -j $(JOBS)
 
 # Only what the ThreadSanitizer run needs.
-build-tsan: deps
-	cmake -S . -B $(TSAN_DIR) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DGAUGELOOP_TSAN=ON -DGAUGELOOP_BENCH=OFF -DGAUGELOOP_WERROR=ON
+build-tsan: configure-tsan
 	cmake --build $(TSAN_DIR) -j $(JOBS) --target $(TSAN_TARGETS)
 
 demo: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target gaugeloop
 	$(BUILD_DIR)/bin/gaugeloop demo --iterations 3
 
-# Every test, without building the benchmarks. The SERIAL real-time tests (ctest label `serial`)
-# first and alone, so that nothing runs beside them; then the others $(JOBS) at a time, the
-# longest first (ctest's cost data in $(BUILD_DIR)/Testing; the COST property in a clean build).
-# Both ctest runs run to the end; the phase fails if either failed.
+# Each phase is its build, then its run (run-*: the tests of a build already built).
 test-normal: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target gaugeloop_tests
+	$(MAKE) --no-print-directory run-normal
+
+test-asan: build-asan
+	$(MAKE) --no-print-directory run-asan
+
+test-tsan: build-tsan
+	$(MAKE) --no-print-directory run-tsan
+
+# The SERIAL real-time tests (ctest label `serial`) first, so that no other test runs beside
+# them; then the others $(JOBS) at a time, the longest first (ctest's cost data in
+# $(BUILD_DIR)/Testing; the COST property in a clean build). Both ctest runs run to the end;
+# the phase fails if either failed.
+run-normal:
 	cd $(BUILD_DIR) && { ctest --output-on-failure -L serial; serial=$$?; \
 	  ctest --output-on-failure -j $(JOBS) -LE serial; rest=$$?; [ $$serial -eq 0 ] && [ $$rest -eq 0 ]; }
+
+run-asan:
+	cd $(ASAN_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
+	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS) -E '$(REALTIME_TESTS)|$(PROCESS_TESTS)'
+
+run-tsan:
+	cd $(TSAN_DIR) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
+	  ctest --output-on-failure -j $(JOBS) --no-tests=error -R '$(TSAN_TESTS)'
 
 # The edit-compile-test loop: the normal build's tests only, without the real-time and process
 # tests (about 300 s of clock that `make test-normal` runs). TESTS=regex narrows it further.
@@ -62,14 +84,6 @@ TESTS ?= .
 check: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target gaugeloop_tests
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) -R '$(TESTS)' -E '$(REALTIME_TESTS)|$(PROCESS_TESTS)'
-
-test-asan: build-asan
-	cd $(ASAN_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
-	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS) -E '$(REALTIME_TESTS)|$(PROCESS_TESTS)'
-
-test-tsan: build-tsan
-	cd $(TSAN_DIR) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
-	  ctest --output-on-failure -j $(JOBS) --no-tests=error -R '$(TSAN_TESTS)'
 
 # The Debian package, from the Release build: only the binary is built (test-normal has built
 # it already), then cpack: $(BUILD_DIR)/gaugeloop_<version>_<arch>.deb.
@@ -84,8 +98,16 @@ test-package: package
 	packaging/test_package.sh $(BUILD_DIR)
 
 # Every test in a normal build and under AddressSanitizer + UndefinedBehaviorSanitizer (less the
-# real-time ones); the service's threads under ThreadSanitizer; the package installed.
-test: test-normal test-asan test-tsan test-package
+# real-time ones); the service's threads under ThreadSanitizer; the package installed. The
+# phases' tests run in that order; the sanitizer builds run beside the tests before them, at the
+# lowest CPU priority (nice 19), so that the cores the tests leave idle (one, through the
+# real-time tests) build: the AddressSanitizer build beside the normal tests, the
+# ThreadSanitizer build beside the AddressSanitizer tests (scripts/make-test.sh).
+test: configure configure-asan configure-tsan
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target gaugeloop_tests
+	MAKE="$(MAKE)" BUILD_DIR="$(BUILD_DIR)" ASAN_DIR="$(ASAN_DIR)" TSAN_DIR="$(TSAN_DIR)" JOBS="$(JOBS)" \
+	  TSAN_TARGETS="$(TSAN_TARGETS)" scripts/make-test.sh
+	$(MAKE) --no-print-directory test-package
 
 # Every benchmark, one after the other (figures: docs/PERFORMANCE.md). Run on a quiet machine.
 bench: build

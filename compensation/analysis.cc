@@ -17,15 +17,15 @@
 
 #include "compensation/inspection.h"
 #include "compensation/message_text.h"
+#include "compensation/thread_fft.h"
+#include "core/angles.h"
 
 namespace gaugeloop {
 namespace {
 
-constexpr size_t kDegrees = static_cast<size_t>(kDegreesPerRevolution);
 constexpr int kMinRevolutions = 3;
 constexpr double kWholeDegreeTolerance = 1e-9;
 constexpr double kBaseCircleToleranceMm = 1e-3;  // 1 um
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 // Runout: base-circle degrees must have the design within 1 um for this many degrees either
 // side, and at least kMinEroded such degrees, else the margin is dropped.
 constexpr int kRampMarginDeg = 3;
@@ -55,12 +55,6 @@ const DegreeTrig& degree_trig() {
     return t;
   }();
   return trig;
-}
-
-// Eigen's FFT keeps its plan (the twiddle factors) in the object: one per thread, reused.
-Eigen::FFT<double>& thread_fft() {
-  thread_local Eigen::FFT<double> fft;
-  return fft;
 }
 
 // Brings every revolution into the cam frame, one value per whole cam degree.
@@ -504,6 +498,11 @@ std::array<double, 31> harmonic_amplitudes_um(const DegreeTable& values_um) {
   // A real table's harmonic k lives in bins k and N - k with equal magnitude: 2 |X_k| / N.
   for (size_t k = 1; k < amplitude.size(); ++k) amplitude[k] = 2.0 * std::abs(spectrum[k]) / n;
   return amplitude;
+}
+
+Eigen::FFT<double>& thread_fft() {
+  thread_local Eigen::FFT<double> fft;
+  return fft;
 }
 
 }  // namespace gaugeloop

@@ -19,7 +19,6 @@
 namespace gaugeloop {
 namespace {
 
-constexpr size_t kDegrees = static_cast<size_t>(kDegreesPerRevolution);
 constexpr int kNyquist = kDegreesPerRevolution / 2;
 
 // The design model and the analysis' design table must agree to this (mm): rounding only.

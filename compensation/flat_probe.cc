@@ -9,13 +9,10 @@
 #include "compensation/cam_geometry.h"
 #include "compensation/message_text.h"
 #include "compensation/polar_support.h"
+#include "core/angles.h"
 
 namespace gaugeloop {
-namespace {
-
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-
-}  // namespace
+namespace {}  // namespace
 
 Result<DesignReading> DesignReading::of_lobe(const PeriodicSpline& lift_mm, const Part& part) {
   Result<FollowerGeometry> geometry = follower_geometry(part);

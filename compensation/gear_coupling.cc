@@ -5,13 +5,11 @@
 #include <cmath>
 #include <string>
 
+#include "core/angles.h"
 #include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kRad = kPi / 180.0;
 
 Error bad(const std::string& key, double value, const std::string& allowed) {
   const int decimals = std::isfinite(value) && value == std::round(value) ? 0 : 4;
@@ -23,7 +21,7 @@ bool in(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && 
 }  // namespace
 
 double worm_lead_angle_deg(const WormWheel& worm, double normal_module_mm) {
-  return std::asin(worm.starts * normal_module_mm / worm.pitch_diameter_mm) / kRad;
+  return std::asin(worm.starts * normal_module_mm / worm.pitch_diameter_mm) / kRadPerDeg;
 }
 
 Status validate(const GearPart& part) {
@@ -44,7 +42,7 @@ Status validate(const GearPart& part) {
     return bad("[gear.worm] pitch_diameter_mm", w.pitch_diameter_mm, "10 to 2000 mm");
   }
   const double sin_lead = w.starts * g.normal_module_mm / w.pitch_diameter_mm;
-  if (!(sin_lead <= std::sin(45.0 * kRad))) {
+  if (!(sin_lead <= std::sin(45.0 * kRadPerDeg))) {
     return bad("[gear.worm] pitch_diameter_mm", w.pitch_diameter_mm,
                "too small for " + std::to_string(w.starts) + (w.starts == 1 ? " start" : " starts") + " of module " +
                    format_fixed(g.normal_module_mm, 3) + " mm: the thread would lead more than 45 deg");
@@ -74,8 +72,8 @@ Status validate(const GearPart& part) {
 GearCoupling gear_coupling(const GearPart& part) {
   const GearGeometry& g = part.gear;
   const WormWheel& w = part.worm;
-  const double beta = g.helix_angle_deg * kRad;
-  const double gamma = worm_lead_angle_deg(w, g.normal_module_mm) * kRad;
+  const double beta = g.helix_angle_deg * kRadPerDeg;
+  const double gamma = worm_lead_angle_deg(w, g.normal_module_mm) * kRadPerDeg;
   const double hg = g.helix_angle_deg == 0.0 ? 0.0 : hand_sign(g.hand);
   const double hw = hand_sign(w.hand);
   const double z2_mn = g.teeth * g.normal_module_mm;
@@ -84,8 +82,8 @@ GearCoupling gear_coupling(const GearPart& part) {
   k.s_zc_deg_per_mm = -hg * 360.0 * std::sin(beta) / (kPi * z2_mn);
   k.s_yc_deg_per_mm = 360.0 * std::cos(gamma) / (kPi * z2_mn);
   k.s_sim_c = 1.0;
-  k.lead_angle_deg = gamma / kRad;
-  k.setting_angle_deg = (hw * gamma - hg * beta) / kRad;
+  k.lead_angle_deg = gamma / kRadPerDeg;
+  k.setting_angle_deg = (hw * gamma - hg * beta) / kRadPerDeg;
   k.worm_lead_mm = w.starts * kPi * g.normal_module_mm / std::cos(gamma);
   k.gear_pitch_diameter_mm = z2_mn / std::cos(beta);
   k.transverse_pitch_mm = kPi * g.normal_module_mm / std::cos(beta);

@@ -6,12 +6,11 @@
 #include <cctype>
 #include <cmath>
 
+#include "core/angles.h"
 #include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The value of one basis function of `t` at z: 0 the term (or its sine), 1 its cosine.
 double basis(const ErrorTerm& t, int part, double z) {

@@ -5,13 +5,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/angles.h"
 #include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kRadPerDeg = kPi / 180.0;
 
 Status check_trace(const LeadTrace& t) {
   const std::string which =

@@ -12,21 +12,15 @@
 #include <unsupported/Eigen/FFT>
 
 #include "compensation/message_text.h"
+#include "compensation/thread_fft.h"
+#include "core/angles.h"
 
 namespace gaugeloop {
 namespace {
 
-constexpr size_t kDegrees = static_cast<size_t>(kDegreesPerRevolution);
 constexpr int kMaxHarmonic = kDegreesPerRevolution / 2 - 1;  // below Nyquist, whose derivative is not defined
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr double kUmPerMm = 1000.0;
 constexpr int kMinRoundnessDegrees = 3;  // a + b cos + c sin needs three degrees
-
-// Eigen's FFT keeps its plan (the twiddle factors) in the object: one per thread, reused.
-Eigen::FFT<double>& thread_fft() {
-  thread_local Eigen::FFT<double> fft;
-  return fft;
-}
 
 Status check_finite(const DegreeTable& error_um, const std::string& who) {
   for (size_t d = 0; d < kDegrees; ++d) {

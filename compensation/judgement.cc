@@ -10,12 +10,10 @@
 namespace gaugeloop {
 namespace {
 
-constexpr int kDegrees = kDegreesPerRevolution;
-
-int wrapped(int d) { return ((d % kDegrees) + kDegrees) % kDegrees; }
+int wrapped(int d) { return ((d % kDegreesPerRevolution) + kDegreesPerRevolution) % kDegreesPerRevolution; }
 
 // A cam degree in (-180, 180], as the nose-centred view and the zone arcs name it.
-int signed_deg(int d) { return d > 180 ? d - kDegrees : d; }
+int signed_deg(int d) { return d > 180 ? d - kDegreesPerRevolution : d; }
 
 std::string zone_where(const ZoneTolerance& z) {
   std::string what = "tolerance zone " + std::string(lobe_zone_name(z.zone));
@@ -31,7 +29,7 @@ std::array<bool, kDegreesPerRevolution> zone_members(const ZoneTolerance& z, con
   if (z.by_lift) {
     const bool opening_side = z.zone == LobeZone::kOpeningRamp || z.zone == LobeZone::kOpeningFlank;
     const bool closing_side = z.zone == LobeZone::kClosingRamp || z.zone == LobeZone::kClosingFlank;
-    for (int d = 0; d < kDegrees; ++d) {
+    for (int d = 0; d < kDegreesPerRevolution; ++d) {
       const int x = signed_deg(d);
       if (opening_side && x > 0) continue;
       if (closing_side && x < 0) continue;
@@ -41,8 +39,8 @@ std::array<bool, kDegreesPerRevolution> zone_members(const ZoneTolerance& z, con
     return in;
   }
   double end = z.to_deg;
-  while (end < z.from_deg) end += kDegrees;
-  if (end - z.from_deg >= kDegrees) {
+  while (end < z.from_deg) end += kDegreesPerRevolution;
+  if (end - z.from_deg >= kDegreesPerRevolution) {
     in.fill(true);
     return in;
   }
@@ -87,7 +85,7 @@ Result<std::vector<ZoneArc>> zone_arcs(const LobeTolerances& tolerances, const D
     int starts = 0;
     int start = 0;
     int count = 0;
-    for (int d = 0; d < kDegrees; ++d) {
+    for (int d = 0; d < kDegreesPerRevolution; ++d) {
       if (!in[static_cast<size_t>(d)]) continue;
       ++count;
       if (!in[static_cast<size_t>(wrapped(d - 1))]) {
@@ -130,8 +128,8 @@ Result<LobeJudgement> judge_lobe(const LobeAnalysis& analysis, const LobeToleran
   Result<std::vector<ZoneArc>> arcs = zone_arcs(tolerances, analysis.design_lift_mm);
   if (!arcs) return arcs.error();
 
-  std::vector<int> all(kDegrees);
-  for (int d = 0; d < kDegrees; ++d) all[static_cast<size_t>(d)] = d;
+  std::vector<int> all(kDegreesPerRevolution);
+  for (int d = 0; d < kDegreesPerRevolution; ++d) all[static_cast<size_t>(d)] = d;
   struct Table {
     const char* key;
     const char* unit;

@@ -9,11 +9,10 @@
 #include <Eigen/Core>
 
 #include "compensation/message_text.h"
+#include "core/angles.h"
 
 namespace gaugeloop {
 namespace {
-
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // Thomas algorithm for a tridiagonal system: sub[i] multiplies x[i-1], sup[i] multiplies
 // x[i+1] (sub[0] and sup[n-1] unused). Stable here because every matrix we pass is

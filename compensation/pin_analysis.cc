@@ -12,16 +12,14 @@
 #include "compensation/analysis.h"
 #include "compensation/periodic_spline.h"
 #include "compensation/pin_kinematics.h"
+#include "core/angles.h"
 
 namespace gaugeloop {
 namespace {
 
-constexpr size_t kDegrees = static_cast<size_t>(kDegreesPerRevolution);
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-
 // Two revolutions are the fewest that tell a spread; the lobe asks for 3 because its zero
 // and phase come from the run too, a pin's gauge is mastered.
-constexpr int kMinRevolutions = 2;
+constexpr int kMinPinRevolutions = 2;
 
 }  // namespace
 
@@ -48,10 +46,10 @@ LeastSquaresCircle fit_least_squares_circle(const DegreeTable& e) {
 Result<PinAnalysis> analyse_pin(const MeasuredRun& run, const PinGeometry& pin) {
   if (Status valid = validate(pin); !valid.ok()) return valid.error();
   const int revolutions = static_cast<int>(run.revolutions.size());
-  if (revolutions < kMinRevolutions) {
+  if (revolutions < kMinPinRevolutions) {
     return make_error(ErrorCode::kInvalidInput, "pin analysis: the run has " + std::to_string(revolutions) +
                                                     " complete revolution(s); at least " +
-                                                    std::to_string(kMinRevolutions) +
+                                                    std::to_string(kMinPinRevolutions) +
                                                     " are needed to average and to judge repeatability; measure again");
   }
   for (const RevolutionSamples& rev : run.revolutions) {

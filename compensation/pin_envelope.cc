@@ -7,12 +7,11 @@
 #include <string>
 
 #include "compensation/pin_kinematics.h"
+#include "core/angles.h"
 #include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
-
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
 // The wheel centre at every row of the path, relative to the pin's nominal centre, in the pin
 // frame (mm).

@@ -5,12 +5,11 @@
 #include <numbers>
 #include <string>
 
+#include "core/angles.h"
 #include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
-
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 double wrap_deg(double a) {
   double w = std::fmod(a, 360.0);

@@ -9,12 +9,11 @@
 
 #include "compensation/periodic_spline.h"
 #include "compensation/pin_kinematics.h"
+#include "core/angles.h"
 #include "core/number_text.h"
 
 namespace gaugeloop {
 namespace {
-
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
 // A curve table's rows must land on whole turns: the step divides 360 to within rounding.
 Result<std::size_t> rows_per_turn(double c_step_deg) {

@@ -7,12 +7,11 @@
 #include <utility>
 
 #include "compensation/cam_geometry.h"
+#include "core/angles.h"
 
 namespace gaugeloop {
 namespace {
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 constexpr double kContactToleranceDeg = 1e-10;
 // Newton steps the fast path of refine takes before handing over to the safeguarded search.
 constexpr int kFastNewtonSteps = 6;

@@ -12,12 +12,11 @@
 
 #include "compensation/cam_geometry.h"
 #include "compensation/message_text.h"
+#include "core/angles.h"
 
 namespace gaugeloop {
 namespace {
 
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 // A row whose evaluated wheel angle is within this of its target is carried the rest of the
 // way by a second-order Taylor step in psi: the error left is X''' dpsi^3 / 6 in X (below
 // 1e-20 mm), X''' dpsi^2 / 2 in X' and X''' dpsi in X'' (dpsi < 1.7e-8 rad).

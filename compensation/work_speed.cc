@@ -1,5 +1,6 @@
 // Grinding-point speed and the work speed program.
 #include "compensation/work_speed.h"
+#include "core/angles.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,8 +10,6 @@
 
 namespace gaugeloop {
 namespace {
-
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 Status in_range(double value, double lo, double hi, const char* key, const char* unit) {
   if (std::isfinite(value) && value > lo && value <= hi) return {};

@@ -35,12 +35,6 @@ Result<std::string> read_text(const fs::path& path, const std::string& what) {
   return std::string(without_utf8_bom(*text));
 }
 
-Error at_key(const TomlReader& r, std::string_view key, const Error& e) {
-  Error out = e;
-  out.message = r.where(key) + ": " + e.message;
-  return out;
-}
-
 // The service creates and writes files in `dir` (the database, NC programs): the directory, or
 // the nearest one above it that exists (the rest is created), must be a directory this user
 // may write. Caught at load, not at the first run: under the systemd unit /etc is read-only
@@ -101,7 +95,7 @@ Status read_gauge_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) 
   if (gr.error) return *gr.error;
   if (!gauge_file.empty()) {
     Result<ModbusSettings> gs = read_gauge_file(f.resolve(gauge_file));
-    if (!gs) return at_key(gr, "config", gs.error());
+    if (!gs) return gr.at_key("config", gs.error());
     c.gauge = std::move(*gs);
   }
   return {};
@@ -308,19 +302,19 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
     if (nr.error) return *nr.error;
     if (!main_path.empty()) {
       Result<std::string> text = read_text(f.resolve(main_path), "NC main program template");
-      if (!text) return at_key(nr, "main_template", text.error());
+      if (!text) return nr.at_key("main_template", text.error());
       job.nc_main_template = std::move(*text);
       job.nc_main_template_name = f.resolve(main_path).string();
     }
     if (!speed_path.empty()) {
       Result<std::string> text = read_text(f.resolve(speed_path), "NC speed subprogram template");
-      if (!text) return at_key(nr, "speed_template", text.error());
+      if (!text) return nr.at_key("speed_template", text.error());
       job.nc_speed_template = std::move(*text);
       job.nc_speed_template_name = f.resolve(speed_path).string();
     }
     if (!main_speed_path.empty()) {
       Result<std::string> text = read_text(f.resolve(main_speed_path), "NC main program template (speed)");
-      if (!text) return at_key(nr, "main_speed_template", text.error());
+      if (!text) return nr.at_key("main_speed_template", text.error());
       c.nc_main_speed_template = std::move(*text);
       c.nc_main_speed_template_name = f.resolve(main_speed_path).string();
     }
@@ -329,7 +323,7 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
                              std::string& name_out) -> Status {
       if (path.empty()) return {};
       Result<std::string> text = read_text(f.resolve(path), "NC template");
-      if (!text) return at_key(nr, key, text.error());
+      if (!text) return nr.at_key(key, text.error());
       text_out = std::move(*text);
       name_out = f.resolve(path).string();
       return {};
@@ -351,10 +345,10 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
     if (!(job.axis_limits.x_min_mm < job.axis_limits.x_max_mm)) {
       return make_error(ErrorCode::kInvalidInput, nr.where("x_max_mm") + ": must be above x_min_mm");
     }
-    if (Status w = check_writable_dir(job.nc_dir, "NC directory"); !w) return at_key(nr, "dir", w.error());
+    if (Status w = check_writable_dir(job.nc_dir, "NC directory"); !w) return nr.at_key("dir", w.error());
     if (!template_path.empty()) {
       Result<std::string> text = read_text(f.resolve(template_path), "NC template");
-      if (!text) return at_key(nr, "template", text.error());
+      if (!text) return nr.at_key("template", text.error());
       job.nc_template = std::move(*text);
       job.nc_template_name = f.resolve(template_path).string();
     }
@@ -377,7 +371,7 @@ Status read_database_table(TomlReader& top, const ConfigFile& f, JobSettings& jo
     job.db_path = f.resolve(dr.text("path", "gaugeloop.sqlite"));
     integrity_check_hours = static_cast<int>(dr.integer("integrity_check_hours", 24, 1, 8760));
     if (dr.error) return *dr.error;
-    if (Status w = check_writable_database(job.db_path); !w) return at_key(dr, "path", w.error());
+    if (Status w = check_writable_database(job.db_path); !w) return dr.at_key("path", w.error());
   } else if (Status w = check_writable_database(job.db_path); !w) {
     return make_error(ErrorCode::kInvalidInput,
                       f.source + ": [database] path (default " + job.db_path.string() + "): " + w.error().message);
@@ -489,7 +483,7 @@ Result<std::string> read_token_file(const TomlReader& hr, const ConfigFile& f, c
   const fs::path path = f.resolve(token_file);
   if (Status s = check_secret_file(hr, "token_file", path, "HTTP token file"); !s) return s.error();
   Result<std::string> text = read_text(path, "HTTP token file");
-  if (!text) return at_key(hr, "token_file", text.error());
+  if (!text) return hr.at_key("token_file", text.error());
   std::string token = *text;
   while (!token.empty() && (token.back() == '\n' || token.back() == '\r' || token.back() == ' ')) token.pop_back();
   if (token.empty()) return make_error(ErrorCode::kInvalidInput, hr.where("token_file") + ": the file is empty");
@@ -510,9 +504,9 @@ Status read_tls_keys(const TomlReader& hr, const ConfigFile& f, const std::strin
   hs.tls_key = f.resolve(key);
   if (Status s = check_secret_file(hr, "tls_key", hs.tls_key, "TLS private key"); !s) return s;
   Result<std::string> cert_text = read_regular_file(hs.tls_cert, "TLS certificate");
-  if (!cert_text) return at_key(hr, "tls_cert", cert_text.error());
+  if (!cert_text) return hr.at_key("tls_cert", cert_text.error());
   Result<std::string> key_text = read_regular_file(hs.tls_key, "TLS private key");
-  if (!key_text) return at_key(hr, "tls_key", key_text.error());
+  if (!key_text) return hr.at_key("tls_key", key_text.error());
   return {};
 }
 
@@ -581,7 +575,7 @@ Result<std::string> read_password_file(const TomlReader& mr, const ConfigFile& f
   const fs::path path = f.resolve(file);
   if (Status s = check_secret_file(mr, "password_file", path, "broker password file"); !s) return s.error();
   Result<std::string> text = read_text(path, "broker password file");
-  if (!text) return at_key(mr, "password_file", text.error());
+  if (!text) return mr.at_key("password_file", text.error());
   std::string password = *text;
   while (!password.empty() && (password.back() == '\n' || password.back() == '\r' || password.back() == ' ')) {
     password.pop_back();
@@ -608,15 +602,15 @@ Status read_mqtt_tls(const TomlReader& mr, const ConfigFile& f, const std::strin
   if (ca.empty()) return {};
   m.ca_file = f.resolve(ca);
   Result<std::string> ca_text = read_regular_file(m.ca_file, "broker CA file");
-  if (!ca_text) return at_key(mr, "ca_file", ca_text.error());
+  if (!ca_text) return mr.at_key("ca_file", ca_text.error());
   if (cert.empty()) return {};
   m.cert_file = f.resolve(cert);
   m.key_file = f.resolve(key);
   Result<std::string> cert_text = read_regular_file(m.cert_file, "broker client certificate");
-  if (!cert_text) return at_key(mr, "cert_file", cert_text.error());
+  if (!cert_text) return mr.at_key("cert_file", cert_text.error());
   if (Status s = check_secret_file(mr, "key_file", m.key_file, "broker client key"); !s) return s;
   Result<std::string> key_text = read_regular_file(m.key_file, "broker client key");
-  if (!key_text) return at_key(mr, "key_file", key_text.error());
+  if (!key_text) return mr.at_key("key_file", key_text.error());
   return {};
 }
 
@@ -749,9 +743,9 @@ Status read_part_entry(const toml::table& entry, const ConfigFile& f, PartClaims
   if (pr.has("plc_part_number")) plc_number = static_cast<int>(pr.integer("plc_part_number", std::nullopt, 1, 65535));
   if (pr.error) return *pr.error;
   Result<PartFile> pf = read_part_file(f.resolve(file));
-  if (!pf) return at_key(pr, "file", pf.error());
+  if (!pf) return pr.at_key("file", pf.error());
   Result<LiftTable> design = pf->pin ? Result<LiftTable>(LiftTable{}) : read_lift_table_csv(pf->part.lift_table);
-  if (!design) return at_key(pr, "file", design.error());
+  if (!design) return pr.at_key("file", design.error());
   if (!claims.parts.insert({pf->part.name, pf->part.lobe}).second) {
     return make_error(ErrorCode::kInvalidInput, pr.where("file") + ": part " + pf->part.name + " lobe " +
                                                     std::to_string(pf->part.lobe) + " is configured twice");
@@ -762,7 +756,7 @@ Status read_part_entry(const toml::table& entry, const ConfigFile& f, PartClaims
   c.parts.push_back({std::move(*pf), std::move(*design), plc_number});
   const JobSettings job = job_for(c, c.parts.back());
   if (Status y = check_y_table_numbers(pr, job); !y) return y;
-  if (Status ok = check_job_settings(job); !ok) return at_key(pr, "file", ok.error());
+  if (Status ok = check_job_settings(job); !ok) return pr.at_key("file", ok.error());
   return {};
 }
 
@@ -803,7 +797,7 @@ Status read_shaft_entries(const toml::table& table, const ConfigFile& f, Service
     const std::string file = sr.text("file", std::nullopt);
     if (sr.error) return *sr.error;
     Result<ShaftFile> shaft = read_shaft_file(f.resolve(file));
-    if (!shaft) return at_key(sr, "file", shaft.error());
+    if (!shaft) return sr.at_key("file", shaft.error());
     for (const ShaftLayout& known : c.shafts) {
       if (known.name == shaft->layout.name) {
         return make_error(ErrorCode::kInvalidInput, sr.where("file") + ": shaft '" + known.name +

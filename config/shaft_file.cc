@@ -12,12 +12,6 @@
 namespace gaugeloop {
 namespace {
 
-Error at_key(const TomlReader& r, std::string_view key, const Error& e) {
-  Error out = e;
-  out.message = r.where(key) + ": " + e.message;
-  return out;
-}
-
 // A part file grinds its nose at C = c_offset_deg; the shaft wants it at reference + angle.
 // A difference is not refused (the part file may serve another shaft too), but said. Runs
 // keep the frame mapping they were measured with, so a record read later is not affected.
@@ -64,7 +58,7 @@ Result<ShaftFile> parse_shaft_toml(std::string_view text, std::string_view sourc
     const std::filesystem::path named(file);
     const std::filesystem::path path = named.is_absolute() ? named : base_dir / named;
     Result<PartFile> pf = read_part_file(path);
-    if (!pf) return at_key(lr, "part", pf.error());
+    if (!pf) return lr.at_key("part", pf.error());
     if (!numbers.insert(pf->part.lobe).second) {
       return make_error(ErrorCode::kInvalidInput,
                         lr.where("part") + ": lobe " + std::to_string(pf->part.lobe) + " (part " + pf->part.name +

@@ -25,6 +25,12 @@ std::string TomlReader::where(std::string_view key) const {
          "`";
 }
 
+Error TomlReader::at_key(std::string_view key, const Error& e) const {
+  Error out = e;
+  out.message = where(key) + ": " + e.message;
+  return out;
+}
+
 void TomlReader::allow_only(std::initializer_list<std::string_view> known) {
   for (const auto& [key, node] : table_) {
     bool ok = false;

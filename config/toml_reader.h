@@ -25,6 +25,8 @@ class TomlReader {
 
   // "file:line: key `name`" (the line where the key is, if it is there).
   std::string where(std::string_view key) const;
+  // `e` with where(key) in front of its message.
+  Error at_key(std::string_view key, const Error& e) const;
 
   bool has(std::string_view key) const { return table_.contains(key); }
   // Refuses keys not in `known`, listing the known ones.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -10,6 +11,8 @@
 namespace gaugeloop {
 
 inline constexpr int kDegreesPerRevolution = 360;
+// The same, as a count of table entries.
+inline constexpr std::size_t kDegrees = static_cast<std::size_t>(kDegreesPerRevolution);
 
 // One value per whole degree, index = degree in [0, 360).
 using DegreeTable = std::array<double, kDegreesPerRevolution>;

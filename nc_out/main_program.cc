@@ -13,19 +13,12 @@ namespace gaugeloop {
 namespace {
 
 using nc_text::lines_of;
+using nc_text::parse_int;
 using nc_text::trim;
 using nc_text::upper;
 
-std::optional<int> parse_int(std::string_view s) {
-  s = trim(s);
-  int v = 0;
-  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
-  return v;
-}
-
 // A block's code: the comment after ';' removed, blanks trimmed, the block number (N10) dropped.
-std::string_view code_of(std::string_view line) {
+std::string_view block_code(std::string_view line) {
   if (const size_t semi = line.find(';'); semi != std::string_view::npos) line = line.substr(0, semi);
   line = trim(line);
   if (line.size() > 1 && (line[0] == 'N' || line[0] == 'n') && std::isdigit(static_cast<unsigned char>(line[1]))) {
@@ -96,7 +89,7 @@ Result<int> coupled_table_number(std::string_view program, std::string_view file
   const std::vector<std::string_view> lines = lines_of(program);
   for (size_t i = 0; i < lines.size(); ++i) {
     std::string error;
-    const std::vector<Coupling> found = couplings_on(code_of(lines[i]), error);
+    const std::vector<Coupling> found = couplings_on(block_code(lines[i]), error);
     if (!error.empty()) {
       return make_error(ErrorCode::kInvalidInput,
                         std::string(file_name) + " line " + std::to_string(i + 1) + ": " + error);
@@ -112,7 +105,7 @@ std::string speed_program_name(std::string_view program_name) { return std::stri
 Status check_main_calls_speed_program(std::string_view program, std::string_view file_name,
                                       std::string_view speed_subprogram) {
   for (const std::string_view line : lines_of(program)) {
-    const std::string_view code = code_of(line);
+    const std::string_view code = block_code(line);
     if (upper(code.substr(0, code.find_first_of(" \t("))) == upper(speed_subprogram)) return {};
   }
   return make_error(ErrorCode::kInvalidInput, std::string(file_name) +
@@ -161,7 +154,7 @@ Result<std::string> render_main_program(std::string_view template_text, std::str
   int y_line = 0;  // 1-based line of the first coupling of Y
   const std::vector<std::string_view> lines = lines_of(*program);
   for (size_t i = 0; i < lines.size(); ++i) {
-    const std::string_view code = code_of(lines[i]);
+    const std::string_view code = block_code(lines[i]);
     calls = calls || calls_program(code, subprogram);
     calls_y = calls_y || (with_y && calls_program(code, y_subprogram));
     std::string error;
@@ -250,7 +243,7 @@ Result<std::string> render_gear_main_program(std::string_view template_text, std
   bool calls = false;
   const std::vector<std::string_view> lines = lines_of(*program);
   for (std::size_t i = 0; i < lines.size(); ++i) {
-    const std::string_view code = code_of(lines[i]);
+    const std::string_view code = block_code(lines[i]);
     const std::string where = "line " + std::to_string(i + 1);
     if (is_coupling_block(code)) {
       if (coupled == coupling.size() || squeezed(code) != coupling[coupled]) {

@@ -1,5 +1,6 @@
 // Mustache variables through libmstch, behind a scan that refuses what libmstch would hide.
 #include "nc_out/nc_template.h"
+#include "nc_out/nc_text.h"
 
 #include <algorithm>
 #include <cctype>
@@ -9,16 +10,12 @@
 namespace gaugeloop {
 namespace {
 
+using nc_text::trim;
+
 bool is_name(std::string_view name) {
   if (name.empty() || !(std::isalpha(static_cast<unsigned char>(name.front())) || name.front() == '_')) return false;
   return std::all_of(name.begin(), name.end(),
                      [](char ch) { return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_'; });
-}
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Small text helpers the NC program readers share (main program, speed program): NC words are
+// Small text helpers the NC program readers and writers share: NC words are
 // case-insensitive, and files from a Windows share may end their lines with "\r\n".
 #pragma once
 
@@ -33,6 +33,22 @@ inline std::optional<double> parse_number(std::string_view s) {
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
   return v;
+}
+
+// A decimal integer, blanks around it allowed; empty for anything else.
+inline std::optional<int> parse_int(std::string_view s) {
+  s = trim(s);
+  int v = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
+  return v;
+}
+
+// `v` rounded to `decimals` places, never -0 (which a control would print as "-0.000").
+inline double round_to(double v, int decimals) {
+  const double q = std::pow(10.0, decimals);
+  const double r = std::round(v * q) / q;
+  return r == 0.0 ? 0.0 : r;
 }
 
 // The lines of `text` without their "\n" or a trailing "\r"; no empty line after a final "\n".

@@ -16,6 +16,8 @@
 namespace gaugeloop {
 namespace {
 
+using nc_text::round_to;
+
 using nc_text::lines_of;
 using nc_text::parse_number;
 using nc_text::trim;
@@ -25,11 +27,6 @@ constexpr double kFullTurnDeg = 360.0;
 constexpr double kTurnTolDeg = 0.0005;  // half the default C resolution
 
 std::string deg_text(double c_deg) { return "C" + format_fixed(c_deg, 3); }
-
-double round_to(double value, int decimals) {
-  const double scale = std::pow(10.0, decimals);
-  return std::round(value * scale) / scale;
-}
 
 // Time to run `length_deg` with the feed linear in path from v0 to v1 (deg/s, both positive):
 // dt = ds / v(s), v linear in s, so t = L ln(v1 / v0) / (v1 - v0).

@@ -17,21 +17,13 @@ namespace gaugeloop {
 namespace {
 
 using nc_text::code_of;
+using nc_text::parse_int;
+using nc_text::parse_number;
+using nc_text::trim;
+using nc_text::upper;
 using nc_text::words_of;
 
 constexpr std::string_view kHeaderPrefix = "; gaugeloop ";
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
-}
-
-std::string upper(std::string_view s) {
-  std::string out(s);
-  for (char& ch : out) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
-  return out;
-}
 
 // Lines without their '\n' or trailing '\r'.
 std::vector<std::string_view> split_lines(std::string_view text) {
@@ -47,22 +39,6 @@ std::vector<std::string_view> split_lines(std::string_view text) {
     pos = nl + 1;
   }
   return lines;
-}
-
-std::optional<double> parse_number(std::string_view s) {
-  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
-  double v = 0.0;
-  auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
-
-std::optional<int> parse_int(std::string_view s) {
-  s = trim(s);
-  int v = 0;
-  auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
-  return v;
 }
 
 // The following axis the template's CTABDEF names (its first argument, upper case), so that

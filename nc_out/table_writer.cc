@@ -1,6 +1,7 @@
 // Table writers and the command position error they report.
 #include "nc_out/table_writer.h"
 #include "core/number_text.h"
+#include "nc_out/nc_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +12,8 @@
 
 namespace gaugeloop {
 namespace {
+
+using nc_text::round_to;
 
 constexpr double kUmPerMm = 1000.0;
 // How many more blocks than the fewest the points of the table in force may grow to before
@@ -23,12 +26,6 @@ constexpr double kSeamWindowDeg = 1.0;
 // Rounds as the table text does (%.*f rounds half away from zero on glibc's exact decimal
 // expansion; std::round on the scaled value agrees except at ties nobody can see in a table
 // of measured values), never giving a signed zero.
-double round_to(double v, int decimals) {
-  const double q = std::pow(10.0, decimals);
-  const double r = std::round(v * q) / q;
-  return r == 0.0 ? 0.0 : r;
-}
-
 // Grid rows a table step spans, or 0 if the step does not divide 360 or is not a whole
 // multiple of the fine step.
 std::size_t rows_per_step(const SampledPath& path, double c_step_deg) {

@@ -20,7 +20,7 @@ constexpr std::string_view kCrLf = "\r\n";
 
 // Decimals written for a unit, also K2022: 1 nm for um, 0.0001 deg for a timing error, and
 // enough for the velocity and acceleration errors' small figures.
-int decimals_for_unit(const std::string& unit) {
+int dfq_decimals(const std::string& unit) {
   if (unit == "um") return 3;
   if (unit == "deg") return 4;
   if (unit == "mm/deg") return 6;
@@ -209,7 +209,7 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
     if (one_machine && !b.runs.front()->run.machine.empty()) out.add("K1081", part_number, b.runs.front()->run.machine);
     if (!options.operation.empty()) out.add("K1086", part_number, options.operation);
     for (const DfqCharacteristicDef& d : b.characteristics) {
-      const int decimals = decimals_for_unit(d.unit);
+      const int decimals = dfq_decimals(d.unit);
       std::optional<double> lower = d.limits.lower;
       bool natural_lower = false;
       if (!lower && has_natural_zero(d.key)) {
@@ -243,7 +243,7 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
       const int i = def.number;
       const auto found = of_key.find(def.key);
       const bool measured = found != of_key.end();
-      out.add("K0001", i, format_fixed(measured ? found->second->value : 0.0, decimals_for_unit(def.unit)));
+      out.add("K0001", i, format_fixed(measured ? found->second->value : 0.0, dfq_decimals(def.unit)));
       out.add("K0002", i, measured ? "0" : "255");
       out.add("K0004", i, time);
       out.add("K0006", i, std::to_string(r->run.id));

@@ -5,13 +5,12 @@
 #include <cmath>
 #include <utility>
 
+#include "core/angles.h"
 #include "core/text_file.h"
 #include "simulator/seeded_random.h"
 
 namespace gaugeloop {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // A uniform deviate in [lo, hi) from (seed, index).
 double uniform(std::uint64_t seed, std::uint64_t index, double lo, double hi) {

@@ -1,11 +1,11 @@
-// Angles in the tests: pi and degrees to radians, one definition for every test file.
+// Angles in the tests: the product's own constants (core/angles.h), also under testing::.
 #pragma once
 
-#include <numbers>
+#include "core/angles.h"
 
 namespace gaugeloop::testing {
 
-inline constexpr double kPi = std::numbers::pi;
-inline constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+using gaugeloop::kPi;
+using gaugeloop::kRadPerDeg;
 
 }  // namespace gaugeloop::testing
