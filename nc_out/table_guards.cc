@@ -105,9 +105,10 @@ Status check_table_guards(const CurveTable& table, const SampledPath& path, cons
   Result<TableInterpolant> nc = TableInterpolant::of(table.points, table.interpolation);
   if (!nc) return nc.error();
   const bool spline = table.interpolation != Interpolation::kLinear;  // a smooth table: its X' and X'' count
+  std::size_t segment = 0;
   for (std::size_t k = 0; k <= path.size(); ++k) {
     const double c = k == path.size() ? 360.0 : path.c_deg(k);
-    const TableInterpolant::Value v = nc->at(c);
+    const TableInterpolant::Value v = nc->at(c, segment);
     if (Status s = check_row("curve table", {c, v.x_mm, v.dx_dc_mm_per_deg, v.d2x_dc2_mm_per_deg2}, limits, spline);
         !s) {
       return s;

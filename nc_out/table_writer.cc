@@ -81,9 +81,10 @@ std::vector<CurvePoint> points_at_rows(const SampledPath& path, const std::vecto
 std::vector<double> row_errors_mm(const SampledPath& path, const TableInterpolant& nc) {
   const std::size_t n = path.size();
   std::vector<double> e(n + 1);
+  std::size_t segment = 0;
   for (std::size_t j = 0; j <= n; ++j) {
     const double c = j == n ? 360.0 : path.c_deg(j);
-    e[j] = nc.at(c).x_mm - path.x_mm[j % n];
+    e[j] = nc.at(c, segment).x_mm - path.x_mm[j % n];
   }
   return e;
 }
@@ -287,17 +288,32 @@ Result<TableInterpolant> TableInterpolant::of(const std::vector<CurvePoint>& poi
 }
 
 TableInterpolant::Value TableInterpolant::at(double c_deg) const {
+  std::size_t segment = c_deg_.size();  // no hint: search
+  return at(c_deg, segment);
+}
+
+TableInterpolant::Value TableInterpolant::at(double c_deg, std::size_t& segment) const {
   const std::size_t m = c_deg_.size();
   // Outside the definition range a periodic table is read modulo its range (a table starting on
   // the base circle covers C0 this way); within it, as defined.
-  const double range = c_deg_.back() - c_deg_.front();
   double c = c_deg;
   if (c < c_deg_.front() || c > c_deg_.back()) {
+    const double range = c_deg_.back() - c_deg_.front();
     c = c_deg_.front() + std::fmod(std::fmod(c - c_deg_.front(), range) + range, range);
   }
   c = std::clamp(c, c_deg_.front(), c_deg_.back());
-  std::size_t i = static_cast<std::size_t>(std::upper_bound(c_deg_.begin(), c_deg_.end(), c) - c_deg_.begin());
-  i = std::min(i == 0 ? 0 : i - 1, m - 2);
+  // Segment i holds c_i <= C < c_i+1; the last one holds its end too (as upper_bound finds).
+  // The hint first, then the segment after it, then a search.
+  const double* cs = c_deg_.data();
+  std::size_t i = segment;
+  if (!(i + 2 <= m && cs[i] <= c && (c < cs[i + 1] || i + 2 == m))) {
+    ++i;
+    if (!(i + 2 <= m && cs[i] <= c && (c < cs[i + 1] || i + 2 == m))) {
+      i = static_cast<std::size_t>(std::upper_bound(cs, cs + m, c) - cs);
+      i = std::min(i == 0 ? 0 : i - 1, m - 2);
+    }
+  }
+  segment = i;
   const double h = c_deg_[i + 1] - c_deg_[i];
   const double y0 = x_mm_[i];
   const double y1 = x_mm_[i + 1];
@@ -543,9 +559,10 @@ Result<CurveTable> adaptive_spline_from_c0(const SampledPath& path, const Adapti
             const std::size_t lo = fewer[i >= 9 ? i - 9 : 0];
             const std::size_t hi = fewer[std::min(i + 8, fewer.size() - 1)];
             bool keeps = true;
+            std::size_t segment = 0;
             for (std::size_t j = lo; j <= hi && keeps; ++j) {
               const double c = j == n ? 360.0 : path.c_deg(j);
-              keeps = std::abs(trial->at(c).x_mm - path.x_mm[j % n]) <= bound_mm;
+              keeps = std::abs(trial->at(c, segment).x_mm - path.x_mm[j % n]) <= bound_mm;
             }
             if (keeps) {
               pruned = std::move(fewer);

@@ -70,6 +70,9 @@ class TableInterpolant {
     double d2x_dc2_mm_per_deg2 = 0.0;
   };
   Value at(double c_deg) const;
+  // As at(c_deg), for a scan along C: `segment` is the segment the last call found (start
+  // with 0); a C in it or the next is found without a search. Same values as at(c_deg).
+  Value at(double c_deg, std::size_t& segment) const;
 
   // Largest |d2X/dC2| of the interpolant (0 for linear): for the between-rows bound.
   double max_abs_d2_mm_per_deg2() const;
