@@ -4,6 +4,10 @@ BUILD_DIR ?= build
 ASAN_DIR ?= build-asan
 TSAN_DIR ?= build-tsan
 JOBS ?= $(shell nproc)
+# Tests at a time (ctest -j): twice the cores. Most tests spend most of their time waiting on a
+# simulated spindle, a socket or a child process, so twice as many keep the cores busy; they
+# hold on a loaded machine (docs/building.md). The SERIAL real-time tests run alone regardless.
+TEST_JOBS ?= $(shell echo $$((2 * $(JOBS))))
 CMAKE_GEN := -G Ninja
 
 # The tests that time live polling against a real clock (SERIAL: about 245 s run alone). They
@@ -63,27 +67,27 @@ test-tsan: build-tsan
 	$(MAKE) --no-print-directory run-tsan
 
 # The SERIAL real-time tests (ctest label `serial`) first, so that no other test runs beside
-# them; then the others $(JOBS) at a time, the longest first (ctest's cost data in
+# them; then the others $(TEST_JOBS) at a time, the longest first (ctest's cost data in
 # $(BUILD_DIR)/Testing; the COST property in a clean build). Both ctest runs run to the end;
 # the phase fails if either failed.
 run-normal:
 	cd $(BUILD_DIR) && { ctest --output-on-failure -L serial; serial=$$?; \
-	  ctest --output-on-failure -j $(JOBS) -LE serial; rest=$$?; [ $$serial -eq 0 ] && [ $$rest -eq 0 ]; }
+	  ctest --output-on-failure -j $(TEST_JOBS) -LE serial; rest=$$?; [ $$serial -eq 0 ] && [ $$rest -eq 0 ]; }
 
 run-asan:
 	cd $(ASAN_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
-	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS) -E '$(REALTIME_TESTS)|$(PROCESS_TESTS)'
+	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(TEST_JOBS) -E '$(REALTIME_TESTS)|$(PROCESS_TESTS)'
 
 run-tsan:
 	cd $(TSAN_DIR) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
-	  ctest --output-on-failure -j $(JOBS) --no-tests=error -R '$(TSAN_TESTS)'
+	  ctest --output-on-failure -j $(TEST_JOBS) --no-tests=error -R '$(TSAN_TESTS)'
 
 # The edit-compile-test loop: the normal build's tests only, without the real-time and process
 # tests (about 300 s of clock that `make test-normal` runs). TESTS=regex narrows it further.
 TESTS ?= .
 check: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target gaugeloop_tests
-	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) -R '$(TESTS)' -E '$(REALTIME_TESTS)|$(PROCESS_TESTS)'
+	cd $(BUILD_DIR) && ctest --output-on-failure -j $(TEST_JOBS) -R '$(TESTS)' -E '$(REALTIME_TESTS)|$(PROCESS_TESTS)'
 
 # The Debian package, from the Release build: only the binary is built (test-normal has built
 # it already), then cpack: $(BUILD_DIR)/gaugeloop_<version>_<arch>.deb.
@@ -105,7 +109,7 @@ test-package: package
 # ThreadSanitizer build beside the AddressSanitizer tests (scripts/make-test.sh).
 test: configure configure-asan configure-tsan
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target gaugeloop_tests
-	MAKE="$(MAKE)" BUILD_DIR="$(BUILD_DIR)" ASAN_DIR="$(ASAN_DIR)" TSAN_DIR="$(TSAN_DIR)" JOBS="$(JOBS)" \
+	MAKE="$(MAKE)" BUILD_DIR="$(BUILD_DIR)" ASAN_DIR="$(ASAN_DIR)" TSAN_DIR="$(TSAN_DIR)" JOBS="$(JOBS)" TEST_JOBS="$(TEST_JOBS)" \
 	  TSAN_TARGETS="$(TSAN_TARGETS)" scripts/make-test.sh
 	$(MAKE) --no-print-directory test-package
 

@@ -5,7 +5,7 @@
 # output goes to <build dir>/background-build.log, printed in full if the build fails.
 # Every phase runs to its end; the script fails if any build or test run failed.
 set -uo pipefail
-: "${MAKE:=make}" "${BUILD_DIR:=build}" "${ASAN_DIR:=build-asan}" "${TSAN_DIR:=build-tsan}" "${JOBS:=2}"
+: "${MAKE:=make}" "${BUILD_DIR:=build}" "${ASAN_DIR:=build-asan}" "${TSAN_DIR:=build-tsan}" "${JOBS:=2}" "${TEST_JOBS:=4}"
 : "${TSAN_TARGETS:?set by the Makefile: what the ThreadSanitizer build builds}"
 
 # build_beside DIR [cmake --build arguments...]: starts the build in the background; its pid in BUILD_PID.
@@ -31,13 +31,13 @@ finish_build() {
 
 status=0
 build_beside "${ASAN_DIR}"
-"${MAKE}" --no-print-directory run-normal BUILD_DIR="${BUILD_DIR}" JOBS="${JOBS}" || status=1
+"${MAKE}" --no-print-directory run-normal BUILD_DIR="${BUILD_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
 if finish_build "${ASAN_DIR}"; then
   # shellcheck disable=SC2086 # the targets are a list
   build_beside "${TSAN_DIR}" --target ${TSAN_TARGETS}
-  "${MAKE}" --no-print-directory run-asan ASAN_DIR="${ASAN_DIR}" JOBS="${JOBS}" || status=1
+  "${MAKE}" --no-print-directory run-asan ASAN_DIR="${ASAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
   if finish_build "${TSAN_DIR}"; then
-    "${MAKE}" --no-print-directory run-tsan TSAN_DIR="${TSAN_DIR}" JOBS="${JOBS}" || status=1
+    "${MAKE}" --no-print-directory run-tsan TSAN_DIR="${TSAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
   else
     status=1
   fi
