@@ -38,8 +38,20 @@ ModbusSettings rtu_settings(const std::string& device, int unit_id) {
   ms.device = device;
   ms.baud = 115200;
   ms.unit_id = unit_id;
-  ms.response_timeout = std::chrono::milliseconds(100);
+  // A loaded machine (tests run twice the cores at a time, a build beside them) can hold the
+  // simulator's thread or socat for tens of milliseconds: the margin is a second, not the
+  // 100 ms a quiet line needs (both tests failed once at 100 ms under such load).
+  ms.response_timeout = std::chrono::milliseconds(1000);
   return ms;
+}
+
+// As above: a stall of the simulator under load is not a frozen amplifier, and the run may
+// take longer than on a quiet machine.
+PollerSettings loaded_machine_poller() {
+  PollerSettings ps;
+  ps.stale_after = std::chrono::milliseconds(1000);
+  ps.run_timeout = std::chrono::milliseconds(60000);
+  return ps;
 }
 
 TEST(RtuLink, LatchedRunOverAPtyPair) {
@@ -49,7 +61,7 @@ TEST(RtuLink, LatchedRunOverAPtyPair) {
   ASSERT_NE(sim, nullptr);
   ModbusGauge gauge(rtu_settings(pty.gauge_end(), 7));
   EXPECT_NE(gauge.address().find("rtu:" + pty.gauge_end() + "@115200"), std::string::npos) << gauge.address();
-  Poller poller(gauge, PollerSettings{});
+  Poller poller(gauge, loaded_machine_poller());
   Result<MeasuredRun> run = poller.measure();
   ASSERT_TRUE(run.ok()) << run.error().message;
   ASSERT_EQ(run->revolutions.size(), 3u);
@@ -69,7 +81,7 @@ TEST(RtuLink, CompactLatchedRunOverAPtyPair) {
   ModbusSettings ms = rtu_settings(pty.gauge_end(), 7);
   ms.map = testing::compact_simulator_map();
   ModbusGauge gauge(ms);
-  Poller poller(gauge, PollerSettings{});
+  Poller poller(gauge, loaded_machine_poller());
   Result<MeasuredRun> run = poller.measure();
   ASSERT_TRUE(run.ok()) << run.error().message;
   ASSERT_EQ(run->revolutions.size(), 3u);
