@@ -23,7 +23,7 @@ PROCESS_TESTS := ^(PlantRun|WebPages)\.
 TSAN_TESTS := ^(GuardedThread|IntegrityWatchTest|OutboxSenderTest|CentralSyncerTest|PlantServiceTest|PlantServeTest|PlcHandshakeTest|PlcServiceWords|PlcServiceTest|HttpApiTest|ServiceTest|ServiceStateTest|ServiceConfigFile|ServiceWatchdog|ServiceNotifyEnv)\.
 TSAN_TARGETS := core_test plant_mqtt_test plant_mqtt_service_test plant_central_test service_unit_test service_integration_test packaging_test gaugeloop
 
-.PHONY: all deps configure configure-asan configure-tsan build build-asan build-tsan demo check test test-normal test-asan test-tsan run-normal run-asan run-tsan package test-package bench clean
+.PHONY: all deps configure configure-asan configure-tsan build build-asan build-tsan demo check test test-normal test-asan test-tsan run-normal run-serial run-parallel run-asan run-tsan package test-package bench clean
 
 all: build
 
@@ -69,10 +69,17 @@ test-tsan: build-tsan
 # The SERIAL real-time tests (ctest label `serial`) first, so that no other test runs beside
 # them; then the others $(TEST_JOBS) at a time, the longest first (ctest's cost data in
 # $(BUILD_DIR)/Testing; the COST property in a clean build). Both ctest runs run to the end;
-# the phase fails if either failed.
+# the phase fails if either failed. run-serial and run-parallel are its two halves: `make test`
+# runs them apart (scripts/make-test.sh).
 run-normal:
-	cd $(BUILD_DIR) && { ctest --output-on-failure -L serial; serial=$$?; \
-	  ctest --output-on-failure -j $(TEST_JOBS) -LE serial; rest=$$?; [ $$serial -eq 0 ] && [ $$rest -eq 0 ]; }
+	$(MAKE) --no-print-directory run-serial; serial=$$?; \
+	  $(MAKE) --no-print-directory run-parallel; rest=$$?; [ $$serial -eq 0 ] && [ $$rest -eq 0 ]
+
+run-serial:
+	cd $(BUILD_DIR) && ctest --output-on-failure -L serial
+
+run-parallel:
+	cd $(BUILD_DIR) && ctest --output-on-failure -j $(TEST_JOBS) -LE serial
 
 run-asan:
 	cd $(ASAN_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
@@ -102,11 +109,11 @@ test-package: package
 	packaging/test_package.sh $(BUILD_DIR)
 
 # Every test in a normal build and under AddressSanitizer + UndefinedBehaviorSanitizer (less the
-# real-time ones); the service's threads under ThreadSanitizer; the package installed. The
-# phases' tests run in that order; the sanitizer builds run beside the tests before them, at the
-# lowest CPU priority (nice 19), so that the cores the tests leave idle (one, through the
-# real-time tests) build: the AddressSanitizer build beside the normal tests, the
-# ThreadSanitizer build beside the AddressSanitizer tests (scripts/make-test.sh).
+# real-time ones); the service's threads under ThreadSanitizer; the package installed. What runs
+# beside what (scripts/make-test.sh): the AddressSanitizer build at nice 19 beside the normal
+# build's other tests; then the real-time tests at normal priority beside the AddressSanitizer
+# tests and then the ThreadSanitizer tests at nice 10 and the ThreadSanitizer build at nice 19,
+# so that the real-time tests get the CPU whenever they want it and the rest the core they leave.
 test: configure configure-asan configure-tsan
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target gaugeloop_tests
 	MAKE="$(MAKE)" BUILD_DIR="$(BUILD_DIR)" ASAN_DIR="$(ASAN_DIR)" TSAN_DIR="$(TSAN_DIR)" JOBS="$(JOBS)" TEST_JOBS="$(TEST_JOBS)" \

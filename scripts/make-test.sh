@@ -1,8 +1,17 @@
 #!/usr/bin/env bash
-# The test phases of `make test` after the normal build (Makefile: test). Each sanitizer build
-# runs in the background at nice 19 while the phase before it runs its tests, so that a core
-# those tests leave idle builds instead of waiting; then that phase's tests run. The builds'
-# output goes to <build dir>/background-build.log, printed in full if the build fails.
+# The test phases of `make test` after the normal build (Makefile: test), arranged so that the
+# two cores stay busy:
+#   1. the AddressSanitizer build at nice 19, beside the normal build's tests but the real-time
+#      ones (run-parallel);
+#   2. the real-time tests (run-serial: ctest label `serial`, about 240 s mostly waiting on a
+#      simulated spindle) at normal priority, beside the AddressSanitizer tests and then the
+#      ThreadSanitizer tests at nice 10, and the ThreadSanitizer build at nice 19: the
+#      real-time tests get a core whenever they want one (the scheduler weighs nice 10 at 110
+#      and nice 19 at 15 against nice 0's 1024), the sanitizer tests get the rest before the
+#      build does. The real-time tests run in the normal build directory, the sanitizer tests
+#      in theirs, so no two ctest runs share a Testing/ directory.
+# A build's output goes to <build dir>/background-build.log, the real-time tests' to
+# <build dir>/serial-tests.log; each is printed in full if it failed (the tests' log always).
 # Every phase runs to its end; the script fails if any build or test run failed.
 set -uo pipefail
 : "${MAKE:=make}" "${BUILD_DIR:=build}" "${ASAN_DIR:=build-asan}" "${TSAN_DIR:=build-tsan}" "${JOBS:=2}" "${TEST_JOBS:=4}"
@@ -31,17 +40,29 @@ finish_build() {
 
 status=0
 build_beside "${ASAN_DIR}"
-"${MAKE}" --no-print-directory run-normal BUILD_DIR="${BUILD_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
-if finish_build "${ASAN_DIR}"; then
+"${MAKE}" --no-print-directory run-parallel BUILD_DIR="${BUILD_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
+asan_built=0
+finish_build "${ASAN_DIR}" && asan_built=1 || status=1
+
+echo "== the real-time tests at normal priority, beside the rest (${BUILD_DIR}/serial-tests.log)"
+"${MAKE}" --no-print-directory run-serial BUILD_DIR="${BUILD_DIR}" >"${BUILD_DIR}/serial-tests.log" 2>&1 &
+serial_pid=$!
+
+if [ "${asan_built}" -eq 1 ]; then
   # shellcheck disable=SC2086 # the targets are a list
   build_beside "${TSAN_DIR}" --target ${TSAN_TARGETS}
-  "${MAKE}" --no-print-directory run-asan ASAN_DIR="${ASAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
+  nice -n 10 "${MAKE}" --no-print-directory run-asan ASAN_DIR="${ASAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
   if finish_build "${TSAN_DIR}"; then
-    "${MAKE}" --no-print-directory run-tsan TSAN_DIR="${TSAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
+    nice -n 10 "${MAKE}" --no-print-directory run-tsan TSAN_DIR="${TSAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
   else
     status=1
   fi
-else
-  status=1
 fi
+
+echo "== waiting for the real-time tests"
+serial_status=0
+wait "${serial_pid}" || serial_status=1
+echo "== the real-time tests' log:"
+cat "${BUILD_DIR}/serial-tests.log"
+[ "${serial_status}" -eq 0 ] || { echo "== the real-time tests FAILED"; status=1; }
 exit "${status}"
