@@ -16,6 +16,7 @@
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "core/text_file.h"
+#include "job/gear_run.h"
 #include "job/gear_stroke.h"
 #include "job/measure_job.h"
 #include "nc_out/stroke_program.h"
@@ -83,6 +84,10 @@ struct StrokeOptions : PushTargetOptions {
 
 struct CorrectOptions : PushTargetOptions {
   std::string lead_path;
+  std::string machine = "grinder-1";
+  std::string serial;
+  std::string operator_name;
+  std::string note;
 };
 
 // Sets `s` up to push gf's stroke into <nc-dir>/<nc_program>.SPF, as a measurement pushes a
@@ -156,36 +161,63 @@ int cmd_gear_stroke(const StrokeOptions& o) {
   return kExitOk;
 }
 
+// One trace's figures as `gear correct` and `gear runs show` print them.
+void print_trace_table(const std::vector<GearTraceRecord>& traces) {
+  std::printf("  %5s  %-6s  %10s  %10s  %10s  %6s\n", "gap", "flank", "F_beta um", "f_f_beta", "f_H_beta", "class");
+  for (const GearTraceRecord& t : traces) {
+    std::printf("  %5d  %-6s  %10.2f  %10.2f  %+10.2f  %6d\n", t.gap, t.flank.c_str(), t.total_um, t.form_um,
+                t.slope_um, t.tolerance_class);
+  }
+}
+
+// "in (class 5 asked)", "out (class 5 asked)", "not judged (the part names no tolerance_class)".
+std::string gear_verdict_text(const GearRunRecord& r) {
+  if (!r.required_class) return "not judged (the part names no tolerance_class)";
+  return std::string(r.verdict == Verdict::kIn ? "in" : "out") + " (class " + std::to_string(*r.required_class) +
+         " asked)";
+}
+
 int cmd_gear_correct(const CorrectOptions& o) {
   Result<GearPartFile> gf = read_gear_part_file(o.part_path);
   if (!gf) return report_error(gf.error());
   Result<std::vector<LeadTrace>> traces = read_lead_traces_csv(o.lead_path);
   if (!traces) return report_error(traces.error());
-  const GearGeometry& g = gf->part.gear;
-  const double d = gear_coupling(gf->part).gear_pitch_diameter_mm;
-  // Every trace judged before anything is written: one too short for ISO 1328-1 is refused.
-  std::vector<LeadFigures> figures;
-  for (const LeadTrace& t : *traces) {
-    Result<LeadFigures> f = lead_figures(t, g);
-    if (!f) return report_error(make_error(f.error().code, o.lead_path + ": " + f.error().message));
-    figures.push_back(*f);
-  }
   GearStrokeSettings s;
   apply_push_options(o, s);
+  GearRunOrigin origin;
+  origin.part_name = gf->name;
+  origin.required_class = gf->tolerance_class;
+  origin.machine = o.machine;
+  origin.source = o.lead_path;
+  origin.serial = o.serial;
+  origin.operator_name = o.operator_name;
+  origin.note = o.note;
+  // Every trace judged before anything is written: one too short for ISO 1328-1 is refused.
+  Result<GearRunRecord> judged = judge_gear(gf->part, *traces, origin);
+  if (!judged) return report_error(make_error(judged.error().code, o.lead_path + ": " + judged.error().message));
   std::optional<RunStore> store;
   if (Status t = open_push_target(o.paths, o.main_template_path, *gf, s, store); !t) return report_error(t.error());
-  Result<GearCorrection> c = correct_gear_stroke(gf->part, *traces, "lead traces " + o.lead_path, s);
-  if (!c) return report_error(c.error());
-  std::printf("lead of %s as measured (%s; ISO 1328-1 over %.2f .. %.2f mm):\n", gf->name.c_str(), o.lead_path.c_str(),
-              figures.front().from_mm, figures.front().to_mm);
-  std::printf("  %5s  %-6s  %10s  %10s  %10s  %6s\n", "gap", "flank", "F_beta um", "f_f_beta", "f_H_beta", "class");
-  for (std::size_t i = 0; i < traces->size(); ++i) {
-    const LeadFigures& f = figures[i];
-    std::printf("  %5d  %-6s  %10.2f  %10.2f  %+10.2f  %6d\n", (*traces)[i].gap,
-                std::string(flank_name((*traces)[i].flank)).c_str(), f.total_um, f.form_um, f.slope_um,
-                helix_tolerance_class(f.total_um, d, g.face_width_mm));
+  // The gear is kept first, ground with the stroke in force if there is one, so that a refused
+  // correction loses no measurement.
+  Result<StrokeInForce> in_force = stroke_in_force(*store, s.nc_file, "");
+  if (in_force) judged->ground_with_version = in_force->version;
+  judged->nc_file = s.nc_file.string();
+  Result<std::int64_t> id = store->insert_gear_run(*judged);
+  if (!id) return report_error(id.error());
+  std::printf("gear run %lld of %s: lead as measured (%s; ISO 1328-1 over %.2f .. %.2f mm):\n",
+              static_cast<long long>(*id), gf->name.c_str(), o.lead_path.c_str(), judged->traces.front().from_mm,
+              judged->traces.front().to_mm);
+  print_trace_table(judged->traces);
+  std::printf("F_beta %.2f um at worst (class %d): %s\n", judged->total_max_um, judged->tolerance_class,
+              gear_verdict_text(*judged).c_str());
+  Result<GearCorrection> c =
+      correct_gear_stroke(gf->part, *traces, "gear run " + std::to_string(*id) + ", lead traces " + o.lead_path, s);
+  if (!c) {
+    std::fprintf(stderr, "gear run %lld is stored; no stroke was pushed from it\n", static_cast<long long>(*id));
+    return report_error(c.error());
   }
   const MeshIdentification& m = c->identification;
+  if (Status r = store->record_gear_push(*id, c->pushed.version, m.residual_rms_um); !r) return report_error(r.error());
   int held = 0;
   for (const bool seen : m.observed) held += seen ? 0 : 1;
   std::printf(
@@ -203,6 +235,123 @@ int cmd_gear_correct(const CorrectOptions& o) {
   std::printf("pushed %s as stroke version %d (from version %d), read back; main program %s\n",
               c->pushed.written.string().c_str(), c->pushed.version, c->from_version,
               main_program_path(c->pushed.written).string().c_str());
+  return kExitOk;
+}
+
+struct GearRunsOptions {
+  DataPaths paths;
+  GearRunQuery query;
+  std::string verdict;
+  std::int64_t id = 0;
+  bool json = false;
+};
+
+nlohmann::json gear_run_json(const StoredGearRun& g, bool with_traces) {
+  const GearRunRecord& r = g.record;
+  nlohmann::json j{
+      {"id", g.id},
+      {"started_utc", r.started_utc},
+      {"machine", r.machine},
+      {"part", r.part},
+      {"source", r.source},
+      {"serial", r.serial},
+      {"operator", r.operator_name},
+      {"note", r.note},
+      {"nc_file", r.nc_file},
+      {"ground_with_version", r.ground_with_version ? nlohmann::json(*r.ground_with_version) : nullptr},
+      {"required_class", r.required_class ? nlohmann::json(*r.required_class) : nullptr},
+      {"verdict", verdict_name(r.verdict)},
+      {"tolerance_class", r.tolerance_class},
+      {"total_max_um", r.total_max_um},
+      {"total_mean_um", r.total_mean_um},
+      {"form_mean_um", r.form_mean_um},
+      {"slope_mean_abs_um", r.slope_mean_abs_um},
+      {"pushed_version", g.pushed_version ? nlohmann::json(*g.pushed_version) : nullptr},
+      {"mesh_residual_rms_um", g.mesh_residual_rms_um ? nlohmann::json(*g.mesh_residual_rms_um) : nullptr}};
+  if (with_traces) {
+    nlohmann::json traces = nlohmann::json::array();
+    for (const GearTraceRecord& t : r.traces) {
+      traces.push_back({{"gap", t.gap},
+                        {"flank", t.flank},
+                        {"total_um", t.total_um},
+                        {"form_um", t.form_um},
+                        {"slope_um", t.slope_um},
+                        {"tolerance_class", t.tolerance_class},
+                        {"from_mm", t.from_mm},
+                        {"to_mm", t.to_mm},
+                        {"z_mm", t.z_mm},
+                        {"deviation_um", t.deviation_um}});
+    }
+    j["traces"] = std::move(traces);
+  }
+  return j;
+}
+
+int cmd_gear_runs_list(GearRunsOptions o) {
+  if (!o.verdict.empty()) {
+    o.query.verdict = verdict_from_name(o.verdict);
+    if (!o.query.verdict) {
+      return report_error(
+          make_error(ErrorCode::kInvalidInput, "--verdict '" + o.verdict + "' is not one of in, out, not_judged"));
+    }
+  }
+  Result<RunStore> store = open_history_read_only(o.paths);
+  if (!store) return report_error(store.error());
+  Result<std::vector<StoredGearRun>> runs = store->list_gear_runs(o.query);
+  if (!runs) return report_error(runs.error());
+  if (o.json) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const StoredGearRun& g : *runs) j.push_back(gear_run_json(g, false));
+    print_json(j);
+    return kExitOk;
+  }
+  if (runs->empty()) {
+    std::printf("no gear runs (in %s)\n", store->path().string().c_str());
+    return kExitOk;
+  }
+  std::printf("%6s  %-20s  %-12s  %-20s  %-12s  %9s  %5s  %-10s  %6s  %6s\n", "id", "started (UTC)", "part", "machine",
+              "serial", "F_beta um", "class", "verdict", "ground", "pushed");
+  for (const StoredGearRun& g : *runs) {
+    const GearRunRecord& r = g.record;
+    std::printf("%6lld  %-20s  %-12s  %-20s  %-12s  %9.2f  %5d  %-10s  %6s  %6s\n", static_cast<long long>(g.id),
+                r.started_utc.c_str(), r.part.c_str(), r.machine.c_str(), r.serial.empty() ? "-" : r.serial.c_str(),
+                r.total_max_um, r.tolerance_class, std::string(verdict_name(r.verdict)).c_str(),
+                r.ground_with_version ? ("v" + std::to_string(*r.ground_with_version)).c_str() : "-",
+                g.pushed_version ? ("v" + std::to_string(*g.pushed_version)).c_str() : "-");
+  }
+  return kExitOk;
+}
+
+int cmd_gear_runs_show(const GearRunsOptions& o) {
+  Result<RunStore> store = open_history_read_only(o.paths);
+  if (!store) return report_error(store.error());
+  Result<StoredGearRun> g = store->load_gear_run(o.id);
+  if (!g) return report_error(g.error());
+  if (o.json) {
+    print_json(gear_run_json(*g, true));
+    return kExitOk;
+  }
+  const GearRunRecord& r = g->record;
+  std::printf("gear run %lld: part %s on %s, measured %s from %s\n", static_cast<long long>(g->id), r.part.c_str(),
+              r.machine.c_str(), r.started_utc.c_str(), r.source.c_str());
+  if (!r.serial.empty() || !r.operator_name.empty()) {
+    std::printf("serial %s, operator %s\n", r.serial.empty() ? "-" : r.serial.c_str(),
+                r.operator_name.empty() ? "-" : r.operator_name.c_str());
+  }
+  if (!r.note.empty()) std::printf("note: %s\n", r.note.c_str());
+  std::printf("ground from %s, stroke version %s\n", r.nc_file.c_str(),
+              r.ground_with_version ? std::to_string(*r.ground_with_version).c_str() : "not known");
+  std::printf("lead, ISO 1328-1 over %.2f .. %.2f mm:\n", r.traces.front().from_mm, r.traces.front().to_mm);
+  print_trace_table(r.traces);
+  std::printf("F_beta %.2f um at worst, %.2f mean (class %d); f_f_beta %.2f um mean, |f_H_beta| %.2f um mean\n",
+              r.total_max_um, r.total_mean_um, r.tolerance_class, r.form_mean_um, r.slope_mean_abs_um);
+  std::printf("verdict: %s\n", gear_verdict_text(r).c_str());
+  if (g->pushed_version) {
+    std::printf("stroke version %d was pushed from it (mesh error fit: residual %.2f um RMS)\n", *g->pushed_version,
+                g->mesh_residual_rms_um.value_or(0.0));
+  } else {
+    std::printf("no stroke was pushed from it\n");
+  }
   return kExitOk;
 }
 
@@ -333,10 +482,11 @@ int run_gear_demo(const GearDemoOptions& o) {
   std::fflush(stdout);
   auto on_gear = [](const GearLoopIteration& g) {
     std::printf(
-        "gear %d (stroke version %d): F_beta %.2f um mean, %.2f max (ISO 1328-1 class %d); f_f_beta %.2f, |f_H_beta| "
-        "%.2f um; as ground F_beta %.2f um\n",
-        g.iteration, g.ground_from_version, g.measured.total_mean_um, g.measured.total_max_um,
-        g.measured.tolerance_class, g.measured.form_mean_um, g.measured.slope_mean_abs_um, g.ground.total_mean_um);
+        "gear %d (stroke version %d, gear run %lld): F_beta %.2f um mean, %.2f max (ISO 1328-1 class %d, %s); "
+        "f_f_beta %.2f, |f_H_beta| %.2f um; as ground F_beta %.2f um\n",
+        g.iteration, g.ground_from_version, static_cast<long long>(g.gear_run_id), g.measured.total_mean_um,
+        g.measured.total_max_um, g.measured.tolerance_class, std::string(verdict_name(g.measured.verdict)).c_str(),
+        g.measured.form_mean_um, g.measured.slope_mean_abs_um, g.ground.total_mean_um);
     if (g.identified) {
       std::printf(
           "  mesh error identified at %zu spline points (%d traces, %d samples, residual %.2f um RMS); "
@@ -361,6 +511,8 @@ int run_gear_demo(const GearDemoOptions& o) {
       "separable from it\n");
   std::printf("stroke program %s, main program %s\n", s.nc_file.string().c_str(),
               main_program_path(s.nc_file).string().c_str());
+  std::printf("gear runs %lld to %lld kept: `gaugeloop gear runs list %s`\n", static_cast<long long>(a.gear_run_id),
+              static_cast<long long>(b.gear_run_id), o.paths.where().c_str());
   return kExitOk;
 }
 
@@ -403,11 +555,38 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
       "correct",
       "Correct the stroke in force from a measured gear: read the lead traces a gear checker exported (CSV: gap, "
       "flank, z_mm, deviation_um), report ISO 1328-1's helix deviations of each, identify the gearbox's mesh error "
-      "at the stroke's spline points by least squares, and push the stroke in force less it as the next version");
+      "at the stroke's spline points by least squares, and push the stroke in force less it as the next version. The "
+      "measured gear is kept first, as a gear run (`gear runs`), judged against the part's tolerance_class");
   add_push_target_options(*correct, *co);
   correct->add_option("--lead", co->lead_path, "Lead traces, CSV: gap, flank (left/right), z_mm, deviation_um")
       ->required();
+  correct->add_option("--machine", co->machine, "The grinder that ground the gear, stored with the gear run")
+      ->capture_default_str();
+  correct->add_option("--serial", co->serial, "Serial number of the measured gear (at most 64 characters)");
+  correct->add_option("--operator", co->operator_name, "Who measured it (at most 64 characters)");
+  correct->add_option("--note", co->note, "A note stored with the gear run");
   correct->callback([&action, co] { action = [co] { return cmd_gear_correct(*co); }; });
+
+  CLI::App* runs = gear->add_subcommand("runs", "The gears measured: their lead, ISO 1328-1 figures and verdicts");
+  runs->require_subcommand(1);
+  auto lo = std::make_shared<GearRunsOptions>();
+  CLI::App* list = runs->add_subcommand("list", "The gear runs, newest first");
+  add_data_options(*list, lo->paths);
+  list->add_option("--part", lo->query.part, "Only this part");
+  list->add_option("--machine", lo->query.machine, "Only this machine");
+  list->add_option("--serial", lo->query.serial, "Only this serial number (exact)");
+  list->add_option("--verdict", lo->verdict, "Only this verdict: in, out or not_judged");
+  list->add_option("--since", lo->query.since_utc, "Started at or after (UTC, 2026-11-22T00:00:00Z)");
+  list->add_option("--until", lo->query.until_utc, "Started before (UTC)");
+  list->add_option("--limit", lo->query.limit, "At most this many")->capture_default_str();
+  list->add_flag("--json", lo->json, "Print JSON");
+  list->callback([&action, lo] { action = [lo] { return cmd_gear_runs_list(*lo); }; });
+  auto so2 = std::make_shared<GearRunsOptions>();
+  CLI::App* show = runs->add_subcommand("show", "One gear run: every trace's figures, the verdict, the stroke pushed");
+  show->add_option("id", so2->id, "Gear run id (`gear runs list`)")->required();
+  add_data_options(*show, so2->paths);
+  show->add_flag("--json", so2->json, "Print JSON, with the traces");
+  show->callback([&action, so2] { action = [so2] { return cmd_gear_runs_show(*so2); }; });
 
   auto io = std::make_shared<IdentifyOptions>();
   CLI::App* identify = gear->add_subcommand(

@@ -4,26 +4,32 @@
 #include <algorithm>
 #include <cmath>
 
+#include "job/gear_run.h"
+
 namespace gaugeloop {
 
-Result<GearLeadSummary> summarize_lead(const std::vector<LeadTrace>& traces, const GearGeometry& gear,
-                                       double pitch_diameter_mm) {
+namespace {
+
+GearLeadSummary summary_of(const GearRunRecord& r) {
   GearLeadSummary s;
-  if (traces.empty()) return s;
-  for (const LeadTrace& t : traces) {
-    Result<LeadFigures> f = lead_figures(t, gear);
-    if (!f) return f.error();
-    s.total_mean_um += f->total_um;
-    s.total_max_um = std::max(s.total_max_um, f->total_um);
-    s.form_mean_um += f->form_um;
-    s.slope_mean_abs_um += std::abs(f->slope_um);
-  }
-  const double n = static_cast<double>(traces.size());
-  s.total_mean_um /= n;
-  s.form_mean_um /= n;
-  s.slope_mean_abs_um /= n;
-  s.tolerance_class = helix_tolerance_class(s.total_max_um, pitch_diameter_mm, gear.face_width_mm);
+  s.total_mean_um = r.total_mean_um;
+  s.total_max_um = r.total_max_um;
+  s.form_mean_um = r.form_mean_um;
+  s.slope_mean_abs_um = r.slope_mean_abs_um;
+  s.tolerance_class = r.tolerance_class;
+  s.verdict = r.verdict;
   return s;
+}
+
+}  // namespace
+
+Result<GearLeadSummary> summarize_lead(const std::vector<LeadTrace>& traces, const GearPart& part,
+                                       std::optional<int> required_class) {
+  GearRunOrigin origin;
+  origin.required_class = required_class;
+  Result<GearRunRecord> r = judge_gear(part, traces, origin);
+  if (!r) return r.error();
+  return summary_of(*r);
 }
 
 Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& settings,
@@ -54,25 +60,45 @@ Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& set
     if (!gear) return gear.error();
     const std::vector<LeadTrace> traces =
         measure_lead(*gear, settings.gaps, settings.lead_step_mm, static_cast<std::uint64_t>(it));
-    Result<GearLeadSummary> measured = summarize_lead(traces, part.gear, coupling.gear_pitch_diameter_mm);
+    // The gear as the checker measured it, judged and kept before anything is pushed from it.
+    GearRunOrigin origin;
+    origin.part_name = settings.part.name;
+    origin.required_class = settings.part.tolerance_class;
+    origin.machine = settings.machine_name;
+    origin.source = "virtual gear checker";
+    origin.serial = "GEAR-" + std::to_string(it);
+    origin.nc_file = settings.stroke.nc_file;
+    origin.ground_with_version = version;
+    Result<GearRunRecord> measured = judge_gear(part, traces, origin);
     if (!measured) return measured.error();
-    g.measured = *measured;
+    g.measured = summary_of(*measured);
+    if (settings.stroke.store != nullptr) {
+      Result<std::int64_t> id = settings.stroke.store->insert_gear_run(*measured);
+      if (!id) return id.error();
+      g.gear_run_id = *id;
+    }
     Result<GroundGear> as_ground = grind_gear(part, quiet, stroke_file);
     if (!as_ground) return as_ground.error();
     Result<GearLeadSummary> ground =
         summarize_lead(measure_lead(*as_ground, settings.gaps, settings.lead_step_mm, static_cast<std::uint64_t>(it)),
-                       part.gear, coupling.gear_pitch_diameter_mm);
+                       part, settings.part.tolerance_class);
     if (!ground) return ground.error();
     g.ground = *ground;
     if (it < settings.iterations) {
       std::string gaps;
       for (int gap : settings.gaps) gaps += (gaps.empty() ? "" : ", ") + std::to_string(gap);
+      const std::string run_name = g.gear_run_id > 0 ? "gear run " + std::to_string(g.gear_run_id) + ", " : "";
       Result<GearCorrection> c =
           correct_gear_stroke(part, traces,
-                              "lead of gaps " + gaps + " of gear " + std::to_string(it) + " (stroke version " +
-                                  std::to_string(version) + "): mesh error identified",
+                              run_name + "lead of gaps " + gaps + " of gear " + std::to_string(it) +
+                                  " (stroke version " + std::to_string(version) + "): mesh error identified",
                               settings.stroke);
       if (!c) return c.error();
+      if (g.gear_run_id > 0) {
+        Status recorded = settings.stroke.store->record_gear_push(g.gear_run_id, c->pushed.version,
+                                                                  c->identification.residual_rms_um);
+        if (!recorded) return recorded.error();
+      }
       version = c->pushed.version;
       g.identified = std::move(c->identification);
       g.pushed_version = version;

@@ -4,6 +4,7 @@
 // directory as the control reads it; the first from a stroke without compensation.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
@@ -20,36 +21,41 @@ namespace gaugeloop {
 struct GearLoopSettings {
   GearPartFile part;
   GearMachineErrors machine;
-  int iterations = 2;                       // corrections; iterations + 1 gears are ground
-  std::vector<int> gaps = {1, 20, 40, 60};  // the tooth gaps the checker measures, both flanks
-  double lead_step_mm = 0.5;                // the checker's spacing across the face
-  GearStrokeSettings stroke;                // store, nc_file, main program, grids, feed
+  int iterations = 2;                                 // corrections; iterations + 1 gears are ground
+  std::vector<int> gaps = {1, 20, 40, 60};            // the tooth gaps the checker measures, both flanks
+  double lead_step_mm = 0.5;                          // the checker's spacing across the face
+  std::string machine_name = "virtual gear grinder";  // as the gear runs are stored
+  GearStrokeSettings stroke;                          // store, nc_file, main program, grids, feed
 };
 
 // What ISO 1328-1 makes of a gear's lead traces, over every trace measured.
 struct GearLeadSummary {
   double total_mean_um = 0.0;  // F_beta
   double total_max_um = 0.0;
-  double form_mean_um = 0.0;       // f_f_beta
-  double slope_mean_abs_um = 0.0;  // |f_H_beta|
-  int tolerance_class = 0;         // of total_max_um (helix_tolerance_class)
+  double form_mean_um = 0.0;              // f_f_beta
+  double slope_mean_abs_um = 0.0;         // |f_H_beta|
+  int tolerance_class = 0;                // of total_max_um (helix_tolerance_class)
+  Verdict verdict = Verdict::kNotJudged;  // against the part's tolerance_class
 };
 
 struct GearLoopIteration {
   int iteration = 0;
   int ground_from_version = 0;                   // the stroke version in force when it was ground
   GearLeadSummary measured;                      // as the checker measured it (its noise included)
+  std::int64_t gear_run_id = 0;                  // the measured gear as stored; 0: no store
   GearLeadSummary ground;                        // the gear as ground: the same traces without the checker's noise
   std::optional<MeshIdentification> identified;  // not after the last gear
   int pushed_version = 0;                        // the corrected stroke's version; 0: none
   double sim_max_abs_deg = 0.0;                  // of the corrected stroke
 };
 
-// Summarises traces with lead_figures; errors: lead_figures'.
-Result<GearLeadSummary> summarize_lead(const std::vector<LeadTrace>& traces, const GearGeometry& gear,
-                                       double pitch_diameter_mm);
+// Summarises traces as judge_gear (job/gear_run.h) judges them; errors: judge_gear's.
+Result<GearLeadSummary> summarize_lead(const std::vector<LeadTrace>& traces, const GearPart& part,
+                                       std::optional<int> required_class = std::nullopt);
 
 // Runs the loop; `on_gear` (may be empty) sees each gear as it is measured (and corrected).
+// With a store (settings.stroke.store) each gear measured is kept as a gear run before the
+// stroke corrected from it is pushed, and the run records the version pushed.
 // Errors: the part's, the push's (push_gear_stroke), the grinder's reading of the stroke.
 Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& settings,
                                                      const std::function<void(const GearLoopIteration&)>& on_gear);

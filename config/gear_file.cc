@@ -55,8 +55,8 @@ Result<GearPartFile> parse_gear_part_toml(std::string_view text, std::string_vie
   if (gear == nullptr && !r.error) r.fail(std::string(source_name) + ": no [gear] section (docs/gears.md)");
   if (gear != nullptr && !r.error) {
     TomlReader g(*gear, source_name, "gear.");
-    g.allow_only({"normal_module_mm", "teeth", "pressure_angle_deg", "helix_angle_deg", "hand", "face_width_mm", "worm",
-                  "stroke"});
+    g.allow_only({"normal_module_mm", "teeth", "pressure_angle_deg", "helix_angle_deg", "hand", "face_width_mm",
+                  "tolerance_class", "worm", "stroke"});
     GearGeometry& gg = out.part.gear;
     gg.normal_module_mm = g.number("normal_module_mm", std::nullopt, 0.0, 50.0, true);
     gg.teeth = static_cast<int>(g.integer("teeth", std::nullopt, 5, 1000));
@@ -64,6 +64,7 @@ Result<GearPartFile> parse_gear_part_toml(std::string_view text, std::string_vie
     gg.helix_angle_deg = g.number("helix_angle_deg", std::nullopt, 0.0, 60.0);
     gg.hand = read_hand(g, "hand");
     gg.face_width_mm = g.number("face_width_mm", std::nullopt, 0.0, 2000.0, true);
+    if (g.has("tolerance_class")) out.tolerance_class = static_cast<int>(g.integer("tolerance_class", 0, 1, 11));
     const toml::table* worm = g.subtable("worm");
     if (worm == nullptr && !g.error) g.fail(std::string(source_name) + ": no [gear.worm] section (docs/gears.md)");
     if (worm != nullptr && !g.error) {

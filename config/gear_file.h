@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -18,6 +19,10 @@ struct GearPartFile {
   std::string name;
   std::string nc_program;  // the stroke program's name, as a part file's nc_program
   GearPart part;
+  // The flank tolerance class of ISO 1328-1 the drawing asks for ([gear] tolerance_class, 1 to
+  // 11): a measured gear is in when every flank's total helix deviation F_beta is within its
+  // tolerance. Empty: gears of the part are not judged.
+  std::optional<int> tolerance_class;
 };
 
 // Parses gear part TOML. Errors (kInvalidInput) name the file, the line and the key and say what

@@ -11,23 +11,25 @@
 
 namespace gaugeloop::storage_internal {
 
-std::string degree_table_to_json(const DegreeTable& table) {
+std::string numbers_to_json(std::span<const double> values) {
   std::string json;
-  json.reserve(table.size() * 10 + 2);
+  json.reserve(values.size() * 10 + 2);
   json += '[';
   // Wide enough for any finite double in fixed notation (up to 309 integer digits).
   std::array<char, 400> buffer{};
-  for (std::size_t i = 0; i < table.size(); ++i) {
-    assert(std::isfinite(table[i]));
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    assert(std::isfinite(values[i]));
     if (i != 0) json += ',';
     const auto [end, ec] =
-        std::to_chars(buffer.data(), buffer.data() + buffer.size(), table[i], std::chars_format::fixed, kJsonDecimals);
+        std::to_chars(buffer.data(), buffer.data() + buffer.size(), values[i], std::chars_format::fixed, kJsonDecimals);
     assert(ec == std::errc());
     json.append(buffer.data(), end);
   }
   json += ']';
   return json;
 }
+
+std::string degree_table_to_json(const DegreeTable& table) { return numbers_to_json(table); }
 
 Result<DegreeTable> degree_table_from_json(std::string_view text) {
   const nlohmann::json parsed = nlohmann::json::parse(text, /*cb=*/nullptr,

@@ -3,6 +3,7 @@
 // number arrays of version 2. Internal to storage/ (and its tests).
 #pragma once
 
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -14,6 +15,10 @@ namespace gaugeloop::storage_internal {
 
 // Decimals kept: lifts in mm come back to within 0.5e-6 mm (half a unit of the last place).
 inline constexpr int kJsonDecimals = 6;
+
+// "[0.000000,0.001250,...]": kJsonDecimals in fixed notation, no spaces, independent of the C
+// locale. Precondition: every value is finite.
+std::string numbers_to_json(std::span<const double> values);
 
 // "[0.000000,0.001250,...]": fixed notation, no spaces, independent of the C locale.
 // Precondition: every value is finite (a JSON number cannot hold NaN or infinity).

@@ -753,6 +753,52 @@ constexpr std::string_view kSchemaV11 = R"sql(
 UPDATE runs SET verdict = 'not_judged' WHERE verdict IS NULL;
 )sql";
 
+// Version 12: gears measured on a gear checker, with ids of their own (docs/gears.md, "Gear
+// runs"): one row per gear with its ISO 1328-1 summary and verdict, one per lead trace (a tooth
+// gap's flank) with its figures and the trace itself as JSON arrays of numbers.
+constexpr std::string_view kSchemaV12 = R"sql(
+CREATE TABLE gear_runs (
+  id                   INTEGER PRIMARY KEY AUTOINCREMENT,
+  started_utc          TEXT    NOT NULL,
+  machine              TEXT    NOT NULL,
+  part                 TEXT    NOT NULL,
+  source               TEXT    NOT NULL,  -- where the traces came from: the checker, a file
+  serial               TEXT    CHECK (serial IS NULL OR length(serial) BETWEEN 1 AND 64),
+  operator             TEXT    CHECK (operator IS NULL OR length(operator) BETWEEN 1 AND 64),
+  note                 TEXT    NOT NULL DEFAULT '',
+  nc_file              TEXT    NOT NULL,  -- the stroke program the gear was ground from
+  ground_with_version  INTEGER CHECK (ground_with_version >= 1),  -- NULL: not known
+  required_class       INTEGER CHECK (required_class BETWEEN 1 AND 11),  -- NULL: not judged
+  verdict              TEXT    NOT NULL CHECK (verdict IN ('in', 'out', 'not_judged')),
+  tolerance_class      INTEGER NOT NULL CHECK (tolerance_class BETWEEN 1 AND 12),  -- the worst flank's
+  total_max_um         REAL    NOT NULL,  -- F_beta, the worst flank
+  total_mean_um        REAL    NOT NULL,
+  form_mean_um         REAL    NOT NULL,  -- f_f_beta
+  slope_mean_abs_um    REAL    NOT NULL,  -- |f_H_beta|
+  pushed_version       INTEGER CHECK (pushed_version >= 1),  -- the stroke pushed from it; NULL: none
+  mesh_residual_rms_um REAL,  -- of the fit that pushed it
+  CHECK ((verdict = 'not_judged') = (required_class IS NULL))
+);
+CREATE INDEX gear_runs_by_part_started ON gear_runs (part, started_utc);
+CREATE INDEX gear_runs_by_started ON gear_runs (started_utc);
+
+CREATE TABLE gear_run_traces (
+  run_id          INTEGER NOT NULL REFERENCES gear_runs (id) ON DELETE CASCADE,
+  gap             INTEGER NOT NULL CHECK (gap >= 1),
+  flank           TEXT    NOT NULL CHECK (flank IN ('left', 'right')),
+  total_um        REAL    NOT NULL,  -- F_beta
+  form_um         REAL    NOT NULL,  -- f_f_beta
+  slope_um        REAL    NOT NULL,  -- f_H_beta
+  tolerance_class INTEGER NOT NULL CHECK (tolerance_class BETWEEN 1 AND 12),
+  from_mm         REAL    NOT NULL,  -- the evaluation range along Z
+  to_mm           REAL    NOT NULL,
+  z_mm            TEXT    NOT NULL CHECK (json_valid(z_mm) AND json_array_length(z_mm) >= 3),
+  deviation_um    TEXT    NOT NULL
+                  CHECK (json_valid(deviation_um) AND json_array_length(deviation_um) = json_array_length(z_mm)),
+  PRIMARY KEY (run_id, gap, flank)
+) WITHOUT ROWID;
+)sql";
+
 // The schema cookie must change with the CREATE text, so every connection reads it again;
 // and both edits must have happened.
 Status bump_schema_cookie(Connection& conn) {
@@ -781,8 +827,8 @@ Status bump_schema_cookie(Connection& conn) {
   return exec(conn, ("PRAGMA schema_version = " + std::to_string(next)).c_str(), "bump the schema cookie");
 }
 
-const std::array<Migration, 11>& all_migrations() {
-  static const std::array<Migration, 11> kMigrations{{
+const std::array<Migration, 12>& all_migrations() {
+  static const std::array<Migration, 12> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -829,6 +875,11 @@ const std::array<Migration, 11>& all_migrations() {
       {11,
        "runs stored before version 8 say `not_judged`, so the verdict filter is served by its index",
        std::string(kSchemaV11),
+       nullptr,
+       {}},
+      {12,
+       "gear runs: a gear checker's lead traces, their ISO 1328-1 figures and the gear's verdict",
+       std::string(kSchemaV12),
        nullptr,
        {}},
   }};

@@ -269,6 +269,60 @@ struct RunQuery {
 // RunStore and the central history check every query with it.
 Status check_run_query(const RunQuery& q);
 
+// A gear measured on a gear checker (schema 12; docs/gears.md, "Gear runs"): its lead traces
+// and what ISO 1328-1 makes of them. Gear runs have ids of their own (gear run 1, 2, ...),
+// apart from the lobe runs'.
+struct GearTraceRecord {
+  int gap = 0;              // the tooth gap, 1-based
+  std::string flank;        // "left" or "right"
+  double total_um = 0.0;    // F_beta
+  double form_um = 0.0;     // f_f_beta
+  double slope_um = 0.0;    // f_H_beta, signed
+  int tolerance_class = 0;  // of F_beta: 1 to 11, 12 beyond class 11
+  double from_mm = 0.0;     // the evaluation range along Z
+  double to_mm = 0.0;
+  std::vector<double> z_mm;          // the trace across the face, increasing
+  std::vector<double> deviation_um;  // one per z_mm
+};
+
+struct GearRunRecord {
+  std::string started_utc;  // ISO 8601 UTC
+  std::string machine;
+  std::string part;
+  std::string source;  // where the traces came from: the checker, a file
+  std::string serial;  // empty: not given
+  std::string operator_name;
+  std::string note;
+  std::string nc_file;                     // the stroke program the gear was ground from
+  std::optional<int> ground_with_version;  // that program's version; empty: not known
+  std::optional<int> required_class;       // the drawing's flank tolerance class; empty: not judged
+  Verdict verdict = Verdict::kNotJudged;   // every flank's F_beta within required_class's tolerance
+  int tolerance_class = 0;                 // of the worst flank's F_beta
+  double total_max_um = 0.0;               // of the flanks' F_beta
+  double total_mean_um = 0.0;
+  double form_mean_um = 0.0;
+  double slope_mean_abs_um = 0.0;
+  std::vector<GearTraceRecord> traces;  // at most one per gap and flank
+};
+
+struct StoredGearRun {
+  std::int64_t id = 0;
+  GearRunRecord record;
+  std::optional<int> pushed_version;           // the stroke version pushed from this gear; empty: none
+  std::optional<double> mesh_residual_rms_um;  // of the identification that pushed it
+};
+
+// Filters for list_gear_runs; as RunQuery's.
+struct GearRunQuery {
+  int limit = 50;
+  std::string part;
+  std::string machine;
+  std::string serial;
+  std::optional<Verdict> verdict;
+  std::string since_utc;
+  std::string until_utc;
+};
+
 enum class EventKind {
   kFault,    // something failed: the gauge, the database, the NC directory...
   kRefusal,  // a guard or the geometry refused: a correction too large, a lobe not grindable
@@ -569,6 +623,19 @@ class RunStore : public RunHistory {
   // correction and residual of the profile) and without its pushes: the run's record, its
   // details and characteristics, which is what the central history copies. kNotFound if absent.
   Result<StoredRun> load_run_record(std::int64_t run_id) const;
+
+  // ---- gear runs (schema 12) ----
+  // Stores a measured gear and its traces in one transaction. kInvalidInput for a record that
+  // contradicts itself (no trace, a trace's z_mm and deviation_um of different lengths, two
+  // traces of one gap and flank, a verdict without a required class), naming the field.
+  Result<std::int64_t> insert_gear_run(const GearRunRecord& run);
+  // The stroke version pushed from gear run `id`, and the residual of the fit that made it.
+  // kNotFound for an unknown id.
+  Status record_gear_push(std::int64_t id, int stroke_version, double mesh_residual_rms_um);
+  // Newest first; traces left out (load_gear_run has them). kInvalidInput as check_run_query.
+  Result<std::vector<StoredGearRun>> list_gear_runs(const GearRunQuery& q) const;
+  // One gear run with its traces. kNotFound if absent.
+  Result<StoredGearRun> load_gear_run(std::int64_t id) const;
 
   // ---- the outbox (schema 9; docs/plant.md) ----
   // Turns queuing on or off and sets the bound. Messages already waiting stay.

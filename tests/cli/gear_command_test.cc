@@ -133,6 +133,8 @@ TEST(GearCommand, CorrectsTheStrokeInForceFromACheckersLeadTraces) {
   testing::CommandResult none = testing::run_command(correct);
   EXPECT_EQ(none.exit_code, 2) << none.output;
   EXPECT_NE(none.output.find("no stroke program was pushed there"), std::string::npos) << none.output;
+  // The measured gear is kept all the same: a refused correction loses no measurement.
+  EXPECT_NE(none.output.find("gear run 1 is stored; no stroke was pushed from it"), std::string::npos) << none.output;
 
   ASSERT_EQ(testing::run_command("gear stroke --part " + kExample + " --errors " + zero.string() +
                                  " --int-incr-per-deg 1000000" + data)
@@ -142,6 +144,11 @@ TEST(GearCommand, CorrectsTheStrokeInForceFromACheckersLeadTraces) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("pushed "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("as stroke version 2 (from version 1)"), std::string::npos) << r.output;
+  // F_beta of a trace rising 0.14 um per mm between its outermost points in the evaluation range
+  // (-10.8 .. 10.8 mm; points every 0.5 mm: -10.5 .. 10.5): 2.94 um, within class 5's 8.6 um for
+  // this gear (the part's tolerance_class).
+  EXPECT_NE(r.output.find("gear run 2 of gear_71"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(": in (class 5 asked)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("not separable"), std::string::npos) << r.output;
   // SIM1 takes the mesh error back: -0.0001 deg per mm about the face's middle, held beyond it.
   const std::string text = testing::slurp(dir.path() / "data" / "nc" / "GEAR_71.SPF");
@@ -157,6 +164,28 @@ TEST(GearCommand, CorrectsTheStrokeInForceFromACheckersLeadTraces) {
       << bad.output;
   testing::CommandResult history = testing::run_command("nc history" + data);
   EXPECT_EQ(history.output.find("GEAR_71                3"), std::string::npos) << history.output;
+
+  // The history of gears: the refused one ground from no known stroke, the corrected one from
+  // version 1 with version 2 pushed from it; nothing stored for the bad file.
+  testing::CommandResult list = testing::run_command("gear runs list --json" + data);
+  ASSERT_EQ(list.exit_code, 0) << list.output;
+  const nlohmann::json runs = nlohmann::json::parse(list.output);
+  ASSERT_EQ(runs.size(), 2u) << list.output;
+  EXPECT_EQ(runs[0]["id"], 2);
+  EXPECT_EQ(runs[0]["ground_with_version"], 1);
+  EXPECT_EQ(runs[0]["pushed_version"], 2);
+  EXPECT_EQ(runs[0]["verdict"], "in");
+  // r_b's um per degree to 5 digits (1397.9, above): 0.002 um over 21 mm; the CSV's 6 digits less.
+  EXPECT_NEAR(runs[0]["total_max_um"].get<double>(), 0.0001 * 21.0 * 1397.9, 0.005);
+  EXPECT_TRUE(runs[1]["ground_with_version"].is_null());
+  EXPECT_TRUE(runs[1]["pushed_version"].is_null());
+  testing::CommandResult show = testing::run_command("gear runs show 2" + data);
+  ASSERT_EQ(show.exit_code, 0) << show.output;
+  EXPECT_NE(show.output.find("stroke version 2 was pushed from it"), std::string::npos) << show.output;
+  EXPECT_NE(show.output.find("     40  right"), std::string::npos) << show.output;
+  testing::CommandResult missing = testing::run_command("gear runs show 9" + data);
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("gear run 9 is not in run database"), std::string::npos) << missing.output;
 }
 
 // A checker's export of a gear ground without compensation on a machine whose C drive runs

@@ -46,8 +46,7 @@ double perfect_lead_um(const GearLoopSettings& s, const testing::TempDir& dir) {
   quiet.checker_noise_um = 0.0;
   Result<GroundGear> gear = grind_gear(part, quiet, file.string());
   EXPECT_TRUE(gear.ok()) << gear.error().message;
-  Result<GearLeadSummary> lead = summarize_lead(measure_lead(*gear, s.gaps, s.lead_step_mm, 0), part.gear,
-                                                gear_coupling(part).gear_pitch_diameter_mm);
+  Result<GearLeadSummary> lead = summarize_lead(measure_lead(*gear, s.gaps, s.lead_step_mm, 0), part);
   EXPECT_TRUE(lead.ok());
   return lead->total_mean_um;
 }
@@ -92,6 +91,20 @@ TEST(GearLoop, ComesToThePerfectStrokeWithinTheCheckersNoiseOnSeveralMachines) {
     Result<std::optional<NcPush>> pushed = store->last_push(s.stroke.nc_file.string());
     ASSERT_TRUE(pushed.ok() && pushed->has_value());
     EXPECT_EQ((**pushed).table_version, 3);
+    // Every gear kept, newest first: ground from versions 3, 2, 1, the two before the last each
+    // with the version pushed from it; judged against the part's class 5 (8.6 um for this gear).
+    Result<std::vector<StoredGearRun>> kept = store->list_gear_runs({});
+    ASSERT_TRUE(kept.ok()) << kept.error().message;
+    ASSERT_EQ(kept->size(), 3u);
+    EXPECT_EQ((*kept)[0].id, last.gear_run_id);
+    EXPECT_EQ((*kept)[0].record.ground_with_version, 3);
+    EXPECT_FALSE((*kept)[0].pushed_version.has_value());
+    EXPECT_EQ((*kept)[2].record.ground_with_version, 1);
+    EXPECT_EQ((*kept)[2].pushed_version, 2);
+    EXPECT_EQ((*kept)[2].record.required_class, 5);
+    EXPECT_DOUBLE_EQ((*kept)[2].record.total_max_um, first.measured.total_max_um);
+    EXPECT_EQ((*kept)[0].record.verdict, last.measured.total_max_um <= 8.6 ? Verdict::kIn : Verdict::kOut);
+    EXPECT_EQ((*kept)[0].record.verdict, Verdict::kIn) << "seed " << seed;
   }
 }
 
@@ -101,14 +114,19 @@ TEST(GearLoop, TheDemoClosesTheLoopOnTheExampleGear) {
   testing::CommandResult r =
       testing::run_command("demo --part " + kGearExample.string() + " --iterations 1 --machine-seed 2" + data);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("gear 0 (stroke version 1)"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("gear 1 (stroke version 2)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("gear 0 (stroke version 1, gear run 1)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("gear 1 (stroke version 2, gear run 2)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("lead F_beta (mean of 8 flanks)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("not separable"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(dir.path() / "data" / "nc" / "GEAR_71_MAIN.MPF"));
   testing::CommandResult h = testing::run_command("nc history" + data);
   ASSERT_EQ(h.exit_code, 0) << h.output;
   EXPECT_NE(h.output.find("mesh error identified"), std::string::npos) << h.output;
+  EXPECT_NE(r.output.find("gear runs 1 to 2 kept"), std::string::npos) << r.output;
+  testing::CommandResult runs = testing::run_command("gear runs list" + data);
+  ASSERT_EQ(runs.exit_code, 0) << runs.output;
+  EXPECT_NE(runs.output.find("virtual gear grinder"), std::string::npos) << runs.output;
+  EXPECT_NE(runs.output.find("GEAR-1"), std::string::npos) << runs.output;
 }
 
 }  // namespace

@@ -59,6 +59,18 @@ TEST(GearPartFile, TheExampleIsThePapersGear) {
   EXPECT_EQ(g->part.gear.helix_angle_deg, 21.8);
   EXPECT_EQ(g->part.gear.hand, Hand::kRight);
   EXPECT_EQ(g->part.worm.starts, 1);
+  EXPECT_EQ(g->tolerance_class, 5);
+}
+
+TEST(GearPartFile, TheToleranceClassIsOptionalAndOneToEleven) {
+  Result<GearPartFile> none = parse_gear(gear_part());
+  ASSERT_TRUE(none.ok()) << none.error().message;
+  EXPECT_FALSE(none->tolerance_class.has_value());
+  Result<GearPartFile> six = parse_gear(gear_part("tolerance_class = 6\n"));
+  ASSERT_TRUE(six.ok()) << six.error().message;
+  EXPECT_EQ(six->tolerance_class, 6);
+  EXPECT_TRUE(refused(parse_gear(gear_part("tolerance_class = 12\n")), "gear.tolerance_class"));
+  EXPECT_TRUE(refused(parse_gear(gear_part("tolerance_class = 5.5\n")), "gear.tolerance_class"));
 }
 
 TEST(GearPartFile, EachRefusalNamesTheFileLineAndKey) {

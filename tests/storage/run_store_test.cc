@@ -249,19 +249,9 @@ TEST_F(RunStoreTest, ListBySerialMatchesExactly) {
   EXPECT_EQ((*runs)[0].id, id);
   EXPECT_EQ((*runs)[0].serial, "CS-42");
   // A part's runs are one index seek away, however long the history.
-  sqlite3* handle = nullptr;
-  ASSERT_EQ(sqlite3_open(db_in(dir_).c_str(), &handle), SQLITE_OK);
-  sqlite3_stmt* st = nullptr;
-  ASSERT_EQ(sqlite3_prepare_v2(handle,
-                               "EXPLAIN QUERY PLAN SELECT id FROM runs AS r WHERE r.serial = 'CS-42' "
-                               "ORDER BY r.started_utc DESC, r.id DESC",
-                               -1, &st, nullptr),
-            SQLITE_OK);
-  std::string plan;
-  while (sqlite3_step(st) == SQLITE_ROW)
-    plan += reinterpret_cast<const char*>(sqlite3_column_text(st, 3)) + std::string("\n");
-  sqlite3_finalize(st);
-  sqlite3_close(handle);
+  const std::string plan =
+      RawDb(db_in(dir_))
+          .query_plan("SELECT id FROM runs AS r WHERE r.serial = 'CS-42' ORDER BY r.started_utc DESC, r.id DESC");
   EXPECT_NE(plan.find("runs_by_serial"), std::string::npos) << plan;
 }
 

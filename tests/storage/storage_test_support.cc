@@ -178,6 +178,18 @@ std::string RawDb::query_text(const std::string& sql) {
   });
 }
 
+std::string RawDb::query_plan(const std::string& sql) {
+  sqlite3_stmt* st = nullptr;
+  const std::string explain = "EXPLAIN QUERY PLAN " + sql;
+  EXPECT_EQ(sqlite3_prepare_v2(db_, explain.c_str(), -1, &st, nullptr), SQLITE_OK) << sql << ": " << errmsg();
+  std::string plan;
+  while (st != nullptr && sqlite3_step(st) == SQLITE_ROW) {
+    plan += reinterpret_cast<const char*>(sqlite3_column_text(st, 3)) + std::string("\n");
+  }
+  sqlite3_finalize(st);
+  return plan;
+}
+
 RawDb::Counts RawDb::counts() {
   return {query_int("SELECT count(*) FROM runs"), query_int("SELECT count(*) FROM run_raw"),
           query_int("SELECT count(*) FROM run_tables")};

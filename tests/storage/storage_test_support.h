@@ -58,6 +58,9 @@ class RawDb {
   std::string query_text(const std::string& sql);
   std::string errmsg() const { return sqlite3_errmsg(db_); }
 
+  // How SQLite plans `sql` (EXPLAIN QUERY PLAN): each step's detail, one a line.
+  std::string query_plan(const std::string& sql);
+
   // Rows of runs, run_raw (one per run with raw samples) and run_tables (one per run).
   struct Counts {
     std::int64_t runs, raw, tables;
