@@ -20,6 +20,9 @@
 #include "job/gear_stroke.h"
 #include "job/measure_job.h"
 #include "nc_out/stroke_program.h"
+#include "report/dfq.h"
+#include "report/gear_characteristics.h"
+#include "report/run_json.h"
 
 namespace gaugeloop {
 namespace {
@@ -174,7 +177,7 @@ void print_trace_table(const std::vector<GearTraceRecord>& traces) {
 std::string gear_verdict_text(const GearRunRecord& r) {
   if (!r.required_class) return "not judged (the part names no tolerance_class)";
   return std::string(r.verdict == Verdict::kIn ? "in" : "out") + " (class " + std::to_string(*r.required_class) +
-         " asked)";
+         " asked: F_beta within " + format_fixed(r.total_tolerance_um.value_or(0.0), 2) + " um)";
 }
 
 int cmd_gear_correct(const CorrectOptions& o) {
@@ -241,6 +244,8 @@ int cmd_gear_correct(const CorrectOptions& o) {
 struct GearRunsOptions {
   DataPaths paths;
   GearRunQuery query;
+  std::string since;
+  std::string until;
   std::string verdict;
   std::int64_t id = 0;
   bool json = false;
@@ -260,6 +265,7 @@ nlohmann::json gear_run_json(const StoredGearRun& g, bool with_traces) {
       {"nc_file", r.nc_file},
       {"ground_with_version", r.ground_with_version ? nlohmann::json(*r.ground_with_version) : nullptr},
       {"required_class", r.required_class ? nlohmann::json(*r.required_class) : nullptr},
+      {"total_tolerance_um", r.total_tolerance_um ? nlohmann::json(*r.total_tolerance_um) : nullptr},
       {"verdict", verdict_name(r.verdict)},
       {"tolerance_class", r.tolerance_class},
       {"total_max_um", r.total_max_um},
@@ -288,6 +294,9 @@ nlohmann::json gear_run_json(const StoredGearRun& g, bool with_traces) {
 }
 
 int cmd_gear_runs_list(GearRunsOptions o) {
+  if (Status t = set_time_bounds(o.since, o.until, o.query.since_utc, o.query.until_utc); !t) {
+    return report_error(t.error());
+  }
   if (!o.verdict.empty()) {
     o.query.verdict = verdict_from_name(o.verdict);
     if (!o.query.verdict) {
@@ -319,6 +328,52 @@ int cmd_gear_runs_list(GearRunsOptions o) {
                 r.ground_with_version ? ("v" + std::to_string(*r.ground_with_version)).c_str() : "-",
                 g.pushed_version ? ("v" + std::to_string(*g.pushed_version)).c_str() : "-");
   }
+  return kExitOk;
+}
+
+struct GearExportOptions {
+  DataPaths paths;
+  GearRunQuery query;
+  std::string since;
+  std::string until;
+  std::string format = "dfq";
+  std::string operation = "gear grinding";
+  std::string out_path;
+};
+
+// Every gear run of a range, far more than a plant keeps of one gear.
+constexpr int kMaxExportedGearRuns = 1000000;
+
+int cmd_gear_runs_export(GearExportOptions o) {
+  if (Status t = set_time_bounds(o.since, o.until, o.query.since_utc, o.query.until_utc); !t) {
+    return report_error(t.error());
+  }
+  o.query.limit = kMaxExportedGearRuns;
+  Result<RunStore> store = open_history_read_only(o.paths);
+  if (!store) return report_error(store.error());
+  Result<std::vector<StoredGearRun>> listed = store->list_gear_runs(o.query);
+  if (!listed) return report_error(listed.error());
+  if (listed->empty()) {
+    return report_error(make_error(ErrorCode::kNotFound, "no gear runs match in " + store->path().string() +
+                                                             "; `gaugeloop gear runs list " + o.paths.where() +
+                                                             "` shows what is stored"));
+  }
+  std::vector<RunCharacteristics> runs;
+  for (const StoredGearRun& g : *listed) {
+    Result<StoredGearRun> full = store->load_gear_run(g.id);
+    if (!full) return report_error(full.error());
+    runs.push_back(gear_run_characteristics(*full));
+  }
+  DfqOptions options;
+  options.operation = o.operation;
+  Result<std::string> dfq = write_dfq(runs, options);
+  if (!dfq) return report_error(dfq.error());
+  if (o.out_path.empty()) {
+    std::fwrite(dfq->data(), 1, dfq->size(), stdout);
+    return kExitOk;
+  }
+  if (Status w = write_file_atomically(o.out_path, *dfq); !w) return report_error(w.error());
+  std::printf("%zu gear run%s exported to %s\n", runs.size(), runs.size() == 1 ? "" : "s", o.out_path.c_str());
   return kExitOk;
 }
 
@@ -576,8 +631,8 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
   list->add_option("--machine", lo->query.machine, "Only this machine");
   list->add_option("--serial", lo->query.serial, "Only this serial number (exact)");
   list->add_option("--verdict", lo->verdict, "Only this verdict: in, out or not_judged");
-  list->add_option("--since", lo->query.since_utc, "Started at or after (UTC, 2026-11-22T00:00:00Z)");
-  list->add_option("--until", lo->query.until_utc, "Started before (UTC)");
+  list->add_option("--since", lo->since, "Started at or after (UTC, 2026-11-22 or 2026-11-22T06:00:00Z)");
+  list->add_option("--until", lo->until, "Started before (UTC)");
   list->add_option("--limit", lo->query.limit, "At most this many")->capture_default_str();
   list->add_flag("--json", lo->json, "Print JSON");
   list->callback([&action, lo] { action = [lo] { return cmd_gear_runs_list(*lo); }; });
@@ -587,6 +642,22 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
   add_data_options(*show, so2->paths);
   show->add_flag("--json", so2->json, "Print JSON, with the traces");
   show->callback([&action, so2] { action = [so2] { return cmd_gear_runs_show(*so2); }; });
+
+  auto eo = std::make_shared<GearExportOptions>();
+  CLI::App* exp = runs->add_subcommand(
+      "export", "The gear runs' ISO 1328-1 figures as an AQDEF (Q-DAS .dfq) file for the plant's SPC system");
+  add_data_options(*exp, eo->paths);
+  exp->add_option("--format", eo->format, "dfq (the only format)")
+      ->check(CLI::IsMember({"dfq"}))
+      ->capture_default_str();
+  exp->add_option("--part", eo->query.part, "Only this part");
+  exp->add_option("--machine", eo->query.machine, "Only this machine");
+  exp->add_option("--serial", eo->query.serial, "Only this serial number (exact)");
+  exp->add_option("--since", eo->since, "Started at or after (UTC, 2026-11-22 or 2026-11-22T06:00:00Z)");
+  exp->add_option("--until", eo->until, "Started before (UTC)");
+  exp->add_option("--operation", eo->operation, "K1086, the work cycle")->capture_default_str();
+  exp->add_option("--out", eo->out_path, "Write the file here (atomically) instead of to standard output");
+  exp->callback([&action, eo] { action = [eo] { return cmd_gear_runs_export(*eo); }; });
 
   auto io = std::make_shared<IdentifyOptions>();
   CLI::App* identify = gear->add_subcommand(

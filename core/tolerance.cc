@@ -2,7 +2,10 @@
 #include "core/tolerance.h"
 #include "core/verdict_text.h"
 
+#include <optional>
+#include <string>
 #include <utility>
+#include <vector>
 
 namespace gaugeloop {
 
@@ -122,7 +125,44 @@ Characteristic single_characteristic(std::string key, std::string unit, double v
   return c;
 }
 
+namespace {
+
+// A gear's "lead." keys (characteristic_title); nullopt for another key.
+std::optional<std::string> lead_title(std::string_view key) {
+  constexpr std::string_view kLead = "lead.";
+  if (key.substr(0, kLead.size()) != kLead) return std::nullopt;
+  std::vector<std::string_view> parts;
+  for (std::string_view rest = key.substr(kLead.size());;) {
+    const size_t dot = rest.find('.');
+    parts.push_back(rest.substr(0, dot));
+    if (dot == std::string_view::npos) break;
+    rest = rest.substr(dot + 1);
+  }
+  std::string figure;
+  if (parts[0] == "F_beta") {
+    figure = "Total helix deviation F_beta";
+  } else if (parts[0] == "f_f_beta") {
+    figure = "Helix form deviation f_f_beta";
+  } else if (parts[0] == "f_H_beta") {
+    figure = "Helix slope deviation f_H_beta";
+  } else {
+    return std::nullopt;
+  }
+  if (parts.size() == 1 && parts[0] == "F_beta") return figure + ", worst flank";
+  if (parts.size() == 2 && parts[1] == "mean") return figure + ", mean of the flanks";
+  if (parts.size() == 2 && parts[1] == "mean_abs") return figure + ", mean size over the flanks";
+  const bool gap =
+      parts.size() == 3 && !parts[1].empty() && parts[1].find_first_not_of("0123456789") == std::string_view::npos;
+  if (gap && (parts[2] == "left" || parts[2] == "right")) {
+    return figure + ", gap " + std::string(parts[1]) + ", " + std::string(parts[2]) + " flank";
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 std::string characteristic_title(std::string_view key, PartKind kind) {
+  if (std::optional<std::string> lead = lead_title(key)) return *lead;
   std::string_view base = key;
   std::string_view zone;
   if (const size_t dot = key.find('.'); dot != std::string_view::npos) {
@@ -164,6 +204,7 @@ std::string characteristic_title(std::string_view key, PartKind kind) {
 PartKind part_kind_of(const std::vector<Characteristic>& characteristics) {
   for (const Characteristic& c : characteristics) {
     if (c.key == "diameter_error" || c.key == "stroke_error" || c.key == "index_error") return PartKind::kPin;
+    if (c.key.rfind("lead.", 0) == 0) return PartKind::kGear;
   }
   return PartKind::kLobe;
 }

@@ -56,7 +56,8 @@ Result<GearRunRecord> judge_gear(const GearPart& part, const std::vector<LeadTra
   r.slope_mean_abs_um /= n;
   r.tolerance_class = helix_tolerance_class(r.total_max_um, d, b);
   if (r.required_class) {
-    r.verdict = r.total_max_um <= helix_tolerance_um(*r.required_class, d, b) ? Verdict::kIn : Verdict::kOut;
+    r.total_tolerance_um = helix_tolerance_um(*r.required_class, d, b);
+    r.verdict = r.total_max_um <= *r.total_tolerance_um ? Verdict::kIn : Verdict::kOut;
   }
   return r;
 }

@@ -40,9 +40,12 @@ int harmonic_order(const std::string& key) {
   return k;
 }
 
-// Figures that cannot be below 0: their lower boundary is natural, not a tolerance.
+// Figures that cannot be below 0: their lower boundary is natural, not a tolerance. A gear's
+// F_beta and f_f_beta are widths of bands; f_H_beta is signed (its mean over the flanks, a
+// size, is not).
 bool has_natural_zero(const std::string& key) {
-  return key == "base_circle_runout" || key == "base_circle_runout_h1" || key == "roundness" || is_harmonic(key);
+  return key == "base_circle_runout" || key == "base_circle_runout_h1" || key == "roundness" || is_harmonic(key) ||
+         key.rfind("lead.F_beta", 0) == 0 || key.rfind("lead.f_f_beta", 0) == 0 || key == "lead.f_H_beta.mean_abs";
 }
 
 std::string run_name(const RunSummary& r) { return "run " + std::to_string(r.id); }
@@ -200,9 +203,12 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
     const PartBlock& b = blocks[p];
     const int part_number = static_cast<int>(p) + 1;
     out.add("K1001", part_number, b.part);
-    // A part block is one part and lobe (or pin): its newest run tells which.
+    // A part block is one part and lobe (or pin, or a gear's teeth): its newest run tells which.
     const PartKind kind = part_kind_of(b.runs.back()->characteristics);
-    out.add("K1002", part_number, (kind == PartKind::kPin ? "pin " : "lobe ") + std::to_string(b.lobe));
+    out.add("K1002", part_number,
+            kind == PartKind::kGear  ? std::string("gear teeth")
+            : kind == PartKind::kPin ? "pin " + std::to_string(b.lobe)
+                                     : "lobe " + std::to_string(b.lobe));
     const bool one_machine = std::all_of(b.runs.begin(), b.runs.end(), [&](const RunCharacteristics* r) {
       return r->run.machine == b.runs.front()->run.machine;
     });

@@ -769,6 +769,7 @@ CREATE TABLE gear_runs (
   nc_file              TEXT    NOT NULL,  -- the stroke program the gear was ground from
   ground_with_version  INTEGER CHECK (ground_with_version >= 1),  -- NULL: not known
   required_class       INTEGER CHECK (required_class BETWEEN 1 AND 11),  -- NULL: not judged
+  total_tolerance_um   REAL    CHECK (total_tolerance_um > 0),  -- F_betaT of required_class
   verdict              TEXT    NOT NULL CHECK (verdict IN ('in', 'out', 'not_judged')),
   tolerance_class      INTEGER NOT NULL CHECK (tolerance_class BETWEEN 1 AND 12),  -- the worst flank's
   total_max_um         REAL    NOT NULL,  -- F_beta, the worst flank
@@ -777,7 +778,8 @@ CREATE TABLE gear_runs (
   slope_mean_abs_um    REAL    NOT NULL,  -- |f_H_beta|
   pushed_version       INTEGER CHECK (pushed_version >= 1),  -- the stroke pushed from it; NULL: none
   mesh_residual_rms_um REAL,  -- of the fit that pushed it
-  CHECK ((verdict = 'not_judged') = (required_class IS NULL))
+  CHECK ((verdict = 'not_judged') = (required_class IS NULL)),
+  CHECK ((total_tolerance_um IS NULL) = (required_class IS NULL))
 );
 CREATE INDEX gear_runs_by_part_started ON gear_runs (part, started_utc);
 CREATE INDEX gear_runs_by_started ON gear_runs (started_utc);

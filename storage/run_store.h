@@ -296,6 +296,7 @@ struct GearRunRecord {
   std::string nc_file;                     // the stroke program the gear was ground from
   std::optional<int> ground_with_version;  // that program's version; empty: not known
   std::optional<int> required_class;       // the drawing's flank tolerance class; empty: not judged
+  std::optional<double> total_tolerance_um;  // F_betaT of required_class for this gear
   Verdict verdict = Verdict::kNotJudged;   // every flank's F_beta within required_class's tolerance
   int tolerance_class = 0;                 // of the worst flank's F_beta
   double total_max_um = 0.0;               // of the flanks' F_beta

@@ -71,6 +71,10 @@ Status check_gear_run(const GearRunRecord& r) {
   if (r.required_class && (*r.required_class < 1 || *r.required_class > 11)) {
     return gear_run_refused("the required class is " + std::to_string(*r.required_class) + ", not 1 to 11");
   }
+  if (r.required_class.has_value() != r.total_tolerance_um.has_value() ||
+      (r.total_tolerance_um && !(*r.total_tolerance_um > 0.0 && std::isfinite(*r.total_tolerance_um)))) {
+    return gear_run_refused("a required class comes with its F_beta tolerance, finite and above 0");
+  }
   if (r.required_class.has_value() == (r.verdict == Verdict::kNotJudged)) {
     return gear_run_refused("a gear is judged (in or out) exactly when the part names its tolerance class");
   }
@@ -94,10 +98,10 @@ Status check_gear_run(const GearRunRecord& r) {
 
 constexpr std::string_view kInsertGearRun = R"sql(
 INSERT INTO gear_runs (started_utc, machine, part, source, serial, operator, note, nc_file, ground_with_version,
-                       required_class, verdict, tolerance_class, total_max_um, total_mean_um, form_mean_um,
-                       slope_mean_abs_um)
+                       required_class, total_tolerance_um, verdict, tolerance_class, total_max_um, total_mean_um,
+                       form_mean_um, slope_mean_abs_um)
 VALUES (:started_utc, :machine, :part, :source, :serial, :operator, :note, :nc_file, :ground_with_version,
-        :required_class, :verdict, :tolerance_class, :total_max_um, :total_mean_um, :form_mean_um,
+        :required_class, :total_tolerance_um, :verdict, :tolerance_class, :total_max_um, :total_mean_um, :form_mean_um,
         :slope_mean_abs_um)
 )sql";
 
@@ -108,11 +112,11 @@ VALUES (:run_id, :gap, :flank, :total_um, :form_um, :slope_um, :tolerance_class,
         :deviation_um)
 )sql";
 
-// Columns 0..18 of gear_runs AS g, read by read_gear_run.
+// Columns 0..19 of gear_runs AS g, read by read_gear_run.
 constexpr std::string_view kGearRunColumns =
     "g.id, g.started_utc, g.machine, g.part, g.source, g.serial, g.operator, g.note, g.nc_file, "
     "g.ground_with_version, g.required_class, g.verdict, g.tolerance_class, g.total_max_um, g.total_mean_um, "
-    "g.form_mean_um, g.slope_mean_abs_um, g.pushed_version, g.mesh_residual_rms_um";
+    "g.form_mean_um, g.slope_mean_abs_um, g.pushed_version, g.mesh_residual_rms_um, g.total_tolerance_um";
 
 StoredGearRun read_gear_run(const Statement& s) {
   StoredGearRun g;
@@ -136,6 +140,7 @@ StoredGearRun read_gear_run(const Statement& s) {
   r.slope_mean_abs_um = s.column<double>(16);
   g.pushed_version = s.column<std::optional<int>>(17);
   g.mesh_residual_rms_um = s.column<std::optional<double>>(18);
+  r.total_tolerance_um = s.column<std::optional<double>>(19);
   return g;
 }
 
@@ -165,6 +170,7 @@ Result<std::int64_t> RunStore::insert_gear_run(const GearRunRecord& run) {
   ins->bind(":nc_file", run.nc_file);
   ins->bind(":ground_with_version", run.ground_with_version);
   ins->bind(":required_class", run.required_class);
+  ins->bind(":total_tolerance_um", run.total_tolerance_um);
   ins->bind(":verdict", verdict_name(run.verdict));
   ins->bind(":tolerance_class", run.tolerance_class);
   ins->bind(":total_max_um", run.total_max_um);

@@ -148,7 +148,7 @@ TEST(GearCommand, CorrectsTheStrokeInForceFromACheckersLeadTraces) {
   // (-10.8 .. 10.8 mm; points every 0.5 mm: -10.5 .. 10.5): 2.94 um, within class 5's 8.6 um for
   // this gear (the part's tolerance_class).
   EXPECT_NE(r.output.find("gear run 2 of gear_71"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find(": in (class 5 asked)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(": in (class 5 asked: F_beta within 8.60 um)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("not separable"), std::string::npos) << r.output;
   // SIM1 takes the mesh error back: -0.0001 deg per mm about the face's middle, held beyond it.
   const std::string text = testing::slurp(dir.path() / "data" / "nc" / "GEAR_71.SPF");

@@ -16,6 +16,7 @@
 #include "tests/compensation/generating_model.h"
 #include "tests/support/cli.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -127,6 +128,17 @@ TEST(GearLoop, TheDemoClosesTheLoopOnTheExampleGear) {
   ASSERT_EQ(runs.exit_code, 0) << runs.output;
   EXPECT_NE(runs.output.find("virtual gear grinder"), std::string::npos) << runs.output;
   EXPECT_NE(runs.output.find("GEAR-1"), std::string::npos) << runs.output;
+  // The gears for the plant's SPC: 2 gears of 8 flanks, 4 figures a gear and 3 a flank each.
+  const fs::path dfq = dir.path() / "gears.dfq";
+  testing::CommandResult exported = testing::run_command("gear runs export --out " + dfq.string() + data);
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  EXPECT_NE(exported.output.find("2 gear runs exported"), std::string::npos) << exported.output;
+  const std::string text = testing::slurp(dfq);
+  EXPECT_NE(text.find("K1002/1 gear teeth\r\n"), std::string::npos);
+  EXPECT_NE(text.find("K0100 28\r\n"), std::string::npos);
+  std::size_t values = 0;
+  for (std::size_t at = text.find("\nK0001/"); at != std::string::npos; at = text.find("\nK0001/", at + 1)) ++values;
+  EXPECT_EQ(values, 2u * 28u);
 }
 
 }  // namespace

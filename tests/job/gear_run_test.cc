@@ -63,6 +63,7 @@ TEST(JudgeGear, AGearIsInWhenItsWorstFlankIsWithinTheClassAndOutJustBeyond) {
     EXPECT_NEAR(r->slope_mean_abs_um, r->total_mean_um * 21.6 / 21.0, 1e-9);  // straight: all slope, no form
     EXPECT_NEAR(r->form_mean_um, 0.0, 1e-9);
     EXPECT_EQ(r->verdict, worst < limit ? Verdict::kIn : Verdict::kOut) << worst;
+    EXPECT_NEAR(*r->total_tolerance_um, limit, 1e-9);
     EXPECT_EQ(r->tolerance_class, worst < limit ? 5 : 6);
     ASSERT_EQ(r->traces.size(), 3u);
     EXPECT_EQ(r->traces[1].flank, "right");

@@ -43,6 +43,7 @@ GearRunRecord sample_gear(const std::string& part, const std::string& started, d
   r.nc_file = "/data/nc/GEAR_71.SPF";
   r.ground_with_version = 3;
   r.required_class = 5;
+  r.total_tolerance_um = 8.6;
   r.verdict = worst_um <= 8.6 ? Verdict::kIn : Verdict::kOut;
   r.tolerance_class = 6;
   r.total_max_um = worst_um;
@@ -74,6 +75,7 @@ TEST_F(GearRunStoreTest, AGearRunReadsBackAsStored) {
   EXPECT_EQ(r.nc_file, in.nc_file);
   EXPECT_EQ(r.ground_with_version, 3);
   EXPECT_EQ(r.required_class, 5);
+  EXPECT_EQ(r.total_tolerance_um, 8.6);
   EXPECT_EQ(r.verdict, Verdict::kOut);
   EXPECT_EQ(r.tolerance_class, 6);
   EXPECT_DOUBLE_EQ(r.total_max_um, 11.5);
@@ -165,7 +167,13 @@ TEST_F(GearRunStoreTest, ARecordThatContradictsItselfIsRefusedBeforeARowIsWritte
       {"NaN deviation",
        [](GearRunRecord& r) { r.traces[2].deviation_um[3] = std::numeric_limits<double>::quiet_NaN(); },
        "gap 20, left flank's deviation 4 is NaN"},
-      {"verdict without class", [](GearRunRecord& r) { r.required_class.reset(); }, "tolerance class"},
+      {"class without tolerance", [](GearRunRecord& r) { r.total_tolerance_um.reset(); }, "F_beta tolerance"},
+      {"verdict without class",
+       [](GearRunRecord& r) {
+         r.required_class.reset();
+         r.total_tolerance_um.reset();
+       },
+       "tolerance class"},
       {"bad time", [](GearRunRecord& r) { r.started_utc = "1.12.2026"; }, "1.12.2026"},
   };
   for (const Case& c : cases) {
