@@ -91,6 +91,7 @@ struct CorrectOptions : PushTargetOptions {
   std::string serial;
   std::string operator_name;
   std::string note;
+  bool require_approval = false;
 };
 
 // Sets `s` up to push gf's stroke into <nc-dir>/<nc_program>.SPF, as a measurement pushes a
@@ -213,6 +214,8 @@ int cmd_gear_correct(const CorrectOptions& o) {
   print_trace_table(judged->traces);
   std::printf("F_beta %.2f um at worst (class %d): %s\n", judged->total_max_um, judged->tolerance_class,
               gear_verdict_text(*judged).c_str());
+  s.require_approval = o.require_approval;
+  s.gear_run_id = *id;
   Result<GearCorrection> c =
       correct_gear_stroke(gf->part, *traces, "gear run " + std::to_string(*id) + ", lead traces " + o.lead_path, s);
   if (!c) {
@@ -220,7 +223,8 @@ int cmd_gear_correct(const CorrectOptions& o) {
     return report_error(c.error());
   }
   const MeshIdentification& m = c->identification;
-  if (Status r = store->record_gear_push(*id, c->pushed.version, m.residual_rms_um); !r) return report_error(r.error());
+  const std::optional<int> pushed = c->pushed.version > 0 ? std::optional<int>(c->pushed.version) : std::nullopt;
+  if (Status r = store->record_gear_correction(*id, m.residual_rms_um, pushed); !r) return report_error(r.error());
   int held = 0;
   for (const bool seen : m.observed) held += seen ? 0 : 1;
   std::printf(
@@ -234,6 +238,14 @@ int cmd_gear_correct(const CorrectOptions& o) {
   for (std::size_t k = 0; k < m.z_mm.size(); ++k) {
     std::printf("  %-10.3f %14.6f %14.6f%s\n", m.z_mm[k], m.mesh_deg[k], c->pushed.points[k].sim_deg,
                 m.observed[k] ? "" : "  (held)");
+  }
+  if (c->pushed.pending_id != 0) {
+    std::printf(
+        "the corrected stroke waits for approval as pending table %lld (from version %d); nothing was written to "
+        "%s: `gaugeloop nc approve %lld --by NAME %s` pushes it, `nc reject` drops it\n",
+        static_cast<long long>(c->pushed.pending_id), c->from_version, s.nc_file.string().c_str(),
+        static_cast<long long>(c->pushed.pending_id), o.paths.where().c_str());
+    return kExitOk;
   }
   std::printf("pushed %s as stroke version %d (from version %d), read back; main program %s\n",
               c->pushed.written.string().c_str(), c->pushed.version, c->from_version,
@@ -404,6 +416,11 @@ int cmd_gear_runs_show(const GearRunsOptions& o) {
   if (g->pushed_version) {
     std::printf("stroke version %d was pushed from it (mesh error fit: residual %.2f um RMS)\n", *g->pushed_version,
                 g->mesh_residual_rms_um.value_or(0.0));
+  } else if (g->mesh_residual_rms_um) {
+    std::printf(
+        "a stroke was corrected from it (mesh error fit: residual %.2f um RMS) and not pushed: it waits for approval "
+        "or was rejected (`gaugeloop nc pending --all`)\n",
+        *g->mesh_residual_rms_um);
   } else {
     std::printf("no stroke was pushed from it\n");
   }
@@ -620,6 +637,9 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
   correct->add_option("--serial", co->serial, "Serial number of the measured gear (at most 64 characters)");
   correct->add_option("--operator", co->operator_name, "Who measured it (at most 64 characters)");
   correct->add_option("--note", co->note, "A note stored with the gear run");
+  correct->add_flag("--require-approval", co->require_approval,
+                    "Keep the corrected stroke as a pending table until a person approves it (`nc approve ID`) "
+                    "instead of pushing it");
   correct->callback([&action, co] { action = [co] { return cmd_gear_correct(*co); }; });
 
   CLI::App* runs = gear->add_subcommand("runs", "The gears measured: their lead, ISO 1328-1 figures and verdicts");

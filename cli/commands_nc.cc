@@ -381,12 +381,13 @@ int cmd_pending(const PendingOptions& o) {
     std::cout << out.dump(2) << "\n";
     return kExitOk;
   }
-  std::printf("%5s  %6s  %-20s  %-16s  %-7s  %-10s  %s\n", "id", "run", "created (UTC)", "program", "verdict", "status",
+  std::printf("%5s  %8s  %-20s  %-16s  %-7s  %-10s  %s\n", "id", "run", "created (UTC)", "program", "verdict", "status",
               "reason");
   for (const PendingTable& t : *tables) {
-    std::printf("%5lld  %6lld  %-20s  %-16s  %-7s  %-10s  %s\n", static_cast<long long>(t.id),
-                static_cast<long long>(t.run_id), t.created_utc.c_str(),
-                std::filesystem::path(t.nc_file).stem().string().c_str(),
+    // A gear's stroke names its gear run: "gear 3".
+    const std::string run = t.gear_run_id != 0 ? "gear " + std::to_string(t.gear_run_id) : std::to_string(t.run_id);
+    std::printf("%5lld  %8s  %-20s  %-16s  %-7s  %-10s  %s\n", static_cast<long long>(t.id), run.c_str(),
+                t.created_utc.c_str(), std::filesystem::path(t.nc_file).stem().string().c_str(),
                 std::string(pending_verdict_name(t.verdict)).c_str(),
                 std::string(pending_status_name(t.status)).c_str(), t.reason.c_str());
   }
@@ -411,6 +412,13 @@ int cmd_approve(const DecideOptions& o) {
   if (!main) return report_error(main.error());
   Result<PushOutcome> pushed = approve_pending(*store, o.id, by, o.note, o.overwrite_edited, *main);
   if (!pushed) return report_error(pushed.error());
+  if (pushed->stroke) {
+    std::printf("%s: stroke version %d written from gear run %lld (pending table %lld, approved by %s)%s\n",
+                pushed->nc_file.c_str(), pushed->table_version, static_cast<long long>(pushed->gear_run_id),
+                static_cast<long long>(o.id), by.c_str(),
+                pushed->decision_recorded ? "" : "; it had stopped pending meanwhile, the push is recorded alone");
+    return kExitOk;
+  }
   std::printf("%s: table version %d written from run %lld (pending table %lld, approved by %s)%s\n",
               pushed->nc_file.c_str(), pushed->table_version, static_cast<long long>(pushed->run_id),
               static_cast<long long>(o.id), by.c_str(),

@@ -95,8 +95,8 @@ Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& set
                               settings.stroke);
       if (!c) return c.error();
       if (g.gear_run_id > 0) {
-        Status recorded = settings.stroke.store->record_gear_push(g.gear_run_id, c->pushed.version,
-                                                                  c->identification.residual_rms_um);
+        Status recorded = settings.stroke.store->record_gear_correction(
+            g.gear_run_id, c->identification.residual_rms_um, c->pushed.version);
         if (!recorded) return recorded.error();
       }
       version = c->pushed.version;

@@ -51,7 +51,25 @@ Result<GearStrokeReport> push_gear_stroke(const GearPart& part, std::vector<Stro
   };
   Result<std::string> text = render_stroke_program(s.program_name, header, program_points, s.feed_mm_per_min, s.format);
   if (!text) return text.error();
-  if (s.store != nullptr) {
+  std::string back_text;  // what the control would read, or the approval will push
+  if (s.store != nullptr && s.require_approval) {
+    if (s.gear_run_id == 0) {
+      return make_error(ErrorCode::kInvalidInput,
+                        "a stroke kept for approval names the gear run it was corrected from; none was given");
+    }
+    PendingTable pending;
+    pending.gear_run_id = s.gear_run_id;
+    pending.nc_file = s.nc_file.string();
+    pending.program_text = *text;
+    pending.reason = "approval required";
+    pending.table.interpolation = "stroke";
+    pending.table.point_count = static_cast<int>(program_points.size());
+    pending.table.block_count = static_cast<int>(program_points.size());
+    Result<std::int64_t> id = s.store->add_pending(pending);
+    if (!id) return id.error();
+    r.pending_id = *id;
+    back_text = *text;
+  } else if (s.store != nullptr) {
     PushFacts facts;
     facts.reason = "stroke from " + source;
     facts.table.interpolation = "stroke";
@@ -70,20 +88,22 @@ Result<GearStrokeReport> push_gear_stroke(const GearPart& part, std::vector<Stro
     if (Status w = write_file_atomically(s.out_file, *text); !w) return w.error();
     r.written = s.out_file;
   }
-  // What the control would read: parsed, checksummed, every point as written.
-  Result<std::string> back = read_regular_file(r.written, "stroke program");
-  if (!back) return back.error();
-  Result<ParsedStrokeProgram> parsed = parse_stroke_program(*back, r.written.string());
-  if (!parsed) {
-    return make_error(ErrorCode::kIo, r.written.string() + " does not read back: " + parsed.error().message);
+  if (r.pending_id == 0) {
+    Result<std::string> back = read_regular_file(r.written, "stroke program");
+    if (!back) return back.error();
+    back_text = std::move(*back);
   }
+  // What the control would read: parsed, checksummed, every point as written.
+  const std::string name = r.pending_id != 0 ? "pending table " + std::to_string(r.pending_id) : r.written.string();
+  Result<ParsedStrokeProgram> parsed = parse_stroke_program(back_text, name);
+  if (!parsed) return make_error(ErrorCode::kIo, name + " does not read back: " + parsed.error().message);
   for (std::size_t i = 0; i < program_points.size(); ++i) {
     const StrokeProgramPoint& a = parsed->points[i];
     if (a.z_mm != s.format.round_z_mm(program_points[i].z_mm) ||
         a.sim_deg != s.format.round_sim_deg(program_points[i].sim_deg)) {
-      return make_error(ErrorCode::kIo, r.written.string() + ":" + std::to_string(parsed->point_lines[i]) +
-                                            ": reads back Z" + format_fixed(a.z_mm, 4) +
-                                            " SIM1=" + format_fixed(a.sim_deg, 6) + ", not what was written");
+      return make_error(ErrorCode::kIo, name + ":" + std::to_string(parsed->point_lines[i]) + ": reads back Z" +
+                                            format_fixed(a.z_mm, 4) + " SIM1=" + format_fixed(a.sim_deg, 6) +
+                                            ", not what was written");
     }
   }
   return r;

@@ -31,6 +31,11 @@ struct GearStrokeSettings {
   MainProgramSource main;
   bool overwrite_edited = false;
   std::filesystem::path out_file;
+  // With a store: keep the program as a pending table waiting for a person's approval (`nc
+  // approve`, which pushes it as the next version) instead of pushing it; gear_run_id names the
+  // gear run it was corrected from (required then: a pending table names where it comes from).
+  bool require_approval = false;
+  std::int64_t gear_run_id = 0;
 };
 
 struct GearStrokeReport {
@@ -38,13 +43,15 @@ struct GearStrokeReport {
   std::vector<StrokeSimPoint> points;
   std::string coupling_lines;  // EGDEF and EGON for the main program
   double sim_max_abs_deg = 0.0;
-  std::filesystem::path written;  // the stroke program's file
-  int version = 0;                // the stroke version pushed; 0: written to a file, not pushed
+  std::filesystem::path written;  // the stroke program's file; empty when it waits for approval
+  int version = 0;                // the stroke version pushed; 0: written to a file, not pushed, or pending
+  std::int64_t pending_id = 0;    // the pending table waiting for approval (require_approval); 0: none
 };
 
-// The points and the program, pushed (settings.store) or written atomically to settings.out_file,
-// then read back: it must parse, match its checksum and hold every point as written (on the
-// control's grid). Errors: validate's and stroke_sim_points' kInvalidInput; push_program's (a
+// The points and the program, pushed (settings.store), kept for approval
+// (settings.require_approval) or written atomically to settings.out_file, then read back (the
+// pending table's text when it waits): it must parse, match its checksum and hold every point as
+// written (on the control's grid). Errors: validate's and stroke_sim_points' kInvalidInput; push_program's (a
 // hand-edited program kRefused, a main template without the gearbox kInvalidInput, both before
 // anything is written); kIo for a file that cannot be written or does not read back as written.
 Result<GearStrokeReport> write_gear_stroke(const GearPart& part, const StrokeAxisErrors& errors,
@@ -77,7 +84,8 @@ struct GearCorrection {
 
 // The stroke in force (the version last pushed to settings.nc_file, its SIM1 as the control
 // holds it) less the mesh error identify_mesh_error finds in `traces` at its spline points,
-// pushed as the next version with `source` as its origin. kInvalidInput without a store;
+// pushed as the next version with `source` as its origin (or kept for approval, as
+// settings.require_approval says). kInvalidInput without a store;
 // kNotFound when no stroke was pushed to the file (push one with write_gear_stroke first);
 // identify_mesh_error's and push_gear_stroke's errors. Nothing is written on an error.
 Result<GearCorrection> correct_gear_stroke(const GearPart& part, const std::vector<LeadTrace>& traces,

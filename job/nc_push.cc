@@ -646,10 +646,12 @@ Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, co
   PushOutcome out;
   out.nc_file = t->nc_file;
   out.run_id = t->run_id;
+  out.gear_run_id = t->gear_run_id;
   const std::string& text = t->program_text;
+  out.stroke = is_stroke_program(text);
   PushOptions options;
   options.overwrite_edited = overwrite_edited;
-  Result<MainProgramSource> m = main_for_run(store, t->run_id, main, t->nc_file, "approved");
+  Result<MainProgramSource> m = main_for_run(store, t->run_id, main, t->nc_file, "approved", text);
   if (!m) return m.error();
   options.main = std::move(*m);
   Result<PushCompletion> pushed = push_program(

@@ -166,7 +166,8 @@ struct PushOutcome {
   // Approval only: false if the table stopped pending between the check and the write (a
   // newer measurement superseded it); the push is then recorded alone.
   bool decision_recorded = true;
-  bool stroke = false;  // a gear's stroke program (nc_out/stroke_program.h), not a curve table
+  bool stroke = false;           // a gear's stroke program (nc_out/stroke_program.h), not a curve table
+  std::int64_t gear_run_id = 0;  // approval of a stroke: the gear run it was corrected from
 };
 
 // `gaugeloop nc approve` and POST /api/nc/approve: pushes pending table `pending_id` (still

@@ -172,6 +172,7 @@ json nc_push_json(const NcPush& p) {
 json pending_table_json(const PendingTable& t) {
   json j{{"id", t.id},
          {"run_id", t.run_id},
+         {"gear_run_id", t.gear_run_id != 0 ? json(t.gear_run_id) : json(nullptr)},
          {"created_utc", t.created_utc},
          {"nc_file", t.nc_file},
          {"verdict", pending_verdict_name(t.verdict)},

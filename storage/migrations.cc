@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "storage/degree_blob.h"
 #include "storage/degree_json.h"
@@ -801,22 +802,41 @@ CREATE TABLE gear_run_traces (
 ) WITHOUT ROWID;
 )sql";
 
-// The schema cookie must change with the CREATE text, so every connection reads it again;
-// and both edits must have happened.
-Status bump_schema_cookie(Connection& conn) {
-  Result<Statement> count =
-      Statement::prepare(conn,
-                         "SELECT count(*) FROM sqlite_schema WHERE type = 'table' AND "
-                         "name IN ('nc_pushes', 'nc_push_intents') AND sql LIKE '%written by nc new%'",
-                         "migrate the schema to version 10");
+// Version 13: a gear's stroke corrected from a gear run may wait for approval as a curve table
+// does: nc_pending.run_id may be NULL (a stroke has no lobe run behind it) and gear_run_id names
+// the gear run instead. The column is added first (ALTER TABLE rewrites the CREATE text from
+// the schema it has read), then NOT NULL is dropped in place as version 10 did.
+constexpr std::string_view kSchemaV13 = R"sql(
+ALTER TABLE nc_pending ADD COLUMN gear_run_id INTEGER REFERENCES gear_runs (id) ON DELETE CASCADE;
+PRAGMA writable_schema = ON;
+UPDATE sqlite_schema
+  SET sql = replace(sql, 'run_id            INTEGER NOT NULL REFERENCES runs (id) ON DELETE CASCADE,',
+                         'run_id            INTEGER REFERENCES runs (id) ON DELETE CASCADE,  -- NULL: a gear''s stroke')
+  WHERE type = 'table' AND name = 'nc_pending';
+PRAGMA writable_schema = OFF;
+)sql";
+
+// After an in-place edit of CREATE texts (versions 10 and 13): `edited` tables must hold
+// `marker` (else the edit found the text changed by hand and the migration rolls back); then the
+// schema cookie changes with the CREATE text, so every connection reads it again.
+Status bump_schema_cookie_after(Connection& conn, int version, const std::vector<std::string>& edited,
+                                const std::string& marker) {
+  const std::string operation = "migrate the schema to version " + std::to_string(version);
+  std::string names;
+  for (const std::string& t : edited) names += (names.empty() ? "'" : ", '") + t + "'";
+  Result<Statement> count = Statement::prepare(conn,
+                                               "SELECT count(*) FROM sqlite_schema WHERE type = 'table' AND name IN (" +
+                                                   names + ") AND sql LIKE '%" + marker + "%'",
+                                               operation);
   if (!count.ok()) return count.error();
   Result<bool> row = count->step();
   if (!row.ok()) return row.error();
-  if (!*row || count->column<int>(0) != 2) {
-    return make_error(ErrorCode::kStorage,
-                      "migrate the schema to version 10: nc_pushes or nc_push_intents in " + conn.path.string() +
-                          " is not as gaugeloop created it (its run_id column was changed by hand); restore a backup "
-                          "or ask for help, nothing was changed");
+  if (!*row || count->column<int>(0) != static_cast<int>(edited.size())) {
+    std::string list;
+    for (const std::string& t : edited) list += (list.empty() ? "" : " or ") + t;
+    return make_error(ErrorCode::kStorage, operation + ": " + list + " in " + conn.path.string() +
+                                               " is not as gaugeloop created it (its run_id column was changed by "
+                                               "hand); restore a backup or ask for help, nothing was changed");
   }
   std::int64_t next = 0;
   {
@@ -829,8 +849,16 @@ Status bump_schema_cookie(Connection& conn) {
   return exec(conn, ("PRAGMA schema_version = " + std::to_string(next)).c_str(), "bump the schema cookie");
 }
 
-const std::array<Migration, 12>& all_migrations() {
-  static const std::array<Migration, 12> kMigrations{{
+Status bump_schema_cookie(Connection& conn) {
+  return bump_schema_cookie_after(conn, 10, {"nc_pushes", "nc_push_intents"}, "written by nc new");
+}
+
+Status bump_schema_cookie_v13(Connection& conn) {
+  return bump_schema_cookie_after(conn, 13, {"nc_pending"}, "NULL: a gear''s stroke");
+}
+
+const std::array<Migration, 13>& all_migrations() {
+  static const std::array<Migration, 13> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -883,6 +911,11 @@ const std::array<Migration, 12>& all_migrations() {
        "gear runs: a gear checker's lead traces, their ISO 1328-1 figures and the gear's verdict",
        std::string(kSchemaV12),
        nullptr,
+       {}},
+      {13,
+       "a gear's stroke waits for approval as a table does: nc_pending.gear_run_id, nc_pending.run_id may be NULL",
+       std::string(kSchemaV13),
+       bump_schema_cookie_v13,
        {}},
   }};
   return kMigrations;

@@ -191,8 +191,11 @@ std::string_view pending_status_name(PendingStatus status);  // "pending", "appr
 // A rendered NC program that was not written to the control, kept in nc_pending until a person
 // approves or rejects it. At most one table per nc_file is pending: the newest measurement.
 struct PendingTable {
-  std::int64_t id = 0;       // read back; ignored by add_pending
-  std::int64_t run_id = 0;   // the run it was computed from; must be stored
+  std::int64_t id = 0;      // read back; ignored by add_pending
+  std::int64_t run_id = 0;  // the run it was computed from; must be stored (0 with gear_run_id)
+  // A gear's stroke program: the gear run it was corrected from, stored; 0: a lobe's table.
+  // Exactly one of run_id and gear_run_id is set (schema 13).
+  std::int64_t gear_run_id = 0;
   std::string created_utc;   // ISO 8601 UTC; empty when adding: now
   std::string nc_file;       // where it would be written; not empty
   std::string program_text;  // the program as rendered; not empty. Empty in list_pending results.
@@ -293,13 +296,13 @@ struct GearRunRecord {
   std::string serial;  // empty: not given
   std::string operator_name;
   std::string note;
-  std::string nc_file;                     // the stroke program the gear was ground from
-  std::optional<int> ground_with_version;  // that program's version; empty: not known
-  std::optional<int> required_class;       // the drawing's flank tolerance class; empty: not judged
+  std::string nc_file;                       // the stroke program the gear was ground from
+  std::optional<int> ground_with_version;    // that program's version; empty: not known
+  std::optional<int> required_class;         // the drawing's flank tolerance class; empty: not judged
   std::optional<double> total_tolerance_um;  // F_betaT of required_class for this gear
-  Verdict verdict = Verdict::kNotJudged;   // every flank's F_beta within required_class's tolerance
-  int tolerance_class = 0;                 // of the worst flank's F_beta
-  double total_max_um = 0.0;               // of the flanks' F_beta
+  Verdict verdict = Verdict::kNotJudged;     // every flank's F_beta within required_class's tolerance
+  int tolerance_class = 0;                   // of the worst flank's F_beta
+  double total_max_um = 0.0;                 // of the flanks' F_beta
   double total_mean_um = 0.0;
   double form_mean_um = 0.0;
   double slope_mean_abs_um = 0.0;
@@ -630,9 +633,10 @@ class RunStore : public RunHistory {
   // contradicts itself (no trace, a trace's z_mm and deviation_um of different lengths, two
   // traces of one gap and flank, a verdict without a required class), naming the field.
   Result<std::int64_t> insert_gear_run(const GearRunRecord& run);
-  // The stroke version pushed from gear run `id`, and the residual of the fit that made it.
-  // kNotFound for an unknown id.
-  Status record_gear_push(std::int64_t id, int stroke_version, double mesh_residual_rms_um);
+  // The correction made from gear run `id`: the residual of the mesh-error fit, and the stroke
+  // version pushed (empty: none yet; a stroke waiting for approval gets its version when
+  // approved, in the approval's transaction). kNotFound for an unknown id.
+  Status record_gear_correction(std::int64_t id, double mesh_residual_rms_um, std::optional<int> stroke_version);
   // Newest first; traces left out (load_gear_run has them). kInvalidInput as check_run_query.
   Result<std::vector<StoredGearRun>> list_gear_runs(const GearRunQuery& q) const;
   // One gear run with its traces. kNotFound if absent.

@@ -200,17 +200,18 @@ Result<std::int64_t> RunStore::insert_gear_run(const GearRunRecord& run) {
   return id;
 }
 
-Status RunStore::record_gear_push(std::int64_t id, int stroke_version, double mesh_residual_rms_um) {
+Status RunStore::record_gear_correction(std::int64_t id, double mesh_residual_rms_um,
+                                        std::optional<int> stroke_version) {
   Connection& conn = *conn_;
-  const std::string operation =
-      "record stroke version " + std::to_string(stroke_version) + " of gear run " + std::to_string(id);
-  if (stroke_version < 1 || !std::isfinite(mesh_residual_rms_um)) {
-    return make_error(ErrorCode::kInvalidInput, "cannot " + operation +
-                                                    ": the version must be 1 or more and the "
-                                                    "residual finite");
+  const std::string operation = "record the correction made from gear run " + std::to_string(id);
+  if ((stroke_version && *stroke_version < 1) || !std::isfinite(mesh_residual_rms_um)) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "cannot " + operation + ": the version must be 1 or more and the residual finite");
   }
   Result<Statement> up = Statement::prepare(
-      conn, "UPDATE gear_runs SET pushed_version = :version, mesh_residual_rms_um = :residual WHERE id = :id",
+      conn,
+      "UPDATE gear_runs SET mesh_residual_rms_um = :residual, pushed_version = coalesce(:version, pushed_version) "
+      "WHERE id = :id",
       operation);
   if (!up.ok()) return up.error();
   up->bind(":version", stroke_version);

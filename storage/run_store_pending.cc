@@ -17,16 +17,16 @@ using storage_internal::Transaction;
 
 namespace {
 
-// Columns 0..17, read by read_pending(); program_text is column 4 ('' in lists).
+// Columns 0..18, read by read_pending(); program_text is column 4 ('' in lists).
 constexpr std::string_view kPendingColumns =
     "id, run_id, created_utc, nc_file, {text}, verdict, reason, interpolation, block_count, command_error_um, "
-    "point_count, correction_max_um, status, decided_utc, decided_by, note, push_id, superseded_by";
+    "point_count, correction_max_um, status, decided_utc, decided_by, note, push_id, superseded_by, gear_run_id";
 
 constexpr std::string_view kInsertPending = R"sql(
-INSERT INTO nc_pending (run_id, created_utc, nc_file, program_text, verdict, reason, interpolation, block_count,
-                        command_error_um, correction_max_um, point_count)
-VALUES (:run_id, :created_utc, :nc_file, :program_text, :verdict, :reason, :interpolation, :block_count,
-        :command_error_um, :correction_max_um, :point_count))sql";
+INSERT INTO nc_pending (run_id, gear_run_id, created_utc, nc_file, program_text, verdict, reason, interpolation,
+                        block_count, command_error_um, correction_max_um, point_count)
+VALUES (:run_id, :gear_run_id, :created_utc, :nc_file, :program_text, :verdict, :reason, :interpolation,
+        :block_count, :command_error_um, :correction_max_um, :point_count))sql";
 
 std::string select_pending(bool with_text, std::string_view rest) {
   std::string columns(kPendingColumns);
@@ -59,6 +59,7 @@ PendingTable read_pending(const Statement& s) {
   t.note = s.column<std::string>(15);
   t.push_id = s.column<std::optional<std::int64_t>>(16);
   t.superseded_by = s.column<std::optional<std::int64_t>>(17);
+  t.gear_run_id = s.column<std::optional<std::int64_t>>(18).value_or(0);
   return t;
 }
 
@@ -97,8 +98,18 @@ Status require_pending(const PendingTable& t, const std::string& operation) {
   return make_error(ErrorCode::kRefused, "cannot " + operation + ": " + how + "; nothing was changed");
 }
 
+// "run 12", or "gear run 3" for a gear's stroke.
+std::string pending_source(const PendingTable& table) {
+  return table.gear_run_id != 0 ? "gear run " + std::to_string(table.gear_run_id)
+                                : "run " + std::to_string(table.run_id);
+}
+
 Status check_pending(const PendingTable& table) {
-  const std::string what = "cannot keep a pending table for run " + std::to_string(table.run_id);
+  const std::string what = "cannot keep a pending table for " + pending_source(table);
+  if (table.gear_run_id != 0 && table.run_id != 0) {
+    return make_error(ErrorCode::kInvalidInput, what + ": it names run " + std::to_string(table.run_id) +
+                                                    " too; a table comes from a lobe run or a gear run, not both");
+  }
   if (table.nc_file.empty()) return make_error(ErrorCode::kInvalidInput, what + ": the NC file path is empty");
   if (table.program_text.empty()) {
     return make_error(ErrorCode::kInvalidInput, what + " (" + table.nc_file + "): the program text is empty");
@@ -132,7 +143,8 @@ Result<std::int64_t> insert_pending(Connection& conn, const PendingTable& table,
                                     const std::string& operation) {
   Result<Statement> ins = Statement::prepare(conn, kInsertPending, operation);
   if (!ins.ok()) return ins.error();
-  ins->bind(":run_id", table.run_id);
+  ins->bind(":run_id", table.gear_run_id != 0 ? std::nullopt : std::optional<std::int64_t>(table.run_id));
+  ins->bind(":gear_run_id", table.gear_run_id != 0 ? std::optional<std::int64_t>(table.gear_run_id) : std::nullopt);
   ins->bind(":created_utc", created);
   ins->bind(":nc_file", table.nc_file);
   ins->bind(":program_text", table.program_text);
@@ -143,17 +155,32 @@ Result<std::int64_t> insert_pending(Connection& conn, const PendingTable& table,
   return conn.last_insert_rowid();
 }
 
+// kNotFound unless gear run `id` is stored.
+Status require_gear_run(Connection& conn, std::int64_t id, const std::string& operation) {
+  Result<Statement> q = Statement::prepare(conn, "SELECT 1 FROM gear_runs WHERE id = :id", operation);
+  if (!q.ok()) return q.error();
+  q->bind(":id", id);
+  Result<bool> row = q->step();
+  if (!row.ok()) return row.error();
+  if (*row) return {};
+  return make_error(ErrorCode::kNotFound, "cannot " + operation + ": gear run " + std::to_string(id) +
+                                              " is not in run database " + conn.path.string());
+}
+
 }  // namespace
 
 Result<std::int64_t> RunStore::add_pending(const PendingTable& table) {
   if (Status s = check_pending(table); !s.ok()) return s.error();
   const std::string created = table.created_utc.empty() ? utc_now() : table.created_utc;
   Connection& conn = *conn_;
-  const std::string operation =
-      "keep the table of run " + std::to_string(table.run_id) + " for " + table.nc_file + " pending";
+  const std::string operation = "keep the table of " + pending_source(table) + " for " + table.nc_file + " pending";
   Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
   if (!tx.ok()) return tx.error();
-  if (Status s = storage_internal::require_run(conn, table.run_id, operation); !s.ok()) return s.error();
+  if (table.gear_run_id != 0) {
+    if (Status s = require_gear_run(conn, table.gear_run_id, operation); !s.ok()) return s.error();
+  } else if (Status s = storage_internal::require_run(conn, table.run_id, operation); !s.ok()) {
+    return s.error();
+  }
   // The older pending table steps aside before the new row goes in (the unique index allows
   // one pending table per file), and learns the new id after.
   Result<std::optional<std::int64_t>> older = supersede_pending(conn, table.nc_file, created, operation);
@@ -254,6 +281,18 @@ Result<std::int64_t> approve_in_transaction(Connection& conn, std::int64_t pendi
 
   Result<std::int64_t> push_id = insert_push(conn, t->run_id, full, *full.program_text, operation);
   if (!push_id.ok()) return push_id.error();
+  if (t->gear_run_id != 0) {
+    // The gear run learns the stroke version pushed from it with the approval.
+    Result<Statement> gear = Statement::prepare(
+        conn,
+        "UPDATE gear_runs SET pushed_version = (SELECT table_version FROM nc_pushes WHERE id = :push_id) "
+        "WHERE id = :gear_run_id",
+        operation);
+    if (!gear.ok()) return gear.error();
+    gear->bind(":push_id", *push_id);
+    gear->bind(":gear_run_id", t->gear_run_id);
+    if (Status s = gear->run(); !s.ok()) return s.error();
+  }
   Result<Statement> upd = Statement::prepare(conn,
                                              "UPDATE nc_pending SET status = 'approved', decided_utc = :decided_utc,"
                                              " decided_by = :decided_by, note = :note, push_id = :push_id"

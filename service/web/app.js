@@ -515,15 +515,17 @@ async function pendingPage(p) {
   out.innerHTML = tables.map((t) => `
     <div class="card pending" data-id="${t.id}" style="margin-bottom:10px">
       <h2>Table ${t.id} for ${esc(programOf(t.nc_file))} ${verdict(t.status)}</h2>
-      <dl class="kv"><dt>Run</dt><dd><a href="#/run/${t.run_id}">${t.run_id}</a></dd><dt>Made (UTC)</dt><dd>${utc(t.created_utc)}</dd>
+      <dl class="kv">${t.gear_run_id ? `<dt>Gear run</dt><dd>${t.gear_run_id} (a gear's stroke: \`gaugeloop gear runs show ${t.gear_run_id}\`)</dd>`
+                       : `<dt>Run</dt><dd><a href="#/run/${t.run_id}">${t.run_id}</a></dd>`}<dt>Made (UTC)</dt><dd>${utc(t.created_utc)}</dd>
         <dt>Why it waits</dt><dd>${t.verdict === "hold" ? "held: " + esc(t.reason) : "every table needs approval"}</dd>
         <dt>Correction</dt><dd>${um(t.correction_max_um)} at most; ${esc(t.block_count ?? "–")} blocks, command error ${um(t.command_error_um)}</dd>
         ${t.decided_by ? `<dt>Decided</dt><dd>by ${esc(t.decided_by)} at ${utc(t.decided_utc)} ${esc(t.note)}</dd>` : ""}</dl>
       ${t.status === "pending" ? `<div class="decide" style="margin-top:6px">
         <input class="note" placeholder="note (optional)">
-        <button class="write approve" data-id="${t.id}">${writeLabel("Approve and write")}</button>
+        ${t.gear_run_id ? `<span class="muted">a gear's stroke: approve it with <code>gaugeloop nc approve ${t.id}</code>, which writes its main program's gearbox</span>`
+                        : `<button class="write approve" data-id="${t.id}">${writeLabel("Approve and write")}</button>`}
         <button class="danger reject" data-id="${t.id}">${writeLabel("Reject")}</button>
-        <button class="show-diff" data-id="${t.id}">Diff from the table in force</button></div>` : ""}
+        ${t.gear_run_id ? "" : `<button class="show-diff" data-id="${t.id}">Diff from the table in force</button>`}</div>` : ""}
       <div class="result"></div><div class="pending-diff"></div>
     </div>`).join("");
   out.querySelectorAll(".card.pending").forEach((cardEl) => {

@@ -12,6 +12,7 @@
 #include "config/gear_file.h"
 #include "tests/support/cli.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -102,32 +103,33 @@ TEST(GearCommand, PushesTheStrokeWithItsHistoryDiffCheckAndRollback) {
 }
 
 // A checker's export of a mesh error growing 0.0001 deg per mm (left flank +r_b dC, right -r_b
-// dC, 0.5 um of alignment offset): `gear correct` pushes the stroke in force less it.
+// dC, 0.5 um of alignment offset) on gaps 1 and 40, both flanks, every 0.5 mm from -12 to 12.
+void write_mesh_lead(const std::filesystem::path& lead) {
+  // r_b = d2 / 2 cos(alpha_t), computed here apart: 80.0931 mm.
+  const double beta = 21.8 * M_PI / 180.0;
+  const double alpha_t = std::atan(std::tan(20.0 * M_PI / 180.0) / std::cos(beta));
+  const double um_per_deg = 71 * 2.25 / std::cos(beta) / 2.0 * std::cos(alpha_t) * 1000.0 * M_PI / 180.0;
+  std::ofstream out(lead);
+  out << "gap,flank,z_mm,deviation_um\n";
+  for (int gap : {1, 40}) {
+    for (const char* flank : {"left", "right"}) {
+      const double sign = std::string(flank) == "left" ? 1.0 : -1.0;
+      for (int i = 0; i <= 48; ++i) {
+        const double z = -12.0 + 0.5 * i;
+        out << gap << ',' << flank << ',' << z << ',' << sign * um_per_deg * 0.0001 * z + 0.5 << '\n';
+      }
+    }
+  }
+}
+
+// `gear correct` pushes the stroke in force less the mesh error of write_mesh_lead's export.
 TEST(GearCommand, CorrectsTheStrokeInForceFromACheckersLeadTraces) {
   testing::TempDir dir("gear-correct-cmd");
   const std::string data = " --data-dir " + (dir.path() / "data").string();
   const auto zero = dir.path() / "zero.csv";
   std::ofstream(zero) << "z_mm,y_error_um,z_error_um,b_error_deg,c_error_deg\n-15,0,0,0,0\n15,0,0,0,0\n";
   const auto lead = dir.path() / "lead.csv";
-  {
-    Result<GearPartFile> g = read_gear_part_file(kExample);
-    ASSERT_TRUE(g.ok());
-    // r_b = d2 / 2 cos(alpha_t), computed here apart: 80.0931 mm.
-    const double beta = 21.8 * M_PI / 180.0;
-    const double alpha_t = std::atan(std::tan(20.0 * M_PI / 180.0) / std::cos(beta));
-    const double um_per_deg = 71 * 2.25 / std::cos(beta) / 2.0 * std::cos(alpha_t) * 1000.0 * M_PI / 180.0;
-    std::ofstream out(lead);
-    out << "gap,flank,z_mm,deviation_um\n";
-    for (int gap : {1, 40}) {
-      for (const char* flank : {"left", "right"}) {
-        const double sign = std::string(flank) == "left" ? 1.0 : -1.0;
-        for (int i = 0; i <= 48; ++i) {
-          const double z = -12.0 + 0.5 * i;
-          out << gap << ',' << flank << ',' << z << ',' << sign * um_per_deg * 0.0001 * z + 0.5 << '\n';
-        }
-      }
-    }
-  }
+  write_mesh_lead(lead);
   const std::string correct =
       "gear correct --part " + kExample + " --lead " + lead.string() + " --int-incr-per-deg 1000000" + data;
   testing::CommandResult none = testing::run_command(correct);
@@ -186,6 +188,54 @@ TEST(GearCommand, CorrectsTheStrokeInForceFromACheckersLeadTraces) {
   testing::CommandResult missing = testing::run_command("gear runs show 9" + data);
   EXPECT_EQ(missing.exit_code, 2) << missing.output;
   EXPECT_NE(missing.output.find("gear run 9 is not in run database"), std::string::npos) << missing.output;
+}
+
+// With --require-approval the corrected stroke waits as a pending table, the control untouched,
+// until `nc approve` pushes it as the next version and the gear run learns it.
+TEST(GearCommand, ACorrectedStrokeWaitsForApprovalAndIsPushedWhenApproved) {
+  testing::TempDir dir("gear-approval-cmd");
+  const std::string data = " --data-dir " + (dir.path() / "data").string();
+  const auto zero = dir.path() / "zero.csv";
+  std::ofstream(zero) << "z_mm,y_error_um,z_error_um,b_error_deg,c_error_deg\n-15,0,0,0,0\n15,0,0,0,0\n";
+  const auto lead = dir.path() / "lead.csv";
+  write_mesh_lead(lead);
+  ASSERT_EQ(testing::run_command("gear stroke --part " + kExample + " --errors " + zero.string() +
+                                 " --int-incr-per-deg 1000000" + data)
+                .exit_code,
+            0);
+  const auto stroke = dir.path() / "data" / "nc" / "GEAR_71.SPF";
+  const std::string v1 = testing::slurp(stroke);
+  testing::CommandResult held = testing::run_command("gear correct --require-approval --part " + kExample + " --lead " +
+                                                     lead.string() + " --int-incr-per-deg 1000000" + data);
+  ASSERT_EQ(held.exit_code, 0) << held.output;
+  EXPECT_NE(held.output.find("waits for approval as pending table 1 (from version 1)"), std::string::npos)
+      << held.output;
+  EXPECT_EQ(testing::slurp(stroke), v1) << "nothing is written before the approval";
+  testing::CommandResult pending = testing::run_command("nc pending" + data);
+  ASSERT_EQ(pending.exit_code, 0) << pending.output;
+  EXPECT_NE(pending.output.find("gear 1"), std::string::npos) << pending.output;
+  testing::CommandResult waiting = testing::run_command("gear runs show 1" + data);
+  EXPECT_NE(waiting.output.find("waits for approval or was rejected"), std::string::npos) << waiting.output;
+
+  testing::CommandResult approved = testing::run_command("nc approve 1 --by anna" + data);
+  ASSERT_EQ(approved.exit_code, 0) << approved.output;
+  EXPECT_NE(approved.output.find("stroke version 2 written from gear run 1 (pending table 1, approved by anna)"),
+            std::string::npos)
+      << approved.output;
+  const std::string v2 = testing::slurp(stroke);
+  EXPECT_NE(v2.find("\nZ12.0000 SIM1=-0.001200\n"), std::string::npos) << v2;
+  EXPECT_NE(testing::slurp(dir.path() / "data" / "nc" / "GEAR_71_MAIN.MPF").find("with stroke version 2 "),
+            std::string::npos);
+  testing::CommandResult list = testing::run_command("gear runs list --json" + data);
+  ASSERT_EQ(list.exit_code, 0) << list.output;
+  const nlohmann::json runs = nlohmann::json::parse(list.output);
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0]["pushed_version"], 2);
+  EXPECT_EQ(runs[0]["ground_with_version"], 1);
+  // Approved once: a second approval is refused and writes nothing.
+  testing::CommandResult again = testing::run_command("nc approve 1 --by ben" + data);
+  EXPECT_NE(again.exit_code, 0) << again.output;
+  EXPECT_EQ(testing::slurp(stroke), v2);
 }
 
 // A checker's export of a gear ground without compensation on a machine whose C drive runs

@@ -259,6 +259,23 @@ TEST_F(RunJsonTest, AnEventNotAboutALobeOrRunHasNulls) {
   expect_units_in_names(j);
 }
 
+TEST(PendingTableJson, AGearsStrokeNamesItsGearRunAndATableItsRun) {
+  PendingTable table;
+  table.id = 4;
+  table.run_id = 12;
+  table.nc_file = "/nc/CAM.SPF";
+  const nlohmann::json lobe = pending_table_json(table);
+  EXPECT_EQ(lobe["run_id"], 12);
+  EXPECT_TRUE(lobe["gear_run_id"].is_null());
+  PendingTable stroke;
+  stroke.id = 5;
+  stroke.gear_run_id = 3;
+  stroke.nc_file = "/nc/GEAR_71.SPF";
+  const nlohmann::json gear = pending_table_json(stroke);
+  EXPECT_EQ(gear["gear_run_id"], 3);
+  EXPECT_EQ(gear["run_id"], 0);
+}
+
 TEST(TimeBound, AnUntilBoundCoversItsWholeUnit) {
   EXPECT_EQ(*time_bound("2026-11-22", false, "--since"), "2026-11-22T00:00:00Z");
   EXPECT_EQ(*time_bound("2026-11-22", true, "--until"), "2026-11-23T00:00:00Z");

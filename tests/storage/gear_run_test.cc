@@ -61,7 +61,7 @@ TEST_F(GearRunStoreTest, AGearRunReadsBackAsStored) {
   const GearRunRecord in = sample_gear("gear_71", "2026-12-01T08:00:00Z", 11.5);
   Result<std::int64_t> id = store().insert_gear_run(in);
   ASSERT_TRUE(id.ok()) << id.error().message;
-  ASSERT_TRUE(store().record_gear_push(*id, 4, 0.52).ok());
+  ASSERT_TRUE(store().record_gear_correction(*id, 0.52, 4).ok());
   Result<StoredGearRun> out = store().load_gear_run(*id);
   ASSERT_TRUE(out.ok()) << out.error().message;
   EXPECT_EQ(out->id, *id);
@@ -194,7 +194,7 @@ TEST_F(GearRunStoreTest, AnUnknownGearRunIsNotFoundNamingItsId) {
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, ErrorCode::kNotFound);
   EXPECT_NE(r.error().message.find("gear run 42"), std::string::npos) << r.error().message;
-  Status pushed = store().record_gear_push(42, 2, 0.5);
+  Status pushed = store().record_gear_correction(42, 0.5, 2);
   ASSERT_FALSE(pushed.ok());
   EXPECT_EQ(pushed.error().code, ErrorCode::kNotFound);
 }

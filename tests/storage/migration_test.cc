@@ -444,5 +444,51 @@ TEST(MigrationFromV9, KeepsEveryPushAndTakesOneWithNoRun) {
   EXPECT_FALSE(store->record_push(99, authored, "text 3").ok());
 }
 
+TEST(MigrationFromV12, KeepsEveryPendingTableAndTakesAGearsStroke) {
+  TempDir dir;
+  ASSERT_NO_FATAL_FAILURE(write_old_database_with_run_5(db_in(dir), 12));
+  {
+    RawDb raw(db_in(dir));
+    ASSERT_EQ(raw.exec("INSERT INTO nc_pending (id, run_id, created_utc, nc_file, program_text, verdict, reason)"
+                       " VALUES (3, 5, '2026-11-21T08:01:00Z', '/nc/CAM.SPF', 'text 1', 'apply', 'approval required')"),
+              SQLITE_OK);
+    // Before version 13 a pending table without a run is refused.
+    EXPECT_NE(raw.exec("INSERT INTO nc_pending (run_id, created_utc, nc_file, program_text, verdict)"
+                       " VALUES (NULL, '2026-11-21T08:01:00Z', '/nc/G.SPF', 'x', 'apply')"),
+              SQLITE_OK);
+    ASSERT_EQ(raw.exec("INSERT INTO gear_runs (id, started_utc, machine, part, source, nc_file, verdict,"
+                       " tolerance_class, total_max_um, total_mean_um, form_mean_um, slope_mean_abs_um)"
+                       " VALUES (2, '2026-11-21T08:00:00Z', 'g1', 'gear_71', 'checker', '/nc/G.SPF', 'not_judged',"
+                       " 4, 3.0, 2.5, 1.0, 0.5)"),
+              SQLITE_OK);
+  }
+  Result<RunStore> store = RunStore::open(db_in(dir));
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  RawDb raw(db_in(dir));
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM nc_pending WHERE id = 3 AND run_id = 5 AND gear_run_id IS NULL"), 1);
+  EXPECT_EQ(raw.query_text("PRAGMA integrity_check"), "ok");
+  PendingTable stroke;
+  stroke.gear_run_id = 2;
+  stroke.nc_file = "/nc/G.SPF";
+  stroke.program_text = "stroke text";
+  stroke.reason = "approval required";
+  Result<std::int64_t> id = store->add_pending(stroke);
+  ASSERT_TRUE(id.ok()) << id.error().message;
+  Result<PendingTable> back = store->load_pending(*id);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->gear_run_id, 2);
+  EXPECT_EQ(back->run_id, 0);
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM nc_pending WHERE run_id IS NULL AND gear_run_id = 2"), 1);
+  // A gear run that never was, or a table naming both a lobe run and a gear run: refused.
+  stroke.gear_run_id = 9;
+  Result<std::int64_t> unknown = store->add_pending(stroke);
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.error().message.find("gear run 9"), std::string::npos) << unknown.error().message;
+  stroke.gear_run_id = 2;
+  stroke.run_id = 5;
+  EXPECT_FALSE(store->add_pending(stroke).ok());
+}
+
 }  // namespace
 }  // namespace gaugeloop
