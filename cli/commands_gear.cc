@@ -1,4 +1,5 @@
 // gear ...: the worm-wheel generating grinder's gearbox for a gear part (docs/gears.md).
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -7,6 +8,8 @@
 #include <optional>
 #include <string>
 
+#include "acquisition/gear_probe.h"
+#include "acquisition/tcp_endpoint.h"
 #include "cli/cli_common.h"
 #include "cli/embedded_defaults.h"
 #include "cli/gear_loop.h"
@@ -181,26 +184,27 @@ std::string gear_verdict_text(const GearRunRecord& r) {
          " asked: F_beta within " + format_fixed(r.total_tolerance_um.value_or(0.0), 2) + " um)";
 }
 
-int cmd_gear_correct(const CorrectOptions& o) {
-  Result<GearPartFile> gf = read_gear_part_file(o.part_path);
-  if (!gf) return report_error(gf.error());
-  Result<std::vector<LeadTrace>> traces = read_lead_traces_csv(o.lead_path);
-  if (!traces) return report_error(traces.error());
+// Keeps a measured gear as a gear run (judged against the part's class, ground with the stroke
+// in force) and, with `correct`, corrects that stroke from it: pushed, or kept for approval.
+// `source` names where the traces came from. Nothing is written when a trace cannot be judged;
+// the gear run is kept when the correction is refused.
+int keep_and_correct(const CorrectOptions& o, const GearPartFile& gf, const std::vector<LeadTrace>& traces,
+                     const std::string& source, bool correct) {
   GearStrokeSettings s;
   apply_push_options(o, s);
   GearRunOrigin origin;
-  origin.part_name = gf->name;
-  origin.required_class = gf->tolerance_class;
+  origin.part_name = gf.name;
+  origin.required_class = gf.tolerance_class;
   origin.machine = o.machine;
-  origin.source = o.lead_path;
+  origin.source = source;
   origin.serial = o.serial;
   origin.operator_name = o.operator_name;
   origin.note = o.note;
   // Every trace judged before anything is written: one too short for ISO 1328-1 is refused.
-  Result<GearRunRecord> judged = judge_gear(gf->part, *traces, origin);
-  if (!judged) return report_error(make_error(judged.error().code, o.lead_path + ": " + judged.error().message));
+  Result<GearRunRecord> judged = judge_gear(gf.part, traces, origin);
+  if (!judged) return report_error(make_error(judged.error().code, source + ": " + judged.error().message));
   std::optional<RunStore> store;
-  if (Status t = open_push_target(o.paths, o.main_template_path, *gf, s, store); !t) return report_error(t.error());
+  if (Status t = open_push_target(o.paths, o.main_template_path, gf, s, store); !t) return report_error(t.error());
   // The gear is kept first, ground with the stroke in force if there is one, so that a refused
   // correction loses no measurement.
   Result<StrokeInForce> in_force = stroke_in_force(*store, s.nc_file, "");
@@ -209,15 +213,15 @@ int cmd_gear_correct(const CorrectOptions& o) {
   Result<std::int64_t> id = store->insert_gear_run(*judged);
   if (!id) return report_error(id.error());
   std::printf("gear run %lld of %s: lead as measured (%s; ISO 1328-1 over %.2f .. %.2f mm):\n",
-              static_cast<long long>(*id), gf->name.c_str(), o.lead_path.c_str(), judged->traces.front().from_mm,
+              static_cast<long long>(*id), gf.name.c_str(), source.c_str(), judged->traces.front().from_mm,
               judged->traces.front().to_mm);
   print_trace_table(judged->traces);
   std::printf("F_beta %.2f um at worst (class %d): %s\n", judged->total_max_um, judged->tolerance_class,
               gear_verdict_text(*judged).c_str());
+  if (!correct) return kExitOk;
   s.require_approval = o.require_approval;
   s.gear_run_id = *id;
-  Result<GearCorrection> c =
-      correct_gear_stroke(gf->part, *traces, "gear run " + std::to_string(*id) + ", lead traces " + o.lead_path, s);
+  Result<GearCorrection> c = correct_gear_stroke(gf.part, traces, "gear run " + std::to_string(*id) + ", " + source, s);
   if (!c) {
     std::fprintf(stderr, "gear run %lld is stored; no stroke was pushed from it\n", static_cast<long long>(*id));
     return report_error(c.error());
@@ -251,6 +255,48 @@ int cmd_gear_correct(const CorrectOptions& o) {
               c->pushed.written.string().c_str(), c->pushed.version, c->from_version,
               main_program_path(c->pushed.written).string().c_str());
   return kExitOk;
+}
+
+int cmd_gear_correct(const CorrectOptions& o) {
+  Result<GearPartFile> gf = read_gear_part_file(o.part_path);
+  if (!gf) return report_error(gf.error());
+  Result<std::vector<LeadTrace>> traces = read_lead_traces_csv(o.lead_path);
+  if (!traces) return report_error(traces.error());
+  return keep_and_correct(o, *gf, *traces, "lead traces " + o.lead_path, true);
+}
+
+struct ProbeMeasureOptions : CorrectOptions {
+  std::string gauge;
+  int base_address = 0;
+  std::vector<int> gaps = {1, 20, 40, 60};
+  double step_mm = 0.5;
+  int point_timeout_ms = 5000;
+  bool correct = false;
+};
+
+int cmd_gear_measure(const ProbeMeasureOptions& o) {
+  Result<GearPartFile> gf = read_gear_part_file(o.part_path);
+  if (!gf) return report_error(gf.error());
+  for (int gap : o.gaps) {
+    if (gap < 1 || gap > gf->part.gear.teeth) {
+      return report_error(make_error(ErrorCode::kInvalidInput, "--gaps: gap " + std::to_string(gap) +
+                                                                   " is not one of " + gf->name + "'s gaps 1 to " +
+                                                                   std::to_string(gf->part.gear.teeth)));
+    }
+  }
+  Result<TcpEndpoint> endpoint = parse_tcp_endpoint(o.gauge);
+  if (!endpoint) return report_error(make_error(ErrorCode::kInvalidInput, "--gauge " + endpoint.error().message));
+  GearProbeSettings ps;
+  ps.link.host = endpoint->host;
+  ps.link.port = endpoint->port;
+  ps.link.response_timeout = std::chrono::milliseconds(1000);
+  ps.base_address = o.base_address;
+  ps.point_timeout = std::chrono::milliseconds(o.point_timeout_ms);
+  GearProbe probe(ps);
+  if (Status c = probe.connect(); !c) return report_error(c.error());
+  Result<std::vector<LeadTrace>> traces = probe.measure_lead(o.gaps, lead_heights_mm(gf->part.gear, o.step_mm));
+  if (!traces) return report_error(traces.error());
+  return keep_and_correct(o, *gf, *traces, "flank probe " + probe.address(), o.correct);
 }
 
 struct GearRunsOptions {
@@ -641,6 +687,38 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
                     "Keep the corrected stroke as a pending table until a person approves it (`nc approve ID`) "
                     "instead of pushing it");
   correct->callback([&action, co] { action = [co] { return cmd_gear_correct(*co); }; });
+
+  auto mo = std::make_shared<ProbeMeasureOptions>();
+  CLI::App* measure = gear->add_subcommand(
+      "measure",
+      "Measure a gear on the grinder with its flank probe over Modbus TCP (the gear probe block, docs/gears.md): the "
+      "lead of the gaps asked, both flanks, across the face; keep it as a gear run judged against the part's "
+      "tolerance_class; with --correct, correct the stroke in force from it as `gear correct` does");
+  add_push_target_options(*measure, *mo);
+  measure->add_option("--gauge", mo->gauge, "The machine's Modbus server, HOST:PORT")->required();
+  measure->add_option("--base-address", mo->base_address, "Holding register of word 0 of the gear probe block")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 65536 - 11));
+  measure->add_option("--gaps", mo->gaps, "Tooth gaps to measure, e.g. 1,20,40,60")
+      ->delimiter(',')
+      ->capture_default_str();
+  measure->add_option("--step-mm", mo->step_mm, "Spacing of the points across the face")
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 50.0));
+  measure->add_option("--point-timeout-ms", mo->point_timeout_ms, "How long the machine may take for one point")
+      ->capture_default_str()
+      ->check(CLI::Range(10, 600000));
+  CLI::Option* correct_flag =
+      measure->add_flag("--correct", mo->correct, "Correct the stroke in force from the gear measured");
+  measure->add_option("--machine", mo->machine, "The grinder, stored with the gear run")->capture_default_str();
+  measure->add_option("--serial", mo->serial, "Serial number of the measured gear (at most 64 characters)");
+  measure->add_option("--operator", mo->operator_name, "Who measured it (at most 64 characters)");
+  measure->add_option("--note", mo->note, "A note stored with the gear run");
+  measure
+      ->add_flag("--require-approval", mo->require_approval,
+                 "With --correct: keep the corrected stroke for approval (`nc approve ID`) instead of pushing it")
+      ->needs(correct_flag);
+  measure->callback([&action, mo] { action = [mo] { return cmd_gear_measure(*mo); }; });
 
   CLI::App* runs = gear->add_subcommand("runs", "The gears measured: their lead, ISO 1328-1 figures and verdicts");
   runs->require_subcommand(1);

@@ -2,9 +2,13 @@
 #include "cli/gear_loop.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <memory>
 
+#include "acquisition/gear_probe.h"
 #include "job/gear_run.h"
+#include "simulator/gear_probe_simulator.h"
 
 namespace gaugeloop {
 
@@ -22,6 +26,13 @@ GearLeadSummary summary_of(const GearRunRecord& r) {
 }
 
 }  // namespace
+
+std::vector<double> lead_heights_mm(const GearGeometry& gear, double step_mm) {
+  std::vector<double> z;
+  const int n = static_cast<int>(std::floor(gear.face_width_mm / step_mm + 1e-9)) + 1;
+  for (int i = 0; i < n; ++i) z.push_back(-gear.face_width_mm / 2.0 + i * step_mm);
+  return z;
+}
 
 Result<GearLeadSummary> summarize_lead(const std::vector<LeadTrace>& traces, const GearPart& part,
                                        std::optional<int> required_class) {
@@ -48,6 +59,17 @@ Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& set
   if (!pushed) return pushed.error();
   int version = pushed->version;
 
+  // The machine's flank probe, served over Modbus TCP on loopback as a real grinder serves it,
+  // and gaugeloop's link to it.
+  Result<std::unique_ptr<GearProbeSimulator>> probe_sim = GearProbeSimulator::start({});
+  if (!probe_sim) return probe_sim.error();
+  GearProbeSettings ps;
+  ps.link.port = (*probe_sim)->port();
+  ps.link.response_timeout = std::chrono::milliseconds(1000);
+  GearProbe probe(ps);
+  if (Status c = probe.connect(); !c) return c.error();
+  const std::vector<double> heights = lead_heights_mm(part.gear, settings.lead_step_mm);
+
   std::vector<GearLoopIteration> out;
   GearMachineErrors quiet = settings.machine;
   quiet.checker_noise_um = 0.0;
@@ -58,14 +80,16 @@ Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& set
     const std::string stroke_file = settings.stroke.nc_file.string();
     Result<GroundGear> gear = grind_gear(part, settings.machine, stroke_file);
     if (!gear) return gear.error();
-    const std::vector<LeadTrace> traces =
-        measure_lead(*gear, settings.gaps, settings.lead_step_mm, static_cast<std::uint64_t>(it));
+    (*probe_sim)->load_gear(*gear, static_cast<std::uint64_t>(it));
+    Result<std::vector<LeadTrace>> probed = probe.measure_lead(settings.gaps, heights);
+    if (!probed) return probed.error();
+    const std::vector<LeadTrace>& traces = *probed;
     // The gear as the checker measured it, judged and kept before anything is pushed from it.
     GearRunOrigin origin;
     origin.part_name = settings.part.name;
     origin.required_class = settings.part.tolerance_class;
     origin.machine = settings.machine_name;
-    origin.source = "virtual gear checker";
+    origin.source = "flank probe " + probe.address();
     origin.serial = "GEAR-" + std::to_string(it);
     origin.nc_file = settings.stroke.nc_file;
     origin.ground_with_version = version;

@@ -1,4 +1,5 @@
-// The closed loop for a gear on the virtual gear grinder: grind -> measure the lead -> identify
+// The closed loop for a gear on the virtual gear grinder: grind -> measure the lead (the
+// machine's flank probe over Modbus TCP on loopback, core/gear_probe_registers.h) -> identify
 // the mesh error along the stroke -> push the corrected stroke -> grind (docs/gears.md, "The
 // loop"). Each gear is ground from the stroke program in force, read back from the NC
 // directory as the control reads it; the first from a stroke without compensation.
@@ -48,6 +49,9 @@ struct GearLoopIteration {
   int pushed_version = 0;                        // the corrected stroke's version; 0: none
   double sim_max_abs_deg = 0.0;                  // of the corrected stroke
 };
+
+// The heights across the face a lead is probed at: from -b/2 every step_mm up to +b/2.
+std::vector<double> lead_heights_mm(const GearGeometry& gear, double step_mm);
 
 // Summarises traces as judge_gear (job/gear_run.h) judges them; errors: judge_gear's.
 Result<GearLeadSummary> summarize_lead(const std::vector<LeadTrace>& traces, const GearPart& part,

@@ -32,8 +32,6 @@ Status check_trace(const LeadTrace& t) {
 
 }  // namespace
 
-std::string_view flank_name(Flank flank) { return flank == Flank::kLeft ? "left" : "right"; }
-
 double base_radius_mm(const GearGeometry& g) {
   const double beta = g.helix_angle_deg * kRadPerDeg;
   const double alpha_t = std::atan(std::tan(g.pressure_angle_deg * kRadPerDeg) / std::cos(beta));

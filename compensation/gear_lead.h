@@ -19,17 +19,6 @@
 
 namespace gaugeloop {
 
-enum class Flank { kLeft, kRight };
-std::string_view flank_name(Flank flank);  // "left", "right"
-inline int flank_sign(Flank flank) { return flank == Flank::kLeft ? 1 : -1; }
-
-struct LeadTrace {
-  int gap = 0;  // the tooth gap, 1-based
-  Flank flank = Flank::kLeft;
-  std::vector<double> z_mm;          // across the face, increasing
-  std::vector<double> deviation_um;  // one per z_mm
-};
-
 // The gear's base radius: d2 / 2 cos(alpha_t), tan(alpha_t) = tan(alpha_n) / cos(beta).
 double base_radius_mm(const GearGeometry& gear);
 

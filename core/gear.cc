@@ -5,6 +5,8 @@ namespace gaugeloop {
 
 std::string_view hand_name(Hand hand) { return hand == Hand::kRight ? "right" : "left"; }
 
+std::string_view flank_name(Flank flank) { return flank == Flank::kLeft ? "left" : "right"; }
+
 std::optional<Hand> hand_from_name(std::string_view name) {
   if (name == "right") return Hand::kRight;
   if (name == "left") return Hand::kLeft;

@@ -15,6 +15,7 @@
 
 #include <optional>
 #include <string_view>
+#include <vector>
 
 namespace gaugeloop {
 
@@ -53,6 +54,23 @@ struct GearPart {
   GearGeometry gear;
   WormWheel worm;
   GearStroke stroke;
+};
+
+// A tooth flank. The left flank is the one facing +C: turning the gear by +dC against the worm
+// leaves the left flank thicker and the right one thinner (compensation/gear_lead.h).
+enum class Flank { kLeft, kRight };
+std::string_view flank_name(Flank flank);  // "left", "right"
+inline int flank_sign(Flank flank) { return flank == Flank::kLeft ? 1 : -1; }
+
+// A flank line across the face width (a lead, or helix, trace) as a gear checker or the
+// grinder's probe measures it: deviations in um along the base circle's tangent in the
+// transverse plane, positive where the flank has more metal than the design helix, at heights
+// z_mm of the stroke's frame (the face from -b/2 to +b/2 around Z = 0).
+struct LeadTrace {
+  int gap = 0;  // the tooth gap, 1-based
+  Flank flank = Flank::kLeft;
+  std::vector<double> z_mm;          // across the face, increasing
+  std::vector<double> deviation_um;  // one per z_mm
 };
 
 }  // namespace gaugeloop

@@ -17,13 +17,6 @@ double uniform(std::uint64_t seed, std::uint64_t index, double lo, double hi) {
   return lo + (hi - lo) * seeded::unit_uniform(seeded::mix(seeded::mix(seed) ^ (index * 0x9e3779b97f4a7c15ULL)));
 }
 
-// A standard normal deviate (Box-Muller) from (seed, index).
-double normal(std::uint64_t seed, std::uint64_t index) {
-  const double u1 = seeded::unit_uniform(seeded::mix(seed ^ seeded::mix(2 * index)));
-  const double u2 = seeded::unit_uniform(seeded::mix(seed ^ seeded::mix(2 * index + 1)));
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
-}
-
 // A sign drawn from (seed, index).
 double sign(std::uint64_t seed, std::uint64_t index) { return uniform(seed, index, 0.0, 1.0) < 0.5 ? -1.0 : 1.0; }
 
@@ -106,15 +99,24 @@ Result<GroundGear> grind_gear(const GearPart& part, const GearMachineErrors& mac
   return GroundGear(part, gear_coupling(part), machine, std::move(p->points));
 }
 
+double GroundGear::flank_deviation_um(double z_mm, int gap, Flank flank) const {
+  return flank_sign(flank) * base_radius_mm(part_.gear) * 1000.0 * kPi / 180.0 * mesh_error_deg(z_mm, gap);
+}
+
+double probed_deviation_um(const GroundGear& gear, std::uint64_t measurement, int gap, Flank flank, double z_mm) {
+  const std::uint64_t noise_seed = seeded::mix(gear.machine_seed() ^ seeded::mix(measurement + 0x51ed));
+  // The point's own index: the gap, the flank and Z to 0.1 um, whatever order points are taken in.
+  const auto z_units = static_cast<std::uint64_t>(std::llround(z_mm * 1e4) + (1LL << 40));
+  const std::uint64_t index =
+      seeded::mix((static_cast<std::uint64_t>(gap) << 1 | (flank == Flank::kLeft ? 0u : 1u)) ^ seeded::mix(z_units));
+  return gear.flank_deviation_um(z_mm, gap, flank) + gear.checker_noise_um() * seeded::normal(noise_seed, index);
+}
+
 std::vector<LeadTrace> measure_lead(const GroundGear& gear, const std::vector<int>& gaps, double step_mm,
                                     std::uint64_t measurement) {
   const GearGeometry& g = gear.part().gear;
-  const double r_b = base_radius_mm(g);
-  const double um_per_deg = r_b * 1000.0 * kPi / 180.0;
   const int n = static_cast<int>(std::floor(g.face_width_mm / step_mm + 1e-9)) + 1;
   std::vector<LeadTrace> out;
-  std::uint64_t index = 0;
-  const std::uint64_t noise_seed = seeded::mix(gear.machine_seed() ^ seeded::mix(measurement + 0x51ed));
   for (int gap : gaps) {
     for (Flank f : {Flank::kLeft, Flank::kRight}) {
       LeadTrace t;
@@ -123,8 +125,7 @@ std::vector<LeadTrace> measure_lead(const GroundGear& gear, const std::vector<in
       for (int i = 0; i < n; ++i) {
         const double z = -g.face_width_mm / 2.0 + i * step_mm;
         t.z_mm.push_back(z);
-        t.deviation_um.push_back(flank_sign(f) * um_per_deg * gear.mesh_error_deg(z, gap) +
-                                 gear.checker_noise_um() * normal(noise_seed, ++index));
+        t.deviation_um.push_back(probed_deviation_um(gear, measurement, gap, f, z));
       }
       double mean = 0.0;
       for (double d : t.deviation_um) mean += d;

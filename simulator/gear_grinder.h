@@ -68,6 +68,9 @@ class GroundGear {
  public:
   GroundGear(GearPart part, GearCoupling coupling, GearMachineErrors machine, std::vector<StrokeProgramPoint> stroke);
   double mesh_error_deg(double z_mm, int gap) const;
+  // What a probe finds on `flank` of `gap` at height z, without noise: flank_sign(flank) r_b
+  // mesh (radians), um.
+  double flank_deviation_um(double z_mm, int gap, Flank flank) const;
   const GearPart& part() const { return part_; }
   std::uint64_t machine_seed() const { return machine_.seed; }
   double checker_noise_um() const { return machine_.checker_noise_um; }
@@ -83,6 +86,13 @@ class GroundGear {
 // Grinds a gear from the stroke program at `stroke_file` (parse_stroke_program: a program that
 // does not read back, or was edited by hand, is refused as the control's reader would).
 Result<GroundGear> grind_gear(const GearPart& part, const GearMachineErrors& machine, const std::string& stroke_file);
+
+// What the checker's probe reads on `flank` of `gap` at height z of gear measurement number
+// `measurement`: flank_deviation_um plus the checker's noise, a pure function of the machine's
+// seed, the measurement and the point (gap, flank, Z to 0.1 um), whatever order points are
+// taken in, so the probe over Modbus (simulator/gear_probe_simulator.h) reads what the
+// checker below reads.
+double probed_deviation_um(const GroundGear& gear, std::uint64_t measurement, int gap, Flank flank, double z_mm);
 
 // The gear checker: the lead of each gap in `gaps` (1-based), left and right flank, at every
 // step_mm across the face (from -b/2 to +b/2), with the checker's noise (seeded by the machine's

@@ -2,7 +2,10 @@
 // ground part is repeatable and independent of the order things are computed in.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
+
+#include "core/angles.h"
 
 namespace gaugeloop::seeded {
 
@@ -17,6 +20,13 @@ inline std::uint64_t mix(std::uint64_t x) {
 // A uniform deviate in (0, 1) from a hash: never 0, so its logarithm is finite.
 inline double unit_uniform(std::uint64_t h) {
   return (static_cast<double>(h >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+}
+
+// A standard normal deviate (Box-Muller) from (seed, index).
+inline double normal(std::uint64_t seed, std::uint64_t index) {
+  const double u1 = unit_uniform(mix(seed ^ mix(2 * index)));
+  const double u2 = unit_uniform(mix(seed ^ mix(2 * index + 1)));
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
 }
 
 }  // namespace gaugeloop::seeded

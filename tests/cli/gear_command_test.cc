@@ -5,11 +5,14 @@
 
 #include <cmath>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "compensation/gear_coupling.h"
 #include "config/gear_file.h"
+#include "simulator/gear_grinder.h"
+#include "simulator/gear_probe_simulator.h"
 #include "tests/support/cli.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/text.h"
@@ -278,6 +281,54 @@ TEST(GearCommand, IdentifiesTheAxesErrorsAndRefusesTermsThatActAlike) {
   ASSERT_EQ(stroke.exit_code, 0) << stroke.output;
   // SIM1 takes C's error back: -0.001 deg at Z 10.
   EXPECT_NE(testing::slurp(dir.path() / "S.SPF").find("\nZ10.0000 SIM1=-0.001000\n"), std::string::npos);
+}
+
+// A gear measured on the machine with its flank probe over Modbus TCP (the virtual grinder's,
+// on loopback): kept as a gear run, then with --correct the stroke in force corrected from it.
+TEST(GearCommand, MeasuresAGearWithTheMachinesFlankProbeAndCorrectsFromIt) {
+  testing::TempDir dir("gear-measure-cmd");
+  const std::string data = " --data-dir " + (dir.path() / "data").string();
+  const auto zero = dir.path() / "zero.csv";
+  std::ofstream(zero) << "z_mm,y_error_um,z_error_um,b_error_deg,c_error_deg\n-15,0,0,0,0\n15,0,0,0,0\n";
+  ASSERT_EQ(testing::run_command("gear stroke --part " + kExample + " --errors " + zero.string() + data).exit_code, 0);
+  Result<GearPartFile> gf = read_gear_part_file(kExample);
+  ASSERT_TRUE(gf.ok());
+  // The gear ground from that stroke on machine seed 3 (a lead of about 17 um), on the probe.
+  Result<GroundGear> gear =
+      grind_gear(gf->part, seeded_gear_machine(3), (dir.path() / "data" / "nc" / "GEAR_71.SPF").string());
+  ASSERT_TRUE(gear.ok()) << gear.error().message;
+  Result<std::unique_ptr<GearProbeSimulator>> sim = GearProbeSimulator::start({});
+  ASSERT_TRUE(sim.ok()) << sim.error().message;
+  (*sim)->load_gear(*gear, 0);
+  const std::string gauge = " --gauge 127.0.0.1:" + std::to_string((*sim)->port());
+
+  testing::CommandResult bad_gap =
+      testing::run_command("gear measure --part " + kExample + gauge + " --gaps 1,99" + data);
+  EXPECT_EQ(bad_gap.exit_code, 2) << bad_gap.output;
+  EXPECT_NE(bad_gap.output.find("gap 99 is not one of gear_71's gaps 1 to 71"), std::string::npos) << bad_gap.output;
+  EXPECT_EQ((*sim)->points_answered(), 0) << "refused before the probe moves";
+
+  testing::CommandResult r = testing::run_command("gear measure --correct --serial G-9 --part " + kExample + gauge +
+                                                  " --gaps 1,40 --step-mm 1" + data);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ((*sim)->points_answered(), 2 * 2 * 25) << "2 gaps, 2 flanks, 25 heights";
+  EXPECT_NE(r.output.find("gear run 1 of gear_71: lead as measured (flank probe tcp:127.0.0.1:"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find(": out (class 5 asked"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("as stroke version 2 (from version 1)"), std::string::npos) << r.output;
+  testing::CommandResult list = testing::run_command("gear runs list --json" + data);
+  const nlohmann::json runs = nlohmann::json::parse(list.output);
+  ASSERT_EQ(runs.size(), 1u) << list.output;
+  EXPECT_EQ(runs[0]["serial"], "G-9");
+  EXPECT_EQ(runs[0]["pushed_version"], 2);
+  EXPECT_GT(runs[0]["total_max_um"].get<double>(), 8.6);
+
+  // The machine gone: the gauge's exit status, naming the probe; nothing stored.
+  (*sim)->stop();
+  testing::CommandResult gone = testing::run_command("gear measure --part " + kExample + gauge + data);
+  EXPECT_EQ(gone.exit_code, 3) << gone.output;
+  EXPECT_NE(gone.output.find("gear probe"), std::string::npos) << gone.output;
+  EXPECT_EQ(nlohmann::json::parse(testing::run_command("gear runs list --json" + data).output).size(), 1u);
 }
 
 }  // namespace
