@@ -26,6 +26,7 @@
 #include "report/dfq.h"
 #include "report/gear_characteristics.h"
 #include "report/run_json.h"
+#include "report/spc.h"
 
 namespace gaugeloop {
 namespace {
@@ -402,26 +403,34 @@ struct GearExportOptions {
 // Every gear run of a range, far more than a plant keeps of one gear.
 constexpr int kMaxExportedGearRuns = 1000000;
 
-int cmd_gear_runs_export(GearExportOptions o) {
-  if (Status t = set_time_bounds(o.since, o.until, o.query.since_utc, o.query.until_utc); !t) {
-    return report_error(t.error());
-  }
-  o.query.limit = kMaxExportedGearRuns;
-  Result<RunStore> store = open_history_read_only(o.paths);
-  if (!store) return report_error(store.error());
-  Result<std::vector<StoredGearRun>> listed = store->list_gear_runs(o.query);
-  if (!listed) return report_error(listed.error());
+// The gear runs `query` selects (its time bounds from since/until), each with its traces, as
+// characteristics, oldest first. kNotFound, saying where to look, when none match.
+Result<std::vector<RunCharacteristics>> selected_gear_runs(const DataPaths& paths, GearRunQuery query,
+                                                           const std::string& since, const std::string& until) {
+  if (Status t = set_time_bounds(since, until, query.since_utc, query.until_utc); !t) return t.error();
+  Result<RunStore> store = open_history_read_only(paths);
+  if (!store) return store.error();
+  Result<std::vector<StoredGearRun>> listed = store->list_gear_runs(query);
+  if (!listed) return listed.error();
   if (listed->empty()) {
-    return report_error(make_error(ErrorCode::kNotFound, "no gear runs match in " + store->path().string() +
-                                                             "; `gaugeloop gear runs list " + o.paths.where() +
-                                                             "` shows what is stored"));
+    return make_error(ErrorCode::kNotFound, "no gear runs match in " + store->path().string() +
+                                                "; `gaugeloop gear runs list " + paths.where() +
+                                                "` shows what is stored");
   }
   std::vector<RunCharacteristics> runs;
-  for (const StoredGearRun& g : *listed) {
-    Result<StoredGearRun> full = store->load_gear_run(g.id);
-    if (!full) return report_error(full.error());
+  for (auto g = listed->rbegin(); g != listed->rend(); ++g) {
+    Result<StoredGearRun> full = store->load_gear_run(g->id);
+    if (!full) return full.error();
     runs.push_back(gear_run_characteristics(*full));
   }
+  return runs;
+}
+
+int cmd_gear_runs_export(GearExportOptions o) {
+  o.query.limit = kMaxExportedGearRuns;
+  Result<std::vector<RunCharacteristics>> selected = selected_gear_runs(o.paths, o.query, o.since, o.until);
+  if (!selected) return report_error(selected.error());
+  const std::vector<RunCharacteristics>& runs = *selected;
   DfqOptions options;
   options.operation = o.operation;
   Result<std::string> dfq = write_dfq(runs, options);
@@ -432,6 +441,37 @@ int cmd_gear_runs_export(GearExportOptions o) {
   }
   if (Status w = write_file_atomically(o.out_path, *dfq); !w) return report_error(w.error());
   std::printf("%zu gear run%s exported to %s\n", runs.size(), runs.size() == 1 ? "" : "s", o.out_path.c_str());
+  return kExitOk;
+}
+
+struct GearSpcOptions {
+  DataPaths paths;
+  GearRunQuery query;
+  std::string since;
+  std::string until;
+  bool json = false;
+};
+
+int cmd_gear_runs_spc(const GearSpcOptions& o) {
+  Result<std::vector<RunCharacteristics>> runs = selected_gear_runs(o.paths, o.query, o.since, o.until);
+  if (!runs) return report_error(runs.error());
+  const std::vector<SpcFigure> figures = spc_figures(*runs);
+  if (o.json) {
+    nlohmann::json out{{"part", o.query.part},
+                       {"machine", o.query.machine.empty() ? nlohmann::json() : nlohmann::json(o.query.machine)},
+                       {"runs", runs->size()},
+                       {"first_started_utc", runs->front().run.started_utc},
+                       {"last_started_utc", runs->back().run.started_utc},
+                       {"characteristics", nlohmann::json::array()}};
+    for (const SpcFigure& f : figures) out["characteristics"].push_back(spc_figure_json(f));
+    print_json(out);
+    return kExitOk;
+  }
+  std::printf("SPC of the gears of %s%s: %zu gear run%s, %s to %s (UTC)\n", o.query.part.c_str(),
+              o.query.machine.empty() ? "" : (" on " + o.query.machine).c_str(), runs->size(),
+              runs->size() == 1 ? "" : "s", runs->front().run.started_utc.c_str(),
+              runs->back().run.started_utc.c_str());
+  std::fputs(spc_table_text(figures).c_str(), stdout);
   return kExitOk;
 }
 
@@ -740,6 +780,20 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
   add_data_options(*show, so2->paths);
   show->add_flag("--json", so2->json, "Print JSON, with the traces");
   show->callback([&action, so2] { action = [so2] { return cmd_gear_runs_show(*so2); }; });
+
+  auto spo = std::make_shared<GearSpcOptions>();
+  CLI::App* spc = runs->add_subcommand(
+      "spc", "SPC of a gear part's runs: per ISO 1328-1 figure the mean, s, Cp and Cpk against its tolerance");
+  add_data_options(*spc, spo->paths);
+  spc->add_option("--part", spo->query.part, "The gear part")->required();
+  spc->add_option("--machine", spo->query.machine, "Only this machine");
+  spc->add_option("--since", spo->since, "Started at or after (UTC, 2026-11-22 or 2026-11-22T06:00:00Z)");
+  spc->add_option("--until", spo->until, "Started before (UTC)");
+  spc->add_option("--limit", spo->query.limit, "The newest this many gear runs")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 1000000));
+  spc->add_flag("--json", spo->json, "Print JSON");
+  spc->callback([&action, spo] { action = [spo] { return cmd_gear_runs_spc(*spo); }; });
 
   auto eo = std::make_shared<GearExportOptions>();
   CLI::App* exp = runs->add_subcommand(

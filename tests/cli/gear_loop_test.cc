@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "cli/embedded_defaults.h"
 #include "storage/run_store.h"
@@ -139,6 +140,21 @@ TEST(GearLoop, TheDemoClosesTheLoopOnTheExampleGear) {
   std::size_t values = 0;
   for (std::size_t at = text.find("\nK0001/"); at != std::string::npos; at = text.find("\nK0001/", at + 1)) ++values;
   EXPECT_EQ(values, 2u * 28u);
+  // SPC over the two gears: F_beta at worst against its tolerance, the uncompensated gear out.
+  testing::CommandResult spc = testing::run_command("gear runs spc --part gear_71 --json" + data);
+  ASSERT_EQ(spc.exit_code, 0) << spc.output;
+  const nlohmann::json figures = nlohmann::json::parse(spc.output);
+  EXPECT_EQ(figures["runs"], 2);
+  ASSERT_GE(figures["characteristics"].size(), 1u);
+  const nlohmann::json& worst = figures["characteristics"][0];
+  EXPECT_EQ(worst["key"], "lead.F_beta");
+  EXPECT_EQ(worst["n"], 2);
+  EXPECT_NEAR(worst["usl"].get<double>(), 8.598, 0.001);
+  EXPECT_EQ(worst["out"], 1);
+  EXPECT_EQ(worst["judged"], 2);
+  testing::CommandResult none = testing::run_command("gear runs spc --part gear_40" + data);
+  EXPECT_EQ(none.exit_code, 2) << none.output;
+  EXPECT_NE(none.output.find("no gear runs match"), std::string::npos) << none.output;
 }
 
 }  // namespace
