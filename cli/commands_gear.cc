@@ -310,48 +310,6 @@ struct GearRunsOptions {
   bool json = false;
 };
 
-nlohmann::json gear_run_json(const StoredGearRun& g, bool with_traces) {
-  const GearRunRecord& r = g.record;
-  nlohmann::json j{
-      {"id", g.id},
-      {"started_utc", r.started_utc},
-      {"machine", r.machine},
-      {"part", r.part},
-      {"source", r.source},
-      {"serial", r.serial},
-      {"operator", r.operator_name},
-      {"note", r.note},
-      {"nc_file", r.nc_file},
-      {"ground_with_version", r.ground_with_version ? nlohmann::json(*r.ground_with_version) : nullptr},
-      {"required_class", r.required_class ? nlohmann::json(*r.required_class) : nullptr},
-      {"total_tolerance_um", r.total_tolerance_um ? nlohmann::json(*r.total_tolerance_um) : nullptr},
-      {"verdict", verdict_name(r.verdict)},
-      {"tolerance_class", r.tolerance_class},
-      {"total_max_um", r.total_max_um},
-      {"total_mean_um", r.total_mean_um},
-      {"form_mean_um", r.form_mean_um},
-      {"slope_mean_abs_um", r.slope_mean_abs_um},
-      {"pushed_version", g.pushed_version ? nlohmann::json(*g.pushed_version) : nullptr},
-      {"mesh_residual_rms_um", g.mesh_residual_rms_um ? nlohmann::json(*g.mesh_residual_rms_um) : nullptr}};
-  if (with_traces) {
-    nlohmann::json traces = nlohmann::json::array();
-    for (const GearTraceRecord& t : r.traces) {
-      traces.push_back({{"gap", t.gap},
-                        {"flank", t.flank},
-                        {"total_um", t.total_um},
-                        {"form_um", t.form_um},
-                        {"slope_um", t.slope_um},
-                        {"tolerance_class", t.tolerance_class},
-                        {"from_mm", t.from_mm},
-                        {"to_mm", t.to_mm},
-                        {"z_mm", t.z_mm},
-                        {"deviation_um", t.deviation_um}});
-    }
-    j["traces"] = std::move(traces);
-  }
-  return j;
-}
-
 int cmd_gear_runs_list(GearRunsOptions o) {
   if (Status t = set_time_bounds(o.since, o.until, o.query.since_utc, o.query.until_utc); !t) {
     return report_error(t.error());

@@ -52,6 +52,11 @@ nlohmann::json nc_push_json(const NcPush& push);
 // One pending table as `nc pending --json` lists it, without the program text.
 nlohmann::json pending_table_json(const PendingTable& table);
 
+// A gear run as `gear runs list --json` (with_traces false) and `gear runs show --json` and GET
+// /api/gear-runs/{id} (with its traces: gap, flank, figures, z_mm, deviation_um) print it;
+// null for what was not recorded.
+nlohmann::json gear_run_json(const StoredGearRun& run, bool with_traces);
+
 // One row of `events --json`; lobe and run_id are null when the event is not about one.
 nlohmann::json event_json(const StoredEvent& event);
 

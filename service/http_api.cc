@@ -684,6 +684,45 @@ struct HttpApi::Impl {
     });
   }
 
+  void list_gear_runs(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {"part", "machine", "serial", "since", "until", "verdict", "limit"});
+    if (!q) return send_error(res, q.error());
+    Result<RunQuery> rq = run_query(*q, 50);
+    if (!rq) return send_error(res, rq.error());
+    GearRunQuery gq;
+    gq.part = rq->part;
+    gq.machine = rq->machine;
+    gq.serial = q->text("serial");
+    gq.limit = rq->limit;
+    gq.since_utc = rq->since_utc;
+    gq.until_utc = rq->until_utc;
+    Result<std::string> verdict = q->choice("verdict", {"in", "out", "not_judged"});
+    if (!verdict) return send_error(res, verdict.error());
+    if (!verdict->empty()) gq.verdict = verdict_from_name(*verdict);
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      Result<std::vector<StoredGearRun>> runs = store.list_gear_runs(gq);
+      if (!runs) return runs.error();
+      json out = json::array();
+      for (const StoredGearRun& g : *runs) out.push_back(gear_run_json(g, false));
+      return out;
+    });
+  }
+
+  void show_gear_run(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {});
+    if (!q) return send_error(res, q.error());
+    Result<std::int64_t> id = path_id(req.matches[1], "gear run id");
+    if (!id) return send_error(res, id.error());
+    with_store(res, [&](RunStore& store) -> Result<json> {
+      Result<StoredGearRun> run = store.load_gear_run(*id);
+      if (!run && run.error().code == ErrorCode::kNotFound) {
+        return make_error(ErrorCode::kNotFound, run.error().message + "; GET /api/gear-runs lists the ids");
+      }
+      if (!run) return run.error();
+      return gear_run_json(*run, true);
+    });
+  }
+
   Result<StoredRun> load_run(RunStore& store, const std::string& id_text) {
     Result<std::int64_t> id = path_id(id_text, "run id");
     if (!id) return id.error();
@@ -1286,6 +1325,8 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
   s.route("/api/runs", [&s](R q, W a) { s.list_runs(q, a); });
   s.route("/api/runs/([^/]+)", [&s](R q, W a) { s.show_run(q, a); });
   s.route("/api/runs/([^/]+)/export", [&s](R q, W a) { s.export_run(q, a); });
+  s.route("/api/gear-runs", [&s](R q, W a) { s.list_gear_runs(q, a); });
+  s.route("/api/gear-runs/([^/]+)", [&s](R q, W a) { s.show_gear_run(q, a); });
   s.route("/api/trend", [&s](R q, W a) { s.trend(q, a); });
   s.route("/api/events", [&s](R q, W a) { s.events(q, a); });
   s.route("/api/nc/table", [&s](R q, W a) { s.nc_table(q, a); });

@@ -190,6 +190,99 @@ async function runsPage(p) {
   }
 }
 
+// ---- Gear runs ----
+
+async function gearRunsPage(p) {
+  page().innerHTML = `
+    <h1>Gear runs</h1>
+    <form class="filters" id="gear-filters">
+      <label>Part<input name="part" value="${esc(p.part)}"></label>
+      <label>Machine<input name="machine" value="${esc(p.machine)}"></label>
+      <label>Serial<input name="serial" value="${esc(p.serial)}"></label>
+      <label>Verdict<select name="verdict">
+        ${["", "in", "out", "not_judged"].map((v) => `<option value="${v}" ${p.verdict === v ? "selected" : ""}>${v ? v.replace("_", " ") : "any"}</option>`).join("")}
+      </select></label>
+      <label>From (UTC)<input name="since" type="date" value="${esc(p.since)}"></label>
+      <label>To (UTC)<input name="until" type="date" value="${esc(p.until)}"></label>
+      <button type="submit">Filter</button>
+      <a href="#/gears">Clear</a>
+    </form>
+    <div id="gears-out"><p>Loading…</p></div>`;
+  document.getElementById("gear-filters").addEventListener("submit", (ev) => {
+    ev.preventDefault();
+    location.hash = hashOf("/gears", Object.fromEntries(new FormData(ev.target).entries()));
+  });
+  const out = document.getElementById("gears-out");
+  try {
+    const runs = await api("/api/gear-runs?" + apiQuery({part: p.part, machine: p.machine, serial: p.serial, verdict: p.verdict,
+                                                        since: p.since, until: p.until, limit: 200}));
+    if (runs.length === 0) { message(out, "No gear run matches these filters."); return; }
+    out.innerHTML = `
+      <div class="scroll"><table id="gear-runs">
+        <thead><tr><th>Gear run</th><th>Started (UTC)</th><th>Machine</th><th>Part</th><th>Serial</th>
+          <th>F<sub>β</sub> worst</th><th>Class</th><th>Verdict</th><th>Ground with</th><th>Pushed</th></tr></thead>
+        <tbody>${runs.map((g) => `
+          <tr class="row-link" data-gear-run="${g.id}">
+            <td><a href="#/gear/${g.id}">${g.id}</a></td><td>${utc(g.started_utc)}</td><td>${esc(g.machine)}</td>
+            <td>${esc(g.part)}</td><td>${esc(g.serial ?? "–")}</td><td class="num">${um(g.total_max_um)}</td>
+            <td class="num">${g.tolerance_class}</td><td>${verdict(g.verdict)}</td>
+            <td>${g.ground_with_version ? "stroke v" + g.ground_with_version : "–"}</td>
+            <td>${g.pushed_version ? "stroke v" + g.pushed_version : "–"}</td></tr>`).join("")}
+        </tbody></table></div>`;
+    out.querySelectorAll("tr.row-link").forEach((tr) => tr.addEventListener("click", () => { location.hash = "#/gear/" + tr.dataset.gearRun; }));
+  } catch (e) {
+    message(out, errorText(e), "error");
+  }
+}
+
+// The lead traces as lines across the face: Z along, the deviation up (um), one colour a flank.
+function leadSvg(traces) {
+  const w = 640, h = 260, m = 40;
+  const zs = traces.flatMap((t) => t.z_mm), ds = traces.flatMap((t) => t.deviation_um);
+  const z0 = Math.min(...zs), z1 = Math.max(...zs);
+  const span = Math.max(1, ...ds.map((d) => Math.abs(d)));
+  const x = (z) => m + (w - 2 * m) * (z - z0) / Math.max(1e-9, z1 - z0);
+  const y = (d) => h / 2 - (h / 2 - m / 2) * d / span;
+  const lines = traces.map((t, i) => `<polyline fill="none" stroke="${t.flank === "left" ? "#1f6fb2" : "#c0392b"}" stroke-width="1.2"
+      stroke-dasharray="${i % 4 < 2 ? "" : "4 2"}" points="${t.z_mm.map((z, k) => `${x(z).toFixed(1)},${y(t.deviation_um[k]).toFixed(1)}`).join(" ")}"><title>gap ${t.gap}, ${t.flank} flank</title></polyline>`).join("");
+  return `<svg viewBox="0 0 ${w} ${h}" width="100%" style="max-width:900px" role="img" aria-label="lead traces">
+    <line x1="${m}" x2="${w - m}" y1="${h / 2}" y2="${h / 2}" stroke="#999" stroke-width="0.5"/>
+    <text x="${m}" y="14" font-size="12">±${span.toFixed(2)} µm; blue: left flanks, red: right flanks</text>
+    <text x="${m}" y="${h - 6}" font-size="12">Z ${z0.toFixed(1)} mm</text><text x="${w - m}" y="${h - 6}" font-size="12" text-anchor="end">Z ${z1.toFixed(1)} mm</text>
+    ${lines}</svg>`;
+}
+
+async function gearRunPage(id) {
+  page().innerHTML = `<p>Loading gear run ${esc(id)}…</p>`;
+  let g;
+  try {
+    g = await api("/api/gear-runs/" + encodeURIComponent(id));
+  } catch (e) {
+    page().innerHTML = `<h1>Gear run ${esc(id)}</h1><div id="gear-message"></div>`;
+    message(document.getElementById("gear-message"), errorText(e), "error");
+    return;
+  }
+  const judged = g.required_class ? `class ${g.required_class} asked: F<sub>β</sub> within ${um(g.total_tolerance_um)}` : "the part names no tolerance class";
+  page().innerHTML = `
+    <h1 id="gear-title">Gear run ${g.id}: ${esc(g.part)} on ${esc(g.machine)}</h1>
+    <p class="muted">Measured ${utc(g.started_utc)} by ${esc(g.source)}${g.serial ? `, serial ${esc(g.serial)}` : ""}${g.operator ? `, ${esc(g.operator)}` : ""}</p>
+    <div class="cards" id="gear-figures">
+      ${card("Verdict", verdict(g.verdict) + ` <span class="muted">(${judged})</span>`)}
+      ${card("Fβ worst flank", um(g.total_max_um) + ` (class ${g.tolerance_class})`)}
+      ${card("Fβ mean", um(g.total_mean_um))}
+      ${card("ffβ mean", um(g.form_mean_um))}
+      ${card("|fHβ| mean", um(g.slope_mean_abs_um))}
+      ${card("Stroke", (g.ground_with_version ? `ground with v${g.ground_with_version}` : "ground with a stroke not known") +
+             (g.pushed_version ? `; v${g.pushed_version} pushed from it` : ""))}
+    </div>
+    <div id="lead-plot">${leadSvg(g.traces)}</div>
+    <div class="scroll"><table id="gear-traces">
+      <thead><tr><th>Gap</th><th>Flank</th><th>F<sub>β</sub></th><th>f<sub>fβ</sub></th><th>f<sub>Hβ</sub></th><th>Class</th><th>Range (mm)</th></tr></thead>
+      <tbody>${g.traces.map((t) => `<tr><td>${t.gap}</td><td>${esc(t.flank)}</td><td class="num">${um(t.total_um)}</td>
+        <td class="num">${um(t.form_um)}</td><td class="num">${um(t.slope_um)}</td><td class="num">${t.tolerance_class}</td>
+        <td>${t.from_mm.toFixed(2)} … ${t.to_mm.toFixed(2)}</td></tr>`).join("")}</tbody></table></div>`;
+}
+
 // ---- One run ----
 
 async function runPage(id) {
@@ -740,10 +833,12 @@ function route() {
   const p = params(query);
   const parts = path.split("/").filter((x) => x);
   const name = parts[0] || "runs";
-  document.querySelectorAll("nav a").forEach((a) => a.classList.toggle("current", a.dataset.page === (name === "run" ? "runs" : name)));
+  document.querySelectorAll("nav a").forEach((a) => a.classList.toggle("current", a.dataset.page === (name === "run" ? "runs" : name === "gear" ? "gears" : name)));
   const pages = {
     runs: () => runsPage(p),
     run: () => runPage(parts[1] || ""),
+    gears: () => gearRunsPage(p),
+    gear: () => gearRunPage(parts[1] || ""),
     trend: () => trendPage(p),
     shaft: () => shaftPage(p),
     nc: () => ncPage(p),

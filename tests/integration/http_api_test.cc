@@ -260,6 +260,59 @@ TEST_F(HttpApiTest, MeasurePassesSerialAndOperatorAndRefusesBadOnesWith400) {
   EXPECT_EQ(log_.all().size(), 2u) << "a refused request queues no run";
 }
 
+TEST_F(HttpApiTest, GearRunsListFilterAndShowWithTheirTraces) {
+  ASSERT_NO_FATAL_FAILURE(fill());
+  {
+    Result<RunStore> store = RunStore::open(db());
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    for (const auto& [started, worst] : {std::pair{"2020-11-20T10:00:00Z", 12.5}, std::pair{"2020-11-21T10:00:00Z", 2.5}}) {
+      GearRunRecord g;
+      g.started_utc = started;
+      g.machine = "gear-grinder-2";
+      g.part = "gear_71";
+      g.source = "flank probe tcp:10.0.0.7:502";
+      g.nc_file = "/nc/GEAR_71.SPF";
+      g.required_class = 5;
+      g.total_tolerance_um = 8.6;
+      g.verdict = worst <= 8.6 ? Verdict::kIn : Verdict::kOut;
+      g.tolerance_class = worst <= 8.6 ? 2 : 7;
+      g.total_max_um = worst;
+      g.total_mean_um = worst;
+      GearTraceRecord t;
+      t.gap = 1;
+      t.flank = "left";
+      t.total_um = worst;
+      t.tolerance_class = g.tolerance_class;
+      t.z_mm = {-1.0, 0.0, 1.0};
+      t.deviation_um = {-worst / 2, 0.0, worst / 2};
+      g.traces = {t};
+      ASSERT_TRUE(store->insert_gear_run(g).ok());
+    }
+  }
+  start();
+  Answer all = get("/api/gear-runs");
+  ASSERT_EQ(all.status, 200) << all.body;
+  ASSERT_EQ(all.j.size(), 2u) << all.body;
+  EXPECT_EQ(all.j[0]["id"], 2);  // newest first
+  EXPECT_FALSE(all.j[0].contains("traces"));
+  EXPECT_TRUE(all.j[0]["serial"].is_null());
+  Answer out = get("/api/gear-runs?verdict=out&part=gear_71");
+  ASSERT_EQ(out.status, 200) << out.body;
+  ASSERT_EQ(out.j.size(), 1u);
+  EXPECT_EQ(out.j[0]["total_max_um"], 12.5);
+  EXPECT_EQ(get("/api/gear-runs?since=2020-11-21").j.size(), 1u);
+  EXPECT_TRUE(has(error_of(get("/api/gear-runs?verdict=maybe"), 400), "`verdict` must be in or out or not_judged"));
+  EXPECT_TRUE(has(error_of(get("/api/gear-runs?lobe=1"), 400), "lobe"));
+  Answer one = get("/api/gear-runs/1");
+  ASSERT_EQ(one.status, 200) << one.body;
+  ASSERT_EQ(one.j["traces"].size(), 1u);
+  EXPECT_EQ(one.j["traces"][0]["flank"], "left");
+  EXPECT_EQ(one.j["traces"][0]["deviation_um"][2], 6.25);
+  EXPECT_EQ(one.j["total_tolerance_um"], 8.6);
+  EXPECT_TRUE(has(error_of(get("/api/gear-runs/9"), 404), "GET /api/gear-runs lists the ids"));
+  EXPECT_TRUE(has(error_of(get("/api/gear-runs/x"), 400), "not a number"));
+}
+
 TEST_F(HttpApiTest, ShowIsTheRunAsRunsShowJsonAndAnUnknownRunIs404) {
   fill();
   start();

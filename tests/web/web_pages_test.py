@@ -4,7 +4,8 @@
 
 Three runs are measured over the HTTP API with every table held for approval: intake lobe 1 of
 shaft S-1001 (its table approved here: version 1 of CAM_INTAKE_L1), then lobe 1 and lobe 2 of
-shaft S-1002 (two pending tables). The browser then looks at every page, approves the lobe 1
+shaft S-1002 (two pending tables); later two gears of the virtual gear grinder's loop join the
+same database. The browser then looks at every page, approves the lobe 1
 table with the token (the NC history shows version 2 and its diff) and rejects the lobe 2 one,
 after both were refused without it; then previews lobe 2's first program and writes it (lobe
 1's, which has a history, is refused). Screenshots of every page, at 1366x768 and 390x844, go to
@@ -439,6 +440,25 @@ def run_checks(svc, browser, shots):
     check(len(runs) == before + 1 and runs[0]["serial"] == "S-1003", f"a run of S-1003 was measured: {runs[0]}")
     b.driver.find_element(By.CSS_SELECTOR, "#measure-message a").click()
     b.wait_text("#title", f"Run {runs[0]['id']}")
+
+    # ---- Gears: two gears of the virtual gear grinder's loop in the same database ----
+    subprocess.run([svc.gaugeloop, "demo", "--part", str(EXAMPLES / "gear_71.toml"), "--iterations", "1",
+                    "--machine-seed", "2", "--data-dir", str(svc.work)], check=True, stdout=subprocess.DEVNULL)
+    b.go(ui + "#/gears")
+    wait_until("two gear runs listed", lambda: b.count("table#gear-runs tbody tr") == 2)
+    gears = b.text("table#gear-runs")
+    for fragment in ("gear_71", "virtual gear grinder", "GEAR-1", "µm", "stroke v2"):
+        check(fragment in gears, f"the gear runs show {fragment}: {gears}")
+    verdicts = [td.text for td in b.driver.find_elements(By.CSS_SELECTOR, "table#gear-runs tbody tr td:nth-child(8)")]
+    check(verdicts == ["in", "out"], f"the corrected gear in, the first out: {verdicts}")
+    screenshots(b, shots, "gears", lambda: b.count("table#gear-runs tbody tr") == 2)
+    b.driver.find_element(By.CSS_SELECTOR, "table#gear-runs tbody tr:last-child").click()
+    b.wait_text("#gear-title", "Gear run 1: gear_71")
+    wait_until("the lead's 8 traces drawn and tabled", lambda: b.count("#lead-plot svg polyline") == 8
+               and b.count("table#gear-traces tbody tr") == 8)
+    figures = b.text("#gear-figures")
+    check("class 5 asked" in figures and "v2 pushed from it" in figures, f"the gear's figures: {figures}")
+    screenshots(b, shots, "gear", lambda: b.count("#lead-plot svg") == 1)
 
     # ---- Every asset from the service itself, nothing from elsewhere ----
     sources = b.driver.execute_script(
