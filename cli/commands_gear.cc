@@ -25,6 +25,7 @@
 #include "nc_out/stroke_program.h"
 #include "report/dfq.h"
 #include "report/gear_characteristics.h"
+#include "report/gear_report.h"
 #include "report/run_json.h"
 #include "report/spc.h"
 
@@ -433,6 +434,23 @@ int cmd_gear_runs_spc(const GearSpcOptions& o) {
   return kExitOk;
 }
 
+struct GearReportOptions {
+  DataPaths paths;
+  std::int64_t id = 0;
+  std::string out_path;
+};
+
+int cmd_gear_runs_report(const GearReportOptions& o) {
+  Result<RunStore> store = open_history_read_only(o.paths);
+  if (!store) return report_error(store.error());
+  Result<StoredGearRun> g = store->load_gear_run(o.id);
+  if (!g) return report_error(g.error());
+  const std::string out = o.out_path.empty() ? "gear_run" + std::to_string(o.id) + ".pdf" : o.out_path;
+  if (Status w = write_gear_report(*g, out); !w) return report_error(w.error());
+  std::printf("gear report of gear run %lld written to %s\n", static_cast<long long>(o.id), out.c_str());
+  return kExitOk;
+}
+
 int cmd_gear_runs_show(const GearRunsOptions& o) {
   Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
@@ -738,6 +756,14 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
   add_data_options(*show, so2->paths);
   show->add_flag("--json", so2->json, "Print JSON, with the traces");
   show->callback([&action, so2] { action = [so2] { return cmd_gear_runs_show(*so2); }; });
+
+  auto ro = std::make_shared<GearReportOptions>();
+  CLI::App* report = runs->add_subcommand(
+      "report", "One gear run's lead report: the verdict, a lead chart per gap (both flanks), every trace's figures");
+  report->add_option("id", ro->id, "Gear run id (`gear runs list`)")->required();
+  add_data_options(*report, ro->paths);
+  report->add_option("--out", ro->out_path, "The file: .pdf, .svg or .png [gear_run<ID>.pdf]");
+  report->callback([&action, ro] { action = [ro] { return cmd_gear_runs_report(*ro); }; });
 
   auto spo = std::make_shared<GearSpcOptions>();
   CLI::App* spc = runs->add_subcommand(

@@ -31,6 +31,7 @@
 #include "core/text_file.h"
 #include "core/utc_time.h"
 #include "report/cam_report.h"
+#include "report/gear_report.h"
 #include "report/program_preview.h"
 #include "report/run_json.h"
 #include "report/svg_plot.h"
@@ -708,6 +709,23 @@ struct HttpApi::Impl {
     });
   }
 
+  void gear_run_report(const httplib::Request& req, httplib::Response& res) {
+    Result<Query> q = Query::of(req, {});
+    if (!q) return send_error(res, q.error());
+    Result<std::int64_t> id = path_id(req.matches[1], "gear run id");
+    if (!id) return send_error(res, id.error());
+    Result<StorePool::Lease> store = stores.acquire();
+    if (!store) return send_error(res, store.error());
+    Result<StoredGearRun> run = (*store)->load_gear_run(*id);
+    if (!run) return fail_with_store(res, *store, run.error());
+    const std::string name = "gear_run" + std::to_string(*id) + ".pdf";
+    Result<std::string> pdf = file_written_by([&](const fs::path& out) { return write_gear_report(*run, out); }, name);
+    if (!pdf) return send_error(res, pdf.error());
+    res.status = 200;
+    res.set_header("Content-Disposition", "inline; filename=\"" + name + "\"");
+    res.set_content(std::move(*pdf), "application/pdf");
+  }
+
   void show_gear_run(const httplib::Request& req, httplib::Response& res) {
     Result<Query> q = Query::of(req, {});
     if (!q) return send_error(res, q.error());
@@ -1327,6 +1345,7 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
   s.route("/api/runs/([^/]+)/export", [&s](R q, W a) { s.export_run(q, a); });
   s.route("/api/gear-runs", [&s](R q, W a) { s.list_gear_runs(q, a); });
   s.route("/api/gear-runs/([^/]+)", [&s](R q, W a) { s.show_gear_run(q, a); });
+  s.route("/api/gear-runs/([^/]+)/report.pdf", [&s](R q, W a) { s.gear_run_report(q, a); });
   s.route("/api/trend", [&s](R q, W a) { s.trend(q, a); });
   s.route("/api/events", [&s](R q, W a) { s.events(q, a); });
   s.route("/api/nc/table", [&s](R q, W a) { s.nc_table(q, a); });

@@ -265,7 +265,8 @@ async function gearRunPage(id) {
   const judged = g.required_class ? `class ${g.required_class} asked: F<sub>β</sub> within ${um(g.total_tolerance_um)}` : "the part names no tolerance class";
   page().innerHTML = `
     <h1 id="gear-title">Gear run ${g.id}: ${esc(g.part)} on ${esc(g.machine)}</h1>
-    <p class="muted">Measured ${utc(g.started_utc)} by ${esc(g.source)}${g.serial ? `, serial ${esc(g.serial)}` : ""}${g.operator ? `, ${esc(g.operator)}` : ""}</p>
+    <p class="muted">Measured ${utc(g.started_utc)} by ${esc(g.source)}${g.serial ? `, serial ${esc(g.serial)}` : ""}${g.operator ? `, ${esc(g.operator)}` : ""}
+      · <a id="gear-report-pdf" href="/api/gear-runs/${g.id}/report.pdf">Lead report (PDF)</a></p>
     <div class="cards" id="gear-figures">
       ${card("Verdict", verdict(g.verdict) + ` <span class="muted">(${judged})</span>`)}
       ${card("Fβ worst flank", um(g.total_max_um) + ` (class ${g.tolerance_class})`)}

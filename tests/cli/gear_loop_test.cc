@@ -152,6 +152,10 @@ TEST(GearLoop, TheDemoClosesTheLoopOnTheExampleGear) {
   EXPECT_NEAR(worst["usl"].get<double>(), 8.598, 0.001);
   EXPECT_EQ(worst["out"], 1);
   EXPECT_EQ(worst["judged"], 2);
+  const fs::path pdf = dir.path() / "gear1.pdf";
+  testing::CommandResult report = testing::run_command("gear runs report 1 --out " + pdf.string() + data);
+  ASSERT_EQ(report.exit_code, 0) << report.output;
+  EXPECT_EQ(testing::slurp(pdf).rfind("%PDF", 0), 0u);
   testing::CommandResult none = testing::run_command("gear runs spc --part gear_40" + data);
   EXPECT_EQ(none.exit_code, 2) << none.output;
   EXPECT_NE(none.output.find("no gear runs match"), std::string::npos) << none.output;

@@ -265,7 +265,8 @@ TEST_F(HttpApiTest, GearRunsListFilterAndShowWithTheirTraces) {
   {
     Result<RunStore> store = RunStore::open(db());
     ASSERT_TRUE(store.ok()) << store.error().message;
-    for (const auto& [started, worst] : {std::pair{"2020-11-20T10:00:00Z", 12.5}, std::pair{"2020-11-21T10:00:00Z", 2.5}}) {
+    for (const auto& [started, worst] :
+         {std::pair{"2020-11-20T10:00:00Z", 12.5}, std::pair{"2020-11-21T10:00:00Z", 2.5}}) {
       GearRunRecord g;
       g.started_utc = started;
       g.machine = "gear-grinder-2";
@@ -310,6 +311,11 @@ TEST_F(HttpApiTest, GearRunsListFilterAndShowWithTheirTraces) {
   EXPECT_EQ(one.j["traces"][0]["deviation_um"][2], 6.25);
   EXPECT_EQ(one.j["total_tolerance_um"], 8.6);
   EXPECT_TRUE(has(error_of(get("/api/gear-runs/9"), 404), "GET /api/gear-runs lists the ids"));
+  Answer pdf = get("/api/gear-runs/1/report.pdf");
+  ASSERT_EQ(pdf.status, 200) << pdf.body.substr(0, 200);
+  EXPECT_EQ(pdf.content_type, "application/pdf");
+  EXPECT_EQ(pdf.body.rfind("%PDF", 0), 0u);
+  EXPECT_EQ(get("/api/gear-runs/9/report.pdf").status, 404);
   EXPECT_TRUE(has(error_of(get("/api/gear-runs/x"), 400), "not a number"));
 }
 

@@ -2,6 +2,7 @@
 // the tolerance band and the error curve where the lift error chart must show them (pixels of
 // the PNG read back), refusals, and no file left after a failure.
 #include "report/cam_report.h"
+#include "report/gear_report.h"
 
 #include <cairo.h>
 #include <gtest/gtest.h>
@@ -19,6 +20,7 @@
 #include "tests/support/angles.h"
 #include "tests/support/cli.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
@@ -524,6 +526,68 @@ TEST(TrendPlot, AnUnknownKeyListsTheKeysPresent) {
   EXPECT_FALSE(write_trend_plot({}, "lift_error", dir / "t.png").ok());
   EXPECT_FALSE(write_trend_plot(trend_runs(), "lift_error", dir / "t.gif").ok());
   EXPECT_EQ(files_in(dir.path()), 0u);
+}
+
+// ---- The gear report ----
+
+StoredGearRun report_gear_run(Verdict verdict, double worst_um) {
+  StoredGearRun g;
+  g.id = 12;
+  GearRunRecord& r = g.record;
+  r.started_utc = "2026-12-04T08:00:00Z";
+  r.machine = "gear-grinder-2";
+  r.part = "gear_71";
+  r.source = "flank probe tcp:10.0.0.7:502";
+  r.serial = "G-12";
+  r.nc_file = "/nc/GEAR_71.SPF";
+  r.ground_with_version = 3;
+  r.required_class = 5;
+  r.total_tolerance_um = 8.6;
+  r.verdict = verdict;
+  r.tolerance_class = verdict == Verdict::kIn ? 4 : 7;
+  r.total_max_um = worst_um;
+  r.total_mean_um = worst_um;
+  for (int gap : {1, 20}) {
+    for (const char* flank : {"left", "right"}) {
+      GearTraceRecord t;
+      t.gap = gap;
+      t.flank = flank;
+      t.total_um = worst_um;
+      t.tolerance_class = r.tolerance_class;
+      t.from_mm = -10.8;
+      t.to_mm = 10.8;
+      for (int i = 0; i <= 24; ++i) {
+        t.z_mm.push_back(-12.0 + i);
+        t.deviation_um.push_back((std::string(flank) == "left" ? 1 : -1) * worst_um * (i - 12) / 24.0);
+      }
+      r.traces.push_back(t);
+    }
+  }
+  return g;
+}
+
+TEST(GearReport, DrawsEveryGapsLeadAndTheVerdictInItsColour) {
+  testing::TempDir dir;
+  ASSERT_TRUE(write_gear_report(report_gear_run(Verdict::kOut, 12.0), dir / "out.png").ok());
+  ASSERT_TRUE(write_gear_report(report_gear_run(Verdict::kIn, 3.0), dir / "in.png").ok());
+  keep_picture(dir / "out.png");
+  const Png out(dir / "out.png");
+  const Png in(dir / "in.png");
+  ASSERT_TRUE(out.ok() && in.ok());
+  // The left flanks' traces in blue (0.05, 0.30, 0.80), 2 gaps of a 24 mm face: hundreds of pixels.
+  EXPECT_GT(count_colour(out, {13, 77, 204}, 30), 300);
+  // OUT and the out rows in red; IN and the in rows in green.
+  EXPECT_GT(count_colour(out, {204, 26, 26}, 30), count_colour(in, {204, 26, 26}, 30) + 100);
+  EXPECT_GT(count_colour(in, {26, 140, 51}, 30), count_colour(out, {26, 140, 51}, 30) + 100);
+  ASSERT_TRUE(write_gear_report(report_gear_run(Verdict::kOut, 12.0), dir / "report.pdf").ok());
+  EXPECT_EQ(testing::slurp(dir / "report.pdf").rfind("%PDF", 0), 0u);
+  EXPECT_FALSE(write_gear_report(report_gear_run(Verdict::kOut, 12.0), dir / "report.txt").ok());
+  StoredGearRun bare = report_gear_run(Verdict::kOut, 12.0);
+  bare.record.traces.clear();
+  Status refused = write_gear_report(bare, dir / "bare.pdf");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("no lead trace"), std::string::npos) << refused.error().message;
+  EXPECT_FALSE(fs::exists(dir / "bare.pdf"));
 }
 
 }  // namespace

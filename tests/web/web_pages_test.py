@@ -458,6 +458,10 @@ def run_checks(svc, browser, shots):
                and b.count("table#gear-traces tbody tr") == 8)
     figures = b.text("#gear-figures")
     check("class 5 asked" in figures and "v2 pushed from it" in figures, f"the gear's figures: {figures}")
+    gear_pdf = b.driver.find_element(By.CSS_SELECTOR, "#gear-report-pdf").get_attribute("href")
+    status, body, ctype = svc.request("GET", gear_pdf.replace(svc.base, ""))
+    check(status == 200 and ctype == "application/pdf" and body.startswith(b"%PDF"),
+          f"the gear's lead report link answers a PDF: {status} {ctype} {body[:20]!r}")
     screenshots(b, shots, "gear", lambda: b.count("#lead-plot svg") == 1)
 
     # ---- Every asset from the service itself, nothing from elsewhere ----
