@@ -152,10 +152,7 @@ Result<std::vector<LeadTrace>> GearProbe::measure_lead(const std::vector<int>& g
         t.z_mm.push_back(p->z_mm);
         t.deviation_um.push_back(p->deviation_um);
       }
-      double mean = 0.0;
-      for (double d : t.deviation_um) mean += d;
-      mean /= static_cast<double>(t.deviation_um.size());
-      for (double& d : t.deviation_um) d -= mean;
+      align_on_tooth(t);
       out.push_back(std::move(t));
     }
   }

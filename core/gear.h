@@ -73,4 +73,8 @@ struct LeadTrace {
   std::vector<double> deviation_um;  // one per z_mm
 };
 
+// Aligns a trace on its tooth as a gear checker does: its mean taken out of every deviation (the
+// probe's zero and the tooth's thickness are not lead).
+void align_on_tooth(LeadTrace& trace);
+
 }  // namespace gaugeloop

@@ -127,10 +127,7 @@ std::vector<LeadTrace> measure_lead(const GroundGear& gear, const std::vector<in
         t.z_mm.push_back(z);
         t.deviation_um.push_back(probed_deviation_um(gear, measurement, gap, f, z));
       }
-      double mean = 0.0;
-      for (double d : t.deviation_um) mean += d;
-      mean /= static_cast<double>(t.deviation_um.size());
-      for (double& d : t.deviation_um) d -= mean;
+      align_on_tooth(t);
       out.push_back(std::move(t));
     }
   }

@@ -115,6 +115,13 @@ async function showSvg(el, path) {
   }
 }
 
+// The verdict filter of a list's form: any, in, out, not judged.
+function verdictFilter(p) {
+  return `<label>Verdict<select name="verdict">
+        ${["", "in", "out", "not_judged"].map((v) => `<option value="${v}" ${p.verdict === v ? "selected" : ""}>${v ? v.replace("_", " ") : "any"}</option>`).join("")}
+      </select></label>`;
+}
+
 function card(label, value) {
   return `<div class="card"><div class="label">${esc(label)}</div><div class="value">${value}</div></div>`;
 }
@@ -135,9 +142,7 @@ async function runsPage(p) {
       <label>Lobe<input name="lobe" type="number" min="1" value="${esc(p.lobe)}"></label>
       <label>Serial<input name="serial" list="serials" value="${esc(p.serial)}"></label>
       <datalist id="machines"></datalist><datalist id="parts"></datalist><datalist id="serials"></datalist>
-      <label>Verdict<select name="verdict">
-        ${["", "in", "out", "not_judged"].map((v) => `<option value="${v}" ${p.verdict === v ? "selected" : ""}>${v ? v.replace("_", " ") : "any"}</option>`).join("")}
-      </select></label>
+      ${verdictFilter(p)}
       <label>From (UTC)<input name="since" type="date" value="${esc(p.since)}"></label>
       <label>To (UTC)<input name="until" type="date" value="${esc(p.until)}"></label>
       <button type="submit">Filter</button>
@@ -199,9 +204,7 @@ async function gearRunsPage(p) {
       <label>Part<input name="part" value="${esc(p.part)}"></label>
       <label>Machine<input name="machine" value="${esc(p.machine)}"></label>
       <label>Serial<input name="serial" value="${esc(p.serial)}"></label>
-      <label>Verdict<select name="verdict">
-        ${["", "in", "out", "not_judged"].map((v) => `<option value="${v}" ${p.verdict === v ? "selected" : ""}>${v ? v.replace("_", " ") : "any"}</option>`).join("")}
-      </select></label>
+      ${verdictFilter(p)}
       <label>From (UTC)<input name="since" type="date" value="${esc(p.since)}"></label>
       <label>To (UTC)<input name="until" type="date" value="${esc(p.until)}"></label>
       <button type="submit">Filter</button>

@@ -105,6 +105,13 @@ TEST(GearCommand, PushesTheStrokeWithItsHistoryDiffCheckAndRollback) {
   EXPECT_NE(testing::slurp(nc / "GEAR_71_MAIN.MPF").find("with stroke version 3 "), std::string::npos);
 }
 
+// An axis error table of zeros along the example's stroke, in `dir`: the first stroke, SIM1 at 0.
+std::filesystem::path zero_axis_errors(const testing::TempDir& dir) {
+  const auto zero = dir.path() / "zero.csv";
+  std::ofstream(zero) << "z_mm,y_error_um,z_error_um,b_error_deg,c_error_deg\n-15,0,0,0,0\n15,0,0,0,0\n";
+  return zero;
+}
+
 // A checker's export of a mesh error growing 0.0001 deg per mm (left flank +r_b dC, right -r_b
 // dC, 0.5 um of alignment offset) on gaps 1 and 40, both flanks, every 0.5 mm from -12 to 12.
 void write_mesh_lead(const std::filesystem::path& lead) {
@@ -129,8 +136,7 @@ void write_mesh_lead(const std::filesystem::path& lead) {
 TEST(GearCommand, CorrectsTheStrokeInForceFromACheckersLeadTraces) {
   testing::TempDir dir("gear-correct-cmd");
   const std::string data = " --data-dir " + (dir.path() / "data").string();
-  const auto zero = dir.path() / "zero.csv";
-  std::ofstream(zero) << "z_mm,y_error_um,z_error_um,b_error_deg,c_error_deg\n-15,0,0,0,0\n15,0,0,0,0\n";
+  const auto zero = zero_axis_errors(dir);
   const auto lead = dir.path() / "lead.csv";
   write_mesh_lead(lead);
   const std::string correct =
@@ -198,8 +204,7 @@ TEST(GearCommand, CorrectsTheStrokeInForceFromACheckersLeadTraces) {
 TEST(GearCommand, ACorrectedStrokeWaitsForApprovalAndIsPushedWhenApproved) {
   testing::TempDir dir("gear-approval-cmd");
   const std::string data = " --data-dir " + (dir.path() / "data").string();
-  const auto zero = dir.path() / "zero.csv";
-  std::ofstream(zero) << "z_mm,y_error_um,z_error_um,b_error_deg,c_error_deg\n-15,0,0,0,0\n15,0,0,0,0\n";
+  const auto zero = zero_axis_errors(dir);
   const auto lead = dir.path() / "lead.csv";
   write_mesh_lead(lead);
   ASSERT_EQ(testing::run_command("gear stroke --part " + kExample + " --errors " + zero.string() +
@@ -288,8 +293,7 @@ TEST(GearCommand, IdentifiesTheAxesErrorsAndRefusesTermsThatActAlike) {
 TEST(GearCommand, MeasuresAGearWithTheMachinesFlankProbeAndCorrectsFromIt) {
   testing::TempDir dir("gear-measure-cmd");
   const std::string data = " --data-dir " + (dir.path() / "data").string();
-  const auto zero = dir.path() / "zero.csv";
-  std::ofstream(zero) << "z_mm,y_error_um,z_error_um,b_error_deg,c_error_deg\n-15,0,0,0,0\n15,0,0,0,0\n";
+  const auto zero = zero_axis_errors(dir);
   ASSERT_EQ(testing::run_command("gear stroke --part " + kExample + " --errors " + zero.string() + data).exit_code, 0);
   Result<GearPartFile> gf = read_gear_part_file(kExample);
   ASSERT_TRUE(gf.ok());
