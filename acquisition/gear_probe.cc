@@ -67,6 +67,18 @@ Result<ProbedPoint> GearProbe::measure_once(int gap, Flank flank, double z_mm) {
   }
   if (!ctx_->is_open()) {
     if (Status s = ctx_->open(); !s) return s.error();
+    in_step_ = false;
+  }
+  if (!in_step_) {
+    // The machine keeps its answer word across our sessions (and we may have been restarted):
+    // start after what it holds, so that an old answer is never taken for the new point's.
+    std::uint16_t held = 0;
+    if (Status s = ctx_->read_registers(RegisterTable::kHolding, settings_.base_address + r::kAnswerSequence, 1, &held);
+        !s) {
+      return make_error(s.error().code, point + ": " + s.error().message);
+    }
+    sequence_ = held;
+    in_step_ = true;
   }
   sequence_ = static_cast<std::uint16_t>(sequence_ + 1);
   if (sequence_ == 0) sequence_ = 1;  // 0 is what an idle machine's answer word holds

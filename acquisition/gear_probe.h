@@ -48,8 +48,9 @@ class GearProbe {
   std::string address() const;
 
   // One point: the request written in one write (sequence, gap, flank, Z), then the answer
-  // words read until they answer that sequence. Errors, each naming the point (gap, flank, Z)
-  // and the probe's address: kInvalidInput for a gap outside 1..65535 or a Z beyond +-214 mm;
+  // words read until they answer that sequence. The first request of a connection follows the
+  // sequence the machine's answer word holds, so a stale answer is never taken for a new one. Errors, each naming the
+  // point (gap, flank, Z) and the probe's address: kInvalidInput for a gap outside 1..65535 or a Z beyond +-214 mm;
   // kGaugeTimeout when the machine has not answered within point_timeout (saying which
   // sequence the answer word still holds); kIncompleteRun for a status with a fault bit (named:
   // no contact, over range, out of reach, probe fault); kGaugeUnreachable for a lost link (closed)
@@ -74,6 +75,7 @@ class GearProbe {
   Clock& clock_;
   std::unique_ptr<ModbusContext> ctx_;  // never null
   std::uint16_t sequence_ = 0;
+  bool in_step_ = false;  // sequence_ follows the machine's answer word (read once a connection)
   int points_ = 0;
   int reconnects_ = 0;
 };

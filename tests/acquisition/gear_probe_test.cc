@@ -85,6 +85,22 @@ TEST_F(GearProbeTest, TheLeadOverModbusIsTheCheckersToTheRegistersNanometre) {
   EXPECT_EQ(sim_->points_answered(), 4 * 49);
 }
 
+// The machine keeps its answer word between gaugeloop's sessions: a new session's first point
+// must not take the last session's answer for its own.
+TEST_F(GearProbeTest, ANewSessionNeverTakesTheLastSessionsAnswer) {
+  sim_->load_gear(ground_gear(dir_), 1);
+  {
+    GearProbe first(settings_);
+    Result<ProbedPoint> p = first.measure_point(1, Flank::kLeft, 0.0);
+    ASSERT_TRUE(p.ok()) << p.error().message;
+  }
+  GearProbe second(settings_);
+  Result<ProbedPoint> q = second.measure_point(1, Flank::kLeft, 5.0);
+  ASSERT_TRUE(q.ok()) << q.error().message;
+  EXPECT_NEAR(q->z_mm, 5.0, 1e-9);
+  EXPECT_EQ(sim_->points_answered(), 2);
+}
+
 TEST_F(GearProbeTest, AStalledProbeCycleTimesOutNamingThePointAndTheAnswerRegister) {
   sim_->load_gear(ground_gear(dir_), 1);
   settings_.base_address = 0;
