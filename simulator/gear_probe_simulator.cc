@@ -2,12 +2,9 @@
 #include "simulator/gear_probe_simulator.h"
 
 #include <modbus/modbus.h>
-#include <sys/eventfd.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <cmath>
-#include <cstring>
 
 #include "core/gear_probe_registers.h"
 #include "core/guarded_thread.h"
@@ -20,22 +17,12 @@ namespace gp = gear_probe_registers;
 GearProbeSimulator::GearProbeSimulator(GearProbeSimulatorSettings settings) : settings_(std::move(settings)) {}
 
 Result<std::unique_ptr<GearProbeSimulator>> GearProbeSimulator::start(const GearProbeSimulatorSettings& settings) {
-  if (settings.base_address < 0 || settings.base_address > 65536 - gp::kBlockWords) {
-    return make_error(ErrorCode::kInvalidInput, "gear probe simulator base_address " +
-                                                    std::to_string(settings.base_address) + " leaves no room for the " +
-                                                    std::to_string(gp::kBlockWords) + "-word block");
-  }
   std::unique_ptr<GearProbeSimulator> sim(new GearProbeSimulator(settings));
-  sim->ctx_ = modbus_new_tcp_pi(settings.host.c_str(), std::to_string(settings.port).c_str());
-  if (sim->ctx_ == nullptr) {
-    return make_error(ErrorCode::kInvalidInput,
-                      "gear probe simulator address " + settings.host + " is not usable: " + modbus_strerror(errno));
+  if (Status s = open_holding_register_server(settings.host, settings.port, settings.base_address, gp::kBlockWords,
+                                              "gear probe simulator", sim->ctx_, sim->mapping_, sim->wake_fd_);
+      !s) {
+    return s.error();
   }
-  sim->mapping_ = modbus_mapping_new_start_address(0, 0, 0, 0, static_cast<unsigned int>(settings.base_address),
-                                                   gp::kBlockWords, 0, 0);
-  if (sim->mapping_ == nullptr) return make_error(ErrorCode::kInternal, "cannot allocate the gear probe's registers");
-  sim->wake_fd_ = ::eventfd(0, EFD_CLOEXEC);
-  if (sim->wake_fd_ < 0) return make_error(ErrorCode::kIo, std::string("eventfd: ") + std::strerror(errno));
   Result<TcpListener> listener = listen_tcp(settings.host, settings.port, "gear probe simulator");
   if (!listener) return listener.error();
   sim->port_ = listener->port;

@@ -7,14 +7,11 @@
 #include <modbus/modbus.h>
 #include <netinet/in.h>
 #include <poll.h>
-#include <sys/eventfd.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
-#include <cstring>
 #include <vector>
 
 namespace gaugeloop {
@@ -24,24 +21,12 @@ namespace r = plc_registers;
 PlcSimulator::PlcSimulator(PlcSimulatorSettings settings) : settings_(std::move(settings)) {}
 
 Result<std::unique_ptr<PlcSimulator>> PlcSimulator::start(const PlcSimulatorSettings& settings) {
-  if (settings.base_address < 0 || settings.base_address > 65536 - r::kBlockWords) {
-    return make_error(ErrorCode::kInvalidInput, "PLC simulator base_address " + std::to_string(settings.base_address) +
-                                                    " leaves no room for the " + std::to_string(r::kBlockWords) +
-                                                    "-word block; use 0 to " + std::to_string(65536 - r::kBlockWords));
-  }
   std::unique_ptr<PlcSimulator> sim(new PlcSimulator(settings));
-  // Framing only (the sockets are the listener's); the protocol-independent backend: IPv4 or IPv6.
-  sim->ctx_ = modbus_new_tcp_pi(settings.host.c_str(), std::to_string(settings.port).c_str());
-  if (sim->ctx_ == nullptr) {
-    return make_error(ErrorCode::kInvalidInput,
-                      "PLC simulator address " + settings.host + " is not usable: " + modbus_strerror(errno));
+  if (Status s = open_holding_register_server(settings.host, settings.port, settings.base_address, r::kBlockWords,
+                                              "PLC simulator", sim->ctx_, sim->mapping_, sim->wake_fd_);
+      !s) {
+    return s.error();
   }
-  sim->mapping_ = modbus_mapping_new_start_address(0, 0, 0, 0, static_cast<unsigned int>(settings.base_address),
-                                                   r::kBlockWords, 0, 0);
-  if (sim->mapping_ == nullptr)
-    return make_error(ErrorCode::kInternal, "cannot allocate the PLC simulator's registers");
-  sim->wake_fd_ = ::eventfd(0, EFD_CLOEXEC);
-  if (sim->wake_fd_ < 0) return make_error(ErrorCode::kIo, std::string("eventfd: ") + std::strerror(errno));
   if (Status s = sim->listen(); !s) return s.error();
   sim->thread_ = start_guarded_thread("PLC simulator", [raw = sim.get()] { raw->serve(); }, {});
   return sim;

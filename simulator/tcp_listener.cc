@@ -5,6 +5,7 @@
 #include <netdb.h>
 #include <netinet/in.h>
 #include <poll.h>
+#include <sys/eventfd.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -80,6 +81,26 @@ ModbusTcpClients::Round ModbusTcpClients::serve_round(modbus_t* ctx, int wake_fd
     clients_.erase(std::remove(clients_.begin(), clients_.end(), fd), clients_.end());
   }
   return Round::kServed;
+}
+
+Status open_holding_register_server(const std::string& host, int port, int base_address, int words,
+                                    const std::string& who, modbus_t*& ctx, modbus_mapping_t*& mapping, int& wake_fd) {
+  if (base_address < 0 || base_address > 65536 - words) {
+    return make_error(ErrorCode::kInvalidInput, who + " base_address " + std::to_string(base_address) +
+                                                    " leaves no room for the " + std::to_string(words) +
+                                                    "-word block; use 0 to " + std::to_string(65536 - words));
+  }
+  // Framing only (the sockets are the listener's); the protocol-independent backend: IPv4 or IPv6.
+  ctx = modbus_new_tcp_pi(host.c_str(), std::to_string(port).c_str());
+  if (ctx == nullptr) {
+    return make_error(ErrorCode::kInvalidInput, who + " address " + host + " is not usable: " + modbus_strerror(errno));
+  }
+  mapping = modbus_mapping_new_start_address(0, 0, 0, 0, static_cast<unsigned int>(base_address),
+                                             static_cast<unsigned int>(words), 0, 0);
+  if (mapping == nullptr) return make_error(ErrorCode::kInternal, "cannot allocate the " + who + "'s registers");
+  wake_fd = ::eventfd(0, EFD_CLOEXEC);
+  if (wake_fd < 0) return make_error(ErrorCode::kIo, std::string("eventfd: ") + std::strerror(errno));
+  return {};
 }
 
 void shut_down_modbus_server(std::thread& thread, int& wake_fd, int& listen_fd, modbus_t*& ctx,

@@ -52,6 +52,15 @@ class ModbusTcpClients {
   std::vector<std::uint8_t> query_ = std::vector<std::uint8_t>(MODBUS_TCP_MAX_ADU_LENGTH);
 };
 
+// The framing context (TCP on host:port, IPv4 or IPv6; its sockets are the listener's), a
+// mapping of `words` holding registers from `base_address` and the wake eventfd of a server
+// that serves holding registers (the PLC, the gear probe). Each handle is set as it is made, so
+// that shut_down_modbus_server releases what an error left. `who` names the server in messages.
+// Errors: kInvalidInput for a base address that leaves no room for the words or an unusable host,
+// kInternal when the mapping cannot be allocated, kIo when the eventfd cannot be made.
+Status open_holding_register_server(const std::string& host, int port, int base_address, int words,
+                                    const std::string& who, modbus_t*& ctx, modbus_mapping_t*& mapping, int& wake_fd);
+
 // The one teardown of a simulator's server: `before_wake` (e.g. setting a stop flag), a wake
 // of the serving thread through its eventfd, the thread joined; then the listening socket and
 // the eventfd closed, the context freed (a serial one closes its line first; a TCP one's
