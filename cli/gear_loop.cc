@@ -27,13 +27,6 @@ GearLeadSummary summary_of(const GearRunRecord& r) {
 
 }  // namespace
 
-std::vector<double> lead_heights_mm(const GearGeometry& gear, double step_mm) {
-  std::vector<double> z;
-  const int n = static_cast<int>(std::floor(gear.face_width_mm / step_mm + 1e-9)) + 1;
-  for (int i = 0; i < n; ++i) z.push_back(-gear.face_width_mm / 2.0 + i * step_mm);
-  return z;
-}
-
 Result<GearLeadSummary> summarize_lead(const std::vector<LeadTrace>& traces, const GearPart& part,
                                        std::optional<int> required_class) {
   GearRunOrigin origin;

@@ -50,9 +50,6 @@ struct GearLoopIteration {
   double sim_max_abs_deg = 0.0;                  // of the corrected stroke
 };
 
-// The heights across the face a lead is probed at: from -b/2 every step_mm up to +b/2.
-std::vector<double> lead_heights_mm(const GearGeometry& gear, double step_mm);
-
 // Summarises traces as judge_gear (job/gear_run.h) judges them; errors: judge_gear's.
 Result<GearLeadSummary> summarize_lead(const std::vector<LeadTrace>& traces, const GearPart& part,
                                        std::optional<int> required_class = std::nullopt);

@@ -73,6 +73,9 @@ struct LeadTrace {
   std::vector<double> deviation_um;  // one per z_mm
 };
 
+// The heights across the face a lead is measured at: from -b/2 every step_mm, up to +b/2.
+std::vector<double> lead_heights_mm(const GearGeometry& gear, double step_mm);
+
 // Aligns a trace on its tooth as a gear checker does: its mean taken out of every deviation (the
 // probe's zero and the tooth's thickness are not lead).
 void align_on_tooth(LeadTrace& trace);

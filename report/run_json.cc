@@ -189,27 +189,26 @@ json pending_table_json(const PendingTable& t) {
 
 json gear_run_json(const StoredGearRun& g, bool with_traces) {
   const GearRunRecord& r = g.record;
-  json j{
-      {"id", g.id},
-      {"started_utc", r.started_utc},
-      {"machine", r.machine},
-      {"part", r.part},
-      {"source", r.source},
-      {"serial", text_or_null(r.serial)},
-      {"operator", text_or_null(r.operator_name)},
-      {"note", r.note},
-      {"nc_file", r.nc_file},
-      {"ground_with_version", r.ground_with_version ? json(*r.ground_with_version) : nullptr},
-      {"required_class", r.required_class ? json(*r.required_class) : nullptr},
-      {"total_tolerance_um", r.total_tolerance_um ? json(*r.total_tolerance_um) : nullptr},
-      {"verdict", verdict_name(r.verdict)},
-      {"tolerance_class", r.tolerance_class},
-      {"total_max_um", r.total_max_um},
-      {"total_mean_um", r.total_mean_um},
-      {"form_mean_um", r.form_mean_um},
-      {"slope_mean_abs_um", r.slope_mean_abs_um},
-      {"pushed_version", g.pushed_version ? json(*g.pushed_version) : nullptr},
-      {"mesh_residual_rms_um", g.mesh_residual_rms_um ? json(*g.mesh_residual_rms_um) : nullptr}};
+  json j{{"id", g.id},
+         {"started_utc", r.started_utc},
+         {"machine", r.machine},
+         {"part", r.part},
+         {"source", r.source},
+         {"serial", text_or_null(r.serial)},
+         {"operator", text_or_null(r.operator_name)},
+         {"note", r.note},
+         {"nc_file", r.nc_file},
+         {"ground_with_version", r.ground_with_version ? json(*r.ground_with_version) : nullptr},
+         {"required_class", r.required_class ? json(*r.required_class) : nullptr},
+         {"total_tolerance_um", r.total_tolerance_um ? json(*r.total_tolerance_um) : nullptr},
+         {"verdict", verdict_name(r.verdict)},
+         {"tolerance_class", r.tolerance_class},
+         {"total_max_um", r.total_max_um},
+         {"total_mean_um", r.total_mean_um},
+         {"form_mean_um", r.form_mean_um},
+         {"slope_mean_abs_um", r.slope_mean_abs_um},
+         {"pushed_version", g.pushed_version ? json(*g.pushed_version) : nullptr},
+         {"mesh_residual_rms_um", g.mesh_residual_rms_um ? json(*g.mesh_residual_rms_um) : nullptr}};
   if (with_traces) {
     json traces = json::array();
     for (const GearTraceRecord& t : r.traces) {

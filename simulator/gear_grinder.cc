@@ -114,19 +114,15 @@ double probed_deviation_um(const GroundGear& gear, std::uint64_t measurement, in
 
 std::vector<LeadTrace> measure_lead(const GroundGear& gear, const std::vector<int>& gaps, double step_mm,
                                     std::uint64_t measurement) {
-  const GearGeometry& g = gear.part().gear;
-  const int n = static_cast<int>(std::floor(g.face_width_mm / step_mm + 1e-9)) + 1;
+  const std::vector<double> heights = lead_heights_mm(gear.part().gear, step_mm);
   std::vector<LeadTrace> out;
   for (int gap : gaps) {
     for (Flank f : {Flank::kLeft, Flank::kRight}) {
       LeadTrace t;
       t.gap = gap;
       t.flank = f;
-      for (int i = 0; i < n; ++i) {
-        const double z = -g.face_width_mm / 2.0 + i * step_mm;
-        t.z_mm.push_back(z);
-        t.deviation_um.push_back(probed_deviation_um(gear, measurement, gap, f, z));
-      }
+      t.z_mm = heights;
+      for (double z : heights) t.deviation_um.push_back(probed_deviation_um(gear, measurement, gap, f, z));
       align_on_tooth(t);
       out.push_back(std::move(t));
     }
