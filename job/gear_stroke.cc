@@ -51,36 +51,54 @@ Result<GearStrokeReport> push_gear_stroke(const GearPart& part, std::vector<Stro
   };
   Result<std::string> text = render_stroke_program(s.program_name, header, program_points, s.feed_mm_per_min, s.format);
   if (!text) return text.error();
-  std::string back_text;  // what the control would read, or the approval will push
+  // What the control would read (or the approval will push): parsed, checksummed, every point
+  // as written. kIo naming `name` and the line otherwise.
+  auto check_reads_back = [&](const std::string& back, const std::string& name) -> Status {
+    Result<ParsedStrokeProgram> parsed = parse_stroke_program(back, name);
+    if (!parsed) return make_error(ErrorCode::kIo, name + " does not read back: " + parsed.error().message);
+    for (std::size_t i = 0; i < program_points.size(); ++i) {
+      const StrokeProgramPoint& a = parsed->points[i];
+      if (a.z_mm != s.format.round_z_mm(program_points[i].z_mm) ||
+          a.sim_deg != s.format.round_sim_deg(program_points[i].sim_deg)) {
+        return make_error(ErrorCode::kIo, name + ":" + std::to_string(parsed->point_lines[i]) + ": reads back Z" +
+                                              format_fixed(a.z_mm, 4) + " SIM1=" + format_fixed(a.sim_deg, 6) +
+                                              ", not what was written");
+      }
+    }
+    return {};
+  };
+  TableFacts facts;
+  facts.interpolation = "stroke";
+  facts.point_count = static_cast<int>(program_points.size());
+  facts.block_count = static_cast<int>(program_points.size());
   if (s.store != nullptr && s.require_approval) {
     if (s.gear_run_id == 0) {
       return make_error(ErrorCode::kInvalidInput,
                         "a stroke kept for approval names the gear run it was corrected from; none was given");
     }
+    // Checked before it is kept: a pending program is one the approval can push as it is.
+    if (Status c = check_reads_back(*text, "the stroke program for " + s.nc_file.string()); !c) return c.error();
     PendingTable pending;
     pending.gear_run_id = s.gear_run_id;
     pending.nc_file = s.nc_file.string();
     pending.program_text = *text;
     pending.reason = "approval required";
-    pending.table.interpolation = "stroke";
-    pending.table.point_count = static_cast<int>(program_points.size());
-    pending.table.block_count = static_cast<int>(program_points.size());
+    pending.table = facts;
     Result<std::int64_t> id = s.store->add_pending(pending);
     if (!id) return id.error();
     r.pending_id = *id;
-    back_text = *text;
-  } else if (s.store != nullptr) {
-    PushFacts facts;
-    facts.reason = "stroke from " + source;
-    facts.table.interpolation = "stroke";
-    facts.table.point_count = static_cast<int>(program_points.size());
-    facts.table.block_count = static_cast<int>(program_points.size());
+    return r;
+  }
+  if (s.store != nullptr) {
+    PushFacts push;
+    push.reason = "stroke from " + source;
+    push.table = facts;
     PushOptions options;
     options.overwrite_edited = s.overwrite_edited;
     options.main = s.main;
     const std::string& program = *text;
     Result<PushCompletion> pushed = push_program(
-        *s.store, s.nc_file, facts, [&program](int version) { return with_table_version(program, version); }, options);
+        *s.store, s.nc_file, push, [&program](int version) { return with_table_version(program, version); }, options);
     if (!pushed) return pushed.error();
     r.version = pushed->table_version;
     r.written = s.nc_file;
@@ -88,24 +106,9 @@ Result<GearStrokeReport> push_gear_stroke(const GearPart& part, std::vector<Stro
     if (Status w = write_file_atomically(s.out_file, *text); !w) return w.error();
     r.written = s.out_file;
   }
-  if (r.pending_id == 0) {
-    Result<std::string> back = read_regular_file(r.written, "stroke program");
-    if (!back) return back.error();
-    back_text = std::move(*back);
-  }
-  // What the control would read: parsed, checksummed, every point as written.
-  const std::string name = r.pending_id != 0 ? "pending table " + std::to_string(r.pending_id) : r.written.string();
-  Result<ParsedStrokeProgram> parsed = parse_stroke_program(back_text, name);
-  if (!parsed) return make_error(ErrorCode::kIo, name + " does not read back: " + parsed.error().message);
-  for (std::size_t i = 0; i < program_points.size(); ++i) {
-    const StrokeProgramPoint& a = parsed->points[i];
-    if (a.z_mm != s.format.round_z_mm(program_points[i].z_mm) ||
-        a.sim_deg != s.format.round_sim_deg(program_points[i].sim_deg)) {
-      return make_error(ErrorCode::kIo, name + ":" + std::to_string(parsed->point_lines[i]) + ": reads back Z" +
-                                            format_fixed(a.z_mm, 4) + " SIM1=" + format_fixed(a.sim_deg, 6) +
-                                            ", not what was written");
-    }
-  }
+  Result<std::string> back = read_regular_file(r.written, "stroke program");
+  if (!back) return back.error();
+  if (Status c = check_reads_back(*back, r.written.string()); !c) return c.error();
   return r;
 }
 
