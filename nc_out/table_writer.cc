@@ -84,7 +84,7 @@ std::vector<double> row_errors_mm(const SampledPath& path, const TableInterpolan
   std::size_t segment = 0;
   for (std::size_t j = 0; j <= n; ++j) {
     const double c = j == n ? 360.0 : path.c_deg(j);
-    e[j] = nc.at(c, segment).x_mm - path.x_mm[j % n];
+    e[j] = nc.x_mm_at(c, segment) - path.x_mm[j % n];
   }
   return e;
 }
@@ -292,11 +292,11 @@ TableInterpolant::Value TableInterpolant::at(double c_deg) const {
   return at(c_deg, segment);
 }
 
-TableInterpolant::Value TableInterpolant::at(double c_deg, std::size_t& segment) const {
+std::size_t TableInterpolant::locate(double c_deg, double& c, std::size_t& segment) const {
   const std::size_t m = c_deg_.size();
   // Outside the definition range a periodic table is read modulo its range (a table starting on
   // the base circle covers C0 this way); within it, as defined.
-  double c = c_deg;
+  c = c_deg;
   if (c < c_deg_.front() || c > c_deg_.back()) {
     const double range = c_deg_.back() - c_deg_.front();
     c = c_deg_.front() + std::fmod(std::fmod(c - c_deg_.front(), range) + range, range);
@@ -314,22 +314,26 @@ TableInterpolant::Value TableInterpolant::at(double c_deg, std::size_t& segment)
     }
   }
   segment = i;
+  return i;
+}
+
+TableInterpolant::Value TableInterpolant::at(double c_deg, std::size_t& segment) const {
+  double c = 0.0;
+  const std::size_t i = locate(c_deg, c, segment);
   const double h = c_deg_[i + 1] - c_deg_[i];
   const double y0 = x_mm_[i];
   const double y1 = x_mm_[i + 1];
   Value v;
+  v.x_mm = x_mm_in(i, c);
   if (interpolation_ == Interpolation::kLinear) {
     v.dx_dc_mm_per_deg = (y1 - y0) / h;
-    v.x_mm = y0 + v.dx_dc_mm_per_deg * (c - c_deg_[i]);
     return v;
   }
   if (interpolation_ == Interpolation::kPoly) {
-    // The segment ending at point i + 1, in p = 0..1 (PL 1); a1 as the control derives it.
     const double a2 = a2_mm_[i + 1];
     const double a3 = a3_mm_[i + 1];
     const double a1 = y1 - y0 - a2 - a3;
     const double p = (c - c_deg_[i]) / h;
-    v.x_mm = y0 + p * (a1 + p * (a2 + p * a3));
     v.dx_dc_mm_per_deg = (a1 + p * (2.0 * a2 + 3.0 * p * a3)) / h;
     v.d2x_dc2_mm_per_deg2 = (2.0 * a2 + 6.0 * p * a3) / (h * h);
     return v;
@@ -338,7 +342,6 @@ TableInterpolant::Value TableInterpolant::at(double c_deg, std::size_t& segment)
   const double b = (c - c_deg_[i]) / h;
   const double m0 = moment_[i];
   const double m1 = moment_[i + 1];
-  v.x_mm = a * y0 + b * y1 + ((a * a * a - a) * m0 + (b * b * b - b) * m1) * h * h / 6.0;
   v.dx_dc_mm_per_deg = (y1 - y0) / h + ((1.0 - 3.0 * a * a) * m0 + (3.0 * b * b - 1.0) * m1) * h / 6.0;
   v.d2x_dc2_mm_per_deg2 = a * m0 + b * m1;
   return v;
@@ -546,6 +549,7 @@ Result<CurveTable> adaptive_spline_from_c0(const SampledPath& path, const Adapti
           // 2 - sqrt(3) = 0.27 a point, so beyond that the change is below 1e-4 of the local
           // one. The pruned table is then evaluated in full, and kept only if it holds.
           std::vector<std::size_t> pruned = rows;
+          std::vector<CurvePoint> pruned_points = pts;  // each point depends on its row alone
           for (std::size_t i = 1; i + 1 < pruned.size();) {
             if (pruned[i + 1] - pruned[i - 1] > max_rows || pruned.size() <= 4) {
               ++i;
@@ -553,8 +557,9 @@ Result<CurveTable> adaptive_spline_from_c0(const SampledPath& path, const Adapti
             }
             std::vector<std::size_t> fewer = pruned;
             fewer.erase(fewer.begin() + static_cast<std::ptrdiff_t>(i));
-            Result<TableInterpolant> trial =
-                TableInterpolant::of(points_at_rows(path, fewer, format), Interpolation::kCubicSpline);
+            std::vector<CurvePoint> fewer_points = pruned_points;
+            fewer_points.erase(fewer_points.begin() + static_cast<std::ptrdiff_t>(i));
+            Result<TableInterpolant> trial = TableInterpolant::of(fewer_points, Interpolation::kCubicSpline);
             if (!trial) return trial.error();
             const std::size_t lo = fewer[i >= 9 ? i - 9 : 0];
             const std::size_t hi = fewer[std::min(i + 8, fewer.size() - 1)];
@@ -562,16 +567,16 @@ Result<CurveTable> adaptive_spline_from_c0(const SampledPath& path, const Adapti
             std::size_t segment = 0;
             for (std::size_t j = lo; j <= hi && keeps; ++j) {
               const double c = j == n ? 360.0 : path.c_deg(j);
-              keeps = std::abs(trial->at(c, segment).x_mm - path.x_mm[j % n]) <= bound_mm;
+              keeps = std::abs(trial->x_mm_at(c, segment) - path.x_mm[j % n]) <= bound_mm;
             }
             if (keeps) {
               pruned = std::move(fewer);
+              pruned_points = std::move(fewer_points);
             } else {
               ++i;
             }
           }
-          Result<TableInterpolant> full =
-              TableInterpolant::of(points_at_rows(path, pruned, format), Interpolation::kCubicSpline);
+          Result<TableInterpolant> full = TableInterpolant::of(pruned_points, Interpolation::kCubicSpline);
           if (!full) return full.error();
           const std::vector<double> fe = row_errors_mm(path, *full);
           if (std::all_of(fe.begin(), fe.end(), [&](double v) { return std::abs(v) <= bound_mm; })) {

@@ -25,6 +25,8 @@
 // Writers do not check values against axis limits: see table_guards.h.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -73,17 +75,61 @@ class TableInterpolant {
   // As at(c_deg), for a scan along C: `segment` is the segment the last call found (start
   // with 0); a C in it or the next is found without a search. Same values as at(c_deg).
   Value at(double c_deg, std::size_t& segment) const;
+  // X alone, as at(c_deg, segment).x_mm to the last bit: for scans that need no slope.
+  double x_mm_at(double c_deg, std::size_t& segment) const;
 
   // Largest |d2X/dC2| of the interpolant (0 for linear): for the between-rows bound.
   double max_abs_d2_mm_per_deg2() const;
 
  private:
+  // The segment holding `c_deg` (read modulo the range outside it) and C within the range.
+  std::size_t locate(double c_deg, double& c, std::size_t& segment) const;
+  double x_mm_in(std::size_t i, double c) const;
+
   Interpolation interpolation_ = Interpolation::kLinear;
   std::vector<double> c_deg_;
   std::vector<double> x_mm_;
   std::vector<double> moment_;         // spline: S'' at each point (natural ends: 0 at both ends)
   std::vector<double> a2_mm_, a3_mm_;  // POLY: each point's segment coefficients (CurvePoint)
 };
+
+// Inline: the writers scan tables at every fine row of C, a few million reads a table.
+// X in segment i at C (within it): the one formula at() and x_mm_at() share.
+inline double TableInterpolant::x_mm_in(std::size_t i, double c) const {
+  const double* cs = c_deg_.data();
+  const double* xs = x_mm_.data();
+  const double h = cs[i + 1] - cs[i];
+  const double y0 = xs[i];
+  const double y1 = xs[i + 1];
+  if (interpolation_ == Interpolation::kLinear) return y0 + (y1 - y0) / h * (c - cs[i]);
+  if (interpolation_ == Interpolation::kPoly) {
+    // The segment ending at point i + 1, in p = 0..1 (PL 1); a1 as the control derives it.
+    const double a2 = a2_mm_[i + 1];
+    const double a3 = a3_mm_[i + 1];
+    const double a1 = y1 - y0 - a2 - a3;
+    const double p = (c - cs[i]) / h;
+    return y0 + p * (a1 + p * (a2 + p * a3));
+  }
+  const double* ms = moment_.data();
+  const double a = (cs[i + 1] - c) / h;
+  const double b = (c - cs[i]) / h;
+  return a * y0 + b * y1 + ((a * a * a - a) * ms[i] + (b * b * b - b) * ms[i + 1]) * h * h / 6.0;
+}
+
+inline double TableInterpolant::x_mm_at(double c_deg, std::size_t& segment) const {
+  // A scan along C within the range: walk on from the hint (the segment locate would find).
+  const double* cs = c_deg_.data();
+  const std::size_t m = c_deg_.size();
+  std::size_t i = segment;
+  if (i + 2 <= m && cs[i] <= c_deg && c_deg <= cs[m - 1]) {
+    while (i + 2 < m && !(c_deg < cs[i + 1])) ++i;
+    segment = i;
+    return x_mm_in(i, c_deg);
+  }
+  double c = 0.0;
+  i = locate(c_deg, c, segment);
+  return x_mm_in(i, c);
+}
 
 // The command position error of `points` against `path`. Points need not lie on the fine
 // grid. kInvalidInput if the path's shape is wrong or the points do not form a table.

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <vector>
 
 #include "nc_out/table_program.h"
 #include "tests/nc_out/analytic_path.h"
@@ -51,6 +53,38 @@ TEST(TableWriter, EveryWriterAgreesWithAnIndependentEvaluation) {
                                write_adaptive_linear_table(p, adaptive), write_adaptive_spline_table(p, adaptive)}) {
     ASSERT_TRUE(t.ok()) << t.error().message;
     EXPECT_NEAR(t->error.max_abs_um, testing::ref_error_um(program_of(*t, {}), p), 1e-4) << t->writer;
+  }
+}
+
+// The scan read (X alone, walking on from the last segment) is the full read's X to the last
+// bit, for every interpolation, for C in order, backwards, on the points, outside the range
+// (read modulo it) and after a jump: the writers judge tables with it. Exact equality.
+TEST(TableInterpolantTest, XAloneIsTheFullReadsXBitForBit) {
+  const SampledPath p = analytic_path(4.0, 0.7);
+  const std::vector<Result<CurveTable>> tables = {write_linear_table(p, 1.0), write_spline_table(p, 5.0),
+                                                  write_poly_table(p, 2.0),
+                                                  write_adaptive_spline_table(p, {0.5, 10.0})};
+  std::vector<double> cs;
+  for (int k = 0; k <= 36000; ++k) cs.push_back(k * 0.01);                              // the fine rows, in order
+  for (int k = 7200; k >= 0; k -= 7) cs.push_back(k * 0.05 - 0.005);                    // backwards, off the grid
+  for (double c : {-725.3, 360.0, 1080.25, 12.0, 359.999, 0.0, -0.0}) cs.push_back(c);  // outside, jumps
+  for (const Result<CurveTable>& t : tables) {
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    Result<TableInterpolant> nc = TableInterpolant::of(t->points, t->interpolation);
+    ASSERT_TRUE(nc.ok()) << nc.error().message;
+    for (const CurvePoint& point : t->points) cs.push_back(point.c_deg);
+    std::size_t scan = 0;
+    std::size_t full = 0;
+    int differing = 0;
+    for (double c : cs) {
+      const double x = nc->x_mm_at(c, scan);
+      const double expected = nc->at(c, full).x_mm;
+      if (std::memcmp(&x, &expected, sizeof x) != 0 && ++differing <= 3) {
+        ADD_FAILURE() << t->writer << ": C" << c << " X " << x << " against " << expected;
+      }
+      EXPECT_EQ(nc->at(c).x_mm, expected) << t->writer << " C" << c;  // the hint changes nothing
+    }
+    EXPECT_EQ(differing, 0) << t->writer;
   }
 }
 
