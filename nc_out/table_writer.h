@@ -76,7 +76,8 @@ class TableInterpolant {
   // with 0); a C in it or the next is found without a search. Same values as at(c_deg).
   Value at(double c_deg, std::size_t& segment) const;
   // X alone, as at(c_deg, segment).x_mm to the last bit: for scans that need no slope.
-  double x_mm_at(double c_deg, std::size_t& segment) const;
+  // Inlined even where the optimiser would not (the sanitizer builds at -O1).
+  [[gnu::always_inline]] double x_mm_at(double c_deg, std::size_t& segment) const;
 
   // Largest |d2X/dC2| of the interpolant (0 for linear): for the between-rows bound.
   double max_abs_d2_mm_per_deg2() const;
@@ -84,7 +85,7 @@ class TableInterpolant {
  private:
   // The segment holding `c_deg` (read modulo the range outside it) and C within the range.
   std::size_t locate(double c_deg, double& c, std::size_t& segment) const;
-  double x_mm_in(std::size_t i, double c) const;
+  [[gnu::always_inline]] double x_mm_in(std::size_t i, double c) const;
 
   Interpolation interpolation_ = Interpolation::kLinear;
   std::vector<double> c_deg_;
