@@ -18,6 +18,7 @@
 
 #include <unsupported/Eigen/FFT>
 
+#include "bench/sample_lobes.h"
 #include "compensation/analysis.h"
 #include "compensation/correction.h"
 #include "compensation/flat_probe.h"
@@ -28,12 +29,8 @@
 namespace gaugeloop {
 namespace {
 
-// CPU time of this thread: on a machine shared with builds, wall time measures the others.
-double thread_cpu_s() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
-}
+using bench::or_die;
+using bench::thread_cpu_s;
 
 // The sample lobes: 0 intake_flat (flat follower, 200 mm wheel), 1 exhaust_roller (11 mm
 // roller, 45 mm wheel, concave flanks).
@@ -45,24 +42,8 @@ struct Lobe {
   MeasuredRun run;
 };
 
-template <typename T>
-T or_die(Result<T> r, const char* what) {
-  if (!r.ok()) {
-    std::fprintf(stderr, "%s: %s\n", what, r.error().message.c_str());
-    std::abort();  // a benchmark on inputs that did not load measures nothing
-  }
-  return std::move(r).value();
-}
-
 Lobe load_lobe(int which) {
-  Part part;
-  part.name = which == 0 ? "intake_flat" : "exhaust_roller";
-  part.follower = which == 0 ? FollowerKind::kFlat : FollowerKind::kRoller;
-  part.follower_radius_mm = which == 0 ? 0.0 : 11.0;
-  part.base_circle_radius_mm = which == 0 ? 18.0 : 17.0;
-  part.wheel_radius_mm = which == 0 ? 200.0 : 45.0;
-  LiftTable design =
-      or_die(read_lift_table_csv(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/" + part.name + ".csv"), "lift table");
+  auto [part, design] = bench::sample_lobe(which);
   PeriodicSpline lift = or_die(PeriodicSpline::fit(design.angle_deg, design.lift_mm), "spline");
   DesignReading reading = or_die(DesignReading::of_lobe(lift, part), "design reading");
   // A ground lobe as the gauge sees it: the design, a 12 um smooth form error, a 0.05 deg lag,

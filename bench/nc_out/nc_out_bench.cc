@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/sample_lobes.h"
 #include "compensation/periodic_spline.h"
 #include "compensation/wheel_path.h"
 #include "core/lift_table.h"
@@ -23,34 +24,15 @@
 namespace gaugeloop {
 namespace {
 
+using bench::or_die;
+using bench::thread_cpu_s;
+
 constexpr double kFineStepDeg = 0.01;  // the fine path a run's table is written from
-
-double thread_cpu_s() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
-}
-
-template <typename T>
-T or_die(Result<T> r, const char* what) {
-  if (!r.ok()) {
-    std::fprintf(stderr, "%s: %s\n", what, r.error().message.c_str());
-    std::abort();  // a benchmark on inputs that did not load measures nothing
-  }
-  return std::move(r).value();
-}
 
 // The wheel path of sample lobe 0 (intake_flat, flat follower, 200 mm wheel) or 1
 // (exhaust_roller, 11 mm roller, 45 mm wheel) at the fine step, as a run writes it.
 SampledPath lobe_path(int which) {
-  Part part;
-  part.name = which == 0 ? "intake_flat" : "exhaust_roller";
-  part.follower = which == 0 ? FollowerKind::kFlat : FollowerKind::kRoller;
-  part.follower_radius_mm = which == 0 ? 0.0 : 11.0;
-  part.base_circle_radius_mm = which == 0 ? 18.0 : 17.0;
-  part.wheel_radius_mm = which == 0 ? 200.0 : 45.0;
-  const LiftTable design =
-      or_die(read_lift_table_csv(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/" + part.name + ".csv"), "lift table");
+  const auto [part, design] = bench::sample_lobe(which);
   const PeriodicSpline lift = or_die(PeriodicSpline::fit(design.angle_deg, design.lift_mm), "spline");
   MachinePath m = or_die(compute_machine_path(lift, part, kFineStepDeg), "wheel path");
   SampledPath out;
