@@ -385,10 +385,23 @@ Status read_database_table(TomlReader& top, const ConfigFile& f, JobSettings& jo
 // The documented layout is root:gaugeloop 0640.
 Status check_secret_file(const TomlReader& r, std::string_view key, const fs::path& path, const std::string& what) {
   struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) {
+  if (::lstat(path.c_str(), &st) != 0) {
     const int err = errno;
     return make_error(err == ENOENT ? ErrorCode::kNotFound : ErrorCode::kInvalidInput,
                       r.where(key) + ": " + what + " " + path.string() + ": " + std::strerror(err));
+  }
+  // Whoever can change a link, or replace a file in its directory, chooses the secret.
+  if (S_ISLNK(st.st_mode)) {
+    return make_error(ErrorCode::kInvalidInput, r.where(key) + ": " + what + " " + path.string() +
+                                                    " is a symbolic link: whoever can change the link chooses what is "
+                                                    "read; give the file itself");
+  }
+  struct stat dir {};
+  const fs::path parent = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  if (::stat(parent.c_str(), &dir) == 0 && (dir.st_mode & S_IWOTH) != 0 && (dir.st_mode & S_ISVTX) == 0) {
+    return make_error(ErrorCode::kInvalidInput, r.where(key) + ": " + what + " " + path.string() +
+                                                    " lies in a directory any user can write (" + parent.string() +
+                                                    "), where anyone can replace it; keep it in /etc/gaugeloop");
   }
   char mode[8];
   std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));

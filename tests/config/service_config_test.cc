@@ -567,6 +567,26 @@ TEST_F(ServiceConfigTest, ATokenFileOwnedBySomeoneElseIsRefused) {
   EXPECT_TRUE(refused(c, "chown root:gaugeloop " + token.string()));
 }
 
+// A link to the token, or a token in a directory any user can write, lets another account
+// choose the token.
+TEST_F(ServiceConfigTest, ATokenFileThroughALinkOrInAWorldWritableDirectoryIsRefused) {
+  const fs::path token = write_secret("token", kStrongToken, 0640);
+  fs::create_symlink(token, dir_.path() / "link");
+  auto linked = read("[gauge]\n" + kIntake + kNc + "[http]\ntoken_file = \"link\"\n");
+  EXPECT_TRUE(refused(linked, at(7, "http.token_file") + ": HTTP token file " + (dir_.path() / "link").string() +
+                                  " is a symbolic link"));
+  const fs::path open_dir = dir_.path() / "open";
+  fs::create_directories(open_dir);
+  fs::permissions(open_dir, fs::perms::all);  // 0777, no sticky bit
+  fs::copy_file(token, open_dir / "token");
+  fs::permissions(open_dir / "token", fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  auto open = read("[gauge]\n" + kIntake + kNc + "[http]\ntoken_file = \"open/token\"\n");
+  EXPECT_TRUE(refused(open, "lies in a directory any user can write (" + open_dir.string() + ")"));
+  fs::permissions(open_dir, fs::perms::sticky_bit, fs::perm_options::add);  // as /tmp: others cannot replace it
+  auto sticky = read("[gauge]\n" + kIntake + kNc + "[http]\ntoken_file = \"open/token\"\n");
+  EXPECT_TRUE(sticky.ok()) << sticky.error().message;
+}
+
 TEST_F(ServiceConfigTest, AnInlineTokenIsRefusedUnlessAllowed) {
   const std::string ok = "[gauge]\n" + kIntake + kNc + "[http]\n";  // [http] on line 6
   const std::string inline_token = "token = \"" + std::string(kStrongToken) + "\"\n";
