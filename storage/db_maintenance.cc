@@ -256,10 +256,23 @@ Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path
   if (!std::filesystem::exists(db_path)) {
     return make_error(ErrorCode::kNotFound, "no run database at " + db_path.string());
   }
+  // A device or a directory reads as an empty database; an empty file is one: neither is a
+  // run database to call sound.
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(db_path, ec)) {
+    return make_error(ErrorCode::kStorage, db_path.string() +
+                                               " is not a regular file (a device, a directory?): no "
+                                               "run database to check; give the database file");
+  }
+  if (std::filesystem::file_size(db_path, ec) == 0 && !ec) {
+    return make_error(ErrorCode::kStorage,
+                      db_path.string() + " is empty (0 bytes): no run database was ever written there");
+  }
   IntegrityReport report;
   Result<std::unique_ptr<storage_internal::Connection>> conn =
       storage_internal::connect_for_checking(db_path, report.constraints_checked);
   if (!conn.ok()) return conn.error();
+  if (Status foreign = storage_internal::refuse_foreign_database(**conn); !foreign.ok()) return foreign.error();
   // SQLite calls this every few thousand virtual machine steps; non-zero interrupts the statement.
   auto ask = [](void* fn) -> int { return (*static_cast<const std::function<bool()>*>(fn))() ? 1 : 0; };
   if (cancelled) sqlite3_progress_handler((*conn)->db, 10000, ask, const_cast<std::function<bool()>*>(&cancelled));
@@ -284,7 +297,7 @@ Status check_database_header(const std::filesystem::path& db_path) {
   if (!tables.ok()) return tables.error();
   Result<int> version = storage_internal::schema_version_not_newer(**conn);
   if (!version.ok()) return version.error();
-  return {};
+  return storage_internal::refuse_foreign_database(**conn);
 }
 
 Status backup_database_file(const std::filesystem::path& db_path, const std::filesystem::path& dest, bool overwrite) {

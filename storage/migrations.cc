@@ -816,7 +816,20 @@ UPDATE sqlite_schema
 PRAGMA writable_schema = OFF;
 )sql";
 
-// After an in-place edit of CREATE texts (versions 10 and 13): `edited` tables must hold
+// Version 14: a run may say the part was ground with the table the main program on the control
+// coupled (ground_with_source 'main_program'): a push cut after its table and before its main
+// program leaves the control grinding the older table. Widening a CHECK in place, as version
+// 10 dropped a NOT NULL: every stored row holds under the wider rule.
+constexpr std::string_view kSchemaV14 = R"sql(
+PRAGMA writable_schema = ON;
+UPDATE sqlite_schema
+  SET sql = replace(sql, 'CHECK (ground_with_source IN (''plc'', ''option'', ''assumed''))',
+                         'CHECK (ground_with_source IN (''plc'', ''option'', ''assumed'', ''main_program''))')
+  WHERE type = 'table' AND name = 'runs';
+PRAGMA writable_schema = OFF;
+)sql";
+
+// After an in-place edit of CREATE texts (versions 10, 13 and 14): `edited` tables must hold
 // `marker` (else the edit found the text changed by hand and the migration rolls back); then the
 // schema cookie changes with the CREATE text, so every connection reads it again.
 Status bump_schema_cookie_after(Connection& conn, int version, const std::vector<std::string>& edited,
@@ -835,7 +848,7 @@ Status bump_schema_cookie_after(Connection& conn, int version, const std::vector
     std::string list;
     for (const std::string& t : edited) list += (list.empty() ? "" : " or ") + t;
     return make_error(ErrorCode::kStorage, operation + ": " + list + " in " + conn.path.string() +
-                                               " is not as gaugeloop created it (its run_id column was changed by "
+                                               " is not as gaugeloop created it (a column of it was changed by "
                                                "hand); restore a backup or ask for help, nothing was changed");
   }
   std::int64_t next = 0;
@@ -857,8 +870,12 @@ Status bump_schema_cookie_v13(Connection& conn) {
   return bump_schema_cookie_after(conn, 13, {"nc_pending"}, "NULL: a gear''s stroke");
 }
 
-const std::array<Migration, 13>& all_migrations() {
-  static const std::array<Migration, 13> kMigrations{{
+Status bump_schema_cookie_v14(Connection& conn) {
+  return bump_schema_cookie_after(conn, 14, {"runs"}, "''assumed'', ''main_program''");
+}
+
+const std::array<Migration, 14>& all_migrations() {
+  static const std::array<Migration, 14> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -916,6 +933,12 @@ const std::array<Migration, 13>& all_migrations() {
        "a gear's stroke waits for approval as a table does: nc_pending.gear_run_id, nc_pending.run_id may be NULL",
        std::string(kSchemaV13),
        bump_schema_cookie_v13,
+       {}},
+      {14,
+       "runs: the part was ground with the table the main program on the control coupled (ground_with_source "
+       "main_program)",
+       std::string(kSchemaV14),
+       bump_schema_cookie_v14,
        {}},
   }};
   return kMigrations;
@@ -982,6 +1005,27 @@ Result<int> schema_version_not_newer(Connection& conn) {
   Result<int> version = read_user_version(conn);
   if (version.ok() && *version > latest_schema_version()) return too_new(conn, *version);
   return version;
+}
+
+Status refuse_foreign_database(Connection& conn) {
+  if (conn.path == ":memory:") return {};
+  // A file that cannot be read as a database at all is the caller's to report (damaged).
+  Result<int> version = read_user_version(conn);
+  if (!version.ok() || *version != 0) return {};
+  Result<Statement> tables = Statement::prepare(
+      conn,
+      "SELECT count(*), coalesce(group_concat(name, ', '), '') FROM (SELECT name FROM sqlite_schema WHERE type = "
+      "'table' AND name NOT LIKE 'sqlite\\_%' ESCAPE '\\' ORDER BY name LIMIT 6)",
+      "read the database's tables");
+  if (!tables.ok()) return {};
+  Result<bool> row = tables->step();
+  if (!row.ok() || !*row || tables->column<int>(0) == 0) return {};
+  return make_error(ErrorCode::kStorage,
+                    "database " + conn.path.string() +
+                        " is a SQLite file gaugeloop did not write (no gaugeloop schema version, tables " +
+                        tables->column<std::string>(1) +
+                        "); gaugeloop keeps its runs in a database of its own: point --data-dir, --db or the "
+                        "config at one (a new directory starts an empty one). Nothing was changed");
 }
 
 }  // namespace gaugeloop::storage_internal

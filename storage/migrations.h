@@ -45,4 +45,10 @@ Status apply_migrations_up_to(Connection& conn, int version);
 // latest_schema_version() is refused (kStorage) as apply_migrations refuses it.
 Result<int> schema_version_not_newer(Connection& conn);
 
+// Refuses (kStorage, naming the file and its tables) a database gaugeloop did not write: no
+// schema version (user_version 0) yet tables in it, another program's SQLite file. An empty
+// database (a new file) is fine: gaugeloop creates its schema there; so, here, is a file that
+// cannot be read as a database at all (the caller reports it as damaged).
+Status refuse_foreign_database(Connection& conn);
+
 }  // namespace gaugeloop::storage_internal

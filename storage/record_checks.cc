@@ -112,8 +112,9 @@ Status check_ground_with(const RunRecord& run) {
     return run_refused("ground_with_version " + std::to_string(*run.ground_with_version) + " is not 1 or more");
   }
   if (!run.ground_with_source.empty() && run.ground_with_source != "plc" && run.ground_with_source != "option" &&
-      run.ground_with_source != "assumed") {
-    return run_refused("ground_with_source '" + run.ground_with_source + "' is not plc, option or assumed");
+      run.ground_with_source != "assumed" && run.ground_with_source != "main_program") {
+    return run_refused("ground_with_source '" + run.ground_with_source +
+                       "' is not plc, option, assumed or main_program");
   }
   if (run.ground_with_version && run.ground_with_source.empty()) {
     return run_refused("ground_with_version is set but not who said so (ground_with_source)");

@@ -89,6 +89,14 @@ Result<RunStore> RunStore::open(const std::filesystem::path& db_path) {
   if (db_path.empty()) {
     return make_error(ErrorCode::kInvalidInput, "no run database path given; set --data-dir");
   }
+  // Another program's file is refused before the writer's set-up (WAL mode) touches it.
+  std::error_code ec;
+  if (db_path != ":memory:" && std::filesystem::file_size(db_path, ec) > 0 && !ec) {
+    Result<std::unique_ptr<Connection>> peek = storage_internal::connect_read_only(db_path);
+    if (peek.ok()) {
+      if (Status foreign = storage_internal::refuse_foreign_database(**peek); !foreign.ok()) return foreign.error();
+    }
+  }
   Result<std::unique_ptr<Connection>> conn = storage_internal::connect(db_path);
   if (!conn.ok()) return conn.error();
   Status backed_up = storage_internal::back_up_before_upgrade(**conn);

@@ -46,8 +46,9 @@ struct RunRecord {
   // the database); empty: the part was ground from the design.
   std::optional<std::int64_t> correction_in_force_run;
   // The table version of the run's NC file that ground the measured part (>= 1; empty: the
-  // design, or not known) and who said so: "plc", "option" (measure --ground-with) or
-  // "assumed" (the table in force when the run started). Empty source with a version is
+  // design, or not known) and who said so: "plc", "option" (measure --ground-with),
+  // "assumed" (the table in force when the run started) or "main_program" (the main program on
+  // the control coupled an older table than the history's). Empty source with a version is
   // refused.
   std::optional<int> ground_with_version;
   std::string ground_with_source;
@@ -533,6 +534,9 @@ class RunStore : public RunHistory {
   // The newest push of a file (the program the control should hold), with program_text;
   // empty if the file was never pushed.
   Result<std::optional<NcPush>> last_push(const std::string& nc_file) const;
+
+  // Every NC file a program was pushed to, as recorded, in name order.
+  Result<std::vector<std::string>> pushed_files() const;
 
   // The push with nc_pushes.id `push_id`, without program_text; empty if there is none.
   Result<std::optional<NcPush>> push_by_id(std::int64_t push_id) const;

@@ -168,6 +168,14 @@ Result<std::vector<NcPush>> RunStore::list_pushes(const PushQuery& q) const {
   return st->collect([](const Statement& s) { return storage_internal::read_push(s, false); });
 }
 
+Result<std::vector<std::string>> RunStore::pushed_files() const {
+  // One seek per file through the (nc_file, table_version) key.
+  Result<Statement> st =
+      Statement::prepare(*conn_, "SELECT DISTINCT nc_file FROM nc_pushes ORDER BY nc_file", "list the NC files pushed");
+  if (!st.ok()) return st.error();
+  return st->collect([](const Statement& s) { return s.column<std::string>(0); });
+}
+
 namespace {
 
 // "its versions are 1 to 4", for a version that is not there.

@@ -1,6 +1,7 @@
 // The database commands and read-only reading as a user runs them: the real binary on a
 // database filled through RunStore, made read-only, damaged, or left at an older schema.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -158,6 +159,47 @@ TEST_F(DbCommandsTest, ADamagedDatabaseIsRefusedByCheck) {
   EXPECT_EQ(check.exit_code, 4) << check.output;
   EXPECT_TRUE(has(check.output, "database " + db_.string() + " is damaged: ")) << check.output;
   EXPECT_TRUE(has(check.output, "gaugeloop db backup")) << check.output;
+}
+
+// What is no run database is never called sound: a device, an empty file, another program's
+// SQLite file. A command that writes refuses the foreign file too, and leaves it as it was.
+TEST_F(DbCommandsTest, CheckRefusesWhatIsNoRunDatabaseAndMeasureLeavesAForeignFileAlone) {
+  for (const char* device : {"/dev/null", "/dev/zero"}) {
+    CommandResult r = run_command(std::string("db check --db ") + device);
+    EXPECT_EQ(r.exit_code, 4) << device << ": " << r.output;
+    EXPECT_TRUE(has(r.output, "is not a regular file")) << r.output;
+  }
+  const fs::path empty = dir_ / "empty.sqlite";
+  { std::ofstream(empty).flush(); }
+  CommandResult r = run_command("db check --db " + empty.string());
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_TRUE(has(r.output, "is empty (0 bytes)")) << r.output;
+
+  const fs::path foreign_dir = dir_ / "foreign";
+  fs::create_directories(foreign_dir);
+  const fs::path foreign = foreign_dir / "gaugeloop.sqlite";
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(foreign.c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db,
+                           "CREATE TABLE customers (id INTEGER PRIMARY KEY, name TEXT);"
+                           "INSERT INTO customers (name) VALUES ('Anna');",
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(db);
+  }
+  const std::string before = testing::slurp(foreign);
+  r = run_command("db check --db " + foreign.string());
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_TRUE(has(r.output,
+                  "is a SQLite file gaugeloop did not write (no gaugeloop schema version, tables "
+                  "customers)"))
+      << r.output;
+  Result<RunStore> opened = RunStore::open(foreign);
+  ASSERT_FALSE(opened.ok()) << "a writer would have migrated it";
+  EXPECT_NE(opened.error().message.find("Nothing was changed"), std::string::npos) << opened.error().message;
+  EXPECT_TRUE(testing::slurp(foreign) == before) << "the foreign file was changed";
+  EXPECT_EQ(testing::sqlite_text(foreign, "SELECT group_concat(name) FROM sqlite_schema"), "customers");
 }
 
 TEST_F(DbCommandsTest, ABackupHoldsTheSameRunsAndIsNeverOverwrittenUnlessTold) {

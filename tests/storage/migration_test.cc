@@ -490,5 +490,25 @@ TEST(MigrationFromV12, KeepsEveryPendingTableAndTakesAGearsStroke) {
   EXPECT_FALSE(store->add_pending(stroke).ok());
 }
 
+TEST(MigrationFromV13, KeepsEveryRunAndTakesAPartGroundWithTheMainProgramsTable) {
+  TempDir dir;
+  ASSERT_NO_FATAL_FAILURE(write_old_database_with_run_5(db_in(dir), 13));
+  {
+    RawDb raw(db_in(dir));
+    ASSERT_EQ(raw.exec("UPDATE runs SET ground_with_version = 2, ground_with_source = 'plc' WHERE id = 5"), SQLITE_OK);
+    // Before version 14 the main program is no source.
+    EXPECT_NE(raw.exec("UPDATE runs SET ground_with_source = 'main_program' WHERE id = 5"), SQLITE_OK);
+  }
+  Result<RunStore> store = RunStore::open(db_in(dir));
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  RawDb raw(db_in(dir));
+  EXPECT_EQ(raw.query_int("PRAGMA user_version"), storage_internal::latest_schema_version());
+  EXPECT_EQ(raw.query_text("SELECT ground_with_source FROM runs WHERE id = 5"), "plc");
+  EXPECT_EQ(raw.query_text("PRAGMA integrity_check"), "ok");
+  EXPECT_EQ(raw.exec("UPDATE runs SET ground_with_source = 'main_program' WHERE id = 5"), SQLITE_OK);
+  EXPECT_NE(raw.exec("UPDATE runs SET ground_with_source = 'a guess' WHERE id = 5"), SQLITE_OK) << "still checked";
+  EXPECT_EQ(raw.query_text("SELECT ground_with_source FROM runs WHERE id = 5"), "main_program");
+}
+
 }  // namespace
 }  // namespace gaugeloop
