@@ -41,6 +41,11 @@ int report_error(const Error& e) {
   return exit_code_for(e.code);
 }
 
+int report_file_error(const Error& e) {
+  const int code = report_error(e);
+  return e.code == ErrorCode::kIo ? kExitOutputFile : code;
+}
+
 std::string default_data_dir() {
   const char* env = std::getenv("GAUGELOOP_DATA_DIR");
   return env != nullptr && *env != '\0' ? std::string(env) : std::string("gaugeloop-data");

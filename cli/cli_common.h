@@ -25,13 +25,18 @@ enum ExitCode : int {
   kExitGauge = 3,
   kExitStorage = 4,
   kExitNcOutput = 5,
-  kExitNotPushed = 6,  // the run is stored, but compensation held or refused its table
+  kExitNotPushed = 6,   // the run is stored, but compensation held or refused its table
+  kExitOutputFile = 7,  // a report, export or plot asked for could not be written
 };
 
 int exit_code_for(ErrorCode code);
 
 // Logs the message (stderr, one line) and returns the exit code for its error code.
 int report_error(const Error& e);
+
+// report_error for writing a file the user asked for (a report, an export, a plot): an I/O
+// error exits kExitOutputFile, not the NC output's code; any other as report_error.
+int report_file_error(const Error& e);
 
 // The data directory when no --data-dir is given: $GAUGELOOP_DATA_DIR if set and not empty,
 // else "gaugeloop-data" (relative to the working directory).

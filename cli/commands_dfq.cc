@@ -130,7 +130,7 @@ int cmd_export_dfq(const DfqExportRequest& r, const DataPaths& paths, std::int64
     std::fwrite(dfq->data(), 1, dfq->size(), stdout);
     return kExitOk;
   }
-  if (Status w = write_file_atomically(out, *dfq); !w) return report_error(w.error());
+  if (Status w = write_file_atomically(out, *dfq); !w) return report_file_error(w.error());
   std::printf("%zu run%s exported to %s\n", runs->size(), runs->size() == 1 ? "" : "s", out.c_str());
   return kExitOk;
 }

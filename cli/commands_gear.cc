@@ -398,7 +398,7 @@ int cmd_gear_runs_export(GearExportOptions o) {
     std::fwrite(dfq->data(), 1, dfq->size(), stdout);
     return kExitOk;
   }
-  if (Status w = write_file_atomically(o.out_path, *dfq); !w) return report_error(w.error());
+  if (Status w = write_file_atomically(o.out_path, *dfq); !w) return report_file_error(w.error());
   std::printf("%zu gear run%s exported to %s\n", runs.size(), runs.size() == 1 ? "" : "s", o.out_path.c_str());
   return kExitOk;
 }
@@ -446,7 +446,7 @@ int cmd_gear_runs_report(const GearReportOptions& o) {
   Result<StoredGearRun> g = store->load_gear_run(o.id);
   if (!g) return report_error(g.error());
   const std::string out = o.out_path.empty() ? "gear_run" + std::to_string(o.id) + ".pdf" : o.out_path;
-  if (Status w = write_gear_report(*g, out); !w) return report_error(w.error());
+  if (Status w = write_gear_report(*g, out); !w) return report_file_error(w.error());
   std::printf("gear report of gear run %lld written to %s\n", static_cast<long long>(o.id), out.c_str());
   return kExitOk;
 }
@@ -559,7 +559,7 @@ int cmd_gear_identify(const IdentifyOptions& o) {
     csv += format_fixed(z, 4) + "," + format_fixed(e.y_mm * 1000.0, 4) + "," + format_fixed(e.z_mm * 1000.0, 4) + "," +
            format_fixed(e.b_deg, 7) + "," + format_fixed(e.c_deg, 7) + "\n";
   }
-  if (Status w = write_file_atomically(o.out_path, csv); !w) return report_error(w.error());
+  if (Status w = write_file_atomically(o.out_path, csv); !w) return report_file_error(w.error());
   std::printf("written %s: the errors along the stroke, for `gaugeloop gear stroke --errors`\n", o.out_path.c_str());
   return kExitOk;
 }

@@ -511,7 +511,9 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
   plot.footer = footer;
   const std::filesystem::path svg_path =
       lo.plot_path.empty() ? std::filesystem::path(o.paths.data_dir) / "loop.svg" : std::filesystem::path(lo.plot_path);
-  if (Status w = write_file_atomically(svg_path, render_loop_plot_svg(plot)); !w) return report_error(w.error());
+  if (Status w = write_file_atomically(svg_path, render_loop_plot_svg(plot)); !w) {
+    return report_file_error(w.error());
+  }
   std::printf("plot: %s\n", svg_path.string().c_str());
   write_demo_report(o, loop->back().job.run_id);
   return std::all_of(loop->begin(), loop->end(), [](const LoopIteration& it) { return it.job.pushed(); })

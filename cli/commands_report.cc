@@ -43,7 +43,7 @@ int cmd_report(const ReportOptions& o) {
     return report_error(make_error(
         ErrorCode::kNotFound, run.error().message + "; `gaugeloop runs list " + o.paths.where() + "` shows the ids"));
   }
-  if (Status s = write_cam_report(*run, o.out); !s) return report_error(s.error());
+  if (Status s = write_cam_report(*run, o.out); !s) return report_file_error(s.error());
   std::printf("report of run %lld written to %s\n", static_cast<long long>(o.id), o.out.c_str());
   return kExitOk;
 }

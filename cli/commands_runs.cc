@@ -304,7 +304,7 @@ int cmd_export(const ExportOptions& o) {
     std::fwrite(csv.data(), 1, csv.size(), stdout);
     return kExitOk;
   }
-  if (Status w = write_file_atomically(o.out, csv); !w) return report_error(w.error());
+  if (Status w = write_file_atomically(o.out, csv); !w) return report_file_error(w.error());
   std::printf("run %lld exported to %s (360 rows)\n", static_cast<long long>(o.id), o.out.c_str());
   return kExitOk;
 }
@@ -480,7 +480,7 @@ int cmd_plot(const PlotOptions& o) {
              format_fixed(s.repeatability_um, 2) + " \u00b5m \u00b7 phase " + opt(s.phase_error_deg, 3, true) +
              "\u00b0 \u00b7 runout " + opt(s.base_circle_runout_um, 2) + " \u00b5m \u00b7 " +
              std::to_string(s.revolutions) + " revolutions \u00b7 " + o.paths.db().string();
-  if (Status w = write_file_atomically(o.out, render_error_plot_svg(p)); !w) return report_error(w.error());
+  if (Status w = write_file_atomically(o.out, render_error_plot_svg(p)); !w) return report_file_error(w.error());
   std::printf("run %lld plotted to %s\n", static_cast<long long>(o.id), o.out.c_str());
   return kExitOk;
 }

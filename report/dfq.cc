@@ -12,6 +12,7 @@
 
 #include "core/number_text.h"
 #include "core/utc_time.h"
+#include "core/utf8.h"
 
 namespace gaugeloop {
 namespace {
@@ -50,23 +51,67 @@ bool has_natural_zero(const std::string& key) {
 
 std::string run_name(const RunSummary& r) { return "run " + std::to_string(r.id); }
 
-// Printable ASCII (no control characters, so no line break) and within the K-field's length.
-Status check_text(std::string_view text, std::string_view field, std::size_t max_length, const std::string& where) {
-  for (unsigned char c : text) {
-    if (c < 0x20 || c > 0x7e) {
-      return make_error(ErrorCode::kInvalidInput,
-                        where + ": " + std::string(field) + " \"" + std::string(text) +
-                            "\" has a character outside printable ASCII, which the DFQ file (ASCII) cannot carry "
-                            "unchanged, and a transliterated name would no longer match its part; leave the run "
-                            "out of the selection (--since/--until)");
-    }
+// The Windows-1252 byte of a code point, or 0 if it has none: Latin-1's printable range
+// (U+00A0..U+00FF, umlauts, accents, the sharp s) is itself; 0x80..0x9F hold a few more (the
+// euro sign, typographic quotes, Š, Œ, Ž...).
+unsigned char windows_1252_byte(char32_t cp) {
+  if (cp >= 0x20 && cp <= 0x7e) return static_cast<unsigned char>(cp);
+  if (cp >= 0xa0 && cp <= 0xff) return static_cast<unsigned char>(cp);
+  static constexpr char32_t kHigh[32] = {0x20ac, 0,      0x201a, 0x0192, 0x201e, 0x2026, 0x2020, 0x2021,
+                                         0x02c6, 0x2030, 0x0160, 0x2039, 0x0152, 0,      0x017d, 0,
+                                         0,      0x2018, 0x2019, 0x201c, 0x201d, 0x2022, 0x2013, 0x2014,
+                                         0x02dc, 0x2122, 0x0161, 0x203a, 0x0153, 0,      0x017e, 0x0178};
+  for (int i = 0; i < 32; ++i) {
+    if (kHigh[i] != 0 && kHigh[i] == cp) return static_cast<unsigned char>(0x80 + i);
   }
-  if (text.size() > max_length) {
+  return 0;
+}
+
+// `text` (UTF-8, as gaugeloop keeps it) in Windows-1252, the encoding Q-DAS tools read a .dfq
+// in, within the K-field's length (in characters). Refused, naming the run, the field and the
+// character: a control character (a line break would end the K-field line), bytes that are not
+// UTF-8, or a character Windows-1252 has no byte for (a transliterated name would no longer
+// match its part).
+Result<std::string> dfq_text(std::string_view text, std::string_view field, std::size_t max_length,
+                             const std::string& where) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size();) {
+    char32_t cp = 0;
+    const std::size_t n = utf8_sequence_at(text, i, cp);
+    const unsigned char byte = n == 0 ? 0 : windows_1252_byte(cp);
+    if (byte == 0) {
+      const std::string what = n == 0 ? "a byte that is not UTF-8"
+                               : cp < 0x20 || cp == 0x7f
+                                   ? "a control character"
+                                   : "\"" + std::string(text.substr(i, n)) + "\", which Windows-1252 has no byte for";
+      return make_error(ErrorCode::kInvalidInput,
+                        where + ": " + std::string(field) + " \"" + std::string(text) + "\" has " + what +
+                            " at character " + std::to_string(out.size() + 1) +
+                            "; the DFQ file (Windows-1252, as Q-DAS tools read it) cannot carry it unchanged, and a "
+                            "transliterated name would no longer match its part; leave the run out of the "
+                            "selection (--since/--until)");
+    }
+    out += static_cast<char>(byte);
+    i += n;
+  }
+  if (out.size() > max_length) {
     return make_error(ErrorCode::kInvalidInput, where + ": " + std::string(field) + " \"" + std::string(text) +
                                                     "\" is longer than the " + std::to_string(max_length) +
                                                     " characters the K-field takes");
   }
+  return out;
+}
+
+Status check_text(std::string_view text, std::string_view field, std::size_t max_length, const std::string& where) {
+  Result<std::string> t = dfq_text(text, field, max_length, where);
+  if (!t) return t.error();
   return {};
+}
+
+// A text check_text passed, as the file carries it.
+std::string in_windows_1252(std::string_view text) {
+  Result<std::string> t = dfq_text(text, "text", text.size(), "");
+  return t ? *t : std::string(text);
 }
 
 // "2026-11-22T02:34:44Z" -> "22.11.2026/02:34:44".
@@ -202,7 +247,7 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
   for (std::size_t p = 0; p < blocks.size(); ++p) {
     const PartBlock& b = blocks[p];
     const int part_number = static_cast<int>(p) + 1;
-    out.add("K1001", part_number, b.part);
+    out.add("K1001", part_number, in_windows_1252(b.part));
     // A part block is one part and lobe (or pin, or a gear's teeth): its newest run tells which.
     const PartKind kind = part_kind_of(b.runs.back()->characteristics);
     out.add("K1002", part_number,
@@ -213,7 +258,7 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
       return r->run.machine == b.runs.front()->run.machine;
     });
     if (one_machine && !b.runs.front()->run.machine.empty()) out.add("K1081", part_number, b.runs.front()->run.machine);
-    if (!options.operation.empty()) out.add("K1086", part_number, options.operation);
+    if (!options.operation.empty()) out.add("K1086", part_number, in_windows_1252(options.operation));
     for (const DfqCharacteristicDef& d : b.characteristics) {
       const int decimals = dfq_decimals(d.unit);
       std::optional<double> lower = d.limits.lower;
@@ -253,9 +298,9 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
       out.add("K0002", i, measured ? "0" : "255");
       out.add("K0004", i, time);
       out.add("K0006", i, std::to_string(r->run.id));
-      if (!r->run.operator_name.empty()) out.add("K0008", i, r->run.operator_name);
-      if (!r->run.machine.empty()) out.add("K0010", i, r->run.machine);
-      if (!r->run.serial.empty()) out.add("K0014", i, r->run.serial);
+      if (!r->run.operator_name.empty()) out.add("K0008", i, in_windows_1252(r->run.operator_name));
+      if (!r->run.machine.empty()) out.add("K0010", i, in_windows_1252(r->run.machine));
+      if (!r->run.serial.empty()) out.add("K0014", i, in_windows_1252(r->run.serial));
     }
   }
   return out.take();

@@ -243,10 +243,8 @@ json event_json(const StoredEvent& e) {
 
 namespace {
 
-// One CSV field as RFC 4180 wants it: quoted when it holds a comma, a quote, CR or LF, with
-// its quotes doubled; as it is otherwise.
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+// `text` in quotes, its quotes doubled.
+std::string csv_field_quoted(const std::string& text) {
   std::string out = "\"";
   for (const char c : text) {
     if (c == '"') out += '"';
@@ -254,6 +252,17 @@ std::string csv_field(const std::string& text) {
   }
   out += '"';
   return out;
+}
+
+// One CSV field as RFC 4180 wants it: quoted when it holds a comma, a quote, CR or LF, with
+// its quotes doubled; as it is otherwise. A text a spreadsheet would take for a formula (it
+// begins with =, +, -, @, a tab or CR: a note "=HYPERLINK(...)") gets a leading apostrophe and
+// quotes, so it is shown as the text it is, never run (OWASP, "CSV injection").
+std::string csv_field(const std::string& text) {
+  const bool formula = !text.empty() && std::string_view("=+-@\t\r").find(text.front()) != std::string_view::npos;
+  if (formula) return csv_field_quoted("'" + text);
+  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+  return csv_field_quoted(text);
 }
 
 }  // namespace

