@@ -12,6 +12,7 @@
 #include "cli/cli_common.h"
 #include "cli/embedded_defaults.h"
 #include "cli/measure_options.h"
+#include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "core/text_file.h"
 #include "job/nc_push.h"
@@ -309,6 +310,27 @@ int cmd_check(const NcOptions& o) {
   Result<std::string> file = resolve_program(*store, o);
   if (!file) return report_error(file.error());
   if (Status c = check_not_edited_by_hand(*store, *file); !c) return report_error(c.error());
+  // The main program must couple the table the subprogram defines: else the control grinds another.
+  Result<std::optional<StaleMain>> stale = find_stale_main(*store, *file);
+  if (!stale) return report_error(stale.error());
+  if (*stale) {
+    std::fprintf(stderr,
+                 "gaugeloop: %s: %s. A push was cut (or its main program not written) after the table was in "
+                 "place; `gaugeloop nc reconcile` writes the main program again for the table on the control "
+                 "(--main-template if the service uses its own), the next push or measurement does too\n",
+                 (**stale).main_file.string().c_str(), stale_main_text(**stale).c_str());
+    return kExitNcOutput;
+  }
+  // Temporary files of interrupted writes: harmless to the control, removed by reconciliation.
+  for (const std::filesystem::path& path : files_of_push(*file)) {
+    if (!std::filesystem::is_directory(path.parent_path())) break;
+    Result<std::vector<std::filesystem::path>> leftovers = atomic_leftovers(path);
+    if (!leftovers) return report_error(leftovers.error());
+    for (const std::filesystem::path& l : *leftovers) {
+      std::printf("%s: a temporary file left by an interrupted write of %s; `gaugeloop nc reconcile` removes it\n",
+                  l.string().c_str(), path.filename().string().c_str());
+    }
+  }
   Result<std::optional<NcPush>> last = store->last_push(*file);
   if (!last) return report_error(last.error());
   if (!std::filesystem::exists(*file)) {
@@ -330,6 +352,20 @@ int cmd_check(const NcOptions& o) {
         file->c_str(), i.push.table_version, static_cast<long long>(i.run_id), i.created_utc.c_str());
     return kExitOk;
   }
+  if (!*last) {
+    // A history copied or moved with its data directory names the original's NC files.
+    Result<std::vector<std::string>> pushed = store->pushed_files();
+    if (!pushed) return report_error(pushed.error());
+    std::string held;
+    for (const std::string& f : *pushed) held += (held.empty() ? "" : ", ") + f;
+    std::fprintf(stderr,
+                 "gaugeloop: %s: the history in %s records no push to this file, so it cannot say what it should "
+                 "hold; %s. A data directory copied or moved keeps the paths of the control it was kept for: "
+                 "check that control's program (--nc-dir, --program)\n",
+                 file->c_str(), o.paths.db().string().c_str(),
+                 held.empty() ? "it records no push at all" : ("its pushes went to " + held).c_str());
+    return kExitNcOutput;
+  }
   if (is_stroke_program(*on_disk)) {
     std::printf("%s: stroke version %d as pushed (%s, %s)\n", file->c_str(), *last ? (**last).table_version : 0,
                 *last ? (**last).reason.c_str() : "-", *last ? (**last).pushed_utc.c_str() : "-");
@@ -342,15 +378,26 @@ int cmd_check(const NcOptions& o) {
 
 // ---- nc reconcile ----
 
-int cmd_reconcile(const NcOptions& o) {
+struct ReconcileOptions : NcOptions {
+  std::string main_template_path;
+};
+
+int cmd_reconcile(const ReconcileOptions& o) {
   Result<RunStore> store = RunStore::open(o.paths.db());
   if (!store) return report_error(store.error());
-  Result<ReconcileReport> r = reconcile_all_pushes(*store);
+  Result<MainProgramSource> main = main_source(o.main_template_path);
+  if (!main) return report_error(main.error());
+  Result<ReconcileReport> r = reconcile_all_pushes(*store, &*main);
   if (!r) return report_error(r.error());
   for (const std::string& m : r->messages) std::printf("%s\n", m.c_str());
-  std::printf("%d interrupted push(es) recorded, %d abandoned, %d temporary file(s) removed\n", r->completed,
-              r->abandoned, r->leftovers_removed);
-  return kExitOk;
+  const auto repointed =
+      std::count_if(r->stale_mains.begin(), r->stale_mains.end(), [](const StaleMain& m) { return m.repointed; });
+  std::printf(
+      "%d interrupted push(es) recorded, %d abandoned, %d temporary file(s) removed, %d main program(s) written "
+      "again\n",
+      r->completed, r->abandoned, r->leftovers_removed, static_cast<int>(repointed));
+  // A main program still coupling another table than its subprogram defines: the control grinds that one.
+  return repointed == static_cast<long>(r->stale_mains.size()) ? kExitOk : kExitNcOutput;
 }
 
 // ---- nc pending, approve, reject ----
@@ -481,17 +528,22 @@ void add_nc_commands(CLI::App& app, CommandAction& action) {
 
   auto check = std::make_shared<NcOptions>();
   CLI::App* check_cmd = nc->add_subcommand(
-      "check", "Is the program on disk the table last pushed? Reports a table edited by hand (exit status 2).");
+      "check",
+      "Is the program on disk the table last pushed? Reports a table edited by hand (exit status 2) and a main "
+      "program coupling another table than the one on the control, left by a cut push (exit status 5).");
   add_nc_options(*check_cmd, *check);
   check_cmd->callback([&action, check] { action = [check] { return cmd_check(*check); }; });
 
-  auto reconcile = std::make_shared<NcOptions>();
+  auto reconcile = std::make_shared<ReconcileOptions>();
   CLI::App* reconcile_cmd = nc->add_subcommand(
       "reconcile",
       "Finish pushes that were interrupted (kill, power cut, full disk, locked database): a program the control "
-      "holds is recorded as pushed, one it never got is abandoned, leftover temporary files are removed. Every "
-      "push and measurement does this for its own program first.");
+      "holds is recorded as pushed, one it never got is abandoned, leftover temporary files of the table, its main "
+      "program, speed and Y subprograms are removed, and a main program coupling another table than the one on "
+      "the control is written again (exit status 5 if one is left). Every push and measurement does this for its "
+      "own program first.");
   add_data_options(*reconcile_cmd, reconcile->paths);
+  reconcile_cmd->add_option("--main-template", reconcile->main_template_path, kMainTemplateHelp);
   reconcile_cmd->callback([&action, reconcile] { action = [reconcile] { return cmd_reconcile(*reconcile); }; });
 
   auto pending = std::make_shared<PendingOptions>();

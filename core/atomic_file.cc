@@ -77,24 +77,31 @@ Status write_file_atomically(const std::filesystem::path& path, std::string_view
   return {};
 }
 
-Result<int> remove_atomic_leftovers(const std::filesystem::path& path) {
+Result<std::vector<std::filesystem::path>> atomic_leftovers(const std::filesystem::path& path) {
   const std::filesystem::path dir = directory_of(path);
   const std::string prefix = atomic_temporary_prefix(path);
   std::error_code ec;
   std::filesystem::directory_iterator it(dir, ec);
   if (ec) return io_error("cannot list", dir, ec.value());
-  int removed = 0;
+  std::vector<std::filesystem::path> out;
   for (; it != std::filesystem::directory_iterator(); it.increment(ec)) {
     const std::string name = it->path().filename().string();
     // mkstemp's six characters after the prefix, nothing else: a file of ours, not the user's.
     if (name.size() != prefix.size() + 6 || name.compare(0, prefix.size(), prefix) != 0) continue;
     if (!std::filesystem::is_regular_file(it->symlink_status(ec))) continue;
-    if (::unlink(it->path().c_str()) != 0)
-      return io_error("cannot remove the leftover temporary file", it->path(), errno);
-    ++removed;
+    out.push_back(it->path());
   }
   if (ec) return io_error("cannot list", dir, ec.value());
-  return removed;
+  return out;
+}
+
+Result<int> remove_atomic_leftovers(const std::filesystem::path& path) {
+  Result<std::vector<std::filesystem::path>> leftovers = atomic_leftovers(path);
+  if (!leftovers) return leftovers.error();
+  for (const std::filesystem::path& p : *leftovers) {
+    if (::unlink(p.c_str()) != 0) return io_error("cannot remove the leftover temporary file", p, errno);
+  }
+  return static_cast<int>(leftovers->size());
 }
 
 Result<DirectoryLock> DirectoryLock::acquire(const std::filesystem::path& dir, std::chrono::milliseconds patience) {

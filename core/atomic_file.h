@@ -7,6 +7,7 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/result.h"
 
@@ -37,6 +38,11 @@ std::filesystem::path directory_of(const std::filesystem::path& path);
 
 // ".<file name>.tmp-": how the temporary files of `path` begin.
 std::string atomic_temporary_prefix(const std::filesystem::path& path);
+
+// The temporary files of `path` that an interrupted write_file_atomically left (".<file
+// name>.tmp-" and mkstemp's six characters, regular files only), without touching them.
+// kIo if the directory cannot be listed.
+Result<std::vector<std::filesystem::path>> atomic_leftovers(const std::filesystem::path& path);
 
 // Removes the temporary files of `path` that an interrupted write_file_atomically left.
 // Call it only while no other writer of `path` can be running (hold its DirectoryLock).

@@ -350,8 +350,10 @@ Result<std::string> why_not_built_on(const RunStore& store, const GroundWith& g,
   if (g.source.empty()) return std::string();
   if (g.source != "assumed") {
     if (g.version == g.version_in_force) return std::string();
-    return "the part was ground with " + version_text(g.version) + " (said by " +
-           (g.source == "plc" ? std::string("the PLC") : std::string("--ground-with")) + "), but " +
+    const std::string said_by = g.source == "plc"            ? std::string("said by the PLC")
+                                : g.source == "main_program" ? std::string("the main program on the control coupled it")
+                                                             : std::string("said by --ground-with");
+    return "the part was ground with " + version_text(g.version) + " (" + said_by + "), but " +
            version_text(g.version_in_force) + " is in force" +
            (g.run_in_force ? " (run " + std::to_string(*g.run_in_force) + ")" : std::string()) +
            ": a correction built on the older table would repeat what the newer one changed; the run is kept "
@@ -474,7 +476,8 @@ Status check_nc_directory(const std::filesystem::path& nc_dir, const std::filesy
   return check_room(nc_dir, kRoomForProgramBytes, "NC output directory");
 }
 
-Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem::path& nc_file) {
+Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem::path& nc_file,
+                                     std::optional<StaleMain>* stale) {
   if (Status d = check_nc_directory(s.nc_dir, nc_file); !d) return d.error();
   if (s.db_path != ":memory:") {
     const std::filesystem::path db_dir = std::filesystem::absolute(s.db_path).parent_path();
@@ -492,7 +495,12 @@ Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem
   if (Status w = store->check_writable(); !w) return w.error();
   // A push interrupted earlier is recorded or abandoned before the table in force is read.
   NcFiles& files = s.nc_files ? *s.nc_files : real_nc_files();
-  if (Result<ReconcileReport> r = reconcile_pushes(*store, nc_file, files); !r) return r.error();
+  const MainProgramSource main = main_source(s, "");
+  Result<ReconcileReport> r = reconcile_pushes(*store, nc_file, files, &main);
+  if (!r) return r.error();
+  for (const StaleMain& m : r->stale_mains) {
+    if (stale != nullptr && m.nc_file == nc_file) *stale = m;
+  }
   return store;
 }
 
@@ -914,9 +922,17 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
   // Absolute, so the push history names one file whatever directory a command runs in.
   const std::filesystem::path nc_file =
       std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal();
-  Result<RunStore> store = open_store_for_push(s, nc_file);
+  std::optional<StaleMain> stale;
+  Result<RunStore> store = open_store_for_push(s, nc_file, &stale);
   if (!store) return store.error();
-  JobRun run(gauge, s, *prepared, *store, nc_file);
+  // The main program coupled an older table than the history's: the part was ground with that
+  // one, and a correction built on the newer table would be wrong (why_not_built_on holds it).
+  JobSettings settings = s;
+  if (stale && !settings.ground_with_version && settings.build_on_table_in_force) {
+    settings.ground_with_version = stale->coupled_version;
+    settings.ground_with_source = "main_program";
+  }
+  JobRun run(gauge, settings, *prepared, *store, nc_file);
   Result<JobReport> result = run.run();
   if (!result) record_failure(*store, s, result.error(), run.stored_run());
   return result;

@@ -237,8 +237,11 @@ Status check_nc_directory(const std::filesystem::path& nc_dir, const std::filesy
 // anything is written: the NC directory takes a file (check_nc_directory), the database's
 // directory has room for a run, the database opens (created and upgraded if need be), is
 // sound (with check_integrity) and writable, and pushes of `nc_file` interrupted earlier are
-// reconciled. Errors: kIo, kStorage, naming the file or directory.
-Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem::path& nc_file);
+// reconciled (a stale main program written again from the settings' template). With `stale`,
+// the stale main program found for `nc_file`, if any: the part measured next was ground with
+// the table it coupled. Errors: kIo, kStorage, naming the file or directory.
+Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem::path& nc_file,
+                                     std::optional<StaleMain>* stale = nullptr);
 
 // A part, machine or program name: 1 to 64 ASCII letters, digits, '_' or '-'. kInvalidInput
 // naming `what` and the offending character's position otherwise.

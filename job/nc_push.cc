@@ -4,10 +4,13 @@
 #include <charconv>
 #include <cstdio>
 #include <map>
+#include <set>
 
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "core/utc_time.h"
+#include "job/pin_files.h"
+#include "job/speed_files.h"
 #include "nc_out/infeed.h"
 #include "nc_out/main_program.h"
 #include "nc_out/nc_text.h"
@@ -235,10 +238,82 @@ std::string_view push_step_name(PushStep step) {
   return "?";
 }
 
+std::string stale_main_text(const StaleMain& stale) {
+  return stale.main_file.filename().string() + " couples table " + std::to_string(stale.coupled_number) +
+         ", that of version " + std::to_string(stale.coupled_version) + ", while " + stale.nc_file.filename().string() +
+         " on the control is version " + std::to_string(stale.table_version) + " (table " +
+         std::to_string(stale.table_number) + "): the control grinds version " + std::to_string(stale.coupled_version);
+}
+
+Result<std::optional<StaleMain>> find_stale_main(const RunStore& store, const std::filesystem::path& nc_file,
+                                                 NcFiles& files) {
+  const std::filesystem::path main_file = main_program_path(nc_file);
+  Result<std::optional<std::string>> main_text = files.read_program(main_file);
+  if (!main_text) return main_text.error();
+  Result<std::optional<std::string>> table_text = files.read_program(nc_file);
+  if (!table_text) return table_text.error();
+  if (!*main_text || !*table_text || is_stroke_program(**table_text)) return std::optional<StaleMain>();
+  Result<ParsedTable> table = parse_table_program(**table_text, nc_file.string());
+  if (!table) return std::optional<StaleMain>();
+  Result<int> coupled = coupled_table_number(**main_text, main_file.string(), table->following_axis);
+  if (!coupled || *coupled == table->table_number) return std::optional<StaleMain>();
+  StaleMain stale;
+  stale.main_file = main_file;
+  stale.nc_file = nc_file;
+  stale.coupled_number = *coupled;
+  stale.table_number = table->table_number;
+  const std::string version = header_value(*table, "table_version");
+  std::from_chars(version.data(), version.data() + version.size(), stale.table_version);
+  // The version the coupled table holds: the newest other push that went to that number.
+  Result<std::optional<NcPush>> last = store.last_push(nc_file.string());
+  if (!last) return last.error();
+  for (int v = *last ? (**last).table_version : 0; v >= 1; --v) {
+    if (v == stale.table_version) continue;
+    Result<NcPush> push = store.load_push(nc_file.string(), v);
+    if (!push) return push.error();
+    if (!push->program_text) break;  // pushed before program texts were kept: cannot tell
+    Result<ParsedTable> t = parse_table_program(*push->program_text, nc_file.string());
+    if (t && t->table_number == *coupled) {
+      stale.coupled_version = v;
+      return std::optional<StaleMain>(stale);
+    }
+  }
+  return std::optional<StaleMain>();
+}
+
 namespace {
 
+Result<MainProgramSource> main_for_run(const RunStore& store, std::int64_t run_id, MainProgramSource main,
+                                       const std::string& nc_file, std::string_view what,
+                                       std::string_view program_text = {});
+
+// Writes the main program again for the table on the control, when it is the one last pushed
+// and `main` can render it; "" when written, otherwise why not.
+Result<std::string> repoint_main(const RunStore& store, const StaleMain& stale, const MainProgramSource& main,
+                                 NcFiles& files) {
+  if (main.template_text.empty()) return std::string("no main program template to write it from");
+  Result<std::optional<NcPush>> last = store.last_push(stale.nc_file.string());
+  if (!last) return last.error();
+  Result<std::optional<std::string>> on_control = files.read_program(stale.nc_file);
+  if (!on_control) return on_control.error();
+  if (!*last || !(**last).program_text || !*on_control || **on_control != *(**last).program_text) {
+    return std::string("the table on the control is not the one last pushed");
+  }
+  // A job's own source knows its part (and a C-X-Y pin's Y table); a command's is completed from the run.
+  Result<MainProgramSource> source =
+      main.y_program_name.empty()
+          ? main_for_run(store, (**last).run_id, main, stale.nc_file.string(), "repointed", **on_control)
+          : Result<MainProgramSource>(main);
+  if (!source) return source.error().message;
+  Result<std::string> text = render_main_for_table(*source, stale.nc_file, **on_control);
+  if (!text) return text.error().message;
+  if (Status w = files.write_program(stale.main_file, *text, {}); !w) return w.error().message;
+  return std::string();
+}
+
 // reconcile_pushes with the directory's lock already held.
-Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem::path& nc_file, NcFiles& files) {
+Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem::path& nc_file, NcFiles& files,
+                                         const MainProgramSource* main) {
   ReconcileReport report;
   Result<std::vector<PushIntent>> open = store.open_push_intents(nc_file.string());
   if (!open) return open.error();
@@ -267,14 +342,32 @@ Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem:
       }
     }
   }
-  if (files.is_directory(directory_of(nc_file))) {
-    Result<int> removed = files.remove_leftovers(nc_file);
+  if (!files.is_directory(directory_of(nc_file))) return report;
+  for (const std::filesystem::path& path : files_of_push(nc_file)) {
+    Result<int> removed = files.remove_leftovers(path);
     if (!removed) return removed.error();
-    report.leftovers_removed = *removed;
+    report.leftovers_removed += *removed;
     if (*removed > 0) {
-      report.messages.push_back(nc_file.string() + ": removed " + std::to_string(*removed) +
+      report.messages.push_back(path.string() + ": removed " + std::to_string(*removed) +
                                 " temporary file(s) left by an interrupted write");
     }
+  }
+  Result<std::optional<StaleMain>> stale = find_stale_main(store, nc_file, files);
+  if (!stale) return stale.error();
+  if (*stale) {
+    StaleMain& found = **stale;
+    Result<std::string> not_repointed = main != nullptr
+                                            ? repoint_main(store, found, *main, files)
+                                            : Result<std::string>(std::string("no main program template given"));
+    if (!not_repointed) return not_repointed.error();
+    found.repointed = not_repointed->empty();
+    report.messages.push_back(found.main_file.string() + ": " + stale_main_text(found) +
+                              (found.repointed
+                                   ? "; written again, it couples table " + std::to_string(found.table_number) +
+                                         " of version " + std::to_string(found.table_version)
+                                   : "; left as it is (" + *not_repointed +
+                                         "): `gaugeloop nc reconcile` with the main template writes it again"));
+    report.stale_mains.push_back(found);
   }
   return report;
 }
@@ -283,27 +376,33 @@ void merge_into(ReconcileReport& total, ReconcileReport one) {
   total.completed += one.completed;
   total.abandoned += one.abandoned;
   total.leftovers_removed += one.leftovers_removed;
+  for (StaleMain& s : one.stale_mains) total.stale_mains.push_back(std::move(s));
   for (std::string& m : one.messages) total.messages.push_back(std::move(m));
 }
 
 }  // namespace
 
-Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file, NcFiles& files) {
+Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file, NcFiles& files,
+                                         const MainProgramSource* main) {
   if (!files.is_directory(directory_of(nc_file))) {
     // No directory, no file and no leftovers: every open intent never reached the control.
-    return reconcile_locked(store, nc_file, files);
+    return reconcile_locked(store, nc_file, files, main);
   }
   Result<DirectoryLock> lock = files.lock_directory(directory_of(nc_file));
   if (!lock) return lock.error();
-  return reconcile_locked(store, nc_file, files);
+  return reconcile_locked(store, nc_file, files, main);
 }
 
-Result<ReconcileReport> reconcile_all_pushes(RunStore& store) {
+Result<ReconcileReport> reconcile_all_pushes(RunStore& store, const MainProgramSource* main) {
   Result<std::vector<PushIntent>> open = store.open_push_intents();
   if (!open) return open.error();
+  Result<std::vector<std::string>> pushed = store.pushed_files();
+  if (!pushed) return pushed.error();
+  std::set<std::string> nc_files(pushed->begin(), pushed->end());
+  for (const PushIntent& i : *open) nc_files.insert(i.push.nc_file);
   ReconcileReport total;
-  for (const PushIntent& i : *open) {
-    Result<ReconcileReport> one = reconcile_pushes(store, i.push.nc_file);
+  for (const std::string& nc_file : nc_files) {
+    Result<ReconcileReport> one = reconcile_pushes(store, nc_file, real_nc_files(), main);
     if (!one) return one.error();
     merge_into(total, std::move(*one));
   }
@@ -312,6 +411,10 @@ Result<ReconcileReport> reconcile_all_pushes(RunStore& store) {
 
 std::filesystem::path main_program_path(const std::filesystem::path& nc_file) {
   return nc_file.parent_path() / (nc_file.stem().string() + "_MAIN.MPF");
+}
+
+std::vector<std::filesystem::path> files_of_push(const std::filesystem::path& nc_file) {
+  return {nc_file, main_program_path(nc_file), speed_program_path(nc_file), y_table_program_path(nc_file)};
 }
 
 namespace {
@@ -465,7 +568,7 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   NcFiles& files = options.files != nullptr ? *options.files : real_nc_files();
   Result<DirectoryLock> lock = files.lock_directory(directory_of(nc_file));
   if (!lock) return lock.error();
-  if (Result<ReconcileReport> r = reconcile_locked(store, nc_file, files); !r) return r.error();
+  if (Result<ReconcileReport> r = reconcile_locked(store, nc_file, files, &options.main); !r) return r.error();
   if (!options.overwrite_edited) {
     if (Status c = check_not_edited_by_hand(store, nc_file, files); !c) return c.error();
   }
@@ -595,7 +698,7 @@ RunPart part_of_program(std::string_view program_text, const std::string& nc_fil
 
 Result<MainProgramSource> main_for_run(const RunStore& store, std::int64_t run_id, MainProgramSource main,
                                        const std::string& nc_file, std::string_view what,
-                                       std::string_view program_text = {}) {
+                                       std::string_view program_text) {
   std::string part_name;
   int lobe = 0;
   RunPart part;

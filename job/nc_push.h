@@ -53,6 +53,10 @@ std::string origin_text(std::int64_t run_id);
 // CAM_MAIN.MPF).
 std::filesystem::path main_program_path(const std::filesystem::path& nc_file);
 
+// Every file a push to `nc_file` may write: the table itself, its main program, its speed
+// subprogram (job/speed_files.h) and a crankpin's Y table (job/pin_files.h).
+std::vector<std::filesystem::path> files_of_push(const std::filesystem::path& nc_file);
+
 // Where the main program comes from: its template and what the table program does not say.
 struct MainProgramSource {
   std::string template_text;  // empty: no main program is written
@@ -139,24 +143,53 @@ struct PushOptions {
 Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path& nc_file, const PushFacts& facts,
                                     const RenderForVersion& render, const PushOptions& options = {});
 
+// A main program that couples another table than the one its table subprogram defines: a push
+// cut (or failed) after the table was in place and before the main program was. The control
+// then grinds the older table still in its memory while the history holds the newer one.
+struct StaleMain {
+  std::filesystem::path main_file;
+  std::filesystem::path nc_file;
+  int coupled_number = 0;   // the table number the main program couples
+  int coupled_version = 0;  // the newest other version pushed to that number
+  int table_number = 0;     // the number the table on the control defines
+  int table_version = 0;    // the version on the control
+  bool repointed = false;   // reconcile wrote the main program again, coupling table_number
+};
+
+// "CAM_MAIN.MPF couples table 1, that of version 3, while CAM.SPF on the control is version 4
+// (table 2): the control grinds version 3"
+std::string stale_main_text(const StaleMain& stale);
+
+// The main program beside `nc_file` (main_program_path) against the table on the control:
+// empty when either is missing, the table is a gear's stroke, the two agree, or the main
+// program couples a number no other pushed version of the file went to (not a push's
+// leftover: left alone).
+Result<std::optional<StaleMain>> find_stale_main(const RunStore& store, const std::filesystem::path& nc_file,
+                                                 NcFiles& files = real_nc_files());
+
 // What reconcile_pushes did.
 struct ReconcileReport {
-  int completed = 0;                  // intents whose program the control holds: recorded as pushed
-  int abandoned = 0;                  // intents whose program never reached the control
-  int leftovers_removed = 0;          // temporary files of interrupted writes
-  std::vector<std::string> messages;  // one line per intent resolved or file removed
+  int completed = 0;                   // intents whose program the control holds: recorded as pushed
+  int abandoned = 0;                   // intents whose program never reached the control
+  int leftovers_removed = 0;           // temporary files of interrupted writes
+  std::vector<StaleMain> stale_mains;  // found, repointed or not
+  std::vector<std::string> messages;   // one line per intent resolved, file removed or main program found
 };
 
 // Brings the journal and the control into agreement for `nc_file`, under the directory's
 // lock: an open intent whose program the file holds byte for byte is completed (recorded as
 // pushed, "found on the control"), any other open intent is abandoned, and leftover temporary
-// files of ours are removed. Nothing is ever called edited by hand here.
+// files of ours (of the table, its main program, its speed subprogram and a pin's Y table) are
+// removed. Then a stale main program (find_stale_main) is written again from `main` for the
+// table on the control, when `main` has a template and the table is not a crankpin's ground
+// C-X-Y (its Y table needs a measurement); otherwise it is reported and left. Nothing is ever
+// called edited by hand here.
 Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file,
-                                         NcFiles& files = real_nc_files());
+                                         NcFiles& files = real_nc_files(), const MainProgramSource* main = nullptr);
 
-// reconcile_pushes for every file that has an open intent (the service at start, `gaugeloop
+// reconcile_pushes for every file a program was pushed to (the service at start, `gaugeloop
 // nc reconcile`).
-Result<ReconcileReport> reconcile_all_pushes(RunStore& store);
+Result<ReconcileReport> reconcile_all_pushes(RunStore& store, const MainProgramSource* main = nullptr);
 
 // What an approval or a rollback pushed.
 struct PushOutcome {

@@ -85,8 +85,10 @@ bool calls_program(std::string_view code, const std::string& name) {
 
 }  // namespace
 
-Result<int> coupled_table_number(std::string_view program, std::string_view file_name) {
+Result<int> coupled_table_number(std::string_view program, std::string_view file_name,
+                                 std::string_view following_axis) {
   const std::vector<std::string_view> lines = lines_of(program);
+  const std::string axis = upper(following_axis);
   for (size_t i = 0; i < lines.size(); ++i) {
     std::string error;
     const std::vector<Coupling> found = couplings_on(block_code(lines[i]), error);
@@ -94,10 +96,13 @@ Result<int> coupled_table_number(std::string_view program, std::string_view file
       return make_error(ErrorCode::kInvalidInput,
                         std::string(file_name) + " line " + std::to_string(i + 1) + ": " + error);
     }
-    if (!found.empty()) return found.front().table;
+    for (const Coupling& c : found) {
+      if (axis.empty() || c.axis == axis) return c.table;
+    }
   }
-  return make_error(ErrorCode::kInvalidInput,
-                    std::string(file_name) + ": no EGON or LEADON couples the infeed to a curve table");
+  return make_error(ErrorCode::kInvalidInput, std::string(file_name) + ": no EGON or LEADON couples " +
+                                                  (axis.empty() ? std::string("the infeed") : axis) +
+                                                  " to a curve table");
 }
 
 std::string speed_program_name(std::string_view program_name) { return std::string(program_name) + "_SPEED"; }

@@ -49,9 +49,11 @@ Status check_main_calls_speed_program(std::string_view program, std::string_view
                                       std::string_view speed_subprogram);
 
 // The table number the first EGON or LEADON of `program` couples through (a crankpin's X
-// table when its template couples X first, as examples/sinumerik/pin_main.mpf does); kInvalidInput
-// naming `file_name` and the line if it has none or it cannot be read.
-Result<int> coupled_table_number(std::string_view program, std::string_view file_name);
+// table when its template couples X first, as examples/sinumerik/pin_main.mpf does), or with
+// `following_axis` the first that couples that axis; kInvalidInput naming `file_name` and the
+// line if it has none or it cannot be read.
+Result<int> coupled_table_number(std::string_view program, std::string_view file_name,
+                                 std::string_view following_axis = {});
 
 // The main program of a gear's stroke (docs/gears.md): `values` must hold "program_name" (the
 // stroke subprogram) and "gearbox_coupling" (render_gearbox_coupling's EGDEF and EGON lines,

@@ -22,6 +22,7 @@
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
 #include "tests/support/damaged_database.h"
+#include "tests/support/failing_nc_files.h"
 #include "tests/support/intake_job.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/tmpfs_mount.h"
@@ -122,6 +123,44 @@ TEST_F(LoopGuardsTest, GroundWithNamesTheTableTheCorrectionBuildsOn) {
   ASSERT_FALSE(refused.ok());
   EXPECT_NE(refused.error().message.find("table version 7"), std::string::npos) << refused.error().message;
   expect_gauge_untouched(requests);
+}
+
+// A push whose main program was not written (here a full disk; a cut push alike) leaves the
+// control coupling the older table while the history holds the newer. The next run finds it
+// before the gauge: the main program is written again for the table on the control, and the
+// part just measured, ground with the older table, is kept for inspection with
+// ground_with_source main_program: a correction built on the newer table would be wrong.
+TEST_F(LoopGuardsTest, APartGroundWhileTheMainProgramCoupledTheOlderTableCorrectsNothing) {
+  JobSettings js = job_settings();
+  js.nc_main_template = std::string(embedded::kNcMainTemplate);
+  js.nc_main_template_name = "cam_main.mpf";
+  Result<JobReport> first = measure(js);
+  ASSERT_TRUE(first.ok() && first->pushed()) << (first.ok() ? first->not_pushed_reason : first.error().message);
+
+  auto full_disk = std::make_shared<testing::FailingNcFiles>();
+  full_disk->fail_writes_ending_with = "_MAIN.MPF";
+  JobSettings told = js;
+  told.ground_with_version = 1;
+  told.nc_files = full_disk;
+  Result<JobReport> second = measure(told);
+  ASSERT_FALSE(second.ok()) << "the main program was not written";
+  EXPECT_NE(second.error().message.find("still couples the previous table"), std::string::npos)
+      << second.error().message;
+  const fs::path main_file = dir_ / "nc" / (part_.nc_program + "_MAIN.MPF");
+  ASSERT_NE(slurp(main_file).find("EGON(X,\"FINE\",C,1,0)"), std::string::npos) << slurp(main_file);
+
+  Result<JobReport> third = measure(js);
+  ASSERT_TRUE(third.ok()) << third.error().message;
+  EXPECT_FALSE(third->pushed());
+  EXPECT_EQ(third->ground_with_source, "main_program");
+  ASSERT_TRUE(third->ground_with_version);
+  EXPECT_EQ(*third->ground_with_version, 1);
+  EXPECT_NE(third->not_pushed_reason.find("the main program on the control coupled it"), std::string::npos)
+      << third->not_pushed_reason;
+  EXPECT_EQ(load(third->run_id).ground_with_source, "main_program");
+  EXPECT_NE(slurp(main_file).find("EGON(X,\"FINE\",C,2,0)"), std::string::npos)
+      << "the main program couples table version 2 again:\n"
+      << slurp(main_file);
 }
 
 // --inspect: stored with the correction in force unchanged, no push, no pending table, the

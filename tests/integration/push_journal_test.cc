@@ -176,6 +176,15 @@ TEST_F(PushJournalTest, ReconcileRecordsAProgramTheControlHoldsAndRemovesLeftove
   { std::ofstream(dir_ / "nc" / (atomic_temporary_prefix(nc_file()) + "aB3xYz")) << "half a program"; }
   // Not ours: another name is never touched.
   { std::ofstream(dir_ / "nc" / ".CAM_TEST.SPF.tmp-keep-me-please") << "someone's file"; }
+  // nc check names it and leaves it.
+  const auto check = testing::run_command("nc check --data-dir " + dir_.string() + " --program CAM_TEST");
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find(atomic_temporary_prefix(nc_file()) + "aB3xYz: a temporary file left by an "
+                                                                   "interrupted write of CAM_TEST.SPF"),
+            std::string::npos)
+      << check.output;
+  EXPECT_EQ(check.output.find("keep-me-please"), std::string::npos) << check.output;
+  EXPECT_TRUE(fs::exists(dir_ / "nc" / (atomic_temporary_prefix(nc_file()) + "aB3xYz")));
 
   const auto r = testing::run_command("nc reconcile --data-dir " + dir_.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -189,6 +198,84 @@ TEST_F(PushJournalTest, ReconcileRecordsAProgramTheControlHoldsAndRemovesLeftove
   ASSERT_TRUE(last.ok() && *last);
   EXPECT_EQ((**last).table_version, 2);
   EXPECT_EQ(*(**last).program_text, slurp(nc_file()));
+}
+
+// A push killed after its table is in place and before its main program is written: the
+// control defines the new table and couples the old one, so it grinds the old. `nc check` says
+// so (exit 5) before anything reconciles, `nc reconcile` writes the main program again for the
+// table on the control (the built-in template), and `nc check` then agrees.
+TEST_F(PushJournalTest, APushKilledBeforeItsMainProgramIsFoundByCheckAndRepairedByReconcile) {
+  const std::int64_t run = stored_run("2026-11-30T08:00:00Z");
+  PushOptions options;
+  options.main.template_text = std::string(embedded::kNcMainTemplate);
+  options.main.template_name = "embedded:cam_main.mpf";
+  options.main.part = "intake";
+  options.main.lobe = 1;
+  auto push_alternating = [&](const PushOptions& o) {
+    Result<RunStore> store = RunStore::open(db());
+    if (!store) return Result<PushCompletion>(store.error());
+    PushFacts facts;
+    facts.run_id = run;
+    facts.reason = "run " + std::to_string(run);
+    return push_program(
+        *store, nc_file(), facts,
+        [run](int version) {
+          return program_for(run, version, 1.0 + 0.1 * version, {1, 2});
+        },
+        o);
+  };
+  ASSERT_TRUE(push_alternating(options).ok());  // version 1: table 1, coupled
+  const fs::path main_file = dir_ / "nc" / "CAM_TEST_MAIN.MPF";
+  const std::string main_v1 = slurp(main_file);
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    PushOptions cut = options;
+    cut.observer = [](PushStep reached) {
+      if (reached == PushStep::kRenamed) ::_exit(0);
+    };
+    ::_exit(push_alternating(cut).ok() ? 1 : 2);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  ASSERT_EQ(slurp(main_file), main_v1) << "the cut came before the main program";
+
+  const std::string data = " --data-dir " + dir_.string() + " --program CAM_TEST";
+  const auto check = testing::run_command("nc check" + data);
+  EXPECT_EQ(check.exit_code, 5) << check.output;
+  EXPECT_NE(check.output.find("CAM_TEST_MAIN.MPF couples table 1, that of version 1, while CAM_TEST.SPF on the "
+                              "control is version 2 (table 2): the control grinds version 1"),
+            std::string::npos)
+      << check.output;
+
+  const auto reconciled = testing::run_command("nc reconcile --data-dir " + dir_.string());
+  ASSERT_EQ(reconciled.exit_code, 0) << reconciled.output;
+  EXPECT_NE(reconciled.output.find("1 interrupted push(es) recorded, 0 abandoned, 0 temporary file(s) removed, 1 "
+                                   "main program(s) written again"),
+            std::string::npos)
+      << reconciled.output;
+  EXPECT_NE(slurp(main_file).find("EGON(X,\"FINE\",C,2,0)"), std::string::npos) << slurp(main_file);
+  const auto again = testing::run_command("nc check" + data);
+  EXPECT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_NE(again.output.find("table version 2 as pushed"), std::string::npos) << again.output;
+}
+
+// A data directory copied elsewhere keeps the paths of the control it was kept for: asked about
+// the copy's program, nc check says the history records no push to it and where its pushes
+// went, instead of calling it "version 0 as pushed".
+TEST_F(PushJournalTest, CheckOnACopiedDataDirectoryNamesTheFilesItsHistoryWasKeptFor) {
+  const std::int64_t run = stored_run("2026-11-30T08:00:00Z");
+  ASSERT_TRUE(push(run).ok());
+  const fs::path copy = dir_ / "copy";
+  fs::create_directories(copy);
+  fs::copy(db(), copy / "gaugeloop.sqlite");
+  fs::copy(dir_ / "nc", copy / "nc", fs::copy_options::recursive);
+  const auto check = testing::run_command("nc check --data-dir " + copy.string() + " --nc-dir " +
+                                          (copy / "nc").string() + " --program CAM_TEST");
+  EXPECT_EQ(check.exit_code, 5) << check.output;
+  EXPECT_NE(check.output.find("records no push to this file"), std::string::npos) << check.output;
+  EXPECT_NE(check.output.find("its pushes went to " + nc_file().string()), std::string::npos) << check.output;
 }
 
 // A database locked by another program through the whole push: the intent cannot be

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <map>
 
 #include "core/atomic_file.h"
@@ -166,6 +167,73 @@ TEST_F(MainProgramPushTest, AMainProgramNotWrittenLeavesTheCouplingOnTheTableThe
   EXPECT_EQ(third->table_version, 3);
   EXPECT_EQ(coupled_when_the_table_was_written, 2);
   EXPECT_EQ(table_on_control(), 1);
+  EXPECT_EQ(coupled(), 1);
+}
+
+// A main program not written after its table (a full disk, or a push cut there) couples the
+// older table: the control grinds it while the history holds the newer one. find_stale_main
+// names both; reconcile without a template reports it and leaves it; with one, writes it again.
+TEST_F(MainProgramPushTest, AMainProgramLeftCouplingTheOlderTableIsFoundAndWrittenAgainByReconcile) {
+  testing::FailingNcFiles files;
+  ASSERT_TRUE(push(files).ok());  // version 1: table 1
+  Result<std::optional<StaleMain>> none = find_stale_main(*store_, nc_file(), files);
+  ASSERT_TRUE(none.ok()) << none.error().message;
+  EXPECT_FALSE(none->has_value());
+  files.fail_writes_ending_with = "_MAIN.MPF";
+  ASSERT_FALSE(push(files).ok());  // version 2: table 2 on the control, the main program still couples 1
+  files.fail_writes_ending_with.clear();
+
+  Result<std::optional<StaleMain>> stale = find_stale_main(*store_, nc_file(), files);
+  ASSERT_TRUE(stale.ok()) << stale.error().message;
+  ASSERT_TRUE(stale->has_value());
+  EXPECT_EQ((**stale).coupled_number, 1);
+  EXPECT_EQ((**stale).coupled_version, 1);
+  EXPECT_EQ((**stale).table_number, 2);
+  EXPECT_EQ((**stale).table_version, 2);
+  EXPECT_EQ(stale_main_text(**stale),
+            "CAM_TEST_MAIN.MPF couples table 1, that of version 1, while CAM_TEST.SPF on the control is version 2 "
+            "(table 2): the control grinds version 1");
+
+  Result<ReconcileReport> reported = reconcile_pushes(*store_, nc_file(), files);
+  ASSERT_TRUE(reported.ok()) << reported.error().message;
+  ASSERT_EQ(reported->stale_mains.size(), 1u);
+  EXPECT_FALSE(reported->stale_mains[0].repointed);
+  EXPECT_EQ(coupled(), 1) << "without a template nothing is written";
+
+  // A temporary file of an interrupted write of the main program is ours to remove.
+  const fs::path leftover = dir_ / "nc" / (atomic_temporary_prefix(main_file()) + "k3Jq9z");
+  { std::ofstream(leftover) << "half a main program"; }
+  Result<ReconcileReport> repaired = reconcile_pushes(*store_, nc_file(), files, &main_);
+  ASSERT_TRUE(repaired.ok()) << repaired.error().message;
+  ASSERT_EQ(repaired->stale_mains.size(), 1u);
+  EXPECT_TRUE(repaired->stale_mains[0].repointed);
+  EXPECT_EQ(repaired->leftovers_removed, 1);
+  EXPECT_FALSE(fs::exists(leftover));
+  EXPECT_EQ(coupled(), 2);
+  EXPECT_EQ(table_on_control(), 2);
+  const std::string main = *read_regular_file(main_file(), "main program");
+  EXPECT_NE(main.find("table version 2 of run"), std::string::npos) << main;
+  Result<std::optional<StaleMain>> after = find_stale_main(*store_, nc_file(), files);
+  ASSERT_TRUE(after.ok());
+  EXPECT_FALSE(after->has_value());
+}
+
+// A table edited on the control is not the one last pushed: the main program is not written for it.
+TEST_F(MainProgramPushTest, AMainProgramIsNotWrittenAgainForATableThatIsNotTheOneLastPushed) {
+  testing::FailingNcFiles files;
+  ASSERT_TRUE(push(files).ok());
+  files.fail_writes_ending_with = "_MAIN.MPF";
+  ASSERT_FALSE(push(files).ok());
+  files.fail_writes_ending_with.clear();
+  std::string table = *read_regular_file(nc_file(), "table");
+  table += "; a comment added at the machine\n";
+  ASSERT_TRUE(write_file_atomically(nc_file(), table).ok());
+  Result<ReconcileReport> r = reconcile_pushes(*store_, nc_file(), files, &main_);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->stale_mains.size(), 1u);
+  EXPECT_FALSE(r->stale_mains[0].repointed);
+  ASSERT_FALSE(r->messages.empty());
+  EXPECT_NE(r->messages.back().find("not the one last pushed"), std::string::npos) << r->messages.back();
   EXPECT_EQ(coupled(), 1);
 }
 

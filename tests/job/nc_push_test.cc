@@ -105,7 +105,7 @@ TEST_F(PushSeamTest, AProgramThatCannotBeReadIsNotOverwritten) {
   FailingNcFiles files;
   ASSERT_TRUE(push(files).ok());
   const std::string in_force = *read_regular_file(nc_file(), "NC program");
-  // Reconciliation reads the file only when an intent is open; the hand-edit check always does.
+  // Reconciliation reads the table and its main program (are they coupled?), as the hand-edit check reads the table.
   files.fail[Op::kRead] = Error{ErrorCode::kIo, "NC program: Permission denied (scripted)"};
   Result<PushCompletion> r = push(files);
   ASSERT_FALSE(r.ok());
