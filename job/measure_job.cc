@@ -498,8 +498,9 @@ Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem
   const MainProgramSource main = main_source(s, "");
   Result<ReconcileReport> r = reconcile_pushes(*store, nc_file, files, &main);
   if (!r) return r.error();
+  // Only a main program gaugeloop writes is known to couple the table of the version pushed.
   for (const StaleMain& m : r->stale_mains) {
-    if (stale != nullptr && m.nc_file == nc_file) *stale = m;
+    if (stale != nullptr && m.nc_file == nc_file && !main.template_text.empty()) *stale = m;
   }
   return store;
 }

@@ -257,7 +257,8 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
     const bool one_machine = std::all_of(b.runs.begin(), b.runs.end(), [&](const RunCharacteristics* r) {
       return r->run.machine == b.runs.front()->run.machine;
     });
-    if (one_machine && !b.runs.front()->run.machine.empty()) out.add("K1081", part_number, b.runs.front()->run.machine);
+    if (one_machine && !b.runs.front()->run.machine.empty())
+      out.add("K1081", part_number, in_windows_1252(b.runs.front()->run.machine));
     if (!options.operation.empty()) out.add("K1086", part_number, in_windows_1252(options.operation));
     for (const DfqCharacteristicDef& d : b.characteristics) {
       const int decimals = dfq_decimals(d.unit);

@@ -133,6 +133,34 @@ TEST(ErrorPlotSvg, IsWellFormedAndEscapesText) {
   EXPECT_EQ(bad_number(svg), "");
 }
 
+// A long note in the subtitle is cut with an ellipsis short of the legend to its right (at
+// most 660 px / (0.62 x 14 px) = 76 characters), the whole note its tooltip; a short one stays whole.
+TEST(ErrorPlotSvg, ALongSubtitleIsCutBeforeTheTextToItsRight) {
+  ErrorPlot p = sample_plot(3.0, 7.0);
+  const std::string note =
+      "re-ground after the wheel was dressed \u00fcber the nose; " + std::string(200, 'x') + " <end>";
+  p.subtitle = "2026-11-22 02:34 UTC \u00b7 pushed \u00b7 " + note;
+  const std::string svg = render_error_plot_svg(p);
+  EXPECT_EQ(xml_problem(svg), "");
+  const std::string shown_start = "y=\"72\" font-size=\"14\" text-anchor=\"start\"";
+  const std::size_t at = svg.find(shown_start);
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t title_end = svg.find("</title>", at);
+  const std::size_t text_end = svg.find("</text>", at);
+  ASSERT_NE(title_end, std::string::npos);
+  ASSERT_LT(title_end, text_end);
+  const std::string shown = svg.substr(title_end + 8, text_end - title_end - 8);
+  std::size_t code_points = 0;
+  for (unsigned char c : shown) code_points += (c & 0xC0) != 0x80 ? 1 : 0;
+  EXPECT_LE(code_points, 76u) << shown;
+  EXPECT_GE(code_points, 60u) << shown;
+  EXPECT_EQ(shown.substr(shown.size() - 3), "\u2026") << shown;
+  EXPECT_NE(svg.find("x &lt;end&gt;</title>"), std::string::npos) << "the whole note is the tooltip";
+  p.subtitle = "2026-11-22 02:34 UTC \u00b7 pushed \u00b7 short note";
+  const std::string whole = render_error_plot_svg(p);
+  EXPECT_NE(whole.find(">2026-11-22 02:34 UTC \u00b7 pushed \u00b7 short note</text>"), std::string::npos);
+}
+
 TEST(ErrorPlotSvg, ShowsTheToleranceBandAndTheWorstDegree) {
   ErrorPlot p = sample_plot(3.0, 7.0);
   p.tolerance_um = 5.0;
