@@ -101,62 +101,83 @@ class EventWriter {
     EventRecord event;
   };
 
-  // Writes the oldest event until it is written (or refused for good), then the next. The
-  // event being written is out of the queue: a full queue drops only events still waiting.
+  // Writes the oldest events, up to kEventBatch of one database in one transaction, until they
+  // are written (or refused for good), then the next. The events being written are out of the
+  // queue: a full queue drops only events still waiting.
   void loop() {
     std::unique_lock<std::mutex> lock(mutex_);
     for (;;) {
       wake_.wait(lock, [this] { return stopped_ || !queue_.empty(); });
       if (queue_.empty()) return;  // stopped with nothing left
-      Item item = std::move(queue_.front());
-      queue_.pop_front();
+      std::vector<Item> batch;
+      while (!queue_.empty() && batch.size() < kEventBatch &&
+             (batch.empty() || queue_.front().db_path == batch.front().db_path)) {
+        batch.push_back(std::move(queue_.front()));
+        queue_.pop_front();
+      }
       for (;;) {
         lock.unlock();
-        const Status written = write(item);
+        Status written = write(batch);
+        if (!written.ok() && written.error().code != ErrorCode::kStorage && batch.size() > 1) {
+          // One of them is refused (a bad code or time): the others one by one, that one logged.
+          written = Status{};
+          for (const Item& item : batch) {
+            if (Status one = write({item}); !one.ok()) {
+              spdlog::error("event '{}' not recorded in the database: {}", item.event.code, one.error().message);
+            }
+          }
+        }
         lock.lock();
         if (written.ok() || written.error().code != ErrorCode::kStorage) {
           if (!written.ok()) {
-            spdlog::error("event '{}' not recorded in the database: {}", item.event.code, written.error().message);
+            spdlog::error("event '{}' not recorded in the database: {}", batch.front().event.code,
+                          written.error().message);
           }
           if (failures_ > 0) {
-            spdlog::info("events written to the database {} again after {} failed attempts", item.db_path.string(),
-                         failures_);
+            spdlog::info("events written to the database {} again after {} failed attempts",
+                         batch.front().db_path.string(), failures_);
             failures_ = 0;
           }
-          ++settled_;
+          settled_ += batch.size();
           written_.notify_all();
           break;
         }
-        // Busy or refusing: the same event again after a pause (the database's busy timeout
-        // has waited already), until stop() gives up, which finds it first in the queue.
+        // Busy or refusing: the same events again after a pause (the database's busy timeout
+        // has waited already), until stop() gives up, which finds them first in the queue.
         last_error_ = written.error().message;
         if (failures_++ == 0) {
-          spdlog::warn("events wait for the database: '{}' not written yet: {}; retrying", item.event.code,
+          spdlog::warn("events wait for the database: '{}' not written yet: {}; retrying", batch.front().event.code,
                        last_error_);
         }
         if (!stopped_) wake_.wait_for(lock, std::chrono::milliseconds(200), [this] { return stopped_; });
         if (stopped_) {
-          queue_.push_front(std::move(item));
+          for (auto it = batch.rbegin(); it != batch.rend(); ++it) queue_.push_front(std::move(*it));
           return;
         }
       }
     }
   }
 
-  Status write(const Item& item) {
-    if (!store_ || store_path_ != item.db_path) {
+  Status write(const std::vector<Item>& items) {
+    if (!store_ || store_path_ != items.front().db_path) {
       store_.reset();
-      Result<RunStore> opened = RunStore::open(item.db_path);
+      Result<RunStore> opened = RunStore::open(items.front().db_path);
       if (!opened) return opened.error();
       store_.emplace(std::move(*opened));
-      store_path_ = item.db_path;
+      store_path_ = items.front().db_path;
     }
-    Result<std::int64_t> id = store_->record_event(item.event);
-    if (!id) {
-      if (id.error().code == ErrorCode::kStorage) store_.reset();  // opened again for the next attempt
-      return id.error();
+    Status written;
+    if (items.size() == 1) {
+      Result<std::int64_t> id = store_->record_event(items.front().event);
+      if (!id) written = id.error();
+    } else {
+      std::vector<EventRecord> events;
+      events.reserve(items.size());
+      for (const Item& item : items) events.push_back(item.event);
+      written = store_->record_events(events);
     }
-    return {};
+    if (!written.ok() && written.error().code == ErrorCode::kStorage) store_.reset();  // opened again next time
+    return written;
   }
 
   std::mutex mutex_;

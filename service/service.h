@@ -65,6 +65,10 @@ nlohmann::json job_report_json(const JobReport& report);
 // event is dropped, counted and logged. A PLC cycle makes about eight events, so this holds a
 // few hundred cycles, far beyond a lock anyone holds on purpose.
 inline constexpr std::size_t kEventQueueLimit = 2000;
+// Events written in one transaction at the most: a burst costs one commit, not one an event.
+// A batch taken by the writer is out of the queue: the service holds at most
+// kEventQueueLimit + kEventBatch events.
+inline constexpr std::size_t kEventBatch = 256;
 // How long stop() waits for the waiting events to be written. An attempt that has begun may
 // take the database's busy timeout (5 s) more before the writer ends.
 inline constexpr std::chrono::seconds kEventDrainLimit{10};

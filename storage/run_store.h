@@ -590,6 +590,9 @@ class RunStore : public RunHistory {
   // Stores a fault or refusal; returns its id. kInvalidInput for an empty message or code, a
   // malformed time; kStorage if run_id names no run.
   Result<std::int64_t> record_event(const EventRecord& event);
+  // Stores `events` in order in one transaction (a burst of the service's steps costs one
+  // commit, not one each): all of them or, on any refusal, none. Errors as record_event.
+  Status record_events(const std::vector<EventRecord>& events);
 
   // Events newest first.
   Result<std::vector<StoredEvent>> list_events(const EventQuery& q) const;

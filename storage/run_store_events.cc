@@ -59,23 +59,55 @@ StoredEvent read_event(const Statement& s) {
 
 }  // namespace
 
+namespace {
+
+// Binds `event` to the prepared insert.
+void bind_event(Statement& ins, const EventRecord& event) {
+  ins.bind(":at_utc", std::string_view(event.at_utc.empty() ? utc_now() : event.at_utc));
+  ins.bind(":kind", event_kind_name(event.kind));
+  ins.bind(":code", event.code);
+  ins.bind(":machine", event.machine);
+  ins.bind(":part", event.part);
+  ins.bind(":lobe", event.lobe > 0 ? std::optional<int>(event.lobe) : std::nullopt);
+  ins.bind(":run_id", event.run_id);
+  ins.bind(":message", event.message);
+  ins.bind(":uuid", std::string_view(event.uuid.empty() ? new_uuid() : event.uuid));
+}
+
+}  // namespace
+
 Result<std::int64_t> RunStore::record_event(const EventRecord& event) {
   if (Status s = check_event(event); !s.ok()) return s.error();
   Connection& conn = *conn_;
   const std::string operation = "record a " + std::string(event_kind_name(event.kind)) + " event";
   Result<Statement> ins = Statement::prepare(conn, kInsertEvent, operation);
   if (!ins.ok()) return ins.error();
-  ins->bind(":at_utc", std::string_view(event.at_utc.empty() ? utc_now() : event.at_utc));
-  ins->bind(":kind", event_kind_name(event.kind));
-  ins->bind(":code", event.code);
-  ins->bind(":machine", event.machine);
-  ins->bind(":part", event.part);
-  ins->bind(":lobe", event.lobe > 0 ? std::optional<int>(event.lobe) : std::nullopt);
-  ins->bind(":run_id", event.run_id);
-  ins->bind(":message", event.message);
-  ins->bind(":uuid", std::string_view(event.uuid.empty() ? new_uuid() : event.uuid));
+  bind_event(*ins, event);
   if (Status s = ins->run(); !s.ok()) return s.error();
   return conn.last_insert_rowid();
+}
+
+Status RunStore::record_events(const std::vector<EventRecord>& events) {
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    if (Status s = check_event(events[i]); !s.ok()) {
+      Error e = s.error();
+      e.message = "event " + std::to_string(i + 1) + " of " + std::to_string(events.size()) + ": " + e.message +
+                  "; none of them was recorded";
+      return e;
+    }
+  }
+  Connection& conn = *conn_;
+  const std::string operation = "record " + std::to_string(events.size()) + " events";
+  Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
+  if (!tx.ok()) return tx.error();
+  Result<Statement> ins = Statement::prepare(conn, kInsertEvent, operation);
+  if (!ins.ok()) return ins.error();
+  for (const EventRecord& event : events) {
+    bind_event(*ins, event);
+    if (Status s = ins->run(); !s.ok()) return s.error();
+    ins->reset();
+  }
+  return tx->commit();
 }
 
 Result<std::vector<StoredEvent>> RunStore::list_events(const EventQuery& q) const {

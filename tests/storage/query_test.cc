@@ -206,6 +206,45 @@ TEST_F(QueryTest, EventsAreKeptAndListedNewestFirstByKind) {
   EXPECT_FALSE(store().record_event(EventRecord{}).ok()) << "an event needs a message";
 }
 
+// A burst of events in one transaction: all of them, in order; one refused (no code), none.
+TEST_F(QueryTest, EventsRecordedTogetherAreAllKeptInOrderOrNoneIs) {
+  const auto run = add("a", 1, "g1", "2026-11-20T10:00:00Z");
+  std::vector<EventRecord> burst;
+  for (int i = 0; i < 300; ++i) {
+    EventRecord e;
+    e.at_utc = "2026-11-20T10:02:00Z";
+    e.kind = EventKind::kInfo;
+    e.code = "plc request";
+    e.machine = "g1";
+    e.run_id = i == 0 ? std::optional<std::int64_t>(run) : std::nullopt;
+    e.message = "request " + std::to_string(i);
+    burst.push_back(e);
+  }
+  std::vector<EventRecord> refused = burst;
+  refused[150].code.clear();
+  Status r = store().record_events(refused);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("event 151 of 300"), std::string::npos) << r.error().message;
+  Result<std::vector<StoredEvent>> none = store().list_events({});
+  ASSERT_TRUE(none.ok());
+  EXPECT_TRUE(none->empty()) << "none of a refused burst is kept";
+
+  ASSERT_TRUE(store().record_events(burst).ok());
+  EventQuery q;
+  q.limit = 1000;
+  Result<std::vector<StoredEvent>> all = store().list_events(q);
+  ASSERT_TRUE(all.ok()) << all.error().message;
+  ASSERT_EQ(all->size(), 300u);
+  for (std::size_t i = 0; i < 300; ++i) {
+    const StoredEvent& e = (*all)[299 - i];  // newest first
+    EXPECT_EQ(e.event.message, "request " + std::to_string(i));
+    if (i > 0) {
+      EXPECT_GT(e.id, (*all)[300 - i].id) << "in order";
+    }
+  }
+  EXPECT_EQ((*all)[299].event.run_id, run);
+}
+
 TEST_F(QueryTest, InfoEventsOfTheServiceAreKeptAndListedApart) {
   const auto run = add("a", 1, "g1", "2026-11-20T10:00:00Z");
   EventRecord info;
