@@ -188,8 +188,10 @@ Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem:
                                          NcFiles& files = real_nc_files(), const MainProgramSource* main = nullptr);
 
 // reconcile_pushes for every file a program was pushed to (the service at start, `gaugeloop
-// nc reconcile`).
-Result<ReconcileReport> reconcile_all_pushes(RunStore& store, const MainProgramSource* main = nullptr);
+// nc reconcile`). An error stops it only for a file with an open intent; another file that
+// cannot be read or locked now is named in the messages ("not checked") and the rest go on.
+Result<ReconcileReport> reconcile_all_pushes(RunStore& store, const MainProgramSource* main = nullptr,
+                                             NcFiles& files = real_nc_files());
 
 // What an approval or a rollback pushed.
 struct PushOutcome {

@@ -218,6 +218,20 @@ TEST_F(MainProgramPushTest, AMainProgramLeftCouplingTheOlderTableIsFoundAndWritt
   EXPECT_FALSE(after->has_value());
 }
 
+// At the service's start every pushed file is looked at; one the share cannot give now stops
+// nothing when no push to it is open: it is named, and the rest go on.
+TEST_F(MainProgramPushTest, ReconcilingEveryFileGoesOnPastOneThatCannotBeReadWithNoOpenPush) {
+  testing::FailingNcFiles files;
+  ASSERT_TRUE(push(files).ok());
+  files.fail[testing::FailingNcFiles::Op::kRead] = Error{ErrorCode::kIo, "Input/output error (scripted)"};
+  Result<ReconcileReport> r = reconcile_all_pushes(*store_, &main_, files);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->messages.size(), 1u);
+  EXPECT_NE(r->messages[0].find(nc_file().string() + ": not checked (Input/output error (scripted))"),
+            std::string::npos)
+      << r->messages[0];
+}
+
 // A table edited on the control is not the one last pushed: the main program is not written for it.
 TEST_F(MainProgramPushTest, AMainProgramIsNotWrittenAgainForATableThatIsNotTheOneLastPushed) {
   testing::FailingNcFiles files;
