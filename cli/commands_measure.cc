@@ -132,8 +132,11 @@ void write_demo_report(const MeasureOptions& o, std::int64_t run_id) {
 // The loop's first step: the program written from the drawing that part 0 is ground from.
 void print_new_program(const NewProgramReport& r) {
   const BuiltTable& b = r.preview.built;
-  std::printf("new program: %s v%d from the drawing, %d blocks (%s), seam C%.3f, command position error %.3f um",
-              r.nc_file.filename().string().c_str(), r.table_version, b.table.block_count(),
+  const std::string layer = r.design_file.empty()
+                                ? std::string()
+                                : r.design_file.filename().string() + " (the design table) and the correction layer ";
+  std::printf("new program: %s%s v%d from the drawing, %d blocks (%s), seam C%.3f, command position error %.3f um",
+              layer.c_str(), r.nc_file.filename().string().c_str(), r.table_version, b.table.block_count(),
               std::string(interpolation_name(b.table.interpolation)).c_str(), b.table.points.front().c_deg,
               b.table.error.max_abs_um);
   if (b.y_table) {

@@ -17,6 +17,7 @@
 #include "core/text_file.h"
 #include "job/nc_push.h"
 #include "nc_out/stroke_program.h"
+#include "nc_out/table_layer.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
 #include "report/run_json.h"
@@ -279,6 +280,8 @@ Result<MainProgramSource> main_source(const std::string& path) {
     m.pin_cx_template_name = "embedded:pin_main_cx.mpf";
     m.gear_template_text = std::string(embedded::kGearMainTemplate);
     m.gear_template_name = "embedded:gear_main.mpf";
+    m.layer_template_text = std::string(embedded::kNcMainLayerTemplate);
+    m.layer_template_name = "embedded:cam_main_layer.mpf";
   }
   return m;
 }
@@ -371,8 +374,29 @@ int cmd_check(const NcOptions& o) {
                 *last ? (**last).reason.c_str() : "-", *last ? (**last).pushed_utc.c_str() : "-");
     return kExitOk;
   }
-  std::printf("%s: table version %d as pushed (%s, %s)\n", file->c_str(), *last ? (**last).table_version : 0,
-              *last ? origin_text((**last).run_id).c_str() : "-", *last ? (**last).pushed_utc.c_str() : "-");
+  // A correction layer: the design table it is added to must be there, the one written.
+  std::string design;
+  if (Result<ParsedTable> table = parse_table_program(*on_disk, *file)) {
+    Result<LayerOf> layer = layer_of(*table, *file);
+    if (!layer) return report_error(layer.error());
+    if (!layer->design_program.empty()) {
+      const std::filesystem::path design_file =
+          std::filesystem::path(*file).parent_path() / (layer->design_program + ".SPF");
+      Result<std::string> text = read_regular_file(design_file, "design table");
+      Result<DesignTable> d = text ? read_design_table(*text, design_file.string(), layer->design_table_number)
+                                   : Result<DesignTable>(text.error());
+      if (!d) {
+        std::fprintf(stderr, "gaugeloop: %s is a correction layer, and its design table cannot be used: %s\n",
+                     file->c_str(), d.error().message.c_str());
+        return kExitNcOutput;
+      }
+      design = ", a correction layer added to the design table " + design_file.filename().string() + " (table " +
+               std::to_string(layer->design_table_number) + ", as written from the drawing)";
+    }
+  }
+  std::printf("%s: %s version %d as pushed (%s, %s)%s\n", file->c_str(), design.empty() ? "table" : "layer",
+              *last ? (**last).table_version : 0, *last ? origin_text((**last).run_id).c_str() : "-",
+              *last ? (**last).pushed_utc.c_str() : "-", design.c_str());
   return kExitOk;
 }
 

@@ -10,6 +10,8 @@ extern const std::string_view kDemoPartToml;    // examples/intake_flat.toml
 extern const std::string_view kDemoLiftCsv;     // examples/intake_flat.csv
 extern const std::string_view kNcTemplate;      // examples/sinumerik/cam_table.spf
 extern const std::string_view kNcMainTemplate;  // examples/sinumerik/cam_main.mpf
+// A correction layer: the main program coupling X to the design table and the layer on SIM1.
+extern const std::string_view kNcMainLayerTemplate;  // examples/sinumerik/cam_main_layer.mpf
 // With a work speed program: the speed subprogram and the main program that calls it.
 extern const std::string_view kNcSpeedTemplate;      // examples/sinumerik/cam_speed.spf
 extern const std::string_view kNcMainSpeedTemplate;  // examples/sinumerik/cam_main_speed.mpf

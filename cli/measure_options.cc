@@ -91,7 +91,10 @@ void set_speed_program(JobSettings& js, std::optional<WorkSpeedSettings> speed, 
   js.speed = std::move(speed);
   js.nc_speed_template = js.speed ? std::string(embedded::kNcSpeedTemplate) : std::string();
   js.nc_speed_template_name = js.speed ? "embedded:cam_speed.spf" : "";
-  if (o.main_template_path.empty()) {
+  if (o.main_template_path.empty() && js.layer_design_table_number != 0) {
+    js.nc_main_template = std::string(embedded::kNcMainLayerTemplate);
+    js.nc_main_template_name = "embedded:cam_main_layer.mpf";
+  } else if (o.main_template_path.empty()) {
     js.nc_main_template = std::string(js.speed ? embedded::kNcMainSpeedTemplate : embedded::kNcMainTemplate);
     js.nc_main_template_name = js.speed ? "embedded:cam_main_speed.mpf" : "embedded:cam_main.mpf";
   }
@@ -116,6 +119,7 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
   Result<std::string> main_tmpl = load_main_template(o.main_template_path, js.nc_main_template_name);
   if (!main_tmpl) return main_tmpl.error();
   js.nc_main_template = std::move(*main_tmpl);
+  js.layer_design_table_number = lp.file.layer_design_table_number;
   set_speed_program(js, lp.file.speed, o);
   js.cycle = lp.file.grinding;
   if (lp.file.pin) set_pin_job(js, *lp.file.pin, /*main_template_given=*/!o.main_template_path.empty());

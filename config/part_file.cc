@@ -272,6 +272,18 @@ GrindingCycle read_grinding(TomlReader& top, std::string_view source) {
   return g;
 }
 
+// [correction_layer]: the correction as a table of its own on the virtual axis SIM1, summed
+// with the design table by the gearbox (docs/nc_output.md). Absent: 0, one whole table.
+int read_correction_layer(TomlReader& top, std::string_view source) {
+  const toml::table* table = top.subtable("correction_layer");
+  if (table == nullptr) return 0;
+  TomlReader r(*table, source, "correction_layer.");
+  r.allow_only({"design_table_number"});
+  const int n = static_cast<int>(r.integer("design_table_number", 5, 1, 999));
+  if (r.error) top.fail(r.error->message);
+  return n;
+}
+
 // [pin.tolerance]: absent means nothing is judged. Read as the lobe's [tolerance].
 PinTolerances read_pin_tolerances(TomlReader& pin, std::string_view source) {
   PinTolerances t;
@@ -377,7 +389,7 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
   TomlReader r(table, source_name);
   r.allow_only({"name", "lobe", "lift_table", "follower", "follower_radius_mm", "base_circle_radius_mm",
                 "wheel_radius_mm", "rotation_sense", "c_offset_deg", "probe_offset_deg", "nc_program", "tolerance",
-                "speed", "grinding"});
+                "speed", "grinding", "correction_layer"});
   PartFile out;
   Part& p = out.part;
   p.name = r.text("name", std::nullopt);
@@ -408,6 +420,7 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
   p.tolerances = read_tolerances(r, source_name);
   out.speed = read_speed(r, source_name);
   out.grinding = read_grinding(r, source_name);
+  out.layer_design_table_number = read_correction_layer(r, source_name);
   if (r.error) return *r.error;
   const std::filesystem::path lt(table_path);
   p.lift_table = lt.is_absolute() ? lt : base_dir / lt;

@@ -31,6 +31,11 @@ struct PartFile {
   // [grinding]: the allowance per side and the passes that grind it off, rendered into the
   // main program (docs/parts.md). Absent: the defaults of GrindingCycle.
   GrindingCycle grinding;
+  // [correction_layer] (a lobe's; docs/nc_output.md, "The correction as a layer"): the CTABDEF
+  // number of the design's whole table (design_table_number, 1..999, default 5), which stays
+  // on the control as written from the drawing while each correction goes to a table of its
+  // own on the virtual axis SIM1. 0: no section, every push writes the whole table.
+  int layer_design_table_number = 0;
 };
 
 // Parses part TOML. `source_name` is used in messages; a relative `lift_table` is resolved

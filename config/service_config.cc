@@ -284,6 +284,7 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
                    "y_table_numbers",
                    "pin_main_template",
                    "pin_main_xy_template",
+                   "layer_main_template",
                    "y_min_mm",
                    "y_max_mm",
                    "y_velocity_max_mm_per_s",
@@ -296,6 +297,7 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
     const std::string y_path = nr.text("y_template", "");
     const std::string pin_main_path = nr.text("pin_main_template", "");
     const std::string pin_main_xy_path = nr.text("pin_main_xy_template", "");
+    const std::string layer_main_path = nr.text("layer_main_template", "");
     read_nc_table_keys(nr, job);
     c.pin_command_error_um = nr.number("pin_command_error_um", kPinCommandErrorBoundUm, 0.0, 100.0, true);
     read_table_numbers(nr, *t, job);
@@ -336,6 +338,11 @@ Status read_nc_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) {
     }
     if (Status r = read_template(pin_main_xy_path, "pin_main_xy_template", c.nc_pin_main_xy_template,
                                  c.nc_pin_main_xy_template_name);
+        !r) {
+      return r;
+    }
+    if (Status r = read_template(layer_main_path, "layer_main_template", c.nc_layer_main_template,
+                                 c.nc_layer_main_template_name);
         !r) {
       return r;
     }
@@ -922,7 +929,15 @@ JobSettings job_for(const ServiceConfig& config, const ServicePart& part) {
   js.speed = part.file.speed;
   js.cycle = part.file.grinding;
   js.pin = part.file.pin;
-  if (js.speed && !config.nc_main_speed_template.empty()) {
+  js.layer_design_table_number = part.file.layer_design_table_number;
+  if (js.layer_design_table_number != 0) {
+    // A correction layer's main program couples the design table and the layer: [nc]
+    // layer_main_template; without it the lobes' main template, which the job then refuses.
+    if (!config.nc_layer_main_template.empty()) {
+      js.nc_main_template = config.nc_layer_main_template;
+      js.nc_main_template_name = config.nc_layer_main_template_name;
+    }
+  } else if (js.speed && !config.nc_main_speed_template.empty()) {
     js.nc_main_template = config.nc_main_speed_template;
     js.nc_main_template_name = config.nc_main_speed_template_name;
   } else if (js.pin) {

@@ -77,6 +77,11 @@ struct ServiceConfig {
   std::string nc_pin_main_template_name;
   std::string nc_pin_main_xy_template;
   std::string nc_pin_main_xy_template_name;
+  // For lobes with a correction layer (their part file's [correction_layer], docs/nc_output.md):
+  // [nc] layer_main_template couples X to the design table from C and to the layer from SIM1,
+  // used instead of [nc] main_template (which such a part's job refuses).
+  std::string nc_layer_main_template;
+  std::string nc_layer_main_template_name;
   std::optional<HttpSettings> http;  // absent: no HTTP API
   std::optional<PlcSettings> plc;    // absent: no PLC trigger
   // [plant.mqtt]: the plant's broker the outbox sender delivers runs, pushes and states to

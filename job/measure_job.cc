@@ -171,7 +171,10 @@ Status check_speed_template(const JobSettings& s) {
 // and for versions 1 and 2 (both table numbers, so a template naming a fixed one is refused
 // now) the table program, a pin's Y table, and the main program, which must call the speed
 // subprogram when there is one.
-Status check_programs_render(const JobSettings& s, const BuiltTable& design_table) {
+// A correction layer's main program is rendered with `design_program`, the design table's
+// program as `nc new` writes it.
+Status check_programs_render(const JobSettings& s, const BuiltTable& design_table,
+                             const std::string* design_program = nullptr) {
   std::optional<std::string> speed_program;
   if (design_table.speed) {
     Result<std::string> text = render_speed(s, *design_table.speed, 0, "");
@@ -189,7 +192,9 @@ Status check_programs_render(const JobSettings& s, const BuiltTable& design_tabl
       if (!y) return y.error();
     }
     if (s.nc_main_template.empty()) continue;
-    Result<std::string> m = render_main_for_table(main_source(s, ""), s.nc_dir / (s.nc_program + ".SPF"), *program);
+    MainProgramSource main = main_source(s, "");
+    if (design_program != nullptr) main.design_table_program = *design_program;
+    Result<std::string> m = render_main_for_table(main, s.nc_dir / (s.nc_program + ".SPF"), *program);
     if (!m) return m.error();
     if (speed_program) {
       if (Status c = check_main_calls_speed_program(*m, s.nc_main_template_name, speed_program_name(s.nc_program));
@@ -234,20 +239,51 @@ Result<Prepared> prepare(const JobSettings& s) {
                                                       " deg must divide 360 into at least 36 steps");
     }
   }
+  if (const int n = s.layer_design_table_number; n != 0) {
+    if (s.pin) {
+      return make_error(ErrorCode::kInvalidInput, "part " + s.part.name +
+                                                      ": a crankpin has no correction layer ([correction_layer] is "
+                                                      "a lobe's); remove it from the pin's part file");
+    }
+    if (s.speed) {
+      return make_error(ErrorCode::kInvalidInput,
+                        "part " + s.part.name +
+                            ": a correction layer with a work speed program is not written by gaugeloop yet (its "
+                            "main program would have to call the speed subprogram too); remove [speed] or "
+                            "[correction_layer] from the part file");
+    }
+    if (n < 1 || n > 999 || n == s.table_numbers[0] || n == s.table_numbers[1]) {
+      return make_error(ErrorCode::kInvalidInput, "part " + s.part.name + ": [correction_layer] design_table_number " +
+                                                      std::to_string(n) +
+                                                      " must be 1..999 and differ from the layer's table numbers " +
+                                                      std::to_string(s.table_numbers[0]) + " and " +
+                                                      std::to_string(s.table_numbers[1]) + " ([nc] table_numbers)");
+    }
+  }
   if (s.pin) return prepare_pin(s);
   if (Status l = check_axis_limits(s.axis_limits); !l) return l.error();
   Result<PeriodicSpline> design = PeriodicSpline::fit(s.design.angle_deg, s.design.lift_mm);
   if (!design) return in_step("design lift table " + s.design.source, design.error());
   if (Status t = check_speed_template(s); !t) return t.error();
-  Result<BuiltTable> design_table = build_table(*design, s);
-  if (!design_table) return in_step("the design", design_table.error());
   Result<DesignReading> design_reading = DesignReading::of_lobe(*design, s.part);
   if (!design_reading) return in_step("flat-probe reading", design_reading.error());
   // Zones that do not fit this lobe are a mistake in the part file: found before measuring.
   if (Result<std::vector<ZoneArc>> zones = zone_arcs(s.part.tolerances, design_reading->table()); !zones) {
     return in_step("part " + s.part.name + " tolerances", zones.error());
   }
-  if (Status r = check_programs_render(s, *design_table); !r) return r.error();
+  if (s.layer_design_table_number != 0) {
+    // The design's whole table, and the layer that would go with it on the control (the design
+    // table's interpolation error, less than the command error bound).
+    Result<LayerDesign> layer_design = build_layer_design(*design, s, "");
+    if (!layer_design) return in_step("the design", layer_design.error());
+    Result<BuiltTable> layer = build_table(*design, s, nullptr, &layer_design->table.nc);
+    if (!layer) return in_step("the design's correction layer", layer.error());
+    if (Status r = check_programs_render(s, *layer, &layer_design->program); !r) return r.error();
+  } else {
+    Result<BuiltTable> design_table = build_table(*design, s);
+    if (!design_table) return in_step("the design", design_table.error());
+    if (Status r = check_programs_render(s, *design_table); !r) return r.error();
+  }
   return Prepared{std::move(*design), std::move(*design_reading)};
 }
 
@@ -571,6 +607,27 @@ class JobRun {
     Result<std::optional<TablePointsInForce>> points = points_in_force(store_, nc_file_, s_);
     if (!points) return points.error();
     points_in_force_ = std::move(*points);
+    return read_design_table_on_control();
+  }
+
+  // A correction layer is written against the design table the control holds: read before
+  // the gauge, so a missing or edited one costs no measurement.
+  Status read_design_table_on_control() {
+    if (s_.layer_design_table_number == 0 || s_.inspect) return {};
+    const std::filesystem::path file = nc_file_.parent_path() / (design_program_name(s_.nc_program) + ".SPF");
+    NcFiles& files = s_.nc_files ? *s_.nc_files : real_nc_files();
+    Result<std::optional<std::string>> text = files.read_program(file);
+    if (!text) return text.error();
+    if (!*text) {
+      return make_error(ErrorCode::kInvalidInput,
+                        "the correction layer of part " + s_.part.name + " is added to the design table " +
+                            file.string() +
+                            ", which is not there: write the first program from the drawing (`gaugeloop nc new "
+                            "--part ...`), then measure");
+    }
+    Result<DesignTable> design = read_design_table(**text, file.string(), s_.layer_design_table_number);
+    if (!design) return design.error();
+    design_on_control_ = std::move(*design);
     return {};
   }
 
@@ -699,7 +756,7 @@ class JobRun {
       if (s_.pin) return build_pin_table(record_.correction_um, s_, in_force);
       Result<PeriodicSpline> target = corrected_lift(s_.design, design_reading_, record_.correction_um, s_.part);
       if (!target) return in_step("corrected lift", target.error());
-      return build_table(*target, s_, in_force);
+      return build_table(*target, s_, in_force, design_on_control_ ? &design_on_control_->nc : nullptr);
     }();
     if (b) {
       built_ = std::move(*b);
@@ -886,6 +943,7 @@ class JobRun {
   GroundWith ground_;
   DegreeTable correction_in_force_;
   std::optional<TablePointsInForce> points_in_force_;
+  std::optional<DesignTable> design_on_control_;  // a correction layer's design table
   // acquire
   RunRecord record_;
   std::string finished_utc_;

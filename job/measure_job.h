@@ -122,6 +122,13 @@ struct JobSettings {
   // The two CTABDEF numbers the tables alternate between: table version v goes to
   // table_numbers[(v - 1) % 2] (table_number_for_version, nc_out/table_program.h). Distinct, 1..999.
   TableNumbers table_numbers{1, 2};
+  // The correction as its own layer (the part file's [correction_layer], docs/nc_output.md,
+  // "The correction as a layer"); 0: off, each pushed table is the whole wheel path. Otherwise
+  // the design's whole table is the subprogram design_program_name(nc_program) defining this
+  // CTABDEF number, written from the drawing (`nc new`) and never by a push, and every pushed
+  // table is the correction alone, X from the virtual axis SIM1, written against the design
+  // table as the control holds it; the main program must couple both (a lobe's only).
+  int layer_design_table_number = 0;
   std::string machine = "grinder-1";
   std::string note;
   // The measured part's serial number and who measured it, stored with the run; empty: not

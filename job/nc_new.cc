@@ -14,6 +14,7 @@
 #include "job/pin_files.h"
 #include "job/speed_files.h"
 #include "nc_out/main_program.h"
+#include "nc_out/table_layer.h"
 #include "nc_out/table_program.h"
 #include "storage/run_store.h"
 
@@ -95,7 +96,49 @@ Status fill_rows(ProgramPreview& p, const JobSettings& s) {
   return {};
 }
 
+// A correction layer's design table on the control, from the drawing: written when it is not
+// there; left as it is (never rewritten) when it holds the design's table already; refused when
+// it holds another unless `replace`. Then the layer that goes with the design table as the
+// control holds it.
+Result<BuiltTable> write_design_table(const JobSettings& s, NcFiles& files, bool replace,
+                                      const std::string& created_utc) {
+  Result<PeriodicSpline> lift = PeriodicSpline::fit(s.design.angle_deg, s.design.lift_mm);
+  if (!lift) return in_step("design lift table " + s.design.source, lift.error());
+  Result<LayerDesign> design = build_layer_design(*lift, s, created_utc);
+  if (!design) return design.error();
+  const std::filesystem::path file =
+      design_program_path(std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal());
+  Result<std::optional<std::string>> on_control = files.read_program(file);
+  if (!on_control) return on_control.error();
+  bool same = false;
+  if (*on_control) {
+    Result<DesignTable> there = read_design_table(**on_control, file.string(), s.layer_design_table_number);
+    same = there && compare_table_points(there->parsed, design->whole.table.points, file.string(), s.table_format) &&
+           there->parsed.interpolation == design->whole.table.interpolation;
+    if (!same && !replace) {
+      return make_error(ErrorCode::kRefused,
+                        file.string() + " holds another design table than this drawing's (" +
+                            (there ? std::string("other points") : there.error().message) +
+                            "): the correction layer in force is added to it. To start again from the drawing, "
+                            "replace it (--replace; over the HTTP API \"replace\": true)");
+    }
+  }
+  if (!same) {
+    if (Status w = files.write_program(file, design->program, {}); !w) return in_step("design table", w.error());
+  }
+  Result<std::optional<std::string>> text = files.read_program(file);
+  if (!text) return text.error();
+  if (!*text) return make_error(ErrorCode::kIo, file.string() + ": written, but not there when read back");
+  Result<DesignTable> held = read_design_table(**text, file.string(), s.layer_design_table_number);
+  if (!held) return held.error();
+  return build_table(*lift, s, nullptr, &held->nc);
+}
+
 }  // namespace
+
+std::filesystem::path design_program_path(const std::filesystem::path& nc_file) {
+  return nc_file.parent_path() / (design_program_name(nc_file.stem().string()) + ".SPF");
+}
 
 Result<ProgramPreview> preview_new_program(const JobSettings& s) {
   if (Status c = check_job_settings(s); !c) return c.error();
@@ -104,7 +147,12 @@ Result<ProgramPreview> preview_new_program(const JobSettings& s) {
     if (s.pin) return build_pin_table(DegreeTable{}, s);
     Result<PeriodicSpline> design = PeriodicSpline::fit(s.design.angle_deg, s.design.lift_mm);
     if (!design) return in_step("design lift table " + s.design.source, design.error());
-    return build_table(*design, s);
+    if (s.layer_design_table_number == 0) return build_table(*design, s);
+    // A correction layer: the new program is the design's whole table; the layer that goes
+    // with it holds what the design table's interpolation misses.
+    Result<LayerDesign> layer_design = build_layer_design(*design, s, "");
+    if (!layer_design) return layer_design.error();
+    return std::move(layer_design->whole);
   }();
   if (!built) return in_step("the design", built.error());
   p.built = std::move(*built);
@@ -131,7 +179,6 @@ Result<NewProgramReport> write_new_program(const JobSettings& s, const NewProgra
   if (!preview) return preview.error();
   NewProgramReport report;
   report.preview = std::move(*preview);
-  const BuiltTable& built = report.preview.built;
   // Absolute, so the push history names one file whatever directory a command runs in.
   report.nc_file = std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal();
   const std::filesystem::path& nc_file = report.nc_file;
@@ -154,6 +201,14 @@ Result<NewProgramReport> write_new_program(const JobSettings& s, const NewProgra
   }
 
   const std::string created_utc = utc_now();
+  std::optional<BuiltTable> layer;
+  if (s.layer_design_table_number != 0) {
+    Result<BuiltTable> l = write_design_table(s, files, options.replace, created_utc);
+    if (!l) return l.error();
+    layer = std::move(*l);
+    report.design_file = design_program_path(nc_file);
+  }
+  const BuiltTable& built = layer ? *layer : report.preview.built;
   PushFacts facts;
   facts.run_id = 0;
   facts.reason = "new program" + (options.from_file.empty() ? std::string() : " from " + options.from_file) +
@@ -182,6 +237,13 @@ Result<NewProgramReport> write_new_program(const JobSettings& s, const NewProgra
     report.files.push_back(path);
     return {};
   };
+  if (layer) {
+    const CurveTable& design = report.preview.built.table;
+    if (Status r = read_back(read_back_table(files, report.design_file, design, s.table_format), report.design_file);
+        !r) {
+      return r.error();
+    }
+  }
   if (Status r = read_back(read_back_table(files, nc_file, built.table, s.table_format), nc_file); !r) return r.error();
   if (built.y_table) {
     const std::filesystem::path y = y_table_program_path(nc_file);

@@ -70,9 +70,17 @@ struct NewProgramOptions {
   std::string from_file;  // the part file, for the history
 };
 
+// The design table's program of a correction layer beside `nc_file` (the layer):
+// <dir>/<stem>_DESIGN.SPF.
+std::filesystem::path design_program_path(const std::filesystem::path& nc_file);
+
 struct NewProgramReport {
   ProgramPreview preview;
   std::filesystem::path nc_file;
+  // A correction layer's design table (JobSettings::layer_design_table_number): written from
+  // the drawing when it is not there or `replace`, left as it is when it holds this drawing's
+  // table; nc_file is then the layer. Empty without a layer.
+  std::filesystem::path design_file;
   int table_version = 0;
   // Every file written, read back from the NC directory after the push: the table, a pin's Y
   // table, the speed subprogram, the main program.

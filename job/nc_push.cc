@@ -15,6 +15,7 @@
 #include "nc_out/main_program.h"
 #include "nc_out/nc_text.h"
 #include "nc_out/stroke_program.h"
+#include "nc_out/table_layer.h"
 #include "nc_out/table_program.h"
 #include "report/run_json.h"
 
@@ -445,10 +446,41 @@ std::string origin_text(std::int64_t run_id) {
   return run_id != 0 ? "run " + std::to_string(run_id) : std::string("the drawing (no part measured yet)");
 }
 
-Result<std::string> render_main_for_table(const MainProgramSource& source, const std::filesystem::path& nc_file,
+Result<std::string> render_main_for_table(const MainProgramSource& given, const std::filesystem::path& nc_file,
                                           std::string_view table_program) {
   Result<ParsedTable> t = parse_table_program(table_program, nc_file.string());
   if (!t) return t.error();
+  Result<LayerOf> layer = layer_of(*t, nc_file.string());
+  if (!layer) return layer.error();
+  // A correction layer's main program: its own template when one is given, and the design
+  // table beside the layer, where the wheel starts.
+  MainProgramSource layered;
+  std::optional<DesignTable> design;
+  if (!layer->design_program.empty()) {
+    layered = given;
+    if (!given.layer_template_text.empty()) {
+      layered.template_text = given.layer_template_text;
+      layered.template_name = given.layer_template_name;
+    }
+    const std::filesystem::path design_file = nc_file.parent_path() / (layer->design_program + ".SPF");
+    std::string text = given.design_table_program;
+    if (text.empty()) {
+      NcFiles& files = given.files != nullptr ? *given.files : real_nc_files();
+      Result<std::optional<std::string>> read = files.read_program(design_file);
+      if (!read) return read.error();
+      if (!*read) {
+        return make_error(ErrorCode::kInvalidInput,
+                          design_file.string() + " is not there: the correction layer " + nc_file.string() +
+                              " is added to that design table, so the main program cannot couple it; write the "
+                              "first program from the drawing (`gaugeloop nc new`)");
+      }
+      text = std::move(**read);
+    }
+    Result<DesignTable> d = read_design_table(text, design_file.string(), layer->design_table_number);
+    if (!d) return d.error();
+    design = std::move(*d);
+  }
+  const MainProgramSource& source = design ? layered : given;
   std::map<std::string, std::string> values = {
       {"program_name", nc_file.stem().string()},
       {"part", source.part},
@@ -483,10 +515,20 @@ Result<std::string> render_main_for_table(const MainProgramSource& source, const
   values["infeed_blocks"] = render_infeed_blocks(*infeed, cycle.work_speed_rpm, cycle.format);
   values["speed_infeed_blocks"] = render_speed_infeed_blocks(*infeed, speed_program_name(nc_file.stem().string()));
   values["start_offset_mm"] = format_fixed(infeed->start_offset_mm, cycle.format.x_decimals());
-  values["start_x_mm"] = format_fixed(t->points.front().x_mm + infeed->start_offset_mm, cycle.format.x_decimals());
+  // Where the wheel is at C: the table, plus the design table under a layer.
+  auto design_at = [&design](double c_deg) { return design ? design->nc.at(c_deg).x_mm : 0.0; };
+  const double c_start = t->points.front().c_deg;
+  values["start_x_mm"] =
+      format_fixed(t->points.front().x_mm + design_at(c_start) + infeed->start_offset_mm, cycle.format.x_decimals());
   Result<TableInterpolant> nc = TableInterpolant::of(t->points, t->interpolation);
   if (!nc) return make_error(ErrorCode::kInvalidInput, nc_file.string() + ": " + nc.error().message);
-  values["start_x_at_c0_mm"] = format_fixed(nc->at(0.0).x_mm + infeed->start_offset_mm, cycle.format.x_decimals());
+  values["start_x_at_c0_mm"] =
+      format_fixed(nc->at(0.0).x_mm + design_at(0.0) + infeed->start_offset_mm, cycle.format.x_decimals());
+  if (design) {
+    values["design_program_name"] = layer->design_program;
+    values["design_table_number"] = std::to_string(layer->design_table_number);
+    values["leading_axis"] = std::string(kLayerLeadingAxis);
+  }
   values["infeed_turns"] = std::to_string(infeed->turns());
   if (!source.y_program_name.empty()) {
     // The Y table of a version goes to the number of that version, as the X table does.

@@ -78,6 +78,15 @@ struct MainProgramSource {
   // template_text for every program.
   std::string gear_template_text;
   std::string gear_template_name;
+  // For a correction layer (a table whose header names its design table, nc_out/table_layer.h):
+  // the main program coupling the design table and the layer (examples/sinumerik/
+  // cam_main_layer.mpf), used instead of template_text; empty: template_text. The design
+  // table's program is design_table_program when given (before it is on the control), else
+  // read from beside the table through `files` (null: the real NC directory).
+  std::string layer_template_text;
+  std::string layer_template_name;
+  std::string design_table_program;
+  NcFiles* files = nullptr;
 };
 
 // The main program for `table_program` (version and table number set, as pushed to

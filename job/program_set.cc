@@ -12,6 +12,7 @@
 #include "nc_out/infeed.h"
 #include "nc_out/main_program.h"
 #include "nc_out/table_guards.h"
+#include "nc_out/table_layer.h"
 #include "nc_out/table_program.h"
 
 namespace gaugeloop {
@@ -48,29 +49,32 @@ Result<BuiltSpeed> speed_from_plan(Result<WorkSpeedPlan> plan, const JobSettings
   return out;
 }
 
+// The table the settings ask for on the exact path `fine`.
+Result<CurveTable> table_of_kind(const SampledPath& fine, const JobSettings& s, const TablePointsInForce* in_force) {
+  const AdaptiveSettings adaptive{s.table_choice.bound_um, s.table_choice.max_step_deg};
+  switch (s.table_kind) {
+    case TableKind::kAuto:
+      return write_default_table(fine, s.table_choice, s.table_format, in_force);
+    case TableKind::kLinear:
+      return write_linear_table(fine, s.table_step_deg, s.table_format);
+    case TableKind::kSpline:
+      return write_spline_table(fine, s.table_step_deg, s.table_format);
+    case TableKind::kAdaptiveLinear:
+      return write_adaptive_linear_table(fine, adaptive, s.table_format);
+    case TableKind::kAdaptiveSpline:
+      return write_adaptive_spline_table(fine, adaptive, s.table_format);
+    case TableKind::kPoly:
+      return write_poly_table(fine, s.table_step_deg, s.table_format);
+  }
+  return make_error(ErrorCode::kInternal, "unknown table kind");
+}
+
 // The table the settings ask for on the exact path `fine` of one following axis, with the
 // axis guards on the path and on the table as the NC will interpolate it.
 Result<CurveTable> table_for_path(const SampledPath& fine, const AxisLimits& limits, const JobSettings& s,
                                   const TablePointsInForce* in_force, const std::string& what) {
   if (Status g = check_path_guards(fine, limits); !g) return in_step(what + " path", g.error());
-  const AdaptiveSettings adaptive{s.table_choice.bound_um, s.table_choice.max_step_deg};
-  Result<CurveTable> table = [&]() -> Result<CurveTable> {
-    switch (s.table_kind) {
-      case TableKind::kAuto:
-        return write_default_table(fine, s.table_choice, s.table_format, in_force);
-      case TableKind::kLinear:
-        return write_linear_table(fine, s.table_step_deg, s.table_format);
-      case TableKind::kSpline:
-        return write_spline_table(fine, s.table_step_deg, s.table_format);
-      case TableKind::kAdaptiveLinear:
-        return write_adaptive_linear_table(fine, adaptive, s.table_format);
-      case TableKind::kAdaptiveSpline:
-        return write_adaptive_spline_table(fine, adaptive, s.table_format);
-      case TableKind::kPoly:
-        return write_poly_table(fine, s.table_step_deg, s.table_format);
-    }
-    return make_error(ErrorCode::kInternal, "unknown table kind");
-  }();
+  Result<CurveTable> table = table_of_kind(fine, s, in_force);
   if (!table) return in_step(what + " table", table.error());
   if (Status g = check_table_guards(*table, fine, limits); !g) return in_step(what + " table", g.error());
   return table;
@@ -94,8 +98,8 @@ void name_the_part(const JobSettings& s, TableProvenance& provenance) {
 
 }  // namespace
 
-Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings& s,
-                               const TablePointsInForce* in_force) {
+Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings& s, const TablePointsInForce* in_force,
+                               const TableInterpolant* layer_on) {
   Result<MachinePath> path = compute_machine_path(lift_mm, s.part, kFinePathStepDeg);
   if (!path) return in_step("wheel path", path.error());
   BuiltTable out;
@@ -105,6 +109,22 @@ Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings&
     out.speed = std::move(*speed);
   }
   out.fine = fine_path(std::move(path->x_mm), std::move(path->dx_dc_mm_per_deg), std::move(path->d2x_dc2_mm_per_deg2));
+  if (s.layer_design_table_number != 0) {
+    if (layer_on == nullptr) {
+      return make_error(ErrorCode::kInternal, "a correction layer is built against its design table: none given");
+    }
+    if (Status g = check_path_guards(out.fine, s.axis_limits); !g) return in_step("wheel path", g.error());
+    Result<SampledPath> layer = layer_path(out.fine, *layer_on);
+    if (!layer) return in_step("correction layer", layer.error());
+    Result<CurveTable> table = table_of_kind(*layer, s, in_force);
+    if (!table) return in_step("correction layer table", table.error());
+    if (Status g = check_layered_guards(*table, *layer_on, out.fine, s.axis_limits); !g) {
+      return in_step("correction layer table", g.error());
+    }
+    out.fine = std::move(*layer);
+    out.table = std::move(*table);
+    return out;
+  }
   Result<CurveTable> table = table_for_path(out.fine, s.axis_limits, s, in_force, "wheel");
   if (!table) return table.error();
   out.table = std::move(*table);
@@ -168,6 +188,7 @@ Result<std::string> render_speed(const JobSettings& s, const BuiltSpeed& speed, 
 
 MainProgramSource main_source(const JobSettings& s, const std::string& created_utc) {
   MainProgramSource m = main_program_source(s);
+  m.files = s.nc_files.get();
   m.part = s.part.name;
   m.lobe = s.part.lobe;
   m.created_utc = created_utc;
@@ -213,8 +234,44 @@ Result<std::string> render_x_table(const JobSettings& s, const BuiltTable& built
   provenance.table_numbers = s.table_numbers;
   provenance.grinding_cycle = grinding_cycle_text({s.cycle, s.axis_limits.speed_rpm, s.table_format});
   name_the_part(s, provenance);
+  if (s.layer_design_table_number != 0) {
+    provenance.design_program = design_program_name(s.nc_program);
+    provenance.design_table_number = s.layer_design_table_number;
+  }
   return with_archive_header(
       s, render_table_program(s.nc_template, s.nc_template_name, values, built.table, provenance, s.table_format));
+}
+
+Result<LayerDesign> build_layer_design(const PeriodicSpline& design_lift, const JobSettings& s,
+                                       const std::string& created_utc) {
+  JobSettings whole_path = s;
+  whole_path.layer_design_table_number = 0;
+  Result<BuiltTable> whole = build_table(design_lift, whole_path);
+  if (!whole) return whole.error();
+  Result<std::string> program = render_design_table(s, whole->table, created_utc);
+  if (!program) return in_step("design table", program.error());
+  const std::string name = design_program_name(s.nc_program) + ".SPF";
+  Result<DesignTable> table = read_design_table(*program, name, s.layer_design_table_number);
+  if (!table) return in_step("design table", table.error());
+  return LayerDesign{std::move(*whole), std::move(*program), std::move(*table)};
+}
+
+Result<std::string> render_design_table(const JobSettings& s, const CurveTable& design,
+                                        const std::string& created_utc) {
+  const std::string name = design_program_name(s.nc_program);
+  std::map<std::string, std::string> values = template_values(s);
+  values["program_name"] = name;
+  values["created_utc"] = created_utc;
+  values["origin"] = "the drawing";
+  TableProvenance provenance;
+  provenance.table_numbers = {s.layer_design_table_number, s.layer_design_table_number};
+  name_the_part(s, provenance);
+  Result<std::string> program =
+      render_table_program(s.nc_template, s.nc_template_name, values, design, provenance, s.table_format);
+  if (!program || !s.nc_archive_header) return program;
+  Result<std::string> header = archive_header(name, NcProgramKind::kSubprogram);
+  if (!header) return header.error();
+  return *header + *program;
 }
 
 Result<PushCompletion> push_program_set(RunStore& store, const std::filesystem::path& nc_file, const PushFacts& facts,

@@ -20,6 +20,7 @@
 #include "job/nc_push.h"
 #include "nc_out/sampled_path.h"
 #include "nc_out/speed_table.h"
+#include "nc_out/table_layer.h"
 #include "nc_out/table_writer.h"
 #include "storage/run_store.h"
 
@@ -56,8 +57,27 @@ struct BuiltTable {
 // write_default_table), the guards on the table as the NC will interpolate it, and with
 // JobSettings::speed the speed program planned on the same path. Refusals (a wheel that does
 // not fit, a limit broken, a speed the control's block rate cannot follow) are kRefused.
+// With `layer_on` (a correction layer, JobSettings::layer_design_table_number) the table is the
+// layer: written on the path less the design table as the NC interpolates it (`fine` is that
+// layer path), guarded as the sum the control commands (check_layered_guards).
 Result<BuiltTable> build_table(const PeriodicSpline& lift_mm, const JobSettings& s,
-                               const TablePointsInForce* in_force = nullptr);
+                               const TablePointsInForce* in_force = nullptr,
+                               const TableInterpolant* layer_on = nullptr);
+
+// A correction layer's design: the design's whole table (built with the layer off), its
+// program as `nc new` writes it (render_design_table) and that program read back as the
+// control will hold it.
+struct LayerDesign {
+  BuiltTable whole;
+  std::string program;
+  DesignTable table;
+};
+Result<LayerDesign> build_layer_design(const PeriodicSpline& design_lift, const JobSettings& s,
+                                       const std::string& created_utc);
+
+// The design's whole table of a correction layer, rendered from the table template as the
+// subprogram design_program_name(nc_program) defining layer_design_table_number, from C.
+Result<std::string> render_design_table(const JobSettings& s, const CurveTable& design, const std::string& created_utc);
 
 // A pin's tables for `correction_um` (pin frame): the path moved along the grinding normal and
 // split onto X (and Y), the X table (keeping the points in force, as a lobe's), the Y table in

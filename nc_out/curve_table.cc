@@ -92,7 +92,10 @@ std::string render_curve_blocks(const std::vector<CurvePoint>& points, const Cur
 }
 
 std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpolation interpolation,
-                                const CurveTableFormat& format, std::string_view following_axis) {
+                                const CurveTableFormat& format, std::string_view following_axis,
+                                std::string_view leading_axis) {
+  const std::string lead(leading_axis);
+  const std::string lead_word = lead + (lead.size() > 1 ? "=" : "");
   std::string out;
   out.reserve(points.size() * 24 + 32);
   for (size_t i = 0; i < points.size(); ++i) {
@@ -102,8 +105,8 @@ std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpola
     const std::string x = format_fixed(format.round_x_mm(points[i].x_mm), format.x_decimals());
     if (i > 0 && interpolation == Interpolation::kPoly) {
       const int ad = format.coefficient_decimals();
-      out += std::string(i == 1 ? "POLY " : "") + "PO[C]=(" + c + ") PO[" + std::string(following_axis) + "]=(" + x +
-             "," + format_fixed(format.round_coefficient_mm(points[i].a2_mm), ad) + "," +
+      out += std::string(i == 1 ? "POLY " : "") + "PO[" + lead + "]=(" + c + ") PO[" + std::string(following_axis) +
+             "]=(" + x + "," + format_fixed(format.round_coefficient_mm(points[i].a2_mm), ad) + "," +
              format_fixed(format.round_coefficient_mm(points[i].a3_mm), ad) + ")";
       continue;
     }
@@ -112,7 +115,7 @@ std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpola
     } else if (i == 1 && interpolation == Interpolation::kCubicSpline) {
       out += "BNAT ENAT CSPLINE ";
     }
-    out += "C" + c + " " + std::string(following_axis) + x;
+    out += lead_word + c + " " + std::string(following_axis) + x;
   }
   return out;
 }

@@ -90,7 +90,10 @@ std::string render_curve_blocks(const std::vector<CurvePoint>& points, const Cur
 //   POLY PO[C]=(1.000) PO[X]=(0.0003,0.000012,-0.000004)
 //   PO[C]=(2.000) PO[X]=(0.0011,0.000010,-0.000003)
 // Call validate_curve_points first.
+// `leading_axis` C by default; a correction layer's SIM1 is written SIM1=<deg> (an axis name
+// with a digit takes '=' before its value).
 std::string render_table_blocks(const std::vector<CurvePoint>& points, Interpolation interpolation,
-                                const CurveTableFormat& format = {}, std::string_view following_axis = "X");
+                                const CurveTableFormat& format = {}, std::string_view following_axis = "X",
+                                std::string_view leading_axis = "C");
 
 }  // namespace gaugeloop

@@ -3,11 +3,13 @@
 
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <optional>
 #include <vector>
 
 #include "nc_out/nc_template.h"
 #include "nc_out/nc_text.h"
+#include "nc_out/table_program.h"
 
 namespace gaugeloop {
 namespace {
@@ -83,12 +85,161 @@ bool calls_program(std::string_view code, const std::string& name) {
   return upper(first) == "EXTCALL" && upper(code).find("\"" + upper(name) + "\"") != std::string::npos;
 }
 
+// One leading axis of an EGON: its name (upper case) and its factor's numerator and
+// denominator as written (a denominator of 0 makes the numerator a curve table's number).
+struct LeadingLink {
+  std::string axis;
+  std::optional<double> numerator;
+  std::optional<double> denominator;
+};
+
+// An EGON read in full: EGON(following axis, block change, leading axis 1, numerator 1,
+// denominator 1, ...). `error` set when it cannot be read.
+struct GearboxCoupling {
+  std::string following;
+  std::vector<LeadingLink> leading;
+};
+
+std::vector<std::string_view> arguments_of(std::string_view inside) {
+  std::vector<std::string_view> args;
+  while (true) {
+    const size_t comma = inside.find(',');
+    args.push_back(trim(inside.substr(0, comma)));
+    if (comma == std::string_view::npos) return args;
+    inside = inside.substr(comma + 1);
+  }
+}
+
+// Every EGON on a block, with all its leading axes, and whether the block holds a LEADON
+// (which has one leading axis: a layer cannot be made with it).
+std::vector<GearboxCoupling> gearbox_couplings_on(std::string_view code, bool& leadon, std::string& error) {
+  const std::string u = upper(code);
+  leadon = leadon || u.find("LEADON(") != std::string::npos;
+  std::vector<GearboxCoupling> out;
+  for (size_t at = u.find("EGON("); at != std::string::npos; at = u.find("EGON(", at + 1)) {
+    const size_t open = at + 5;
+    const size_t close = u.find(')', open);
+    if (close == std::string::npos) {
+      error = "the coupling has no closing ')'";
+      return out;
+    }
+    const std::vector<std::string_view> args = arguments_of(std::string_view(u).substr(open, close - open));
+    if (args.size() < 5 || (args.size() - 2) % 3 != 0) {
+      error =
+          "EGON needs the following axis, the block change and a leading axis, numerator and denominator "
+          "for each leading axis";
+      return out;
+    }
+    GearboxCoupling c;
+    c.following = std::string(args[0]);
+    for (size_t i = 2; i + 2 < args.size(); i += 3) {
+      c.leading.push_back(
+          {std::string(args[i]), nc_text::parse_number(args[i + 1]), nc_text::parse_number(args[i + 2])});
+    }
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+// A correction layer's main program (render_main_program): both subprograms called, X coupled
+// to C through the design table and to SIM1 through the layer, SIM1 to C 1:1, nothing else.
+Status check_layered_main(std::string_view program, std::string_view template_name,
+                          const std::map<std::string, std::string>& values) {
+  const std::string& subprogram = values.at("program_name");
+  const std::string& number = values.at("table_number");
+  const std::string& design_subprogram = values.at("design_program_name");
+  const std::string& design_number = values.at("design_table_number");
+  const std::string layer_axis = upper(values.count("leading_axis") ? values.at("leading_axis") : "SIM1");
+  auto refuse = [&](const std::string& why) {
+    return make_error(ErrorCode::kInvalidInput,
+                      std::string(template_name) + ": the rendered main program of a correction layer " + why +
+                          "; call {{design_program_name}} and {{program_name}}, couple EGON(" + layer_axis +
+                          ",\"FINE\",C,1,1) and EGON(X,\"FINE\",C,{{design_table_number}},0," + layer_axis +
+                          ",{{table_number}},0), as examples/sinumerik/cam_main_layer.mpf does (docs/nc_output.md)");
+  };
+  if (number == design_number) {
+    return refuse("would couple the design and the layer through the same curve table " + number +
+                  "; give the design table a number of its own");
+  }
+  auto is_number = [](const std::optional<double>& v, const std::string& n) {
+    return v && n == std::to_string(static_cast<long long>(*v)) && *v == std::floor(*v);
+  };
+  bool calls = false;
+  bool calls_design = false;
+  bool x_coupled = false;
+  bool layer_follows_c = false;
+  bool leadon = false;
+  const std::vector<std::string_view> lines = lines_of(program);
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const std::string_view code = block_code(lines[i]);
+    calls = calls || calls_program(code, subprogram);
+    calls_design = calls_design || calls_program(code, design_subprogram);
+    std::string error;
+    const std::vector<GearboxCoupling> found = gearbox_couplings_on(code, leadon, error);
+    const std::string where = " at line " + std::to_string(i + 1);
+    if (!error.empty()) return refuse("has a coupling that cannot be read" + where + " (" + error + ")");
+    if (leadon) return refuse("couples with LEADON" + where + ", which takes one leading axis");
+    for (const GearboxCoupling& c : found) {
+      if (c.following == "X") {
+        bool design = false;
+        bool layer = false;
+        for (const LeadingLink& l : c.leading) {
+          const bool table = l.denominator && *l.denominator == 0.0;
+          if (l.axis == "C" && table && is_number(l.numerator, design_number)) {
+            design = true;
+          } else if (l.axis == layer_axis && table && is_number(l.numerator, number)) {
+            layer = true;
+          } else {
+            return refuse("couples X to " + l.axis + where + " otherwise than through the design table " +
+                          design_number + " (from C) or the layer " + number + " (from " + layer_axis + ")");
+          }
+        }
+        if (!design || !layer) {
+          return refuse("couples X" + where + " without " +
+                        (design ? "the layer " + number + " from " + layer_axis
+                                : "the design table " + design_number + " from C") +
+                        ": the gearbox would grind " + (design ? "without the correction" : "the correction alone"));
+        }
+        x_coupled = true;
+      } else if (c.following == layer_axis) {
+        if (c.leading.size() != 1 || c.leading[0].axis != "C" || !c.leading[0].numerator || !c.leading[0].denominator ||
+            *c.leading[0].denominator == 0.0 || *c.leading[0].numerator != *c.leading[0].denominator) {
+          return refuse("couples " + layer_axis + where +
+                        " otherwise than to C 1:1: the layer would be read at "
+                        "another angle than the design");
+        }
+        layer_follows_c = true;
+      } else {
+        return refuse("couples axis " + c.following + where + "; a lobe's layer couples X and " + layer_axis + " only");
+      }
+    }
+  }
+  if (!calls_design) return refuse("does not call the design table's subprogram " + design_subprogram);
+  if (!calls) return refuse("does not call the layer's subprogram " + subprogram);
+  if (!x_coupled) return refuse("does not couple X to the design table and the layer");
+  if (!layer_follows_c) return refuse("does not couple " + layer_axis + " to C");
+  return {};
+}
+
 }  // namespace
 
 Result<int> coupled_table_number(std::string_view program, std::string_view file_name,
                                  std::string_view following_axis) {
   const std::vector<std::string_view> lines = lines_of(program);
   const std::string axis = upper(following_axis);
+  // A correction layer's main program: the table pushed is the one coupled from SIM1.
+  for (const std::string_view line : lines) {
+    std::string error;
+    bool leadon = false;
+    for (const GearboxCoupling& c : gearbox_couplings_on(block_code(line), leadon, error)) {
+      if (!axis.empty() && c.following != axis) continue;
+      for (const LeadingLink& l : c.leading) {
+        if (l.axis == kLayerLeadingAxis && l.denominator && *l.denominator == 0.0 && l.numerator) {
+          return static_cast<int>(*l.numerator);
+        }
+      }
+    }
+  }
   for (size_t i = 0; i < lines.size(); ++i) {
     std::string error;
     const std::vector<Coupling> found = couplings_on(block_code(lines[i]), error);
@@ -123,6 +274,8 @@ Status check_main_calls_speed_program(std::string_view program, std::string_view
 
 std::string pin_y_program_name(std::string_view program_name) { return std::string(program_name) + "_Y"; }
 
+std::string design_program_name(std::string_view program_name) { return std::string(program_name) + "_DESIGN"; }
+
 Result<std::string> render_main_program(std::string_view template_text, std::string_view template_name,
                                         const std::map<std::string, std::string>& values) {
   const auto y_number_value = values.find("y_table_number");
@@ -133,8 +286,22 @@ Result<std::string> render_main_program(std::string_view template_text, std::str
                                                     "y_program_name to render its main program, not one of them");
   }
   const bool with_y = y_number_value != values.end();
+  const bool layered = values.count("design_table_number") != 0;
+  if (layered != (values.count("design_program_name") != 0)) {
+    return make_error(ErrorCode::kInvalidInput, std::string(template_name) +
+                                                    ": a correction layer needs both design_table_number and "
+                                                    "design_program_name to render its main program, not one of them");
+  }
   Result<std::string> program = render_nc_template(template_text, template_name, values);
   if (!program) return program.error();
+  if (layered) {
+    if (with_y) {
+      return make_error(ErrorCode::kInvalidInput,
+                        std::string(template_name) + ": a correction layer is a lobe's; a crankpin has no layer");
+    }
+    if (Status c = check_layered_main(*program, template_name, values); !c) return c.error();
+    return program;
+  }
   const std::string& subprogram = values.at("program_name");
   const std::string& number = values.at("table_number");
   const std::string y_subprogram = with_y ? y_program_value->second : std::string();

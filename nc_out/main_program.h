@@ -29,12 +29,25 @@ namespace gaugeloop {
 // table_number and Y through y_table_number, each axis only to its own table and no other
 // axis, and the two numbers must differ. Without them (a lobe, or a pin ground C-X) the rule
 // above holds unchanged.
+//
+// A correction layer: when `values` hold "design_program_name" and "design_table_number"
+// (both or neither), the program must call both subprograms, couple X through one EGON to
+// two leading axes, C through the design table and SIM1 through table_number (each with
+// denominator 0, a curve table), couple SIM1 to C 1:1 (numerator equal to denominator) and
+// nothing else; the two numbers must differ.
 Result<std::string> render_main_program(std::string_view template_text, std::string_view template_name,
                                         const std::map<std::string, std::string>& values);
 
 // The Y table's subprogram of a crankpin ground C-X-Y: <program_name>_Y (CRANK_PIN1_XY ->
 // CRANK_PIN1_XY_Y), the file that defines the Y table beside the X table's <program_name>.
 std::string pin_y_program_name(std::string_view program_name);
+
+// The design table's subprogram of a correction layer: <program_name>_DESIGN (CAM ->
+// CAM_DESIGN). It defines the design's whole table, coupled X to C; the layer <program_name>
+// holds the correction alone, X to the virtual axis SIM1 following C, and the electronic
+// gearbox adds the two (docs/nc_output.md, "The correction as a layer"). Written from the
+// drawing and never by a push.
+std::string design_program_name(std::string_view program_name);
 
 // The speed subprogram of a table subprogram: <program_name>_SPEED (CAM -> CAM_SPEED), the
 // file the main program calls for one turn of C at the programmed work speed
@@ -51,7 +64,8 @@ Status check_main_calls_speed_program(std::string_view program, std::string_view
 // The table number the first EGON or LEADON of `program` couples through (a crankpin's X
 // table when its template couples X first, as examples/sinumerik/pin_main.mpf does), or with
 // `following_axis` the first that couples that axis; kInvalidInput naming `file_name` and the
-// line if it has none or it cannot be read.
+// line if it has none or it cannot be read. A correction layer's main program: the table
+// coupled from the virtual axis SIM1 (the layer, the table pushed), not the design table.
 Result<int> coupled_table_number(std::string_view program, std::string_view file_name,
                                  std::string_view following_axis = {});
 

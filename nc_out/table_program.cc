@@ -139,6 +139,10 @@ std::string render_table_header(const CurveTable& table, const TableProvenance& 
     line("lobe", std::to_string(provenance.lobe));
   }
   if (!provenance.pin_mode.empty()) line("pin_mode", provenance.pin_mode);
+  if (provenance.design_table_number != 0) {
+    line("design_program", provenance.design_program);
+    line("design_table_number", std::to_string(provenance.design_table_number));
+  }
   line("body_checksum_fnv1a64", table_body_checksum(body));
   return out;
 }
@@ -148,7 +152,9 @@ Result<std::string> render_table_program(std::string_view template_text, std::st
                                          const TableProvenance& provenance, const CurveTableFormat& format) {
   if (Status s = validate_curve_points(table.points); !s) return s.error();
   const std::string axis = template_following_axis(template_text);
-  const std::string body = render_table_blocks(table.points, table.interpolation, format, axis);
+  const bool layer = provenance.design_table_number != 0;
+  const std::string leading = layer ? std::string(kLayerLeadingAxis) : std::string("C");
+  const std::string body = render_table_blocks(table.points, table.interpolation, format, axis, leading);
   values["table_blocks"] = body;
   values["table_header"] = render_table_header(table, provenance, body);
   values["point_count"] = std::to_string(table.points.size());
@@ -158,6 +164,7 @@ Result<std::string> render_table_program(std::string_view template_text, std::st
   const bool numbered = provenance.table_numbers[0] != 0;
   const int number = table_number_for_version(provenance.table_numbers, provenance.table_version);
   if (numbered) values["table_number"] = std::to_string(number);
+  values["leading_axis"] = leading;
   Result<std::string> program = render_nc_template(template_text, template_name, values);
   if (!program) return program.error();
   // Read back what would be pushed: it must be the table we meant, checksum and all.
@@ -177,7 +184,12 @@ Result<std::string> render_table_program(std::string_view template_text, std::st
   if (back->interpolation != table.interpolation) return refuse("interpolation differs");
   if (numbered && back->table_number != number) {
     return refuse("CTABDEF names table " + std::to_string(back->table_number) + ", not table " +
-                  std::to_string(number) + "; write CTABDEF(" + axis + ",C,{{table_number}},1)");
+                  std::to_string(number) + "; write CTABDEF(" + axis + ",{{leading_axis}},{{table_number}},1)");
+  }
+  if (layer && nc_text::upper(back->leading_axis) != leading) {
+    return refuse("CTABDEF's leading axis is " + back->leading_axis + ", not " + leading +
+                  (layer ? ", the virtual axis a correction layer follows" : std::string()) + "; write CTABDEF(" +
+                  axis + ",{{leading_axis}},{{table_number}},1)");
   }
   return program;
 }

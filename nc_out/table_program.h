@@ -85,7 +85,18 @@ struct TableProvenance {
   std::string part{};
   int lobe = 0;
   std::string pin_mode{};
+  // A correction layer (docs/nc_output.md, "The correction as a layer"): the table is the
+  // correction alone, X against the virtual axis SIM1 that follows C, summed by the gearbox
+  // with the design table `design_table_number` that the subprogram `design_program` defines.
+  // The header names both (keys design_program, design_table_number), {{leading_axis}} is
+  // SIM1 and the CTABDEF read back must name it. Empty: a whole table, leading axis C.
+  std::string design_program{};
+  int design_table_number = 0;
 };
+
+// The virtual leading axis a correction layer is a table of (MD30132 $MA_IS_VIRTUAL_AX = 1,
+// a modulo rotary axis following C 1:1 in the main program).
+inline constexpr std::string_view kLayerLeadingAxis = "SIM1";
 
 // The header comment block for `table` whose rendered body is `body`; lines joined with
 // "\n", none after the last.
@@ -93,7 +104,8 @@ std::string render_table_header(const CurveTable& table, const TableProvenance& 
 
 // Renders the user's table template with `values` plus the table's own placeholders:
 // table_blocks, table_header, point_count, block_count, interpolation, command_error_um, and
-// table_number when provenance.table_numbers is known (the CTABDEF read back must name it).
+// table_number when provenance.table_numbers is known (the CTABDEF read back must name it),
+// leading_axis (C, or SIM1 for a correction layer: the CTABDEF read back must name it).
 // The blocks carry the following axis the template's CTABDEF names: CTABDEF(X,C,..) for the
 // infeed, CTABDEF(Y,C,..) for the wheel height of a crankpin ground C-X-Y (X when it names
 // none that can be read; the read-back then refuses it).

@@ -31,6 +31,7 @@ set(GAUGELOOP_EXAMPLES
 list(APPEND GAUGELOOP_EXAMPLES camshaft.toml)  # names intake_flat.toml and exhaust_roller.toml
 list(APPEND GAUGELOOP_EXAMPLES crankpin_cx.toml crankpin_cxy.toml)  # the sample crankpin, C-X and C-X-Y
 list(APPEND GAUGELOOP_EXAMPLES gear_71.toml gear_71_axis_errors.csv)  # the generating grinder's test gear
+list(APPEND GAUGELOOP_EXAMPLES intake_flat_layer.toml)  # the intake lobe with its correction as a layer
 list(TRANSFORM GAUGELOOP_EXAMPLES PREPEND ${PROJECT_SOURCE_DIR}/examples/)
 install(FILES ${GAUGELOOP_EXAMPLES} DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples)
 install(FILES ${PROJECT_SOURCE_DIR}/examples/gauges/simulator.toml ${PROJECT_SOURCE_DIR}/examples/gauges/other_amplifier.toml
@@ -40,6 +41,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_main.mpf ${PROJECT_SO
               ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_main_speed.mpf ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_speed.spf
               ${PROJECT_SOURCE_DIR}/examples/sinumerik/pin_main.mpf ${PROJECT_SOURCE_DIR}/examples/sinumerik/pin_main_cx.mpf
               ${PROJECT_SOURCE_DIR}/examples/sinumerik/pin_y_table.spf ${PROJECT_SOURCE_DIR}/examples/sinumerik/gear_main.mpf
+              ${PROJECT_SOURCE_DIR}/examples/sinumerik/cam_main_layer.mpf
         DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples/sinumerik)
 
 # The unit names the binary by its installed path. The prefix is known for certain only when

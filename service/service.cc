@@ -422,11 +422,14 @@ void Service::stop() {
 namespace {
 
 // The main programs an approval or a rollback renders: the lobes' ([nc] main_template), and
-// for a crankpin ground C-X its own ([nc] pin_main_template).
+// for a crankpin ground C-X its own ([nc] pin_main_template), for a correction layer its own
+// ([nc] layer_main_template).
 MainProgramSource main_program_for_pushes(const ServiceConfig& c) {
   MainProgramSource m = main_program_source(c.job);
   m.pin_cx_template_text = c.nc_pin_main_template;
   m.pin_cx_template_name = c.nc_pin_main_template_name;
+  m.layer_template_text = c.nc_layer_main_template;
+  m.layer_template_name = c.nc_layer_main_template_name;
   return m;
 }
 

@@ -12,6 +12,7 @@
 #include "compensation/flat_probe.h"
 #include "compensation/periodic_spline.h"
 #include "compensation/wheel_path.h"
+#include "nc_out/table_layer.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
 #include "simulator/seeded_random.h"
@@ -209,10 +210,31 @@ Result<ProgramSlidePath> slide_path_from_program(const std::filesystem::path& nc
   if (!table) return table.error();
   Result<TableInterpolant> nc = TableInterpolant::of(table->points, table->interpolation);
   if (!nc) return nc.error();
+  // A correction layer: the gearbox adds the design table beside it, SIM1 following C 1:1.
+  Result<LayerOf> layer = layer_of(*table, nc_file.string());
+  if (!layer) return layer.error();
+  std::optional<DesignTable> design;
+  if (!layer->design_program.empty()) {
+    const std::filesystem::path design_file = nc_file.parent_path() / (layer->design_program + ".SPF");
+    std::ifstream din(design_file, std::ios::binary);
+    if (!din) {
+      return make_error(ErrorCode::kNotFound, "virtual grinder: the design table " + design_file.string() +
+                                                  " of the correction layer " + nc_file.string() +
+                                                  " cannot be read; write the first program from the drawing");
+    }
+    std::ostringstream design_text;
+    design_text << din.rdbuf();
+    Result<DesignTable> d = read_design_table(design_text.str(), design_file.string(), layer->design_table_number);
+    if (!d) return d.error();
+    design = std::move(*d);
+  }
   ProgramSlidePath path;
   path.following_axis = table->following_axis;
   path.position_mm.resize(kGridRows);
-  for (int k = 0; k < kGridRows; ++k) path.position_mm[static_cast<size_t>(k)] = nc->at(k * kGridStepDeg).x_mm;
+  for (int k = 0; k < kGridRows; ++k) {
+    const double c = k * kGridStepDeg;
+    path.position_mm[static_cast<size_t>(k)] = nc->at(c).x_mm + (design ? design->nc.at(c).x_mm : 0.0);
+  }
   return path;
 }
 

@@ -97,8 +97,10 @@ Result<FollowedSlide> follow_slide(const std::vector<double>& commanded_mm, doub
                                    const MachineErrorModel& model, int part_index, std::string_view source);
 
 // A table program read back as the NC runs it: the table's following axis (CTABDEF's first
-// argument, e.g. "X") and the position it interpolates at C = k * 0.1 deg, 3600 rows. Errors:
-// as commanded_path_from_program.
+// argument, e.g. "X") and the position it interpolates at C = k * 0.1 deg, 3600 rows. A
+// correction layer (its header names its design table, nc_out/table_layer.h) is added to the
+// design table beside it, as the gearbox adds them with SIM1 following C 1:1. Errors: as
+// commanded_path_from_program, and the design table's (read_design_table).
 struct ProgramSlidePath {
   std::string following_axis;
   std::vector<double> position_mm;

@@ -167,6 +167,22 @@ TEST(PartFile, ReadsTheAllowanceAndRefusesABadOne) {
       refused(parse(flat_part("[grinding]\nstock_mm = 5\nroughing_infeed_mm_per_turn = 0.001\n")), "more than 1000"));
 }
 
+TEST(PartFile, ReadsTheCorrectionLayerAndRefusesABadDesignTableNumber) {
+  auto none = parse(flat_part());
+  ASSERT_TRUE(none.ok());
+  EXPECT_EQ(none->layer_design_table_number, 0) << "without [correction_layer]: the whole table";
+  auto by_default = parse(flat_part("[correction_layer]\n"));
+  ASSERT_TRUE(by_default.ok()) << by_default.error().message;
+  EXPECT_EQ(by_default->layer_design_table_number, 5);
+  auto pf = parse(flat_part("[correction_layer]\ndesign_table_number = 40\n"));
+  ASSERT_TRUE(pf.ok()) << pf.error().message;
+  EXPECT_EQ(pf->layer_design_table_number, 40);
+  EXPECT_TRUE(refused(parse(flat_part("[correction_layer]\ndesign_table_number = 1000\n")),
+                      "part.toml:10: key `correction_layer.design_table_number`: 1000 is out of range"));
+  EXPECT_TRUE(refused(parse(flat_part("[correction_layer]\naxis = \"SIM2\"\n")),
+                      "part.toml:10: key `correction_layer.axis`: unknown key"));
+}
+
 TEST(PartFile, RefusesAnInvalidNcProgramName) {
   for (const char* name : {"1CAM", "CAM-1", "", "A234567890123456789012345"}) {
     std::string text = flat_part();

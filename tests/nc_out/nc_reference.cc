@@ -17,7 +17,8 @@ RefTable ref_parse(const std::string& program, char axis) {
   std::istringstream in(program);
   std::string line;
   bool inside = false;
-  const std::regex point(std::string(R"(C(-?[0-9]+\.[0-9]+) )") + axis + R"((-?[0-9]+\.[0-9]+))");
+  // The leading axis: C, or a correction layer's virtual axis written SIM1=<value>.
+  const std::regex point(std::string(R"((?:C|SIM1=)(-?[0-9]+\.[0-9]+) )") + axis + R"((-?[0-9]+\.[0-9]+))");
   const std::string num = R"((-?[0-9]+\.[0-9]+))";
   const std::regex poly(R"(PO\[C\]=\()" + num + R"(\) PO\[)" + std::string(1, axis) + R"(\]=\()" + num + "," + num +
                         "," + num + R"(\))");

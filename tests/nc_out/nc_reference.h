@@ -22,7 +22,8 @@ struct RefTable {
 };
 
 // Blocks between CTABDEF and CTABEND: `C<number> <axis><number>` (X, or Y for a crankpin's Y
-// table), CSPLINE anywhere switches mode; POLY blocks `PO[C]=(c) PO[<axis>]=(x,a2,a3)`.
+// table; a correction layer's `SIM1=<number> X<number>`), CSPLINE anywhere switches mode;
+// POLY blocks `PO[C]=(c) PO[<axis>]=(x,a2,a3)`.
 RefTable ref_parse(const std::string& program, char axis = 'X');
 
 // What the NC makes of the table at C. A failed solve is a test failure (EXPECT).
