@@ -15,9 +15,9 @@
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "core/text_file.h"
+#include "job/layer_files.h"
 #include "job/nc_push.h"
 #include "nc_out/stroke_program.h"
-#include "nc_out/table_layer.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
 #include "report/run_json.h"
@@ -375,24 +375,18 @@ int cmd_check(const NcOptions& o) {
     return kExitOk;
   }
   // A correction layer: the design table it is added to must be there, the one written.
+  Result<std::optional<LayerOnControl>> layer = layer_on_control(*on_disk, *file);
+  if (!layer) return report_error(layer.error());
   std::string design;
-  if (Result<ParsedTable> table = parse_table_program(*on_disk, *file)) {
-    Result<LayerOf> layer = layer_of(*table, *file);
-    if (!layer) return report_error(layer.error());
-    if (!layer->design_program.empty()) {
-      const std::filesystem::path design_file =
-          std::filesystem::path(*file).parent_path() / (layer->design_program + ".SPF");
-      Result<std::string> text = read_regular_file(design_file, "design table");
-      Result<DesignTable> d = text ? read_design_table(*text, design_file.string(), layer->design_table_number)
-                                   : Result<DesignTable>(text.error());
-      if (!d) {
-        std::fprintf(stderr, "gaugeloop: %s is a correction layer, and its design table cannot be used: %s\n",
-                     file->c_str(), d.error().message.c_str());
-        return kExitNcOutput;
-      }
-      design = ", a correction layer added to the design table " + design_file.filename().string() + " (table " +
-               std::to_string(layer->design_table_number) + ", as written from the drawing)";
+  if (*layer) {
+    const LayerOnControl& l = **layer;
+    if (!l.problem.empty()) {
+      std::fprintf(stderr, "gaugeloop: %s is a correction layer, and its design table cannot be used: %s\n",
+                   file->c_str(), l.problem.c_str());
+      return kExitNcOutput;
     }
+    design = ", a correction layer added to the design table " + l.design_file.filename().string() + " (table " +
+             std::to_string(l.design_table_number) + ", as written from the drawing)";
   }
   std::printf("%s: %s version %d as pushed (%s, %s)%s\n", file->c_str(), design.empty() ? "table" : "layer",
               *last ? (**last).table_version : 0, *last ? origin_text((**last).run_id).c_str() : "-",

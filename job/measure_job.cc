@@ -27,6 +27,7 @@
 #include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "core/verdict_text.h"
+#include "job/layer_files.h"
 #include "job/nc_push.h"
 #include "job/pin_files.h"
 #include "job/program_set.h"
@@ -614,7 +615,7 @@ class JobRun {
   // the gauge, so a missing or edited one costs no measurement.
   Status read_design_table_on_control() {
     if (s_.layer_design_table_number == 0 || s_.inspect) return {};
-    const std::filesystem::path file = nc_file_.parent_path() / (design_program_name(s_.nc_program) + ".SPF");
+    const std::filesystem::path file = design_program_path(nc_file_);
     NcFiles& files = s_.nc_files ? *s_.nc_files : real_nc_files();
     Result<std::optional<std::string>> text = files.read_program(file);
     if (!text) return text.error();

@@ -136,10 +136,6 @@ Result<BuiltTable> write_design_table(const JobSettings& s, NcFiles& files, bool
 
 }  // namespace
 
-std::filesystem::path design_program_path(const std::filesystem::path& nc_file) {
-  return nc_file.parent_path() / (design_program_name(nc_file.stem().string()) + ".SPF");
-}
-
 Result<ProgramPreview> preview_new_program(const JobSettings& s) {
   if (Status c = check_job_settings(s); !c) return c.error();
   ProgramPreview p;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/result.h"
+#include "job/layer_files.h"
 #include "job/measure_job.h"
 #include "job/program_set.h"
 #include "nc_out/infeed.h"
@@ -69,10 +70,6 @@ struct NewProgramOptions {
   std::string by;         // who writes it, for the history ("new program from intake.toml by anna")
   std::string from_file;  // the part file, for the history
 };
-
-// The design table's program of a correction layer beside `nc_file` (the layer):
-// <dir>/<stem>_DESIGN.SPF.
-std::filesystem::path design_program_path(const std::filesystem::path& nc_file);
 
 struct NewProgramReport {
   ProgramPreview preview;

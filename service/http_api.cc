@@ -30,6 +30,7 @@
 #include "core/guarded_thread.h"
 #include "core/text_file.h"
 #include "core/utc_time.h"
+#include "job/layer_files.h"
 #include "report/cam_report.h"
 #include "report/gear_report.h"
 #include "report/program_preview.h"
@@ -847,6 +848,18 @@ struct HttpApi::Impl {
       json out = nc_push_json(*push);
       out["program"] = fs::path(*file).stem().string();
       out["program_text"] = push->program_text ? json(*push->program_text) : json(nullptr);
+      // A correction layer: the design table the control adds it to, as it holds it now.
+      out["layer"] = nullptr;
+      if (push->program_text) {
+        Result<std::optional<LayerOnControl>> layer = layer_on_control(*push->program_text, *file);
+        if (layer && *layer) {
+          const LayerOnControl& l = **layer;
+          out["layer"] = {{"design_program", fs::path(l.design_file).stem().string()},
+                          {"design_table_number", l.design_table_number},
+                          {"design_text", l.problem.empty() ? json(l.design_text) : json(nullptr)},
+                          {"design_problem", l.problem.empty() ? json(nullptr) : json(l.problem)}};
+        }
+      }
       return out;
     });
   }

@@ -569,9 +569,11 @@ async function ncPage(p) {
   }));
   try {
     const [ta, tb] = await Promise.all([api("/api/nc/table?" + apiQuery({program, version: a})), api("/api/nc/table?" + apiQuery({program, version: b}))]);
-    document.getElementById("nc-diff").innerHTML = ta.program_text === null || tb.program_text === null
+    const layer = tb.layer ? `<div class="message" id="nc-layer">${esc(program)} is a correction layer: the control adds it (X from the virtual axis SIM1, following C) to the design table ${esc(tb.layer.design_program)} (table ${esc(tb.layer.design_table_number)}), written from the drawing and never by a push.
+      ${tb.layer.design_problem ? `<strong>That design table cannot be used now:</strong> ${esc(tb.layer.design_problem)}` : `<details><summary>The design table as the control holds it</summary><pre>${esc(tb.layer.design_text)}</pre></details>`}</div>` : "";
+    document.getElementById("nc-diff").innerHTML = layer + (ta.program_text === null || tb.program_text === null
       ? `<div class="message">The text of one of these versions was not kept (written by an older gaugeloop).</div>`
-      : diffHtml(ta.program_text, tb.program_text);
+      : diffHtml(ta.program_text, tb.program_text));
   } catch (e) {
     message(document.getElementById("nc-diff"), errorText(e), "error");
   }

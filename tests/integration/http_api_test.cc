@@ -412,6 +412,7 @@ TEST_F(HttpApiTest, NcTableIsTheLastPushWithItsProgramText) {
     EXPECT_EQ(a.j["block_count"], 47);
     EXPECT_EQ(a.j["command_error_um"], 0.497);
     EXPECT_EQ(a.j["program_text"], kProgramV2) << "byte for byte, CR LF kept";
+    EXPECT_TRUE(a.j["layer"].is_null()) << "a whole table, not a correction layer";
   }
   const std::string missing = error_of(get("/api/nc/table?program=CAM_EXHAUST_L1"), 404);
   EXPECT_TRUE(has(missing, "no table of program 'CAM_EXHAUST_L1'")) << missing;
@@ -429,6 +430,26 @@ TEST_F(HttpApiTest, NcTableIsTheLastPushWithItsProgramText) {
   EXPECT_EQ(pending.j[0]["id"], pending_id_);
   EXPECT_EQ(pending.j[0]["verdict"], "hold");
   EXPECT_EQ(pending.j[0]["reason"], "correction changes by 60 um");
+}
+
+// A correction layer's table names the design table the control adds it to, as it holds it now.
+TEST_F(HttpApiTest, NcTableOfACorrectionLayerCarriesItsDesignTable) {
+  const std::string part = std::string(GAUGELOOP_SOURCE_DIR) + "/examples/intake_flat_layer.toml";
+  testing::CommandResult made = testing::run_command("nc new --part " + part + " --data-dir " + dir_.string());
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  start();
+  Answer a = get("/api/nc/table?program=CAM_INTAKE_L1");
+  ASSERT_EQ(a.status, 200) << a.body;
+  ASSERT_TRUE(a.j["layer"].is_object()) << a.body;
+  EXPECT_EQ(a.j["layer"]["design_program"], "CAM_INTAKE_L1_DESIGN");
+  EXPECT_EQ(a.j["layer"]["design_table_number"], 5);
+  EXPECT_EQ(a.j["layer"]["design_text"], testing::slurp(dir_ / "nc" / "CAM_INTAKE_L1_DESIGN.SPF"));
+  EXPECT_TRUE(a.j["layer"]["design_problem"].is_null());
+  fs::remove(dir_ / "nc" / "CAM_INTAKE_L1_DESIGN.SPF");
+  Answer gone = get("/api/nc/table?program=CAM_INTAKE_L1");
+  ASSERT_EQ(gone.status, 200) << gone.body;
+  EXPECT_TRUE(gone.j["layer"]["design_text"].is_null());
+  EXPECT_TRUE(has(gone.j["layer"]["design_problem"].get<std::string>(), "CAM_INTAKE_L1_DESIGN.SPF")) << gone.body;
 }
 
 TEST_F(HttpApiTest, NcTableBeforeAnyPushIs404SayingSo) {

@@ -464,6 +464,15 @@ def run_checks(svc, browser, shots):
           f"the gear's lead report link answers a PDF: {status} {ctype} {body[:20]!r}")
     screenshots(b, shots, "gear", lambda: b.count("#lead-plot svg") == 1)
 
+    # ---- A correction layer: the NC page names the design table the control adds it to ----
+    subprocess.run([svc.gaugeloop, "nc", "new", "--part", str(EXAMPLES / "intake_flat_layer.toml"), "--replace",
+                    "--data-dir", str(svc.work)], check=True, stdout=subprocess.DEVNULL)
+    b.go(ui + "#/nc?program=CAM_INTAKE_L1")
+    b.wait_text("#nc-layer", "is a correction layer")
+    layer = b.text("#nc-layer")
+    check("CAM_INTAKE_L1_DESIGN (table 5)" in layer and "never by a push" in layer,
+          f"the layer names its design table: {layer}")
+
     # ---- Every asset from the service itself, nothing from elsewhere ----
     sources = b.driver.execute_script(
         "return performance.getEntriesByType('resource').map(e => e.name)"
