@@ -149,9 +149,20 @@ constexpr std::string_view kCentralV2 = R"sql(
 ALTER TABLE sync_progress ADD COLUMN rescan_local_id bigint, ADD COLUMN rescan_uuid text COLLATE "C";
 )sql";
 
-constexpr std::array<CentralMigration, 2> kMigrations{{
+// Events name their run by its UUID too, the central history's key for a run (local_run_id is
+// only the grinder's file's): events copied before are given theirs from the runs copied from
+// the same file.
+constexpr std::string_view kCentralV3 = R"sql(
+ALTER TABLE events ADD COLUMN run_uuid text COLLATE "C";
+UPDATE events AS e SET run_uuid = r.uuid FROM runs AS r
+WHERE e.local_run_id IS NOT NULL AND r.source = e.source AND r.local_id = e.local_run_id;
+CREATE INDEX events_by_run ON events (run_uuid) WHERE run_uuid IS NOT NULL;
+)sql";
+
+constexpr std::array<CentralMigration, 3> kMigrations{{
     {1, "runs, run_characteristics, nc_pushes, events and sync_progress", kCentralV1},
     {2, "sync_progress: where a sync from the start stands (rescan_local_id, rescan_uuid)", kCentralV2},
+    {3, "events: the run's UUID (run_uuid)", kCentralV3},
 }};
 
 // Any 64-bit number of our own: held by whoever migrates, so two grinders syncing into an

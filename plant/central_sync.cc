@@ -58,9 +58,9 @@ WHERE uuid = $1)sql";
 
 constexpr std::string_view kInsertEventHead = R"sql(
 INSERT INTO events (uuid, source_machine, source, local_id, at_utc, kind, code, machine, part, lobe, local_run_id,
-                    message, synced_utc)
+                    message, synced_utc, run_uuid)
 VALUES )sql";
-constexpr std::size_t kEventWidth = 13;
+constexpr std::size_t kEventWidth = 14;
 constexpr std::string_view kInsertEventTail = " ON CONFLICT (uuid) DO NOTHING RETURNING 1";
 
 // Inserts `rows` (each `width` parameters) in as few statements as PostgreSQL's limit on
@@ -171,7 +171,7 @@ std::int64_t insert_events(pqxx::work& tx, const std::vector<StoredEvent>& event
     Params p;
     p.text(ev.uuid).text(machine).text(source).integer(e.id).text(ev.at_utc).text(event_kind_name(ev.kind));
     p.text(ev.code).text(ev.machine).text(ev.part).integer(std::int64_t{ev.lobe}).integer(ev.run_id).text(ev.message);
-    p.text(now);
+    p.text(now).text_or_null(e.run_uuid);
     rows.push_back(std::move(p));
   }
   return static_cast<std::int64_t>(insert_rows(tx, kInsertEventHead, kInsertEventTail, kEventWidth, rows));

@@ -354,6 +354,9 @@ struct EventRecord {
 struct StoredEvent {
   std::int64_t id = 0;
   EventRecord event;
+  // The UUID of event.run_id's run, read by events_after for the central history (its key for
+  // the run); empty: no run, or the run is no longer in the file.
+  std::string run_uuid;
 };
 
 struct EventQuery {

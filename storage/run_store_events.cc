@@ -138,13 +138,20 @@ Result<std::vector<StoredEvent>> RunStore::events_after(std::int64_t after_id, i
     return make_error(ErrorCode::kInvalidInput,
                       "cannot read events to replicate: limit " + std::to_string(limit) + " is not 1 or more");
   }
-  Result<Statement> st = Statement::prepare(
-      *conn_, "SELECT " + std::string(kEventColumns) + " FROM events WHERE id > :after ORDER BY id LIMIT :limit",
-      "read events to replicate");
+  // The run's UUID beside its local id (a correlated lookup by primary key: one row a event).
+  Result<Statement> st = Statement::prepare(*conn_,
+                                            "SELECT " + std::string(kEventColumns) +
+                                                ", (SELECT r.uuid FROM runs AS r WHERE r.id = events.run_id) "
+                                                "FROM events WHERE id > :after ORDER BY id LIMIT :limit",
+                                            "read events to replicate");
   if (!st.ok()) return st.error();
   st->bind(":after", after_id);
   st->bind(":limit", limit);
-  return st->collect(read_event);
+  return st->collect([](const Statement& row) {
+    StoredEvent e = read_event(row);
+    e.run_uuid = row.column<std::optional<std::string>>(10).value_or("");
+    return e;
+  });
 }
 
 std::string_view event_kind_name(EventKind kind) {

@@ -441,6 +441,74 @@ TEST_F(CentralTest, ASchemaOneHistoryIsMigratedBySyncingIntoIt) {
                   "3 -"));
 }
 
+// Events name their run by the run's UUID, the central history's key, beside the file's local
+// id: an event of g2's run 1 is not g1's run 1's.
+TEST_F(CentralTest, EventsCarryTheirRunsUuid) {
+  Grinder g1("central-ev1");
+  Grinder g2("central-ev2");
+  fill(*g1.store, "g1", "2026-11-20", 9);
+  fill(*g2.store, "g2", "2026-11-20", 6);
+  EventRecord lone = testing::sample_refusal_event();  // no run
+  lone.machine = "g1";
+  ASSERT_TRUE(g1.store->record_event(lone).ok());
+  ASSERT_TRUE(sync_to_central(*g1.store, url_, "g1").ok());
+  ASSERT_TRUE(sync_to_central(*g2.store, url_, "g2").ok());
+  EXPECT_EQ(count("SELECT count(*) FROM events"), 6);
+  EXPECT_EQ(count("SELECT count(*) FROM events WHERE local_run_id IS NULL AND run_uuid IS NULL"), 1);
+  // Every event with a run names that run: the same file's run under the local id.
+  EXPECT_EQ(count("SELECT count(*) FROM events AS e JOIN runs AS r ON r.uuid = e.run_uuid "
+                  "WHERE r.source = e.source AND r.local_id = e.local_run_id"),
+            5);
+  EXPECT_EQ(count("SELECT count(*) FROM events AS e JOIN runs AS r ON r.uuid = e.run_uuid "
+                  "WHERE r.source <> e.source OR r.local_id <> e.local_run_id"),
+            0);
+}
+
+// A central history of schema 2 (events without their run's UUID) is migrated by the next sync,
+// and the events copied before get their runs' UUIDs from the runs copied from the same file.
+TEST_F(CentralTest, ASchemaTwoHistoryGivesItsEventsTheirRunsUuid) {
+  sql("CREATE TABLE central_schema_version (version integer PRIMARY KEY, applied_utc text NOT NULL, "
+      "description text NOT NULL)");
+  for (const CentralMigration& m : central_migrations()) {
+    if (m.version > 2) break;
+    sql(std::string(m.sql));
+    sql("INSERT INTO central_schema_version VALUES (" + std::to_string(m.version) + ", '2026-11-01T00:00:00Z', 'v')");
+  }
+  auto g = std::make_unique<Grinder>("central-v2");
+  fill(*g->store, "g1", "2026-11-22", 8);
+  // What a schema-2 sync copied: the runs, and the events without run_uuid.
+  const std::string source = std::filesystem::weakly_canonical(g->store->path()).string();
+  Result<std::vector<StoredEvent>> events = g->store->events_after(0, 100);
+  ASSERT_TRUE(events.ok()) << events.error().message;
+  ASSERT_EQ(events->size(), 2u);
+  for (const StoredEvent& e : *events) {
+    EXPECT_EQ(
+        sql("INSERT INTO runs (uuid, source_machine, source, local_id, started_utc, finished_utc, machine, part, lobe, "
+            "gauge, status, revolutions, degrees_captured, polls, reconnects, discarded_revolutions, zero_offset_mm, "
+            "max_abs_error_um, rms_error_um, peak_to_valley_um, repeatability_um, inspection, verdict, "
+            "lift_error_reference, synced_utc) VALUES ('" +
+            e.run_uuid + "', 'g1', '" + source + "', " + std::to_string(*e.event.run_id) +
+            ", 's', 'f', 'g1', 'p', 1, 'g', 'measured', 3, 360, 0, 0, 0, 0, 0, 0, 0, 0, false, 'in', 'best_fit', "
+            "'now')"),
+        "");
+    EXPECT_EQ(sql("INSERT INTO events (uuid, source_machine, source, local_id, at_utc, kind, code, machine, part, "
+                  "lobe, local_run_id, message, synced_utc) VALUES ('" +
+                  e.event.uuid + "', 'g1', '" + source + "', " + std::to_string(e.id) +
+                  ", 'a', 'refusal', 'c', 'g1', 'p', 1, " + std::to_string(*e.event.run_id) + ", 'm', 'now')"),
+              "");
+  }
+  ASSERT_EQ(count("SELECT count(*) FROM events"), 2);
+  CentralSyncOptions from_start;
+  from_start.from_start = true;
+  Result<CentralSyncCounts> synced = sync_to_central(*g->store, url_, "g1", from_start);
+  ASSERT_TRUE(synced.ok()) << synced.error().message;
+  EXPECT_EQ(count("SELECT max(version) FROM central_schema_version"), 3);
+  EXPECT_EQ(count("SELECT count(*) FROM events WHERE run_uuid IS NULL"), 0);
+  EXPECT_EQ(count("SELECT count(*) FROM events AS e JOIN runs AS r ON r.uuid = e.run_uuid AND r.local_id = "
+                  "e.local_run_id"),
+            2);
+}
+
 // ---- queries ----
 
 TEST_F(CentralTest, EveryQueryAnswersWithTheLocalFilesRowsInItsOrder) {
