@@ -69,11 +69,22 @@ Status write_file_atomically(const std::filesystem::path& path, std::string_view
     return io_error("cannot rename into place", path, err);
   }
   int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  int flush_error = 0;
   if (dfd >= 0) {
-    ::fsync(dfd);  // best effort: some filesystems refuse fsync on directories
+    if (::fsync(dfd) != 0) flush_error = errno;
     ::close(dfd);
   }
   reached(AtomicWriteStep::kRenamed);
+  // Some file systems (network shares among them) do not fsync a directory: as before. Any
+  // other failure leaves the rename in place but not known to be on disk.
+  if (flush_error != 0 && flush_error != EINVAL && flush_error != ENOTSUP && flush_error != EOPNOTSUPP &&
+      flush_error != EBADF) {
+    return make_error(ErrorCode::kIo, "renamed into place, but the directory " + dir.string() +
+                                          " could not be flushed (" + std::strerror(flush_error) +
+                                          "): " + path.string() +
+                                          " holds the new contents now, and may hold the old ones again after a "
+                                          "power cut");
+  }
   return {};
 }
 

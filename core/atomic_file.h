@@ -18,7 +18,7 @@ namespace gaugeloop {
 enum class AtomicWriteStep {
   kTemporaryWritten,  // the temporary file holds the contents, not yet flushed
   kFlushed,           // the temporary file is on disk (fsync), not yet renamed
-  kRenamed,           // `path` holds the new contents; the directory is flushed
+  kRenamed,           // `path` holds the new contents; the directory is flushed (or refused)
 };
 using AtomicWriteObserver = std::function<void(AtomicWriteStep step)>;
 
@@ -30,6 +30,11 @@ using AtomicWriteObserver = std::function<void(AtomicWriteStep step)>;
 // removed. `observer`, if given, is called after each step. The file gets permission bits
 // `mode`; the temporary file is made owner-only (0600) and changed to `mode` before it is
 // renamed, so a secret written with mode 0600 is never readable by anyone else.
+// The directory's fsync: a file system that does not do it on directories (EINVAL, ENOTSUP:
+// some network shares) is taken as it is; any other failure (EIO, ENOSPC) is an error after
+// kRenamed was reached, saying `path` holds the new contents but the rename may not survive a
+// power cut (the old contents may be back after it): the caller must not take the write as
+// undone, nor as durable.
 Status write_file_atomically(const std::filesystem::path& path, std::string_view contents,
                              const AtomicWriteObserver& observer = {}, unsigned mode = 0644);
 

@@ -672,16 +672,28 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   if (!intent_id) return not_pushed(intent_id.error());
   reached(PushStep::kIntentRecorded);
 
-  Status written = files.write_program(nc_file, *program, [&reached](AtomicWriteStep step) {
+  bool renamed = false;
+  Status written = files.write_program(nc_file, *program, [&reached, &renamed](AtomicWriteStep step) {
     switch (step) {
       case AtomicWriteStep::kTemporaryWritten:
         return reached(PushStep::kTemporaryWritten);
       case AtomicWriteStep::kFlushed:
         return reached(PushStep::kFlushed);
       case AtomicWriteStep::kRenamed:
+        renamed = true;
         return reached(PushStep::kRenamed);
     }
   });
+  if (!written && renamed) {
+    // On the control, but perhaps not after a power cut: neither pushed nor abandoned. The
+    // intent stays open; reconciliation records it if the control still holds the program,
+    // abandons it if the old one came back.
+    Error e = written.error();
+    e.message = what + " is on the control, but not known to be on its disk (" + e.message +
+                "); the push journal keeps it open, and the next push to this file or `gaugeloop nc reconcile` "
+                "records it if the control still holds it";
+    return e;
+  }
   if (!written) {
     // Best effort: should this fail too, the next push finds the intent open, the file
     // without its program, and abandons it then.

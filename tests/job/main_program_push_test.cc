@@ -114,6 +114,35 @@ TEST_F(MainProgramPushTest, ThreePushesAlternateTheTableNumberAndTheMainProgramC
   }
 }
 
+// A table renamed into place whose directory then cannot be flushed (EIO) is on the control but
+// may not survive a power cut: not reported pushed, not abandoned. The intent stays open, and
+// reconciliation records it once the control still holds it.
+TEST_F(MainProgramPushTest, ARenameTheDirectoryCannotFlushIsNeitherPushedNorAbandoned) {
+  testing::FailingNcFiles files;
+  ASSERT_TRUE(push(files).ok());
+  files.fail_directory_flush = true;
+  Result<PushCompletion> r = push(files);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::kIo);
+  EXPECT_NE(r.error().message.find("not known to be on its disk"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("nc reconcile"), std::string::npos) << r.error().message;
+  Result<std::optional<NcPush>> last = store_->last_push(nc_file().string());
+  ASSERT_TRUE(last.ok() && last->has_value());
+  EXPECT_EQ((**last).table_version, 1) << "version 2 is not recorded as pushed";
+  Result<std::vector<PushIntent>> open = store_->open_push_intents();
+  ASSERT_TRUE(open.ok());
+  ASSERT_EQ(open->size(), 1u) << "the intent of version 2 stays open";
+  EXPECT_EQ(open->front().push.table_version, 2);
+  // The control still holds version 2 (no power cut came): reconciliation records it.
+  files.fail_directory_flush = false;
+  Result<ReconcileReport> settled = reconcile_pushes(*store_, nc_file(), files);
+  ASSERT_TRUE(settled.ok()) << settled.error().message;
+  EXPECT_EQ(settled->completed, 1);
+  last = store_->last_push(nc_file().string());
+  ASSERT_TRUE(last.ok() && last->has_value());
+  EXPECT_EQ((**last).table_version, 2);
+}
+
 TEST_F(MainProgramPushTest, AMainTemplateWithAnUnknownPlaceholderIsRefusedBeforeAnythingIsWritten) {
   testing::FailingNcFiles files;
   main_.template_text += "; {{wheel_speed}}\n";

@@ -19,6 +19,9 @@ class FailingNcFiles final : public NcFiles {
   std::vector<Op> calls;     // every operation asked for, in order
   // A write to a file whose name ends with this ("_MAIN.MPF") fails as on a full disk; empty: none.
   std::string fail_writes_ending_with;
+  // Writes go through, and then fail as a directory that cannot be flushed does (EIO after the
+  // rename, write_file_atomically): the file is in place, the error says it may not stay.
+  bool fail_directory_flush = false;
 
   Result<DirectoryLock> lock_directory(const std::filesystem::path& dir) override {
     calls.push_back(Op::kLock);
@@ -38,7 +41,12 @@ class FailingNcFiles final : public NcFiles {
     if (!fail_writes_ending_with.empty() && path.filename().string().ends_with(fail_writes_ending_with)) {
       return Error{ErrorCode::kIo, "No space left on device (scripted)"};
     }
-    return real_nc_files().write_program(path, contents, observer);
+    Status written = real_nc_files().write_program(path, contents, observer);
+    if (written && fail_directory_flush) {
+      return Error{ErrorCode::kIo,
+                   "renamed into place, but the directory could not be flushed (Input/output error, scripted)"};
+    }
+    return written;
   }
   Result<int> remove_leftovers(const std::filesystem::path& path) override {
     calls.push_back(Op::kRemoveLeftovers);
