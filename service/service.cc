@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <deque>
 #include <thread>
 #include <utility>
@@ -25,7 +26,8 @@ using nlohmann::json;
 // no thread that records one (the PLC trigger's above all) waits for the database.
 class EventWriter {
  public:
-  EventWriter() {
+  // `after_run_events` is called (on the writer's thread) once events of a run are written.
+  explicit EventWriter(std::function<void()> after_run_events) : after_run_events_(std::move(after_run_events)) {
     thread_ = start_guarded_thread("event writer",
                                    [this] {
                                      // An exception while writing is logged and the writer goes on: the queue must
@@ -140,6 +142,15 @@ class EventWriter {
           }
           settled_ += batch.size();
           written_.notify_all();
+          // Events of a run written after the run's own sync: the plant hears of them now, not at
+          // the next interval.
+          const bool of_a_run =
+              written.ok() && std::any_of(batch.begin(), batch.end(), [](const Item& i) { return i.event.run_id; });
+          if (of_a_run && after_run_events_) {
+            lock.unlock();
+            after_run_events_();
+            lock.lock();
+          }
           break;
         }
         // Busy or refusing: the same events again after a pause (the database's busy timeout
@@ -192,6 +203,7 @@ class EventWriter {
   std::atomic<long long> dropped_{0};
   std::optional<RunStore> store_;  // writer thread only
   std::filesystem::path store_path_;
+  std::function<void()> after_run_events_;
   std::thread thread_;
 };
 
@@ -241,7 +253,9 @@ json job_report_json(const JobReport& r) {
 Service::Service(ServiceConfig config, GaugeFactory gauge)
     : gauge_factory_(std::move(gauge)),
       config_(std::make_shared<const ServiceConfig>(std::move(config))),
-      events_(std::make_unique<EventWriter>()) {}
+      events_(std::make_unique<EventWriter>([this] {
+        if (CentralSyncer* central = central_.load()) central->notify();
+      })) {}
 
 Service::~Service() { stop(); }
 
@@ -493,6 +507,7 @@ Result<json> Service::rollback(const std::string& program, int table_version, co
 }
 
 json Service::health() const {
+  CentralSyncer* const central = central_.load();
   const std::shared_ptr<const ServiceConfig> c = config();
   json parts = json::array();
   for (const ServicePart& p : c->parts) parts.push_back({{"part", p.file.part.name}, {"lobe", p.file.part.lobe}});
@@ -508,13 +523,13 @@ json Service::health() const {
           {"thread_faults", thread_faults_.load()},
           {"plc", plc_status_ ? plc_status_() : json(nullptr)},
           {"outbox", outbox_ != nullptr ? outbox_->health() : json(nullptr)},
-          {"central", central_ != nullptr ? central_->health() : json(nullptr)},
+          {"central", central != nullptr ? central->health() : json(nullptr)},
           {"integrity", integrity_ != nullptr ? integrity_->health() : json(nullptr)}};
 }
 
 void Service::tell_plant() const {
   if (outbox_ != nullptr) outbox_->notify();
-  if (central_ != nullptr) central_->notify();
+  if (CentralSyncer* central = central_.load()) central->notify();
 }
 
 void Service::plant_state(const std::string& state, const std::string& detail) const {
@@ -542,7 +557,7 @@ std::string Service::metrics() const {
   m += "# TYPE gaugeloop_service_events_dropped_total counter\n";
   m += "gaugeloop_service_events_dropped_total " + std::to_string(events_->dropped()) + "\n";
   if (outbox_ != nullptr) m += outbox_->metrics();
-  if (central_ != nullptr) m += central_->metrics();
+  if (CentralSyncer* central = central_.load()) m += central->metrics();
   if (integrity_ != nullptr) m += integrity_->metrics();
   return m;
 }

@@ -172,7 +172,8 @@ class Service {
   // and it is told after every run, push and state change.
   void set_outbox(OutboxSender* sender) { outbox_ = sender; }
   // The sync into the plant's central history ([plant.central]); null: none. As set_outbox:
-  // /api/health gets its "central", /metrics its series, and it is told after every run and push.
+  // /api/health gets its "central", /metrics its series, and it is told after every run and push,
+  // and when events of a run are written (the event writer's thread may already run: atomic).
   void set_central_sync(CentralSyncer* syncer) { central_ = syncer; }
   // The run database's full check beside the service (service/integrity_watch.h); null: none.
   // As set_outbox: /api/health gets its "integrity", /metrics its series.
@@ -211,7 +212,7 @@ class Service {
   mutable std::atomic<long long> thread_faults_{0};
   std::function<nlohmann::json()> plc_status_;
   OutboxSender* outbox_ = nullptr;
-  CentralSyncer* central_ = nullptr;
+  std::atomic<CentralSyncer*> central_{nullptr};
   IntegrityWatch* integrity_ = nullptr;
   std::string database_damaged_;  // guarded by slot_mutex_: why runs and pushes are refused
   struct CachedPreview {

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "plant/central_syncer.h"
+#include "service/service.h"
 #include "storage/run_store.h"
 #include "tests/support/postgres_server.h"
 #include "tests/support/raw_http.h"
@@ -136,6 +137,30 @@ TEST_F(CentralSyncerTest, AServerDownLosesNothingAndHealthSaysSoUntilItIsBack) {
   EXPECT_EQ(syncer.health()["degraded"], false);
   EXPECT_TRUE(syncer.health()["last_error"].is_null());
   EXPECT_GE(syncer.status().syncs_failed, 2);
+}
+
+// An event of a run that the service writes after the run's own sync (a push's outcome, a
+// refusal) reaches the central history at once, not at the next interval (an hour here).
+TEST_F(CentralSyncerTest, AnEventOfARunWrittenAfterItsSyncIsCopiedWithoutWaitingTheInterval) {
+  const std::string url = shared_postgres().create_database();
+  ASSERT_FALSE(url.empty());
+  const std::string db = url.substr(url.rfind('/') + 1);
+  add_runs(1, 0);
+  CentralSyncer syncer(db_path(), settings(url, std::chrono::hours(1)), "g1");
+  ASSERT_TRUE(wait_until([&] { return syncer.status().runs_copied == 1 && syncer.status().caught_up; }, kWithin))
+      << syncer.status().last_error;
+  ServiceConfig config;
+  config.job.db_path = db_path();
+  Service service(config, {});
+  service.set_central_sync(&syncer);
+  service.record_event(EventKind::kInfo, "pushed", "intake", 1, 1, "the table of run 1 was pushed");
+  ASSERT_TRUE(wait_until(
+      [&] { return shared_postgres().psql(db, "SELECT count(*) FROM events WHERE run_uuid IS NOT NULL") == "1"; },
+      kWithin))
+      << syncer.status().last_error;
+  EXPECT_EQ(shared_postgres().psql(db, "SELECT e.code FROM events AS e JOIN runs AS r ON r.uuid = e.run_uuid"),
+            "pushed");
+  service.stop();
 }
 
 TEST_F(CentralSyncerTest, TheServiceSyncsItsFileAndShowsItInHealthAndMetrics) {
