@@ -1293,6 +1293,7 @@ struct HttpApi::Impl {
   int port = 0;
   std::thread listener;
   std::atomic<bool> listener_done{false};
+  std::unique_ptr<HttpFront> front;  // plain HTTP: the connections' front door
 };
 
 HttpApi::HttpApi(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -1306,7 +1307,9 @@ void HttpApi::set_token(std::string token) {
   impl_->token = std::move(token);
 }
 
-bool HttpApi::alive() const { return impl_->server->is_running() && !impl_->listener_done; }
+bool HttpApi::alive() const {
+  return impl_->server->is_running() && !impl_->listener_done && (!impl_->front || impl_->front->alive());
+}
 
 namespace {
 
@@ -1339,7 +1342,7 @@ Result<std::unique_ptr<httplib::Server>> make_server(const HttpSettings& setting
 }  // namespace
 
 Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, std::filesystem::path db_path,
-                                                HttpWrites writes, HttpStatus status) {
+                                                HttpWrites writes, HttpStatus status, HttpFrontLimits front) {
   if (settings.port < 0 || settings.port > 65535) {
     return make_error(ErrorCode::kInvalidInput,
                       "HTTP port " + std::to_string(settings.port) + " is not a port; use 1 to 65535, or 0 for any");
@@ -1392,17 +1395,29 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
     ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
   });
   s.server->set_logger([](R q, const httplib::Response& a) {
-    spdlog::debug("http: {} {} from {} -> {}", q.method, q.path, q.remote_addr, a.status);
+    // Behind the front the peer is the front: the client is its X-Forwarded-For.
+    const std::string from = q.has_header("X-Forwarded-For") ? q.get_header_value("X-Forwarded-For") : q.remote_addr;
+    spdlog::debug("http: {} {} from {} -> {}", q.method, q.path, from, a.status);
   });
 
-  const int port = settings.port == 0 ? s.server->bind_to_any_port(settings.host)
-                                      : (s.server->bind_to_port(settings.host, settings.port) ? settings.port : -1);
+  // Plain HTTP: the server on loopback behind the front, which takes the address asked for.
+  const bool behind_front = settings.tls_cert.empty();
+  const std::string server_host = behind_front ? std::string("127.0.0.1") : settings.host;
+  const int server_port = behind_front ? 0 : settings.port;
+  const int port = server_port == 0 ? s.server->bind_to_any_port(server_host)
+                                    : (s.server->bind_to_port(server_host, server_port) ? server_port : -1);
   if (port < 0) {
-    return make_error(ErrorCode::kIo, "cannot serve HTTP on " + settings.host + ":" + std::to_string(settings.port) +
+    return make_error(ErrorCode::kIo, "cannot serve HTTP on " + server_host + ":" + std::to_string(server_port) +
                                           ": the port is in use or the host is not an address of this machine; "
                                           "change [http] host or port");
   }
   s.port = port;
+  if (behind_front) {
+    Result<std::unique_ptr<HttpFront>> f = HttpFront::start(settings.host, settings.port, port, front);
+    if (!f) return f.error();
+    s.front = std::move(*f);
+    s.port = s.front->port();
+  }
   s.listener = start_guarded_thread(
       "HTTP listener",
       [&s] {
@@ -1421,6 +1436,7 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
 
 void HttpApi::stop() {
   if (!impl_ || !impl_->listener.joinable()) return;
+  if (impl_->front) impl_->front->stop();
   impl_->server->stop();
   impl_->listener.join();
 }

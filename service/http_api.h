@@ -15,6 +15,7 @@
 #include "core/result.h"
 #include "report/program_preview.h"
 #include "report/shaft.h"
+#include "service/http_front.h"
 
 namespace gaugeloop {
 
@@ -78,8 +79,11 @@ class HttpApi {
   // cannot bind (in use, or not an address of this machine); kInvalidInput naming the files
   // when only one of tls_cert and tls_key is set, or they cannot be read or loaded as a PEM
   // certificate and its (unencrypted) key.
+  // Plain HTTP goes through the front (service/http_front.h, `front`: its limits), which
+  // listens on host:port and hands complete request heads to the server on loopback; HTTPS is
+  // served by the server itself.
   static Result<std::unique_ptr<HttpApi>> start(const HttpSettings& settings, std::filesystem::path db_path,
-                                                HttpWrites writes, HttpStatus status);
+                                                HttpWrites writes, HttpStatus status, HttpFrontLimits front = {});
 
   HttpApi(const HttpApi&) = delete;
   HttpApi& operator=(const HttpApi&) = delete;

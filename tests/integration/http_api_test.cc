@@ -767,6 +767,26 @@ TEST_F(HttpApiTest, StopClosesThePortAndIsIdempotent) {
   EXPECT_FALSE(c.Get("/api/health")) << "nothing listens after stop";
 }
 
+// A head that does not come whole within the front's head timeout is answered 408 and closed;
+// the next client is served.
+TEST_F(HttpApiTest, AHeadThatDoesNotComeWholeInTimeIsAnswered408) {
+  ASSERT_TRUE(RunStore::open(db()).ok());
+  HttpSettings settings;
+  settings.port = 0;
+  HttpFrontLimits limits;
+  limits.head_timeout = std::chrono::milliseconds(300);
+  Result<std::unique_ptr<HttpApi>> api = HttpApi::start(settings, db(), {}, {}, limits);
+  ASSERT_TRUE(api.ok()) << api.error().message;
+  const int port = (*api)->port();
+  const std::string partial = testing::raw_http(port, "GET /api/health HTTP/1.1\r\nHost: x\r\n");
+  EXPECT_EQ(partial.rfind("HTTP/1.1 408", 0), 0u) << partial;
+  EXPECT_TRUE(has(partial, "the request's head did not come whole within 300 ms")) << partial;
+  const std::string whole = testing::raw_http(port, "GET /api/health HTTP/1.1\r\nHost: x\r\n\r\n");
+  EXPECT_EQ(whole.rfind("HTTP/1.1 200", 0), 0u) << whole.substr(0, 200);
+  // Passed on with the client's address, one request a connection.
+  EXPECT_TRUE(has(whole, "Connection: close")) << whole.substr(0, 400);
+}
+
 TEST_F(HttpApiTest, ABusyPortIsAnErrorNamingTheAddress) {
   start();
   HttpSettings taken;

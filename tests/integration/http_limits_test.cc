@@ -2,7 +2,12 @@
 // before it is buffered, whatever its transfer encoding, and a write without the token is
 // refused before a byte of its body is read. Measured on the process: its peak resident
 // memory (VmHWM) before and after.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <cstdint>
 #include <cstdio>
@@ -10,6 +15,7 @@
 #include <fstream>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "tests/support/cli.h"
 #include "tests/support/raw_http.h"
@@ -130,6 +136,136 @@ TEST_F(HttpApiLimitsTest, AHugeChunkedBodyCostsTheServiceUnder16MegabytesWithOrW
   auto health = cli.Get("/api/health");
   ASSERT_TRUE(health) << log();
   EXPECT_EQ(health->status, 200) << "still serving";
+}
+
+// A connection from `source` (any 127.x.y.z: loopback answers them all) to 127.0.0.1:`port`,
+// `bytes` sent; -1 if it could not be made.
+int connect_from(const std::string& source, int port, const std::string& bytes) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) return -1;
+  sockaddr_in local{};
+  local.sin_family = AF_INET;
+  ::inet_pton(AF_INET, source.c_str(), &local.sin_addr);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&local), sizeof local) != 0 ||
+      ::connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof to) != 0 ||
+      ::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(bytes.size())) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+// What comes on `fd` until the peer closes it (a guard of 60 s against a hang, not a clock).
+std::string read_until_closed(int fd) {
+  std::string out;
+  char buf[4096];
+  for (;;) {
+    pollfd p{fd, POLLIN, 0};
+    if (::poll(&p, 1, 60 * 1000) <= 0) break;
+    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+    if (n <= 0) break;
+    out.append(buf, static_cast<std::size_t>(n));
+  }
+  return out;
+}
+
+// 200 clients that send a request line and a header line and then nothing more (as a client
+// sending one header line a second would): the health check and the metrics still answer.
+TEST_F(HttpApiLimitsTest, TwoHundredSlowClientsDoNotSilenceTheHealthCheck) {
+  ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
+  const int port = service.port();
+  ASSERT_GT(port, 0) << log();
+  std::vector<int> slow;
+  for (int i = 0; i < 200; ++i) {
+    // Eight addresses, 25 each: under the cap of 32 connections an address.
+    const int fd =
+        connect_from("127.0.0." + std::to_string(2 + i % 8), port, "GET /api/runs HTTP/1.1\r\nHost: grinder\r\n");
+    ASSERT_GE(fd, 0) << "slow client " << i;
+    slow.push_back(fd);
+  }
+  const std::string health = testing::raw_http(port, "GET /api/health HTTP/1.1\r\nHost: x\r\n\r\n");
+  EXPECT_EQ(health.rfind("HTTP/1.1 200", 0), 0u) << health.substr(0, 300);
+  EXPECT_NE(health.find("\"state\""), std::string::npos) << health;
+  const std::string metrics = testing::raw_http(port, "GET /metrics HTTP/1.1\r\nHost: x\r\n\r\n");
+  EXPECT_EQ(metrics.rfind("HTTP/1.1 200", 0), 0u) << metrics.substr(0, 300);
+  // The slow clients are still waited for, not answered.
+  int answered = 0;
+  for (const int fd : slow) {
+    pollfd p{fd, POLLIN, 0};
+    answered += ::poll(&p, 1, 0) > 0 ? 1 : 0;
+    ::close(fd);
+  }
+  EXPECT_EQ(answered, 0);
+}
+
+// One address may hold 32 connections: the 33rd and later are answered 503 and closed at once,
+// and another address is still served.
+TEST_F(HttpApiLimitsTest, OneAddressHoldsAtMost32Connections) {
+  ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
+  const int port = service.port();
+  ASSERT_GT(port, 0) << log();
+  std::vector<int> held;
+  for (int i = 0; i < 32; ++i) {
+    const int fd = connect_from("127.0.0.3", port, "GET /api/runs HTTP/1.1\r\n");
+    ASSERT_GE(fd, 0);
+    held.push_back(fd);
+  }
+  const int over = connect_from("127.0.0.3", port, "GET /api/health HTTP/1.1\r\nHost: x\r\n\r\n");
+  ASSERT_GE(over, 0);
+  const std::string refused = read_until_closed(over);
+  ::close(over);
+  EXPECT_EQ(refused.rfind("HTTP/1.1 503", 0), 0u) << refused;
+  EXPECT_NE(refused.find("too many connections from 127.0.0.3"), std::string::npos) << refused;
+  const std::string other = testing::raw_http(port, "GET /api/health HTTP/1.1\r\nHost: x\r\n\r\n");
+  EXPECT_EQ(other.rfind("HTTP/1.1 200", 0), 0u) << other.substr(0, 300);
+  for (const int fd : held) ::close(fd);
+}
+
+// A header line of 100 MB is answered 431 after its first 8 KiB; the service's peak resident
+// memory grows by less than 1 MB. The request line has a bound of its own (414).
+TEST_F(HttpApiLimitsTest, AHundredMegabyteHeaderLineCostsUnderAMegabyte) {
+  ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
+  const int port = service.port();
+  ASSERT_GT(port, 0) << log();
+  httplib::Client cli("127.0.0.1", port);
+  ASSERT_TRUE(cli.Get("/api/health")) << log();
+  const long peak_before_kb = status_kb(service.pid(), "VmHWM");
+  const std::string head = "GET /api/health HTTP/1.1\r\nHost: x\r\nX-Long: ";
+  const std::string piece(64 * 1024, 'x');
+  std::uint64_t given = 0;
+  bool head_given = false;
+  const testing::RawExchange long_line = testing::raw_exchange(
+      port,
+      [&]() -> std::string_view {
+        if (!head_given) {
+          head_given = true;
+          return head;
+        }
+        if (given >= 100ull * 1024 * 1024) return {};
+        given += piece.size();
+        return piece;
+      },
+      /*until_closed=*/true);
+  EXPECT_EQ(long_line.answer.rfind("HTTP/1.1 431", 0), 0u) << long_line.answer.substr(0, 300);
+  EXPECT_NE(long_line.answer.find("a header line is longer than 8 KiB"), std::string::npos) << long_line.answer;
+  EXPECT_FALSE(long_line.all_sent) << "the connection ends instead of the line being read";
+  const long peak_after_kb = status_kb(service.pid(), "VmHWM");
+  EXPECT_LT(peak_after_kb - peak_before_kb, 1024) << peak_before_kb << " kB before, " << peak_after_kb << " kB after";
+  std::printf("service peak resident memory: %ld kB before, %ld kB after a 100 MB header line\n", peak_before_kb,
+              peak_after_kb);
+
+  const std::string long_target =
+      testing::raw_http(port, "GET /api/runs?part=" + std::string(9000, 'a') + " HTTP/1.1\r\nHost: x\r\n\r\n");
+  EXPECT_EQ(long_target.rfind("HTTP/1.1 414", 0), 0u) << long_target.substr(0, 300);
+  std::string many_headers = "GET /api/health HTTP/1.1\r\n";
+  for (int i = 0; i < 100; ++i) many_headers += "X-" + std::to_string(i) + ": " + std::string(1000, 'v') + "\r\n";
+  const std::string too_much = testing::raw_http(port, many_headers + "\r\n");
+  EXPECT_EQ(too_much.rfind("HTTP/1.1 431", 0), 0u) << too_much.substr(0, 300);
+  EXPECT_NE(too_much.find("head is larger than 64 KiB"), std::string::npos) << too_much.substr(0, 300);
 }
 
 }  // namespace
