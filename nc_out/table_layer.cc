@@ -38,22 +38,32 @@ Result<DesignTable> read_design_table(std::string_view text, std::string_view fi
   return DesignTable{std::move(*parsed), std::move(*nc)};
 }
 
-Result<SampledPath> layer_path(const SampledPath& whole, const TableInterpolant& design) {
-  if (Status s = check_sampled_path_shape(whole); !s) return s.error();
+namespace {
+
+// On the rows of `rows`: their values (or zeros, without `keep_rows`) plus `sign` times what the
+// NC makes of `table` there, with the derivatives alike.
+SampledPath plus_table(const SampledPath& rows, bool keep_rows, const TableInterpolant& table, double sign) {
   SampledPath out;
-  out.c_step_deg = whole.c_step_deg;
-  const std::size_t n = whole.size();
-  out.x_mm.resize(n);
-  out.dx_dc_mm_per_deg.resize(n);
-  out.d2x_dc2_mm_per_deg2.resize(n);
+  out.c_step_deg = rows.c_step_deg;
+  const std::size_t n = rows.size();
+  out.x_mm.assign(n, 0.0);
+  out.dx_dc_mm_per_deg.assign(n, 0.0);
+  out.d2x_dc2_mm_per_deg2.assign(n, 0.0);
   std::size_t segment = 0;
   for (std::size_t k = 0; k < n; ++k) {
-    const TableInterpolant::Value d = design.at(whole.c_deg(k), segment);
-    out.x_mm[k] = whole.x_mm[k] - d.x_mm;
-    out.dx_dc_mm_per_deg[k] = whole.dx_dc_mm_per_deg[k] - d.dx_dc_mm_per_deg;
-    out.d2x_dc2_mm_per_deg2[k] = whole.d2x_dc2_mm_per_deg2[k] - d.d2x_dc2_mm_per_deg2;
+    const TableInterpolant::Value v = table.at(rows.c_deg(k), segment);
+    out.x_mm[k] = (keep_rows ? rows.x_mm[k] : 0.0) + sign * v.x_mm;
+    out.dx_dc_mm_per_deg[k] = (keep_rows ? rows.dx_dc_mm_per_deg[k] : 0.0) + sign * v.dx_dc_mm_per_deg;
+    out.d2x_dc2_mm_per_deg2[k] = (keep_rows ? rows.d2x_dc2_mm_per_deg2[k] : 0.0) + sign * v.d2x_dc2_mm_per_deg2;
   }
   return out;
+}
+
+}  // namespace
+
+Result<SampledPath> layer_path(const SampledPath& whole, const TableInterpolant& design) {
+  if (Status s = check_sampled_path_shape(whole); !s) return s.error();
+  return plus_table(whole, true, design, -1.0);
 }
 
 Status check_layered_guards(const CurveTable& layer, const TableInterpolant& design, const SampledPath& whole,
@@ -61,21 +71,7 @@ Status check_layered_guards(const CurveTable& layer, const TableInterpolant& des
   if (Status s = check_sampled_path_shape(whole); !s) return s;
   Result<TableInterpolant> l = TableInterpolant::of(layer.points, layer.interpolation);
   if (!l) return l.error();
-  SampledPath sum;
-  sum.c_step_deg = whole.c_step_deg;
-  const std::size_t n = whole.size();
-  sum.x_mm.resize(n);
-  sum.dx_dc_mm_per_deg.resize(n);
-  sum.d2x_dc2_mm_per_deg2.resize(n);
-  std::size_t design_segment = 0;
-  std::size_t layer_segment = 0;
-  for (std::size_t k = 0; k < n; ++k) {
-    const TableInterpolant::Value d = design.at(whole.c_deg(k), design_segment);
-    const TableInterpolant::Value c = l->at(whole.c_deg(k), layer_segment);
-    sum.x_mm[k] = d.x_mm + c.x_mm;
-    sum.dx_dc_mm_per_deg[k] = d.dx_dc_mm_per_deg + c.dx_dc_mm_per_deg;
-    sum.d2x_dc2_mm_per_deg2[k] = d.d2x_dc2_mm_per_deg2 + c.d2x_dc2_mm_per_deg2;
-  }
+  const SampledPath sum = plus_table(plus_table(whole, false, *l, 1.0), true, design, 1.0);
   if (Status g = check_path_guards(sum, limits); !g) {
     Error e = g.error();
     e.message = "design table + correction layer as the control adds them: " + e.message;
