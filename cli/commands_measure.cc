@@ -188,6 +188,16 @@ int cmd_demo(const MeasureOptions& o, const SimulatorSettings& sim_settings, con
   if (!lp) return report_error(lp.error());
   // A pin is always ground on the virtual grinder: the simulator has no built-in pin.
   if (lp->file.pin) return cmd_pin_demo_loop(o, *lp, sim_settings, lo);
+  // A correction layer is added to the design table on the control: written from the drawing
+  // first when it is not there yet, as the loop's first program is.
+  if (lp->file.layer_design_table_number != 0) {
+    Result<JobSettings> job = job_settings_for(*lp, o, /*build_on_table_in_force=*/false);
+    if (!job) return report_error(job.error());
+    if (!std::filesystem::exists(design_program_path(job->nc_dir / (job->nc_program + ".SPF")))) {
+      Result<NewProgramReport> first = write_first_program(*job, o.part_path, print_new_program);
+      if (!first) return report_error(first.error());
+    }
+  }
   auto sim = GaugeSimulator::start(lp->file.part, lp->design, sim_settings);
   if (!sim) return report_error(sim.error());
   std::printf(

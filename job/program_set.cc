@@ -265,6 +265,7 @@ Result<std::string> render_design_table(const JobSettings& s, const CurveTable& 
   values["origin"] = "the drawing";
   TableProvenance provenance;
   provenance.table_numbers = {s.layer_design_table_number, s.layer_design_table_number};
+  provenance.layer_program = s.nc_program;
   name_the_part(s, provenance);
   Result<std::string> program =
       render_table_program(s.nc_template, s.nc_template_name, values, design, provenance, s.table_format);

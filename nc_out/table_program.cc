@@ -147,6 +147,28 @@ std::string render_table_header(const CurveTable& table, const TableProvenance& 
   return out;
 }
 
+namespace {
+
+// What the table's following axis holds, as one comment line.
+std::string table_note(const std::string& axis, const TableProvenance& p) {
+  if (p.design_table_number != 0) {
+    return axis + ": the correction alone, mm, added by the gearbox to the design table " +
+           std::to_string(p.design_table_number) + " (" + p.design_program +
+           ".SPF); SIM1: the virtual axis following C 1:1, degrees.";
+  }
+  if (!p.layer_program.empty()) {
+    return axis + ": wheel infeed in mm from the base-circle position, the design's whole path; the correction is " +
+           "the layer " + p.layer_program + ".SPF, added by the gearbox; C: work spindle in degrees.";
+  }
+  if (!p.pin_mode.empty()) {
+    return axis + ": wheel infeed in mm, 0 with the pin farthest from the wheel, twice its throw with it nearest; " +
+           "C: work spindle in degrees.";
+  }
+  return axis + ": wheel infeed in mm from the base-circle position; C: work spindle in degrees.";
+}
+
+}  // namespace
+
 Result<std::string> render_table_program(std::string_view template_text, std::string_view template_name,
                                          std::map<std::string, std::string> values, const CurveTable& table,
                                          const TableProvenance& provenance, const CurveTableFormat& format) {
@@ -165,6 +187,9 @@ Result<std::string> render_table_program(std::string_view template_text, std::st
   const int number = table_number_for_version(provenance.table_numbers, provenance.table_version);
   if (numbered) values["table_number"] = std::to_string(number);
   values["leading_axis"] = leading;
+  const std::string number_text = values.count("lobe") != 0 ? values.at("lobe") : std::to_string(provenance.lobe);
+  values["table_subject"] = (provenance.pin_mode.empty() ? "lobe " : "pin ") + number_text;
+  values["table_note"] = table_note(axis, provenance);
   Result<std::string> program = render_nc_template(template_text, template_name, values);
   if (!program) return program.error();
   // Read back what would be pushed: it must be the table we meant, checksum and all.

@@ -92,6 +92,9 @@ struct TableProvenance {
   // SIM1 and the CTABDEF read back must name it. Empty: a whole table, leading axis C.
   std::string design_program{};
   int design_table_number = 0;
+  // The design table under a correction layer: the layer's program, for {{table_note}} (not a
+  // header line). Empty: not a design table.
+  std::string layer_program{};
 };
 
 // The virtual leading axis a correction layer is a table of (MD30132 $MA_IS_VIRTUAL_AX = 1,
@@ -105,7 +108,10 @@ std::string render_table_header(const CurveTable& table, const TableProvenance& 
 // Renders the user's table template with `values` plus the table's own placeholders:
 // table_blocks, table_header, point_count, block_count, interpolation, command_error_um, and
 // table_number when provenance.table_numbers is known (the CTABDEF read back must name it),
-// leading_axis (C, or SIM1 for a correction layer: the CTABDEF read back must name it).
+// leading_axis (C, or SIM1 for a correction layer: the CTABDEF read back must name it),
+// table_subject ("lobe 1", "pin 1") and table_note (one comment line saying what the following
+// axis holds: a lobe's infeed from the base circle, a pin's from its farthest position, a
+// correction layer's correction alone, a design table's whole path).
 // The blocks carry the following axis the template's CTABDEF names: CTABDEF(X,C,..) for the
 // infeed, CTABDEF(Y,C,..) for the wheel height of a crankpin ground C-X-Y (X when it names
 // none that can be read; the read-back then refuses it).

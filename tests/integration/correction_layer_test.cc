@@ -207,6 +207,26 @@ TEST_F(CorrectionLayerTest, NcCheckNamesTheDesignTableUnderTheLayerAndMissesOneG
   EXPECT_NE(gone.output.find("its design table cannot be used"), std::string::npos) << gone.output;
 }
 
+// `demo --part` of a layered part writes the design table from the drawing first when it is not
+// there, measures and pushes the layer; a second demo leaves the design table as it is.
+TEST_F(CorrectionLayerTest, TheDemoWritesTheDesignTableOnceAndPushesLayers) {
+  const std::string args = "demo --part " +
+                           (fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat_layer.toml").string() +
+                           " --time-scale 10 --data-dir " + dir_.string();
+  testing::CommandResult first = testing::run_command(args);
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_NE(first.output.find("CAM_INTAKE_L1_DESIGN.SPF (the design table)"), std::string::npos) << first.output;
+  const std::string design = slurp(design_file());
+  testing::CommandResult second = testing::run_command(args);
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_EQ(second.output.find("(the design table)"), std::string::npos) << second.output;
+  EXPECT_EQ(slurp(design_file()), design);
+  Result<ParsedTable> layer = parse_table_program(slurp(layer_file()), "layer");
+  ASSERT_TRUE(layer.ok()) << layer.error().message;
+  EXPECT_EQ(layer->leading_axis, "SIM1");
+  EXPECT_EQ(layer->header.at("table_version"), "3") << "the first program, then one push a demo";
+}
+
 // A layer is added to the design table the control holds: without one there is nothing to add
 // it to, and the run is refused before the gauge is read.
 TEST_F(CorrectionLayerTest, AMissingDesignTableIsRefusedBeforeTheGaugeAndNothingIsWritten) {
