@@ -59,6 +59,18 @@ void add_capability(SpcFigure& f) {
   } else {
     f.cpk_side.clear();
   }
+  if (f.cpk) {
+    const double n = f.n;
+    const double half = 1.96 * std::sqrt(1.0 / (9.0 * n) + *f.cpk * *f.cpk / (2.0 * (n - 1.0)));
+    f.cpk_low95 = *f.cpk - half;
+    f.cpk_high95 = *f.cpk + half;
+    if (f.n < kCapabilityMinRuns) {
+      f.caution = std::to_string(f.n) + " run" + (f.n == 1 ? "" : "s") + ": Cp and Cpk from fewer than " +
+                  std::to_string(kCapabilityMinRuns) +
+                  " runs are a first look, not a capability (Cpk's 95 % interval " + format_fixed(*f.cpk_low95, 2) +
+                  " .. " + format_fixed(*f.cpk_high95, 2) + ")";
+    }
+  }
   if ((cp && !f.cp) || !f.cpk) {
     f.not_computed = "spread too small against the limits for a finite Cp or Cpk";
   } else if (!f.cp) {
@@ -162,6 +174,7 @@ std::string spc_table_text(const std::vector<SpcFigure>& figures) {
              " (the newest), each run was judged against its own\n";
     }
     if (!f.not_computed.empty()) out += characteristic_title(f.key, f.part_kind) + ": " + f.not_computed + "\n";
+    if (!f.caution.empty()) out += characteristic_title(f.key, f.part_kind) + ": " + f.caution + "\n";
   }
   return out;
 }
@@ -181,6 +194,9 @@ nlohmann::json spc_figure_json(const SpcFigure& f) {
           {"cp", number(f.cp)},
           {"cpk", number(f.cpk)},
           {"cpk_side", f.cpk_side.empty() ? nlohmann::json() : nlohmann::json(f.cpk_side)},
+          {"cpk_low95", number(f.cpk_low95)},
+          {"cpk_high95", number(f.cpk_high95)},
+          {"caution", f.caution},
           {"out", f.out_count},
           {"judged", f.judged_count},
           {"note", f.not_computed}};

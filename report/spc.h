@@ -13,6 +13,10 @@
 
 namespace gaugeloop {
 
+// Fewer runs than this give Cp and Cpk with a caution: capability studies ask for at least 25
+// (the usual preliminary study; a machine capability study asks for 50).
+inline constexpr int kCapabilityMinRuns = 25;
+
 // One characteristic over the runs selected.
 struct SpcFigure {
   std::string key;   // Characteristic::key, e.g. "lift_error.opening_flank"
@@ -36,6 +40,13 @@ struct SpcFigure {
   std::string cpk_side;  // "both", "upper" (CPU), "lower" (CPL); empty without Cpk
   // Why sd, Cp or Cpk is missing, in words ("1 run: no spread"); empty when all are given.
   std::string not_computed;
+  // Cpk's approximate 95 % confidence interval (Bissell's normal approximation:
+  // Cpk +- 1.96 sqrt(1 / (9 n) + Cpk^2 / (2 (n - 1)))), when Cpk is given.
+  std::optional<double> cpk_low95;
+  std::optional<double> cpk_high95;
+  // Said when Cp or Cpk comes from fewer than kCapabilityMinRuns runs: a first look, not a
+  // capability; empty otherwise.
+  std::string caution;
   int out_count = 0;     // runs whose verdict for the key was out
   int judged_count = 0;  // runs whose verdict for the key was in or out
   // The part of the newest run that has the key (part_kind_of): its title reads for it.
@@ -50,14 +61,15 @@ std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs);
 
 // One figure as `runs spc --json` prints it: key, title (characteristic_title for its
 // part_kind), unit, n, mean,
-// sd, lsl, usl, limits_from_run, limits_changed, cp, cpk, cpk_side, out, judged, note; null for
-// what is not given.
+// sd, lsl, usl, limits_from_run, limits_changed, cp, cpk, cpk_side, cpk_low95, cpk_high95, out,
+// judged, note, caution; null for what is not given.
 nlohmann::json spc_figure_json(const SpcFigure& figure);
 
 // The figures as `runs spc` prints them: one row per characteristic (title, unit, n, mean, s,
 // LSL, USL, Cp, Cpk, out/judged; "-" for what is not given, Cpk marked (U) or (L) when one-sided),
-// a line saying whose limits these are, then a line for each figure whose limits changed or whose ratios are missing,
-// saying why. Figures with figure_decimals (core/tolerance.h).
+// a line saying whose limits these are, then a line for each figure whose limits changed, whose
+// ratios are missing or come from fewer than kCapabilityMinRuns runs, saying so. Figures with figure_decimals
+// (core/tolerance.h).
 std::string spc_table_text(const std::vector<SpcFigure>& figures);
 
 }  // namespace gaugeloop

@@ -236,6 +236,29 @@ TEST(Spc, TableHasARowPerCharacteristicAndSaysWhatIsMissing) {
   EXPECT_NE(text.find("+10.00       -          -  0/0"), std::string::npos) << text;
   EXPECT_NE(text.find("Base circle runout (dial): 1 run"), std::string::npos) << text;
   EXPECT_NE(text.find("LSL, USL: the limits of the newest run"), std::string::npos) << text;
+  // Three runs: a first look. Bissell's interval: 1.00 +- 1.96 sqrt(1/27 + 1/4) = 1.00 +- 1.05.
+  EXPECT_NE(text.find("Lift error, whole turn: 3 runs: Cp and Cpk from fewer than 25 runs are a first look, not a "
+                      "capability (Cpk's 95 % interval -0.05 .. 2.05)"),
+            std::string::npos)
+      << text;
+}
+
+TEST(Spc, TwentyFiveRunsGiveCpkWithItsIntervalAndNoCaution) {
+  // 25 runs alternating 1 and 3 um against -5..+5 (mean 1.96): Cpk = (5 - 1.96) / (3 s), and
+  // the interval as Bissell's, to 1e-12.
+  std::vector<RunCharacteristics> runs;
+  for (int i = 0; i < 25; ++i) runs.push_back(run(i + 1, {make("lift_error", i % 2 == 0 ? 1.0 : 3.0, both(-5, 5))}));
+  const SpcFigure f = figure(spc_figures(runs), "lift_error");
+  ASSERT_TRUE(f.cpk.has_value());
+  EXPECT_TRUE(f.caution.empty()) << f.caution;
+  const double half = 1.96 * std::sqrt(1.0 / (9.0 * 25) + *f.cpk * *f.cpk / (2.0 * 24));
+  ASSERT_TRUE(f.cpk_low95 && f.cpk_high95);
+  EXPECT_NEAR(*f.cpk_low95, *f.cpk - half, 1e-12);
+  EXPECT_NEAR(*f.cpk_high95, *f.cpk + half, 1e-12);
+  EXPECT_EQ(spc_figure_json(f)["caution"], "");
+  EXPECT_NEAR(spc_figure_json(f)["cpk_low95"].get<double>(), *f.cpk - half, 1e-12);
+  std::vector<RunCharacteristics> few(runs.begin(), runs.begin() + 24);
+  EXPECT_FALSE(figure(spc_figures(few), "lift_error").caution.empty()) << "24 runs: a first look";
 }
 
 TEST(Spc, HugeValuesGiveAFiniteMeanAndNoInfiniteS) {
