@@ -239,8 +239,11 @@ int cmd_diff(const DiffOptions& o) {
   }
   std::printf("%s: version %d -> version %d\n", file->c_str(), o.a, o.b);
   for (const auto* p : {&pa, &pb}) {
-    std::printf("  version %-4d run %lld, %s, %s, %zu points, pushed %s\n", p->table_version,
-                static_cast<long long>(p->run_id), p->reason.c_str(),
+    // Where the version came from, once: "run 12", "run 12, approved by anna", or the drawing's
+    // reason for a program with no run.
+    const std::string run = "run " + std::to_string(p->run_id);
+    const std::string from = p->run_id == 0 || p->reason == run ? p->reason : run + ", " + p->reason;
+    std::printf("  version %-4d %s, %s, %zu points, pushed %s\n", p->table_version, from.c_str(),
                 p->table.interpolation.empty() ? "-" : p->table.interpolation.c_str(),
                 (p == &pa ? ta : tb)->points.size(), p->pushed_utc.c_str());
   }

@@ -89,6 +89,12 @@ TEST_F(NcPushTest, VersionsHistoryDiffAndRollback) {
   json d = json::parse(diff.output);
   EXPECT_GT(std::abs(d["largest_dx_um"].get<double>()), 10.0);
   EXPECT_FALSE(d["degrees"].empty());
+  // The text names where each version came from once: "run 2", not "run 2, run 2".
+  CommandResult text = run_command("nc diff 1 2 " + data());
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  const std::string second_run = "run " + std::to_string(second->run_id);
+  EXPECT_NE(text.output.find("version 2    " + second_run + ", "), std::string::npos) << text.output;
+  EXPECT_EQ(text.output.find(second_run + ", " + second_run), std::string::npos) << text.output;
   CommandResult same = run_command("nc diff 2 2 --json " + data());
   ASSERT_EQ(same.exit_code, 0) << same.output;
   EXPECT_EQ(json::parse(same.output)["largest_dx_um"].get<double>(), 0.0);
