@@ -258,6 +258,7 @@ struct HttpFront::Impl {
   std::atomic<bool> running{false};
   std::list<Connection> connections;
   std::map<std::string, int> per_address;
+  Clock::time_point accept_paused_until{};
 
   ~Impl() { close_all(); }
 
@@ -296,7 +297,14 @@ struct HttpFront::Impl {
       sockaddr_storage from{};
       socklen_t size = sizeof from;
       const int fd = ::accept4(listener, reinterpret_cast<sockaddr*>(&from), &size, SOCK_NONBLOCK | SOCK_CLOEXEC);
-      if (fd < 0) return;
+      if (fd < 0) {
+        // Out of file descriptors or memory: the pending connection stays in the backlog, and
+        // the listener is left alone for a moment instead of waking the loop at once again.
+        if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
+          accept_paused_until = Clock::now() + std::chrono::milliseconds(100);
+        }
+        return;
+      }
       char host[NI_MAXHOST] = "?";
       ::getnameinfo(reinterpret_cast<sockaddr*>(&from), size, host, sizeof host, nullptr, 0, NI_NUMERICHOST);
       const std::string address = host;
@@ -486,7 +494,7 @@ struct HttpFront::Impl {
       fds.clear();
       of.clear();
       fds.push_back({wake, POLLIN, 0});
-      fds.push_back({listener, POLLIN, 0});
+      fds.push_back({listener, static_cast<short>(Clock::now() >= accept_paused_until ? POLLIN : 0), 0});
       for (Connection& c : connections) {
         short client = 0;
         short server = 0;
