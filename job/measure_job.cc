@@ -273,13 +273,12 @@ Result<Prepared> prepare(const JobSettings& s) {
     return in_step("part " + s.part.name + " tolerances", zones.error());
   }
   if (s.layer_design_table_number != 0) {
-    // The design's whole table, and the layer that would go with it on the control (the design
-    // table's interpolation error, less than the command error bound).
+    // The design's whole table and its program; the layer's templates are checked with that
+    // table in the layer's place (any table renders as any other: the layer itself is built
+    // against the design table on the control, once measured).
     Result<LayerDesign> layer_design = build_layer_design(*design, s, "");
     if (!layer_design) return in_step("the design", layer_design.error());
-    Result<BuiltTable> layer = build_table(*design, s, nullptr, &layer_design->table.nc);
-    if (!layer) return in_step("the design's correction layer", layer.error());
-    if (Status r = check_programs_render(s, *layer, &layer_design->program); !r) return r.error();
+    if (Status r = check_programs_render(s, layer_design->whole, &layer_design->program); !r) return r.error();
   } else {
     Result<BuiltTable> design_table = build_table(*design, s);
     if (!design_table) return in_step("the design", design_table.error());

@@ -96,16 +96,16 @@ Status fill_rows(ProgramPreview& p, const JobSettings& s) {
   return {};
 }
 
-// A correction layer's design table on the control, from the drawing: written when it is not
-// there; left as it is (never rewritten) when it holds the design's table already; refused when
-// it holds another unless `replace`. Then the layer that goes with the design table as the
-// control holds it.
-Result<BuiltTable> write_design_table(const JobSettings& s, NcFiles& files, bool replace,
+// A correction layer's design table `whole` (the preview's) on the control: written when it is
+// not there; left as it is (never rewritten) when it holds that table already; refused when it
+// holds another unless `replace`. Then the layer that goes with the design table as the control
+// holds it.
+Result<BuiltTable> write_design_table(const JobSettings& s, const CurveTable& whole, NcFiles& files, bool replace,
                                       const std::string& created_utc) {
   Result<PeriodicSpline> lift = PeriodicSpline::fit(s.design.angle_deg, s.design.lift_mm);
   if (!lift) return in_step("design lift table " + s.design.source, lift.error());
-  Result<LayerDesign> design = build_layer_design(*lift, s, created_utc);
-  if (!design) return design.error();
+  Result<std::string> program = render_design_table(s, whole, created_utc);
+  if (!program) return in_step("design table", program.error());
   const std::filesystem::path file =
       design_program_path(std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal());
   Result<std::optional<std::string>> on_control = files.read_program(file);
@@ -113,8 +113,8 @@ Result<BuiltTable> write_design_table(const JobSettings& s, NcFiles& files, bool
   bool same = false;
   if (*on_control) {
     Result<DesignTable> there = read_design_table(**on_control, file.string(), s.layer_design_table_number);
-    same = there && compare_table_points(there->parsed, design->whole.table.points, file.string(), s.table_format) &&
-           there->parsed.interpolation == design->whole.table.interpolation;
+    same = there && compare_table_points(there->parsed, whole.points, file.string(), s.table_format) &&
+           there->parsed.interpolation == whole.interpolation;
     if (!same && !replace) {
       return make_error(ErrorCode::kRefused,
                         file.string() + " holds another design table than this drawing's (" +
@@ -124,7 +124,7 @@ Result<BuiltTable> write_design_table(const JobSettings& s, NcFiles& files, bool
     }
   }
   if (!same) {
-    if (Status w = files.write_program(file, design->program, {}); !w) return in_step("design table", w.error());
+    if (Status w = files.write_program(file, *program, {}); !w) return in_step("design table", w.error());
   }
   Result<std::optional<std::string>> text = files.read_program(file);
   if (!text) return text.error();
@@ -199,7 +199,7 @@ Result<NewProgramReport> write_new_program(const JobSettings& s, const NewProgra
   const std::string created_utc = utc_now();
   std::optional<BuiltTable> layer;
   if (s.layer_design_table_number != 0) {
-    Result<BuiltTable> l = write_design_table(s, files, options.replace, created_utc);
+    Result<BuiltTable> l = write_design_table(s, report.preview.built.table, files, options.replace, created_utc);
     if (!l) return l.error();
     layer = std::move(*l);
     report.design_file = design_program_path(nc_file);
