@@ -12,7 +12,10 @@
 #      in theirs, so no two ctest runs share a Testing/ directory.
 # A build's output goes to <build dir>/background-build.log, the real-time tests' to
 # <build dir>/serial-tests.log; each is printed in full if it failed (the tests' log always).
-# Every phase runs to its end; the script fails if any build or test run failed.
+# Every test run's output is also kept in <build dir>/<phase>-tests.log, and the script ends with
+# the failed tests of every phase and each one's output, so that the last lines of a long log
+# (all a CI page may show) say what failed. Every phase runs to its end; the script fails if any
+# build or test run failed.
 set -uo pipefail
 : "${MAKE:=make}" "${BUILD_DIR:=build}" "${ASAN_DIR:=build-asan}" "${TSAN_DIR:=build-tsan}" "${JOBS:=2}" "${TEST_JOBS:=4}"
 : "${TSAN_TARGETS:?set by the Makefile: what the ThreadSanitizer build builds}"
@@ -38,9 +41,28 @@ finish_build() {
   return 1
 }
 
+# run_tests NICENESS PHASE DIR [make arguments...]: runs `make run-PHASE` at that niceness, its
+# output to the terminal and to DIR/PHASE-tests.log; fails if the tests failed.
+run_tests() {
+  local niceness="$1" phase="$2" dir="$3"
+  shift 3
+  nice -n "${niceness}" "${MAKE}" --no-print-directory "run-${phase}" "$@" 2>&1 | tee "${dir}/${phase}-tests.log"
+}
+
+# failed_tests LOG: each failed test of a ctest log with the output ctest printed for it (up to
+# 60 lines each).
+failed_tests() {
+  awk '
+    / Test +#[0-9]+: / { inside = ($0 ~ /\*\*\*| Not Run/); lines = 0 }
+    /^ *Start +[0-9]+: / { inside = 0 }
+    /^[0-9]+% tests passed/ { inside = 0 }
+    inside && lines < 60 { print; ++lines }
+  ' "$1"
+}
+
 status=0
 build_beside "${ASAN_DIR}"
-"${MAKE}" --no-print-directory run-parallel BUILD_DIR="${BUILD_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
+run_tests 0 parallel "${BUILD_DIR}" BUILD_DIR="${BUILD_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
 asan_built=0
 finish_build "${ASAN_DIR}" && asan_built=1 || status=1
 
@@ -51,9 +73,9 @@ serial_pid=$!
 if [ "${asan_built}" -eq 1 ]; then
   # shellcheck disable=SC2086 # the targets are a list
   build_beside "${TSAN_DIR}" --target ${TSAN_TARGETS}
-  nice -n 10 "${MAKE}" --no-print-directory run-asan ASAN_DIR="${ASAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
+  run_tests 10 asan "${ASAN_DIR}" ASAN_DIR="${ASAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
   if finish_build "${TSAN_DIR}"; then
-    nice -n 10 "${MAKE}" --no-print-directory run-tsan TSAN_DIR="${TSAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
+    run_tests 10 tsan "${TSAN_DIR}" TSAN_DIR="${TSAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
   else
     status=1
   fi
@@ -65,4 +87,15 @@ wait "${serial_pid}" || serial_status=1
 echo "== the real-time tests' log:"
 cat "${BUILD_DIR}/serial-tests.log"
 [ "${serial_status}" -eq 0 ] || { echo "== the real-time tests FAILED"; status=1; }
+
+if [ "${status}" -ne 0 ]; then
+  echo "== what failed"
+  for log in "${BUILD_DIR}/parallel-tests.log" "${BUILD_DIR}/serial-tests.log" "${ASAN_DIR}/asan-tests.log" \
+    "${TSAN_DIR}/tsan-tests.log"; do
+    [ -f "${log}" ] || continue
+    found="$(failed_tests "${log}")"
+    [ -n "${found}" ] && printf '%s:\n%s\n' "${log}" "${found}"
+  done
+  echo "== make test FAILED (the failed tests above; a failed build's log earlier)"
+fi
 exit "${status}"
