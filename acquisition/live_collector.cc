@@ -93,6 +93,10 @@ class LiveCollector : private Collector {
   // The amplifier's sample number of the last poll, kept across reconnects: a sample seen
   // before a reconnect is no new sample after it.
   std::optional<std::uint16_t> last_sequence_;
+  // When the sample number last changed: a stale period in which it changed is the spindle's,
+  // whichever kind of poll meets its end (a poll faster than the amplifier reads the same
+  // sample twice).
+  std::optional<Clock::time_point> sequence_changed_at_;
   // The polls that form an unbroken chain: good status, moving forward, each within
   // max_interpolation_gap_deg of the one before. Segment chain_[pending_] -> chain_[pending_+1]
   // is the first whose degrees are not filled yet; it waits for a neighbour on its right (see
@@ -151,17 +155,22 @@ void LiveCollector::pace() {
 Status LiveCollector::take_snapshot(const GaugeSnapshot& snap) {
   const auto now = clock_.now();
   freeze_.answered(now);
+  const std::string angle_stayed = "its angle stayed at " + format_fixed(snap.angle_deg, 1) + " deg";
   if (last_sequence_ && snap.sequence == *last_sequence_) {
-    // Same amplifier sample as last time: an amplifier whose sample number stops is frozen.
-    return no_progress(now, "its sample number stayed at " + std::to_string(snap.sequence));
+    // Same amplifier sample as last time: an amplifier whose sample number stops is frozen;
+    // one that sampled in this stale period is not, the spindle stands.
+    const bool sampled_this_period = sequence_changed_at_ && *sequence_changed_at_ > freeze_.period_began();
+    return no_progress(
+        now, sampled_this_period ? angle_stayed : "its sample number stayed at " + std::to_string(snap.sequence));
   }
   last_sequence_ = snap.sequence;
+  sequence_changed_at_ = now;
 
   const Poll cur{unwrapper_.unwrap(snap), snap.reading_mm, snap.sequence, snap.status};
   if (!progress_u_ || cur.u_deg > *progress_u_ + kStandstillDeg) {
     progress_u_ = cur.u_deg;
     freeze_.progressed(now);
-  } else if (Status s = no_progress(now, "its angle stayed at " + format_fixed(snap.angle_deg, 1) + " deg"); !s) {
+  } else if (Status s = no_progress(now, angle_stayed); !s) {
     return s;  // new samples, but the spindle stands (or turns backwards)
   }
   update_rates(cur, now);

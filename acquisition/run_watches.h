@@ -84,6 +84,9 @@ class FreezeWatch {
   }
   // True when a new stale period has passed; counts it and restarts the timer.
   bool stale(Clock::time_point now);
+  // Where the stale period now running began (the last progress, answer after an outage, or
+  // stale period).
+  Clock::time_point period_began() const { return since_; }
   std::chrono::milliseconds frozen_for() const { return periods_ * s_.stale_after; }
   bool exhausted(const RunBudget& budget) const {
     return periods_ >= s_.max_attempts && frozen_for() >= budget.patience();

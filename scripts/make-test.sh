@@ -53,7 +53,7 @@ run_tests() {
 # 60 lines each).
 failed_tests() {
   awk '
-    / Test +#[0-9]+: / { inside = ($0 ~ /\*\*\*| Not Run/); lines = 0 }
+    / Test +#[0-9]+: / { inside = ($0 ~ /\*\*\*(Failed|Timeout|Exception)|Not Run/); lines = 0 }
     /^ *Start +[0-9]+: / { inside = 0 }
     /^[0-9]+% tests passed/ { inside = 0 }
     inside && lines < 60 { print; ++lines }

@@ -377,6 +377,29 @@ TEST(RunTimeout, ARunLongerThanItsTimeoutFailsNamingIt) {
   }
 }
 
+// Live mode, on a manual clock: the spindle stops in revolution 1 while the amplifier goes on
+// sampling once every four polls (three polls in four read the sample before again), so the
+// poll that meets the end of the patience is most likely one of the same sample number. The
+// run still names the spindle, which stood while the amplifier sampled; an amplifier that
+// stands as well is named as the amplifier.
+TEST(Poller, AStoppedSpindleIsNamedWhicheverPollMeetsTheEndOfThePatience) {
+  for (const int sample_every : {4, 0}) {
+    SCOPED_TRACE("a new sample every " + std::to_string(sample_every) + " polls (0: none)");
+    ScriptedGauge g;
+    g.stand_from_read = 1500;  // 450 deg in: revolution 1
+    g.sample_every = sample_every;
+    ManualClock clock;
+    clock.set_tick(std::chrono::milliseconds(1));
+    Poller p(g, fast_settings(), clock);
+    Result<MeasuredRun> run = p.measure();
+    ASSERT_FALSE(run.ok());
+    EXPECT_EQ(run.error().code, ErrorCode::kGaugeTimeout) << run.error().message;
+    EXPECT_NE(run.error().message.find("stood still during revolution 1"), std::string::npos) << run.error().message;
+    const std::string named = sample_every > 0 ? "its angle stayed at" : "its sample number stayed at";
+    EXPECT_NE(run.error().message.find(named), std::string::npos) << run.error().message;
+  }
+}
+
 // (revolutions + spares + 2) revolutions at the speed, at least 10 s; or as set.
 TEST(RunTimeout, FollowsTheSpeedAndTheRevolutions) {
   PollerSettings s;  // 3 revolutions, 3 spares: 8 revolutions

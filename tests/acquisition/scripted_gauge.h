@@ -32,6 +32,10 @@ class ScriptedGauge final : public GaugeClient {
   std::map<int, Fault> faults;        // by read call number, 1-based
   int fail_connects = 0;              // the next n connects fail
   bool dead_after_faults = false;     // every read after the last scripted fault times out
+  // From this read call on (0: never) the spindle stands; the amplifier then takes a new
+  // sample every `sample_every` reads and repeats its last between them (0: it stands too).
+  int stand_from_read = 0;
+  int sample_every = 1;
 
   // Latched mode: every read_latch_state() lets the spindle pass `marks_per_poll` degree
   // marks, latched into a ring of `ring_size`; faults apply by read_latch_state() call.
@@ -102,7 +106,12 @@ class ScriptedGauge final : public GaugeClient {
     if (!connected_) return make_error(ErrorCode::kGaugeUnreachable, "not connected");
     auto it = faults.find(reads);
     const bool dead = dead_after_faults && !faults.empty() && reads > faults.rbegin()->first;
-    u_deg += step_deg;
+    if (stand_from_read > 0 && reads >= stand_from_read) {
+      const int since = reads - stand_from_read;
+      if (sample_every == 0 || since % sample_every != 0) return last_;
+    } else {
+      u_deg += step_deg;
+    }
     if (dead || (it != faults.end() && it->second == Fault::kTimeout)) {
       connected_ = false;
       return make_error(ErrorCode::kGaugeTimeout, "no reply (scripted)");
