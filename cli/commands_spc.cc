@@ -6,6 +6,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <tuple>
 
 #include "config/shaft_file.h"
@@ -22,6 +23,19 @@ using nlohmann::json;
 
 // ---- runs spc ----
 
+// The window of `runs spc` unless --last says otherwise: 25 subgroups of 5, a usual capability
+// study. Wider windows than kSpcLargeWindow say what they read.
+constexpr int kSpcDefaultRuns = 125;
+constexpr int kSpcLargeWindow = 1000;
+
+// Said of a window wider than kSpcLargeWindow; empty otherwise.
+std::string large_window_note(int runs) {
+  if (runs <= kSpcLargeWindow) return {};
+  return "summed up over " + std::to_string(runs) + " runs, each with its characteristics; a window this wide takes " +
+         "a moment on a long history: --last " + std::to_string(kSpcDefaultRuns) +
+         " (the default) or --since narrows it";
+}
+
 struct SpcOptions {
   DataPaths paths;
   std::string db_url;  // --db: the central history instead of the file
@@ -35,28 +49,30 @@ int cmd_spc(const SpcOptions& o) {
   if (Status t = set_time_bounds(o.since, o.until, q.since_utc, q.until_utc); !t) return report_error(t.error());
   Result<std::unique_ptr<RunHistory>> history = open_run_history(o.paths, o.db_url);
   if (!history) return report_error(history.error());
-  Result<std::vector<RunCharacteristics>> runs = (*history)->characteristics(q);
+  Result<CharacteristicSummaries> runs = (*history)->characteristic_summaries(q);
   if (!runs) return report_error(runs.error());
   const std::vector<SpcFigure> figures = spc_figures(*runs);
   if (o.json_out) {
     json out = {{"part", q.part},
                 {"lobe", q.lobe},
                 {"machine", q.machine.empty() ? json() : json(q.machine)},
-                {"runs", runs->size()},
-                {"first_started_utc", runs->empty() ? json() : json(runs->front().run.started_utc)},
-                {"last_started_utc", runs->empty() ? json() : json(runs->back().run.started_utc)},
+                {"runs", runs->runs},
+                {"first_started_utc", runs->runs == 0 ? json() : json(runs->first_started_utc)},
+                {"last_started_utc", runs->runs == 0 ? json() : json(runs->last_started_utc)},
                 {"characteristics", json::array()}};
     for (const SpcFigure& f : figures) out["characteristics"].push_back(spc_figure_json(f));
+    const std::string note = large_window_note(runs->runs);
+    out["note"] = note.empty() ? json() : json(note);
     print_json(out);
     return kExitOk;
   }
   const std::string what = q.part + " lobe " + std::to_string(q.lobe) + (q.machine.empty() ? "" : " on " + q.machine);
-  if (runs->empty()) {
+  if (runs->runs == 0) {
     std::printf("(no runs of %s match; `gaugeloop runs list` shows which parts and lobes have runs)\n", what.c_str());
     return kExitOk;
   }
-  std::printf("SPC of %s: %zu run%s, %s to %s (UTC)\n", what.c_str(), runs->size(), runs->size() == 1 ? "" : "s",
-              runs->front().run.started_utc.c_str(), runs->back().run.started_utc.c_str());
+  std::printf("SPC of %s: %d run%s, %s to %s (UTC)\n", what.c_str(), runs->runs, runs->runs == 1 ? "" : "s",
+              runs->first_started_utc.c_str(), runs->last_started_utc.c_str());
   if (figures.empty()) {
     std::printf(
         "(none of these runs carries characteristics: they were measured before tolerances were judged, or the "
@@ -64,6 +80,7 @@ int cmd_spc(const SpcOptions& o) {
     return kExitOk;
   }
   std::fputs(spc_table_text(figures).c_str(), stdout);
+  if (const std::string note = large_window_note(runs->runs); !note.empty()) std::printf("note: %s\n", note.c_str());
   return kExitOk;
 }
 
@@ -143,7 +160,7 @@ int cmd_shaft(const ShaftOptions& o) {
 
 void add_spc_commands(CLI::App* runs, CommandAction& action) {
   auto spc = std::make_shared<SpcOptions>();
-  spc->query.limit = 10000;
+  spc->query.limit = kSpcDefaultRuns;
   CLI::App* spc_cmd = runs->add_subcommand(
       "spc", "Mean, standard deviation, Cp, Cpk and the count out of tolerance per characteristic of one lobe.");
   add_central_db_option(*spc_cmd, spc->db_url, add_data_options(*spc_cmd, spc->paths));

@@ -7,22 +7,10 @@
 #include <map>
 
 #include "core/number_text.h"
+#include "storage/characteristic_summaries.h"
 
 namespace gaugeloop {
 namespace {
-
-bool same_limits(const Limits& a, const Limits& b) { return a.lower == b.lower && a.upper == b.upper; }
-
-// The values of one key, and the newest characteristic that carried it.
-struct Gathered {
-  std::vector<double> values;
-  const Characteristic* newest = nullptr;
-  std::int64_t newest_run = 0;
-  bool limits_changed = false;
-  int out_count = 0;
-  int judged_count = 0;
-  PartKind part_kind = PartKind::kLobe;
-};
 
 void add_capability(SpcFigure& f) {
   if (f.n < 2) {
@@ -85,54 +73,38 @@ std::string or_dash(const std::optional<double>& v, int decimals, bool with_sign
 
 }  // namespace
 
-std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs) {
-  std::vector<std::string> order;
-  std::map<std::string, Gathered> by_key;
+CharacteristicSummaries summarize_characteristics(const std::vector<RunCharacteristics>& runs) {
+  CharacteristicSummer summer;
   for (const RunCharacteristics& run : runs) {
-    for (const Characteristic& c : run.characteristics) {
-      auto [it, inserted] = by_key.try_emplace(c.key);
-      Gathered& g = it->second;
-      if (inserted) order.push_back(c.key);
-      if (g.newest != nullptr && !same_limits(g.newest->limits, c.limits)) g.limits_changed = true;
-      g.values.push_back(c.value);
-      g.newest = &c;
-      g.newest_run = run.run.id;
-      g.part_kind = part_kind_of(run.characteristics);
-      if (c.verdict != Verdict::kNotJudged) ++g.judged_count;
-      if (c.verdict == Verdict::kOut) ++g.out_count;
-    }
+    for (const Characteristic& c : run.characteristics) summer.add(run.run.id, c);
   }
+  if (runs.empty()) return summer.finish(0, "", "");
+  return summer.finish(static_cast<int>(runs.size()), runs.front().run.started_utc, runs.back().run.started_utc);
+}
+
+std::vector<SpcFigure> spc_figures(const CharacteristicSummaries& summaries) {
+  std::vector<Characteristic> keys;  // the part kind reads from the keys
+  for (const CharacteristicSummary& k : summaries.by_key) {
+    keys.emplace_back();
+    keys.back().key = k.key;
+  }
+  const PartKind part_kind = part_kind_of(keys);
   std::vector<SpcFigure> out;
-  out.reserve(order.size());
-  for (const std::string& key : order) {
-    const Gathered& g = by_key.at(key);
+  out.reserve(summaries.by_key.size());
+  for (const CharacteristicSummary& k : summaries.by_key) {
     SpcFigure f;
-    f.key = key;
-    f.unit = g.newest->unit;
-    f.n = static_cast<int>(g.values.size());
-    f.limits = g.newest->limits;
-    f.limits_from_run = g.newest_run;
-    f.limits_changed = g.limits_changed;
-    f.out_count = g.out_count;
-    f.judged_count = g.judged_count;
-    f.part_kind = g.part_kind;
-    // A running mean: the sum of many values near the largest double would overflow.
-    f.mean = 0.0;
-    for (std::size_t i = 0; i < g.values.size(); ++i) f.mean += (g.values[i] - f.mean) / static_cast<double>(i + 1);
-    if (f.n >= 2) {
-      // Equal values give exactly 0 here (the mean of equal values can differ from them in the
-      // last bit, so the deviations are not summed for them).
-      const bool all_equal =
-          std::all_of(g.values.begin(), g.values.end(), [&](double v) { return v == g.values.front(); });
-      if (all_equal) {
-        f.mean = g.values.front();
-        f.sd = 0.0;
-      } else {
-        double squares = 0.0;
-        for (double v : g.values) squares += (v - f.mean) * (v - f.mean);
-        f.sd = std::sqrt(squares / (f.n - 1));
-      }
-    }
+    f.key = k.key;
+    f.unit = k.unit;
+    f.n = k.n;
+    f.mean = k.mean;
+    f.limits = k.limits;
+    f.limits_from_run = k.limits_from_run;
+    f.limits_changed = k.limits_changed;
+    f.out_count = k.out_count;
+    f.judged_count = k.judged_count;
+    f.part_kind = part_kind;
+    // Equal values give exactly 0 (their mean can differ from them in the last bit).
+    if (f.n >= 2) f.sd = k.all_equal ? 0.0 : std::sqrt(k.squares / (f.n - 1));
     if (f.sd && !std::isfinite(*f.sd)) {
       f.sd.reset();
       f.not_computed = "values too far apart for a finite s: no s, Cp or Cpk";
@@ -142,6 +114,10 @@ std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs) 
     out.push_back(std::move(f));
   }
   return out;
+}
+
+std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs) {
+  return spc_figures(summarize_characteristics(runs));
 }
 
 std::string spc_table_text(const std::vector<SpcFigure>& figures) {

@@ -59,6 +59,14 @@ struct SpcFigure {
 // Every number given is finite: a ratio that would not be is left out and said so.
 std::vector<SpcFigure> spc_figures(const std::vector<RunCharacteristics>& runs);
 
+// The same from the database's summaries (RunHistory::characteristic_summaries), one figure a
+// key in their order. The part kind reads from all the keys.
+std::vector<SpcFigure> spc_figures(const CharacteristicSummaries& summaries);
+
+// What the database sums up, summed up here from `runs` (oldest first): what spc_figures(runs)
+// reads.
+CharacteristicSummaries summarize_characteristics(const std::vector<RunCharacteristics>& runs);
+
 // One figure as `runs spc --json` prints it: key, title (characteristic_title for its
 // part_kind), unit, n, mean,
 // sd, lsl, usl, limits_from_run, limits_changed, cp, cpk, cpk_side, cpk_low95, cpk_high95, out,

@@ -255,6 +255,33 @@ struct RunCharacteristics {
   std::vector<Characteristic> characteristics;  // in the order stored
 };
 
+// One characteristic over the runs a query selects, summed up by the database that holds them
+// (runs spc): what the SPC figures are made of, without reading the runs one by one.
+struct CharacteristicSummary {
+  std::string key;
+  std::string unit;  // as the newest run that has the key stored it
+  int n = 0;         // runs that have the key (>= 1)
+  // The mean, and the sum of the squared deviations from it (+inf for values too far apart):
+  // two passes over the values. The file sums value / n (no sum of large values overflows
+  // before the division); PostgreSQL takes avg() and refuses a sum that would overflow.
+  double mean = 0.0;
+  double squares = 0.0;
+  bool all_equal = false;  // every value the same: the mean is that value exactly
+  Limits limits;           // of the newest run that has the key
+  std::int64_t limits_from_run = 0;
+  bool limits_changed = false;  // some older run had other limits
+  int out_count = 0;
+  int judged_count = 0;  // verdict in or out
+};
+
+struct CharacteristicSummaries {
+  int runs = 0;  // the runs selected, with or without characteristics
+  std::string first_started_utc;
+  std::string last_started_utc;
+  // In the order the keys first appear: the oldest run first, then the position in the run.
+  std::vector<CharacteristicSummary> by_key;
+};
+
 // Filters for list_runs and trend. Times are ISO 8601 UTC, "YYYY-MM-DDTHH:MM:SSZ".
 struct RunQuery {
   int limit = 50;                  // at most this many runs; must be >= 1
@@ -459,6 +486,10 @@ class RunHistory {
   virtual Result<std::vector<RunSummary>> list_runs(const RunQuery& q) const = 0;
   virtual Result<std::vector<RunSummary>> trend(const RunQuery& q) const = 0;
   virtual Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q) const = 0;
+  // Over the same runs as characteristics(q), each key summed up: the file reads the window's
+  // characteristics in one statement and sums them up as they come, PostgreSQL sums them up
+  // itself, so the rows never cross the network.
+  virtual Result<CharacteristicSummaries> characteristic_summaries(const RunQuery& q) const = 0;
 };
 
 class RunStore : public RunHistory {
@@ -610,6 +641,7 @@ class RunStore : public RunHistory {
 
   // The runs trend() returns (oldest first), each with its characteristics.
   Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q) const override;
+  Result<CharacteristicSummaries> characteristic_summaries(const RunQuery& q) const override;
 
   // Deletes the raw samples of runs started before `cutoff_utc` (exclusive), keeping every
   // summary, profile, correction, push and event, and marks those runs pruned at `now_utc`.

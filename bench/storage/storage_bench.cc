@@ -35,6 +35,7 @@ constexpr int kParts = 5;
 constexpr int kLobes = 8;                           // per part: 160 lobes, 625 runs each
 constexpr std::int64_t kFirstRunUnix = 1767225600;  // 2026-01-01T00:00:00Z
 constexpr std::int64_t kRunSpacingS = 300;          // a run every 5 minutes: 100,000 runs in 347 days
+constexpr int kCharacteristics = 25;                // a judged lobe's: whole turn, zones, velocity, roundness
 
 [[noreturn]] void die(const std::string& what) {
   std::fprintf(stderr, "storage_bench: %s\n", what.c_str());
@@ -169,7 +170,9 @@ void build_history(const fs::path& path) {
       " VALUES (?1, ?1, ?2, ?3, ?4, 'tcp:10.0.0.7:502', '', ?5, 3, 1080, 410, 0, 0, 0.25, ?6, 7.1, 29.9, 0.7, ?7,"
       " ?8, ?9, 1.2, ?10, 1, 0, 0)");
   sqlite3_stmt* raw = prepare(db, "INSERT INTO run_raw VALUES (?1, '[100,101,102]', ?2)");
-  sqlite3_stmt* tables = prepare(db, "INSERT INTO run_tables VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+  sqlite3_stmt* tables = prepare(db,
+                                 "INSERT INTO run_tables (run_id, design_lift, mean_lift, spread, error, correction)"
+                                 " VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
   sqlite3_stmt* push =
       prepare(db,
               "INSERT INTO nc_pushes (run_id, pushed_utc, nc_file, point_count, correction_max_um, program_hash,"
@@ -177,6 +180,8 @@ void build_history(const fs::path& path) {
               " VALUES (?1, ?2, ?3, 361, 16.6, 'abcdef0123456789',"
               " (SELECT coalesce(max(table_version), 0) + 1 FROM nc_pushes WHERE nc_file = ?3),"
               " 'run ' || ?1, 'cspline', 55, 0.47)");
+  sqlite3_stmt* characteristic =
+      prepare(db, "INSERT INTO run_characteristics VALUES (?1, ?2, ?3, 'um', ?4, ?4, ?4, -12.0, 12.0, ?5, NULL, NULL)");
   for (int i = 0; i < kRuns; ++i) {
     const std::string started = utc(kFirstRunUnix + static_cast<std::int64_t>(i) * kRunSpacingS);
     const std::string machine = "grinder-" + std::to_string(1 + i % kMachines);
@@ -216,8 +221,18 @@ void build_history(const fs::path& path) {
       sqlite3_bind_text(push, 3, nc.c_str(), -1, SQLITE_TRANSIENT);
       step_done(db, push);
     }
+    for (int k = 0; k < kCharacteristics; ++k) {
+      const std::string key = "lift_error.zone" + std::to_string(k);
+      const double value = 13.0 * std::sin(0.37 * i + k);
+      sqlite3_bind_int64(characteristic, 1, id);
+      sqlite3_bind_int(characteristic, 2, k);
+      sqlite3_bind_text(characteristic, 3, key.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_double(characteristic, 4, value);
+      sqlite3_bind_text(characteristic, 5, std::fabs(value) > 12.0 ? "out" : "in", -1, SQLITE_STATIC);
+      step_done(db, characteristic);
+    }
   }
-  for (sqlite3_stmt* s : {run, raw, tables, push}) sqlite3_finalize(s);
+  for (sqlite3_stmt* s : {run, raw, tables, push, characteristic}) sqlite3_finalize(s);
   exec(db, "COMMIT; PRAGMA wal_checkpoint(TRUNCATE)");
   sqlite3_close(db);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -238,7 +253,8 @@ const fs::path& history() {
       sqlite3* db = nullptr;
       if (sqlite3_open_v2(p.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
         ok = query_int(db, "PRAGMA user_version") == storage_internal::latest_schema_version() &&
-             query_int(db, "SELECT count(*) FROM runs") == kRuns;
+             query_int(db, "SELECT count(*) FROM runs") == kRuns &&
+             query_int(db, "SELECT count(*) FROM run_characteristics") == std::int64_t{kRuns} * kCharacteristics;
       }
       sqlite3_close(db);
     }
@@ -366,6 +382,55 @@ BENCHMARK_DEFINE_F(History, ShowOneRun)(benchmark::State& state) {
   }
 }
 
+// `runs spc` of a random lobe over its newest state.range(0) runs (25 characteristics each),
+// summed up in SQL (RunStore::characteristic_summaries), then the figures.
+BENCHMARK_DEFINE_F(History, SpcOfALobe)(benchmark::State& state) {
+  for (auto _ : state) {
+    RunQuery q;
+    q.part = part_name(static_cast<int>(next() % kParts));
+    q.lobe = 1 + static_cast<int>(next() % kLobes);
+    q.limit = static_cast<int>(state.range(0));
+    Result<CharacteristicSummaries> s = store_->characteristic_summaries(q);
+    if (!s || s->by_key.size() != static_cast<std::size_t>(kCharacteristics)) die("spc summed up no keys");
+    benchmark::DoNotOptimize(s->by_key.data());
+  }
+}
+
+// The same window read as before: every run and its characteristics, summed up in C++.
+BENCHMARK_DEFINE_F(History, SpcOfALobeFromEveryRun)(benchmark::State& state) {
+  for (auto _ : state) {
+    RunQuery q;
+    q.part = part_name(static_cast<int>(next() % kParts));
+    q.lobe = 1 + static_cast<int>(next() % kLobes);
+    q.limit = static_cast<int>(state.range(0));
+    Result<std::vector<RunCharacteristics>> runs = store_->characteristics(q);
+    if (!runs || runs->empty()) die("spc read no runs");
+    benchmark::DoNotOptimize(runs->data());
+  }
+}
+
+// Baseline: the same rows' values, bare sqlite3: the lobe's newest state.range(0) runs by
+// the index and their characteristics' values, summed.
+BENCHMARK_DEFINE_F(History, Baseline_BareSelectOfTheSpcRows)(benchmark::State& state) {
+  sqlite3* db = nullptr;
+  sqlite3_open_v2(history().c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
+  for (auto _ : state) {
+    sqlite3_stmt* s = prepare(db,
+                              "SELECT c.value FROM (SELECT id FROM runs WHERE part = ?1 AND lobe = ?2"
+                              " ORDER BY started_utc DESC, id DESC LIMIT ?3) AS w"
+                              " JOIN run_characteristics AS c ON c.run_id = w.id");
+    const std::string part = part_name(static_cast<int>(next() % kParts));
+    sqlite3_bind_text(s, 1, part.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_int(s, 2, 1 + static_cast<int>(next() % kLobes));
+    sqlite3_bind_int64(s, 3, state.range(0));
+    double sum = 0.0;
+    while (sqlite3_step(s) == SQLITE_ROW) sum += sqlite3_column_double(s, 0);
+    benchmark::DoNotOptimize(sum);
+    sqlite3_finalize(s);
+  }
+  sqlite3_close(db);
+}
+
 // What the command line pays before its query: opening the file and checking the schema.
 BENCHMARK_DEFINE_F(History, OpenTheDatabase)(benchmark::State& state) {
   for (auto _ : state) {
@@ -470,6 +535,9 @@ BENCHMARK_REGISTER_F(History, Trend30DaysOfALobe)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
+BENCHMARK_REGISTER_F(History, SpcOfALobe)->Arg(125)->Arg(625)->Unit(benchmark::kMillisecond);
+BENCHMARK_REGISTER_F(History, SpcOfALobeFromEveryRun)->Arg(125)->Arg(625)->Unit(benchmark::kMillisecond);
+BENCHMARK_REGISTER_F(History, Baseline_BareSelectOfTheSpcRows)->Arg(125)->Arg(625)->Unit(benchmark::kMillisecond);
 BENCHMARK_REGISTER_F(History, ShowOneRun)->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true);
 BENCHMARK_REGISTER_F(History, OpenTheDatabase)
     ->Unit(benchmark::kMillisecond)

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 
 #include "storage/run_store.h"
 #include "tests/support/cli.h"
@@ -199,6 +200,39 @@ TEST_F(ShaftCommandsTest, SpcFromStoredCharacteristics) {
   ASSERT_EQ(text.exit_code, 0) << text.output;
   EXPECT_TRUE(has(text.output, "Lift error, whole turn")) << text.output;
   EXPECT_TRUE(has(text.output, "1.67       1.00  1/3")) << text.output;
+}
+
+// Without --last the window is the newest 125 runs: of 130 runs with lift errors 1..130 um,
+// runs 6..130, mean 68; --last 130 takes them all (mean 65.5). No note under 1000 runs.
+TEST_F(ShaftCommandsTest, SpcTakesTheNewest125RunsUnlessToldOtherwise) {
+  Result<RunStore> store = RunStore::open(tmp_.path() / "gaugeloop.sqlite");
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  for (int i = 1; i <= 130; ++i) {
+    char started[32];
+    std::snprintf(started, sizeof started, "2020-11-%02dT%02d:%02d:00Z", 1 + i / 24, i % 24, i % 60);
+    RunRecord r = testing::sample_run("window_part", 1, "g1", started, 4.0);
+    Characteristic c;
+    c.key = "lift_error";
+    c.unit = "um";
+    c.value = c.min = c.max = i;
+    c.limits = Limits{-200.0, 200.0};
+    c.verdict = Verdict::kIn;
+    r.characteristics = {c};
+    r.verdict = c.verdict;
+    ASSERT_TRUE(store->insert_run(r).ok());
+  }
+  for (const auto& [args, runs, mean] : {std::tuple<std::string, int, double>{"", 125, 68.0},
+                                         std::tuple<std::string, int, double>{" --last 130", 130, 65.5}}) {
+    CommandResult r = run_command("runs spc --part window_part --lobe 1 --json" + args + data_);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json j = nlohmann::json::parse(r.output, nullptr, false);
+    ASSERT_FALSE(j.is_discarded()) << r.output;
+    EXPECT_EQ(j["runs"], runs) << args;
+    ASSERT_EQ(j["characteristics"].size(), 1u) << r.output;
+    EXPECT_EQ(j["characteristics"][0]["n"], runs) << args;
+    EXPECT_NEAR(j["characteristics"][0]["mean"].get<double>(), mean, 1e-9) << args;
+    EXPECT_TRUE(j["note"].is_null()) << r.output;
+  }
 }
 
 }  // namespace

@@ -271,7 +271,7 @@ TEST(Spc, HugeValuesGiveAFiniteMeanAndNoInfiniteS) {
   EXPECT_NE(figure(same, "lift_error").not_computed.find("finite s"), std::string::npos);
 }
 
-TEST(Spc, NoRunsNoFigures) { EXPECT_TRUE(spc_figures({}).empty()); }
+TEST(Spc, NoRunsNoFigures) { EXPECT_TRUE(spc_figures(std::vector<RunCharacteristics>{}).empty()); }
 
 }  // namespace
 }  // namespace gaugeloop
