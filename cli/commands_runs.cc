@@ -622,7 +622,7 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   compare_cmd->callback([&action, cmp] { action = [cmp] { return cmd_compare(*cmp); }; });
 
   auto trend = std::make_shared<ListOptions>();
-  trend->query.limit = 10000;
+  trend->query.limit = 1000;  // as GET /api/trend: a few milliseconds at any size of the history
   CLI::App* trend_cmd =
       runs->add_subcommand("trend", "Max error, phase and runout of one lobe over time, oldest first.");
   add_filter_options(*trend_cmd, *trend, true);

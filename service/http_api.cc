@@ -49,6 +49,9 @@ using nlohmann::json;
 // Every list the API reads in full (program names) asks for this many rows.
 constexpr int kAll = INT_MAX;
 constexpr int kMaxLimit = 100000;
+// A trend's window unless `limit` says otherwise: about three weeks of a lobe measured every
+// half hour, drawn readably, and read in a few milliseconds at any size of the history.
+constexpr int kTrendDefaultRuns = 1000;
 constexpr int kMaxLobe = 1000;  // as `runs list --lobe`
 constexpr std::size_t kMaxBodyBytes = 64 * 1024;
 const char* const kDocs = "see docs/http_api.md";
@@ -779,7 +782,7 @@ struct HttpApi::Impl {
   void trend(const httplib::Request& req, httplib::Response& res) {
     Result<Query> q = Query::of(req, {"part", "lobe", "machine", "since", "until", "limit"});
     if (!q) return send_error(res, q.error());
-    Result<RunQuery> rq = run_query(*q, 10000);
+    Result<RunQuery> rq = run_query(*q, kTrendDefaultRuns);
     if (!rq) return send_error(res, rq.error());
     if (rq->part.empty() || rq->lobe == 0) {
       return send_error(res, 400, "a trend is of one lobe: give both `part` and `lobe`, e.g. ?part=intake_flat&lobe=1");
@@ -1021,7 +1024,7 @@ struct HttpApi::Impl {
   void trend_plot(const httplib::Request& req, httplib::Response& res) {
     Result<Query> q = Query::of(req, {"part", "lobe", "machine", "since", "until", "limit", "key"});
     if (!q) return send_error(res, q.error());
-    Result<RunQuery> rq = run_query(*q, 10000);
+    Result<RunQuery> rq = run_query(*q, kTrendDefaultRuns);
     if (!rq) return send_error(res, rq.error());
     if (rq->part.empty() || rq->lobe == 0) {
       return send_error(

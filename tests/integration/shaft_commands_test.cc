@@ -235,5 +235,43 @@ TEST_F(ShaftCommandsTest, SpcTakesTheNewest125RunsUnlessToldOtherwise) {
   }
 }
 
+// 1001 runs: `runs trend` takes the newest 1000 unless told otherwise, and an SPC window of more
+// than 1000 runs says what it read.
+TEST_F(ShaftCommandsTest, TheTrendTakesTheNewest1000AndAWideSpcWindowSaysSo) {
+  Result<RunStore> store = RunStore::open(tmp_.path() / "gaugeloop.sqlite");
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  for (int i = 0; i < 1001; ++i) {
+    char started[32];
+    std::snprintf(started, sizeof started, "2020-%02d-%02dT%02d:00:00Z", 1 + i / 240, 1 + (i / 24) % 10, i % 24);
+    RunRecord r = testing::sample_run("long_part", 1, "g1", started, 4.0);
+    Characteristic c;
+    c.key = "lift_error";
+    c.unit = "um";
+    c.value = c.min = c.max = 1.0 + (i % 7);
+    c.limits = Limits{-12.0, 12.0};
+    c.verdict = Verdict::kIn;
+    r.characteristics = {c};
+    r.verdict = c.verdict;
+    ASSERT_TRUE(store->insert_run(r).ok());
+  }
+  CommandResult trend = run_command("runs trend --part long_part --lobe 1 --json" + data_);
+  ASSERT_EQ(trend.exit_code, 0) << trend.output.substr(0, 400);
+  const nlohmann::json runs = nlohmann::json::parse(trend.output, nullptr, false);
+  ASSERT_TRUE(runs.is_array()) << trend.output.substr(0, 400);
+  EXPECT_EQ(runs.size(), 1000u);
+  EXPECT_EQ(runs.front()["started_utc"], "2020-01-01T01:00:00Z") << "the oldest of the newest 1000: the second run";
+
+  CommandResult wide = run_command("runs spc --part long_part --lobe 1 --last 2000 --json" + data_);
+  ASSERT_EQ(wide.exit_code, 0) << wide.output;
+  const nlohmann::json j = nlohmann::json::parse(wide.output, nullptr, false);
+  EXPECT_EQ(j["runs"], 1001);
+  ASSERT_TRUE(j["note"].is_string()) << wide.output;
+  EXPECT_TRUE(has(j["note"].get<std::string>(), "summed up over 1001 runs")) << wide.output;
+  CommandResult text = run_command("runs spc --part long_part --lobe 1 --last 1001" + data_);
+  EXPECT_TRUE(has(text.output, "note: summed up over 1001 runs")) << text.output;
+  CommandResult narrow = run_command("runs spc --part long_part --lobe 1" + data_);
+  EXPECT_FALSE(has(narrow.output, "note:")) << narrow.output;
+}
+
 }  // namespace
 }  // namespace gaugeloop
