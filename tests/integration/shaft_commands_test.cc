@@ -164,6 +164,22 @@ TEST_F(ShaftCommandsTest, SpcSelectsTheLobesRuns) {
   EXPECT_TRUE(has(since.output, "1 run, 2020-11-20T09:00:00Z to 2020-11-20T09:00:00Z")) << since.output;
 }
 
+// A stored run of `part` lobe `lobe` whose only characteristic is the whole-turn lift error
+// `value_um`, judged against `limits`.
+RunRecord run_with_lift_error(const std::string& part, int lobe, const std::string& started, double value_um,
+                              Limits limits, Verdict verdict) {
+  RunRecord r = testing::sample_run(part, lobe, "g1", started, 4.0);
+  Characteristic c;
+  c.key = "lift_error";
+  c.unit = "um";
+  c.value = c.min = c.max = value_um;
+  c.limits = limits;
+  c.verdict = verdict;
+  r.characteristics = {c};
+  r.verdict = verdict;
+  return r;
+}
+
 TEST_F(ShaftCommandsTest, SpcFromStoredCharacteristics) {
   // Lift error 1, 2, 3 um against -5..+5 over three runs of exhaust lobe 2 (the third out by
   // its own verdict): mean 2, s = sqrt((1 + 0 + 1) / 2) = 1, Cp = 10 / 6 = 1.667,
@@ -171,16 +187,10 @@ TEST_F(ShaftCommandsTest, SpcFromStoredCharacteristics) {
   Result<RunStore> store = RunStore::open(tmp_.path() / "gaugeloop.sqlite");
   ASSERT_TRUE(store.ok()) << store.error().message;
   for (int i = 1; i <= 3; ++i) {
-    RunRecord r = testing::sample_run("spc_part", 2, "g1", "2020-11-2" + std::to_string(i) + "T08:00:00Z", 4.0);
-    Characteristic c;
-    c.key = "lift_error";
-    c.unit = "um";
-    c.value = c.min = c.max = i;
-    c.limits = Limits{-5.0, 5.0};
-    c.verdict = i == 3 ? Verdict::kOut : Verdict::kIn;
-    r.characteristics = {c};
-    r.verdict = c.verdict;
-    ASSERT_TRUE(store->insert_run(r).ok());
+    ASSERT_TRUE(store
+                    ->insert_run(run_with_lift_error("spc_part", 2, "2020-11-2" + std::to_string(i) + "T08:00:00Z", i,
+                                                     Limits{-5.0, 5.0}, i == 3 ? Verdict::kOut : Verdict::kIn))
+                    .ok());
   }
   CommandResult r = run_command("runs spc --part spc_part --lobe 2 --json" + data_);
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -210,16 +220,8 @@ TEST_F(ShaftCommandsTest, SpcTakesTheNewest125RunsUnlessToldOtherwise) {
   for (int i = 1; i <= 130; ++i) {
     char started[32];
     std::snprintf(started, sizeof started, "2020-11-%02dT%02d:%02d:00Z", 1 + i / 24, i % 24, i % 60);
-    RunRecord r = testing::sample_run("window_part", 1, "g1", started, 4.0);
-    Characteristic c;
-    c.key = "lift_error";
-    c.unit = "um";
-    c.value = c.min = c.max = i;
-    c.limits = Limits{-200.0, 200.0};
-    c.verdict = Verdict::kIn;
-    r.characteristics = {c};
-    r.verdict = c.verdict;
-    ASSERT_TRUE(store->insert_run(r).ok());
+    ASSERT_TRUE(
+        store->insert_run(run_with_lift_error("window_part", 1, started, i, Limits{-200.0, 200.0}, Verdict::kIn)).ok());
   }
   for (const auto& [args, runs, mean] : {std::tuple<std::string, int, double>{"", 125, 68.0},
                                          std::tuple<std::string, int, double>{" --last 130", 130, 65.5}}) {
@@ -243,16 +245,10 @@ TEST_F(ShaftCommandsTest, TheTrendTakesTheNewest1000AndAWideSpcWindowSaysSo) {
   for (int i = 0; i < 1001; ++i) {
     char started[32];
     std::snprintf(started, sizeof started, "2020-%02d-%02dT%02d:00:00Z", 1 + i / 240, 1 + (i / 24) % 10, i % 24);
-    RunRecord r = testing::sample_run("long_part", 1, "g1", started, 4.0);
-    Characteristic c;
-    c.key = "lift_error";
-    c.unit = "um";
-    c.value = c.min = c.max = 1.0 + (i % 7);
-    c.limits = Limits{-12.0, 12.0};
-    c.verdict = Verdict::kIn;
-    r.characteristics = {c};
-    r.verdict = c.verdict;
-    ASSERT_TRUE(store->insert_run(r).ok());
+    ASSERT_TRUE(
+        store
+            ->insert_run(run_with_lift_error("long_part", 1, started, 1.0 + (i % 7), Limits{-12.0, 12.0}, Verdict::kIn))
+            .ok());
   }
   CommandResult trend = run_command("runs trend --part long_part --lobe 1 --json" + data_);
   ASSERT_EQ(trend.exit_code, 0) << trend.output.substr(0, 400);
