@@ -829,6 +829,13 @@ UPDATE sqlite_schema
 PRAGMA writable_schema = OFF;
 )sql";
 
+// Version 15: `runs list --part P` (and GET /api/runs?part=P) without a lobe read every run of
+// the part and sorted them (runs_by_part_lobe_started gives no time order across lobes); this
+// index gives the newest runs of a part in order.
+constexpr std::string_view kSchemaV15 = R"sql(
+CREATE INDEX runs_by_part_started ON runs (part, started_utc);
+)sql";
+
 // After an in-place edit of CREATE texts (versions 10, 13 and 14): `edited` tables must hold
 // `marker` (else the edit found the text changed by hand and the migration rolls back); then the
 // schema cookie changes with the CREATE text, so every connection reads it again.
@@ -874,8 +881,8 @@ Status bump_schema_cookie_v14(Connection& conn) {
   return bump_schema_cookie_after(conn, 14, {"runs"}, "''assumed'', ''main_program''");
 }
 
-const std::array<Migration, 14>& all_migrations() {
-  static const std::array<Migration, 14> kMigrations{{
+const std::array<Migration, 15>& all_migrations() {
+  static const std::array<Migration, 15> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -940,6 +947,7 @@ const std::array<Migration, 14>& all_migrations() {
        std::string(kSchemaV14),
        bump_schema_cookie_v14,
        {}},
+      {15, "runs: an index by part and time, for the newest runs of a part", std::string(kSchemaV15), nullptr, {}},
   }};
   return kMigrations;
 }

@@ -255,6 +255,33 @@ TEST_F(RunStoreTest, ListBySerialMatchesExactly) {
   EXPECT_NE(plan.find("runs_by_serial"), std::string::npos) << plan;
 }
 
+// Each filter `runs list` and GET /api/runs offer, alone and as a lobe's, is one index seek
+// that also gives the newest-first order: no full scan and no sort of all a part's runs.
+// (status alone walks runs_by_started newest first and stops at the limit.)
+TEST_F(RunStoreTest, EveryListFilterIsServedByAnIndexInTimeOrder) {
+  insert_ok(store(), make_record("intake", "2026-11-22T01:00:00Z"));
+  const std::pair<const char*, const char*> filters[] = {
+      {"r.part = 'a'", "runs_by_part_started (part=?)"},
+      {"r.part = 'a' AND r.lobe = 3", "runs_by_part_lobe_started (part=? AND lobe=?)"},
+      {"r.part = 'a' AND r.lobe = 3 AND r.started_utc >= '2026'",
+       "runs_by_part_lobe_started (part=? AND lobe=? AND started_utc>?)"},
+      {"r.machine = 'g'", "runs_by_machine_started (machine=?)"},
+      {"r.machine = 'g' AND r.part = 'a' AND r.lobe = 3", "runs_by_lobe_started (machine=? AND part=? AND lobe=?)"},
+      {"r.serial = 's'", "runs_by_serial (serial=?)"},
+      {"r.verdict = 'out'", "runs_by_verdict (verdict=?)"},
+      {"r.started_utc >= '2026'", "runs_by_started (started_utc>?)"},
+      {"r.started_utc < '2026'", "runs_by_started (started_utc<?)"},
+      {"r.status = 'measured'", "SCAN r USING INDEX runs_by_started"},
+  };
+  for (const auto& [where, index] : filters) {
+    const std::string plan = RawDb(db_in(dir_))
+                                 .query_plan("SELECT id FROM runs AS r WHERE " + std::string(where) +
+                                             " ORDER BY r.started_utc DESC, r.id DESC LIMIT 50");
+    EXPECT_NE(plan.find(index), std::string::npos) << where << "\n" << plan;
+    EXPECT_EQ(plan.find("TEMP B-TREE"), std::string::npos) << where << ": a sort of every run it selects\n" << plan;
+  }
+}
+
 // The verdict filter, every value of it, is one index seek with the sort (runs_by_verdict),
 // however long the history: the plan SQLite makes for list_runs' query, and the runs it finds.
 TEST_F(RunStoreTest, TheVerdictFilterIsServedByItsIndex) {
