@@ -159,10 +159,17 @@ WHERE e.local_run_id IS NOT NULL AND r.source = e.source AND r.local_id = e.loca
 CREATE INDEX events_by_run ON events (run_uuid) WHERE run_uuid IS NOT NULL;
 )sql";
 
-constexpr std::array<CentralMigration, 3> kMigrations{{
+// The newest runs of a part across its lobes (`runs list --db ... --part P`) by an index, not a
+// sort of all the part's runs.
+constexpr std::string_view kCentralV4 = R"sql(
+CREATE INDEX runs_by_part_started ON runs (part, started_utc DESC);
+)sql";
+
+constexpr std::array<CentralMigration, 4> kMigrations{{
     {1, "runs, run_characteristics, nc_pushes, events and sync_progress", kCentralV1},
     {2, "sync_progress: where a sync from the start stands (rescan_local_id, rescan_uuid)", kCentralV2},
     {3, "events: the run's UUID (run_uuid)", kCentralV3},
+    {4, "runs: an index by part and time (runs_by_part_started)", kCentralV4},
 }};
 
 // Any 64-bit number of our own: held by whoever migrates, so two grinders syncing into an
