@@ -483,6 +483,8 @@ struct HttpFront::Impl {
   int poll_timeout_ms() const {
     Clock::time_point next = Clock::now() + std::chrono::seconds(1);
     for (const Connection& c : connections) next = std::min(next, next_deadline(c));
+    // A listener at rest listens again when its rest ends, not at the next second's tick.
+    if (accept_paused_until > Clock::now()) next = std::min(next, accept_paused_until);
     const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(next - Clock::now()).count();
     return static_cast<int>(std::clamp<long long>(ms + 1, 1, 1000));
   }

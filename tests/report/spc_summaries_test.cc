@@ -1,7 +1,8 @@
-// The SPC summaries the SQLite file sums up in SQL against the same summaries made here from
-// every run's characteristics (summarize_characteristics over RunStore::characteristics), on a
-// real file on disk: the same runs, keys, order, counts and limits, and the same mean and
-// squared deviations to the rounding of a different order of summation.
+// The SPC summaries the SQLite file makes from one statement over the window's characteristics
+// against the same summaries made here run by run (summarize_characteristics over
+// RunStore::characteristics), on a real file on disk: the same runs, keys, order, counts and
+// limits, and the same mean and squared deviations to the bit (the same values summed in the
+// same order, oldest run first; a REAL comes back from SQLite exactly).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -81,9 +82,8 @@ class SpcSummariesTest : public ::testing::Test {
       EXPECT_EQ(a.unit, b.unit);
       EXPECT_EQ(a.n, b.n);
       EXPECT_EQ(a.all_equal, b.all_equal);
-      // Sums of the same terms in another order: equal to a few units in the last place.
-      EXPECT_NEAR(a.mean, b.mean, 1e-13 * (1.0 + std::fabs(b.mean)));
-      EXPECT_NEAR(a.squares, b.squares, 1e-12 * (1.0 + b.squares));
+      EXPECT_EQ(a.mean, b.mean);
+      EXPECT_EQ(a.squares, b.squares);
       EXPECT_EQ(a.limits.lower, b.limits.lower);
       EXPECT_EQ(a.limits.upper, b.limits.upper);
       EXPECT_EQ(a.limits_from_run, b.limits_from_run);
@@ -105,7 +105,7 @@ RunQuery lobe_one() {
   return q;
 }
 
-TEST_F(SpcSummariesTest, TheWholeLobeSumsUpInSqlAsFromEveryRun) {
+TEST_F(SpcSummariesTest, TheWholeLobeSumsUpFromOneStatementAsRunByRun) {
   const RunQuery q = lobe_one();
   expect_same(q);
   // What the comparison compares: 40 runs, five keys, the late one last, the changed limits.
