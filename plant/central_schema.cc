@@ -165,11 +165,59 @@ constexpr std::string_view kCentralV4 = R"sql(
 CREATE INDEX runs_by_part_started ON runs (part, started_utc DESC);
 )sql";
 
-constexpr std::array<CentralMigration, 4> kMigrations{{
+// A run's characteristics in one row of arrays (position i of each array is the characteristic
+// at position i), one row and one index entry a run instead of one each per characteristic:
+// what PostgreSQL spent most of a sync on, and most of the history's index. The rows as before
+// are a view of the same name and columns.
+constexpr std::string_view kCentralV5 = R"sql(
+CREATE TABLE run_characteristic_sets (
+  run_uuid              text COLLATE "C" PRIMARY KEY REFERENCES runs (uuid) ON DELETE CASCADE,
+  key_list              text[] COLLATE "C" NOT NULL,
+  unit_list             text[] COLLATE "C" NOT NULL,
+  value_list            float8[] NOT NULL,
+  min_value_list        float8[] NOT NULL,
+  max_value_list        float8[] NOT NULL,
+  lower_limit_list      float8[] NOT NULL,
+  upper_limit_list      float8[] NOT NULL,
+  verdict_list          text[] COLLATE "C" NOT NULL,
+  from_deg_list         integer[] NOT NULL,
+  to_deg_list           integer[] NOT NULL,
+  CHECK (array_ndims(key_list) = 1 AND cardinality(key_list) > 0),
+  CHECK (cardinality(unit_list) = cardinality(key_list) AND cardinality(value_list) = cardinality(key_list)
+         AND cardinality(min_value_list) = cardinality(key_list) AND cardinality(max_value_list) = cardinality(key_list)
+         AND cardinality(lower_limit_list) = cardinality(key_list)
+         AND cardinality(upper_limit_list) = cardinality(key_list)
+         AND cardinality(verdict_list) = cardinality(key_list) AND cardinality(from_deg_list) = cardinality(key_list)
+         AND cardinality(to_deg_list) = cardinality(key_list)),
+  CHECK (array_position(key_list, NULL) IS NULL AND array_position(unit_list, NULL) IS NULL
+         AND array_position(value_list, NULL) IS NULL AND array_position(min_value_list, NULL) IS NULL
+         AND array_position(max_value_list, NULL) IS NULL),
+  CHECK (verdict_list <@ ARRAY['in', 'out', 'not_judged']::text[])
+);
+INSERT INTO run_characteristic_sets
+SELECT run_uuid, array_agg(key ORDER BY position), array_agg(unit ORDER BY position),
+       array_agg(value ORDER BY position), array_agg(min_value ORDER BY position),
+       array_agg(max_value ORDER BY position), array_agg(lower_limit ORDER BY position),
+       array_agg(upper_limit ORDER BY position), array_agg(verdict ORDER BY position),
+       array_agg(from_deg ORDER BY position), array_agg(to_deg ORDER BY position)
+FROM run_characteristics GROUP BY run_uuid;
+DROP TABLE run_characteristics;
+CREATE VIEW run_characteristics AS
+SELECT s.run_uuid, (c.ordinality - 1)::integer AS position, c.key, c.unit, c.value, c.min_value, c.max_value,
+       c.lower_limit, c.upper_limit, c.verdict, c.from_deg, c.to_deg
+FROM run_characteristic_sets AS s,
+     unnest(s.key_list, s.unit_list, s.value_list, s.min_value_list, s.max_value_list, s.lower_limit_list,
+            s.upper_limit_list, s.verdict_list, s.from_deg_list, s.to_deg_list)
+       WITH ORDINALITY AS c (key, unit, value, min_value, max_value, lower_limit, upper_limit, verdict, from_deg,
+                             to_deg, ordinality);
+)sql";
+
+constexpr std::array<CentralMigration, 5> kMigrations{{
     {1, "runs, run_characteristics, nc_pushes, events and sync_progress", kCentralV1},
     {2, "sync_progress: where a sync from the start stands (rescan_local_id, rescan_uuid)", kCentralV2},
     {3, "events: the run's UUID (run_uuid)", kCentralV3},
     {4, "runs: an index by part and time (runs_by_part_started)", kCentralV4},
+    {5, "run_characteristic_sets: a run's characteristics in one row; run_characteristics a view of them", kCentralV5},
 }};
 
 // Any 64-bit number of our own: held by whoever migrates, so two grinders syncing into an

@@ -3,8 +3,11 @@
 #include "plant/central_sync.h"
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
+#include <future>
 #include <optional>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -20,26 +23,26 @@ using central_internal::Params;
 
 namespace {
 
-// Each INSERT is a head, the multi-row VALUES list (central_internal::values_list) and a tail:
-// a batch's records go in a few statements, not one round trip each.
-constexpr std::string_view kInsertRunHead = R"sql(
-INSERT INTO runs (uuid, source_machine, source, local_id, started_utc, finished_utc, machine, part, lobe, gauge,
-                  note, status, revolutions, degrees_captured, polls, reconnects, discarded_revolutions,
-                  zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um, repeatability_um, nc_file,
-                  phase_error_deg, base_circle_runout_um, harmonic_amplitude_um, correction_in_force_run,
-                  settings_hash, settings, raw_pruned_utc, ground_with_version, ground_with_source, inspection,
-                  serial, operator, verdict, lift_error_reference, max_abs_residual_um, rms_residual_um,
-                  peak_to_valley_residual_um, dial_runout_um, roundness_um, synced_utc)
-VALUES )sql";
-constexpr std::size_t kRunWidth = 43;
-constexpr std::string_view kInsertRunTail = " ON CONFLICT (uuid) DO NOTHING RETURNING 1";
+// The runs go by COPY into a temporary table of the runs table's columns but synced_utc (made
+// once per connection, emptied at each commit), and from there into runs with ON CONFLICT DO
+// NOTHING, which returns the runs that were new; their characteristics go by COPY straight into
+// run_characteristic_sets, one row a run: a run that was new has none there yet. COPY is what
+// PostgreSQL reads fastest (no statement to parse per row, rows inserted in groups).
+constexpr std::string_view kRunColumns =
+    "uuid, source_machine, source, local_id, started_utc, finished_utc, machine, part, lobe, gauge, note, status, "
+    "revolutions, degrees_captured, polls, reconnects, discarded_revolutions, zero_offset_mm, max_abs_error_um, "
+    "rms_error_um, peak_to_valley_um, repeatability_um, nc_file, phase_error_deg, base_circle_runout_um, "
+    "harmonic_amplitude_um, correction_in_force_run, settings_hash, settings, raw_pruned_utc, ground_with_version, "
+    "ground_with_source, inspection, serial, operator, verdict, lift_error_reference, max_abs_residual_um, "
+    "rms_residual_um, peak_to_valley_residual_um, dial_runout_um, roundness_um";
+constexpr std::size_t kRunWidth = 42;  // and synced_utc, given at the insert
+constexpr std::string_view kIncomingRuns = "sync_incoming_runs";
 
-constexpr std::string_view kInsertCharacteristicHead = R"sql(
-INSERT INTO run_characteristics (run_uuid, position, key, unit, value, min_value, max_value, lower_limit,
-                                 upper_limit, verdict, from_deg, to_deg)
-VALUES )sql";
-constexpr std::size_t kCharacteristicWidth = 12;
-constexpr std::string_view kInsertCharacteristicTail = " ON CONFLICT (run_uuid, position) DO NOTHING";
+// A run's characteristics as one row of arrays (central schema 5).
+constexpr std::string_view kCharacteristicSetColumns =
+    "run_uuid, key_list, unit_list, value_list, min_value_list, max_value_list, lower_limit_list, upper_limit_list, "
+    "verdict_list, from_deg_list, to_deg_list";
+constexpr std::size_t kCharacteristicSetWidth = 11;
 
 constexpr std::string_view kInsertPushHead = R"sql(
 INSERT INTO nc_pushes (uuid, run_uuid, machine, source_machine, source, local_id, local_run_id, pushed_utc, nc_file,
@@ -83,6 +86,39 @@ pqxx::result::size_type insert_rows(pqxx::work& tx, std::string_view head, std::
   return count;
 }
 
+// A COPY into `table` of the columns `columns` (a comma-separated list).
+pqxx::stream_to open_copy(pqxx::work& tx, std::string_view table, std::string_view columns) {
+  // libpqxx joins the names with commas: one element that is the whole list is the list.
+  return pqxx::stream_to(tx, std::string(table), std::vector<std::string>{std::string(columns)});
+}
+
+// One row of kWidth values; a NULL value is COPY's NULL.
+template <std::size_t kWidth>
+void copy_row(pqxx::stream_to& copy, const Params& row) {
+  const std::vector<const char*> values = row.pointers();
+  std::array<const char*, kWidth> fields{};
+  std::copy_n(values.begin(), kWidth, fields.begin());
+  copy << fields;
+}
+
+// `value` as an element of a PostgreSQL array literal: NULL, a number as it is, a text quoted.
+void append_array_element(std::string& list, const char* value, bool text) {
+  if (value == nullptr) {
+    list += "NULL";
+    return;
+  }
+  if (!text) {
+    list += value;
+    return;
+  }
+  list += '"';
+  for (const char* c = value; *c != '\0'; ++c) {
+    if (*c == '"' || *c == '\\') list += '\\';
+    list += *c;
+  }
+  list += '"';
+}
+
 std::string harmonics_json(const LobeAnalysis& a) {
   std::string out = "[";
   for (std::size_t h = 0; h < a.harmonic_amplitude_um.size(); ++h) {
@@ -93,45 +129,82 @@ std::string harmonics_json(const LobeAnalysis& a) {
   return out + "]";
 }
 
-// The runs, and their characteristics (a run already there keeps its own: DO NOTHING); the
-// runs that were new.
-std::int64_t insert_runs(pqxx::work& tx, const std::vector<StoredRun>& runs, const std::string& machine,
-                         const std::string& source, const std::string& now) {
-  std::vector<Params> rows;
-  std::vector<Params> characteristics;
-  rows.reserve(runs.size());
-  for (const StoredRun& run : runs) {
-    const RunSummary& s = run.summary;
-    const LobeAnalysis& a = run.analysis;
-    Params p;
-    p.text(s.uuid).text(machine).text(source).integer(s.id).text(s.started_utc).text(run.finished_utc);
-    p.text(s.machine).text(s.part).integer(std::int64_t{s.lobe}).text(run.gauge).text(s.note).text(s.status);
-    p.integer(std::int64_t{s.revolutions}).integer(std::int64_t{s.degrees_captured}).integer(run.polls);
-    p.integer(run.reconnects).integer(run.discarded_revolutions).number(a.zero_offset_mm).number(s.max_abs_error_um);
-    p.number(s.rms_error_um).number(s.peak_to_valley_um).number(s.repeatability_um).text_or_null(s.nc_file);
-    p.number(s.phase_error_deg).number(s.base_circle_runout_um).text(harmonics_json(a));
-    p.integer(run.correction_in_force_run).text_or_null(s.settings_hash).text_or_null(run.settings);
-    p.text_or_null(s.raw_pruned_utc);
-    p.integer(run.ground_with_version ? std::optional<std::int64_t>(*run.ground_with_version) : std::nullopt);
-    p.text_or_null(run.ground_with_source).text(run.inspection ? "true" : "false");
-    p.text_or_null(s.serial).text_or_null(s.operator_name).text(verdict_name(s.verdict));
-    p.text(run.lift_error_reference == LiftErrorReference::kNominal ? "nominal" : "best_fit");
-    p.number(a.max_abs_residual_um).number(a.rms_residual_um).number(a.peak_to_valley_residual_um);
-    p.number(a.dial_runout_um).number(a.roundness_um).text(now);
-    rows.push_back(std::move(p));
+// A run as the sync sends it: its runs row (all but synced_utc) and its characteristics' row,
+// made from the file while the batch before is being sent.
+struct OutgoingRun {
+  std::int64_t id = 0;
+  std::string uuid;
+  Params row;
+  Params characteristics;  // the run_characteristic_sets row; none for a run without any
+};
+
+OutgoingRun outgoing_run(const StoredRun& run, const std::string& machine, const std::string& source) {
+  const RunSummary& s = run.summary;
+  const LobeAnalysis& a = run.analysis;
+  OutgoingRun out{s.id, s.uuid, {}, {}};
+  Params& p = out.row;
+  p.text(s.uuid).text(machine).text(source).integer(s.id).text(s.started_utc).text(run.finished_utc);
+  p.text(s.machine).text(s.part).integer(std::int64_t{s.lobe}).text(run.gauge).text(s.note).text(s.status);
+  p.integer(std::int64_t{s.revolutions}).integer(std::int64_t{s.degrees_captured}).integer(run.polls);
+  p.integer(run.reconnects).integer(run.discarded_revolutions).number(a.zero_offset_mm).number(s.max_abs_error_um);
+  p.number(s.rms_error_um).number(s.peak_to_valley_um).number(s.repeatability_um).text_or_null(s.nc_file);
+  p.number(s.phase_error_deg).number(s.base_circle_runout_um).text(harmonics_json(a));
+  p.integer(run.correction_in_force_run).text_or_null(s.settings_hash).text_or_null(run.settings);
+  p.text_or_null(s.raw_pruned_utc);
+  p.integer(run.ground_with_version ? std::optional<std::int64_t>(*run.ground_with_version) : std::nullopt);
+  p.text_or_null(run.ground_with_source).text(run.inspection ? "true" : "false");
+  p.text_or_null(s.serial).text_or_null(s.operator_name).text(verdict_name(s.verdict));
+  p.text(run.lift_error_reference == LiftErrorReference::kNominal ? "nominal" : "best_fit");
+  p.number(a.max_abs_residual_um).number(a.rms_residual_um).number(a.peak_to_valley_residual_um);
+  p.number(a.dial_runout_um).number(a.roundness_um);
+  if (!run.characteristics.empty()) {
+    // Array literals of the exact texts the parameters use; every text element quoted.
+    std::array<std::string, kCharacteristicSetWidth - 1> lists;
+    for (std::string& l : lists) l = "{";
     for (std::size_t i = 0; i < run.characteristics.size(); ++i) {
       const Characteristic& c = run.characteristics[i];
-      Params cp;
-      cp.text(s.uuid).integer(static_cast<std::int64_t>(i)).text(c.key).text(c.unit).number(c.value).number(c.min);
-      cp.number(c.max).number(c.limits.lower).number(c.limits.upper).text(verdict_name(c.verdict));
-      cp.integer(c.from_deg ? std::optional<std::int64_t>(*c.from_deg) : std::nullopt);
-      cp.integer(c.to_deg ? std::optional<std::int64_t>(*c.to_deg) : std::nullopt);
-      characteristics.push_back(std::move(cp));
+      Params e;
+      e.text(c.key).text(c.unit).number(c.value).number(c.min).number(c.max).number(c.limits.lower);
+      e.number(c.limits.upper).text(verdict_name(c.verdict));
+      e.integer(c.from_deg ? std::optional<std::int64_t>(*c.from_deg) : std::nullopt);
+      e.integer(c.to_deg ? std::optional<std::int64_t>(*c.to_deg) : std::nullopt);
+      const std::vector<const char*> values = e.pointers();
+      for (std::size_t k = 0; k < lists.size(); ++k) {
+        if (i > 0) lists[k] += ',';
+        const bool text = k == 0 || k == 1 || k == 7;
+        append_array_element(lists[k], values[k], text);
+      }
     }
+    out.characteristics.text(s.uuid);
+    for (std::string& l : lists) out.characteristics.text(l + "}");
   }
-  const auto inserted = insert_rows(tx, kInsertRunHead, kInsertRunTail, kRunWidth, rows);
-  insert_rows(tx, kInsertCharacteristicHead, kInsertCharacteristicTail, kCharacteristicWidth, characteristics);
-  return static_cast<std::int64_t>(inserted);
+  return out;
+}
+
+// The runs, and the characteristics of those that were new (a run already there keeps its own:
+// DO NOTHING); the runs that were new.
+std::int64_t insert_runs(pqxx::work& tx, const std::vector<OutgoingRun>& runs, const std::string& now) {
+  {
+    pqxx::stream_to copy = open_copy(tx, kIncomingRuns, kRunColumns);
+    for (const OutgoingRun& r : runs) copy_row<kRunWidth>(copy, r.row);
+    copy.complete();
+  }
+  Params synced;
+  synced.text(now);
+  const pqxx::result inserted = central_internal::exec(
+      tx,
+      "INSERT INTO runs (" + std::string(kRunColumns) + ", synced_utc) SELECT " + std::string(kRunColumns) +
+          ", $1 FROM " + std::string(kIncomingRuns) + " ON CONFLICT (uuid) DO NOTHING RETURNING uuid",
+      synced);
+  std::set<std::string> fresh;
+  for (const auto& row : inserted) fresh.insert(central_internal::text_of(row[0]));
+  pqxx::stream_to copy = open_copy(tx, "run_characteristic_sets", kCharacteristicSetColumns);
+  for (const OutgoingRun& r : runs) {
+    if (fresh.count(r.uuid) == 0 || r.characteristics.size() == 0) continue;
+    copy_row<kCharacteristicSetWidth>(copy, r.characteristics);
+  }
+  copy.complete();
+  return static_cast<std::int64_t>(inserted.size());
 }
 
 // The pushes, and each run a new push came from marked pushed; the pushes that were new.
@@ -211,6 +284,8 @@ class Syncer {
     std::optional<std::int64_t> position;  // rescan: where this sync stands
     std::string position_uuid;             // the UUID of the record at `position`
     bool anchor_checked = false;
+    // Waited for on every way out, by its future's destructor.
+    std::optional<std::pair<std::int64_t, std::future<Result<std::vector<Record>>>>> ahead;
     for (;;) {
       if (options_.max_batches > 0 && counts_.batches >= options_.max_batches) return false;
       const std::string operation = "copy " + std::string(reader.table) + " of " + source_;
@@ -250,7 +325,11 @@ class Syncer {
           if (rescan && !position) position = 0;
         }
         const std::int64_t after = position.value_or(stored);
-        Result<std::vector<Record>> records = reader.read(after, options_.batch_size);
+        // The batch read while the last one was sent, if it starts where this one does (another
+        // sync of the same file may have moved the progress meanwhile).
+        Result<std::vector<Record>> records =
+            ahead && ahead->first == after ? ahead->second.get() : reader.read(after, options_.batch_size);
+        ahead.reset();
         if (!records.ok()) return records.error();
         if (records->empty()) {
           counts.last_local_id = after;
@@ -265,6 +344,14 @@ class Syncer {
                                  done);
           tx.commit();
           return true;
+        }
+        if (options_.max_batches == 0 || counts_.batches + 1 < options_.max_batches) {
+          // The next batch is read from the file (a thread of its own) while the server takes this
+          // one: the file's reading and the server's writing overlap.
+          const std::int64_t next = reader.id(records->back());
+          ahead.emplace(next, std::async(std::launch::async, [&reader, next, limit = options_.batch_size] {
+                          return reader.read(next, limit);
+                        }));
         }
         const std::string now = utc_now();
         const std::int64_t inserted = reader.insert(tx, *records, machine_, source_, now);
@@ -376,24 +463,30 @@ Result<CentralSyncCounts> sync_to_central(const RunStore& local, const std::stri
   counts.source = source_of(local);
   Syncer syncer(*c, machine, counts.source, options, counts);
 
-  const TableReader<StoredRun> runs{
+  const TableReader<OutgoingRun> runs{
       "runs",
       "run",
-      [&local](std::int64_t after, int limit) -> Result<std::vector<StoredRun>> {
-        Result<std::vector<std::int64_t>> ids = local.run_ids_after(after, limit);
-        if (!ids.ok()) return ids.error();
-        std::vector<StoredRun> out;
-        out.reserve(ids->size());
-        for (std::int64_t id : *ids) {
-          Result<StoredRun> run = local.load_run_record(id);
-          if (!run.ok()) return run.error();
-          out.push_back(std::move(*run));
-        }
+      [&](std::int64_t after, int limit) -> Result<std::vector<OutgoingRun>> {
+        Result<std::vector<StoredRun>> read = local.run_records_after(after, limit);
+        if (!read.ok()) return read.error();
+        std::vector<OutgoingRun> out;
+        out.reserve(read->size());
+        for (const StoredRun& run : *read) out.push_back(outgoing_run(run, machine, counts.source));
         return out;
       },
-      [](const StoredRun& r) { return r.summary.id; },
-      [](const StoredRun& r) { return r.summary.uuid; },
-      insert_runs,
+      [](const OutgoingRun& r) { return r.id; },
+      [](const OutgoingRun& r) { return r.uuid; },
+      [incoming_made = false](pqxx::work& tx, const std::vector<OutgoingRun>& batch, const std::string&,
+                              const std::string&, const std::string& now) mutable {
+        // Made by the first batch with runs, not by a sync that finds nothing new (the usual
+        // one, every interval): a sync whose batch fails ends with its connection.
+        if (!incoming_made) {
+          tx.exec("CREATE TEMPORARY TABLE " + std::string(kIncomingRuns) + " ON COMMIT DELETE ROWS AS SELECT " +
+                  std::string(kRunColumns) + " FROM runs WITH NO DATA");
+          incoming_made = true;
+        }
+        return insert_runs(tx, batch, now);
+      },
   };
   const TableReader<ReplicatedPush> pushes{
       "nc_pushes",

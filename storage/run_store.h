@@ -669,6 +669,9 @@ class RunStore : public RunHistory {
   // correction and residual of the profile) and without its pushes: the run's record, its
   // details and characteristics, which is what the central history copies. kNotFound if absent.
   Result<StoredRun> load_run_record(std::int64_t run_id) const;
+  // The records (as load_run_record reads them) of the runs after `after_id` in id order, at
+  // most `limit`, in one snapshot: what the central sync copies in one batch.
+  Result<std::vector<StoredRun>> run_records_after(std::int64_t after_id, int limit) const;
 
   // ---- gear runs (schema 12) ----
   // Stores a measured gear and its traces in one transaction. kInvalidInput for a record that

@@ -2,6 +2,7 @@
 #include <array>
 #include <cstdio>
 #include <initializer_list>
+#include <map>
 #include <utility>
 
 #include "core/utc_time.h"
@@ -373,28 +374,58 @@ Result<std::vector<Characteristic>> characteristics_of(Statement& q, std::int64_
   return q.collect(read_characteristic);
 }
 
-Result<Statement> prepare_characteristics(Connection& conn, const std::string& operation) {
-  return Statement::prepare(conn,
-                            "SELECT " + std::string(kCharacteristicColumns) +
-                                " FROM run_characteristics WHERE run_id = :run_id ORDER BY position",
-                            operation);
+std::string characteristics_sql() {
+  return "SELECT " + std::string(kCharacteristicColumns) +
+         " FROM run_characteristics WHERE run_id = :run_id ORDER BY position";
 }
 
+Result<Statement> prepare_characteristics(Connection& conn, const std::string& operation) {
+  return Statement::prepare(conn, characteristics_sql(), operation);
+}
+
+// The statements the readers of a run's parts use, each prepared once however many runs are
+// read: reading runs one after another pays SQLite's parsing once, not per run.
+class PartStatements {
+ public:
+  PartStatements(Connection& conn, std::string operation) : conn_(conn), operation_(std::move(operation)) {}
+
+  Connection& conn() const { return conn_; }
+
+  // `sql`, prepared on first use and reset since; its bindings are rebound by the caller.
+  Result<Statement*> get(const std::string& sql) {
+    auto it = prepared_.find(sql);
+    if (it == prepared_.end()) {
+      Result<Statement> st = Statement::prepare(conn_, sql, operation_);
+      if (!st.ok()) return st.error();
+      it = prepared_.emplace(sql, std::move(*st)).first;
+    } else {
+      it->second.reset();
+    }
+    return &it->second;
+  }
+
+ private:
+  Connection& conn_;
+  std::string operation_;
+  std::map<std::string, Statement> prepared_;
+};
+
 // The runs row: the summary and the analysis's figures.
-Status read_summary_of_run(Connection& conn, std::int64_t run_id, StoredRun& out, const std::string& operation) {
-  Result<Statement> q = Statement::prepare(conn, select_summaries(" WHERE r.id = :run_id"), operation);
-  if (!q.ok()) return q.error();
-  q->bind(":run_id", run_id);
-  Result<bool> row = q->step();
+Status read_summary_of_run(PartStatements& st, std::int64_t run_id, StoredRun& out) {
+  Result<Statement*> prepared = st.get(select_summaries(" WHERE r.id = :run_id"));
+  if (!prepared.ok()) return prepared.error();
+  Statement& q = **prepared;
+  q.bind(":run_id", run_id);
+  Result<bool> row = q.step();
   if (!row.ok()) return row.error();
   if (!*row) {
     return make_error(ErrorCode::kNotFound,
-                      "run " + std::to_string(run_id) + " is not in run database " + conn.path.string());
+                      "run " + std::to_string(run_id) + " is not in run database " + st.conn().path.string());
   }
-  out.summary = read_summary(*q);
+  out.summary = read_summary(q);
   out.note = out.summary.note;
   LobeAnalysis& a = out.analysis;
-  a.zero_offset_mm = q->column<double>(kZeroOffsetColumn);
+  a.zero_offset_mm = q.column<double>(kZeroOffsetColumn);
   a.max_abs_error_um = out.summary.max_abs_error_um;
   a.rms_error_um = out.summary.rms_error_um;
   a.peak_to_valley_um = out.summary.peak_to_valley_um;
@@ -420,81 +451,82 @@ Part read_geometry(const Statement& q, const RunSummary& summary) {
 }
 
 // The rest of the runs row, its settings text and its part's geometry.
-Status read_details(Connection& conn, std::int64_t run_id, StoredRun& out, const std::string& operation) {
-  Result<Statement> q = Statement::prepare(conn, kLoadDetails, operation);
-  if (!q.ok()) return q.error();
-  q->bind(":run_id", run_id);
-  Result<bool> row = q->step();
+Status read_details(PartStatements& st, std::int64_t run_id, StoredRun& out) {
+  Result<Statement*> prepared = st.get(std::string(kLoadDetails));
+  if (!prepared.ok()) return prepared.error();
+  Statement& q = **prepared;
+  q.bind(":run_id", run_id);
+  Result<bool> row = q.step();
   if (!row.ok()) return row.error();
-  if (!*row) return damaged_run(conn, run_id, "its row vanished while it was read");
-  out.finished_utc = q->column<std::string>(0);
-  out.gauge = q->column<std::string>(1);
-  out.polls = q->column<std::int64_t>(2);
-  out.reconnects = q->column<std::int64_t>(3);
-  out.discarded_revolutions = q->column<std::int64_t>(4);
-  out.correction_in_force_run = q->column<std::optional<std::int64_t>>(5);
-  out.settings = q->column<std::string>(6);
-  if (std::optional<std::string> json = q->column<std::optional<std::string>>(7)) {
+  if (!*row) return damaged_run(st.conn(), run_id, "its row vanished while it was read");
+  out.finished_utc = q.column<std::string>(0);
+  out.gauge = q.column<std::string>(1);
+  out.polls = q.column<std::int64_t>(2);
+  out.reconnects = q.column<std::int64_t>(3);
+  out.discarded_revolutions = q.column<std::int64_t>(4);
+  out.correction_in_force_run = q.column<std::optional<std::int64_t>>(5);
+  out.settings = q.column<std::string>(6);
+  if (std::optional<std::string> json = q.column<std::optional<std::string>>(7)) {
     Result<std::vector<double>> h = storage_internal::numbers_from_json(*json);
     if (!h.ok() || h->size() != out.analysis.harmonic_amplitude_um.size()) {
-      return damaged_run(conn, run_id, "harmonic_amplitude_um is not a JSON array of 31 numbers");
+      return damaged_run(st.conn(), run_id, "harmonic_amplitude_um is not a JSON array of 31 numbers");
     }
     for (std::size_t i = 0; i < h->size(); ++i) out.analysis.harmonic_amplitude_um[i] = (*h)[i];
   }
-  if (!q->column_is_null(8)) out.geometry = read_geometry(*q, out.summary);
-  out.ground_with_version = q->column<std::optional<int>>(15);
-  out.ground_with_source = q->column<std::string>(16);
-  out.inspection = q->column<bool>(17);
+  if (!q.column_is_null(8)) out.geometry = read_geometry(q, out.summary);
+  out.ground_with_version = q.column<std::optional<int>>(15);
+  out.ground_with_source = q.column<std::string>(16);
+  out.inspection = q.column<bool>(17);
   out.lift_error_reference =
-      q->column<std::string>(18) == "nominal" ? LiftErrorReference::kNominal : LiftErrorReference::kBestFit;
+      q.column<std::string>(18) == "nominal" ? LiftErrorReference::kNominal : LiftErrorReference::kBestFit;
   LobeAnalysis& a = out.analysis;
-  a.max_abs_residual_um = q->column<std::optional<double>>(19).value_or(0.0);
-  a.rms_residual_um = q->column<std::optional<double>>(20).value_or(0.0);
-  a.peak_to_valley_residual_um = q->column<std::optional<double>>(21).value_or(0.0);
-  a.dial_runout_um = q->column<std::optional<double>>(22).value_or(0.0);
-  a.roundness_um = q->column<std::optional<double>>(23).value_or(0.0);
+  a.max_abs_residual_um = q.column<std::optional<double>>(19).value_or(0.0);
+  a.rms_residual_um = q.column<std::optional<double>>(20).value_or(0.0);
+  a.peak_to_valley_residual_um = q.column<std::optional<double>>(21).value_or(0.0);
+  a.dial_runout_um = q.column<std::optional<double>>(22).value_or(0.0);
+  a.roundness_um = q.column<std::optional<double>>(23).value_or(0.0);
   return {};
 }
 
-Status read_characteristics(Connection& conn, std::int64_t run_id, StoredRun& out, const std::string& operation) {
-  Result<Statement> q = prepare_characteristics(conn, operation);
+Status read_characteristics(PartStatements& st, std::int64_t run_id, StoredRun& out) {
+  Result<Statement*> q = st.get(characteristics_sql());
   if (!q.ok()) return q.error();
-  Result<std::vector<Characteristic>> c = characteristics_of(*q, run_id);
+  Result<std::vector<Characteristic>> c = characteristics_of(**q, run_id);
   if (!c.ok()) return c.error();
   out.characteristics = std::move(*c);
   return {};
 }
 
 // The raw revolutions, unless prune_raw_samples removed them.
-Status read_raw(Connection& conn, std::int64_t run_id, StoredRun& out, const std::string& operation) {
-  Result<Statement> q =
-      Statement::prepare(conn, "SELECT amplifier_revolutions, lift FROM run_raw WHERE run_id = :run_id", operation);
-  if (!q.ok()) return q.error();
-  q->bind(":run_id", run_id);
-  Result<bool> row = q->step();
+Status read_raw(PartStatements& st, std::int64_t run_id, StoredRun& out) {
+  Result<Statement*> prepared = st.get("SELECT amplifier_revolutions, lift FROM run_raw WHERE run_id = :run_id");
+  if (!prepared.ok()) return prepared.error();
+  Statement& q = **prepared;
+  q.bind(":run_id", run_id);
+  Result<bool> row = q.step();
   if (!row.ok()) return row.error();
   if (!*row) {
     if (out.summary.raw_pruned_utc.empty()) {
-      return damaged_run(conn, run_id, "its raw revolutions are missing but it was never pruned");
+      return damaged_run(st.conn(), run_id, "its raw revolutions are missing but it was never pruned");
     }
     return {};
   }
-  Result<std::vector<double>> counts = storage_internal::numbers_from_json(q->column<std::string>(0));
-  if (!counts.ok()) return damaged_run(conn, run_id, "amplifier_revolutions: " + counts.error().message);
-  const std::string lift = q->column_blob(1);
+  Result<std::vector<double>> counts = storage_internal::numbers_from_json(q.column<std::string>(0));
+  if (!counts.ok()) return damaged_run(st.conn(), run_id, "amplifier_revolutions: " + counts.error().message);
+  const std::string lift = q.column_blob(1);
   if (lift.size() != counts->size() * storage_internal::kDegreeBlobBytes) {
-    return damaged_run(conn, run_id,
+    return damaged_run(st.conn(), run_id,
                        "the raw lift BLOB holds " + std::to_string(lift.size()) + " bytes for " +
                            std::to_string(counts->size()) + " revolutions");
   }
   for (std::size_t i = 0; i < counts->size(); ++i) {
     Result<DegreeTable> t =
         storage_internal::read_degree_blob(lift, i * storage_internal::kDegreeBlobBytes, kCountsPerMm);
-    if (!t.ok()) return damaged_run(conn, run_id, t.error().message);
+    if (!t.ok()) return damaged_run(st.conn(), run_id, t.error().message);
     out.revolutions.push_back(RevolutionSamples{static_cast<std::int64_t>((*counts)[i]), *t});
   }
   if (out.revolutions.size() != static_cast<std::size_t>(out.summary.revolutions)) {
-    return damaged_run(conn, run_id,
+    return damaged_run(st.conn(), run_id,
                        "it lists " + std::to_string(out.summary.revolutions) + " revolutions but holds " +
                            std::to_string(out.revolutions.size()));
   }
@@ -502,16 +534,16 @@ Status read_raw(Connection& conn, std::int64_t run_id, StoredRun& out, const std
 }
 
 // The per-degree profile and correction (cam frame).
-Status read_profile(Connection& conn, std::int64_t run_id, StoredRun& out, const std::string& operation) {
-  Result<Statement> q = Statement::prepare(
-      conn,
-      "SELECT design_lift, mean_lift, spread, error, correction, residual_error FROM run_tables WHERE run_id = :run_id",
-      operation);
-  if (!q.ok()) return q.error();
-  q->bind(":run_id", run_id);
-  Result<bool> row = q->step();
+Status read_profile(PartStatements& st, std::int64_t run_id, StoredRun& out) {
+  Result<Statement*> prepared = st.get(
+      "SELECT design_lift, mean_lift, spread, error, correction, residual_error FROM run_tables WHERE run_id = "
+      ":run_id");
+  if (!prepared.ok()) return prepared.error();
+  Statement& q = **prepared;
+  q.bind(":run_id", run_id);
+  Result<bool> row = q.step();
   if (!row.ok()) return row.error();
-  if (!*row) return damaged_run(conn, run_id, "its profile (run_tables) is missing");
+  if (!*row) return damaged_run(st.conn(), run_id, "its profile (run_tables) is missing");
   const std::array<std::pair<DegreeTable*, double>, 5> tables = {{
       {&out.analysis.design_lift_mm, kCountsPerMm},
       {&out.analysis.mean_lift_mm, kCountsPerMm},
@@ -520,29 +552,28 @@ Status read_profile(Connection& conn, std::int64_t run_id, StoredRun& out, const
       {&out.correction_um, kCountsPerUm},
   }};
   for (std::size_t i = 0; i < tables.size(); ++i) {
-    Result<DegreeTable> t =
-        storage_internal::read_degree_blob(q->column_blob(static_cast<int>(i)), 0, tables[i].second);
-    if (!t.ok()) return damaged_run(conn, run_id, "profile column " + std::to_string(i) + ": " + t.error().message);
+    Result<DegreeTable> t = storage_internal::read_degree_blob(q.column_blob(static_cast<int>(i)), 0, tables[i].second);
+    if (!t.ok())
+      return damaged_run(st.conn(), run_id, "profile column " + std::to_string(i) + ": " + t.error().message);
     *tables[i].first = *t;
   }
   // Runs stored before schema 8 have no residual: it stays 0.
-  if (!q->column_is_null(5)) {
-    Result<DegreeTable> t = storage_internal::read_degree_blob(q->column_blob(5), 0, kCountsPerUm);
-    if (!t.ok()) return damaged_run(conn, run_id, "residual_error: " + t.error().message);
+  if (!q.column_is_null(5)) {
+    Result<DegreeTable> t = storage_internal::read_degree_blob(q.column_blob(5), 0, kCountsPerUm);
+    if (!t.ok()) return damaged_run(st.conn(), run_id, "residual_error: " + t.error().message);
     out.analysis.residual_error_um = *t;
   }
   return {};
 }
 
-Status read_pushes_of(Connection& conn, std::int64_t run_id, StoredRun& out, const std::string& operation) {
-  Result<Statement> q = Statement::prepare(conn,
-                                           "SELECT " + std::string(storage_internal::kPushColumns) +
-                                               " FROM nc_pushes AS p WHERE p.run_id = :run_id ORDER BY p.id",
-                                           operation);
-  if (!q.ok()) return q.error();
-  q->bind(":run_id", run_id);
+Status read_pushes_of(PartStatements& st, std::int64_t run_id, StoredRun& out) {
+  Result<Statement*> prepared = st.get("SELECT " + std::string(storage_internal::kPushColumns) +
+                                       " FROM nc_pushes AS p WHERE p.run_id = :run_id ORDER BY p.id");
+  if (!prepared.ok()) return prepared.error();
+  Statement& q = **prepared;
+  q.bind(":run_id", run_id);
   Result<std::vector<NcPush>> pushes =
-      q->collect([](const Statement& s) { return storage_internal::read_push(s, false); });
+      q.collect([](const Statement& s) { return storage_internal::read_push(s, false); });
   if (!pushes.ok()) return pushes.error();
   out.pushes = std::move(*pushes);
   return {};
@@ -552,31 +583,50 @@ Status read_pushes_of(Connection& conn, std::int64_t run_id, StoredRun& out, con
 
 namespace {
 
-using RunPartReader = Status (*)(Connection&, std::int64_t, StoredRun&, const std::string&);
+using RunPartReader = Status (*)(PartStatements&, std::int64_t, StoredRun&);
 
-// The parts of run `run_id` that `readers` read, in one snapshot, so a concurrent writer cannot
-// split the run.
-Result<StoredRun> load_parts(Connection& conn, std::int64_t run_id, std::initializer_list<RunPartReader> readers) {
-  const std::string operation = "load run " + std::to_string(run_id);
+// The parts of the runs that `ids` names (read in the same snapshot) that `readers` read: one
+// read transaction, so a concurrent writer cannot split a run.
+template <typename ReadIds>
+Result<std::vector<StoredRun>> load_parts(Connection& conn, const std::string& operation, ReadIds read_ids,
+                                          std::initializer_list<RunPartReader> readers) {
   Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kRead, operation);
   if (!tx.ok()) return tx.error();
-  StoredRun out;
-  for (RunPartReader read : readers) {
-    if (Status s = read(conn, run_id, out, operation); !s.ok()) return s.error();
+  Result<std::vector<std::int64_t>> ids = read_ids();
+  if (!ids.ok()) return ids.error();
+  PartStatements statements(conn, operation);
+  std::vector<StoredRun> out(ids->size());
+  for (std::size_t i = 0; i < ids->size(); ++i) {
+    for (RunPartReader read : readers) {
+      if (Status s = read(statements, (*ids)[i], out[i]); !s.ok()) return s.error();
+    }
   }
   if (Status s = tx->commit(); !s.ok()) return s.error();
   return out;
 }
 
+Result<StoredRun> load_one(Connection& conn, std::int64_t run_id, std::initializer_list<RunPartReader> readers) {
+  Result<std::vector<StoredRun>> runs = load_parts(
+      conn, "load run " + std::to_string(run_id),
+      [run_id]() -> Result<std::vector<std::int64_t>> { return std::vector<std::int64_t>{run_id}; }, readers);
+  if (!runs.ok()) return runs.error();
+  return std::move(runs->front());
+}
+
 }  // namespace
 
 Result<StoredRun> RunStore::load_run(std::int64_t run_id) const {
-  return load_parts(*conn_, run_id,
-                    {read_summary_of_run, read_details, read_raw, read_profile, read_pushes_of, read_characteristics});
+  return load_one(*conn_, run_id,
+                  {read_summary_of_run, read_details, read_raw, read_profile, read_pushes_of, read_characteristics});
 }
 
 Result<StoredRun> RunStore::load_run_record(std::int64_t run_id) const {
-  return load_parts(*conn_, run_id, {read_summary_of_run, read_details, read_characteristics});
+  return load_one(*conn_, run_id, {read_summary_of_run, read_details, read_characteristics});
+}
+
+Result<std::vector<StoredRun>> RunStore::run_records_after(std::int64_t after_id, int limit) const {
+  return load_parts(*conn_, "read runs to replicate", [&] { return run_ids_after(after_id, limit); },
+                    {read_summary_of_run, read_details, read_characteristics});
 }
 
 Status check_run_query(const RunQuery& q) {

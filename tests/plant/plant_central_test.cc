@@ -552,6 +552,123 @@ TEST_F(CentralTest, ASchemaTwoHistoryGivesItsEventsTheirRunsUuid) {
             2);
 }
 
+// A schema-4 history kept each characteristic as a row: the migration to one row of arrays a
+// run keeps every value, position and NULL, and the rows read back are the file's.
+TEST_F(CentralTest, ASchemaFourHistorysCharacteristicsAreTheSameRowsAfterTheMigration) {
+  sql("CREATE TABLE central_schema_version (version integer PRIMARY KEY, applied_utc text NOT NULL, "
+      "description text NOT NULL)");
+  for (const CentralMigration& m : central_migrations()) {
+    if (m.version > 4) break;
+    sql(std::string(m.sql));
+    sql("INSERT INTO central_schema_version VALUES (" + std::to_string(m.version) + ", '2026-11-01T00:00:00Z', 'v')");
+  }
+  auto g = std::make_unique<Grinder>("central-v4");
+  fill(*g->store, "g1", "2026-11-22", 6);
+  // What a schema-4 sync wrote: the runs, and each characteristic as a row, numbers exact.
+  const std::string source = std::filesystem::weakly_canonical(g->store->path()).string();
+  auto number = [](std::optional<double> v) {
+    if (!v) return std::string("NULL");
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", *v);
+    return std::string(buf);
+  };
+  auto integer = [](std::optional<int> v) { return v ? std::to_string(*v) : std::string("NULL"); };
+  Result<std::vector<StoredRun>> runs = g->store->run_records_after(0, 100);
+  ASSERT_TRUE(runs.ok()) << runs.error().message;
+  ASSERT_EQ(runs->size(), 6u);
+  for (const StoredRun& run : *runs) {
+    const RunSummary& r = run.summary;
+    EXPECT_EQ(sql("INSERT INTO runs (uuid, source_machine, source, local_id, started_utc, finished_utc, machine, "
+                  "part, lobe, gauge, status, revolutions, degrees_captured, polls, reconnects, "
+                  "discarded_revolutions, zero_offset_mm, max_abs_error_um, rms_error_um, peak_to_valley_um, "
+                  "repeatability_um, inspection, verdict, lift_error_reference, serial, note, operator, "
+                  "synced_utc) VALUES ('" +
+                  r.uuid + "', 'g1', '" + source + "', " + std::to_string(r.id) + ", '" + r.started_utc + "', 'f', '" +
+                  r.machine + "', '" + r.part + "', " + std::to_string(r.lobe) + ", 'g', '" + r.status + "', " +
+                  std::to_string(r.revolutions) + ", " + std::to_string(r.degrees_captured) + ", 0, 0, 0, 0, " +
+                  number(r.max_abs_error_um) + ", " + number(r.rms_error_um) + ", " + number(r.peak_to_valley_um) +
+                  ", " + number(r.repeatability_um) + ", false, '" + std::string(verdict_name(r.verdict)) +
+                  "', 'best_fit', " + (r.serial.empty() ? "NULL" : "'" + r.serial + "'") + ", '" + r.note + "', " +
+                  (r.operator_name.empty() ? "NULL" : "'" + r.operator_name + "'") + ", 'now')"),
+              "");
+    for (std::size_t i = 0; i < run.characteristics.size(); ++i) {
+      const Characteristic& c = run.characteristics[i];
+      EXPECT_EQ(
+          sql("INSERT INTO run_characteristics VALUES ('" + r.uuid + "', " + std::to_string(i) + ", '" + c.key +
+              "', '" + c.unit + "', " + number(c.value) + ", " + number(c.min) + ", " + number(c.max) + ", " +
+              number(c.limits.lower) + ", " + number(c.limits.upper) + ", '" + std::string(verdict_name(c.verdict)) +
+              "', " + integer(c.from_deg) + ", " + integer(c.to_deg) + ")"),
+          "");
+    }
+  }
+  ASSERT_EQ(count("SELECT count(*) FROM run_characteristics"), 18);
+  const std::string before = sql("SELECT * FROM run_characteristics ORDER BY run_uuid, position");
+
+  CentralSyncOptions from_start;
+  from_start.from_start = true;
+  Result<CentralSyncCounts> synced = sync_to_central(*g->store, url_, "g1", from_start);
+  ASSERT_TRUE(synced.ok()) << synced.error().message;
+  EXPECT_EQ(count("SELECT max(version) FROM central_schema_version"), latest_central_schema_version());
+  EXPECT_EQ(synced->runs.already_there, 6);
+  EXPECT_EQ(count("SELECT count(*) FROM run_characteristic_sets"), 6);  // one row a run
+  EXPECT_EQ(sql("SELECT * FROM run_characteristics ORDER BY run_uuid, position"), before);
+  Result<CentralHistory> central = CentralHistory::open(url_);
+  ASSERT_TRUE(central.ok()) << central.error().message;
+  // The characteristics' lines (the runs' own rows above were written by hand, in part).
+  auto characteristic_lines = [](const std::vector<std::string>& lines) {
+    std::vector<std::string> out;
+    for (const std::string& l : lines) {
+      if (l.rfind("  ", 0) == 0) out.push_back(l);
+    }
+    return out;
+  };
+  const std::vector<std::string> local = characteristic_lines(rows(g->store->characteristics(RunQuery{})));
+  EXPECT_EQ(local.size(), 18u);
+  EXPECT_EQ(characteristic_lines(rows(central->characteristics(RunQuery{}))), local);
+}
+
+// Deleting runs in the central history (by hand: a plant's retention) deletes their
+// characteristics with them, as the foreign key's cascade did when they were rows.
+TEST_F(CentralTest, DeletingARunDeletesItsCharacteristics) {
+  Grinder g("central-delete");
+  fill(*g.store, "g1", "2026-11-20", 4);
+  ASSERT_TRUE(sync_to_central(*g.store, url_, "g1").ok());
+  ASSERT_EQ(count("SELECT count(*) FROM run_characteristics"), 12);
+  EXPECT_EQ(sql("DELETE FROM nc_pushes; DELETE FROM events; DELETE FROM runs WHERE local_id <= 2"), "");
+  EXPECT_EQ(count("SELECT count(*) FROM run_characteristics"), 6);
+  EXPECT_EQ(count("SELECT count(*) FROM run_characteristics AS c LEFT JOIN runs AS r ON r.uuid = c.run_uuid "
+                  "WHERE r.uuid IS NULL"),
+            0);
+}
+
+// A characteristic's key and unit are copied as they are, whatever they hold: the quotes,
+// backslashes, commas and braces an array literal gives meaning to, tabs and new lines that
+// COPY does, and a run without characteristics.
+TEST_F(CentralTest, CharacteristicTextsWithTheCharactersCopyAndArraysUseArriveAsTheyAre) {
+  Grinder g("central-odd-texts");
+  RunRecord odd = judged_run("intake", 1, "g1", "2026-11-20T06:00:00Z", 1);
+  odd.characteristics[0].key = R"(zone "A", {nose}\flank)";
+  odd.characteristics[0].unit = "um\tper\nmm NULL";
+  odd.characteristics[1].key = "NULL";
+  odd.characteristics[2].key = "{}";
+  Result<std::int64_t> stored = g.store->insert_run(odd);
+  ASSERT_TRUE(stored.ok()) << stored.error().message;
+  RunRecord none = judged_run("intake", 1, "g1", "2026-11-20T07:00:00Z", 2);
+  none.characteristics.clear();
+  none.verdict = Verdict::kNotJudged;
+  ASSERT_TRUE(g.store->insert_run(none).ok());
+  Result<CentralSyncCounts> synced = sync_to_central(*g.store, url_, "g1");
+  ASSERT_TRUE(synced.ok()) << synced.error().message;
+  EXPECT_EQ(synced->runs.inserted, 2);
+  Result<CentralHistory> central = CentralHistory::open(url_);
+  ASSERT_TRUE(central.ok()) << central.error().message;
+  const std::vector<std::string> local = rows(g.store->characteristics(RunQuery{}));
+  EXPECT_EQ(rows(central->characteristics(RunQuery{})), local);
+  ASSERT_EQ(local.size(), 5u);  // two runs, three characteristics of the first
+  EXPECT_TRUE(has(local[1], R"(zone "A", {nose}\flank|um)")) << local[1];
+  EXPECT_EQ(count("SELECT count(*) FROM run_characteristic_sets"), 1);
+}
+
 // ---- queries ----
 
 TEST_F(CentralTest, EveryQueryAnswersWithTheLocalFilesRowsInItsOrder) {

@@ -145,6 +145,46 @@ TEST_F(RunStoreTest, TheRunsRecordIsTheRunWithoutWhatIsKeptPerDegree) {
   EXPECT_EQ(store().load_run_record(id + 100).error().code, ErrorCode::kNotFound);
 }
 
+// The records of many runs read at once (the central sync's batch) are each run's record, in id
+// order after the id given, at most the limit: the statements prepared once serve every run.
+TEST_F(RunStoreTest, TheRecordsOfRunsAfterAnIdAreEachRunsRecordInIdOrder) {
+  std::vector<std::int64_t> ids;
+  for (int i = 0; i < 4; ++i) {
+    RunRecord record = make_record(i % 2 == 0 ? "intake" : "exhaust", "2026-11-22T02:3" + std::to_string(i) + ":44Z");
+    for (int k = 0; k <= i; ++k) {
+      Characteristic c;
+      c.key = "lift_error." + std::to_string(k);
+      c.unit = "um";
+      c.value = 1.5 + i;
+      c.verdict = Verdict::kIn;
+      record.characteristics.push_back(c);
+    }
+    record.note = "run " + std::to_string(i);
+    ids.push_back(insert_ok(store(), record));
+  }
+  Result<std::vector<StoredRun>> after_first = store().run_records_after(ids[0], 2);
+  ASSERT_TRUE(after_first.ok()) << after_first.error().message;
+  ASSERT_EQ(after_first->size(), 2u);
+  for (std::size_t i = 0; i < after_first->size(); ++i) {
+    const StoredRun& batch = (*after_first)[i];
+    Result<StoredRun> one = store().load_run_record(ids[i + 1]);
+    ASSERT_TRUE(one.ok()) << one.error().message;
+    EXPECT_EQ(batch.summary.id, ids[i + 1]);
+    EXPECT_EQ(batch.summary.uuid, one->summary.uuid);
+    EXPECT_EQ(batch.note, one->note);
+    EXPECT_EQ(batch.settings, one->settings);
+    EXPECT_EQ(batch.finished_utc, one->finished_utc);
+    EXPECT_EQ(batch.analysis.harmonic_amplitude_um, one->analysis.harmonic_amplitude_um);
+    ASSERT_EQ(batch.characteristics.size(), i + 2);  // each run its own, not the last one's
+    EXPECT_EQ(batch.characteristics.back().value, one->characteristics.back().value);
+  }
+  Result<std::vector<StoredRun>> all = store().run_records_after(0, 100);
+  ASSERT_TRUE(all.ok()) << all.error().message;
+  EXPECT_EQ(all->size(), 4u);
+  EXPECT_TRUE(store().run_records_after(ids.back(), 10)->empty());
+  EXPECT_FALSE(store().run_records_after(0, 0).ok());
+}
+
 TEST_F(RunStoreTest, ReopeningTheFileKeepsTheRun) {
   const RunRecord record = make_record("intake-flat", "2026-11-22T02:34:44Z");
   const std::int64_t id = insert_ok(store(), record);
