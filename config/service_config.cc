@@ -530,13 +530,31 @@ Status read_tls_keys(const TomlReader& hr, const ConfigFile& f, const std::strin
   return {};
 }
 
-// [http]: address, token and TLS files of the HTTP API; absent table, no API.
-Result<std::optional<HttpSettings>> read_http_table(TomlReader& top, const ConfigFile& f) {
+// [http]: address, token and TLS files of the HTTP API, and the history its lists read (the
+// service's file, or `central`: the [plant.central] history); absent table, no API.
+Result<std::optional<HttpSettings>> read_http_table(TomlReader& top, const ConfigFile& f,
+                                                    const std::optional<CentralSyncSettings>& central) {
   const toml::table* t = top.subtable("http");
   if (t == nullptr) return std::optional<HttpSettings>();
   TomlReader hr(*t, f.source, "http.");
-  hr.allow_only({"host", "port", "token", "token_file", "allow_inline_token", "tls_cert", "tls_key"});
+  hr.allow_only({"host", "port", "token", "token_file", "allow_inline_token", "tls_cert", "tls_key", "history"});
   HttpSettings hs;
+  const std::string history = hr.text("history", "local");
+  if (hr.error) return *hr.error;
+  if (history != "local" && history != "central") {
+    return make_error(ErrorCode::kInvalidInput, hr.where("history") + ": '" + history +
+                                                    "' is not one of local (this grinder's file) and central (the "
+                                                    "plant's history of [plant.central])");
+  }
+  if (history == "central") {
+    if (!central) {
+      return make_error(ErrorCode::kInvalidInput,
+                        hr.where("history") +
+                            ": central needs the central history's URL: give [plant.central] url = "
+                            "\"postgresql://USER@HOST/DATABASE\", or history = \"local\"");
+    }
+    hs.history_url = central->url;
+  }
   hs.host = hr.text("host", "127.0.0.1");
   hs.port = static_cast<int>(hr.integer("port", 8080, 0, 65535));
   hs.token = hr.text("token", "");
@@ -858,13 +876,13 @@ Result<ServiceConfig> read_service_config(const fs::path& path) {
   if (Status s = read_compensation_table(top, f, c.job); !s) return s.error();
   if (Status s = read_nc_table(top, f, c); !s) return s.error();
   if (Status s = read_database_table(top, f, c.job, c.integrity_check_hours); !s) return s.error();
-  Result<std::optional<HttpSettings>> http = read_http_table(top, f);
+  if (Status s = read_plant_table(top, f, c); !s) return s.error();  // before [http]: its history
+  Result<std::optional<HttpSettings>> http = read_http_table(top, f, c.central);
   if (!http) return http.error();
   c.http = std::move(*http);
   Result<std::optional<PlcSettings>> plc = read_plc_table(top, f);
   if (!plc) return plc.error();
   c.plc = std::move(*plc);
-  if (Status s = read_plant_table(top, f, c); !s) return s.error();
   if (Status s = read_part_entries(table, top, f, c); !s) return s.error();
   if (Status s = read_shaft_entries(table, f, c); !s) return s.error();
   return c;

@@ -41,6 +41,10 @@ struct HttpSettings {
   // HTTP. The config reader checks they can be read.
   std::filesystem::path tls_cert;
   std::filesystem::path tls_key;
+  // [http] history = "central": the central history (the [plant.central] URL) that the run lists
+  // and trends of the API and pages read, every grinder's runs; empty ("local", the default):
+  // the service's own file. A run's own page always reads the file.
+  std::string history_url;
 };
 
 // The PLC trigger: the PLC's Modbus server and the handshake block on it (docs/service.md).

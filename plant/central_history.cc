@@ -31,27 +31,39 @@ constexpr std::string_view kNewestFirst =
 constexpr std::string_view kOldestFirst = " ORDER BY r.started_utc, r.local_id, r.source_machine, r.uuid";
 
 // CharacteristicSummaries' statement as RunStore's (storage/run_store_runs.cc), over the central
-// runs chosen and their characteristics by run UUID; ties in time broken as kOldestFirst.
+// runs chosen and their characteristics by run UUID, read once (`c`: only the arrays it sums,
+// not the whole run_characteristics view); ties in time broken as kOldestFirst. One statement,
+// one round trip: the window's count and times (columns 0..2) on every row, and a row per key
+// after them (columns 3..15; none when the window has no characteristics).
 constexpr std::string_view kSummariesSql = R"sql(
 w AS MATERIALIZED (SELECT uuid, local_id,
                           ROW_NUMBER() OVER (ORDER BY started_utc, local_id, source_machine, uuid) AS rank
                    FROM chosen),
+c AS MATERIALIZED (SELECT w.rank, w.local_id, (c.ordinality - 1)::integer AS position, c.key, c.unit, c.value,
+                          c.lower_limit, c.upper_limit, c.verdict
+                   FROM w JOIN run_characteristic_sets AS s ON s.run_uuid = w.uuid,
+                        unnest(s.key_list, s.unit_list, s.value_list, s.lower_limit_list, s.upper_limit_list,
+                               s.verdict_list) WITH ORDINALITY
+                          AS c (key, unit, value, lower_limit, upper_limit, verdict, ordinality)),
 k AS MATERIALIZED (
   SELECT c.key, count(*) AS n, avg(c.value) AS mean, min(c.value) AS lo, max(c.value) AS hi,
-         min(w.rank * 100000 + c.position) AS first_seen, max(w.rank) AS newest,
+         min(c.rank * 100000 + c.position) AS first_seen, max(c.rank) AS newest,
          count(*) FILTER (WHERE c.verdict = 'out') AS out_count,
          count(*) FILTER (WHERE c.verdict <> 'not_judged') AS judged_count,
          coalesce(count(c.lower_limit) NOT IN (0, count(*)) OR count(c.upper_limit) NOT IN (0, count(*))
                   OR min(c.lower_limit) <> max(c.lower_limit) OR min(c.upper_limit) <> max(c.upper_limit), false)
            AS changed
-  FROM w JOIN run_characteristics AS c ON c.run_uuid = w.uuid GROUP BY c.key)
-SELECT k.key, max(CASE WHEN w.rank = k.newest THEN c.unit END), k.n, k.mean,
-       sum((c.value - k.mean) * (c.value - k.mean)), k.lo = k.hi, k.lo,
-       max(CASE WHEN w.rank = k.newest THEN c.lower_limit END), max(CASE WHEN w.rank = k.newest THEN c.upper_limit END),
-       max(CASE WHEN w.rank = k.newest THEN w.local_id END), k.changed, k.out_count, k.judged_count
-FROM w JOIN run_characteristics AS c ON c.run_uuid = w.uuid JOIN k ON k.key = c.key
-GROUP BY k.key, k.n, k.mean, k.lo, k.hi, k.first_seen, k.changed, k.out_count, k.judged_count
-ORDER BY k.first_seen)sql";
+  FROM c GROUP BY c.key),
+sums AS (
+  SELECT k.key, max(CASE WHEN c.rank = k.newest THEN c.unit END), k.n, k.mean,
+         sum((c.value - k.mean) * (c.value - k.mean)), k.lo = k.hi, k.lo,
+         max(CASE WHEN c.rank = k.newest THEN c.lower_limit END),
+         max(CASE WHEN c.rank = k.newest THEN c.upper_limit END),
+         max(CASE WHEN c.rank = k.newest THEN c.local_id END), k.changed, k.out_count, k.judged_count, k.first_seen
+  FROM c JOIN k ON k.key = c.key
+  GROUP BY k.key, k.n, k.mean, k.lo, k.hi, k.first_seen, k.changed, k.out_count, k.judged_count),
+span AS (SELECT count(*), min(started_utc), max(started_utc) FROM chosen)
+SELECT * FROM span LEFT JOIN sums ON true ORDER BY sums.first_seen)sql";
 
 RunSummary read_summary(const pqxx::row& row) {
   using central_internal::number_of;
@@ -164,9 +176,10 @@ CentralHistory::~CentralHistory() = default;
 
 const CentralUrl& CentralHistory::url() const { return conn_->url; }
 
+// One statement: outside a transaction (no BEGIN and COMMIT round trips), it sees one snapshot.
 Result<std::vector<RunSummary>> CentralHistory::list_runs(const RunQuery& q) const {
   try {
-    pqxx::read_transaction tx(*conn_->conn);
+    pqxx::nontransaction tx(*conn_->conn);
     return query_runs(tx, q, false);
   } catch (const std::exception& e) {
     return central_internal::database_error(conn_->url, "list runs", e);
@@ -175,7 +188,7 @@ Result<std::vector<RunSummary>> CentralHistory::list_runs(const RunQuery& q) con
 
 Result<std::vector<RunSummary>> CentralHistory::trend(const RunQuery& q) const {
   try {
-    pqxx::read_transaction tx(*conn_->conn);
+    pqxx::nontransaction tx(*conn_->conn);
     return query_runs(tx, q, true);
   } catch (const std::exception& e) {
     return central_internal::database_error(conn_->url, "list runs", e);
@@ -219,34 +232,32 @@ Result<CharacteristicSummaries> CentralHistory::characteristic_summaries(const R
   using central_internal::optional_number_of;
   using central_internal::text_of;
   try {
-    pqxx::transaction<pqxx::repeatable_read, pqxx::readwrite_policy::read_only> tx(*conn_->conn);
+    pqxx::nontransaction tx(*conn_->conn);
     Result<Filter> f = run_filter(q);
     if (!f.ok()) return f.error();
     const std::string chosen = "WITH chosen AS (" + chosen_runs(*f, q.limit) + ")";
     CharacteristicSummaries out;
-    const pqxx::result runs = central_internal::exec(
-        tx, chosen + " SELECT count(*), min(started_utc), max(started_utc) FROM chosen", f->params);
-    out.runs = runs[0][0].as<int>();
-    out.first_started_utc = text_of(runs[0][1]);
-    out.last_started_utc = text_of(runs[0][2]);
     const pqxx::result rows = central_internal::exec(tx, chosen + "," + std::string(kSummariesSql), f->params);
+    out.runs = rows[0][0].as<int>();
+    out.first_started_utc = text_of(rows[0][1]);
+    out.last_started_utc = text_of(rows[0][2]);
     for (const pqxx::row& row : rows) {
+      if (row[3].is_null()) continue;  // no characteristics: the window's row alone
       CharacteristicSummary k;
-      k.key = text_of(row[0]);
-      k.unit = text_of(row[1]);
-      k.n = row[2].as<int>();
-      k.all_equal = row[5].as<bool>();
-      k.mean = k.all_equal ? central_internal::number_of(row[6]) : central_internal::number_of(row[3]);
-      k.squares = k.all_equal ? 0.0 : optional_number_of(row[4]).value_or(INFINITY);
-      k.limits.lower = optional_number_of(row[7]);
-      k.limits.upper = optional_number_of(row[8]);
-      k.limits_from_run = row[9].as<std::int64_t>();
-      k.limits_changed = row[10].as<bool>();
-      k.out_count = row[11].as<int>();
-      k.judged_count = row[12].as<int>();
+      k.key = text_of(row[3]);
+      k.unit = text_of(row[4]);
+      k.n = row[5].as<int>();
+      k.all_equal = row[8].as<bool>();
+      k.mean = k.all_equal ? central_internal::number_of(row[9]) : central_internal::number_of(row[6]);
+      k.squares = k.all_equal ? 0.0 : optional_number_of(row[7]).value_or(INFINITY);
+      k.limits.lower = optional_number_of(row[10]);
+      k.limits.upper = optional_number_of(row[11]);
+      k.limits_from_run = row[12].as<std::int64_t>();
+      k.limits_changed = row[13].as<bool>();
+      k.out_count = row[14].as<int>();
+      k.judged_count = row[15].as<int>();
       out.by_key.push_back(std::move(k));
     }
-    tx.commit();
     return out;
   } catch (const std::exception& e) {
     return central_internal::database_error(conn_->url, "sum up the characteristics of the runs", e);

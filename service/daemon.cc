@@ -147,8 +147,9 @@ void reload(Service& service, const std::filesystem::path& config_path, StartedW
   }
   std::optional<HttpSettings>& was = started.http;
   if (fresh->http.has_value() != was.has_value() ||
-      (fresh->http && (fresh->http->host != was->host || fresh->http->port != was->port ||
-                       fresh->http->tls_cert != was->tls_cert || fresh->http->tls_key != was->tls_key))) {
+      (fresh->http &&
+       (fresh->http->host != was->host || fresh->http->port != was->port || fresh->http->tls_cert != was->tls_cert ||
+        fresh->http->tls_key != was->tls_key || fresh->http->history_url != was->history_url))) {
     spdlog::warn("reload: [http] changes take effect when the service restarts");
   }
   if (fresh->http && was && http != nullptr && fresh->http->token != was->token) {
@@ -214,7 +215,8 @@ std::string describe_service_config(const ServiceConfig& c) {
   }
   return c.source.string() + ": machine " + c.machine + ", parts " + parts + ", database " + c.job.db_path.string() +
          ", NC directory " + c.job.nc_dir.string() + ", PLC " + plc + ", plant broker " + broker +
-         ", central history " + central;
+         ", central history " + central +
+         (c.http && !c.http->history_url.empty() ? " (the pages' run lists read it)" : "");
 }
 
 Status run_service(const std::filesystem::path& config_path) {

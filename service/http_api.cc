@@ -31,6 +31,7 @@
 #include "core/text_file.h"
 #include "core/utc_time.h"
 #include "job/layer_files.h"
+#include "plant/central_history_pool.h"
 #include "report/cam_report.h"
 #include "report/gear_report.h"
 #include "report/program_preview.h"
@@ -475,6 +476,7 @@ struct HttpApi::Impl {
   Impl(HttpSettings s, fs::path db, HttpWrites w, HttpStatus st, std::unique_ptr<httplib::Server> srv)
       : settings(std::move(s)),
         stores(std::move(db)),
+        central(settings.history_url.empty() ? nullptr : std::make_unique<CentralHistoryPool>(settings.history_url)),
         writes(std::move(w)),
         status(std::move(st)),
         server(std::move(srv)) {}
@@ -680,13 +682,7 @@ struct HttpApi::Impl {
     Result<std::string> verdict = q->choice("verdict", {"in", "out", "not_judged"});
     if (!verdict) return send_error(res, verdict.error());
     if (!verdict->empty()) rq->verdict = verdict_from_name(*verdict);
-    with_store(res, [&](RunStore& store) -> Result<json> {
-      Result<std::vector<RunSummary>> runs = store.list_runs(*rq);
-      if (!runs) return runs.error();
-      json out = json::array();
-      for (const RunSummary& r : *runs) out.push_back(run_summary_json(r));
-      return out;
-    });
+    with_history(res, [&](const RunHistory& history) { return history.list_runs(*rq); });
   }
 
   void list_gear_runs(const httplib::Request& req, httplib::Response& res) {
@@ -787,13 +783,7 @@ struct HttpApi::Impl {
     if (rq->part.empty() || rq->lobe == 0) {
       return send_error(res, 400, "a trend is of one lobe: give both `part` and `lobe`, e.g. ?part=intake_flat&lobe=1");
     }
-    with_store(res, [&](RunStore& store) -> Result<json> {
-      Result<std::vector<RunSummary>> runs = store.trend(*rq);
-      if (!runs) return runs.error();
-      json out = json::array();
-      for (const RunSummary& r : *runs) out.push_back(run_summary_json(r));
-      return out;
-    });
+    with_history(res, [&](const RunHistory& history) { return history.trend(*rq); });
   }
 
   void events(const httplib::Request& req, httplib::Response& res) {
@@ -1032,10 +1022,9 @@ struct HttpApi::Impl {
           "a trend is of one lobe: give both `part` and `lobe`, e.g. ?part=intake_flat&lobe=1&key=lift_error");
     }
     const std::string key = q->text("key").empty() ? std::string("lift_error") : q->text("key");
-    Result<StorePool::Lease> store = stores.acquire();
-    if (!store) return send_error(res, store.error());
-    Result<std::vector<RunCharacteristics>> runs = (*store)->characteristics(*rq);
-    if (!runs) return fail_with_store(res, *store, runs.error());
+    Result<std::vector<RunCharacteristics>> runs =
+        read_history([&](const RunHistory& history) { return history.characteristics(*rq); });
+    if (!runs) return send_error(res, runs.error());
     if (runs->empty()) {
       return send_error(res, 404,
                         "no runs of " + rq->part + " lobe " + std::to_string(rq->lobe) +
@@ -1273,6 +1262,56 @@ struct HttpApi::Impl {
     send_json(res, 200, *out);
   }
 
+  // Answers with the runs `read` lists from the history the lists read ([http] history): the
+  // service's file, or the central history. Each row says whether its run is in the file
+  // (`here`): a run of another grinder has its page, export and report on that grinder.
+  void with_history(httplib::Response& res,
+                    const std::function<Result<std::vector<RunSummary>>(const RunHistory&)>& read) {
+    Result<std::vector<RunSummary>> runs = read_history(read);
+    if (!runs) return send_error(res, runs.error());
+    Result<std::set<std::string>> here = runs_here(*runs);
+    if (!here) return send_error(res, here.error());
+    json out = json::array();
+    for (const RunSummary& r : *runs) {
+      json row = run_summary_json(r);
+      row["here"] = here->count(r.uuid) > 0;
+      out.push_back(std::move(row));
+    }
+    send_json(res, 200, out);
+  }
+
+  // What `read` reads from the history the lists read; a connection that failed is closed.
+  template <typename Read>
+  auto read_history(const Read& read) -> std::invoke_result_t<const Read&, const RunHistory&> {
+    if (!central) {
+      Result<StorePool::Lease> store = stores.acquire();
+      if (!store) return store.error();
+      auto out = read(static_cast<const RunHistory&>(**store));
+      if (!out && out.error().code == ErrorCode::kStorage) store->discard();
+      return out;
+    }
+    Result<CentralHistoryPool::Lease> history = central->acquire();
+    if (!history) return history.error();
+    auto out = read(static_cast<const RunHistory&>(**history));
+    if (!out && out.error().code == ErrorCode::kStorage) history->discard();
+    return out;
+  }
+
+  // The UUIDs of `runs` whose runs are in the service's file: all of them when the lists read
+  // the file; none before its first run.
+  Result<std::set<std::string>> runs_here(const std::vector<RunSummary>& runs) {
+    std::vector<std::string> uuids;
+    for (const RunSummary& r : runs) uuids.push_back(r.uuid);
+    if (!central) return std::set<std::string>(uuids.begin(), uuids.end());
+    std::error_code ec;
+    if (!fs::exists(stores.path(), ec)) return std::set<std::string>();
+    Result<StorePool::Lease> store = stores.acquire();
+    if (!store) return store.error();
+    Result<std::set<std::string>> here = (*store)->runs_here(uuids);
+    if (!here && here.error().code == ErrorCode::kStorage) store->discard();
+    return here;
+  }
+
   static void fail_with_store(httplib::Response& res, StorePool::Lease& store, const Error& e) {
     if (e.code == ErrorCode::kStorage) store.discard();
     send_error(res, e);
@@ -1287,6 +1326,8 @@ struct HttpApi::Impl {
   mutable std::mutex token_mutex;
   std::string token = settings.token;  // guarded by token_mutex; set_token replaces it
   StorePool stores;
+  // [http] history = "central": the plant's history the run lists and trends read; else none.
+  const std::unique_ptr<CentralHistoryPool> central;
   DatabaseStateLog database_log;  // how /metrics last found the database
   const HttpWrites writes;
   const HttpStatus status;

@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -704,6 +705,9 @@ class RunStore : public RunHistory {
 
   // ---- replication (schema 9): records in local id order after `after_id`, at most `limit` ----
   Result<std::vector<std::int64_t>> run_ids_after(std::int64_t after_id, int limit) const;
+  // Which of `uuids` name runs in this file (the others are other grinders' runs, listed from
+  // the central history).
+  Result<std::set<std::string>> runs_here(const std::vector<std::string>& uuids) const;
   Result<std::vector<ReplicatedPush>> pushes_after(std::int64_t after_id, int limit) const;
   Result<std::vector<StoredEvent>> events_after(std::int64_t after_id, int limit) const;
 

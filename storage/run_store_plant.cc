@@ -136,6 +136,20 @@ Result<std::vector<std::int64_t>> RunStore::run_ids_after(std::int64_t after_id,
   return st->collect([](const Statement& s) { return s.column<std::int64_t>(0); });
 }
 
+Result<std::set<std::string>> RunStore::runs_here(const std::vector<std::string>& uuids) const {
+  Result<Statement> st = Statement::prepare(*conn_, "SELECT 1 FROM runs WHERE uuid = :uuid", "look runs up by UUID");
+  if (!st.ok()) return st.error();
+  std::set<std::string> here;
+  for (const std::string& uuid : uuids) {
+    st->reset();
+    st->bind(":uuid", uuid);
+    Result<bool> row = st->step();
+    if (!row.ok()) return row.error();
+    if (*row) here.insert(uuid);
+  }
+  return here;
+}
+
 Result<std::vector<ReplicatedPush>> RunStore::pushes_after(std::int64_t after_id, int limit) const {
   if (Status s = check_limit(limit, "pushes to replicate"); !s.ok()) return s.error();
   Result<Statement> st = Statement::prepare(*conn_,

@@ -357,8 +357,20 @@ const std::string& million_url() {
         " 0.01, 0.5, false, CASE WHEN g % 50 = 0 THEN 'out' ELSE 'in' END, 'best_fit', '2026-12-01T00:00:00Z'"
         " FROM generate_series(1, " +
         std::to_string(kCentralRuns - 8) + ") AS g");
+    // 25 characteristics a run, the size of a judged lobe, one row of arrays a run.
+    w.exec(
+        "INSERT INTO run_characteristic_sets SELECT r.uuid, k.keys, k.units,"
+        " ARRAY(SELECT (r.local_id % 100) * 0.01 + i * 0.5 FROM generate_series(1, 25) AS i),"
+        " k.zeros, k.zeros, k.lower, k.upper, k.verdicts, k.nulls, k.nulls"
+        " FROM runs AS r, (SELECT array_agg('zone_' || i) AS keys, array_agg('um'::text) AS units,"
+        " array_agg(0.0::float8) AS zeros, array_agg(-12.0::float8) AS lower, array_agg(12.0::float8) AS upper,"
+        " array_agg('in'::text) AS verdicts, array_agg(NULL::integer) AS nulls FROM generate_series(1, 25) AS i) AS k"
+        " WHERE r.source = '/bench'");
     w.commit();
     pqxx::nontransaction(c).exec("VACUUM ANALYZE runs");
+    pqxx::nontransaction(c).exec("VACUUM ANALYZE run_characteristic_sets");
+    // The generated gigabyte written out now, not by a checkpoint during the measurements.
+    pqxx::nontransaction(c).exec("CHECKPOINT");
     return u;
   }();
   return url;
@@ -410,6 +422,54 @@ void BM_CentralLastRunsOfOneMachine(benchmark::State& state) {
   run_query(state, q, false);
 }
 BENCHMARK(BM_CentralLastRunsOfOneMachine)->Unit(benchmark::kMillisecond);
+
+// What a query command pays beyond its process start: connect, check the schema, list the
+// newest 50 runs of one lobe on every machine.
+void BM_CentralOpenAndListRuns(benchmark::State& state) {
+  const std::string url = million_url();
+  RunQuery q;
+  q.part = "cam_3";
+  q.lobe = 4;
+  for (auto _ : state) {
+    Result<CentralHistory> h = CentralHistory::open(url);
+    if (!h) die(h.error().message);
+    Result<std::vector<RunSummary>> r = h->list_runs(q);
+    if (!r || r->size() != 50) die("the list found no runs");
+  }
+}
+BENCHMARK(BM_CentralOpenAndListRuns)->Unit(benchmark::kMillisecond);
+
+// `runs spc --db` of one lobe with its default window (125 runs of 25 characteristics), the
+// connection open.
+void BM_CentralSpcOfALobe(benchmark::State& state) {
+  const CentralHistory& h = million();
+  RunQuery q;
+  q.part = "cam_3";
+  q.lobe = 4;
+  q.limit = 125;
+  for (auto _ : state) {
+    Result<CharacteristicSummaries> s = h.characteristic_summaries(q);
+    if (!s || s->runs != 125 || s->by_key.size() != 25) die("the SPC summed up no runs");
+    benchmark::DoNotOptimize(s);
+  }
+}
+BENCHMARK(BM_CentralSpcOfALobe)->Unit(benchmark::kMillisecond);
+
+// The bare baseline of a command's connection: libpqxx connects and selects one run by UUID.
+void BM_BareConnectAndSelectOneRun(benchmark::State& state) {
+  const std::string url = million_url();
+  const std::string uuid = pqxx::nontransaction(*std::make_unique<pqxx::connection>(url))
+                               .exec1("SELECT md5('4711')::uuid::text")[0]
+                               .as<std::string>();
+  for (auto _ : state) {
+    pqxx::connection c(url);
+    pqxx::nontransaction w(c);
+    pqxx::result r = w.exec_params("SELECT * FROM runs WHERE uuid = $1", uuid);
+    if (r.size() != 1) die("the bare select found no run");
+    benchmark::DoNotOptimize(r);
+  }
+}
+BENCHMARK(BM_BareConnectAndSelectOneRun)->Unit(benchmark::kMillisecond);
 
 void BM_BareSelectOneRunByUuid(benchmark::State& state) {
   pqxx::connection c(million_url());

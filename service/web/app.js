@@ -33,6 +33,15 @@ function verdict(v) {
   return `<span class="verdict ${esc(v)}">${esc(String(v).replace("_", " "))}</span>`;
 }
 
+// A run's id, a link to its page when the run is in this grinder's file; a run listed from the
+// plant's central history that is another grinder's has its page on that grinder.
+function runLink(r) {
+  if (r.here === false) {
+    return `<span class="elsewhere" title="run ${r.id} of ${esc(r.machine)}: its page is on that grinder">${r.id}</span>`;
+  }
+  return `<a href="#/run/${r.id}">${r.id}</a>`;
+}
+
 function utc(text) {
   return text ? esc(String(text).replace("T", " ").replace("Z", "")) : "–";
 }
@@ -177,8 +186,8 @@ async function runsPage(p) {
         <thead><tr><th>Run</th><th>Started (UTC)</th><th>Machine</th><th>Part</th><th>Lobe</th><th>Serial</th>
           <th>Max error</th><th>RMS</th><th>Repeatability</th><th>Phase</th><th>Verdict</th><th>Status</th></tr></thead>
         <tbody>${rows.map((r) => `
-          <tr class="row-link" data-run="${r.id}">
-            <td><a href="#/run/${r.id}">${r.id}</a></td><td>${utc(r.started_utc)}</td><td>${esc(r.machine)}</td>
+          <tr${r.here === false ? "" : ` class="row-link" data-run="${r.id}"`}>
+            <td>${runLink(r)}</td><td>${utc(r.started_utc)}</td><td>${esc(r.machine)}</td>
             <td>${esc(r.part)}</td><td>${r.lobe}</td><td>${esc(r.serial ?? "–")}</td>
             <td class="num">${um(r.max_abs_error_um)}</td><td class="num">${um(r.rms_error_um)}</td>
             <td class="num">${um(r.repeatability_um)}</td><td class="num">${deg(r.phase_error_deg)}</td>
@@ -375,7 +384,9 @@ async function trendPage(p) {
   if (p.part) {
     try {
       const newest = await api("/api/runs?" + apiQuery({part: p.part, lobe: p.lobe, limit: 1}));
-      if (newest.length) keys = ((await api("/api/runs/" + newest[0].id)).characteristics || []).map((c) => c.key);
+      if (newest.length && newest[0].here !== false) {
+        keys = ((await api("/api/runs/" + newest[0].id)).characteristics || []).map((c) => c.key);
+      }
     } catch (e) { keys = []; }
   }
   if (!keys.includes("lift_error")) keys.unshift("lift_error");
@@ -405,7 +416,7 @@ async function trendPage(p) {
     const runs = await api("/api/trend?" + apiQuery(q));
     document.getElementById("trend-table").innerHTML = `<div class="scroll"><table id="trend-runs">
       <thead><tr><th>Run</th><th>Started (UTC)</th><th>Machine</th><th>Serial</th><th>Max error</th><th>RMS</th><th>Phase</th><th>Verdict</th></tr></thead>
-      <tbody>${runs.slice().reverse().map((r) => `<tr><td><a href="#/run/${r.id}">${r.id}</a></td><td>${utc(r.started_utc)}</td><td>${esc(r.machine)}</td>
+      <tbody>${runs.slice().reverse().map((r) => `<tr><td>${runLink(r)}</td><td>${utc(r.started_utc)}</td><td>${esc(r.machine)}</td>
         <td>${esc(r.serial ?? "–")}</td><td class="num">${um(r.max_abs_error_um)}</td><td class="num">${um(r.rms_error_um)}</td>
         <td class="num">${deg(r.phase_error_deg)}</td><td>${verdict(r.verdict)}</td></tr>`).join("")}</tbody></table></div>`;
   } catch (e) {
@@ -463,7 +474,7 @@ async function shaftPage(p) {
     out.innerHTML = `<h2 id="shaft-title">Serial ${esc(p.serial)}: ${rows.length} lobe${rows.length === 1 ? "" : "s"} measured, shaft ${verdict(shaft)}</h2>
       <div class="scroll"><table id="shaft-lobes"><thead><tr><th>Lobe</th><th>Part</th><th>Newest run</th><th>Started (UTC)</th><th>Machine</th>
         <th>Max error</th><th>Phase</th><th>Base circle runout</th><th>Verdict</th><th>Runs</th></tr></thead>
-      <tbody>${rows.map(({run: r, count}) => `<tr><td>${r.lobe}</td><td>${esc(r.part)}</td><td><a href="#/run/${r.id}">${r.id}</a></td><td>${utc(r.started_utc)}</td>
+      <tbody>${rows.map(({run: r, count}) => `<tr><td>${r.lobe}</td><td>${esc(r.part)}</td><td>${runLink(r)}</td><td>${utc(r.started_utc)}</td>
         <td>${esc(r.machine)}</td><td class="num">${um(r.max_abs_error_um)}</td><td class="num">${deg(r.phase_error_deg)}</td>
         <td class="num">${um(r.base_circle_runout_um)}</td><td>${verdict(r.verdict)}</td><td class="num">${count}</td></tr>`).join("")}</tbody></table></div>
       <p class="muted" id="shaft-note">${why ? esc(why)

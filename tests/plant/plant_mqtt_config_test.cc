@@ -165,5 +165,27 @@ TEST_F(PlantCentralConfigTest, ABadUrlAPasswordInItAndBadNumbersNameFileLineAndK
   EXPECT_NE(other.find("cental"), std::string::npos) << other;
 }
 
+// [http] history: the file by default; `central` reads the lists from [plant.central]'s history
+// and is refused without one, naming the key.
+TEST_F(PlantCentralConfigTest, TheHttpHistoryIsTheFileOrTheCentralHistoryOfPlantCentral) {
+  Result<ServiceConfig> c = read(kBase + "[http]\nport = 8080\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  ASSERT_TRUE(c->http.has_value());
+  EXPECT_EQ(c->http->history_url, "") << "the service's own file";
+  c = read(kBase + "[http]\nhistory = \"central\"\n[plant.central]\nurl = \"postgresql://gaugeloop@central/plant\"\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->http->history_url, "postgresql://gaugeloop@central/plant");
+  c = read(kBase + "[http]\nhistory = \"local\"\n[plant.central]\nurl = \"postgresql://gaugeloop@central/plant\"\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->http->history_url, "") << "synced, but the pages read the file";
+
+  const std::string none = refusal(kBase + "[http]\nhistory = \"central\"\n");
+  EXPECT_NE(none.find(at(7, "http.history")), std::string::npos) << none;
+  EXPECT_NE(none.find("[plant.central]"), std::string::npos) << none;
+  const std::string other = refusal(kBase + "[http]\nhistory = \"plant\"\n");
+  EXPECT_NE(other.find(at(7, "http.history")), std::string::npos) << other;
+  EXPECT_NE(other.find("local"), std::string::npos) << other;
+}
+
 }  // namespace
 }  // namespace gaugeloop
