@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "core/guarded_thread.h"
+#include "core/idle_pool.h"
 #include "core/text_file.h"
 #include "core/utc_time.h"
 #include "job/layer_files.h"
@@ -304,26 +305,9 @@ bool same_secret(std::string_view given, std::string_view expected) {
 // each time.
 class StorePool {
  public:
+  using Lease = IdlePool<RunStore>::Lease;
+
   explicit StorePool(fs::path db) : db_(std::move(db)) {}
-
-  // A store for one request, given back when the lease ends (unless discard()ed).
-  class Lease {
-   public:
-    Lease(StorePool* pool, RunStore store) : pool_(pool), store_(std::move(store)) {}
-    Lease(Lease&& other) noexcept : pool_(std::exchange(other.pool_, nullptr)), store_(std::move(other.store_)) {}
-    Lease& operator=(Lease&&) = delete;
-    ~Lease() {
-      if (pool_ != nullptr) pool_->give_back(std::move(store_));
-    }
-    RunStore& operator*() { return store_; }
-    RunStore* operator->() { return &store_; }
-    // The connection failed: close it rather than hand it to the next request.
-    void discard() { pool_ = nullptr; }
-
-   private:
-    StorePool* pool_;
-    RunStore store_;
-  };
 
   // kStorage when there is no database yet or it cannot be opened (503).
   Result<Lease> acquire() {
@@ -334,30 +318,18 @@ class StorePool {
                                                  " yet; it is created by the first measurement (POST /api/measure, "
                                                  "the PLC, or `gaugeloop measure`)");
     }
-    {
-      std::lock_guard lock(mutex_);
-      if (!idle_.empty()) {
-        RunStore store = std::move(idle_.back());
-        idle_.pop_back();
-        return Lease(this, std::move(store));
-      }
-    }
-    Result<RunStore> store = RunStore::open(db_);
-    if (!store) return make_error(ErrorCode::kStorage, store.error().message);
-    return Lease(this, std::move(*store));
+    return pool_.acquire([this]() -> Result<RunStore> {
+      Result<RunStore> store = RunStore::open(db_);
+      if (!store) return make_error(ErrorCode::kStorage, store.error().message);
+      return store;
+    });
   }
 
   const fs::path& path() const { return db_; }
 
  private:
-  void give_back(RunStore store) {
-    std::lock_guard lock(mutex_);
-    idle_.push_back(std::move(store));
-  }
-
   const fs::path db_;
-  std::mutex mutex_;
-  std::vector<RunStore> idle_;
+  IdlePool<RunStore> pool_;
 };
 
 // Program names a client gives, against the NC files the history knows: "CAM_INTAKE_L1",

@@ -238,6 +238,17 @@ void BM_SyncIntoCentral(benchmark::State& state) {
 }
 BENCHMARK(BM_SyncIntoCentral)->Arg(6)->Arg(25)->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
 
+// The bare baselines' tables: runs of the central runs table's width (45 columns) and
+// characteristics of four, a primary key each.
+void make_bare_tables(pqxx::connection& c) {
+  pqxx::work w(c);
+  std::string cols;
+  for (int k = 0; k < 44; ++k) cols += ", c" + std::to_string(k) + (k % 2 ? " float8" : " text");
+  w.exec("CREATE TABLE runs (uuid text PRIMARY KEY" + cols + ")");
+  w.exec("CREATE TABLE chars (run_uuid text, position int, key text, value float8, PRIMARY KEY (run_uuid, position))");
+  w.commit();
+}
+
 // As many rows of the central runs table's width (45 columns) and state.range(0)
 // characteristic rows each, inserted by prepared statements one row each, 200 runs per
 // transaction.
@@ -247,16 +258,7 @@ void BM_BarePqxxInsert(benchmark::State& state) {
   for (auto _ : state) {
     const std::string url = new_database("bare_" + std::to_string(characteristics) + "_" + std::to_string(iteration++));
     pqxx::connection c(url);
-    {
-      pqxx::work w(c);
-      std::string cols;
-      for (int k = 0; k < 44; ++k) cols += ", c" + std::to_string(k) + (k % 2 ? " float8" : " text");
-      w.exec("CREATE TABLE runs (uuid text PRIMARY KEY" + cols + ")");
-      w.exec(
-          "CREATE TABLE chars (run_uuid text, position int, key text, value float8, PRIMARY KEY (run_uuid, "
-          "position))");
-      w.commit();
-    }
+    make_bare_tables(c);
     std::string params = "$1";
     for (int k = 0; k < 44; ++k) params += ", $" + std::to_string(k + 2);
     c.prepare("run", "INSERT INTO runs VALUES (" + params + ")");
@@ -289,16 +291,7 @@ void BM_BarePqxxCopy(benchmark::State& state) {
     const std::string url =
         new_database("bare_copy_" + std::to_string(characteristics) + "_" + std::to_string(iteration++));
     pqxx::connection c(url);
-    {
-      pqxx::work w(c);
-      std::string cols;
-      for (int k = 0; k < 44; ++k) cols += ", c" + std::to_string(k) + (k % 2 ? " float8" : " text");
-      w.exec("CREATE TABLE runs (uuid text PRIMARY KEY" + cols + ")");
-      w.exec(
-          "CREATE TABLE chars (run_uuid text, position int, key text, value float8, PRIMARY KEY (run_uuid, "
-          "position))");
-      w.commit();
-    }
+    make_bare_tables(c);
     const auto start = std::chrono::steady_clock::now();
     for (int batch = 0; batch < kSyncRuns / 200; ++batch) {
       pqxx::work w(c);

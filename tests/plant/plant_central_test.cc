@@ -143,6 +143,16 @@ class CentralTest : public ::testing::Test {
   }
 
   std::string sql(const std::string& statement) const { return sql_in(database_, statement); }
+  // The central schema as an older gaugeloop left it: the migrations up to version `last`.
+  void make_schema_up_to(int last) const {
+    sql("CREATE TABLE central_schema_version (version integer PRIMARY KEY, applied_utc text NOT NULL, "
+        "description text NOT NULL)");
+    for (const CentralMigration& m : central_migrations()) {
+      if (m.version > last) break;
+      sql(std::string(m.sql));
+      sql("INSERT INTO central_schema_version VALUES (" + std::to_string(m.version) + ", '2026-11-01T00:00:00Z', 'v')");
+    }
+  }
   static std::string sql_in(const std::string& database, const std::string& statement) {
     return shared_postgres().psql(database, statement);
   }
@@ -510,13 +520,7 @@ TEST_F(CentralTest, EveryListFilterIsServedByAnIndexInTimeOrder) {
 // A central history of schema 2 (events without their run's UUID) is migrated by the next sync,
 // and the events copied before get their runs' UUIDs from the runs copied from the same file.
 TEST_F(CentralTest, ASchemaTwoHistoryGivesItsEventsTheirRunsUuid) {
-  sql("CREATE TABLE central_schema_version (version integer PRIMARY KEY, applied_utc text NOT NULL, "
-      "description text NOT NULL)");
-  for (const CentralMigration& m : central_migrations()) {
-    if (m.version > 2) break;
-    sql(std::string(m.sql));
-    sql("INSERT INTO central_schema_version VALUES (" + std::to_string(m.version) + ", '2026-11-01T00:00:00Z', 'v')");
-  }
+  make_schema_up_to(2);
   auto g = std::make_unique<Grinder>("central-v2");
   fill(*g->store, "g1", "2026-11-22", 8);
   // What a schema-2 sync copied: the runs, and the events without run_uuid.
@@ -555,13 +559,7 @@ TEST_F(CentralTest, ASchemaTwoHistoryGivesItsEventsTheirRunsUuid) {
 // A schema-4 history kept each characteristic as a row: the migration to one row of arrays a
 // run keeps every value, position and NULL, and the rows read back are the file's.
 TEST_F(CentralTest, ASchemaFourHistorysCharacteristicsAreTheSameRowsAfterTheMigration) {
-  sql("CREATE TABLE central_schema_version (version integer PRIMARY KEY, applied_utc text NOT NULL, "
-      "description text NOT NULL)");
-  for (const CentralMigration& m : central_migrations()) {
-    if (m.version > 4) break;
-    sql(std::string(m.sql));
-    sql("INSERT INTO central_schema_version VALUES (" + std::to_string(m.version) + ", '2026-11-01T00:00:00Z', 'v')");
-  }
+  make_schema_up_to(4);
   auto g = std::make_unique<Grinder>("central-v4");
   fill(*g->store, "g1", "2026-11-22", 6);
   // What a schema-4 sync wrote: the runs, and each characteristic as a row, numbers exact.
