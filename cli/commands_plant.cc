@@ -81,6 +81,9 @@ void add_plant_commands(CLI::App& app, CommandAction& action) {
                      "Read the file from its first record again (after it was replaced or restored from a backup); "
                      "records already there are found by UUID and not copied twice, and one stopped part-way resumes "
                      "where it stopped");
+  sync_cmd->add_flag("--programs", sync->sync.programs,
+                     "Copy each NC push's program text too (nc_pushes.program_text), and give it to pushes copied "
+                     "before without it");
   sync_cmd->callback([&action, sync] { action = [sync] { return cmd_sync(*sync); }; });
 }
 

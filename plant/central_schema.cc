@@ -212,12 +212,19 @@ FROM run_characteristic_sets AS s,
                              to_deg, ordinality);
 )sql";
 
-constexpr std::array<CentralMigration, 5> kMigrations{{
+// A push's program text, copied when the sync is asked to (plant sync --programs,
+// [plant.central] programs = true); NULL otherwise.
+constexpr std::string_view kCentralV6 = R"sql(
+ALTER TABLE nc_pushes ADD COLUMN program_text text;
+)sql";
+
+constexpr std::array<CentralMigration, 6> kMigrations{{
     {1, "runs, run_characteristics, nc_pushes, events and sync_progress", kCentralV1},
     {2, "sync_progress: where a sync from the start stands (rescan_local_id, rescan_uuid)", kCentralV2},
     {3, "events: the run's UUID (run_uuid)", kCentralV3},
     {4, "runs: an index by part and time (runs_by_part_started)", kCentralV4},
     {5, "run_characteristic_sets: a run's characteristics in one row; run_characteristics a view of them", kCentralV5},
+    {6, "nc_pushes: the program text (program_text), when synced", kCentralV6},
 }};
 
 // Any 64-bit number of our own: held by whoever migrates, so two grinders syncing into an

@@ -47,10 +47,15 @@ constexpr std::size_t kCharacteristicSetWidth = 11;
 constexpr std::string_view kInsertPushHead = R"sql(
 INSERT INTO nc_pushes (uuid, run_uuid, machine, source_machine, source, local_id, local_run_id, pushed_utc, nc_file,
                        table_version, reason, interpolation, block_count, command_error_um, point_count,
-                       correction_max_um, program_hash, synced_utc)
+                       correction_max_um, program_hash, synced_utc, program_text)
 VALUES )sql";
-constexpr std::size_t kPushWidth = 18;
-constexpr std::string_view kInsertPushTail = " ON CONFLICT (uuid) DO NOTHING RETURNING run_uuid";
+constexpr std::size_t kPushWidth = 19;
+// A push there without its program text gets it (a sync with programs after one without); the
+// pushes that were new say so (xmax 0: inserted, not updated).
+constexpr std::string_view kInsertPushTail =
+    " ON CONFLICT (uuid) DO UPDATE SET program_text = EXCLUDED.program_text"
+    " WHERE nc_pushes.program_text IS NULL AND EXCLUDED.program_text IS NOT NULL"
+    " RETURNING run_uuid, xmax = 0";
 
 // As RunStore::record_push does to the local row: the run is pushed, and its nc_file is the
 // program last pushed from it.
@@ -67,20 +72,20 @@ constexpr std::size_t kEventWidth = 14;
 constexpr std::string_view kInsertEventTail = " ON CONFLICT (uuid) DO NOTHING RETURNING 1";
 
 // Inserts `rows` (each `width` parameters) in as few statements as PostgreSQL's limit on
-// parameters allows; the rows the statements returned.
-pqxx::result::size_type insert_rows(pqxx::work& tx, std::string_view head, std::string_view tail, std::size_t width,
-                                    const std::vector<Params>& rows, std::vector<std::string>* returned = nullptr) {
+// parameters allows; the rows the statements returned, those `inserted` says were new when given.
+std::int64_t insert_rows(pqxx::work& tx, std::string_view head, std::string_view tail, std::size_t width,
+                         const std::vector<Params>& rows,
+                         const std::function<bool(const pqxx::row&)>& inserted = nullptr) {
   const std::size_t per_statement = std::max<std::size_t>(1, central_internal::kMaxParameters / width);
-  pqxx::result::size_type count = 0;
+  std::int64_t count = 0;
   for (std::size_t from = 0; from < rows.size(); from += per_statement) {
     const std::size_t n = std::min(per_statement, rows.size() - from);
     Params all;
     for (std::size_t i = from; i < from + n; ++i) all.append(rows[i]);
     const pqxx::result r = central_internal::exec(
         tx, std::string(head) + central_internal::values_list(n, width) + std::string(tail), all);
-    count += r.size();
-    if (returned != nullptr) {
-      for (const auto& row : r) returned->push_back(central_internal::text_of(row[0]));
+    for (const auto& row : r) {
+      if (!inserted || inserted(row)) ++count;
     }
   }
   return count;
@@ -222,10 +227,16 @@ std::int64_t insert_pushes(pqxx::work& tx, const std::vector<ReplicatedPush>& pu
     p.text_or_null(push.reason).text_or_null(push.table.interpolation).integer(optional_int(push.table.block_count));
     p.number(push.table.command_error_um).integer(optional_int(push.table.point_count));
     p.number(push.table.correction_max_um).text_or_null(push.program_hash).text(now);
+    p.text_or_null(push.program_text.value_or(""));
     rows.push_back(std::move(p));
   }
-  std::vector<std::string> runs;
-  const auto inserted = insert_rows(tx, kInsertPushHead, kInsertPushTail, kPushWidth, rows, &runs);
+  std::vector<std::string> runs;  // of the pushes that were new
+  const std::int64_t inserted =
+      insert_rows(tx, kInsertPushHead, kInsertPushTail, kPushWidth, rows, [&runs](const pqxx::row& row) {
+        if (!row[1].as<bool>()) return false;  // there before, given its program text
+        runs.push_back(central_internal::text_of(row[0]));
+        return true;
+      });
   std::sort(runs.begin(), runs.end());
   runs.erase(std::unique(runs.begin(), runs.end()), runs.end());
   for (const std::string& run_uuid : runs) {
@@ -233,7 +244,7 @@ std::int64_t insert_pushes(pqxx::work& tx, const std::vector<ReplicatedPush>& pu
     mark.text(run_uuid);
     central_internal::exec(tx, std::string(kMarkPushed), mark);
   }
-  return static_cast<std::int64_t>(inserted);
+  return inserted;
 }
 
 std::int64_t insert_events(pqxx::work& tx, const std::vector<StoredEvent>& events, const std::string& machine,
@@ -247,7 +258,7 @@ std::int64_t insert_events(pqxx::work& tx, const std::vector<StoredEvent>& event
     p.text(now).text_or_null(e.run_uuid);
     rows.push_back(std::move(p));
   }
-  return static_cast<std::int64_t>(insert_rows(tx, kInsertEventHead, kInsertEventTail, kEventWidth, rows));
+  return insert_rows(tx, kInsertEventHead, kInsertEventTail, kEventWidth, rows);
 }
 
 // One table's records as the sync reads them from the file.
@@ -491,7 +502,7 @@ Result<CentralSyncCounts> sync_to_central(const RunStore& local, const std::stri
   const TableReader<ReplicatedPush> pushes{
       "nc_pushes",
       "push",
-      [&local](std::int64_t after, int limit) { return local.pushes_after(after, limit); },
+      [&local, &options](std::int64_t after, int limit) { return local.pushes_after(after, limit, options.programs); },
       [](const ReplicatedPush& p) { return p.push.id; },
       [](const ReplicatedPush& p) { return p.push.uuid; },
       insert_pushes,

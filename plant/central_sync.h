@@ -20,6 +20,9 @@ struct CentralSyncOptions {
   // Read the file from its first record again, ignoring where the last sync stopped: after the
   // file was replaced or restored from a backup. Records already there are found by UUID.
   bool from_start = false;
+  // Copy each push's program text too (nc_pushes.program_text; NULL otherwise): the office can
+  // read what was sent to the control. A push copied before without its text gets it.
+  bool programs = false;
   // Called before each batch's commit with the table ("runs", "nc_pushes", "events") and the
   // batch's number (1, 2... over the whole sync); an error aborts that batch's transaction and
   // ends the sync with it. For tests: a sync that fails half way.
@@ -32,7 +35,8 @@ struct CentralSyncSettings {
   // A sync at least this often; also right after each run the service stores, while the last
   // sync succeeded.
   std::chrono::seconds interval{60};
-  int batch_size = 200;  // as CentralSyncOptions
+  int batch_size = 200;   // as CentralSyncOptions
+  bool programs = false;  // as CentralSyncOptions
   // Not in the config file: the first wait after a failed sync, doubling up to `interval`.
   std::chrono::milliseconds retry_min{5000};
 };

@@ -708,7 +708,9 @@ class RunStore : public RunHistory {
   // Which of `uuids` name runs in this file (the others are other grinders' runs, listed from
   // the central history).
   Result<std::set<std::string>> runs_here(const std::vector<std::string>& uuids) const;
-  Result<std::vector<ReplicatedPush>> pushes_after(std::int64_t after_id, int limit) const;
+  // With `program_text`, each push's program text too (push.program_text; empty for a push
+  // recorded without it).
+  Result<std::vector<ReplicatedPush>> pushes_after(std::int64_t after_id, int limit, bool program_text = false) const;
   Result<std::vector<StoredEvent>> events_after(std::int64_t after_id, int limit) const;
 
   // Takes the write lock and lets it go again, writing nothing: before a measurement, so that

@@ -150,19 +150,20 @@ Result<std::set<std::string>> RunStore::runs_here(const std::vector<std::string>
   return here;
 }
 
-Result<std::vector<ReplicatedPush>> RunStore::pushes_after(std::int64_t after_id, int limit) const {
+Result<std::vector<ReplicatedPush>> RunStore::pushes_after(std::int64_t after_id, int limit, bool program_text) const {
   if (Status s = check_limit(limit, "pushes to replicate"); !s.ok()) return s.error();
   Result<Statement> st = Statement::prepare(*conn_,
                                             "SELECT " + std::string(storage_internal::kPushColumns) +
-                                                ", NULL, r.uuid, r.machine FROM nc_pushes AS p JOIN runs AS r "
+                                                (program_text ? ", p.program_text" : ", NULL") +
+                                                ", r.uuid, r.machine FROM nc_pushes AS p JOIN runs AS r "
                                                 "ON r.id = p.run_id WHERE p.id > :after ORDER BY p.id LIMIT :limit",
                                             "read pushes to replicate");
   if (!st.ok()) return st.error();
   st->bind(":after", after_id);
   st->bind(":limit", limit);
-  return st->collect([](const Statement& s) {
+  return st->collect([program_text](const Statement& s) {
     ReplicatedPush p;
-    p.push = storage_internal::read_push(s, false);
+    p.push = storage_internal::read_push(s, program_text);
     p.run_uuid = s.column<std::string>(14);
     p.machine = s.column<std::string>(15);
     return p;

@@ -350,6 +350,55 @@ TEST_F(CentralTest, ARunPushedAfterItWasSyncedIsPushedInTheCentralHistoryToo) {
   EXPECT_EQ(sql("SELECT status || ' ' || nc_file FROM runs"), "pushed nc/B.SPF");
 }
 
+// A push's program text is copied when asked (--programs): not by a plain sync; a later sync
+// with programs gives the pushes copied without it their text, without counting them as new or
+// copying anything twice.
+TEST_F(CentralTest, ProgramTextsAreCopiedWhenAskedAndGivenToPushesCopiedWithout) {
+  Grinder g("central-programs");
+  Result<std::int64_t> run = g.store->insert_run(judged_run("intake", 1, "g1", "2026-11-22T08:00:00Z", 1));
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  const std::string v1 =
+      "; CAM_INTAKE_L1 version 1\r\nCTABDEF(1,1)\r\nC0 X0\r\n\tN10 ; a tab, a \\ and a \"\r\nCTABEND\r\n";
+  NcPush push;
+  push.nc_file = "nc/CAM_INTAKE_L1.SPF";
+  ASSERT_TRUE(g.store->record_push(*run, push, v1).ok());
+  ASSERT_TRUE(sync_to_central(*g.store, url_, "g1").ok());
+  EXPECT_EQ(count("SELECT count(*) FROM nc_pushes WHERE program_text IS NULL"), 1) << "not asked";
+  // Texts compared as hex: psql's output would lose a last line end.
+  auto hex_of = [](const std::string& text) {
+    static const char* const kDigits = "0123456789abcdef";
+    std::string hex;
+    for (const unsigned char c : text) {
+      hex += kDigits[c >> 4];
+      hex += kDigits[c & 15];
+    }
+    return hex;
+  };
+  auto text_of_version = [this](int version) {
+    return sql("SELECT encode(convert_to(program_text, 'UTF8'), 'hex') FROM nc_pushes WHERE table_version = " +
+               std::to_string(version));
+  };
+
+  const std::string v2 = "; CAM_INTAKE_L1 version 2\r\nCTABDEF(1,1)\r\nC0 X0.001\r\nCTABEND\r\n";
+  ASSERT_TRUE(g.store->record_push(*run, push, v2).ok());
+  CentralSyncOptions with;
+  with.programs = true;
+  Result<CentralSyncCounts> s = sync_to_central(*g.store, url_, "g1", with);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->pushes.inserted, 1);
+  EXPECT_EQ(text_of_version(2), hex_of(v2)) << "the text byte for byte";
+  EXPECT_EQ(count("SELECT count(*) FROM nc_pushes WHERE program_text IS NULL"), 1) << "the first, copied before";
+
+  with.from_start = true;
+  s = sync_to_central(*g.store, url_, "g1", with);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->pushes.inserted, 0);
+  EXPECT_EQ(s->pushes.already_there, 2);
+  EXPECT_EQ(count("SELECT count(*) FROM nc_pushes"), 2);
+  EXPECT_EQ(count("SELECT count(*) FROM nc_pushes WHERE program_text IS NULL"), 0);
+  EXPECT_EQ(text_of_version(1), hex_of(v1)) << "the text byte for byte";
+}
+
 TEST_F(CentralTest, AReplacedFileIsRefusedUntilSyncedFromTheStart) {
   auto g = std::make_unique<Grinder>("central-replaced");
   fill(*g->store, "g1", "2026-11-22", 4);
