@@ -58,12 +58,14 @@ void print_report(const JobReport& r, const Part& part, const std::string& machi
               static_cast<long long>(r.measured.discarded_revolutions), static_cast<long long>(r.measured.reconnects),
               static_cast<long long>(r.measured.polls));
   std::printf("  degrees captured  %d of %d\n", revs * kDegreesPerRevolution, revs * kDegreesPerRevolution);
-  std::printf("  max lift error    %.2f um\n", a.max_abs_error_um);
-  std::printf("  RMS lift error    %.2f um\n", a.rms_error_um);
+  std::printf("  max lift error    %.2f um (raw: at nominal timing)\n", a.max_abs_error_um);
+  std::printf("  RMS lift error    %.2f um (raw)\n", a.rms_error_um);
   std::printf("  peak to valley    %.2f um\n", a.peak_to_valley_um);
   std::printf("  repeatability     %.2f um (largest per-degree standard deviation)\n", a.repeatability_um);
   std::printf("  phase             %+.3f deg (timing; corrected through the lift)\n", a.phase_error_deg);
-  std::printf("  runout            %.2f um (base circle, total indicator reading)\n", a.base_circle_runout_um);
+  std::printf("  runout            %.2f um (base circle, first harmonic: twice the eccentricity)\n",
+              a.base_circle_runout_um);
+  std::printf("  dial runout       %.2f um (base circle, total indicator reading)\n", a.dial_runout_um);
   std::printf("  tolerances        %s\n", tolerance_text(r).c_str());
   if (!r.ground_with_source.empty()) {
     const std::string table =

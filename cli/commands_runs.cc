@@ -16,6 +16,7 @@
 #include "cli/commands_spc.h"
 #include "core/atomic_file.h"
 #include "core/number_text.h"
+#include "report/judged_error.h"
 #include "report/run_json.h"
 #include "report/svg_plot.h"
 #include "storage/run_store.h"
@@ -237,19 +238,29 @@ int cmd_show(const RunOptions& o) {
     std::printf("  RMS radius error  %.2f um\n", s.rms_error_um);
   } else {
     std::printf("analysis (cam frame, 0 deg at the nose)\n");
-    std::printf("  max lift error    %.2f um at cam %zu deg (%+.2f um)\n", s.max_abs_error_um, worst,
-                a.error_um[worst]);
-    std::printf("  RMS lift error    %.2f um\n", s.rms_error_um);
+    std::printf("  max lift error    %.2f um at cam %zu deg (%+.2f um), raw: at nominal timing\n", s.max_abs_error_um,
+                worst, a.error_um[worst]);
+    std::printf("  RMS lift error    %.2f um, raw\n", s.rms_error_um);
   }
-  std::printf("  peak to valley    %.2f um\n", s.peak_to_valley_um);
+  std::printf("  peak to valley    %.2f um%s\n", s.peak_to_valley_um, pin ? "" : ", raw");
+  // The curve the verdicts judge when it is not the raw error: its own figures, named.
+  if (const JudgedError judged = judged_error(r); judged.raw_error_um) {
+    std::printf("  judged            %s: max %.2f um at %s %d deg, RMS %.2f um, peak to valley %.2f um\n",
+                judged.name.c_str(), judged.max_abs_um, at, judged.max_abs_at_deg, judged.rms_um,
+                judged.peak_to_valley_um);
+  }
   std::printf("  repeatability     %.2f um (largest per-degree standard deviation, at %s %zu deg)\n",
               s.repeatability_um, at, worst_spread);
   if (pin) {
     print_pin_figures(r.characteristics);
   } else {
     std::printf("  phase error       %s deg\n", opt(s.phase_error_deg, 3, true).c_str());
-    std::printf("  runout            %s um (base circle, total indicator reading)\n",
+    std::printf("  runout            %s um (base circle, first harmonic: twice the eccentricity)\n",
                 opt(s.base_circle_runout_um, 2).c_str());
+    if (has_inspection) {
+      std::printf("  dial runout       %.2f um (base circle, total indicator reading: what the tolerance judges)\n",
+                  a.dial_runout_um);
+    }
   }
   if (has_inspection) {
     std::string h;
@@ -471,15 +482,13 @@ int cmd_plot(const PlotOptions& o) {
   if (!store) return report_error(store.error());
   Result<StoredRun> run = load(*store, o.id, o.paths);
   if (!run) return report_error(run.error());
-  const RunSummary& s = run->summary;
   ErrorPlot p = run_error_plot(*run);
   if (o.no_correction) p.correction_um.reset();
-  if (o.tolerance_um > 0) p.tolerance_um = o.tolerance_um;
-  p.footer = "RMS " + format_fixed(s.rms_error_um, 2) + " \u00b5m \u00b7 peak to valley " +
-             format_fixed(s.peak_to_valley_um, 2) + " \u00b5m \u00b7 repeatability " +
-             format_fixed(s.repeatability_um, 2) + " \u00b5m \u00b7 phase " + opt(s.phase_error_deg, 3, true) +
-             "\u00b0 \u00b7 runout " + opt(s.base_circle_runout_um, 2) + " \u00b5m \u00b7 " +
-             std::to_string(s.revolutions) + " revolutions \u00b7 " + o.paths.db().string();
+  if (o.tolerance_um > 0) {
+    p.limits_um.reset();
+    p.tolerance_um = o.tolerance_um;
+  }
+  p.footer += " \u00b7 " + o.paths.db().string();
   if (Status w = write_file_atomically(o.out, render_error_plot_svg(p)); !w) return report_file_error(w.error());
   std::printf("run %lld plotted to %s\n", static_cast<long long>(o.id), o.out.c_str());
   return kExitOk;
@@ -643,7 +652,10 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
   add_data_options(*plot_cmd, plot->paths);
   plot_cmd->add_option("id", plot->id, "Run id (see `runs list`)")->required();
   plot_cmd->add_option("--out", plot->out, "SVG file to write, e.g. run12.svg")->required();
-  plot_cmd->add_option("--tolerance-um", plot->tolerance_um, "Draw the band +-T um and mark degrees outside it")
+  plot_cmd
+      ->add_option("--tolerance-um", plot->tolerance_um,
+                   "Draw the band +-T um at every degree, instead of the limits the run was judged against, and mark "
+                   "the degrees outside it")
       ->check(CLI::PositiveNumber);
   plot_cmd->add_flag("--no-correction", plot->no_correction, "Leave the correction curve out");
   plot_cmd->callback([&action, plot] { action = [plot] { return cmd_plot(*plot); }; });

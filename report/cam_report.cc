@@ -12,6 +12,7 @@
 #include "core/number_text.h"
 #include "core/tolerance.h"
 #include "report/chart_cairo.h"
+#include "report/judged_error.h"
 #include "report/run_json.h"
 
 namespace gaugeloop {
@@ -77,24 +78,6 @@ const Characteristic* find_characteristic(const std::vector<Characteristic>& cs,
     if (c.key == key) return &c;
   }
   return nullptr;
-}
-
-// The limits in force at each nose-centred degree x = -179..180 (index x + 179) for a figure
-// ("lift_error"...): a zone's own where a zone with limits covers x, the whole turn's elsewhere.
-using DegreeLimits = std::array<Limits, 360>;
-DegreeLimits limits_per_degree(const std::vector<Characteristic>& cs, const std::string& figure) {
-  DegreeLimits out{};
-  if (const Characteristic* whole = find_characteristic(cs, figure)) out.fill(whole->limits);
-  for (const Characteristic& c : cs) {
-    if (c.key.rfind(figure + ".", 0) != 0 || !c.limits.any() || !c.from_deg || !c.to_deg) continue;
-    const int from = *c.from_deg;
-    const int to = *c.to_deg;
-    for (int x = -179; x <= 180; ++x) {
-      const bool inside = from <= to ? (x >= from && x <= to) : (x >= from || x <= to);
-      if (inside) out[static_cast<std::size_t>(x + 179)] = c.limits;
-    }
-  }
-  return out;
 }
 
 // A figure over cam angle as the report charts it: values per nose-centred degree.
@@ -222,20 +205,10 @@ double legend_entry(cairo_t* cr, double x, double y, chart::Rgb colour, const st
   return x + 13 + chart::text(cr, x + 13, y, label, 6.5) + 8;
 }
 
-// The lift error the report charts as judged: the one the run names, except a best-fit table
-// of zeros beside a raw error that is not (a run stored before the best-fit error was kept),
-// where the raw error is all there is.
-bool best_fit_missing(const StoredRun& run) {
-  const auto zero = [](const DegreeTable& t) {
-    return std::all_of(t.begin(), t.end(), [](double v) { return v == 0.0; });
-  };
-  return run.lift_error_reference == LiftErrorReference::kBestFit && zero(run.analysis.residual_error_um) &&
-         !zero(run.analysis.error_um);
-}
+// A run stored before the best-fit error was kept (judged_error): its raw error is charted.
+bool best_fit_missing(const StoredRun& run) { return judged_error(run).basis == JudgedError::Basis::kNominalNoBestFit; }
 
-const DegreeTable& charted_lift_error_um(const StoredRun& run) {
-  return best_fit_missing(run) ? run.analysis.error_um : judged_lift_error_um(run.analysis, run.lift_error_reference);
-}
+DegreeTable charted_lift_error_um(const StoredRun& run) { return judged_error(run).error_um; }
 
 struct ReportData {
   const StoredRun* run = nullptr;
@@ -454,7 +427,13 @@ void draw_table(cairo_t* cr, const StoredRun& run, const CamReportWords& w) {
   const double limits_c = kTableLeft + 261;
   const double verdict_x = kTableLeft + 287;
   chart::set_colour(cr, chart::kInk);
-  chart::text(cr, kTableLeft, kTableTop - 12, "Characteristics", 8, Align::kLeft, true);
+  const double title_width = chart::text(cr, kTableLeft, kTableTop - 12, "Characteristics", 8, Align::kLeft, true);
+  if (!w.table_note.empty()) {
+    chart::set_colour(cr, chart::kNotJudged);
+    const double room = right - (kTableLeft + title_width + 6);
+    chart::text(cr, kTableLeft + title_width + 6, kTableTop - 12, chart::fit_text(cr, w.table_note, 6.0, room), 6.0);
+    chart::set_colour(cr, chart::kInk);
+  }
   double y = kTableTop;
   const double size = 6.0;
   chart::set_colour(cr, chart::kNotJudged);
@@ -608,7 +587,17 @@ Status check_page_file_name(const std::filesystem::path& out) {
 
 CamReportWords cam_report_words(const StoredRun& run) {
   const RunPart part = run_part(run);
-  return part.pin() ? pin_words(run, part) : lobe_words(run);
+  CamReportWords w = part.pin() ? pin_words(run, part) : lobe_words(run);
+  // Next to each verdict, which error it judges: the rows of the judged curve marked, the mark
+  // named beside the table's title.
+  bool marked = false;
+  for (std::size_t i = 0; i < run.characteristics.size() && i < w.characteristic_titles.size(); ++i) {
+    if (!judges_error_curve(run.characteristics[i].key, part.kind)) continue;
+    w.characteristic_titles[i] += " *";
+    marked = true;
+  }
+  if (marked) w.table_note = "* of the " + judged_error(run).name;
+  return w;
 }
 
 ChartPlacement cam_report_lift_chart(const StoredRun& run) {

@@ -42,21 +42,23 @@ Status write_cam_report(const StoredRun& run, const std::filesystem::path& out);
 // leaves out what only a lobe has (velocity and acceleration error, phase, base circle
 // runout). write_cam_report draws exactly these words; a test reads them here.
 struct CamReportWords {
-  std::string page_title;                          // "Cam inspection report", "Pin inspection report"
-  std::string item;                                // "lobe 3", "pin 1"
-  std::string item_label;                          // "Lobe", "Pin": the identity field
-  std::string angle_axis;                          // the charts' x axis title
-  std::string error_axis;                          // the error chart's y axis title
-  std::string error_chart;                         // the error chart's title
-  std::string polar_title;                         // the polar view's title
-  std::string polar_zero;                          // the polar view's label at 0 degrees
-  std::string polar_angle;                         // the polar view's scale line starts with it: "cam deg", "pin deg"
-  std::string polar_reference;                     // what its rings are about: "base circle", "least-squares circle"
-  std::string harmonics_title;                     // the harmonics chart's title
-  bool derivative_charts = true;                   // velocity and acceleration error: a lobe's only
-  std::vector<std::string> characteristic_titles;  // the table's, in run.characteristics' order
-  std::string footer_judged;                       // the footer's first line
-  std::string footer_detail;                       // and its second
+  std::string page_title;         // "Cam inspection report", "Pin inspection report"
+  std::string item;               // "lobe 3", "pin 1"
+  std::string item_label;         // "Lobe", "Pin": the identity field
+  std::string angle_axis;         // the charts' x axis title
+  std::string error_axis;         // the error chart's y axis title
+  std::string error_chart;        // the error chart's title
+  std::string polar_title;        // the polar view's title
+  std::string polar_zero;         // the polar view's label at 0 degrees
+  std::string polar_angle;        // the polar view's scale line starts with it: "cam deg", "pin deg"
+  std::string polar_reference;    // what its rings are about: "base circle", "least-squares circle"
+  std::string harmonics_title;    // the harmonics chart's title
+  bool derivative_charts = true;  // velocity and acceleration error: a lobe's only
+  // The table's, in run.characteristics' order; " *" after those of the judged error curve.
+  std::vector<std::string> characteristic_titles;
+  std::string table_note;     // beside the table's title: "* of the lift error after the best-fit phase"
+  std::string footer_judged;  // the footer's first line
+  std::string footer_detail;  // and its second
 };
 CamReportWords cam_report_words(const StoredRun& run);
 

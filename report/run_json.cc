@@ -1,6 +1,8 @@
 // JSON and CSV of stored runs, pushes, pending tables and events; UTC time bounds.
 #include "report/run_json.h"
+
 #include "core/number_text.h"
+#include "report/judged_error.h"
 
 #include <algorithm>
 #include <cmath>
@@ -120,7 +122,19 @@ json run_detail_json(const StoredRun& r) {
   const RunPart part = run_part(r);
   j["part_kind"] = part.pin() ? "pin" : "lobe";
   if (part.pin()) j["pin_mode"] = part.pin_mode ? json(pin_mode_name(*part.pin_mode)) : json(nullptr);
+  // The curve the verdicts of the error characteristics judge, and its figures: what the run
+  // page's plot draws its band around (judged_error).
+  const JudgedError judged = judged_error(r);
+  j["judged_error"] = {{"name", judged.name},
+                       {"reference", judged.reference},
+                       {"max_abs_um", judged.max_abs_um},
+                       {"max_abs_at_deg", judged.max_abs_at_deg},
+                       {"rms_um", judged.rms_um},
+                       {"peak_to_valley_um", judged.peak_to_valley_um}};
   j["characteristics"] = characteristics_json(r.characteristics, part.kind);
+  for (json& c : j["characteristics"]) {
+    c["judges"] = judges_error_curve(c["key"].get<std::string>(), part.kind) ? json(judged.reference) : json(nullptr);
+  }
   return j;
 }
 

@@ -35,7 +35,10 @@ nlohmann::json run_summary_json(const RunSummary& run);
 // `runs show --json`: the summary plus the rest of the record, the worst degrees (cam frame;
 // pin degrees for a pin), the frame mapping (null if not recorded), every push of the run
 // (nc_push_json, oldest first), and what was measured: part_kind "lobe" or "pin" and, for a
-// pin, pin_mode "c-x" or "c-x-y" (null if its settings name none).
+// pin, pin_mode "c-x" or "c-x-y" (null if its settings name none); judged_error: the curve the
+// error characteristics judge (judged_error: name, reference, max_abs_um, max_abs_at_deg,
+// rms_um, peak_to_valley_um), and on each characteristic `judges`: that reference when its
+// figure is of that curve, else null.
 nlohmann::json run_detail_json(const StoredRun& run);
 
 // One characteristic of a run against its tolerances: key, title, unit, value, min, max,

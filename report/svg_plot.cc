@@ -2,6 +2,7 @@
 #include "report/svg_plot.h"
 #include "core/number_text.h"
 #include "core/utf8.h"
+#include "report/judged_error.h"
 
 #include <algorithm>
 #include <array>
@@ -32,6 +33,7 @@ constexpr double kPlotBottom = 540.0;
 
 constexpr const char* kErrorColour = "#1f4e9c";
 constexpr const char* kSpreadColour = "#9db8e3";
+constexpr const char* kRawColour = "#9aa3ad";
 constexpr const char* kCorrectionColour = "#d9730d";
 constexpr const char* kToleranceColour = "#d7efd9";
 constexpr const char* kOutColour = "#c62828";
@@ -125,6 +127,17 @@ std::string circle_path(double r) {
 // (the legend of the lift error, about 430 px at 13 px).
 constexpr double kSubtitleWidthPx = 660.0;
 
+// The code points of `text` (a byte that starts no UTF-8 sequence counts as one).
+std::size_t code_points(const std::string& text) {
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < text.size(); ++count) {
+    char32_t cp = 0;
+    const std::size_t n = utf8_sequence_at(text, i, cp);
+    i += n == 0 ? 1 : n;
+  }
+  return count;
+}
+
 // `text` cut to what `max_px` holds at `font_px` with an ellipsis where it was cut. Characters
 // (code points) are taken at 0.62 em, wider than DejaVu Sans's average, so nothing cut runs
 // over what stands beside it.
@@ -166,6 +179,8 @@ std::string start_document(const std::string& title, const std::string& subtitle
 struct DegreePanel {
   double left, right, top, bottom;
   double scale, step;
+  std::string y_title = "lift error (\u00b5m)";
+  std::string x_title = "cam angle (deg, 0 = nose)";
 
   double x_of(double deg) const { return left + (right - left) * deg / 360.0; }
   double y_of(double um) const { return (top + bottom) / 2.0 - um * (bottom - top) / (2.0 * scale); }
@@ -183,11 +198,11 @@ struct DegreePanel {
     }
     svg += "<rect x=\"" + num(left) + "\" y=\"" + num(top) + "\" width=\"" + num(right - left) + "\" height=\"" +
            num(bottom - top) + "\" fill=\"none\" stroke=\"#8a949e\" stroke-width=\"1\"/>\n";
-    add_text(svg, {(left + right) / 2, bottom + 40, "cam angle (deg, 0 = nose)", 12, "middle", kMutedColour});
+    add_text(svg, {(left + right) / 2, bottom + 40, x_title, 12, "middle", kMutedColour});
     const double y0 = (top + bottom) / 2.0;
     svg += "<text x=\"" + num(left - 46) + "\" y=\"" + num(y0) + "\" font-size=\"12\" text-anchor=\"middle\" fill=\"" +
-           kMutedColour + "\" transform=\"rotate(-90 " + num(left - 46) + " " + num(y0) +
-           ")\">lift error (\u00b5m)</text>\n";
+           kMutedColour + "\" transform=\"rotate(-90 " + num(left - 46) + " " + num(y0) + ")\">" + escape(y_title) +
+           "</text>\n";
   }
 
   // Polyline points of a table; the last point repeats the first at 360 deg (periodic).
@@ -201,9 +216,64 @@ struct DegreePanel {
   }
 };
 
+// The limits at degree d: limits_um's, or the symmetric tolerance's.
+Limits limits_at(const ErrorPlot& p, std::size_t d) {
+  if (p.limits_um) return (*p.limits_um)[d];
+  if (p.tolerance_um) return Limits{-*p.tolerance_um, *p.tolerance_um};
+  return {};
+}
+
+bool has_limits(const ErrorPlot& p) {
+  for (std::size_t d = 0; d < p.error_um.size(); ++d) {
+    if (limits_at(p, d).any()) return true;
+  }
+  return false;
+}
+
+bool out_of_tolerance(const ErrorPlot& p, std::size_t d) {
+  const Limits l = limits_at(p, d);
+  const double v = p.error_um[d];
+  return (l.lower && v < *l.lower) || (l.upper && v > *l.upper);
+}
+
+// The one symmetric band that holds at every degree, as "±12.0 µm"; empty when the limits
+// differ by zone (or are one-sided).
+std::string uniform_limits_text(const ErrorPlot& p) {
+  const Limits first = limits_at(p, 0);
+  bool uniform = first.lower && first.upper && std::abs(*first.lower + *first.upper) < 1e-9;
+  for (std::size_t d = 1; d < p.error_um.size() && uniform; ++d) {
+    const Limits l = limits_at(p, d);
+    uniform = l.lower == first.lower && l.upper == first.upper;
+  }
+  return uniform ? "\u00b1" + num(*first.upper, 1) + " \u00b5m" : std::string();
+}
+
+// Runs of whole degrees [from, to] with the same limits, in order; only those with limits.
+struct LimitRun {
+  int from = 0;
+  int to = 0;
+  Limits limits;
+};
+
+std::vector<LimitRun> limit_runs(const ErrorPlot& p) {
+  std::vector<LimitRun> runs;
+  for (int d = 0; d < kDegreesPerRevolution;) {
+    const Limits l = limits_at(p, static_cast<std::size_t>(d));
+    int end = d;
+    while (end + 1 < kDegreesPerRevolution) {
+      const Limits n = limits_at(p, static_cast<std::size_t>(end + 1));
+      if (n.lower != l.lower || n.upper != l.upper) break;
+      ++end;
+    }
+    if (l.any()) runs.push_back({d, end, l});
+    d = end + 1;
+  }
+  return runs;
+}
+
 // The error plot's scale and what it marks: the axis runs -scale..+scale um with a grid line
-// every `step`; `worst` is the degree of the largest |error|, `outside` how many degrees are
-// beyond the tolerance.
+// every `step`; `worst` is the degree of the largest |judged error|, `outside` how many degrees
+// of it are beyond their limits.
 struct ErrorScale {
   double scale = 0.0;
   double step = 0.0;
@@ -211,52 +281,80 @@ struct ErrorScale {
   int outside = 0;
 };
 
-bool out_of_tolerance(const ErrorPlot& p, std::size_t d) {
-  return p.tolerance_um && std::abs(p.error_um[d]) > *p.tolerance_um;
-}
-
-// The scale: the largest error (with its spread) or the tolerance, whichever is larger.
+// The scale: the largest error (with its spread, the raw error and the correction) or the
+// limits, whichever is larger.
 ErrorScale error_scale(const ErrorPlot& p) {
   ErrorScale s;
   double extent = 0.0;
   for (std::size_t d = 0; d < p.error_um.size(); ++d) {
     const double spread = p.spread_um ? (*p.spread_um)[d] : 0.0;
     extent = std::max(extent, std::abs(p.error_um[d]) + spread);
+    if (p.raw_error_um) extent = std::max(extent, std::abs((*p.raw_error_um)[d]));
     if (p.correction_um) extent = std::max(extent, std::abs((*p.correction_um)[d]));
+    const Limits l = limits_at(p, d);
+    if (l.lower) extent = std::max(extent, std::abs(*l.lower) * 1.15);
+    if (l.upper) extent = std::max(extent, std::abs(*l.upper) * 1.15);
     if (std::abs(p.error_um[d]) > std::abs(p.error_um[s.worst])) s.worst = d;
   }
-  if (p.tolerance_um) extent = std::max(extent, *p.tolerance_um * 1.15);
   s.step = nice_step(2.0 * extent);
   s.scale = std::max(s.step, std::ceil(extent / s.step) * s.step);
   for (std::size_t d = 0; d < p.error_um.size(); ++d) s.outside += out_of_tolerance(p, d) ? 1 : 0;
   return s;
 }
 
-// The verdict at the top right: the largest error and where, and the tolerance kept or not.
+// The verdict at the top right, of the judged error: the largest and where, and the limits kept
+// or not; under it, which error that is.
 void draw_error_verdict(std::string& svg, const ErrorPlot& p, const ErrorScale& s) {
-  std::string verdict =
-      "max |error| " + num(std::abs(p.error_um[s.worst]), 2) + " \u00b5m at cam " + std::to_string(s.worst) + "\u00b0";
-  if (p.tolerance_um) {
-    verdict += s.outside == 0 ? " \u00b7 within \u00b1" + num(*p.tolerance_um, 1) + " \u00b5m"
-                              : " \u00b7 " + std::to_string(s.outside) + " degrees outside \u00b1" +
-                                    num(*p.tolerance_um, 1) + " \u00b5m";
+  std::string verdict = "max |error| " + num(std::abs(p.error_um[s.worst]), 2) + " \u00b5m at " + p.angle_word + " " +
+                        std::to_string(s.worst) + "\u00b0";
+  if (has_limits(p)) {
+    const std::string band = uniform_limits_text(p);
+    const std::string limits = band.empty() ? std::string("their limits") : band;
+    verdict += s.outside == 0 ? " \u00b7 within " + limits
+                              : " \u00b7 " + std::to_string(s.outside) + " degrees outside " + limits;
   }
   add_text(svg, {kWidth - 40.0, 46, verdict, 16, "end", s.outside > 0 ? kOutColour : kTextColour, "bold"});
-  add_text(svg, {kWidth - 40.0, 72, "lift error = measured \u2212 design, cam frame, 0\u00b0 at the nose", 13, "end",
-                 kMutedColour});
+  add_text(svg, {kWidth - 40.0, 72, "judged: " + p.error_name + ", " + p.frame_note, 13, "end", kMutedColour});
 }
 
-// The polar panel: the error as a ring around the zero circle, the tolerance as a band.
+// The band of limits in the polar panel: each run of degrees with the same limits an annular
+// sector (a one-sided limit reaches the panel's edge); one band all round, a ring.
+void draw_polar_band(std::string& svg, const ErrorPlot& p, double scale, double k) {
+  const std::vector<LimitRun> runs = limit_runs(p);
+  const auto radius = [&](const std::optional<double>& limit, double edge_um) {
+    return std::max(1.0, kPolarR0 + limit.value_or(edge_um) * k);
+  };
+  if (runs.size() == 1 && runs.front().from == 0 && runs.front().to == kDegreesPerRevolution - 1) {
+    const Limits& l = runs.front().limits;
+    svg += "<path d=\"" + circle_path(radius(l.upper, scale)) + circle_path(radius(l.lower, -scale)) + "\" fill=\"" +
+           kToleranceColour + "\" fill-rule=\"evenodd\" stroke=\"none\"/>\n";
+    return;
+  }
+  for (const LimitRun& r : runs) {
+    const double outer = radius(r.limits.upper, scale);
+    const double inner = radius(r.limits.lower, -scale);
+    std::string pts;
+    const double from = r.from - 0.5;
+    const double to = r.to + 0.5;
+    for (double a = from;; a = std::min(to, a + 1.0)) {
+      pts += num(polar_x(a, outer), 2) + "," + num(polar_y(a, outer), 2) + " ";
+      if (a >= to) break;
+    }
+    for (double a = to;; a = std::max(from, a - 1.0)) {
+      pts += num(polar_x(a, inner), 2) + "," + num(polar_y(a, inner), 2) + " ";
+      if (a <= from) break;
+    }
+    svg += "<polygon points=\"" + pts + "\" fill=\"" + kToleranceColour + "\" stroke=\"none\"/>\n";
+  }
+}
+
+// The polar panel: the error as a ring around the zero circle, the limits as a band.
 void draw_polar_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s) {
   const double scale = s.scale;
   const double step = s.step;
   const double k = kPolarSpan / scale;  // px per um
   add_text(svg, {kPolarCx, 104, "Polar: error around the zero circle", 14, "middle", kTextColour, "bold"});
-  if (p.tolerance_um) {
-    const double t = *p.tolerance_um * k;
-    svg += "<path d=\"" + circle_path(kPolarR0 + t) + circle_path(kPolarR0 - t) + "\" fill=\"" + kToleranceColour +
-           "\" fill-rule=\"evenodd\" stroke=\"none\"/>\n";
-  }
+  draw_polar_band(svg, p, scale, k);
   for (double e = -scale; e <= scale + 1e-9; e += step) {
     const bool zero = std::abs(e) < 1e-9;
     svg += "<path d=\"" + circle_path(kPolarR0 + e * k) + "\" fill=\"none\" stroke=\"" +
@@ -276,6 +374,11 @@ void draw_polar_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s)
     add_text(svg, {kPolarCx + 4, kPolarCy - (kPolarR0 + e * k) + 4, (e > 0 ? "+" : "") + num(e, step < 1 ? 1 : 0), 10,
                    "start", kMutedColour, "normal", true});
   }
+  if (p.raw_error_um) {
+    const DegreeTable& raw = *p.raw_error_um;
+    svg += "<path d=\"" + polar_ring([&](int d) { return kPolarR0 + raw[static_cast<std::size_t>(d)] * k; }) +
+           "\" fill=\"none\" stroke=\"" + kRawColour + "\" stroke-width=\"1\" stroke-linejoin=\"round\"/>\n";
+  }
   svg += "<path d=\"" + polar_ring([&](int d) { return kPolarR0 + p.error_um[static_cast<std::size_t>(d)] * k; }) +
          "\" fill=\"none\" stroke=\"" + kErrorColour + "\" stroke-width=\"1.8\" stroke-linejoin=\"round\"/>\n";
   if (p.correction_um) {
@@ -289,7 +392,7 @@ void draw_polar_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s)
     svg += "<circle cx=\"" + num(polar_x(static_cast<double>(d), r), 2) + "\" cy=\"" +
            num(polar_y(static_cast<double>(d), r), 2) + "\" r=\"2\" fill=\"" + kOutColour + "\"/>\n";
   }
-  add_text(svg, {kPolarCx, kPolarCy + 4, "nose at 0\u00b0, top", 11, "middle", kMutedColour});
+  add_text(svg, {kPolarCx, kPolarCy + 4, "0\u00b0 at the top", 11, "middle", kMutedColour});
   add_text(svg, {kPolarCx, kPolarCy + 20, "angles counter-clockwise", 11, "middle", kMutedColour});
   add_text(svg,
            {kPolarCx, 604, "radial scale " + num(step, step < 1 ? 1 : 0) + " \u00b5m per ring, outward = more material",
@@ -310,22 +413,44 @@ std::string spread_band_points(const ErrorPlot& p, const DegreePanel& panel) {
   return band;
 }
 
-// The linear panel: error, spread and correction per cam degree, the tolerance as a strip,
-// the degrees outside it marked, and the worst degree ringed and labelled.
+// The band of limits in the linear panel: a strip per run of degrees with the same limits, each
+// degree from half a degree before it to half after (degree 0 at both ends of the axis); a
+// one-sided limit reaches the panel's edge.
+void draw_linear_band(std::string& svg, const ErrorPlot& p, const DegreePanel& panel) {
+  const auto strip = [&](double from_deg, double to_deg, const Limits& l) {
+    const double top = panel.y_of(l.upper.value_or(panel.scale));
+    const double bottom = panel.y_of(l.lower.value_or(-panel.scale));
+    svg += "<rect x=\"" + num(panel.x_of(from_deg), 2) + "\" y=\"" + num(top, 2) + "\" width=\"" +
+           num(panel.x_of(to_deg) - panel.x_of(from_deg), 2) + "\" height=\"" + num(std::max(0.0, bottom - top), 2) +
+           "\" fill=\"" + kToleranceColour + "\"/>\n";
+  };
+  for (const LimitRun& r : limit_runs(p)) {
+    if (r.from == 0 && r.to == kDegreesPerRevolution - 1) {
+      strip(0.0, kDegreesPerRevolution, r.limits);
+      continue;
+    }
+    strip(std::max(0.0, r.from - 0.5), r.to + 0.5, r.limits);
+    if (r.from == 0) strip(kDegreesPerRevolution - 0.5, kDegreesPerRevolution, r.limits);
+  }
+}
+
+// The linear panel: the judged error (the raw error beside it), spread and correction per
+// degree, the limits as a band, the degrees outside it marked, and the worst degree ringed and
+// labelled.
 void draw_linear_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s) {
-  const DegreePanel panel{kPlotLeft, kPlotRight, kPlotTop, kPlotBottom, s.scale, s.step};
+  const DegreePanel panel{kPlotLeft, kPlotRight, kPlotTop, kPlotBottom, s.scale, s.step, p.axis_label, p.angle_title};
   const auto x_of = [&](double deg) { return panel.x_of(deg); };
   const auto y_of = [&](double um) { return panel.y_of(um); };
-  add_text(svg, {(kPlotLeft + kPlotRight) / 2, 104, "Linear: error per cam degree", 14, "middle", kTextColour, "bold"});
-  if (p.tolerance_um) {
-    svg += "<rect x=\"" + num(kPlotLeft) + "\" y=\"" + num(y_of(*p.tolerance_um)) + "\" width=\"" +
-           num(kPlotRight - kPlotLeft) + "\" height=\"" + num(y_of(-*p.tolerance_um) - y_of(*p.tolerance_um)) +
-           "\" fill=\"" + kToleranceColour + "\"/>\n";
-  }
+  add_text(svg, {(kPlotLeft + kPlotRight) / 2, 104, "Linear: error per degree", 14, "middle", kTextColour, "bold"});
+  draw_linear_band(svg, p, panel);
   panel.draw_axes(svg);
   if (p.spread_um) {
     svg += "<polygon points=\"" + spread_band_points(p, panel) + "\" fill=\"" + kSpreadColour +
            "\" fill-opacity=\"0.6\" stroke=\"none\"/>\n";
+  }
+  if (p.raw_error_um) {
+    svg += "<polyline points=\"" + panel.points(*p.raw_error_um) + "\" fill=\"none\" stroke=\"" + kRawColour +
+           "\" stroke-width=\"1\" stroke-linejoin=\"round\"/>\n";
   }
   svg += "<polyline points=\"" + panel.points(p.error_um) + "\" fill=\"none\" stroke=\"" + kErrorColour +
          "\" stroke-width=\"1.8\" stroke-linejoin=\"round\"/>\n";
@@ -351,33 +476,42 @@ void draw_linear_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s
                  label_left ? "end" : "start", kTextColour, "bold"});
 }
 
-// The legend under the linear panel: a swatch and a label for each thing drawn.
+// The legend under the linear panel: a swatch and a label for each thing drawn, the judged
+// error first; an entry that does not fit on its row starts the next.
 void draw_error_legend(std::string& svg, const ErrorPlot& p) {
-  double lx = kPlotLeft - 40;
-  const double ly = 606;
-  const auto legend = [&](const std::string& swatch, const std::string& label) {
-    svg += swatch;
+  const double left = kPlotLeft - 40;
+  double lx = left;
+  double ly = 598;
+  const auto legend = [&](const auto& swatch, const std::string& label) {
+    const double width = 30 + 6.5 * static_cast<double>(code_points(label));
+    if (lx > left && lx + width > kWidth - 40.0) {
+      lx = left;
+      ly += 16;
+    }
+    svg += swatch();
     add_text(svg, {lx + 30, ly + 4, label, 12, "start", kTextColour});
-    lx += 30 + 6.5 * static_cast<double>(label.size()) + 18;
+    lx += width + 18;
   };
-  legend("<line x1=\"" + num(lx) + "\" y1=\"" + num(ly) + "\" x2=\"" + num(lx + 24) + "\" y2=\"" + num(ly) +
-             "\" stroke=\"" + kErrorColour + "\" stroke-width=\"2\"/>\n",
-         "error");
-  if (p.spread_um) {
-    legend("<rect x=\"" + num(lx) + "\" y=\"" + num(ly - 6) + "\" width=\"24\" height=\"12\" fill=\"" + kSpreadColour +
-               "\"/>\n",
-           "\u00b1 spread (1 s.d.)");
-  }
-  if (p.correction_um) {
-    legend("<line x1=\"" + num(lx) + "\" y1=\"" + num(ly) + "\" x2=\"" + num(lx + 24) + "\" y2=\"" + num(ly) +
-               "\" stroke=\"" + kCorrectionColour + "\" stroke-width=\"1.5\" stroke-dasharray=\"5,3\"/>\n",
-           "correction");
-  }
-  if (p.tolerance_um) {
-    legend("<rect x=\"" + num(lx) + "\" y=\"" + num(ly - 6) + "\" width=\"24\" height=\"12\" fill=\"" +
-               kToleranceColour + "\" stroke=\"#9fcfa4\"/>\n",
-           "tolerance \u00b1" + num(*p.tolerance_um, 1) + " \u00b5m");
-  }
+  const auto line = [&](const char* colour, const char* width, const char* dash) {
+    return [&lx, &ly, colour, width, dash] {
+      return "<line x1=\"" + num(lx) + "\" y1=\"" + num(ly) + "\" x2=\"" + num(lx + 24) + "\" y2=\"" + num(ly) +
+             "\" stroke=\"" + colour + "\" stroke-width=\"" + width + "\"" +
+             (dash != nullptr ? std::string(" stroke-dasharray=\"") + dash + "\"" : std::string()) + "/>\n";
+    };
+  };
+  const auto box = [&](const char* colour, const char* stroke) {
+    return [&lx, &ly, colour, stroke] {
+      return "<rect x=\"" + num(lx) + "\" y=\"" + num(ly - 6) + "\" width=\"24\" height=\"12\" fill=\"" + colour +
+             "\"" + (stroke != nullptr ? std::string(" stroke=\"") + stroke + "\"" : std::string()) + "/>\n";
+    };
+  };
+  legend(line(kErrorColour, "2", nullptr), p.raw_error_um ? std::string("judged error") : std::string("error"));
+  if (p.raw_error_um) legend(line(kRawColour, "1", nullptr), "raw error, not judged");
+  if (p.spread_um) legend(box(kSpreadColour, nullptr), "\u00b1 spread (1 s.d.)");
+  if (p.correction_um) legend(line(kCorrectionColour, "1.5", "5,3"), "correction");
+  if (has_limits(p))
+    legend(box(kToleranceColour, "#9fcfa4"),
+           uniform_limits_text(p).empty() ? std::string("tolerance, per zone") : "tolerance " + uniform_limits_text(p));
 }
 
 }  // namespace
@@ -517,9 +651,30 @@ ErrorPlot run_error_plot(const StoredRun& run) {
   p.subtitle = t.substr(0, std::min<std::size_t>(10, t.size())) + (t.size() >= 16 ? " " + t.substr(11, 5) : "") +
                " UTC \u00b7 " + s.status + (s.serial.empty() ? "" : " \u00b7 serial " + s.serial) +
                (s.note.empty() ? "" : " \u00b7 " + s.note);
-  p.error_um = run.analysis.error_um;
+  const JudgedError judged = judged_error(run);
+  // The figures of the judged curve first, those of the raw error after them, named.
+  p.footer = "judged: max " + num(judged.max_abs_um, 2) + " \u00b5m \u00b7 RMS " + num(judged.rms_um, 2) +
+             " \u00b5m \u00b7 peak to valley " + num(judged.peak_to_valley_um, 2) + " \u00b5m";
+  if (judged.raw_error_um) p.footer += " \u00b7 raw max " + num(s.max_abs_error_um, 2) + " \u00b5m";
+  if (s.phase_error_deg && judged.basis != JudgedError::Basis::kLeastSquaresCircle) {
+    p.footer += " \u00b7 phase " + format_signed_fixed(*s.phase_error_deg, 3) + "\u00b0";
+  }
+  p.footer += " \u00b7 repeatability " + num(s.repeatability_um, 2) + " \u00b5m \u00b7 " +
+              std::to_string(s.revolutions) + " revolutions";
+  p.error_um = judged.error_um;
+  p.error_name = judged.name;
+  p.raw_error_um = judged.raw_error_um;
   p.spread_um = run.analysis.spread_um;
   p.correction_um = run.correction_um;
+  if (judged.basis == JudgedError::Basis::kLeastSquaresCircle) {
+    p.axis_label = "radius error (\u00b5m)";
+    p.angle_title = "pin angle (deg, 0 = along the crank radius outward)";
+    p.angle_word = "pin";
+    p.frame_note = "0\u00b0 along the crank radius outward";
+    return p;
+  }
+  const auto limits = limits_per_cam_degree(run.characteristics, "lift_error");
+  if (std::any_of(limits.begin(), limits.end(), [](const Limits& l) { return l.any(); })) p.limits_um = limits;
   return p;
 }
 

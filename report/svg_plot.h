@@ -1,11 +1,13 @@
 // The lobe error of one run as an SVG picture: polar and linear, with the tolerance band.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/run.h"
+#include "core/tolerance.h"
 #include "storage/run_store.h"
 
 namespace gaugeloop {
@@ -13,13 +15,27 @@ namespace gaugeloop {
 struct ErrorPlot {
   std::string title;     // e.g. "Run 12 · intake_flat lobe 1 · grinder-1"
   std::string subtitle;  // e.g. "2026-11-22 02:34 UTC · pushed"
-  // Lift error (measured - design), um, cam frame, index = cam degree (0 at the nose).
+  // The error the verdicts judge, um, index = degree (cam frame, 0 at the nose, for a lobe):
+  // the tolerance band is drawn around it, and the headline's largest error and degrees outside
+  // are of it.
   DegreeTable error_um{};
+  // What error_um is, named in the headline and the legend.
+  std::string error_name = "lift error = measured \u2212 design";
+  // The error as measured at nominal timing when error_um is another (after the best-fit phase,
+  // less a least-squares circle): drawn thin and grey, labelled, never judged on the picture.
+  std::optional<DegreeTable> raw_error_um;
+  std::string axis_label = "lift error (\u00b5m)";
+  std::string angle_title = "cam angle (deg, 0 = nose)";
+  std::string angle_word = "cam";  // "max |error| ... at cam 59°"
+  std::string frame_note = "cam frame, 0\u00b0 at the nose";
   // Per-degree standard deviation across revolutions, um: drawn as a band around the error.
   std::optional<DegreeTable> spread_um;
   // The correction computed from the run, um, cam frame: drawn dashed when set.
   std::optional<DegreeTable> correction_um;
-  // Symmetric tolerance: the band -t..+t is drawn and degrees outside it are marked. > 0.
+  // The limits in force at each degree (index = degree, as error_um; the whole turn's narrowed by
+  // a zone's, limits_per_cam_degree): the band drawn and the degrees outside it marked. Wins over tolerance_um.
+  std::optional<std::array<Limits, kDegreesPerRevolution>> limits_um;
+  // A symmetric tolerance -t..+t at every degree, when limits_um is not set. > 0.
   std::optional<double> tolerance_um;
   std::string footer;  // one line of small print (figures, database, settings hash)
 };
@@ -30,8 +46,10 @@ struct ErrorPlot {
 std::string render_error_plot_svg(const ErrorPlot& plot);
 
 // A stored run's error plot as `runs plot` and the run page draw it: title, subtitle (time,
-// status, serial and note) and the error, spread and correction curves. The tolerance band and
-// the footer are the caller's.
+// status, serial and note), the judged error (judged_error) with its name, the raw error beside
+// it when that is another curve, the spread, the correction, and the limits per degree the run
+// was judged against (none for a pin: roundness is a figure of the whole curve), and a footer
+// of the judged curve's figures, then the raw error's, phase, repeatability and revolutions.
 ErrorPlot run_error_plot(const StoredRun& run);
 
 // Every part of a grinding loop on one sheet (gaugeloop demo --iterations): the lift error

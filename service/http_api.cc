@@ -396,24 +396,6 @@ Result<std::string> resolve_program(const RunStore& store, const std::string& pr
 
 // ---- Pictures and files ----
 
-// The error plot of a run as `runs plot` draws it, with the lift error's tolerance band when the
-// run was judged against a symmetric one (the plot draws -t..+t only).
-std::string run_plot_svg(const StoredRun& run) {
-  const RunSummary& s = run.summary;
-  ErrorPlot p = run_error_plot(run);
-  for (const Characteristic& c : run.characteristics) {
-    if (c.key == "lift_error" && c.limits.upper && c.limits.lower && *c.limits.upper > 0 &&
-        std::fabs(*c.limits.upper + *c.limits.lower) < 1e-9) {
-      p.tolerance_um = *c.limits.upper;
-    }
-  }
-  char figures[200];
-  std::snprintf(figures, sizeof figures, "max %.2f \u00b5m \u00b7 RMS %.2f \u00b5m \u00b7 repeatability %.2f \u00b5m",
-                s.max_abs_error_um, s.rms_error_um, s.repeatability_um);
-  p.footer = std::string(figures) + " \u00b7 " + std::to_string(s.revolutions) + " revolutions";
-  return render_error_plot_svg(p);
-}
-
 // A directory of its own under the system's temporary directory, removed with everything in it
 // when this ends: the report and trend writers write files, and two requests must not share one.
 class ScratchDir {
@@ -966,7 +948,7 @@ struct HttpApi::Impl {
     const std::optional<StoredRun> run = path_run(req, res);
     if (!run) return;
     res.status = 200;
-    res.set_content(run_plot_svg(*run), "image/svg+xml");
+    res.set_content(render_error_plot_svg(run_error_plot(*run)), "image/svg+xml");
   }
 
   // The cam report as `runs report` writes it, written to a file of its own and served from it.

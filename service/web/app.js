@@ -298,6 +298,11 @@ async function gearRunPage(id) {
 
 // ---- One run ----
 
+// "lift error" or "radius error": the quantity a run's judged error curve is of.
+function judgedQuantity(j) {
+  return j.name.startsWith("radius") ? "radius error" : "lift error";
+}
+
 async function runPage(id) {
   page().innerHTML = `<p>Loading run ${esc(id)}…</p>`;
   let r;
@@ -309,6 +314,7 @@ async function runPage(id) {
     return;
   }
   const chars = r.characteristics || [];
+  const j = r.judged_error;
   const program = r.nc_file ? r.nc_file.split("/").pop().replace(/\.spf$/i, "") : "";
   page().innerHTML = `
     <h1 id="title">Run ${r.id} · ${esc(r.part)} lobe ${r.lobe} · ${esc(r.machine)}</h1>
@@ -322,9 +328,10 @@ async function runPage(id) {
     <div class="cards" id="figures">
       ${card("Verdict", verdict(r.verdict))}
       ${card("Serial", esc(r.serial ?? "–"))}
-      ${card("Max lift error", um(r.max_abs_error_um) + ` <span class="muted">at ${fig(r.max_abs_error_at_cam_deg, "deg", 0)}</span>`)}
-      ${card("RMS lift error", um(r.rms_error_um))}
-      ${card("Peak to valley", um(r.peak_to_valley_um))}
+      ${card(`Max ${esc(judgedQuantity(j))}, judged`, um(j.max_abs_um) + ` <span class="muted">at ${fig(j.max_abs_at_deg, "deg", 0)}</span>`)}
+      ${card(`RMS, judged`, um(j.rms_um))}
+      ${card(`Peak to valley, judged`, um(j.peak_to_valley_um))}
+      ${j.reference === "at nominal timing" ? "" : card("Max raw error (nominal timing)", um(r.max_abs_error_um) + ` <span class="muted">at ${fig(r.max_abs_error_at_cam_deg, "deg", 0)}</span>`)}
       ${card("Repeatability", um(r.repeatability_um))}
       ${card("Phase error", deg(r.phase_error_deg))}
       ${card("Base circle runout", um(r.base_circle_runout_um))}
@@ -332,16 +339,18 @@ async function runPage(id) {
       ${card("Revolutions", esc(r.revolutions))}
     </div>
     <h2>Lift error over the cam degrees</h2>
+    <p class="muted" id="judged-caption">The verdicts judge the ${esc(j.name)}: the bold curve, with the tolerance band around it${j.reference === "at nominal timing" ? "" : "; the thin grey curve is the error at nominal timing, not judged"}.</p>
     <div id="plot"><p>Loading the plot…</p></div>
     <h2>Characteristics</h2>
     ${chars.length === 0 ? `<p class="muted">This run was not judged: its part file gives no tolerances.</p>` : `
     <div class="scroll"><table id="characteristics">
-      <thead><tr><th>Characteristic</th><th>Value</th><th>Min</th><th>Max</th><th>Lower limit</th><th>Upper limit</th><th>Zone</th><th>Verdict</th></tr></thead>
+      <thead><tr><th>Characteristic</th><th>Value</th><th>Min</th><th>Max</th><th>Lower limit</th><th>Upper limit</th><th>Zone</th><th>Of the error</th><th>Verdict</th></tr></thead>
       <tbody>${chars.map((c) => {
         const u = unitText(c.unit), d = decimalsOf(c.unit);
         return `<tr><td>${esc(c.title)}</td><td class="num">${fig(c.value, u, d)}</td><td class="num">${fig(c.min, u, d)}</td>
           <td class="num">${fig(c.max, u, d)}</td><td class="num">${fig(c.lower_limit, u, d)}</td><td class="num">${fig(c.upper_limit, u, d)}</td>
-          <td>${c.from_deg === null || c.from_deg === undefined ? "whole turn" : `${c.from_deg} to ${c.to_deg} deg`}</td><td>${verdict(c.verdict)}</td></tr>`;
+          <td>${c.from_deg === null || c.from_deg === undefined ? "whole turn" : `${c.from_deg} to ${c.to_deg} deg`}</td>
+          <td class="judges">${esc(c.judges ?? "–")}</td><td>${verdict(c.verdict)}</td></tr>`;
       }).join("")}</tbody></table></div>`}
     <h2>Curve tables written from this run</h2>
     ${(r.nc_pushes || []).length === 0 ? `<p class="muted">None: no table of this run was written to the control.</p>` : `

@@ -369,8 +369,9 @@ TEST(CamReport, APinRunSpeaksOfThePinAndLeavesOutTheLobesFigures) {
   EXPECT_EQ(w.error_chart.rfind("Radius error", 0), 0u) << w.error_chart;
   EXPECT_EQ(w.angle_axis.rfind("pin degree", 0), 0u) << w.angle_axis;
   EXPECT_FALSE(w.derivative_charts);
-  EXPECT_EQ(w.characteristic_titles, (std::vector<std::string>{"Pin roundness", "Pin diameter error",
+  EXPECT_EQ(w.characteristic_titles, (std::vector<std::string>{"Pin roundness *", "Pin diameter error",
                                                                "Pin stroke (throw) error", "Pin index error"}));
+  EXPECT_EQ(w.table_note, "* of the radius error less the least-squares circle");
   EXPECT_NE(w.footer_detail.find("C-X"), std::string::npos) << w.footer_detail;
   const std::string words = all_words(w);
   for (const char* lobe_word :
@@ -402,7 +403,16 @@ TEST(CamReport, ALobeRunKeepsTheCamWords) {
   EXPECT_EQ(w.polar_title, "Polar view of the judged lift error");
   EXPECT_EQ(w.polar_zero, "0 (nose)");
   EXPECT_TRUE(w.derivative_charts);
-  EXPECT_EQ(w.characteristic_titles.back(), "Base circle roundness");
+  EXPECT_EQ(w.characteristic_titles.back(), "Base circle roundness") << "a figure of its own: not marked";
+  ASSERT_FALSE(r.characteristics.empty());
+  for (std::size_t i = 0; i < r.characteristics.size(); ++i) {
+    const bool of_curve = r.characteristics[i].key.rfind("lift_error", 0) == 0 ||
+                          r.characteristics[i].key.rfind("velocity_error", 0) == 0 ||
+                          r.characteristics[i].key.rfind("acceleration_error", 0) == 0;
+    const std::string& t = w.characteristic_titles[i];
+    EXPECT_EQ(t.size() > 2 && t.substr(t.size() - 2) == " *", of_curve) << t;
+  }
+  EXPECT_EQ(w.table_note, "* of the lift error after the best-fit phase");
   EXPECT_EQ(w.footer_judged.rfind("judged: lift error after the best-fit phase (+0.125 deg removed)", 0), 0u)
       << w.footer_judged;
 }

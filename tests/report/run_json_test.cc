@@ -44,6 +44,7 @@ const std::set<std::string> kSummaryKeys = {"id",
 
 // docs/http_api.md, GET /api/runs/{id}: the summary's keys plus these.
 const std::set<std::string> kDetailKeys = {"lift_error_reference",
+                                           "judged_error",
                                            "max_abs_residual_um",
                                            "rms_residual_um",
                                            "peak_to_valley_residual_um",
@@ -150,6 +151,12 @@ TEST_F(RunJsonTest, AStoredRunHasEveryDocumentedKeyAndItsFigures) {
   ASSERT_TRUE(j["frame"].is_object());
   EXPECT_EQ(keys_of(j["frame"]), (std::set<std::string>{"rotation_sense", "c_offset_deg", "probe_offset_deg"}));
   EXPECT_EQ(j["frame"]["c_offset_deg"], 10.0);
+  // The sample keeps no best-fit table: its judged curve is the raw error, and says so.
+  EXPECT_EQ(keys_of(j["judged_error"]), (std::set<std::string>{"name", "reference", "max_abs_um", "max_abs_at_deg",
+                                                               "rms_um", "peak_to_valley_um"}));
+  EXPECT_EQ(j["judged_error"]["reference"], "at nominal timing");
+  EXPECT_NEAR(j["judged_error"]["max_abs_um"].get<double>(), 5.0, 1e-3);
+  EXPECT_EQ(j["judged_error"]["max_abs_at_deg"], 90);
 
   ASSERT_EQ(j["nc_pushes"].size(), 1u);
   const json& p = j["nc_pushes"][0];
@@ -191,6 +198,9 @@ TEST_F(RunJsonTest, APinRunSaysPinItsModeAndTitlesItsRoundnessAsThePins) {
   EXPECT_EQ(j["characteristics"][0]["key"], "roundness");
   EXPECT_EQ(j["characteristics"][0]["title"], "Pin roundness");
   EXPECT_EQ(j["characteristics"][1]["title"], "Pin diameter error");
+  EXPECT_EQ(j["characteristics"][0]["judges"], "less LS circle") << "roundness is of the curve less the circle";
+  EXPECT_TRUE(j["characteristics"][1]["judges"].is_null()) << "the diameter is a figure of its own";
+  EXPECT_EQ(j["judged_error"]["reference"], "less LS circle");
   EXPECT_EQ(run_detail_json(load(cxy))["pin_mode"], "c-x-y");
 
   const json l = run_detail_json(load(lobe_id));

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <regex>
@@ -171,6 +172,7 @@ TEST(ErrorPlotSvg, ShowsTheToleranceBandAndTheWorstDegree) {
   EXPECT_NE(svg.find("tolerance \u00b15.0 \u00b5m"), std::string::npos);
   // The worst degree: the verdict, the ring around it and its label.
   EXPECT_NE(svg.find("max |error| 7.00 \u00b5m at cam 200\u00b0"), std::string::npos);
+  EXPECT_NE(svg.find("judged: lift error = measured \u2212 design, cam frame"), std::string::npos);
   EXPECT_EQ(count(svg, "r=\"4.5\""), 1);
   EXPECT_NE(svg.find(">-7.00 \u00b5m at 200\u00b0</text>"), std::string::npos);
   // Only degree 200 is outside +-5 um: one mark on each panel, and the verdict says so.
@@ -186,6 +188,51 @@ TEST(ErrorPlotSvg, ShowsTheToleranceBandAndTheWorstDegree) {
 
   p.tolerance_um = 10.0;
   EXPECT_NE(render_error_plot_svg(p).find("within \u00b110.0 \u00b5m"), std::string::npos);
+}
+
+// One judged quantity per picture: a raw error beyond the band beside a judged curve within it
+// is drawn thin and grey and named "not judged"; the headline's maximum, its marks and its count
+// are of the judged curve alone, and the headline names it.
+TEST(ErrorPlotSvg, TheBandTheMarksAndTheHeadlineAreOfTheJudgedCurve) {
+  ErrorPlot p = sample_plot(3.0, 7.0);  // judged: 3 sin(deg), -7 at 200 deg
+  p.error_name = "lift error after the best-fit phase";
+  DegreeTable raw{};
+  for (std::size_t d = 0; d < 360; ++d) raw[d] = 16.0 * std::sin(static_cast<double>(d) * 3.14159265358979 / 180.0);
+  p.raw_error_um = raw;
+  p.tolerance_um = 10.0;
+  const std::string svg = render_error_plot_svg(p);
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_NE(svg.find("max |error| 7.00 \u00b5m at cam 200\u00b0 \u00b7 within \u00b110.0 \u00b5m"), std::string::npos)
+      << "the raw 16 um is not what the band judges";
+  EXPECT_NE(svg.find("judged: lift error after the best-fit phase"), std::string::npos);
+  EXPECT_EQ(count(svg, "#c62828"), 0) << "no degree of the judged curve is outside";
+  EXPECT_EQ(count(svg, "stroke=\"#9aa3ad\""), 3) << "the raw error on both panels and in the legend";
+  EXPECT_NE(svg.find(">raw error, not judged</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">judged error</text>"), std::string::npos);
+}
+
+// Limits per degree: +-10 everywhere but +-2 over cam 30..60 (a zone's): the band is drawn in
+// strips, the degrees of the judged curve beyond +-2 there are marked (3 sin(deg) > 2 from 42
+// degrees on: 42..60, 19 degrees, each marked on both panels), and the headline counts them
+// against "their limits".
+TEST(ErrorPlotSvg, AZonesLimitsAreDrawnAndCountedOverItsArc) {
+  ErrorPlot p = sample_plot(3.0, 7.0);
+  std::array<Limits, 360> limits{};
+  limits.fill(Limits{-10.0, 10.0});
+  for (std::size_t d = 30; d <= 60; ++d) limits[d] = Limits{-2.0, 2.0};
+  p.limits_um = limits;
+  const std::string svg = render_error_plot_svg(p);
+  EXPECT_EQ(xml_problem(svg), "");
+  int expected = 0;
+  for (std::size_t d = 30; d <= 60; ++d) expected += std::abs(p.error_um[d]) > 2.0 ? 1 : 0;
+  EXPECT_EQ(expected, 19);
+  EXPECT_EQ(count(svg, "r=\"2\" fill=\"#c62828\""), 2 * expected);
+  EXPECT_NE(svg.find(std::to_string(expected) + " degrees outside their limits"), std::string::npos);
+  // Three runs of equal limits (0..29, 30..60, 61..359): three strips (degree 0's half degree
+  // before it drawn at the axis' end, a fourth), three polar sectors and the legend's swatch.
+  EXPECT_EQ(count(svg, "fill=\"#d7efd9\""), 8);
+  EXPECT_NE(svg.find("tolerance, per zone"), std::string::npos);
+  EXPECT_EQ(bad_number(svg), "");
 }
 
 TEST(ErrorPlotSvg, LabelsTheAxesWithUnits) {

@@ -267,12 +267,29 @@ def run_checks(svc, browser, shots):
     b.go(ui + f"#/run/{run_id}")
     title = b.wait_text("#title", f"Run {run_id}")
     check("intake_flat lobe 1" in title and "grinder-web" in title, f"the run page's title: {title}")
-    figures = b.wait_text("#figures", "Max lift error")
+    figures = b.wait_text("#figures", "Max lift error, judged")
     check("S-1002" in figures, f"the run page shows its serial: {figures}")
-    check(f"{runs[0]['max_abs_error_um']:.2f} µm" in figures, f"the max error with its unit: {figures}")
+    detail = svc.get_json(f"/api/runs/{run_id}")
+    judged = detail["judged_error"]
+    check(f"{judged['max_abs_um']:.2f} µm" in figures, f"the judged max error with its unit: {figures}")
+    check(f"{runs[0]['max_abs_error_um']:.2f} µm" in figures, f"the raw max error beside it: {figures}")
     check("deg" in figures, f"the phase in deg: {figures}")
     wait_until("the error plot's SVG", lambda: b.count("#plot svg") == 1)
     check(b.count("table#characteristics tbody tr") > 0, "the run's characteristics")
+    # One judged quantity per picture: the caption, the plot's headline and each lift error
+    # verdict name the same curve, and the plot counts degrees outside on that curve, so its
+    # headline agrees with the verdicts of the lift error and its zones.
+    check(judged["name"] in b.text("#judged-caption"), f"the caption names the judged curve: {b.text('#judged-caption')}")
+    svg = b.driver.find_element(By.CSS_SELECTOR, "#plot svg").get_attribute("outerHTML")
+    check(f"judged: {judged['name']}" in svg, "the plot's headline names the judged curve")
+    lift_rows = [r for r in b.driver.find_elements(By.CSS_SELECTOR, "table#characteristics tbody tr")
+                 if r.text.startswith("Lift error")]
+    check(len(lift_rows) > 0 and all(judged["reference"] in r.text for r in lift_rows),
+          f"each lift error verdict says which error it judges: {[r.text for r in lift_rows]}")
+    lift_verdicts = [c["verdict"] for c in detail["characteristics"] if c["key"].startswith("lift_error")]
+    plot_out = "degrees outside" in svg
+    check(plot_out == ("out" in lift_verdicts),
+          f"the plot's headline ({'out' if plot_out else 'within'}) agrees with the lift verdicts {lift_verdicts}")
     pdf_href = b.driver.find_element(By.CSS_SELECTOR, "#report-pdf").get_attribute("href")
     status, body, ctype = svc.request("GET", pdf_href.replace(svc.base, ""))
     check(status == 200 and ctype == "application/pdf" and body.startswith(b"%PDF"),
