@@ -272,7 +272,8 @@ constexpr const char* kMainTemplateHelp =
 
 // The main program's template as the option names it; its part and lobe are the run's.
 // Without --main-template, a crankpin ground C-X gets the built-in pin main program, a gear's
-// stroke the built-in gear main program.
+// stroke the built-in gear main program, a correction layer the built-in layer main program and
+// a table kept with its speed subprogram the built-in main program that calls it.
 Result<MainProgramSource> main_source(const std::string& path) {
   MainProgramSource m;
   Result<std::string> text = load_main_template(path, m.template_name);
@@ -285,6 +286,8 @@ Result<MainProgramSource> main_source(const std::string& path) {
     m.gear_template_name = "embedded:gear_main.mpf";
     m.layer_template_text = std::string(embedded::kNcMainLayerTemplate);
     m.layer_template_name = "embedded:cam_main_layer.mpf";
+    m.speed_template_text = std::string(embedded::kNcMainSpeedTemplate);
+    m.speed_template_name = "embedded:cam_main_speed.mpf";
   }
   return m;
 }

@@ -816,11 +816,28 @@ Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, co
   out.stroke = is_stroke_program(text);
   PushOptions options;
   options.overwrite_edited = overwrite_edited;
-  Result<MainProgramSource> m = main_for_run(store, t->run_id, main, t->nc_file, "approved", text);
+  MainProgramSource approved_main = main;
+  if (t->speed_program_text && !main.speed_template_text.empty()) {
+    approved_main.template_text = main.speed_template_text;
+    approved_main.template_name = main.speed_template_name;
+  }
+  Result<MainProgramSource> m = main_for_run(store, t->run_id, approved_main, t->nc_file, "approved", text);
   if (!m) return m.error();
   options.main = std::move(*m);
-  Result<PushCompletion> pushed = push_program(
-      store, t->nc_file, facts, [&text](int version) { return with_table_version(text, version); }, options);
+  const RenderForVersion render = [&text](int version) { return with_table_version(text, version); };
+  std::optional<std::string> speed;
+  if (t->speed_program_text) {
+    // The speed subprogram kept with the table, naming the version it goes beside: the file's
+    // next, once pushes interrupted earlier are settled (push_program settles them again under
+    // the lock).
+    NcFiles& files = options.files ? *options.files : real_nc_files();
+    if (Result<ReconcileReport> r = reconcile_pushes(store, t->nc_file, files); !r) return r.error();
+    Result<int> next = store.next_table_version(t->nc_file);
+    if (!next) return next.error();
+    speed = with_header_value(*t->speed_program_text, "table_version", std::to_string(*next));
+  }
+  Result<PushCompletion> pushed = speed ? push_program_with_speed(store, t->nc_file, facts, render, *speed, options)
+                                        : push_program(store, t->nc_file, facts, render, options);
   if (!pushed) return pushed.error();
   out.table_version = pushed->table_version;
   out.decision_recorded = pushed->decision_recorded;

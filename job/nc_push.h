@@ -85,6 +85,11 @@ struct MainProgramSource {
   // read from beside the table through `files` (null: the real NC directory).
   std::string layer_template_text;
   std::string layer_template_name;
+  // For an approval of a table kept with its speed subprogram (a lobe ground at a work speed
+  // program): the main program that calls it (examples/sinumerik/cam_main_speed.mpf), used
+  // instead of template_text; empty: template_text, which must call it too.
+  std::string speed_template_text;
+  std::string speed_template_name;
   std::string design_table_program;
   NcFiles* files = nullptr;
 };
@@ -218,7 +223,9 @@ struct PushOutcome {
 // pending: else kRefused naming its status) and records the push and the approval by `by`
 // in one transaction. The table of a crankpin ground C-X-Y is refused (kRefused): its Y table
 // would not follow it (a measurement writes both). A hand-edited program is overwritten only with `overwrite_edited`.
-// With a main program template in `main`, the main program is rewritten to couple it.
+// With a main program template in `main`, the main program is rewritten to couple it. A table
+// kept with its speed subprogram (a lobe ground at a work speed program) has that written first,
+// naming the version pushed, as push_program_with_speed writes it.
 Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, const std::string& by,
                                     const std::string& note, bool overwrite_edited, const MainProgramSource& main = {});
 

@@ -444,6 +444,8 @@ MainProgramSource main_program_for_pushes(const ServiceConfig& c) {
   m.pin_cx_template_name = c.nc_pin_main_template_name;
   m.layer_template_text = c.nc_layer_main_template;
   m.layer_template_name = c.nc_layer_main_template_name;
+  m.speed_template_text = c.nc_main_speed_template;
+  m.speed_template_name = c.nc_main_speed_template_name;
   return m;
 }
 

@@ -645,6 +645,13 @@ constexpr std::string_view kSchemaV15 = R"sql(
 CREATE INDEX runs_by_part_started ON runs (part, started_utc);
 )sql";
 
+// Version 16: a lobe ground at a work speed program has its speed subprogram kept with its
+// pending table, so that approving the table writes the speed that goes with it (NULL: a table
+// without one, or kept before this version).
+constexpr std::string_view kSchemaV16 = R"sql(
+ALTER TABLE nc_pending ADD COLUMN speed_program_text TEXT CHECK (speed_program_text <> '');
+)sql";
+
 // After an in-place edit of CREATE texts (versions 10, 13 and 14): `edited` tables must hold
 // `marker` (else the edit found the text changed by hand and the migration rolls back); then the
 // schema cookie changes with the CREATE text, so every connection reads it again.
@@ -690,8 +697,8 @@ Status bump_schema_cookie_v14(Connection& conn) {
   return bump_schema_cookie_after(conn, 14, {"runs"}, "''assumed'', ''main_program''");
 }
 
-const std::array<Migration, 15>& all_migrations() {
-  static const std::array<Migration, 15> kMigrations{{
+const std::array<Migration, 16>& all_migrations() {
+  static const std::array<Migration, 16> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -757,6 +764,12 @@ const std::array<Migration, 15>& all_migrations() {
        bump_schema_cookie_v14,
        {}},
       {15, "runs: an index by part and time, for the newest runs of a part", std::string(kSchemaV15), nullptr, {}},
+      {16,
+       "nc_pending: the speed subprogram of a lobe ground at a work speed program, written when its table is "
+       "approved",
+       std::string(kSchemaV16),
+       nullptr,
+       {}},
   }};
   return kMigrations;
 }

@@ -201,6 +201,10 @@ struct PendingTable {
   std::string created_utc;   // ISO 8601 UTC; empty when adding: now
   std::string nc_file;       // where it would be written; not empty
   std::string program_text;  // the program as rendered; not empty. Empty in list_pending results.
+  // A lobe ground at a work speed program: the speed subprogram rendered with the table
+  // (table_version 0), which approving the table writes beside it. Empty in list_pending
+  // results, for other tables and for tables kept before schema 16.
+  std::optional<std::string> speed_program_text;
   PendingVerdict verdict = PendingVerdict::kApply;
   std::string reason;  // why it waits: "approval required", or the reasons compensation held it
   TableFacts table;

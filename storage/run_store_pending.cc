@@ -17,20 +17,23 @@ using storage_internal::Transaction;
 
 namespace {
 
-// Columns 0..18, read by read_pending(); program_text is column 4 ('' in lists).
+// Columns 0..19, read by read_pending(); program_text is column 4 ('' in lists) and
+// speed_program_text column 19 (NULL in lists).
 constexpr std::string_view kPendingColumns =
     "id, run_id, created_utc, nc_file, {text}, verdict, reason, interpolation, block_count, command_error_um, "
-    "point_count, correction_max_um, status, decided_utc, decided_by, note, push_id, superseded_by, gear_run_id";
+    "point_count, correction_max_um, status, decided_utc, decided_by, note, push_id, superseded_by, gear_run_id, "
+    "{speed}";
 
 constexpr std::string_view kInsertPending = R"sql(
-INSERT INTO nc_pending (run_id, gear_run_id, created_utc, nc_file, program_text, verdict, reason, interpolation,
-                        block_count, command_error_um, correction_max_um, point_count)
-VALUES (:run_id, :gear_run_id, :created_utc, :nc_file, :program_text, :verdict, :reason, :interpolation,
-        :block_count, :command_error_um, :correction_max_um, :point_count))sql";
+INSERT INTO nc_pending (run_id, gear_run_id, created_utc, nc_file, program_text, speed_program_text, verdict, reason,
+                        interpolation, block_count, command_error_um, correction_max_um, point_count)
+VALUES (:run_id, :gear_run_id, :created_utc, :nc_file, :program_text, :speed_program_text, :verdict, :reason,
+        :interpolation, :block_count, :command_error_um, :correction_max_um, :point_count))sql";
 
 std::string select_pending(bool with_text, std::string_view rest) {
   std::string columns(kPendingColumns);
   columns.replace(columns.find("{text}"), 6, with_text ? "program_text" : "''");
+  columns.replace(columns.find("{speed}"), 7, with_text ? "speed_program_text" : "NULL");
   return "SELECT " + columns + " FROM nc_pending" + std::string(rest);
 }
 
@@ -60,6 +63,7 @@ PendingTable read_pending(const Statement& s) {
   t.push_id = s.column<std::optional<std::int64_t>>(16);
   t.superseded_by = s.column<std::optional<std::int64_t>>(17);
   t.gear_run_id = s.column<std::optional<std::int64_t>>(18).value_or(0);
+  t.speed_program_text = s.column<std::optional<std::string>>(19);
   return t;
 }
 
@@ -114,6 +118,9 @@ Status check_pending(const PendingTable& table) {
   if (table.program_text.empty()) {
     return make_error(ErrorCode::kInvalidInput, what + " (" + table.nc_file + "): the program text is empty");
   }
+  if (table.speed_program_text && table.speed_program_text->empty()) {
+    return make_error(ErrorCode::kInvalidInput, what + " (" + table.nc_file + "): the speed program text is empty");
+  }
   if (!table.created_utc.empty() && !is_utc_timestamp(table.created_utc)) {
     return storage_internal::bad_bound(what + ": created_utc", table.created_utc);
   }
@@ -148,6 +155,7 @@ Result<std::int64_t> insert_pending(Connection& conn, const PendingTable& table,
   ins->bind(":created_utc", created);
   ins->bind(":nc_file", table.nc_file);
   ins->bind(":program_text", table.program_text);
+  ins->bind(":speed_program_text", table.speed_program_text);
   ins->bind(":verdict", pending_verdict_name(table.verdict));
   ins->bind(":reason", table.reason);
   storage_internal::bind_table_facts(*ins, table.table);

@@ -297,6 +297,60 @@ TEST_F(NcPushTest, TableEditedByHandIsReportedAndKept) {
   EXPECT_EQ(pending->decided_by, "ben");
 }
 
+// A lobe with a speed program and approval required: the table waits with its speed
+// subprogram, and approving it writes that subprogram beside the table, naming the version
+// pushed (its blocks checksummed and read back as the control would), so that the main program
+// never calls a speed subprogram that is missing or belongs to another table.
+TEST_F(NcPushTest, ApprovingATableWithASpeedProgramWritesItsSpeedSubprogram) {
+  JobSettings js = job_settings();
+  js.require_approval = true;
+  js.speed = WorkSpeedSettings{};
+  js.nc_speed_template = std::string(embedded::kNcSpeedTemplate);
+  js.nc_speed_template_name = "cam_speed.spf";
+  const fs::path speed_file = dir_ / "nc" / (part_.nc_program + "_SPEED.SPF");
+  for (int version = 1; version <= 2; ++version) {
+    auto r = measure(ground_with_table_in_force(js));
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    ASSERT_TRUE(r->pending_id.has_value()) << r->not_pushed_reason;
+    auto pending = store().load_pending(*r->pending_id);
+    ASSERT_TRUE(pending.ok()) << pending.error().message;
+    ASSERT_TRUE(pending->speed_program_text.has_value()) << "the speed subprogram waits with its table";
+    EXPECT_NE(pending->speed_program_text->find("table_version: 0"), std::string::npos);
+    if (version == 1) {
+      EXPECT_FALSE(fs::exists(speed_file)) << "nothing reaches the control before approval";
+    }
+
+    const std::string id = std::to_string(*r->pending_id);
+    if (version == 1) {
+      // A main program that grinds at one speed would not call it: refused before anything is
+      // written.
+      CommandResult refused =
+          run_command("nc approve " + id + " --by anna --main-template " + std::string(GAUGELOOP_SOURCE_DIR) +
+                      "/examples/sinumerik/cam_main.mpf " + data());
+      EXPECT_EQ(refused.exit_code, 2) << refused.output;
+      EXPECT_NE(refused.output.find("_SPEED"), std::string::npos) << refused.output;
+      EXPECT_FALSE(fs::exists(speed_file));
+      EXPECT_FALSE(fs::exists(nc_file()));
+    }
+    // Without --main-template: the built-in main program that calls the speed subprogram.
+    CommandResult approved = run_command("nc approve " + id + " --by anna " + data());
+    ASSERT_EQ(approved.exit_code, 0) << approved.output;
+    ASSERT_TRUE(fs::exists(speed_file));
+    EXPECT_NE(slurp(dir_ / "nc" / (part_.nc_program + "_MAIN.MPF")).find(part_.nc_program + "_SPEED"),
+              std::string::npos)
+        << "the main program calls the speed subprogram written";
+    const std::string speed = slurp(speed_file);
+    EXPECT_NE(speed.find("table_version: " + std::to_string(version)), std::string::npos) << speed.substr(0, 600);
+    EXPECT_NE(speed.find("run_id: " + std::to_string(r->run_id)), std::string::npos) << speed.substr(0, 600);
+    Result<ParsedSpeedProgram> back = read_speed_program(nc_file());
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    EXPECT_EQ(static_cast<int>(back->blocks.size()), r->speed_blocks);
+    auto parsed = parse_table_program(slurp(nc_file()), "approved");
+    ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+    EXPECT_EQ(parsed->header.at("table_version"), std::to_string(version));
+  }
+}
+
 // With approval required nothing reaches the control until a person approves; a table
 // approved once cannot be approved again, and a rejected one never reaches the control.
 TEST_F(NcPushTest, ApprovalRequiredHoldsTheTableUntilApproved) {
