@@ -273,6 +273,12 @@ int cmd_show(const RunOptions& o) {
                                            "'s (the table that ground the part)")
                                               .c_str()
                                         : "from the design");
+  if (r.harmonics_fed_back) {
+    std::printf("  band fed back     harmonics 0..%d%s\n", *r.harmonics_fed_back,
+                r.harmonic_threshold_um
+                    ? (", each above " + format_fixed(*r.harmonic_threshold_um, 3) + " um (the gauge noise's)").c_str()
+                    : " (fixed, or no spread to tell the noise)");
+  }
   if (!r.ground_with_source.empty()) {
     std::printf("  ground with       table version %d (%s)\n", r.ground_with_version.value_or(0),
                 r.ground_with_source == "plc"      ? "said by the PLC"

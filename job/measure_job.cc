@@ -437,6 +437,12 @@ class JobRun {
     verdict_reasons_ = decision->reasons();
     correction_max_um_ = std::abs(decision->largest_correction_um);
     harmonics_ = decision->harmonics;
+    if (!s_.inspect) {
+      record_.harmonics_fed_back = harmonics_.harmonics;
+      if (s_.compensation.choose_harmonics && harmonics_.noise_um > 0.0) {
+        record_.harmonic_threshold_um = harmonics_.threshold_um;
+      }
+    }
     if (verdict_ != CompensationVerdict::kRefuse && !correction_stands) {
       if (Status b = build_corrected_table(); !b) return b;
     }

@@ -99,6 +99,8 @@ json run_detail_json(const StoredRun& r) {
   j["ground_with_version"] = opt_json(r.ground_with_version);
   j["ground_with_source"] = text_or_null(r.ground_with_source);
   j["inspection"] = r.inspection;
+  j["harmonics_fed_back"] = opt_json(r.harmonics_fed_back);
+  j["harmonic_threshold_um"] = opt_json(r.harmonic_threshold_um);
   j["harmonic_amplitude_um"] =
       has_inspection ? json(std::vector<double>(a.harmonic_amplitude_um.begin(), a.harmonic_amplitude_um.end()))
                      : json(nullptr);

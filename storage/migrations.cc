@@ -652,6 +652,14 @@ constexpr std::string_view kSchemaV16 = R"sql(
 ALTER TABLE nc_pending ADD COLUMN speed_program_text TEXT CHECK (speed_program_text <> '');
 )sql";
 
+// Version 17: the band of harmonics a run's correction fed back (0..harmonics_fed_back) and the
+// amplitude a harmonic had to exceed to count as measured (NULL: the band was fixed, or the
+// revolutions showed no spread); both NULL for an inspection and for runs stored before.
+constexpr std::string_view kSchemaV17 = R"sql(
+ALTER TABLE runs ADD COLUMN harmonics_fed_back INTEGER CHECK (harmonics_fed_back BETWEEN 0 AND 180);
+ALTER TABLE runs ADD COLUMN harmonic_threshold_um REAL CHECK (harmonic_threshold_um >= 0);
+)sql";
+
 // After an in-place edit of CREATE texts (versions 10, 13 and 14): `edited` tables must hold
 // `marker` (else the edit found the text changed by hand and the migration rolls back); then the
 // schema cookie changes with the CREATE text, so every connection reads it again.
@@ -697,8 +705,8 @@ Status bump_schema_cookie_v14(Connection& conn) {
   return bump_schema_cookie_after(conn, 14, {"runs"}, "''assumed'', ''main_program''");
 }
 
-const std::array<Migration, 16>& all_migrations() {
-  static const std::array<Migration, 16> kMigrations{{
+const std::array<Migration, 17>& all_migrations() {
+  static const std::array<Migration, 17> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -768,6 +776,11 @@ const std::array<Migration, 16>& all_migrations() {
        "nc_pending: the speed subprogram of a lobe ground at a work speed program, written when its table is "
        "approved",
        std::string(kSchemaV16),
+       nullptr,
+       {}},
+      {17,
+       "runs: the band of harmonics the correction fed back and the threshold that chose it",
+       std::string(kSchemaV17),
        nullptr,
        {}},
   }};

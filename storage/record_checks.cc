@@ -174,6 +174,15 @@ Status check_run_record(const RunRecord& run) {
   if (Status s = check_analysis(run.analysis, run.correction_um); !s.ok()) return s;
   if (Status s = check_ground_with(run); !s.ok()) return s;
   if (Status s = check_characteristics(run.characteristics); !s.ok()) return s;
+  if (run.harmonics_fed_back && (*run.harmonics_fed_back < 0 || *run.harmonics_fed_back > 180)) {
+    return make_error(ErrorCode::kInvalidInput, "run record: harmonics_fed_back " +
+                                                    std::to_string(*run.harmonics_fed_back) +
+                                                    " is outside 0..180 (the band fed back is 0..N)");
+  }
+  if (run.harmonic_threshold_um && !(std::isfinite(*run.harmonic_threshold_um) && *run.harmonic_threshold_um >= 0.0)) {
+    return make_error(ErrorCode::kInvalidInput, "run record: harmonic_threshold_um must be a number >= 0, not " +
+                                                    std::to_string(*run.harmonic_threshold_um));
+  }
   if (run.geometry) return check_geometry(*run.geometry);
   return {};
 }

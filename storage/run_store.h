@@ -56,6 +56,11 @@ struct RunRecord {
   // Measured only to inspect the part: correction_um is the correction in force, unchanged,
   // and nothing is pushed from the run.
   bool inspection = false;
+  // The band of harmonics the correction fed back, 0..harmonics_fed_back (0..180), and the
+  // amplitude a harmonic had to exceed to count as measured (um, >= 0; empty: the band was
+  // fixed, or the revolutions showed no spread). Empty for an inspection.
+  std::optional<int> harmonics_fed_back;
+  std::optional<double> harmonic_threshold_um;
   // The settings the run was made with, as canonical "key = value" lines (part geometry,
   // analysis, compensation, poller, table step...): stored once per distinct text and named
   // by settings_hash(text), so two runs made alike show the same hash. Empty: not recorded.
@@ -244,6 +249,9 @@ struct StoredRun {
   std::optional<int> ground_with_version;  // as RunRecord; empty before schema version 5
   std::string ground_with_source;
   bool inspection = false;
+  // As RunRecord; empty for runs stored before schema 17.
+  std::optional<int> harmonics_fed_back;
+  std::optional<double> harmonic_threshold_um;
   std::string settings;  // the text settings_hash names; empty if not recorded
   // The frame mapping and geometry the run was measured with; empty if not recorded.
   // Only follower, radii, rotation_sense, c_offset_deg and probe_offset_deg are filled.

@@ -40,7 +40,7 @@ INSERT INTO runs (started_utc, finished_utc, machine, part, lobe, gauge, note, s
                   rotation_sense, c_offset_deg, probe_offset_deg, ground_with_version,
                   ground_with_source, inspection, serial, operator, verdict, lift_error_reference,
                   max_abs_residual_um, rms_residual_um, peak_to_valley_residual_um, dial_runout_um,
-                  roundness_um, uuid)
+                  roundness_um, uuid, harmonics_fed_back, harmonic_threshold_um)
 VALUES (:started_utc, :finished_utc, :machine, :part, :lobe, :gauge, :note, 'measured',
         :revolutions, :degrees_captured, :polls, :reconnects, :discarded_revolutions,
         :zero_offset_mm, :max_abs_error_um, :rms_error_um, :peak_to_valley_um,
@@ -49,7 +49,7 @@ VALUES (:started_utc, :finished_utc, :machine, :part, :lobe, :gauge, :note, 'mea
         :rotation_sense, :c_offset_deg, :probe_offset_deg, :ground_with_version,
         :ground_with_source, :inspection, :serial, :operator, :verdict, :lift_error_reference,
         :max_abs_residual_um, :rms_residual_um, :peak_to_valley_residual_um, :dial_runout_um,
-        :roundness_um, :uuid))sql";
+        :roundness_um, :uuid, :harmonics_fed_back, :harmonic_threshold_um))sql";
 
 constexpr std::string_view kInsertRaw = R"sql(
 INSERT INTO run_raw (run_id, amplifier_revolutions, lift) VALUES (?1, ?2, ?3))sql";
@@ -98,7 +98,7 @@ SELECT r.finished_utc, r.gauge, r.polls, r.reconnects, r.discarded_revolutions,
        r.probe_offset_deg, p.follower, p.follower_radius_mm, p.base_circle_radius_mm, p.wheel_radius_mm,
        r.ground_with_version, r.ground_with_source, r.inspection, r.lift_error_reference,
        r.max_abs_residual_um, r.rms_residual_um, r.peak_to_valley_residual_um, r.dial_runout_um,
-       r.roundness_um
+       r.roundness_um, r.harmonics_fed_back, r.harmonic_threshold_um
 FROM runs AS r
 LEFT JOIN settings AS s ON s.hash = r.settings_hash
 LEFT JOIN parts AS p ON p.name = r.part
@@ -227,6 +227,8 @@ Result<std::int64_t> insert_run_row(Connection& conn, const RunRecord& run, cons
   ins->bind(":ground_with_version", run.ground_with_version);
   ins->bind(":ground_with_source", text_or_null(run.ground_with_source));
   ins->bind(":inspection", run.inspection ? 1 : 0);
+  ins->bind(":harmonics_fed_back", run.harmonics_fed_back);
+  ins->bind(":harmonic_threshold_um", run.harmonic_threshold_um);
   ins->bind(":serial", text_or_null(run.serial));
   ins->bind(":operator", text_or_null(run.operator_name));
   ins->bind(":verdict", verdict_name(run.verdict));
@@ -485,6 +487,8 @@ Status read_details(PartStatements& st, std::int64_t run_id, StoredRun& out) {
   a.peak_to_valley_residual_um = q.column<std::optional<double>>(21).value_or(0.0);
   a.dial_runout_um = q.column<std::optional<double>>(22).value_or(0.0);
   a.roundness_um = q.column<std::optional<double>>(23).value_or(0.0);
+  out.harmonics_fed_back = q.column<std::optional<int>>(24);
+  out.harmonic_threshold_um = q.column<std::optional<double>>(25);
   return {};
 }
 

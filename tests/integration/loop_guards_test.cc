@@ -187,6 +187,21 @@ TEST_F(LoopGuardsTest, AnInspectionTouchesNeitherTheCorrectionNorTheProgram) {
   EXPECT_EQ(j["inspection"], true);
   EXPECT_EQ(j["ground_with_source"], "assumed");
   EXPECT_EQ(j["ground_with_version"], 1);
+  // The band fed back is the correcting run's record: stored with the first run as the job
+  // chose it (above a threshold from its revolutions' spread), absent from the inspection.
+  const StoredRun corrected = load(first->run_id);
+  ASSERT_TRUE(corrected.harmonics_fed_back.has_value());
+  EXPECT_EQ(*corrected.harmonics_fed_back, first->harmonics_fed_back);
+  ASSERT_TRUE(corrected.harmonic_threshold_um.has_value());
+  EXPECT_GT(*corrected.harmonic_threshold_um, 0.0);
+  EXPECT_FALSE(stored.harmonics_fed_back.has_value());
+  EXPECT_TRUE(j["harmonics_fed_back"].is_null());
+  const auto first_shown =
+      testing::run_command("runs show " + std::to_string(first->run_id) + " --data-dir " + dir_.string());
+  ASSERT_EQ(first_shown.exit_code, 0) << first_shown.output;
+  EXPECT_NE(first_shown.output.find("band fed back     harmonics 0.." + std::to_string(first->harmonics_fed_back)),
+            std::string::npos)
+      << first_shown.output;
 }
 
 // Bad names are refused before the gauge is read: empty, too long, a NUL byte, a slash.

@@ -45,6 +45,8 @@ const std::set<std::string> kSummaryKeys = {"id",
 // docs/http_api.md, GET /api/runs/{id}: the summary's keys plus these.
 const std::set<std::string> kDetailKeys = {"lift_error_reference",
                                            "judged_error",
+                                           "harmonics_fed_back",
+                                           "harmonic_threshold_um",
                                            "max_abs_residual_um",
                                            "rms_residual_um",
                                            "peak_to_valley_residual_um",

@@ -112,6 +112,40 @@ TEST_F(RunStoreTest, InsertThenLoadReturnsTheSameRunToATenthOfANanometre) {
   expect_same_run(*loaded, record);
 }
 
+// The band of harmonics the correction fed back and the threshold that chose it come back as
+// stored; a run without them (an inspection) reads as empty; a band past 0..180 or a negative
+// or non-finite threshold is refused, naming the field, and nothing is stored.
+TEST_F(RunStoreTest, TheBandFedBackComesBackAsStoredAndANonsenseOneIsRefused) {
+  RunRecord record = make_record("intake-flat", "2026-11-22T02:34:44Z", 4);
+  record.harmonics_fed_back = 27;
+  record.harmonic_threshold_um = 0.052;
+  const std::int64_t id = insert_ok(store(), record);
+  Result<StoredRun> loaded = store().load_run(id);
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  EXPECT_EQ(loaded->harmonics_fed_back, 27);
+  EXPECT_EQ(loaded->harmonic_threshold_um, 0.052);
+
+  RunRecord without = make_record("intake-flat", "2026-11-22T02:35:44Z", 4);
+  Result<StoredRun> plain = store().load_run(insert_ok(store(), without));
+  ASSERT_TRUE(plain.ok()) << plain.error().message;
+  EXPECT_FALSE(plain->harmonics_fed_back.has_value());
+  EXPECT_FALSE(plain->harmonic_threshold_um.has_value());
+
+  RunRecord wide = make_record("intake-flat", "2026-11-22T02:36:44Z", 4);
+  wide.harmonics_fed_back = 181;
+  Result<std::int64_t> refused = store().insert_run(wide);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("harmonics_fed_back 181"), std::string::npos) << refused.error().message;
+  RunRecord negative = make_record("intake-flat", "2026-11-22T02:37:44Z", 4);
+  negative.harmonic_threshold_um = -0.1;
+  refused = store().insert_run(negative);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("harmonic_threshold_um"), std::string::npos) << refused.error().message;
+  Result<std::vector<RunSummary>> all = store().list_runs(RunQuery{});
+  ASSERT_TRUE(all.ok()) << all.error().message;
+  EXPECT_EQ(all->size(), 2u) << "the refused runs left nothing";
+}
+
 // What the central history copies: the whole record, its details and characteristics as
 // load_run has them, and nothing of what is kept per degree.
 TEST_F(RunStoreTest, TheRunsRecordIsTheRunWithoutWhatIsKeptPerDegree) {
