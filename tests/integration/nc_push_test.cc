@@ -54,6 +54,14 @@ class NcPushTest : public testing::IntakeSimulatorJobTest {
 
   std::string data() const { return "--data-dir " + dir_.string() + " "; }
 
+  // `js` ground at the default work speed program, with the built-in speed subprogram template.
+  static JobSettings with_speed_program(JobSettings js) {
+    js.speed = WorkSpeedSettings{};
+    js.nc_speed_template = std::string(embedded::kNcSpeedTemplate);
+    js.nc_speed_template_name = "cam_speed.spf";
+    return js;
+  }
+
   RunStore store() const {
     auto s = RunStore::open(dir_ / "gaugeloop.sqlite");
     EXPECT_TRUE(s.ok());
@@ -201,9 +209,7 @@ TEST_F(NcPushTest, AtOneMicronWithTheArchiveHeaderTheProgramsAreOnTheGridAndVeri
 // table number and calls the speed subprogram; every placeholder filled.
 TEST_F(NcPushTest, WithASpeedProgramEachPushWritesTheSpeedSubprogramTheMainProgramCalls) {
   JobSettings js = job_settings();
-  js.speed = WorkSpeedSettings{};
-  js.nc_speed_template = std::string(embedded::kNcSpeedTemplate);
-  js.nc_speed_template_name = "cam_speed.spf";
+  js = with_speed_program(js);
   js.nc_main_template = std::string(embedded::kNcMainSpeedTemplate);
   js.nc_main_template_name = "cam_main_speed.mpf";
   const fs::path main_file = dir_ / "nc" / (part_.nc_program + "_MAIN.MPF");
@@ -243,9 +249,7 @@ TEST_F(NcPushTest, WithASpeedProgramEachPushWritesTheSpeedSubprogramTheMainProgr
 // one speed) is refused before the gauge is read, naming the template and the subprogram.
 TEST_F(NcPushTest, WithASpeedProgramAMainProgramNotCallingItIsRefusedBeforeMeasuring) {
   JobSettings js = job_settings();
-  js.speed = WorkSpeedSettings{};
-  js.nc_speed_template = std::string(embedded::kNcSpeedTemplate);
-  js.nc_speed_template_name = "cam_speed.spf";
+  js = with_speed_program(js);
   js.nc_main_template = std::string(embedded::kNcMainTemplate);
   js.nc_main_template_name = "/etc/gaugeloop/cam_main.mpf";
   auto report = measure(js);
@@ -304,9 +308,7 @@ TEST_F(NcPushTest, TableEditedByHandIsReportedAndKept) {
 TEST_F(NcPushTest, ApprovingATableWithASpeedProgramWritesItsSpeedSubprogram) {
   JobSettings js = job_settings();
   js.require_approval = true;
-  js.speed = WorkSpeedSettings{};
-  js.nc_speed_template = std::string(embedded::kNcSpeedTemplate);
-  js.nc_speed_template_name = "cam_speed.spf";
+  js = with_speed_program(js);
   const fs::path speed_file = dir_ / "nc" / (part_.nc_program + "_SPEED.SPF");
   for (int version = 1; version <= 2; ++version) {
     auto r = measure(ground_with_table_in_force(js));
