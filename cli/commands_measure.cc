@@ -63,9 +63,9 @@ void print_report(const JobReport& r, const Part& part, const std::string& machi
   std::printf("  peak to valley    %.2f um\n", a.peak_to_valley_um);
   std::printf("  repeatability     %.2f um (largest per-degree standard deviation)\n", a.repeatability_um);
   std::printf("  phase             %+.3f deg (timing; corrected through the lift)\n", a.phase_error_deg);
-  std::printf("  runout            %.2f um (base circle, first harmonic: twice the eccentricity)\n",
+  std::printf("  runout            %.2f um (base circle, dial: total indicator reading)\n", a.dial_runout_um);
+  std::printf("  eccentricity      %.2f um (base circle's first harmonic, as the runout of a pure eccentric)\n",
               a.base_circle_runout_um);
-  std::printf("  dial runout       %.2f um (base circle, total indicator reading)\n", a.dial_runout_um);
   std::printf("  tolerances        %s\n", tolerance_text(r).c_str());
   if (!r.ground_with_source.empty()) {
     const std::string table =

@@ -255,12 +255,11 @@ int cmd_show(const RunOptions& o) {
     print_pin_figures(r.characteristics);
   } else {
     std::printf("  phase error       %s deg\n", opt(s.phase_error_deg, 3, true).c_str());
-    std::printf("  runout            %s um (base circle, first harmonic: twice the eccentricity)\n",
-                opt(s.base_circle_runout_um, 2).c_str());
     if (has_inspection) {
-      std::printf("  dial runout       %.2f um (base circle, total indicator reading: what the tolerance judges)\n",
-                  a.dial_runout_um);
+      std::printf("  runout            %.2f um (base circle, dial: total indicator reading)\n", a.dial_runout_um);
     }
+    std::printf("  eccentricity      %s um (base circle's first harmonic, as the runout of a pure eccentric)\n",
+                opt(s.base_circle_runout_um, 2).c_str());
   }
   if (has_inspection) {
     std::string h;
