@@ -66,8 +66,13 @@ Result<std::unique_ptr<MqttClient>> MqttClient::connect(const MqttConnectOptions
       return make_error(ErrorCode::kInvalidInput, "the last will on " + o.will_topic + " refused: " + reason(rc));
     }
   }
+  // Not blocking: the TCP connection (and TLS handshake) completes in run_for, so a broker that
+  // never answers holds no thread; libmosquitto's keepalive check ends a connection that gets
+  // no CONNACK within keepalive_s. Only a host name is resolved here (getaddrinfo): give the
+  // broker's address to avoid even that.
+  c->tls_ = !o.ca_file.empty();
   errno = 0;
-  const int rc = mosquitto_connect(c->mosq_, o.host.c_str(), o.port, o.keepalive_s);
+  const int rc = mosquitto_connect_async(c->mosq_, o.host.c_str(), o.port, o.keepalive_s);
   if (rc != MOSQ_ERR_SUCCESS) {
     return make_error(ErrorCode::kIo, "cannot connect to the broker " + c->address_ + ": " + c->reason_of(rc));
   }
@@ -138,15 +143,28 @@ bool MqttClient::run_for(std::chrono::milliseconds timeout, int wake_fd) {
     fail("the connection to the broker " + address_ + " is closed");
     return false;
   }
-  pollfd fds[2] = {{sock, static_cast<short>(POLLIN | (mosquitto_want_write(mosq_) ? POLLOUT : 0)), 0},
-                   {wake_fd, POLLIN, 0}};
+  // Until the TCP connection is made, it is writability that says so. After that, while a TLS
+  // handshake runs, libmosquitto may still want to write (want_write stays set until its first
+  // packet is written), but the handshake goes on when the broker answers: waiting for
+  // writability then would wake at once, again and again.
+  const bool handshaking = tls_ && tcp_connected_ && !connected_;
+  const bool want_write = mosquitto_want_write(mosq_) && !handshaking;
+  pollfd fds[2] = {{sock, static_cast<short>(POLLIN | (want_write ? POLLOUT : 0)), 0}, {wake_fd, POLLIN, 0}};
   const int n = ::poll(fds, wake_fd >= 0 ? 2 : 1, static_cast<int>(timeout.count()));
   bool woken = false;
   if (n > 0) {
     woken = wake_fd >= 0 && (fds[1].revents & POLLIN) != 0;
+    const bool readable = (fds[0].revents & (POLLIN | POLLHUP | POLLERR)) != 0;
+    const bool writable = (fds[0].revents & POLLOUT) != 0;
+    if (writable) tcp_connected_ = true;
     int rc = MOSQ_ERR_SUCCESS;
-    if ((fds[0].revents & (POLLIN | POLLHUP | POLLERR)) != 0) rc = mosquitto_loop_read(mosq_, 1);
-    if (rc == MOSQ_ERR_SUCCESS && (fds[0].revents & POLLOUT) != 0) rc = mosquitto_loop_write(mosq_, 1);
+    // A TLS handshake is driven by mosquitto_loop_read alone (it calls SSL_connect while one is
+    // under way): on the connection's first writability, and on every answer of the broker.
+    // Then what waits to be written (CONNECT, once the handshake is done) is written.
+    if (readable || (tls_ && !connected_ && writable)) rc = mosquitto_loop_read(mosq_, 1);
+    if (rc == MOSQ_ERR_SUCCESS && (writable || (tls_ && !connected_ && readable))) {
+      rc = mosquitto_loop_write(mosq_, 1);
+    }
     if (rc != MOSQ_ERR_SUCCESS) {
       fail("the connection to the broker " + address_ + " was lost: " + reason_of(rc));
       return woken;

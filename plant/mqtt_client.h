@@ -39,10 +39,12 @@ struct MqttConnectOptions {
 
 class MqttClient {
  public:
-  // Opens the TCP (and TLS) connection and sends CONNECT. The broker's answer (CONNACK) comes
-  // through run_for: connected() turns true, or failed() says why. kIo naming the broker's
-  // address and the reason when the connection cannot be opened; kInvalidInput for options
-  // libmosquitto refuses (a TLS file it cannot read).
+  // Starts the TCP (and TLS) connection without waiting for it, CONNECT queued behind it; the
+  // connection, the handshake and the broker's answer (CONNACK) come through run_for:
+  // connected() turns true, or failed() says why (a broker that does not answer within
+  // keepalive_s is a lost connection). kIo naming the broker's address and the reason when the
+  // connection cannot even be started (a host name that does not resolve); kInvalidInput for
+  // options libmosquitto refuses (a TLS file it cannot read).
   static Result<std::unique_ptr<MqttClient>> connect(const MqttConnectOptions& options);
   // Closes the connection without a DISCONNECT (the broker publishes the last will), unless
   // disconnect() was called.
@@ -87,7 +89,9 @@ class MqttClient {
   struct mosquitto* mosq_ = nullptr;
   std::string address_;  // "host:port", for messages
   bool connected_ = false;
-  bool disconnected_ = false;  // by disconnect()
+  bool tls_ = false;            // with a CA file: the connection is TLS
+  bool tcp_connected_ = false;  // the socket was writable once: the TCP connection is made
+  bool disconnected_ = false;   // by disconnect()
   std::string failure_;
   std::vector<int> acknowledged_;
   std::string last_log_error_;  // libmosquitto's last error log line

@@ -1,9 +1,13 @@
 // The outbox sender against a real mosquitto broker started by the test: what a run stored
 // with the outbox enabled becomes at a subscriber, and what each failure does (broker down,
 // broker restart, a sender stopped before the acknowledgement, a connection that dies).
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <mosquitto.h>
+#include <netinet/in.h>
 #include <sqlite3.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -16,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "plant/mqtt_client.h"
 #include "plant/outbox_sender.h"
 #include "plant/plant_messages.h"
 #include "storage/run_store.h"
@@ -314,6 +319,66 @@ TEST_F(OutboxSenderTest, HealthIsDegradedWhileOldMessagesWaitForAnUnreachableBro
   ASSERT_TRUE(wait_until([&] { return sender->health()["depth"] == 0; })) << sender->health().dump();
   EXPECT_EQ(sender->health()["degraded"], false);
   EXPECT_EQ(sender->health()["connected"], true);
+}
+
+// A loopback port whose connections never complete: a listener whose accept queue (backlog 0)
+// one connection, never accepted, has filled, so that Linux drops the next SYN as a broker
+// behind a dead route would. The descriptors are closed when it ends.
+class UnansweredPort {
+ public:
+  UnansweredPort() {
+    listener_ = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    a.sin_port = 0;
+    socklen_t len = sizeof a;
+    if (listener_ < 0 || ::bind(listener_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
+        ::listen(listener_, 0) != 0 || ::getsockname(listener_, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
+      return;
+    }
+    port_ = ntohs(a.sin_port);
+    filler_ = ::socket(AF_INET, SOCK_STREAM, 0);
+    if (filler_ < 0 || ::connect(filler_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) port_ = 0;
+  }
+  ~UnansweredPort() {
+    if (filler_ >= 0) ::close(filler_);
+    if (listener_ >= 0) ::close(listener_);
+  }
+  UnansweredPort(const UnansweredPort&) = delete;
+  UnansweredPort& operator=(const UnansweredPort&) = delete;
+  int port() const { return port_; }  // 0: could not be made
+
+ private:
+  int listener_ = -1;
+  int filler_ = -1;
+  int port_ = 0;
+};
+
+// Connecting does not wait for the broker: against a port whose SYNs go unanswered the client
+// is made at once, neither connected nor failed; the sender gives the attempt up after its
+// keepalive (5 s here, libmosquitto's check of a CONNACK that does not come) and tries again,
+// and stops at once. A connect that blocked would hold the thread for the kernel's two minutes
+// of SYN retries: no attempt would end within the 30 s wait_until gives.
+TEST_F(OutboxSenderTest, ABrokerThatNeverAnswersHoldsNeitherTheConnectNorTheStop) {
+  UnansweredPort dead;
+  ASSERT_NE(dead.port(), 0);
+  MqttConnectOptions o;
+  o.host = "127.0.0.1";
+  o.port = dead.port();
+  o.client_id = "grinder-dead";
+  Result<std::unique_ptr<MqttClient>> client = MqttClient::connect(o);
+  ASSERT_TRUE(client.ok()) << client.error().message;
+  (*client)->run_for(std::chrono::milliseconds(50));
+  EXPECT_FALSE((*client)->connected());
+  EXPECT_FALSE((*client)->failed()) << (*client)->failure();
+
+  MqttSettings m = settings();
+  m.port = dead.port();
+  OutboxSender sender(db(), m, "grinder-1");
+  ASSERT_TRUE(wait_until([&] { return sender.status().reconnects >= 1; })) << sender.health().dump();
+  EXPECT_FALSE(sender.status().connected);
+  EXPECT_FALSE(sender.status().last_error.empty());
 }
 
 // A CA and a broker certificate for "localhost", made with the openssl command line.
