@@ -394,6 +394,13 @@ Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem:
   return reconcile_locked(store, nc_file, files, main);
 }
 
+Result<int> next_table_version_settled(RunStore& store, const std::filesystem::path& nc_file,
+                                       const PushOptions& options) {
+  NcFiles& files = options.files ? *options.files : real_nc_files();
+  if (Result<ReconcileReport> r = reconcile_pushes(store, nc_file, files); !r) return r.error();
+  return store.next_table_version(nc_file.string());
+}
+
 Result<ReconcileReport> reconcile_all_pushes(RunStore& store, const MainProgramSource* main, NcFiles& files) {
   Result<std::vector<PushIntent>> open = store.open_push_intents();
   if (!open) return open.error();
@@ -827,12 +834,8 @@ Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, co
   const RenderForVersion render = [&text](int version) { return with_table_version(text, version); };
   std::optional<std::string> speed;
   if (t->speed_program_text) {
-    // The speed subprogram kept with the table, naming the version it goes beside: the file's
-    // next, once pushes interrupted earlier are settled (push_program settles them again under
-    // the lock).
-    NcFiles& files = options.files ? *options.files : real_nc_files();
-    if (Result<ReconcileReport> r = reconcile_pushes(store, t->nc_file, files); !r) return r.error();
-    Result<int> next = store.next_table_version(t->nc_file);
+    // The speed subprogram kept with the table, naming the version it goes beside.
+    Result<int> next = next_table_version_settled(store, t->nc_file, options);
     if (!next) return next.error();
     speed = with_header_value(*t->speed_program_text, "table_version", std::to_string(*next));
   }

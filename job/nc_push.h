@@ -201,6 +201,12 @@ struct ReconcileReport {
 Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file,
                                          NcFiles& files = real_nc_files(), const MainProgramSource* main = nullptr);
 
+// The table version the next push to `nc_file` gets, once pushes interrupted earlier are
+// settled (reconcile_pushes through options.files; push_program settles them again under the
+// lock): what a file written before the table names, a speed subprogram's `table_version`.
+Result<int> next_table_version_settled(RunStore& store, const std::filesystem::path& nc_file,
+                                       const PushOptions& options);
+
 // reconcile_pushes for every file a program was pushed to (the service at start, `gaugeloop
 // nc reconcile`). An error stops it only for a file with an open intent; another file that
 // cannot be read or locked now is named in the messages ("not checked") and the rest go on.

@@ -288,11 +288,8 @@ Result<PushCompletion> push_program_set(RunStore& store, const std::filesystem::
     return push_pin_programs(store, nc_file, facts, render_table, render_y, options);
   }
   if (!built.speed) return push_program(store, nc_file, facts, render_table, options);
-  // The speed subprogram names the table version it goes with: the file's next, once pushes
-  // interrupted earlier are settled (push_program settles them again under the lock).
-  NcFiles& files = options.files ? *options.files : real_nc_files();
-  if (Result<ReconcileReport> r = reconcile_pushes(store, nc_file, files); !r) return r.error();
-  Result<int> next = store.next_table_version(nc_file.string());
+  // The speed subprogram names the table version it goes with.
+  Result<int> next = next_table_version_settled(store, nc_file, options);
   if (!next) return next.error();
   Result<std::string> speed = render_speed(s, *built.speed, facts.run_id, created_utc, *next);
   if (!speed) return speed.error();
