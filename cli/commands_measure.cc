@@ -34,6 +34,7 @@
 #include "core/verdict_text.h"
 #include "job/measure_job.h"
 #include "report/cam_report.h"
+#include "report/judged_error.h"
 #include "report/svg_plot.h"
 #include "simulator/gauge_simulator.h"
 #include "simulator/surface_roughness.h"
@@ -49,6 +50,19 @@ std::string tolerance_text(const JobReport& r) {
          std::to_string(r.run_id) + "` lists them";
 }
 
+// The curve the verdicts judged, when it is not the raw error above, with its own figures: as
+// `runs show` says it, from the run as stored.
+void print_judged_line(const JobReport& r) {
+  if (r.run_id <= 0 || r.characteristics.empty()) return;
+  Result<RunStore> store = RunStore::open_read_only(r.db_path);
+  Result<StoredRun> run = store ? store->load_run(r.run_id) : Result<StoredRun>(store.error());
+  if (!run) return;  // the run is stored; `runs show` names what could not be read
+  const JudgedError judged = judged_error(*run);
+  if (!judged.raw_error_um) return;
+  std::printf("  judged            %s: max %.2f um at cam %d deg, RMS %.2f um, peak to valley %.2f um\n",
+              judged.name.c_str(), judged.max_abs_um, judged.max_abs_at_deg, judged.rms_um, judged.peak_to_valley_um);
+}
+
 void print_report(const JobReport& r, const Part& part, const std::string& machine) {
   const auto& a = r.analysis;
   const int revs = static_cast<int>(r.measured.revolutions.size());
@@ -60,13 +74,14 @@ void print_report(const JobReport& r, const Part& part, const std::string& machi
   std::printf("  degrees captured  %d of %d\n", revs * kDegreesPerRevolution, revs * kDegreesPerRevolution);
   std::printf("  max lift error    %.2f um (raw: at nominal timing)\n", a.max_abs_error_um);
   std::printf("  RMS lift error    %.2f um (raw)\n", a.rms_error_um);
-  std::printf("  peak to valley    %.2f um\n", a.peak_to_valley_um);
+  std::printf("  peak to valley    %.2f um (raw)\n", a.peak_to_valley_um);
   std::printf("  repeatability     %.2f um (largest per-degree standard deviation)\n", a.repeatability_um);
   std::printf("  phase             %+.3f deg (timing; corrected through the lift)\n", a.phase_error_deg);
   std::printf("  runout            %.2f um (base circle, dial: total indicator reading)\n", a.dial_runout_um);
   std::printf("  eccentricity      %.2f um (base circle's first harmonic, as the runout of a pure eccentric)\n",
               a.base_circle_runout_um);
   std::printf("  tolerances        %s\n", tolerance_text(r).c_str());
+  print_judged_line(r);
   if (!r.ground_with_source.empty()) {
     const std::string table =
         r.ground_with_version ? "table version " + std::to_string(*r.ground_with_version) : "the design (no table)";
@@ -426,14 +441,15 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
                               " blocks, harmonics 0.." + std::to_string(it.job.harmonics_fed_back)
                         : "not pushed (" + std::string(compensation_verdict_name(it.job.verdict)) +
                               "): " + it.job.not_pushed_reason;
-    std::printf("%4d  %-26s %5lld  %6.2f  %6.2f  %+9.4f  %9.2f  %-7s | %8.2f  %5.2f  %s\n", it.iteration,
+    std::printf("%4d  %-26s %5lld  %10.2f  %10.2f  %+9.4f  %9.2f  %-7s | %8.2f  %5.2f  %s\n", it.iteration,
                 it.ground_from.c_str(), static_cast<long long>(it.job.run_id), a.max_abs_error_um, a.rms_error_um,
-                a.phase_error_deg, a.base_circle_runout_um, std::string(verdict_name(it.job.tolerance_verdict)).c_str(),
+                a.phase_error_deg, a.dial_runout_um, std::string(verdict_name(it.job.tolerance_verdict)).c_str(),
                 it.part.max_abs_um, it.floor.max_abs_um, table.c_str());
     std::fflush(stdout);
   };
   const char* header =
-      "part  ground from                  run  max um  RMS um  phase deg  runout um  verdict | true max  floor  "
+      "part  ground from                  run  raw max um  raw RMS um  phase deg  runout um  verdict | true max  floor "
+      " "
       "table\n";
   ls.on_new_program = [header](const NewProgramReport& r) {
     print_new_program(r);
@@ -466,7 +482,7 @@ int cmd_demo_loop(const MeasureOptions& o, const SimulatorSettings& sim_settings
   if (!loop) return report_error(loop.error());
   const LoopIteration& first = loop->front();
   const LoopIteration& last = loop->back();
-  std::printf("\nmax lift error %.2f um before compensation", first.job.analysis.max_abs_error_um);
+  std::printf("\nraw max lift error %.2f um before compensation", first.job.analysis.max_abs_error_um);
   if (loop->size() > 1)
     std::printf(", %.2f um after 1 iteration (published cam-grinding result: 2.6 um)",
                 (*loop)[1].job.analysis.max_abs_error_um);

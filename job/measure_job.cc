@@ -480,9 +480,12 @@ class JobRun {
     if (!analysis) return in_step("analysis", analysis.error());
     record_.analysis = std::move(*analysis);
     const LobeAnalysis& a = record_.analysis;
-    step("analysed", "max lift error " + format_fixed(a.max_abs_error_um, 2) + " um, RMS " +
-                         format_fixed(a.rms_error_um, 2) + " um, phase " + format_fixed(a.phase_error_deg, 4) +
-                         " deg, runout " + format_fixed(a.base_circle_runout_um, 2) + " um, repeatability " +
+    // The raw error at nominal timing: the verdicts that follow judge their own curve (after the
+    // phase or best fit, as the part file says), which the "judged" step and the reports name.
+    step("analysed", "raw lift error at nominal timing: max " + format_fixed(a.max_abs_error_um, 2) + " um, RMS " +
+                         format_fixed(a.rms_error_um, 2) + " um; phase " + format_fixed(a.phase_error_deg, 4) +
+                         " deg, runout " + format_fixed(a.dial_runout_um, 2) + " um (dial), eccentricity " +
+                         format_fixed(a.base_circle_runout_um, 2) + " um, repeatability " +
                          format_fixed(a.repeatability_um, 2) + " um");
     judge();
     if (!s_.inspect) {

@@ -369,7 +369,7 @@ Result<JobReport> Service::run_reserved(RunReservation reservation, const std::s
   if (report->pushed()) {
     ++runs_pushed_;
     const std::string line =
-        fmt::format("run {} stored: max lift error {:.2f} um; table version {} pushed to {} ({} blocks, {:.3f} um)",
+        fmt::format("run {} stored: raw max lift error {:.2f} um; table version {} pushed to {} ({} blocks, {:.3f} um)",
                     report->run_id, report->analysis.max_abs_error_um, report->table_version, report->nc_file.string(),
                     report->table_blocks, report->command_error_um);
     spdlog::info("{}", line);

@@ -184,7 +184,7 @@ async function runsPage(p) {
     out.innerHTML = `
       <div class="scroll"><table id="runs">
         <thead><tr><th>Run</th><th>Started (UTC)</th><th>Machine</th><th>Part</th><th>Lobe</th><th>Serial</th>
-          <th>Max error</th><th>RMS</th><th>Repeatability</th><th>Phase</th><th>Verdict</th><th>Status</th></tr></thead>
+          <th>Max raw error</th><th>Raw RMS</th><th>Repeatability</th><th>Phase</th><th>Verdict</th><th>Status</th></tr></thead>
         <tbody>${rows.map((r) => `
           <tr${r.here === false ? "" : ` class="row-link" data-run="${r.id}"`}>
             <td>${runLink(r)}</td><td>${utc(r.started_utc)}</td><td>${esc(r.machine)}</td>
@@ -334,7 +334,8 @@ async function runPage(id) {
       ${j.reference === "at nominal timing" ? "" : card("Max raw error (nominal timing)", um(r.max_abs_error_um) + ` <span class="muted">at ${fig(r.max_abs_error_at_cam_deg, "deg", 0)}</span>`)}
       ${card("Repeatability", um(r.repeatability_um))}
       ${card("Phase error", deg(r.phase_error_deg))}
-      ${card("Base circle runout", um(r.base_circle_runout_um))}
+      ${card("Base circle runout (dial)", um(r.dial_runout_um))}
+      ${card("Eccentricity (1st harmonic)", um(r.base_circle_runout_um))}
       ${card("Largest correction", um(r.correction_max_um))}
       ${card("Revolutions", esc(r.revolutions))}
     </div>
@@ -424,7 +425,7 @@ async function trendPage(p) {
   try {
     const runs = await api("/api/trend?" + apiQuery(q));
     document.getElementById("trend-table").innerHTML = `<div class="scroll"><table id="trend-runs">
-      <thead><tr><th>Run</th><th>Started (UTC)</th><th>Machine</th><th>Serial</th><th>Max error</th><th>RMS</th><th>Phase</th><th>Verdict</th></tr></thead>
+      <thead><tr><th>Run</th><th>Started (UTC)</th><th>Machine</th><th>Serial</th><th>Max raw error</th><th>Raw RMS</th><th>Phase</th><th>Verdict</th></tr></thead>
       <tbody>${runs.slice().reverse().map((r) => `<tr><td>${runLink(r)}</td><td>${utc(r.started_utc)}</td><td>${esc(r.machine)}</td>
         <td>${esc(r.serial ?? "–")}</td><td class="num">${um(r.max_abs_error_um)}</td><td class="num">${um(r.rms_error_um)}</td>
         <td class="num">${deg(r.phase_error_deg)}</td><td>${verdict(r.verdict)}</td></tr>`).join("")}</tbody></table></div>`;
@@ -482,7 +483,7 @@ async function shaftPage(p) {
     const shaft = verdicts.includes("out") ? "out" : verdicts.every((v) => v === "in") ? "in" : "not_judged";
     out.innerHTML = `<h2 id="shaft-title">Serial ${esc(p.serial)}: ${rows.length} lobe${rows.length === 1 ? "" : "s"} measured, shaft ${verdict(shaft)}</h2>
       <div class="scroll"><table id="shaft-lobes"><thead><tr><th>Lobe</th><th>Part</th><th>Newest run</th><th>Started (UTC)</th><th>Machine</th>
-        <th>Max error</th><th>Phase</th><th>Base circle runout</th><th>Verdict</th><th>Runs</th></tr></thead>
+        <th>Max raw error</th><th>Phase</th><th>Eccentricity</th><th>Verdict</th><th>Runs</th></tr></thead>
       <tbody>${rows.map(({run: r, count}) => `<tr><td>${r.lobe}</td><td>${esc(r.part)}</td><td>${runLink(r)}</td><td>${utc(r.started_utc)}</td>
         <td>${esc(r.machine)}</td><td class="num">${um(r.max_abs_error_um)}</td><td class="num">${deg(r.phase_error_deg)}</td>
         <td class="num">${um(r.base_circle_runout_um)}</td><td>${verdict(r.verdict)}</td><td class="num">${count}</td></tr>`).join("")}</tbody></table></div>

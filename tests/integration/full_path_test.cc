@@ -257,7 +257,7 @@ TEST_F(FullPathTest, GaugeThatStopsAnsweringMidRunStoresNothingAndWritesNoTable)
   EXPECT_FALSE(fs::exists(dir_ / "nc" / (part_.nc_program + ".SPF")));
 }
 
-TEST_F(FullPathTest, DemoTwiceLeavesTwoRunsThatRunsListShows) {
+TEST_F(FullPathTest, DemoRunsAreListedAndShownWithTheCurveTheirVerdictsJudge) {
   const std::string data = "--data-dir " + dir_.string();
   for (int i = 1; i <= 2; ++i) {
     CommandResult demo = run_command("demo " + data);
@@ -269,8 +269,21 @@ TEST_F(FullPathTest, DemoTwiceLeavesTwoRunsThatRunsListShows) {
     // afresh, not on the first one's points (docs/nc_output.md).
     EXPECT_EQ(demo.output.find("points of the table in force"), std::string::npos) << demo.output;
   }
+  // The report names the curve the verdicts judged, with the figures `runs show` gives it:
+  // the sample part judges the lift error after the best-fit phase, not the raw error above it.
+  CommandResult last = run_command("demo " + data);
+  ASSERT_EQ(last.exit_code, 0) << last.output;
+  const std::size_t judged_at = last.output.find("  judged            lift error after the best-fit phase: max ");
+  ASSERT_NE(judged_at, std::string::npos) << last.output;
+  const std::string judged = last.output.substr(judged_at, last.output.find('\n', judged_at) - judged_at);
+  CommandResult show = run_command("runs show 3 " + data);
+  ASSERT_EQ(show.exit_code, 0) << show.output;
+  EXPECT_NE(show.output.find(judged), std::string::npos) << judged << "\n" << show.output;
+  EXPECT_NE(last.output.find("  runout            "), std::string::npos) << last.output;
+  EXPECT_NE(last.output.find("  eccentricity      "), std::string::npos) << last.output;
   CommandResult list = run_command("runs list --json " + data);
   ASSERT_EQ(list.exit_code, 0) << list.output;
+  EXPECT_NE(list.output.find("\"id\": 3"), std::string::npos) << list.output;
   EXPECT_NE(list.output.find("\"id\": 2"), std::string::npos) << list.output;
   EXPECT_NE(list.output.find("\"id\": 1"), std::string::npos) << list.output;
   EXPECT_LT(list.output.find("\"id\": 2"), list.output.find("\"id\": 1")) << "newest first";

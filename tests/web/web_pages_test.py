@@ -274,6 +274,11 @@ def run_checks(svc, browser, shots):
     check(f"{judged['max_abs_um']:.2f} µm" in figures, f"the judged max error with its unit: {figures}")
     check(f"{runs[0]['max_abs_error_um']:.2f} µm" in figures, f"the raw max error beside it: {figures}")
     check("deg" in figures, f"the phase in deg: {figures}")
+    # Runout is the dial figure the tolerance judges; the first harmonic is the eccentricity.
+    check(f"Base circle runout (dial)\n{detail['dial_runout_um']:.2f} µm" in figures,
+          f"the runout card shows the dial figure: {figures}")
+    check(f"Eccentricity (1st harmonic)\n{detail['base_circle_runout_um']:.2f} µm" in figures,
+          f"the eccentricity card shows the first harmonic: {figures}")
     wait_until("the error plot's SVG", lambda: b.count("#plot svg") == 1)
     check(b.count("table#characteristics tbody tr") > 0, "the run's characteristics")
     # One judged quantity per picture: the caption, the plot's headline and each lift error
