@@ -136,12 +136,16 @@ std::string make_one(const DataPaths& paths) {
 
 Result<RunStore> open_history(const DataPaths& paths) {
   if (Status s = require_database(paths.db(), make_one(paths)); !s) return s.error();
-  return RunStore::open(paths.db());
+  Result<RunStore> store = RunStore::open(paths.db());
+  if (store) store->set_nc_dir(paths.nc());
+  return store;
 }
 
 Result<RunStore> open_history_read_only(const DataPaths& paths) {
   if (Status s = require_database(paths.db(), make_one(paths)); !s) return s.error();
-  return RunStore::open_read_only(paths.db());
+  Result<RunStore> store = RunStore::open_read_only(paths.db());
+  if (store) store->set_nc_dir(paths.nc());
+  return store;
 }
 
 CLI::Option* add_central_db_option(CLI::App& cmd, std::string& url, CLI::Option* config) {

@@ -362,15 +362,15 @@ int cmd_check(const NcOptions& o) {
     return kExitOk;
   }
   if (!*last) {
-    // A history copied or moved with its data directory names the original's NC files.
+    // A program the history never pushed: what it did push, in the NC directory in force.
     Result<std::vector<std::string>> pushed = store->pushed_files();
     if (!pushed) return report_error(pushed.error());
     std::string held;
     for (const std::string& f : *pushed) held += (held.empty() ? "" : ", ") + f;
     std::fprintf(stderr,
                  "gaugeloop: %s: the history in %s records no push to this file, so it cannot say what it should "
-                 "hold; %s. A data directory copied or moved keeps the paths of the control it was kept for: "
-                 "check that control's program (--nc-dir, --program)\n",
+                 "hold; %s. Check one of those programs (--program), or the NC directory they were pushed to "
+                 "(--nc-dir)\n",
                  file->c_str(), o.paths.db().string().c_str(),
                  held.empty() ? "it records no push at all" : ("its pushes went to " + held).c_str());
     return kExitNcOutput;
@@ -409,6 +409,7 @@ struct ReconcileOptions : NcOptions {
 int cmd_reconcile(const ReconcileOptions& o) {
   Result<RunStore> store = RunStore::open(o.paths.db());
   if (!store) return report_error(store.error());
+  store->set_nc_dir(o.paths.nc());
   Result<MainProgramSource> main = main_source(o.main_template_path);
   if (!main) return report_error(main.error());
   Result<ReconcileReport> r = reconcile_all_pushes(*store, &*main);

@@ -234,6 +234,7 @@ Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem
   }
   Result<RunStore> store = RunStore::open(s.db_path);
   if (!store) return store.error();
+  store->set_nc_dir(s.nc_dir);
   // A damaged file is refused before the gauge is read: a correction read from it could be
   // anything, and a run stored into it could be lost.
   if (s.check_integrity) {

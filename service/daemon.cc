@@ -42,7 +42,7 @@ Error not_starting(const Error& e, const std::string& what) {
 // older (checked whole first: an upgrade reads it all anyway), and the pushes a power cut
 // interrupted finished, before anything else reads the tables. The whole file is checked
 // beside the service (IntegrityWatch), so a large one does not keep the grinder waiting.
-Status prepare_database(const std::filesystem::path& db_path) {
+Status prepare_database(const std::filesystem::path& db_path, const std::filesystem::path& nc_dir) {
   Result<RunStore> store = [&]() -> Result<RunStore> {
     if (!std::filesystem::exists(db_path)) return RunStore::open(db_path);
     if (Status h = check_database_header(db_path); !h) return h.error();
@@ -56,6 +56,7 @@ Status prepare_database(const std::filesystem::path& db_path) {
     spdlog::info("database {} upgraded from schema version {}; the file as it was is kept in {}", db_path.string(),
                  upgrade->from_version, upgrade->backup.string());
   }
+  store->set_nc_dir(nc_dir);
   Result<ReconcileReport> reconciled = reconcile_all_pushes(*store);
   if (!reconciled) return not_starting(reconciled.error(), "interrupted pushes could not be reconciled");
   for (const std::string& line : reconciled->messages) spdlog::warn("reconciled: {}", line);
@@ -238,7 +239,7 @@ Status run_service(const std::filesystem::path& config_path) {
   // Taken away now, left again by a clean stop: missing at the next start means this run of the
   // service did not end cleanly, and the database is checked whole at once.
   const bool stopped_cleanly = take_clean_shutdown_marker(db_path);
-  if (Status s = prepare_database(db_path); !s) return s;
+  if (Status s = prepare_database(db_path, config->job.nc_dir); !s) return s;
   if (Status s = configure_plant_outbox(db_path, started.mqtt); !s) return s;
   // Before the service, so that it outlives every thread that tells it something; its end
   // publishes the offline state.

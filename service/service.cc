@@ -463,6 +463,7 @@ Result<json> Service::approve(std::int64_t pending_id, const std::string& by, co
   if (!held) return held.error();
   Result<RunStore> store = RunStore::open(config()->job.db_path);
   if (!store) return store.error();
+  store->set_nc_dir(config()->job.nc_dir);
   Result<PushOutcome> pushed =
       approve_pending(*store, pending_id, by, note, /*overwrite_edited=*/false, main_program_for_pushes(*config()));
   if (!pushed) return with_pending_ids_hint(pushed.error());
@@ -480,6 +481,7 @@ Result<json> Service::reject(std::int64_t pending_id, const std::string& by, con
   if (!held) return held.error();
   Result<RunStore> store = RunStore::open(config()->job.db_path);
   if (!store) return store.error();
+  store->set_nc_dir(config()->job.nc_dir);
   Result<PendingTable> table = store->load_pending(pending_id);
   if (!table) return with_pending_ids_hint(table.error());
   if (Status s = store->reject_pending(pending_id, by, note); !s) return s.error();
@@ -499,6 +501,7 @@ Result<json> Service::rollback(const std::string& program, int table_version, co
   }
   Result<RunStore> store = RunStore::open(c->job.db_path);
   if (!store) return store.error();
+  store->set_nc_dir(c->job.nc_dir);
   Result<PushOutcome> pushed = rollback_to_version(*store, std::filesystem::absolute(file).lexically_normal().string(),
                                                    table_version, by, main_program_for_pushes(*c));
   if (!pushed) return pushed.error();

@@ -660,6 +660,45 @@ ALTER TABLE runs ADD COLUMN harmonics_fed_back INTEGER CHECK (harmonics_fed_back
 ALTER TABLE runs ADD COLUMN harmonic_threshold_um REAL CHECK (harmonic_threshold_um >= 0);
 )sql";
 
+// Version 18: the history names an NC program by its file name inside the NC directory its
+// pushes go to (nc_directory), not by an absolute path, so that a data directory copied, moved or
+// restored from a backup checks, rolls back and pushes into the directory it is used with. The
+// directory of the newest push (else pending table, gear run, pushed run) becomes the history's;
+// paths in it become names; paths elsewhere stay as they are (all of them, in a history that
+// already holds a bare name).
+constexpr std::string_view kSchemaV18 = R"sql(
+CREATE TABLE nc_directory (
+  id    INTEGER PRIMARY KEY CHECK (id = 1),
+  path  TEXT    NOT NULL CHECK (path <> '')  -- where the programs the history names by file name are
+);
+CREATE TEMP TABLE v18_dir AS
+  SELECT d FROM (
+    SELECT rtrim(nc_file, replace(nc_file, '/', '')) AS d, 1 AS k, id FROM nc_pushes
+    UNION ALL SELECT rtrim(nc_file, replace(nc_file, '/', '')), 2, id FROM nc_push_intents
+    UNION ALL SELECT rtrim(nc_file, replace(nc_file, '/', '')), 3, id FROM nc_pending
+    UNION ALL SELECT rtrim(nc_file, replace(nc_file, '/', '')), 4, id FROM gear_runs
+    UNION ALL SELECT rtrim(nc_file, replace(nc_file, '/', '')), 5, id FROM runs WHERE nc_file IS NOT NULL)
+  WHERE length(d) > 1
+    AND NOT EXISTS (SELECT 1 FROM nc_pushes WHERE instr(nc_file, '/') = 0
+                    UNION ALL SELECT 1 FROM nc_push_intents WHERE instr(nc_file, '/') = 0
+                    UNION ALL SELECT 1 FROM nc_pending WHERE instr(nc_file, '/') = 0
+                    UNION ALL SELECT 1 FROM gear_runs WHERE instr(nc_file, '/') = 0
+                    UNION ALL SELECT 1 FROM runs WHERE instr(nc_file, '/') = 0)
+  ORDER BY k, id DESC LIMIT 1;
+INSERT INTO nc_directory (id, path) SELECT 1, substr(d, 1, length(d) - 1) FROM v18_dir;
+UPDATE nc_pushes SET nc_file = substr(nc_file, length((SELECT d FROM v18_dir)) + 1)
+  WHERE rtrim(nc_file, replace(nc_file, '/', '')) = (SELECT d FROM v18_dir);
+UPDATE nc_push_intents SET nc_file = substr(nc_file, length((SELECT d FROM v18_dir)) + 1)
+  WHERE rtrim(nc_file, replace(nc_file, '/', '')) = (SELECT d FROM v18_dir);
+UPDATE nc_pending SET nc_file = substr(nc_file, length((SELECT d FROM v18_dir)) + 1)
+  WHERE rtrim(nc_file, replace(nc_file, '/', '')) = (SELECT d FROM v18_dir);
+UPDATE gear_runs SET nc_file = substr(nc_file, length((SELECT d FROM v18_dir)) + 1)
+  WHERE rtrim(nc_file, replace(nc_file, '/', '')) = (SELECT d FROM v18_dir);
+UPDATE runs SET nc_file = substr(nc_file, length((SELECT d FROM v18_dir)) + 1)
+  WHERE nc_file IS NOT NULL AND rtrim(nc_file, replace(nc_file, '/', '')) = (SELECT d FROM v18_dir);
+DROP TABLE v18_dir;
+)sql";
+
 // After an in-place edit of CREATE texts (versions 10, 13 and 14): `edited` tables must hold
 // `marker` (else the edit found the text changed by hand and the migration rolls back); then the
 // schema cookie changes with the CREATE text, so every connection reads it again.
@@ -705,8 +744,8 @@ Status bump_schema_cookie_v14(Connection& conn) {
   return bump_schema_cookie_after(conn, 14, {"runs"}, "''assumed'', ''main_program''");
 }
 
-const std::array<Migration, 17>& all_migrations() {
-  static const std::array<Migration, 17> kMigrations{{
+const std::array<Migration, 18>& all_migrations() {
+  static const std::array<Migration, 18> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -781,6 +820,11 @@ const std::array<Migration, 17>& all_migrations() {
       {17,
        "runs: the band of harmonics the correction fed back and the threshold that chose it",
        std::string(kSchemaV17),
+       nullptr,
+       {}},
+      {18,
+       "the NC directory the pushes go to (nc_directory); programs in it named by their file name",
+       std::string(kSchemaV18),
        nullptr,
        {}},
   }};

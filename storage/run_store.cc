@@ -20,6 +20,65 @@ using storage_internal::Transaction;
 
 namespace storage_internal {
 
+namespace {
+
+std::filesystem::path nc_normal_absolute(const std::filesystem::path& p) {
+  std::error_code ec;
+  std::filesystem::path a = std::filesystem::absolute(p, ec);
+  return (ec ? p : a).lexically_normal();
+}
+
+bool nc_bare_name(std::string_view name) { return !name.empty() && name.find('/') == std::string_view::npos; }
+
+// The NC directory in force: the one set, else the history's.
+const std::filesystem::path& nc_dir_in_force(const Connection& conn) {
+  return conn.nc_dir.empty() ? conn.nc_recorded : conn.nc_dir;
+}
+
+}  // namespace
+
+std::string nc_key(const Connection& conn, std::string_view nc_file) {
+  const std::filesystem::path& dir = nc_dir_in_force(conn);
+  if (dir.empty() || nc_bare_name(nc_file)) return std::string(nc_file);
+  const std::filesystem::path file = nc_normal_absolute(std::filesystem::path(nc_file));
+  if (file.has_filename() && file.parent_path() == nc_normal_absolute(dir)) return file.filename().string();
+  return std::string(nc_file);
+}
+
+std::string nc_path(const Connection& conn, std::string nc_key) {
+  const std::filesystem::path& dir = nc_dir_in_force(conn);
+  if (dir.empty() || !nc_bare_name(nc_key)) return nc_key;
+  return (dir / nc_key).string();
+}
+
+void load_nc_directory(Connection& conn) {
+  conn.nc_recorded.clear();
+  Result<Statement> q = Statement::prepare(conn, "SELECT path FROM nc_directory WHERE id = 1", "read the NC directory");
+  if (!q.ok()) return;  // before schema 18 (a reader does not migrate)
+  Result<bool> row = q->step();
+  if (row.ok() && *row) conn.nc_recorded = q->column<std::string>(0);
+}
+
+Status note_nc_directory(Connection& conn, std::string_view nc_file, const std::string& operation) {
+  if (nc_file.empty() || nc_bare_name(nc_file)) return {};
+  const std::filesystem::path dir = std::filesystem::path(nc_file).parent_path();  // as given, as it is read back
+  const std::filesystem::path dir_absolute = nc_normal_absolute(dir);
+  const bool first = conn.nc_recorded.empty() && conn.nc_dir.empty();
+  const bool moved = !conn.nc_dir.empty() && dir_absolute == nc_normal_absolute(conn.nc_dir) &&
+                     (conn.nc_recorded.empty() || dir_absolute != nc_normal_absolute(conn.nc_recorded));
+  if (!first && !moved) return {};
+  Result<Statement> up = Statement::prepare(
+      conn, "INSERT INTO nc_directory (id, path) VALUES (1, :path) ON CONFLICT (id) DO UPDATE SET path = :path",
+      operation);
+  if (!up.ok()) return up.error();
+  up->bind(":path", dir.string());
+  if (Status s = up->run(); !s.ok()) return s;
+  conn.nc_recorded = dir;
+  return {};
+}
+
+std::string nc_path_column(const Statement& s, int col) { return nc_path(s.connection(), s.column<std::string>(col)); }
+
 Error damaged_run(const Connection& conn, std::int64_t run_id, const std::string& what) {
   return make_error(ErrorCode::kStorage, "run database " + conn.path.string() + ": run " + std::to_string(run_id) +
                                              " is damaged: " + what +
@@ -80,7 +139,9 @@ Result<std::unique_ptr<Connection>> connect(const std::filesystem::path& db_path
 }  // namespace
 }  // namespace storage_internal
 
-RunStore::RunStore(std::unique_ptr<Connection> conn) : conn_(std::move(conn)) {}
+RunStore::RunStore(std::unique_ptr<Connection> conn) : conn_(std::move(conn)) {
+  storage_internal::load_nc_directory(*conn_);
+}
 RunStore::RunStore(RunStore&& other) noexcept = default;
 RunStore& RunStore::operator=(RunStore&& other) noexcept = default;
 RunStore::~RunStore() = default;
@@ -107,6 +168,10 @@ Result<RunStore> RunStore::open(const std::filesystem::path& db_path) {
 }
 
 const std::filesystem::path& RunStore::path() const { return conn_->path; }
+
+void RunStore::set_nc_dir(const std::filesystem::path& nc_dir) { conn_->nc_dir = nc_dir; }
+
+const std::filesystem::path& RunStore::nc_dir() const { return conn_->nc_dir; }
 
 Status RunStore::check_writable() {
   Result<Transaction> tx =

@@ -733,6 +733,15 @@ class RunStore : public RunHistory {
   // The file this store was opened on, as given to open().
   const std::filesystem::path& path() const;
 
+  // The NC directory the curve tables are pushed to now (the service's [nc] dir, the CLI's
+  // --nc-dir or <data-dir>/nc). The history names a program in it by its file name alone
+  // (NC_FILE.SPF), and every path it gives back (NcPush, PendingTable, PushIntent, a run's
+  // nc_file) is that name inside this directory: a data directory copied, moved or restored
+  // from a backup keeps its history for the control it is used with, and never reaches the
+  // directory it came from. Without it, paths are stored as given and names read back bare.
+  void set_nc_dir(const std::filesystem::path& nc_dir);
+  const std::filesystem::path& nc_dir() const;
+
  private:
   explicit RunStore(std::unique_ptr<storage_internal::Connection> conn);
 

@@ -129,7 +129,7 @@ StoredGearRun read_gear_run(const Statement& s) {
   r.serial = s.column<std::optional<std::string>>(5).value_or("");
   r.operator_name = s.column<std::optional<std::string>>(6).value_or("");
   r.note = s.column<std::string>(7);
-  r.nc_file = s.column<std::string>(8);
+  r.nc_file = storage_internal::nc_path_column(s, 8);
   r.ground_with_version = s.column<std::optional<int>>(9);
   r.required_class = s.column<std::optional<int>>(10);
   r.verdict = verdict_from_name(s.column<std::string>(11)).value_or(Verdict::kNotJudged);
@@ -158,6 +158,7 @@ Result<std::int64_t> RunStore::insert_gear_run(const GearRunRecord& run) {
   const std::string operation = "store the gear run of part " + run.part + " started " + run.started_utc;
   Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
   if (!tx.ok()) return tx.error();
+  if (Status s = storage_internal::note_nc_directory(conn, run.nc_file, operation); !s.ok()) return s.error();
   Result<Statement> ins = Statement::prepare(conn, kInsertGearRun, operation);
   if (!ins.ok()) return ins.error();
   ins->bind(":started_utc", run.started_utc);
@@ -167,7 +168,7 @@ Result<std::int64_t> RunStore::insert_gear_run(const GearRunRecord& run) {
   ins->bind(":serial", text_or_null(run.serial));
   ins->bind(":operator", text_or_null(run.operator_name));
   ins->bind(":note", run.note);
-  ins->bind(":nc_file", run.nc_file);
+  ins->bind(":nc_file", storage_internal::nc_key(conn, run.nc_file));
   ins->bind(":ground_with_version", run.ground_with_version);
   ins->bind(":required_class", run.required_class);
   ins->bind(":total_tolerance_um", run.total_tolerance_um);

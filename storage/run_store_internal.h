@@ -20,6 +20,24 @@ inline std::optional<std::string_view> text_or_null(std::string_view text) {
   return text;
 }
 
+// An NC program as the history names it: a file in the NC directory in force (conn.nc_dir) by
+// its name alone, so that a data directory copied, moved or restored from a backup keeps its
+// history for the directory it is used with; any other path as given.
+std::string nc_key(const Connection& conn, std::string_view nc_file);
+// The path of a program the history names: a bare name inside the NC directory in force (as
+// stored when none is set); a path as stored.
+std::string nc_path(const Connection& conn, std::string nc_key);
+// nc_path of column `col` of the statement's row.
+std::string nc_path_column(const Statement& s, int col);
+// Reads the directory the history's pushes went to into conn.nc_recorded (none: a history
+// from before schema 18 opened read-only, or nothing pushed yet).
+void load_nc_directory(Connection& conn);
+// Before a program `nc_file` is written into the history (a push, its intent, a pending table,
+// a gear run), inside the caller's write transaction: its directory becomes the history's when
+// it is the NC directory in force and the history recorded another (the data directory was
+// moved), or when the history recorded none.
+Status note_nc_directory(Connection& conn, std::string_view nc_file, const std::string& operation);
+
 // kStorage: run `run_id` has rows that contradict each other or are missing.
 Error damaged_run(const Connection& conn, std::int64_t run_id, const std::string& what);
 

@@ -50,7 +50,7 @@ PendingTable read_pending(const Statement& s) {
   t.id = s.column<std::int64_t>(0);
   t.run_id = s.column<std::int64_t>(1);
   t.created_utc = s.column<std::string>(2);
-  t.nc_file = s.column<std::string>(3);
+  t.nc_file = storage_internal::nc_path_column(s, 3);
   t.program_text = s.column<std::string>(4);
   t.verdict = s.column<std::string>(5) == "hold" ? PendingVerdict::kHold : PendingVerdict::kApply;
   t.reason = s.column<std::string>(6);
@@ -134,7 +134,7 @@ Result<std::optional<std::int64_t>> supersede_pending(Connection& conn, const st
   Result<Statement> q =
       Statement::prepare(conn, "SELECT id FROM nc_pending WHERE nc_file = :nc_file AND status = 'pending'", operation);
   if (!q.ok()) return q.error();
-  q->bind(":nc_file", nc_file);
+  q->bind(":nc_file", storage_internal::nc_key(conn, nc_file));
   Result<std::optional<std::int64_t>> older = q->first([](const Statement& s) { return s.column<std::int64_t>(0); });
   if (!older.ok() || !*older) return older;
   Result<Statement> sup = Statement::prepare(
@@ -153,7 +153,7 @@ Result<std::int64_t> insert_pending(Connection& conn, const PendingTable& table,
   ins->bind(":run_id", table.gear_run_id != 0 ? std::nullopt : std::optional<std::int64_t>(table.run_id));
   ins->bind(":gear_run_id", table.gear_run_id != 0 ? std::optional<std::int64_t>(table.gear_run_id) : std::nullopt);
   ins->bind(":created_utc", created);
-  ins->bind(":nc_file", table.nc_file);
+  ins->bind(":nc_file", storage_internal::nc_key(conn, table.nc_file));
   ins->bind(":program_text", table.program_text);
   ins->bind(":speed_program_text", table.speed_program_text);
   ins->bind(":verdict", pending_verdict_name(table.verdict));
@@ -189,6 +189,7 @@ Result<std::int64_t> RunStore::add_pending(const PendingTable& table) {
   } else if (Status s = storage_internal::require_run(conn, table.run_id, operation); !s.ok()) {
     return s.error();
   }
+  if (Status s = storage_internal::note_nc_directory(conn, table.nc_file, operation); !s.ok()) return s.error();
   // The older pending table steps aside before the new row goes in (the unique index allows
   // one pending table per file), and learns the new id after.
   Result<std::optional<std::int64_t>> older = supersede_pending(conn, table.nc_file, created, operation);
@@ -214,7 +215,7 @@ Result<std::vector<PendingTable>> RunStore::list_pending(const PendingQuery& q) 
   }
   storage_internal::WhereClause where;
   if (q.status) where.add("status =", std::string(pending_status_name(*q.status)));
-  if (!q.nc_file.empty()) where.add("nc_file =", q.nc_file);
+  if (!q.nc_file.empty()) where.add("nc_file =", storage_internal::nc_key(*conn_, q.nc_file));
   Result<Statement> st = Statement::prepare(
       *conn_, select_pending(false, where.sql() + " ORDER BY id DESC LIMIT :limit"), "list pending tables");
   if (!st.ok()) return st.error();
@@ -279,7 +280,8 @@ Result<std::int64_t> approve_in_transaction(Connection& conn, std::int64_t pendi
   }
   Result<PendingTable> t = read_one_pending(conn, pending_id, true, operation);
   if (!t.ok()) return t.error();
-  if (!push.nc_file.empty() && push.nc_file != t->nc_file) {
+  if (!push.nc_file.empty() &&
+      storage_internal::nc_key(conn, push.nc_file) != storage_internal::nc_key(conn, t->nc_file)) {
     return make_error(ErrorCode::kInvalidInput, "cannot " + operation + ": it was rendered for " + t->nc_file +
                                                     ", not for " + push.nc_file + "; nothing was recorded");
   }

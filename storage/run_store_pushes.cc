@@ -61,7 +61,7 @@ NcPush read_push(const Statement& s, bool with_text) {
   p.id = s.column<std::int64_t>(0);
   p.run_id = s.column<std::int64_t>(1);
   p.pushed_utc = s.column<std::string>(2);
-  p.nc_file = s.column<std::string>(3);
+  p.nc_file = nc_path_column(s, 3);
   p.table_version = s.column<int>(4);
   p.reason = s.column<std::string>(5);
   p.table = read_table_facts(s, 6);
@@ -75,7 +75,7 @@ Result<int> next_version_of(Connection& conn, std::string_view nc_file, const st
   Result<Statement> next = Statement::prepare(
       conn, "SELECT coalesce(max(table_version), 0) + 1 FROM nc_pushes WHERE nc_file = :nc_file", operation);
   if (!next.ok()) return next.error();
-  next->bind(":nc_file", nc_file);
+  next->bind(":nc_file", nc_key(conn, nc_file));
   Result<bool> row = next->step();
   if (!row.ok()) return row.error();
   return next->column<int>(0);
@@ -87,12 +87,13 @@ std::string default_reason(std::int64_t run_id) {
 
 Result<std::int64_t> insert_push(Connection& conn, std::int64_t run_id, const NcPush& push, std::string_view text,
                                  const std::string& operation) {
+  if (Status s = note_nc_directory(conn, push.nc_file, operation); !s.ok()) return s.error();
   // Run 0: a program written from a drawing (nc new), with no run behind it.
   if (run_id != 0) {
     Result<Statement> upd = Statement::prepare(conn, kRecordNcFile, operation);
     if (!upd.ok()) return upd.error();
     upd->bind(":run_id", run_id);
-    upd->bind(":nc_file", push.nc_file);
+    upd->bind(":nc_file", nc_key(conn, push.nc_file));
     if (Status s = upd->run(); !s.ok()) return s.error();
     if (conn.changes() == 0) return run_not_found(conn, run_id, operation);
   }
@@ -104,7 +105,7 @@ Result<std::int64_t> insert_push(Connection& conn, std::int64_t run_id, const Nc
   if (!ins.ok()) return ins.error();
   ins->bind(":run_id", run_id != 0 ? std::optional<std::int64_t>(run_id) : std::nullopt);
   ins->bind(":pushed_utc", std::string_view(push.pushed_utc.empty() ? utc_now() : push.pushed_utc));
-  ins->bind(":nc_file", push.nc_file);
+  ins->bind(":nc_file", nc_key(conn, push.nc_file));
   ins->bind(":table_version", *version);
   ins->bind(":reason", std::string_view(push.reason.empty() ? default_reason(run_id) : push.reason));
   storage_internal::bind_table_facts(*ins, push.table);
@@ -153,7 +154,7 @@ Result<std::vector<NcPush>> RunStore::list_pushes(const PushQuery& q) const {
                       "cannot list NC pushes: lobe " + std::to_string(q.lobe) + " is negative");
   }
   storage_internal::WhereClause where;
-  if (!q.nc_file.empty()) where.add("p.nc_file =", q.nc_file);
+  if (!q.nc_file.empty()) where.add("p.nc_file =", storage_internal::nc_key(*conn_, q.nc_file));
   if (!q.machine.empty()) where.add("r.machine =", q.machine);
   if (!q.part.empty()) where.add("r.part =", q.part);
   if (q.lobe > 0) where.add_literal("r.lobe = " + std::to_string(q.lobe));
@@ -173,7 +174,7 @@ Result<std::vector<std::string>> RunStore::pushed_files() const {
   Result<Statement> st =
       Statement::prepare(*conn_, "SELECT DISTINCT nc_file FROM nc_pushes ORDER BY nc_file", "list the NC files pushed");
   if (!st.ok()) return st.error();
-  return st->collect([](const Statement& s) { return s.column<std::string>(0); });
+  return st->collect([](const Statement& s) { return storage_internal::nc_path_column(s, 0); });
 }
 
 namespace {
@@ -184,7 +185,7 @@ Result<std::string> versions_of(Connection& conn, const std::string& nc_file, co
       conn, "SELECT count(*), min(table_version), max(table_version) FROM nc_pushes WHERE nc_file = :nc_file",
       operation);
   if (!have.ok()) return have.error();
-  have->bind(":nc_file", nc_file);
+  have->bind(":nc_file", storage_internal::nc_key(conn, nc_file));
   Result<bool> row = have->step();
   if (!row.ok()) return row.error();
   const int count = have->column<int>(0);
@@ -210,7 +211,7 @@ Result<NcPush> RunStore::load_push(const std::string& nc_file, int table_version
                                                " WHERE p.nc_file = :nc_file AND p.table_version = :table_version",
                                            operation);
   if (!q.ok()) return q.error();
-  q->bind(":nc_file", nc_file);
+  q->bind(":nc_file", storage_internal::nc_key(*conn_, nc_file));
   q->bind(":table_version", table_version);
   Result<std::optional<NcPush>> push =
       q->first([](const Statement& s) { return storage_internal::read_push(s, true); });
@@ -240,7 +241,7 @@ Result<std::optional<NcPush>> RunStore::last_push(const std::string& nc_file) co
                                                " ORDER BY p.table_version DESC LIMIT 1",
                                            "load the last push of " + nc_file);
   if (!q.ok()) return q.error();
-  q->bind(":nc_file", nc_file);
+  q->bind(":nc_file", storage_internal::nc_key(*conn_, nc_file));
   return q->first([](const Statement& s) { return storage_internal::read_push(s, true); });
 }
 
@@ -266,7 +267,7 @@ PushIntent read_intent(const Statement& s) {
   i.created_utc = s.column<std::string>(1);
   i.run_id = s.column<std::int64_t>(2);
   i.push.run_id = i.run_id;
-  i.push.nc_file = s.column<std::string>(3);
+  i.push.nc_file = storage_internal::nc_path_column(s, 3);
   i.push.table_version = s.column<int>(4);
   i.push.reason = s.column<std::string>(5);
   i.push.table = storage_internal::read_table_facts(s, 6);
@@ -314,7 +315,7 @@ Status require_no_open_intent(Connection& conn, const std::string& nc_file, cons
       conn, "SELECT id, created_utc, run_id FROM nc_push_intents WHERE nc_file = :nc_file AND state = 'open'",
       operation);
   if (!open.ok()) return open.error();
-  open->bind(":nc_file", nc_file);
+  open->bind(":nc_file", storage_internal::nc_key(conn, nc_file));
   Result<bool> row = open->step();
   if (!row.ok()) return row.error();
   if (!*row) return {};
@@ -331,7 +332,7 @@ Result<std::int64_t> insert_intent(Connection& conn, const PushIntent& intent, c
   if (!ins.ok()) return ins.error();
   ins->bind(":created_utc", std::string_view(utc_now()));
   ins->bind(":run_id", intent.run_id != 0 ? std::optional<std::int64_t>(intent.run_id) : std::nullopt);
-  ins->bind(":nc_file", p.nc_file);
+  ins->bind(":nc_file", storage_internal::nc_key(conn, p.nc_file));
   ins->bind(":table_version", p.table_version);
   ins->bind(":reason", std::string_view(p.reason.empty() ? storage_internal::default_reason(intent.run_id) : p.reason));
   storage_internal::bind_table_facts(*ins, p.table);
@@ -357,6 +358,7 @@ Result<std::int64_t> RunStore::begin_push(const PushIntent& intent) {
   Connection& conn = *conn_;
   Result<Transaction> tx = Transaction::begin(conn, Transaction::Mode::kWrite, operation);
   if (!tx.ok()) return tx.error();
+  if (Status s = storage_internal::note_nc_directory(conn, p.nc_file, operation); !s.ok()) return s.error();
   if (Status s = require_no_open_intent(conn, p.nc_file, operation); !s.ok()) return s.error();
   if (intent.run_id != 0) {
     if (Status s = storage_internal::require_run(conn, intent.run_id, operation); !s.ok()) return s.error();
@@ -423,7 +425,7 @@ Result<std::vector<PushIntent>> RunStore::open_push_intents(const std::string& n
                                                " AND (:nc_file = '' OR nc_file = :nc_file) ORDER BY id",
                                            "list the open push intents");
   if (!q.ok()) return q.error();
-  q->bind(":nc_file", nc_file);
+  q->bind(":nc_file", storage_internal::nc_key(*conn_, nc_file));
   return q->collect(read_intent);
 }
 

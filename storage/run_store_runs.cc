@@ -340,7 +340,7 @@ RunSummary read_summary(const Statement& s) {
   r.max_abs_error_um = s.column<double>(8);
   r.rms_error_um = s.column<double>(9);
   r.repeatability_um = s.column<double>(10);
-  r.nc_file = s.column<std::string>(11);  // NULL reads as ""
+  r.nc_file = storage_internal::nc_path_column(s, 11);  // NULL reads as ""
   r.phase_error_deg = s.column<std::optional<double>>(12);
   r.base_circle_runout_um = s.column<std::optional<double>>(13);
   r.peak_to_valley_um = s.column<double>(14);

@@ -50,6 +50,12 @@ struct Connection {
   // Set by back_up_before_upgrade: the version the file had and where it was copied first.
   int upgraded_from_version = 0;  // 0: the schema was not upgraded by this connection
   std::filesystem::path upgrade_backup;
+  // The NC directory in force (RunStore::set_nc_dir): a program in it is stored by its name
+  // alone and read back inside it. Empty: names are read back as stored.
+  std::filesystem::path nc_dir;
+  // The directory the history's pushes went to (table nc_directory), as its first push gave
+  // it: the NC directory when none is set. Empty: none recorded.
+  std::filesystem::path nc_recorded;
 
   Connection() = default;
   Connection(const Connection&) = delete;
@@ -184,6 +190,8 @@ class Statement {
   }
   std::string column_blob(int col) const;  // the bytes; "" for NULL
   bool column_is_null(int col) const;
+  // The connection the statement was prepared on.
+  const Connection& connection() const { return *conn_; }
 
  private:
   template <typename T>

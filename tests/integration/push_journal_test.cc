@@ -264,18 +264,58 @@ TEST_F(PushJournalTest, APushKilledBeforeItsMainProgramIsFoundByCheckAndRepaired
 // A data directory copied elsewhere keeps the paths of the control it was kept for: asked about
 // the copy's program, nc check says the history records no push to it and where its pushes
 // went, instead of calling it "version 0 as pushed".
-TEST_F(PushJournalTest, CheckOnACopiedDataDirectoryNamesTheFilesItsHistoryWasKeptFor) {
+// A data directory copied (or moved, or restored from a backup elsewhere) keeps its history for
+// the NC directory it is used with: check and rollback work on the copy's files and never reach
+// the directory it came from; a program the copy never pushed is not "as pushed".
+TEST_F(PushJournalTest, ACopiedOrMovedDataDirectoryChecksAndRollsBackItsOwnPrograms) {
   const std::int64_t run = stored_run("2026-11-30T08:00:00Z");
   ASSERT_TRUE(push(run).ok());
+  ASSERT_TRUE(push(run).ok());
+  const std::string original = slurp(nc_file());
   const fs::path copy = dir_ / "copy";
   fs::create_directories(copy);
   fs::copy(db(), copy / "gaugeloop.sqlite");
   fs::copy(dir_ / "nc", copy / "nc", fs::copy_options::recursive);
-  const auto check = testing::run_command("nc check --data-dir " + copy.string() + " --nc-dir " +
-                                          (copy / "nc").string() + " --program CAM_TEST");
+  const std::string data = " --data-dir " + copy.string();
+
+  auto check = testing::run_command("nc check" + data);
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find((copy / "nc" / "CAM_TEST.SPF").string() + ": table version 2 as pushed"),
+            std::string::npos)
+      << check.output;
+  EXPECT_EQ(check.output.find(nc_file().string()), std::string::npos) << "the original is not checked\n"
+                                                                      << check.output;
+
+  const auto rollback = testing::run_command("nc rollback 1 --by test" + data);
+  ASSERT_EQ(rollback.exit_code, 0) << rollback.output;
+  EXPECT_NE(rollback.output.find((copy / "nc" / "CAM_TEST.SPF").string() + ": table version 3 written"),
+            std::string::npos)
+      << rollback.output;
+  EXPECT_EQ(slurp(nc_file()), original) << "the rollback did not reach the original's NC directory";
+  EXPECT_FALSE(fs::exists(dir_ / "nc" / "CAM_TEST_MAIN.MPF")) << "nor wrote a main program there";
+  check = testing::run_command("nc check" + data);
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find("table version 3 as pushed"), std::string::npos) << check.output;
+  const auto history = testing::run_command("nc history --data-dir " + dir_.string());
+  EXPECT_EQ(history.output.find("      3 "), std::string::npos) << "the original's history is its own\n"
+                                                                << history.output;
+
+  // Moved as a whole (a restored backup in another place): its history follows it.
+  const fs::path moved = dir_ / "moved";
+  fs::rename(copy, moved);
+  check = testing::run_command("nc check --data-dir " + moved.string());
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find((moved / "nc" / "CAM_TEST.SPF").string() + ": table version 3 as pushed"),
+            std::string::npos)
+      << check.output;
+
+  // A program the history never pushed (one of ours, copied in by hand) is not "as pushed".
+  fs::copy_file(moved / "nc" / "CAM_TEST.SPF", moved / "nc" / "CAM_OTHER.SPF");
+  check = testing::run_command("nc check --data-dir " + moved.string() + " --program CAM_OTHER");
   EXPECT_EQ(check.exit_code, 5) << check.output;
   EXPECT_NE(check.output.find("records no push to this file"), std::string::npos) << check.output;
-  EXPECT_NE(check.output.find("its pushes went to " + nc_file().string()), std::string::npos) << check.output;
+  EXPECT_NE(check.output.find("its pushes went to " + (moved / "nc" / "CAM_TEST.SPF").string()), std::string::npos)
+      << check.output;
 }
 
 // A database locked by another program through the whole push: the intent cannot be

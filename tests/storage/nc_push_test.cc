@@ -77,10 +77,27 @@ TEST_F(NcPushTest, TableVersionsCountUpPerFile) {
 
   EXPECT_EQ(*store().next_table_version("/nc/A.SPF"), 4);
   EXPECT_EQ(*store().next_table_version("/nc/B.SPF"), 2);
+  // The history names a program by its file name inside the NC directory of its first push.
   RawDb raw(db_in(dir_));
   EXPECT_EQ(raw.query_text("SELECT group_concat(table_version, ',') FROM"
-                           " (SELECT table_version FROM nc_pushes WHERE nc_file = '/nc/A.SPF' ORDER BY id)"),
+                           " (SELECT table_version FROM nc_pushes WHERE nc_file = 'A.SPF' ORDER BY id)"),
             "1,2,3");
+  EXPECT_EQ(raw.query_text("SELECT path FROM nc_directory"), "/nc");
+  EXPECT_EQ(store().last_push("/nc/A.SPF")->value().nc_file, "/nc/A.SPF") << "read back where it was pushed";
+  // A program outside that directory keeps its path.
+  push_next(run, "/other/C.SPF");
+  EXPECT_EQ(raw.query_int("SELECT count(*) FROM nc_pushes WHERE nc_file = '/other/C.SPF'"), 1);
+  // The data directory moved: its NC directory in force is another; the history follows it,
+  // and the first push there makes it the history's.
+  store().set_nc_dir("/moved/nc");
+  EXPECT_EQ(*store().next_table_version("/moved/nc/A.SPF"), 4);
+  EXPECT_EQ(store().last_push("/moved/nc/A.SPF")->value().nc_file, "/moved/nc/A.SPF");
+  EXPECT_FALSE(store().last_push("/nc/A.SPF")->has_value()) << "the old place is not this history's any more";
+  push_next(run, "/moved/nc/A.SPF");
+  EXPECT_EQ(raw.query_text("SELECT path FROM nc_directory"), "/moved/nc");
+  EXPECT_EQ(raw.query_text("SELECT group_concat(table_version, ',') FROM"
+                           " (SELECT table_version FROM nc_pushes WHERE nc_file = 'A.SPF' ORDER BY id)"),
+            "1,2,3,4");
   EXPECT_EQ(raw.query_text("SELECT reason FROM nc_pushes WHERE table_version = 3"), "run " + std::to_string(run))
       << "an unsaid reason is the run pushed";
 }
@@ -328,7 +345,7 @@ TEST_F(NcPushTest, ANewerPendingTableSupersedesTheOlderOneForTheSameFile) {
   // The schema itself keeps one pending table per file.
   RawDb raw(db_in(dir_));
   EXPECT_NE(raw.exec("INSERT INTO nc_pending (run_id, created_utc, nc_file, program_text, verdict)"
-                     " VALUES (1, '2026-11-22T10:00:00Z', '/nc/A.SPF', 'x', 'apply')"),
+                     " VALUES (1, '2026-11-22T10:00:00Z', 'A.SPF', 'x', 'apply')"),
             SQLITE_OK);
 }
 
@@ -491,7 +508,9 @@ TEST(MigrationFromV2, KeepsEveryPushAndNumbersThemPerFileInPushOrder) {
   EXPECT_EQ(raw.query_int("PRAGMA foreign_key_check"), 0);
   EXPECT_EQ(raw.query_text("SELECT group_concat(id || ':' || nc_file || ':' || table_version, ' ') FROM"
                            " (SELECT * FROM nc_pushes ORDER BY id)"),
-            "1:/nc/A.SPF:1 2:/nc/B.SPF:1 3:/nc/A.SPF:2 4:/nc/A.SPF:3 5:/nc/B.SPF:2");
+            "1:A.SPF:1 2:B.SPF:1 3:A.SPF:2 4:A.SPF:3 5:B.SPF:2");
+  // Schema 18: the directory of the newest push is the history's, its programs named by file.
+  EXPECT_EQ(raw.query_text("SELECT path FROM nc_directory"), "/nc");
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM nc_pushes WHERE point_count = 361 AND correction_max_um = 16.5"
                           " AND program_hash = '0123456789abcdef' AND run_id IS NOT NULL"),
             5)
