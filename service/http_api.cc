@@ -284,6 +284,13 @@ bool HttpApi::Impl::authorized(const httplib::Request& req, httplib::Response& r
   return true;
 }
 
+void HttpApi::Impl::check_token(const httplib::Request& req, httplib::Response& res) const {
+  Result<Query> q = Query::of(req, {});
+  if (!q) return send_error(res, q.error());
+  if (!authorized(req, res)) return;
+  send_json(res, 200, json{{"token", "accepted"}});
+}
+
 void HttpApi::Impl::answer(httplib::Response& res, const Result<json>& out) {
   if (!out) return send_error(res, out.error());
   send_json(res, 200, *out);
@@ -395,6 +402,7 @@ Result<std::unique_ptr<HttpApi>> HttpApi::start(const HttpSettings& settings, st
   using W = httplib::Response&;
   using B = const std::string&;
   s.route("/api/health", [&s](R q, W a) { s.health(q, a); });
+  s.route("/api/token", [&s](R q, W a) { s.check_token(q, a); });
   s.route("/api/runs", [&s](R q, W a) { s.list_runs(q, a); });
   s.route("/api/runs/([^/]+)", [&s](R q, W a) { s.show_run(q, a); });
   s.route("/api/runs/([^/]+)/export", [&s](R q, W a) { s.export_run(q, a); });

@@ -94,6 +94,10 @@ struct HttpApi::Impl {
   // the answer is already set.
   bool authorized(const httplib::Request& req, httplib::Response& res) const;
 
+  // GET /api/token: the check a write's token passes, and nothing written. 200 for the token
+  // configured; 401 or 403 as a write would be answered. The pages check a token as it is entered.
+  void check_token(const httplib::Request& req, httplib::Response& res) const;
+
   static void answer(httplib::Response& res, const Result<json>& out);
 
   // ---- Helpers (http_api.cc) ----

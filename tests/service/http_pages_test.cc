@@ -1,6 +1,6 @@
 // What the pages need of the HTTP API, in-process: the page files served from the binary, the
 // run's plot and PDF report, the trend plot, a table's text by version, a pending table's
-// text, and rejecting a pending table with the token.
+// text, checking a token without writing, and rejecting a pending table with the token.
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
@@ -251,6 +251,39 @@ TEST_F(HttpPagesTest, APendingTableIsReadWithItsText) {
   EXPECT_EQ(a.j["program"], "CAM_INTAKE_L1");
   EXPECT_EQ(a.j["status"], "pending");
   EXPECT_TRUE(has(error_of(get("/api/nc/pending/99"), 404), "pending"));
+}
+
+TEST_F(HttpPagesTest, ATokenIsCheckedWithoutWritingAnything) {
+  fill();
+  std::vector<std::string> calls;
+  HttpWrites writes;
+  writes.reject = [&calls](std::int64_t id, const std::string&, const std::string&) -> Result<json> {
+    calls.push_back(std::to_string(id));
+    return json{{"rejected", id}};
+  };
+  start("secret", {}, writes);
+  const auto check = [this](const std::string& header) {
+    httplib::Headers headers;
+    if (!header.empty()) headers.emplace("Authorization", header);
+    return answer_of(client_->Get("/api/token", headers));
+  };
+  Answer good = check("Bearer secret");
+  ASSERT_EQ(good.status, 200) << good.body;
+  EXPECT_EQ(good.j["token"], "accepted");
+  EXPECT_TRUE(has(error_of(check("Bearer wrong"), 401), "not the one configured"));
+  EXPECT_TRUE(has(error_of(check(""), 401), "Authorization: Bearer <token>"));
+  EXPECT_EQ(header(check("Bearer wrong"), "WWW-Authenticate"), "Bearer realm=\"gaugeloop\"");
+  EXPECT_TRUE(has(error_of(answer_of(client_->Get("/api/token?x=1", {{"Authorization", "Bearer secret"}})), 400),
+                  "unknown query parameter"));
+  EXPECT_TRUE(calls.empty());
+  EXPECT_EQ(pending_status(), "pending");
+}
+
+TEST_F(HttpPagesTest, ATokenIsRefusedWhenTheApiIsReadOnly) {
+  fill();
+  start();
+  httplib::Headers headers{{"Authorization", "Bearer anything"}};
+  EXPECT_TRUE(has(error_of(answer_of(client_->Get("/api/token", headers)), 403), "read-only"));
 }
 
 TEST_F(HttpPagesTest, RejectNeedsTheTokenAndLeavesTheTableInForce) {
