@@ -2,6 +2,7 @@
 // approval, rejection and rollback, and new programs from a part's drawing.
 #include <httplib.h>
 
+#include <cmath>
 #include <optional>
 #include <set>
 #include <string>
@@ -9,6 +10,8 @@
 #include <vector>
 
 #include "job/layer_files.h"
+#include "nc_out/table_program.h"
+#include "nc_out/table_writer.h"
 #include "report/program_preview.h"
 #include "report/run_json.h"
 #include "service/http_api_impl.h"
@@ -79,6 +82,65 @@ Result<std::string> resolve_program(const RunStore& store, const std::string& pr
   for (const std::string& f : named) paths += (paths.empty() ? "" : ", ") + f;
   return bad_request("program '" + program + "' names several NC files (" + paths +
                      "); give the path as ?program=PATH");
+}
+
+// A whole degree of C counts as changed when the two tables' X differ there by more than this:
+// one step of X as the tables are written by default (0.0001 mm, CurveTableFormat).
+constexpr double kChangeThresholdUm = 0.1;
+
+// What the control interpolates from a table program's points, with the table's axes.
+struct TableOnControl {
+  ParsedTable parsed;
+  TableInterpolant interpolant;
+};
+
+Result<TableOnControl> table_on_control(const std::string& text, const std::string& what) {
+  Result<ParsedTable> parsed = parse_table_program(text, what);
+  if (!parsed) return parsed.error();
+  if (parsed->interpolation == Interpolation::kCubicSpline && !parsed->natural_ends) {
+    return make_error(ErrorCode::kInvalidInput,
+                      what + ": a CSPLINE table without BNAT and ENAT, whose ends gaugeloop does not model");
+  }
+  Result<TableInterpolant> interpolant = TableInterpolant::of(parsed->points, parsed->interpolation);
+  if (!interpolant) return make_error(ErrorCode::kInvalidInput, what + ": " + interpolant.error().message);
+  return TableOnControl{std::move(*parsed), std::move(*interpolant)};
+}
+
+// How a pending table would move the following axis against the table in force: both read from
+// their program texts as the control interpolates them, X (or Y) compared at every whole degree
+// of the leading axis, C = 0 .. 359 (a table's C read modulo its turn, as the control reads a
+// periodic table). kInvalidInput saying why when either text is no curve table gaugeloop can
+// read, or the two tables are of different axes.
+Result<json> change_from_in_force(const std::string& pending_text, const std::string& in_force_text,
+                                  int in_force_version) {
+  Result<TableOnControl> pending = table_on_control(pending_text, "the pending table");
+  if (!pending) return pending.error();
+  Result<TableOnControl> in_force =
+      table_on_control(in_force_text, "version " + std::to_string(in_force_version) + " in force");
+  if (!in_force) return in_force.error();
+  const ParsedTable& p = pending->parsed;
+  const ParsedTable& f = in_force->parsed;
+  if (p.following_axis != f.following_axis || p.leading_axis != f.leading_axis) {
+    return make_error(ErrorCode::kInvalidInput, "the pending table is of " + p.following_axis + " over " +
+                                                    p.leading_axis + ", the table in force of " + f.following_axis +
+                                                    " over " + f.leading_axis + ": not comparable degree by degree");
+  }
+  double max_abs_um = 0.0;
+  int at_deg = 0;
+  int over = 0;
+  for (int deg = 0; deg < 360; ++deg) {
+    const double c = static_cast<double>(deg);
+    const double dx_um = (pending->interpolant.at(c).x_mm - in_force->interpolant.at(c).x_mm) * 1000.0;
+    if (std::abs(dx_um) > max_abs_um) {
+      max_abs_um = std::abs(dx_um);
+      at_deg = deg;
+    }
+    // A tolerance far below the threshold: one step of the format is 0.1 um give or take the
+    // last bit, and counts as no change.
+    if (std::abs(dx_um) > kChangeThresholdUm + 1e-6) ++over;
+  }
+  return json{{"against_version", in_force_version}, {"max_abs_um", max_abs_um}, {"at_c_deg", at_deg},
+              {"threshold_um", kChangeThresholdUm},  {"degrees_over", over},     {"degrees", 360}};
 }
 
 }  // namespace
@@ -184,6 +246,38 @@ void HttpApi::Impl::pending_table(const httplib::Request& req, httplib::Response
     json out = pending_table_json(*table);
     out["program"] = fs::path(table->nc_file).stem().string();
     out["program_text"] = table->program_text;
+    // What approving it would do: the version it would become if nothing else is pushed first,
+    // and its change from the table in force.
+    out["next_version"] = nullptr;
+    if (table->status == PendingStatus::kPending) {
+      Result<int> next = store.next_table_version(table->nc_file);
+      if (!next) return next.error();
+      out["next_version"] = *next;
+    }
+    Result<std::optional<NcPush>> in_force = store.last_push(table->nc_file);
+    if (!in_force) return in_force.error();
+    out["in_force_version"] = *in_force ? json((*in_force)->table_version) : json(nullptr);
+    out["change"] = nullptr;
+    out["change_problem"] = nullptr;
+    if (table->status != PendingStatus::kPending) {
+      out["change_problem"] =
+          "the table is no longer pending: GET /api/nc/table?version= gives the versions to compare";
+    } else if (table->gear_run_id != 0) {
+      out["change_problem"] = "a gear's stroke program: it has no curve table over C to compare";
+    } else if (!*in_force) {
+      out["change_problem"] = "no table of " + out["program"].get<std::string>() + " is in force yet";
+    } else if (!(*in_force)->program_text) {
+      out["change_problem"] = "the text of version " + std::to_string((*in_force)->table_version) +
+                              " in force was not kept (written by an older gaugeloop)";
+    } else {
+      Result<json> change =
+          change_from_in_force(table->program_text, *(*in_force)->program_text, (*in_force)->table_version);
+      if (change) {
+        out["change"] = std::move(*change);
+      } else {
+        out["change_problem"] = change.error().message;
+      }
+    }
     return out;
   });
 }

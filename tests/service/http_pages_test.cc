@@ -1,6 +1,7 @@
 // What the pages need of the HTTP API, in-process: the page files served from the binary, the
 // run's plot and PDF report, the trend plot, a table's text by version, a pending table's
-// text, checking a token without writing, and rejecting a pending table with the token.
+// text with the version it would become and its change from the table in force, checking a
+// token without writing, and rejecting a pending table with the token.
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
@@ -251,6 +252,81 @@ TEST_F(HttpPagesTest, APendingTableIsReadWithItsText) {
   EXPECT_EQ(a.j["program"], "CAM_INTAKE_L1");
   EXPECT_EQ(a.j["status"], "pending");
   EXPECT_TRUE(has(error_of(get("/api/nc/pending/99"), 404), "pending"));
+}
+
+// Curve tables of CAM_EXHAUST_L1 read by the parser the push reads back with (G1: straight
+// lines between the points, so the change per degree is known by hand).
+const char* const kExhaustInForce =
+    "; CAM_EXHAUST_L1 in force\nCTABDEF(X,C,1,1)\nG1 C0.000 X0.0005\nC360.000 X0.0005\nCTABEND\nM17\n";
+// From a seam at C45 (a table's C is read modulo its turn): 0.5 um up to 2.5 um at C135 and
+// back by C225, on 0.5 um elsewhere.
+const char* const kExhaustPending =
+    "; CAM_EXHAUST_L1 pending\nCTABDEF(X,C,1,1)\nG1 C45.000 X0.0005\nC135.000 X0.0025\nC225.000 X0.0005\n"
+    "C405.000 X0.0005\nCTABEND\nM17\n";
+
+TEST_F(HttpPagesTest, APendingTableSaysTheVersionItWouldBecomeAndItsChangeFromTheTableInForce) {
+  fill();
+  std::int64_t id = 0;
+  {
+    Result<RunStore> store = RunStore::open(db());
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    NcPush push;
+    push.nc_file = "/nc/CAM_EXHAUST_L1.SPF";
+    ASSERT_TRUE(store->record_push(ids_[0], push, kExhaustInForce).ok());
+    PendingTable pending;
+    pending.run_id = ids_[1];
+    pending.nc_file = "/nc/CAM_EXHAUST_L1.SPF";
+    pending.program_text = kExhaustPending;
+    Result<std::int64_t> p = store->add_pending(pending);
+    ASSERT_TRUE(p.ok()) << p.error().message;
+    id = *p;
+  }
+  start();
+  Answer a = get("/api/nc/pending/" + std::to_string(id));
+  ASSERT_EQ(a.status, 200) << a.body;
+  EXPECT_EQ(a.j["in_force_version"], 1);
+  EXPECT_EQ(a.j["next_version"], 2);
+  ASSERT_TRUE(a.j["change"].is_object()) << a.body;
+  const json& change = a.j["change"];
+  EXPECT_EQ(change["against_version"], 1);
+  EXPECT_NEAR(change["max_abs_um"].get<double>(), 2.0, 1e-9);
+  EXPECT_EQ(change["at_c_deg"], 135);
+  EXPECT_EQ(change["threshold_um"], 0.1);
+  // |dX| = 2 um * (C - 45) / 90 rising, 2 um * (225 - C) / 90 falling: over 0.1 um from C50
+  // to C135 (86 degrees) and from C136 to C220 (85).
+  EXPECT_EQ(change["degrees_over"], 86 + 85);
+  EXPECT_EQ(change["degrees"], 360);
+  EXPECT_TRUE(a.j["change_problem"].is_null());
+}
+
+TEST_F(HttpPagesTest, APendingTableWithoutATableToCompareSaysWhy) {
+  fill();
+  std::int64_t first = 0;
+  {
+    Result<RunStore> store = RunStore::open(db());
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    PendingTable pending;
+    pending.run_id = ids_[1];
+    pending.nc_file = "/nc/CAM_EXHAUST_L2.SPF";
+    pending.program_text = kExhaustPending;
+    Result<std::int64_t> p = store->add_pending(pending);
+    ASSERT_TRUE(p.ok()) << p.error().message;
+    first = *p;
+  }
+  start();
+  Answer none = get("/api/nc/pending/" + std::to_string(first));
+  ASSERT_EQ(none.status, 200) << none.body;
+  EXPECT_TRUE(none.j["in_force_version"].is_null());
+  EXPECT_EQ(none.j["next_version"], 1);
+  EXPECT_TRUE(none.j["change"].is_null());
+  EXPECT_TRUE(has(none.j["change_problem"].get<std::string>(), "no table of CAM_EXHAUST_L2 is in force"));
+  // The fixture's texts are no curve tables: the parser's refusal, not a figure.
+  Answer unreadable = get("/api/nc/pending/" + std::to_string(pending_id_));
+  ASSERT_EQ(unreadable.status, 200) << unreadable.body;
+  EXPECT_EQ(unreadable.j["in_force_version"], 2);
+  EXPECT_EQ(unreadable.j["next_version"], 3);
+  EXPECT_TRUE(unreadable.j["change"].is_null());
+  EXPECT_TRUE(has(unreadable.j["change_problem"].get<std::string>(), "the pending table")) << unreadable.body;
 }
 
 TEST_F(HttpPagesTest, ATokenIsCheckedWithoutWritingAnything) {
