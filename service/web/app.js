@@ -113,16 +113,44 @@ function apiQuery(p) {
   return q.toString();
 }
 
-// The SVG from `path` put into `el` as markup (the service's own plots, no scripts in them),
-// so it scales with the page.
+// A plot in `el`: the SVG markup (the service's own plots, no scripts in them) in a box of its
+// own. On a wide screen it scales to the page; on a narrow one (style.css) it keeps the size it
+// was drawn at, whose text reads as on the desktop, and the box scrolls sideways under a hint
+// that says so and, with `path`, links the plot alone for the phone to zoom.
+function plotHtml(svg, path) {
+  return `<p class="plot-hint">The plot is at full size: swipe it sideways to see the rest${
+    path ? `, or <a href="${esc(path)}" target="_blank">open it alone</a> to zoom` : ""}.</p><div class="plot-scroll">${svg}</div>`;
+}
+
 async function showSvg(el, path) {
   try {
-    el.innerHTML = await apiText(path);
+    el.innerHTML = plotHtml(await apiText(path), path);
     el.classList.add("plot");
   } catch (e) {
     message(el, errorText(e), "error");
   }
 }
+
+// Every table the pages draw reads as cards on a narrow screen (style.css): each cell carries its
+// column's name (data-label), and the cells that hold a verdict or a write button are marked
+// (class "keep") so that they show whole. Set here once for every table as it is drawn, so a
+// page only writes its table.
+function labelTable(table) {
+  const names = [...table.querySelectorAll("thead th")].map((th) => th.textContent.trim());
+  table.querySelectorAll("tbody tr").forEach((tr) => {
+    let column = 0;
+    for (const td of tr.children) {
+      td.dataset.label = td.colSpan > 1 ? "" : (names[column] ?? "");
+      if (td.querySelector(".verdict, button.write, button.danger")) td.classList.add("keep");
+      column += td.colSpan;
+    }
+  });
+  table.dataset.labelled = "true";
+}
+
+new MutationObserver(() => {
+  document.querySelectorAll("#page table:not([data-labelled])").forEach(labelTable);
+}).observe(document.getElementById("page"), {childList: true, subtree: true});
 
 // The verdict filter of a list's form: any, in, out, not judged.
 function verdictFilter(p) {
@@ -257,7 +285,7 @@ function leadSvg(traces) {
   const y = (d) => h / 2 - (h / 2 - m / 2) * d / span;
   const lines = traces.map((t, i) => `<polyline fill="none" stroke="${t.flank === "left" ? "#1f6fb2" : "#c0392b"}" stroke-width="1.2"
       stroke-dasharray="${i % 4 < 2 ? "" : "4 2"}" points="${t.z_mm.map((z, k) => `${x(z).toFixed(1)},${y(t.deviation_um[k]).toFixed(1)}`).join(" ")}"><title>gap ${t.gap}, ${t.flank} flank</title></polyline>`).join("");
-  return `<svg viewBox="0 0 ${w} ${h}" width="100%" style="max-width:900px" role="img" aria-label="lead traces">
+  return `<svg viewBox="0 0 ${w} ${h}" width="${w}" height="${h}" style="max-width:900px" role="img" aria-label="lead traces">
     <line x1="${m}" x2="${w - m}" y1="${h / 2}" y2="${h / 2}" stroke="#999" stroke-width="0.5"/>
     <text x="${m}" y="14" font-size="12">±${span.toFixed(2)} µm; blue: left flanks, red: right flanks</text>
     <text x="${m}" y="${h - 6}" font-size="12">Z ${z0.toFixed(1)} mm</text><text x="${w - m}" y="${h - 6}" font-size="12" text-anchor="end">Z ${z1.toFixed(1)} mm</text>
@@ -288,7 +316,7 @@ async function gearRunPage(id) {
       ${card("Stroke", (g.ground_with_version ? `ground with v${g.ground_with_version}` : "ground with a stroke not known") +
              (g.pushed_version ? `; v${g.pushed_version} pushed from it` : ""))}
     </div>
-    <div id="lead-plot">${leadSvg(g.traces)}</div>
+    <div id="lead-plot" class="plot">${plotHtml(leadSvg(g.traces), "")}</div>
     <div class="scroll"><table id="gear-traces">
       <thead><tr><th>Gap</th><th>Flank</th><th>F<sub>β</sub></th><th>f<sub>fβ</sub></th><th>f<sub>Hβ</sub></th><th>Class</th><th>Range (mm)</th></tr></thead>
       <tbody>${g.traces.map((t) => `<tr><td>${t.gap}</td><td>${esc(t.flank)}</td><td class="num">${um(t.total_um)}</td>
@@ -348,10 +376,10 @@ async function runPage(id) {
       <thead><tr><th>Characteristic</th><th>Value</th><th>Min</th><th>Max</th><th>Lower limit</th><th>Upper limit</th><th>Zone</th><th>Of the error</th><th>Verdict</th></tr></thead>
       <tbody>${chars.map((c) => {
         const u = unitText(c.unit), d = decimalsOf(c.unit);
-        return `<tr><td>${esc(c.title)}</td><td class="num">${fig(c.value, u, d)}</td><td class="num">${fig(c.min, u, d)}</td>
+        return `<tr><td class="wrap">${esc(c.title)}</td><td class="num">${fig(c.value, u, d)}</td><td class="num">${fig(c.min, u, d)}</td>
           <td class="num">${fig(c.max, u, d)}</td><td class="num">${fig(c.lower_limit, u, d)}</td><td class="num">${fig(c.upper_limit, u, d)}</td>
           <td>${c.from_deg === null || c.from_deg === undefined ? "whole turn" : `${c.from_deg} to ${c.to_deg} deg`}</td>
-          <td class="judges">${esc(c.judges ?? "–")}</td><td>${verdict(c.verdict)}</td></tr>`;
+          <td class="judges wrap">${esc(c.judges ?? "–")}</td><td>${verdict(c.verdict)}</td></tr>`;
       }).join("")}</tbody></table></div>`}
     <h2>Curve tables written from this run</h2>
     ${(r.nc_pushes || []).length === 0 ? `<p class="muted">None: no table of this run was written to the control.</p>` : `

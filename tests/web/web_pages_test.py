@@ -8,7 +8,10 @@ shaft S-1002 (two pending tables); later two gears of the virtual gear grinder's
 same database. The browser then looks at every page, approves the lobe 1
 table with the token (the NC history shows version 2 and its diff) and rejects the lobe 2 one,
 after both were refused without it; then previews lobe 2's first program and writes it (lobe
-1's, which has a history, is refused). Screenshots of every page, at 1366x768 and 390x844, go to
+1's, which has a history, is refused). At 390x844 the verdicts and write buttons of the run
+history, the characteristics, the NC history, the pending tables and the service page are
+within the screen and whole, and the run's plot keeps its drawn size in a box that scrolls.
+Screenshots of every page, at 1366x768 and 390x844, go to
 --screenshots. Exits 0 when every check holds; a failed check says what the page showed.
 """
 
@@ -221,6 +224,51 @@ def screenshots(browser, out, name, ready):
     browser.size("desktop")
 
 
+# What of `selector` a phone shows whole, as a list of what it does not: each element is scrolled
+# into view by the window, vertically only (a box that scrolls sideways is left where it is, as a
+# person finds it), then its box must lie within the viewport's width and within every ancestor
+# that clips what overflows it; with `whole_text`, neither it nor its cell may hold text wider
+# than itself.
+IN_VIEW_JS = """
+const [selector, width, wholeText] = arguments;
+const out = [];
+const found = document.querySelectorAll(selector);
+if (found.length === 0) return [`nothing matches ${selector}`];
+for (const el of found) {
+  window.scrollTo(0, window.scrollY + el.getBoundingClientRect().top - window.innerHeight / 2);
+  const r = el.getBoundingClientRect();
+  const name = `${selector} "${el.textContent.trim().slice(0, 30)}"`;
+  if (r.width === 0 || r.height === 0) { out.push(`${name}: not shown`); continue; }
+  if (r.left < 0 || r.right > width) out.push(`${name}: at x ${r.left.toFixed(0)} to ${r.right.toFixed(0)}, not within 0 to ${width}`);
+  for (let a = el.parentElement; a && a !== document.body; a = a.parentElement) {
+    if (getComputedStyle(a).overflowX === "visible") continue;
+    const box = a.getBoundingClientRect();
+    if (r.left < box.left - 0.5 || r.right > box.right + 0.5) {
+      out.push(`${name}: cut off by its ${a.tagName.toLowerCase()}.${a.className} (x ${box.left.toFixed(0)} to ${box.right.toFixed(0)})`);
+    }
+  }
+  const cell = el.closest("td, th") || el.parentElement;
+  if (wholeText && (el.scrollWidth > el.clientWidth || cell.scrollWidth > cell.clientWidth)) {
+    out.push(`${name}: its text is clipped (${el.scrollWidth} > ${el.clientWidth} or ${cell.scrollWidth} > ${cell.clientWidth})`);
+  }
+}
+window.scrollTo(0, 0);
+return out;
+"""
+
+
+def check_in_view(b, what, size, selectors, whole_text=()):
+    """At `size`, every element of `selectors` in full view and each of `whole_text` unclipped."""
+    b.size(size)
+    width = SIZES[size][0]
+    problems = []
+    for css in selectors:
+        problems += b.driver.execute_script(IN_VIEW_JS, css, width, css in whole_text)
+    b.size("desktop")
+    check(problems == [], f"{what} at {size} {SIZES[size]}: " + "; ".join(problems[:8])
+          + (f" (and {len(problems) - 8} more)" if len(problems) > 8 else ""))
+
+
 def run_checks(svc, browser, shots):
     b = browser
     ui = svc.base + "/ui/"
@@ -236,6 +284,9 @@ def run_checks(svc, browser, shots):
     for fragment in ("S-1001", "S-1002", "intake_flat", "grinder-web", "µm", "deg"):
         check(fragment in table, f"the run history shows {fragment}: {table}")
     screenshots(b, shots, "runs", lambda: b.count("table#runs tbody tr") == 3)
+    # On a phone every run's verdict, and every figure, is in view and whole.
+    check_in_view(b, "the run history", "phone", ["table#runs td .verdict", "table#runs td"],
+                  whole_text=["table#runs td .verdict"])
     all_ids = [r.get_attribute("data-run") for r in b.driver.find_elements(By.CSS_SELECTOR, "table#runs tbody tr")]
     check(all_ids == sorted(all_ids, key=int, reverse=True), f"newest first: {all_ids}")
     # Paging, 2 runs a page: the older page holds the third.
@@ -300,6 +351,25 @@ def run_checks(svc, browser, shots):
     check(status == 200 and ctype == "application/pdf" and body.startswith(b"%PDF"),
           f"the PDF link answers a PDF: {status} {ctype} {body[:20]!r}")
     screenshots(b, shots, "run", lambda: b.count("#plot svg") == 1)
+    # The plot: on the desktop as wide as the page; on a phone at the size it was drawn at, whose
+    # text reads as on the desktop, in a box that scrolls sideways under a hint that says so.
+    plot_js = """const svg = document.querySelector('#plot svg'), box = document.querySelector('#plot .plot-scroll');
+        const hint = document.querySelector('#plot .plot-hint');
+        return [svg.getBoundingClientRect().width, svg.width.baseVal.value, box.clientWidth, box.scrollWidth,
+                hint.getBoundingClientRect().height > 0 ? hint.textContent : ''];"""
+    width, drawn, box, scrolled, hint = b.driver.execute_script(plot_js)
+    check(abs(width - box) < 1 and scrolled <= box and hint == "", f"the plot fits the desktop's page: {width, box, scrolled, hint}")
+    b.size("phone")
+    width, drawn, box, scrolled, hint = b.driver.execute_script(plot_js)
+    b.size("desktop")
+    check(abs(width - drawn) < 1 and box < 390 and scrolled >= drawn and "swipe it sideways" in hint,
+          f"on a phone the plot keeps its {drawn} px in a box of {box} px that scrolls ({scrolled}), with a hint: {width}, {hint!r}")
+    # The characteristics' verdicts whole, on the desktop too ("not judgec" was cut off by the
+    # table's box), and on a phone every figure of them.
+    check_in_view(b, "the characteristics", "desktop", ["table#characteristics td .verdict"],
+                  whole_text=["table#characteristics td .verdict"])
+    check_in_view(b, "the characteristics", "phone", ["table#characteristics td .verdict", "table#characteristics td"],
+                  whole_text=["table#characteristics td .verdict"])
     # The first run's table, approved: version 1 of CAM_INTAKE_L1.
     first_id = svc.get_json("/api/runs?serial=S-1001")[0]["id"]
     b.go(ui + f"#/run/{first_id}")
@@ -355,6 +425,9 @@ def run_checks(svc, browser, shots):
     check(len(svc.get_json("/api/nc/pending")) == 2, "nothing was decided without the token")
     check(len(svc.get_json("/api/nc/history?program=CAM_INTAKE_L1")) == 1, "no version written without the token")
     screenshots(b, shots, "pending", lambda: b.count(".card.pending") == 2)
+    check_in_view(b, "the pending tables", "phone", [".card.pending .verdict", ".card.pending button.approve",
+                                                     ".card.pending button.reject"],
+                  whole_text=[".card.pending .verdict"])
 
     # ---- A wrong token is refused too, and can be forgotten ----
     b.driver.find_element(By.CSS_SELECTOR, "#token-input").send_keys("not-the-token")
@@ -401,6 +474,7 @@ def run_checks(svc, browser, shots):
     b.wait_text("#diff-count", "differ")
     check(b.count("#diff .add") > 0 and b.count("#diff .del") > 0, "the diff marks added and removed lines")
     screenshots(b, shots, "nc", lambda: b.count("#diff .add") > 0)
+    check_in_view(b, "the NC history", "phone", ["table#nc-history button.rollback", "table#nc-history td"])
     # Roll back to version 1 (confirmed): version 3 holds its table, the same text.
     b.driver.find_element(By.CSS_SELECTOR, "table#nc-history tr[data-version='1'] button.rollback").click()
     wait_until("the rollback's question", lambda: b.driver.switch_to.alert).accept()
@@ -453,6 +527,7 @@ def run_checks(svc, browser, shots):
     first = b.text("#state-time")
     wait_until("the state to refresh itself", lambda: b.text("#state-time") != first, deadline_s=30)
     screenshots(b, shots, "state", lambda: b.count("#state-cards") == 1)
+    check_in_view(b, "the service page", "phone", ["#measure-button", "#state-cards .card"])
     # Measure now, with the token still in the session.
     before = len(svc.get_json("/api/runs"))
     b.driver.find_element(By.CSS_SELECTOR, "#measure-form input[name=serial]").send_keys("S-1003")
