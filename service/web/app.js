@@ -7,6 +7,9 @@ const PAGE_SIZE = 25;
 const TOKEN_KEY = "gaugeloop.token";
 const BY_KEY = "gaugeloop.by";
 let refreshTimer = null;  // the service page's; stopped when another page is shown
+// What a write did, for the page drawn after it from the service's answers ({page, text});
+// taken by that page.
+let notice = null;
 
 // ---- Helpers ----
 
@@ -603,15 +606,33 @@ async function ncPage(p) {
     const f = new FormData(ev.target);
     location.hash = hashOf("/nc", {program, a: f.get("a"), b: f.get("b")});
   });
+  const msg = document.getElementById("nc-message");
+  if (notice && notice.page === "nc") message(msg, notice.text, "ok");
+  notice = null;
   out.querySelectorAll("button.rollback").forEach((btn) => btn.addEventListener("click", async () => {
-    if (!window.confirm(`Write the table of version ${btn.dataset.version} to the control again, as a new version of ${program}?`)) return;
+    const version = Number(btn.dataset.version);
     const by = askName();
-    const msg = document.getElementById("nc-message");
     if (by === null) { message(msg, "A rollback needs your name.", "error"); return; }
+    // With the token, the question names the versions as the service has them now; without it the
+    // service refuses the write, and the page shows why.
+    if (token()) {
+      let now;
+      try {
+        now = (await api("/api/nc/history?" + apiQuery({program, limit: 1})))[0].table_version;
+      } catch (e) {
+        message(msg, errorText(e), "error");
+        return;
+      }
+      if (!window.confirm(`Roll ${program} back to the table of version ${version}? It is written to the control again as version ${now + 1}; version ${now} is in force now.`)) {
+        message(msg, "Not rolled back: nothing was written.");
+        return;
+      }
+    }
     try {
-      const r = await write("/api/nc/rollback", {program, version: Number(btn.dataset.version), by});
-      message(msg, `Rolled back: version ${r.table_version} holds the table of version ${btn.dataset.version}.`, "ok");
-      msg.insertAdjacentHTML("beforeend", `<a id="nc-reload" href="${hashOf("/nc", {program, a: btn.dataset.version, b: r.table_version})}">Show version ${r.table_version}</a>`);
+      const r = await write("/api/nc/rollback", {program, version, by});
+      // The history again from the service: the new version in force, its diff from the one restored.
+      notice = {page: "nc", text: `Rolled back: version ${r.table_version} holds the table of version ${version}.`};
+      show(hashOf("/nc", {program, a: version, b: r.table_version}));
     } catch (e) {
       message(msg, errorText(e), "error");
     }
@@ -643,31 +664,26 @@ function askName() {
 
 // ---- Pending tables ----
 
-async function pendingPage(p) {
-  const all = p.all === "true";
-  page().innerHTML = `<h1>Pending tables</h1>
-    <p class="muted">A table waits here when the service holds it (a large change, poor repeatability) or every table needs approval.
-      Approve writes it to the control; reject keeps the table in force.</p>
-    <div class="decide"><label>Decided by <input id="decided-by" value="${esc(sessionStorage.getItem(BY_KEY) || "")}" placeholder="your name"></label>
-      <a href="${hashOf("/pending", all ? {} : {all: "true"})}">${all ? "Show only pending" : "Show decided ones too"}</a></div>
-    <div id="pending-message"></div><div id="pending-out"><p>Loading…</p></div>`;
-  const out = document.getElementById("pending-out");
-  let tables;
-  try {
-    tables = await api("/api/nc/pending?" + apiQuery({all: all ? "true" : "", limit: 200}));
-  } catch (e) {
-    message(out, errorText(e), "error");
-    return;
-  }
-  if (tables.length === 0) { out.innerHTML = `<div class="message" id="no-pending">No table is waiting for a decision.</div>`; return; }
-  out.innerHTML = tables.map((t) => `
-    <div class="card pending" data-id="${t.id}" style="margin-bottom:10px">
+// What approving pending table `t` (GET /api/nc/pending/{id}) would change, from the service's
+// comparison of its curve table with the one in force; `plain` for a question's text.
+function changeText(t, plain) {
+  const b = (x, cls) => plain ? x : `<strong class="${cls}">${esc(x)}</strong>`;
+  if (!t.change && t.in_force_version === null) return `No table of ${plain ? t.program : esc(t.program)} is in force yet: this would be its first.`;
+  if (!t.change) return `Change from the table in force: not computed (${plain ? t.change_problem : esc(t.change_problem)}).`;
+  const c = t.change;
+  return `Change from version ${c.against_version} in force: at most ${b(um(c.max_abs_um), "change-max")} at ${b(`C ${c.at_c_deg}°`, "change-at")}; `
+    + `${b(String(c.degrees_over), "change-over")} of ${c.degrees} degrees change by more than ${fig(c.threshold_um, "µm", 1)}.`;
+}
+
+function pendingCardHtml(t) {
+  return `<div class="card pending" data-id="${t.id}" style="margin-bottom:10px">
       <h2>Table ${t.id} for ${esc(programOf(t.nc_file))} ${verdict(t.status)}</h2>
       <dl class="kv">${t.gear_run_id ? `<dt>Gear run</dt><dd>${t.gear_run_id} (a gear's stroke: \`gaugeloop gear runs show ${t.gear_run_id}\`)</dd>`
                        : `<dt>Run</dt><dd><a href="#/run/${t.run_id}">${t.run_id}</a></dd>`}<dt>Made (UTC)</dt><dd>${utc(t.created_utc)}</dd>
         <dt>Why it waits</dt><dd>${t.verdict === "hold" ? "held: " + esc(t.reason) : "every table needs approval"}</dd>
         <dt>Correction</dt><dd>${um(t.correction_max_um)} at most; ${esc(t.block_count ?? "–")} blocks, command error ${um(t.command_error_um)}</dd>
         ${t.decided_by ? `<dt>Decided</dt><dd>by ${esc(t.decided_by)} at ${utc(t.decided_utc)} ${esc(t.note)}</dd>` : ""}</dl>
+      ${t.status === "pending" && !t.gear_run_id ? `<div class="change-summary"><span class="muted">Comparing with the table in force…</span></div>` : ""}
       ${t.status === "pending" ? `<div class="decide" style="margin-top:6px">
         <input class="note" placeholder="note (optional)">
         ${t.gear_run_id ? `<span class="muted">a gear's stroke: approve it with <code>gaugeloop nc approve ${t.id}</code>, which writes its main program's gearbox</span>`
@@ -675,26 +691,99 @@ async function pendingPage(p) {
         <button class="danger reject" data-id="${t.id}">${writeLabel("Reject")}</button>
         ${t.gear_run_id ? "" : `<button class="show-diff" data-id="${t.id}">Diff from the table in force</button>`}</div>` : ""}
       <div class="result"></div><div class="pending-diff"></div>
-    </div>`).join("");
-  out.querySelectorAll(".card.pending").forEach((cardEl) => {
+    </div>`;
+}
+
+async function pendingPage(p) {
+  const all = p.all === "true";
+  page().innerHTML = `<h1>Pending tables</h1>
+    <p class="muted">A table waits here when the service holds it (a large change, poor repeatability) or every table needs approval.
+      Approve writes it to the control; reject keeps the table in force. With the token, each asks first, naming the table, the version
+      it would become and its change.</p>
+    <p id="pending-count" class="muted"></p>
+    <div class="decide"><label>Decided by <input id="decided-by" value="${esc(sessionStorage.getItem(BY_KEY) || "")}" placeholder="your name"></label>
+      <a href="${hashOf("/pending", all ? {} : {all: "true"})}">${all ? "Show only pending" : "Show decided ones too"}</a></div>
+    <div id="pending-message"></div><div id="pending-out"><p>Loading…</p></div>`;
+  const out = document.getElementById("pending-out");
+  // How many wait now, from the service: after each decision too.
+  const count = async () => {
+    const el = document.getElementById("pending-count");
+    try {
+      const n = (await api("/api/nc/pending?limit=200")).length;
+      if (el) el.textContent = n === 0 ? "No table waits for a decision." : `${n} table${n === 1 ? " waits" : "s wait"} for a decision.`;
+    } catch (e) {
+      if (el) el.textContent = errorText(e);
+    }
+  };
+  let tables;
+  try {
+    tables = await api("/api/nc/pending?" + apiQuery({all: all ? "true" : "", limit: 200}));
+  } catch (e) {
+    message(out, errorText(e), "error");
+    return;
+  }
+  count();
+  if (tables.length === 0) { out.innerHTML = `<div class="message" id="no-pending">No table is waiting for a decision.</div>`; return; }
+  out.innerHTML = tables.map(pendingCardHtml).join("");
+  const bind = (cardEl) => {
     const id = cardEl.dataset.id;
+    const program = programOf(tables.find((t) => String(t.id) === id)?.nc_file ?? "");
     const result = cardEl.querySelector(".result");
+    const summary = cardEl.querySelector(".change-summary");
+    if (summary) {
+      api("/api/nc/pending/" + id).then((t) => { summary.innerHTML = changeText(t, false); })
+        .catch((e) => { summary.textContent = errorText(e); });
+    }
     const decide = async (verb) => {
       const by = askName();
       if (by === null) { message(result, "A decision needs your name.", "error"); return; }
       const note = cardEl.querySelector(".note").value;
+      // With the token, the question names what the service says now; without it the service
+      // refuses the write, and the page shows why.
+      if (token()) {
+        let t;
+        try {
+          t = await api("/api/nc/pending/" + id);
+        } catch (e) {
+          message(result, errorText(e), "error");
+          return;
+        }
+        if (t.status !== "pending") {
+          message(result, `Table ${id} is no longer pending: it was ${t.status}. Reload the page for the tables that wait now.`, "error");
+          return;
+        }
+        const question = verb === "approve"
+          ? `Approve table ${id} for ${t.program} and write it to the control as version ${t.next_version}? (${
+            t.in_force_version ? `Version ${t.in_force_version} is in force now.` : `No table of ${t.program} is in force yet.`})`
+          : `Reject table ${id} for ${t.program}, which would have become version ${t.next_version}? Nothing is written${
+            t.in_force_version ? `: version ${t.in_force_version} stays in force` : ""}.`;
+        if (!window.confirm(`${question}\n\n${changeText(t, true)}`)) {
+          message(result, `Not ${verb === "approve" ? "approved" : "rejected"}: nothing was written.`);
+          return;
+        }
+      }
+      let text;
       try {
         const r = await write(`/api/nc/${verb}/${id}`, {by, note});
-        if (verb === "approve") {
-          message(result, `Approved: version ${r.table_version} of ${programOf(r.nc_file)} written to the control.`, "ok");
-          result.insertAdjacentHTML("beforeend", `<a class="nc-link" href="${hashOf("/nc", {program: programOf(r.nc_file)})}">NC history of ${esc(programOf(r.nc_file))}</a>`);
-        } else {
-          message(result, `Rejected: the table in force stays.`, "ok");
-        }
-        cardEl.querySelectorAll("button.approve, button.reject").forEach((b) => { b.disabled = true; });
+        text = verb === "approve" ? `Approved: version ${r.table_version} of ${programOf(r.nc_file)} written to the control.`
+                                  : `Rejected: the table in force of ${program} stays.`;
       } catch (e) {
         message(result, errorText(e), "error");
+        return;
       }
+      // The card again as the service has it now: its status, who decided, no buttons.
+      try {
+        const fresh = await api("/api/nc/pending/" + id);
+        cardEl.outerHTML = pendingCardHtml(fresh);
+      } catch (e) {
+        cardEl.querySelectorAll("button.approve, button.reject").forEach((b) => { b.disabled = true; });
+      }
+      const now = out.querySelector(`.card.pending[data-id="${id}"] .result`);
+      message(now, text, "ok");
+      if (verb === "approve") {
+        now.insertAdjacentHTML("beforeend", `<a class="nc-link" href="${hashOf("/nc", {program})}">NC history of ${esc(program)}</a>`);
+      }
+      count();
     };
     cardEl.querySelector("button.approve")?.addEventListener("click", () => decide("approve"));
     cardEl.querySelector("button.reject")?.addEventListener("click", () => decide("reject"));
@@ -709,7 +798,8 @@ async function pendingPage(p) {
         message(target, errorText(e), "error");
       }
     });
-  });
+  };
+  out.querySelectorAll(".card.pending").forEach(bind);
 }
 
 // ---- New program ----
@@ -841,14 +931,24 @@ async function statePage() {
     const f = Object.fromEntries(new FormData(ev.target).entries());
     const [part, lobe] = (f["lobe-of"] || "|").split("|");
     const msg = document.getElementById("measure-message");
+    const button = document.getElementById("measure-button");
     message(msg, "Measuring…");
+    button.disabled = true;  // one measurement at a time: the service refuses a second (409)
     try {
       const r = await write("/api/measure", {part, lobe: Number(lobe), serial: f.serial, operator: f.operator, note: f.note});
-      message(msg, "Measured" + (r && r.run_id ? `: run ${r.run_id}` : "") + ".", "ok");
-      if (r && r.run_id) msg.insertAdjacentHTML("beforeend", `<a href="#/run/${r.run_id}">Show run ${r.run_id}</a>`);
+      // What became of its table, from the answer: written, waiting for approval, or neither and why.
+      const table = r.pushed ? `version ${r.table_version} of ${programOf(r.nc_file)} written to the control`
+        : r.pending_id ? `its table waits for approval (table ${r.pending_id})`
+        : `no table written: ${r.not_pushed_reason ?? "the service gave no reason"}`;
+      message(msg, `Measured: run ${r.run_id} — ${table}.`, "ok");
+      msg.insertAdjacentHTML("beforeend", `<div class="links"><a href="#/run/${r.run_id}">Show run ${r.run_id}</a>${
+        r.pending_id ? `<a id="measure-pending" href="#/pending">Pending tables</a>` : ""}${
+        r.pushed ? `<a href="${hashOf("/nc", {program: programOf(r.nc_file)})}">NC history of ${esc(programOf(r.nc_file))}</a>` : ""}</div>`);
       refresh();
     } catch (e) {
       message(msg, errorText(e), "error");
+    } finally {
+      button.disabled = false;
     }
   });
   await refresh();
@@ -857,22 +957,49 @@ async function statePage() {
 
 // ---- Token and routing ----
 
-function showToken() {
+// The token's state beside its field; `said`: what checking it last found, when that is more than
+// "accepted" ({text, why}).
+function showToken(said) {
   const on = token() !== "";
   const state = document.getElementById("token-state");
-  state.textContent = on ? "writes enabled" : "read-only";
-  state.classList.toggle("on", on);
+  state.textContent = said ? said.text : on ? "writes enabled" : "read-only";
+  state.title = said ? said.why : on ? "the service accepted this token" : "enter the token to approve, reject, roll back and measure";
+  state.classList.toggle("on", on && !said);
+  state.classList.toggle("refused", !on && !!said);
   document.getElementById("token-input").hidden = on;
   document.getElementById("token-use").hidden = on;
   document.getElementById("token-forget").hidden = !on;
 }
 
-document.getElementById("token-form").addEventListener("submit", (ev) => {
+// Asks the service whether `candidate` is its token (GET /api/token: nothing is written). Kept
+// for the session only when accepted, or when the service did not answer; null when accepted,
+// otherwise what to show beside the field.
+async function checkToken(candidate) {
+  let r;
+  try {
+    r = await fetch("/api/token", {cache: "no-store", headers: {"Authorization": "Bearer " + candidate}});
+  } catch (e) {
+    sessionStorage.setItem(TOKEN_KEY, candidate);
+    return {text: "token kept, not checked", why: `the service did not answer: ${e.message}`};
+  }
+  if (r.ok) {
+    sessionStorage.setItem(TOKEN_KEY, candidate);
+    return null;
+  }
+  sessionStorage.removeItem(TOKEN_KEY);
+  let why = `HTTP ${r.status}`;
+  try { why = (await r.json()).error || why; } catch (e) { /* the status says it */ }
+  return {text: r.status === 403 ? "writes disabled" : "token refused", why};
+}
+
+document.getElementById("token-form").addEventListener("submit", async (ev) => {
   ev.preventDefault();
   const input = document.getElementById("token-input");
-  if (input.value.trim()) sessionStorage.setItem(TOKEN_KEY, input.value.trim());
+  const candidate = input.value.trim();
   input.value = "";
-  showToken();
+  if (!candidate) return;
+  document.getElementById("token-state").textContent = "checking…";
+  showToken(await checkToken(candidate));
   route();
 });
 document.getElementById("token-forget").addEventListener("click", () => {
@@ -881,6 +1008,12 @@ document.getElementById("token-forget").addEventListener("click", () => {
   route();
 });
 
+// Shows the page at `hash`, drawn again when it is the one shown.
+function show(hash) {
+  if (location.hash === hash) route();
+  else location.hash = hash;
+}
+
 function route() {
   if (refreshTimer) { clearInterval(refreshTimer); refreshTimer = null; }
   const hash = location.hash.replace(/^#/, "") || "/runs";
@@ -888,6 +1021,7 @@ function route() {
   const p = params(query);
   const parts = path.split("/").filter((x) => x);
   const name = parts[0] || "runs";
+  if (notice && notice.page !== name) notice = null;
   document.querySelectorAll("nav a").forEach((a) => a.classList.toggle("current", a.dataset.page === (name === "run" ? "runs" : name === "gear" ? "gears" : name)));
   const pages = {
     runs: () => runsPage(p),
@@ -911,3 +1045,5 @@ function route() {
 window.addEventListener("hashchange", route);
 showToken();
 route();
+// A token kept from earlier in the session is checked again: the service's may have changed.
+if (token()) checkToken(token()).then((said) => { if (said) { showToken(said); route(); } });

@@ -7,12 +7,15 @@ shaft S-1001 (its table approved here: version 1 of CAM_INTAKE_L1), then lobe 1 
 shaft S-1002 (two pending tables); later two gears of the virtual gear grinder's loop join the
 same database. The browser then looks at every page, approves the lobe 1
 table with the token (the NC history shows version 2 and its diff) and rejects the lobe 2 one,
-after both were refused without it; then previews lobe 2's first program and writes it (lobe
-1's, which has a history, is refused). At 390x844 the verdicts and write buttons of the run
-history, the characteristics, the NC history, the pending tables and the service page are
-within the screen and whole, and the run's plot keeps its drawn size in a box that scrolls.
-Screenshots of every page, at 1366x768 and 390x844, go to
---screenshots. Exits 0 when every check holds; a failed check says what the page showed.
+after both were refused without it, a wrong token was refused as it was entered, and each
+question was dismissed once with nothing written; the lobe 1 table's change from the table in
+force is shown above its diff as computed here from the two programs. It rolls back (dismissed
+once, then accepted), previews lobe 2's first program and writes it (lobe 1's, which has a
+history, is refused), and measures from the service page, which says the table waits. At
+390x844 the verdicts and write buttons of the run history, the characteristics, the NC history,
+the pending tables and the service page are within the screen and whole, and the run's plot
+keeps its drawn size in a box that scrolls. Screenshots of every page, at 1366x768 and 390x844,
+go to --screenshots. Exits 0 when every check holds; a failed check says what the page showed.
 """
 
 import argparse
@@ -269,6 +272,58 @@ def check_in_view(b, what, size, selectors, whole_text=()):
           + (f" (and {len(problems) - 8} more)" if len(problems) > 8 else ""))
 
 
+def table_points(program):
+    """A curve table program's points (C deg, X mm) and whether it is a CSPLINE table."""
+    points, inside, x = [], False, None
+    for line in program.splitlines():
+        code = line.split(";", 1)[0].strip()
+        if code.startswith("CTABDEF"):
+            inside = True
+        elif code.startswith("CTABEND"):
+            break
+        elif inside and code:
+            words = {w[0]: float(w[1:].lstrip("=")) for w in code.split()
+                     if w[0] in "CX" and len(w) > 1 and (w[1].isdigit() or w[1] in "-.=")}
+            x = words.get("X", x)  # X is modal
+            points.append((words["C"], x))
+    return points, "CSPLINE" in program
+
+
+def table_x_mm(points, spline):
+    """X at any C as the control interpolates the periodic table: straight lines, or the natural
+    cubic spline (BNAT ENAT) through the points, C read modulo the table's turn."""
+    c, y = [p[0] for p in points], [p[1] for p in points]
+    n = len(c)
+    h = [c[i + 1] - c[i] for i in range(n - 1)]
+    moments = [0.0] * n
+    if spline:  # h[i-1] M[i-1] + 2 (h[i-1] + h[i]) M[i] + h[i] M[i+1] = 6 (slope[i] - slope[i-1]), by elimination
+        slope = [(y[i + 1] - y[i]) / h[i] for i in range(n - 1)]
+        diag = [2 * (h[i - 1] + h[i]) for i in range(1, n - 1)]
+        rhs = [6 * (slope[i] - slope[i - 1]) for i in range(1, n - 1)]
+        for k in range(1, n - 2):
+            f = h[k] / diag[k - 1]
+            diag[k] -= f * h[k]
+            rhs[k] -= f * rhs[k - 1]
+        for k in range(n - 3, -1, -1):
+            moments[k + 1] = (rhs[k] - (h[k + 1] * moments[k + 2] if k + 2 < n - 1 else 0.0)) / diag[k]
+
+    def at(cc):
+        cc = c[0] + (cc - c[0]) % (c[-1] - c[0])
+        i = max(j for j in range(n - 1) if c[j] <= cc)
+        a, b = (c[i + 1] - cc) / h[i], (cc - c[i]) / h[i]
+        return a * y[i] + b * y[i + 1] + ((a ** 3 - a) * moments[i] + (b ** 3 - b) * moments[i + 1]) * h[i] ** 2 / 6
+    return at
+
+
+def table_change(pending, in_force, threshold_um=0.1):
+    """The largest |dX| in um between two table programs over the whole degrees of C, where, and
+    how many degrees differ by more than the threshold."""
+    p, f = table_x_mm(*table_points(pending)), table_x_mm(*table_points(in_force))
+    dx = [abs(p(d) - f(d)) * 1000 for d in range(360)]
+    at = max(range(360), key=lambda d: dx[d])
+    return dx[at], at, sum(1 for v in dx if v > threshold_um)
+
+
 def run_checks(svc, browser, shots):
     b = browser
     ui = svc.base + "/ui/"
@@ -429,33 +484,90 @@ def run_checks(svc, browser, shots):
                                                      ".card.pending button.reject"],
                   whole_text=[".card.pending .verdict"])
 
-    # ---- A wrong token is refused too, and can be forgotten ----
+    # ---- A wrong token is refused as it is entered, before any write ----
     b.driver.find_element(By.CSS_SELECTOR, "#token-input").send_keys("not-the-token")
     b.driver.find_element(By.CSS_SELECTOR, "#token-use").click()
-    b.wait_text("#token-state", "writes enabled")
-    wait_until("the pending tables drawn again", lambda: b.count(f".card.pending[data-id='{approve_id}'] button.approve") == 1
-               and b.text(f".card.pending[data-id='{approve_id}'] button.approve") == "Approve and write")
-    b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{approve_id}'] button.approve").click()
-    refused = b.wait_text(f".card.pending[data-id='{approve_id}'] .result", "not the one configured")
-    check("Forget the token" in refused, refused)
+    b.wait_text("#token-state", "token refused")
+    check("not the one configured" in b.driver.find_element(By.CSS_SELECTOR, "#token-state").get_attribute("title"),
+          "the refusal says why")
+    wait_until("the token field still offered", lambda: b.driver.find_element(By.CSS_SELECTOR, "#token-input").is_displayed())
+    wait_until("the pending tables drawn again, still needing the token",
+               lambda: "needs the token" in b.text(f".card.pending[data-id='{approve_id}'] button.approve"))
     check(len(svc.get_json("/api/nc/pending")) == 2, "nothing was decided with a wrong token")
+
+    # ---- The token, entered once for the session, and forgotten ----
+    def enter_token():
+        b.driver.find_element(By.CSS_SELECTOR, "#token-input").send_keys(svc.token)
+        b.driver.find_element(By.CSS_SELECTOR, "#token-use").click()
+        b.wait_text("#token-state", "writes enabled")
+    enter_token()
     b.driver.find_element(By.CSS_SELECTOR, "#token-forget").click()
     b.wait_text("#token-state", "read-only")
-
-    # ---- The token, entered once for the session ----
     wait_until("the token field back", lambda: b.driver.find_element(By.CSS_SELECTOR, "#token-input").is_displayed())
-    b.driver.find_element(By.CSS_SELECTOR, "#token-input").send_keys(svc.token)
-    b.driver.find_element(By.CSS_SELECTOR, "#token-use").click()
-    b.wait_text("#token-state", "writes enabled")
+    enter_token()
     wait_until("the buttons to no longer ask for the token",
                lambda: b.text(f".card.pending[data-id='{approve_id}'] button.approve") == "Approve and write")
-    # A diff of the pending table from the table in force.
+
+    # ---- The change a table makes, above its diff, as the service computes it ----
+    detail = svc.get_json(f"/api/nc/pending/{approve_id}")
+    change = detail["change"]
+    check(detail["in_force_version"] == 1 and detail["next_version"] == 2 and change["against_version"] == 1,
+          f"the table would become version 2 over version 1: {detail}")
+    summary_css = f".card.pending[data-id='{approve_id}'] .change-summary"
+    summary = b.wait_text(summary_css, "Change from version 1 in force")
+    check(b.text(summary_css + " .change-max") == f"{change['max_abs_um']:.2f} µm"
+          and b.text(summary_css + " .change-at") == f"C {change['at_c_deg']}°"
+          and b.text(summary_css + " .change-over") == str(change["degrees_over"])
+          and "by more than 0.1 µm" in summary, f"the summary shows the service's figures {change}: {summary}")
+    check(0 < change["degrees_over"] <= 360 and change["max_abs_um"] > 0.1, f"the new table changes the path: {change}")
+    # The same figures computed here from the two programs' points.
+    in_force_text = svc.get_json("/api/nc/table?program=CAM_INTAKE_L1")["program_text"]
+    mine = table_change(detail["program_text"], in_force_text)
+    check(abs(mine[0] - change["max_abs_um"]) < 0.005 and mine[1] == change["at_c_deg"] and mine[2] == change["degrees_over"],
+          f"the change computed here {mine} is the service's {change}")
+    b.wait_text(f".card.pending[data-id='{reject_id}'] .change-summary", "No table of CAM_INTAKE_L2 is in force yet")
+    # A diff of the pending table from the table in force, below the summary.
     b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{approve_id}'] button.show-diff").click()
     b.wait_text(f".card.pending[data-id='{approve_id}'] #diff-count", "differ")
+    check(b.driver.execute_script(
+        "const c = document.querySelector(arguments[0]);"
+        "return c.querySelector('.change-summary').getBoundingClientRect().bottom <= c.querySelector('#diff').getBoundingClientRect().top",
+        f".card.pending[data-id='{approve_id}']"), "the summary is above the diff")
+
+    # ---- Approve and reject ask first; dismissed, nothing is written ----
+    b.wait_text("#pending-count", "2 tables wait")
     b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{approve_id}'] button.approve").click()
-    b.wait_text(f".card.pending[data-id='{approve_id}'] .result", "Approved: version 2 of CAM_INTAKE_L1")
+    question = wait_until("the approval's question", lambda: b.driver.switch_to.alert)
+    asked = question.text
+    for fragment in (f"Approve table {approve_id} for CAM_INTAKE_L1", "as version 2", "Version 1 is in force",
+                     f"at most {change['max_abs_um']:.2f} µm at C {change['at_c_deg']}°",
+                     f"{change['degrees_over']} of 360 degrees"):
+        check(fragment in asked, f"the approval's question says {fragment!r}: {asked}")
+    question.dismiss()
+    b.wait_text(f".card.pending[data-id='{approve_id}'] .result", "Not approved: nothing was written")
+    check(len(svc.get_json("/api/nc/pending")) == 2 and len(svc.get_json("/api/nc/history?program=CAM_INTAKE_L1")) == 1,
+          "a dismissed approval writes nothing")
+    check("2 tables wait" in b.text("#pending-count"), b.text("#pending-count"))
     b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{reject_id}'] button.reject").click()
+    question = wait_until("the rejection's question", lambda: b.driver.switch_to.alert)
+    check(f"Reject table {reject_id} for CAM_INTAKE_L2" in question.text and "version 1" in question.text,
+          f"the rejection's question: {question.text}")
+    question.dismiss()
+    b.wait_text(f".card.pending[data-id='{reject_id}'] .result", "Not rejected: nothing was written")
+    check(len(svc.get_json("/api/nc/pending")) == 2, "a dismissed rejection writes nothing")
+    # Accepted: written, and the page shows what the service holds now without a reload.
+    b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{approve_id}'] button.approve").click()
+    wait_until("the approval's question", lambda: b.driver.switch_to.alert).accept()
+    b.wait_text(f".card.pending[data-id='{approve_id}'] .result", "Approved: version 2 of CAM_INTAKE_L1")
+    b.wait_text(f".card.pending[data-id='{approve_id}'] h2 .verdict", "approved")
+    check(b.count(f".card.pending[data-id='{approve_id}'] button.approve") == 0, "an approved table offers no approval")
+    check("by anna" in b.text(f".card.pending[data-id='{approve_id}'] dl"), "the card says who approved it")
+    b.wait_text("#pending-count", "1 table waits")
+    b.driver.find_element(By.CSS_SELECTOR, f".card.pending[data-id='{reject_id}'] button.reject").click()
+    wait_until("the rejection's question", lambda: b.driver.switch_to.alert).accept()
     b.wait_text(f".card.pending[data-id='{reject_id}'] .result", "Rejected")
+    b.wait_text(f".card.pending[data-id='{reject_id}'] h2 .verdict", "rejected")
+    b.wait_text("#pending-count", "No table waits")
     check(svc.get_json("/api/nc/pending") == [], "no table is pending after the decisions")
     decided = {p["id"]: p for p in svc.get_json("/api/nc/pending?all=true")}
     check(decided[approve_id]["status"] == "approved" and decided[approve_id]["decided_by"] == "anna",
@@ -475,13 +587,24 @@ def run_checks(svc, browser, shots):
     check(b.count("#diff .add") > 0 and b.count("#diff .del") > 0, "the diff marks added and removed lines")
     screenshots(b, shots, "nc", lambda: b.count("#diff .add") > 0)
     check_in_view(b, "the NC history", "phone", ["table#nc-history button.rollback", "table#nc-history td"])
-    # Roll back to version 1 (confirmed): version 3 holds its table, the same text.
+    # Roll back to version 1, after a question naming the versions: dismissed, nothing is written;
+    # accepted, version 3 holds its table, and the history shows it without a reload.
+    b.driver.find_element(By.CSS_SELECTOR, "table#nc-history tr[data-version='1'] button.rollback").click()
+    question = wait_until("the rollback's question", lambda: b.driver.switch_to.alert)
+    check("Roll CAM_INTAKE_L1 back to the table of version 1" in question.text and "as version 3" in question.text
+          and "version 2 is in force" in question.text, f"the rollback's question: {question.text}")
+    question.dismiss()
+    b.wait_text("#nc-message", "Not rolled back")
+    check(len(svc.get_json("/api/nc/history?program=CAM_INTAKE_L1")) == 2, "a dismissed rollback writes nothing")
     b.driver.find_element(By.CSS_SELECTOR, "table#nc-history tr[data-version='1'] button.rollback").click()
     wait_until("the rollback's question", lambda: b.driver.switch_to.alert).accept()
     b.wait_text("#nc-message", "Rolled back: version 3 holds the table of version 1")
-    b.driver.find_element(By.CSS_SELECTOR, "#nc-reload").click()
     b.wait_text("#nc-title", "3 versions, version 3 in force")
     b.wait_text("#diff-count", "differ")
+    check(b.count("table#nc-history tr[data-version='3'] button.rollback") == 0
+          and b.count("table#nc-history tr[data-version='2'] button.rollback") == 1
+          and b.count("table#nc-history tr[data-version='1'] button.rollback") == 1,
+          "version 3 is in force, versions 1 and 2 can be rolled back to")
     v1 = svc.get_json("/api/nc/table?program=CAM_INTAKE_L1&version=1")["program_text"]
     v3 = svc.get_json("/api/nc/table?program=CAM_INTAKE_L1&version=3")["program_text"]
     check(v3 != v1 and "rollback" in svc.get_json("/api/nc/history?program=CAM_INTAKE_L1")[0]["reason"],
@@ -532,9 +655,13 @@ def run_checks(svc, browser, shots):
     before = len(svc.get_json("/api/runs"))
     b.driver.find_element(By.CSS_SELECTOR, "#measure-form input[name=serial]").send_keys("S-1003")
     b.driver.find_element(By.CSS_SELECTOR, "#measure-button").click()
-    b.wait_text("#measure-message", "Measured: run")
+    said = b.wait_text("#measure-message", "Measured: run")
     runs = svc.get_json("/api/runs")
     check(len(runs) == before + 1 and runs[0]["serial"] == "S-1003", f"a run of S-1003 was measured: {runs[0]}")
+    waiting = svc.get_json("/api/nc/pending")
+    check(len(waiting) == 1 and waiting[0]["run_id"] == runs[0]["id"], f"its table waits: {waiting}")
+    check(f"Measured: run {runs[0]['id']} — its table waits for approval (table {waiting[0]['id']})" in said,
+          f"the page says where its table went: {said}")
     b.driver.find_element(By.CSS_SELECTOR, "#measure-message a").click()
     b.wait_text("#title", f"Run {runs[0]['id']}")
 
