@@ -170,6 +170,15 @@ void add_spc_commands(CLI::App* runs, CommandAction& action) {
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
   spc_cmd->add_option("--machine", spc->query.machine, "Only runs on this machine");
+  spc_cmd
+      ->add_option("--status", spc->query.status,
+                   "Only runs whose table was pushed (pushed) or not (measured: held, inspected)")
+      ->check(CLI::IsMember({"measured", "pushed"}));
+  spc_cmd
+      ->add_option("--ground-with-from", spc->query.ground_with_from,
+                   "Only parts ground with this table version of the lobe's program or a later one (leaves out "
+                   "the parts ground before the correction it brought)")
+      ->check(CLI::Range(1, 1000000));
   spc_cmd->add_option("--since", spc->since, "Only from this UTC date or time on, e.g. 2026-11-22 or 2026-11-22T08:30");
   spc_cmd->add_option("--until", spc->until, "Only up to this UTC date or time, inclusive (2026-11-22: the whole day)");
   spc_cmd->add_flag("--json", spc->json_out, "Print JSON instead of a table");

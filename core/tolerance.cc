@@ -181,7 +181,7 @@ std::string characteristic_title(std::string_view key, PartKind kind) {
   } else if (key == "base_circle_runout") {
     return "Base circle runout (dial)";
   } else if (key == "base_circle_runout_h1") {
-    return "Base circle runout (1st harmonic)";
+    return "Base circle eccentricity (1st harmonic)";
   } else if (key == "roundness") {
     return kind == PartKind::kPin ? "Pin roundness" : "Base circle roundness";
   } else if (key == "diameter_error") {

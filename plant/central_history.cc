@@ -133,6 +133,7 @@ Result<Filter> run_filter(const RunQuery& q) {
   if (!q.serial.empty()) f.add("r.serial =", q.serial);
   if (q.verdict) f.add("r.verdict =", std::string(verdict_name(*q.verdict)));
   if (!q.status.empty()) f.add("r.status =", q.status);
+  if (q.ground_with_from > 0) f.add("r.ground_with_version >=", std::to_string(q.ground_with_from));
   if (!q.since_utc.empty()) f.add("r.started_utc >=", q.since_utc);
   if (!q.until_utc.empty()) f.add("r.started_utc <", q.until_utc);
   return f;

@@ -13,6 +13,7 @@
 #include "core/number_text.h"
 #include "core/utc_time.h"
 #include "core/utf8.h"
+#include "report/judged_error.h"
 
 namespace gaugeloop {
 namespace {
@@ -260,6 +261,14 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
     if (one_machine && !b.runs.front()->run.machine.empty())
       out.add("K1081", part_number, in_windows_1252(b.runs.front()->run.machine));
     if (!options.operation.empty()) out.add("K1086", part_number, in_windows_1252(options.operation));
+    // The curve the error characteristics judge, named in their title when every run of the
+    // block says the same (the plant's central history does not say).
+    std::optional<std::string_view> judged;
+    if (std::all_of(b.runs.begin(), b.runs.end(), [&](const RunCharacteristics* r) {
+          return r->run.lift_error_reference && r->run.lift_error_reference == b.runs.front()->run.lift_error_reference;
+        })) {
+      judged = judged_reference_text(kind, *b.runs.front()->run.lift_error_reference);
+    }
     for (const DfqCharacteristicDef& d : b.characteristics) {
       const int decimals = dfq_decimals(d.unit);
       std::optional<double> lower = d.limits.lower;
@@ -269,7 +278,9 @@ Result<std::string> write_dfq(const std::vector<RunCharacteristics>& runs, const
         natural_lower = true;
       }
       out.add("K2001", d.number, d.key);
-      out.add("K2002", d.number, characteristic_title(d.key, kind));
+      out.add("K2002", d.number,
+              characteristic_title(d.key, kind) +
+                  (judged && judges_error_curve(d.key, kind) ? " (" + std::string(*judged) + ")" : ""));
       out.add("K2022", d.number, std::to_string(decimals));
       out.add("K2101", d.number, format_fixed(0.0, decimals));
       if (lower) out.add("K2110", d.number, format_fixed(*lower, decimals));

@@ -31,23 +31,23 @@ JudgedError judged_error(const StoredRun& run) {
     j.error_um = a.residual_error_um;
     j.raw_error_um = a.error_um;
     j.name = "radius error less the least-squares circle";
-    j.reference = "less LS circle";
+    j.reference = judged_reference_text(PartKind::kPin, LiftErrorReference::kBestFit);
   } else if (run.lift_error_reference == LiftErrorReference::kNominal) {
     j.basis = JudgedError::Basis::kNominal;
     j.error_um = a.error_um;
     j.name = "lift error at nominal timing";
-    j.reference = "at nominal timing";
+    j.reference = judged_reference_text(PartKind::kLobe, LiftErrorReference::kNominal);
   } else if (all_zero(a.residual_error_um) && !all_zero(a.error_um)) {
     // Stored before the best-fit error was kept: the raw error is all there is.
     j.basis = JudgedError::Basis::kNominalNoBestFit;
     j.error_um = a.error_um;
     j.name = "lift error at nominal timing (the run kept no best-fit error)";
-    j.reference = "at nominal timing";
+    j.reference = judged_reference_text(PartKind::kLobe, LiftErrorReference::kNominal);
   } else {
     j.error_um = judged_lift_error_um(a, LiftErrorReference::kBestFit);
     j.raw_error_um = a.error_um;
     j.name = "lift error after the best-fit phase";
-    j.reference = "after best-fit phase";
+    j.reference = judged_reference_text(PartKind::kLobe, LiftErrorReference::kBestFit);
   }
   double sum_sq = 0.0;
   double lo = j.error_um[0];
@@ -94,6 +94,11 @@ DegreeLimits limits_per_cam_degree(const std::vector<Characteristic>& characteri
     out[static_cast<std::size_t>(d)] = nose_centred[static_cast<std::size_t>(x + 179)];
   }
   return out;
+}
+
+std::string_view judged_reference_text(PartKind kind, LiftErrorReference reference) {
+  if (kind == PartKind::kPin) return "less LS circle";
+  return reference == LiftErrorReference::kNominal ? "at nominal timing" : "after best-fit phase";
 }
 
 bool judges_error_curve(const std::string& key, PartKind kind) {

@@ -55,6 +55,10 @@ DegreeLimits limits_per_degree(const std::vector<Characteristic>& characteristic
 // The same limits indexed by cam degree 0..359 (the frame of DegreeTable).
 DegreeLimits limits_per_cam_degree(const std::vector<Characteristic>& characteristics, const std::string& figure);
 
+// The short form of the curve a run's error characteristics judge ("after best-fit phase", "at
+// nominal timing", "less LS circle"), as JudgedError::reference says it.
+std::string_view judged_reference_text(PartKind kind, LiftErrorReference reference);
+
 // Whether `key`'s figure is taken from the judged error curve (lift, velocity and acceleration
 // error and their zones of a lobe; a pin's roundness), so that a view names the curve beside it.
 bool judges_error_curve(const std::string& key, PartKind kind);

@@ -112,6 +112,9 @@ struct RunSummary {
   std::string serial;                     // the part's serial number; empty: not given (or before schema 7)
   std::string operator_name;              // who measured; empty: not given (or before schema 7)
   Verdict verdict = Verdict::kNotJudged;  // not judged for runs stored before schema 8
+  // Which lift error the lift characteristics judged; empty where the history does not say
+  // (the plant's central history).
+  std::optional<LiftErrorReference> lift_error_reference;
 };
 
 // What a curve table is, as kept with each push, pending table and push journal entry.
@@ -304,6 +307,7 @@ struct RunQuery {
   std::string serial;              // exact serial number (no wildcards, case counts); empty = any
   std::optional<Verdict> verdict;  // the run's verdict; empty = any
   std::string status;              // "measured" or "pushed"; empty = any
+  int ground_with_from = 0;        // only parts ground with this table version or a later one; 0 = any
   std::string since_utc;           // started at or after; empty = no bound
   std::string until_utc;           // started before (exclusive); empty = no bound
 };

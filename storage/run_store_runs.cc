@@ -78,15 +78,16 @@ UPDATE lobes SET rotation_sense = :rotation_sense, c_offset_deg = :c_offset_deg,
                  probe_offset_deg = :probe_offset_deg
 WHERE part = :part AND lobe = :lobe)sql";
 
-// Columns 0..20, read by read_summary() and (zero_offset_mm) read_summary_of_run().
+// Columns 0..23, read by read_summary() and (zero_offset_mm) read_summary_of_run().
 constexpr std::string_view kSummaryColumns =
     "r.id, r.started_utc, r.machine, r.part, r.lobe, r.status, r.revolutions, r.degrees_captured, "
     "r.max_abs_error_um, r.rms_error_um, r.repeatability_um, r.nc_file, r.phase_error_deg, "
     "r.base_circle_runout_um, r.peak_to_valley_um, r.settings_hash, r.note, r.raw_pruned_utc, r.serial, "
-    "r.operator, r.zero_offset_mm, r.verdict, r.uuid";
+    "r.operator, r.zero_offset_mm, r.verdict, r.uuid, r.lift_error_reference";
 constexpr int kZeroOffsetColumn = 20;
 constexpr int kVerdictColumn = 21;
 constexpr int kUuidColumn = 22;
+constexpr int kReferenceColumn = 23;
 
 std::string select_summaries(std::string_view rest) {
   return "SELECT " + std::string(kSummaryColumns) + " FROM runs AS r" + std::string(rest);
@@ -352,6 +353,9 @@ RunSummary read_summary(const Statement& s) {
   // NULL (before schema 8) reads as not judged.
   r.verdict = verdict_from_name(s.column<std::string>(kVerdictColumn)).value_or(Verdict::kNotJudged);
   r.uuid = s.column<std::string>(kUuidColumn);
+  if (const std::optional<std::string> ref = s.column<std::optional<std::string>>(kReferenceColumn)) {
+    r.lift_error_reference = *ref == "nominal" ? LiftErrorReference::kNominal : LiftErrorReference::kBestFit;
+  }
   return r;
 }
 
@@ -645,6 +649,10 @@ Status check_run_query(const RunQuery& q) {
     return make_error(ErrorCode::kInvalidInput,
                       "cannot list runs: status '" + q.status + "' is not one of measured, pushed");
   }
+  if (q.ground_with_from < 0) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "cannot list runs: table version " + std::to_string(q.ground_with_from) + " is negative");
+  }
   if (!storage_internal::is_time_bound(q.since_utc)) {
     return storage_internal::bad_bound("cannot list runs: since", q.since_utc);
   }
@@ -668,6 +676,7 @@ Result<storage_internal::WhereClause> run_filter(const RunQuery& q) {
   // runs_by_verdict serves with the sort.
   if (q.verdict) where.add("r.verdict =", std::string(verdict_name(*q.verdict)));
   if (!q.status.empty()) where.add("r.status =", q.status);
+  if (q.ground_with_from > 0) where.add_literal("r.ground_with_version >= " + std::to_string(q.ground_with_from));
   if (!q.since_utc.empty()) where.add("r.started_utc >=", q.since_utc);
   if (!q.until_utc.empty()) where.add("r.started_utc <", q.until_utc);
   return where;

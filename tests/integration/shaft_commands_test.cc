@@ -164,6 +164,37 @@ TEST_F(ShaftCommandsTest, SpcSelectsTheLobesRuns) {
   EXPECT_TRUE(has(since.output, "1 run, 2020-11-20T09:00:00Z to 2020-11-20T09:00:00Z")) << since.output;
 }
 
+// SPC can leave out the parts ground before a correction (by the table version that ground
+// them) and the runs whose table was or was not pushed.
+TEST_F(ShaftCommandsTest, SpcLeavesOutRunsByTableVersionAndStatus) {
+  {
+    Result<RunStore> store = RunStore::open(tmp_.path() / "gaugeloop.sqlite");
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    for (int version : {2, 3}) {
+      RunRecord r =
+          testing::sample_run("intake_flat", 1, "g1", "2020-11-21T0" + std::to_string(version) + ":00:00Z", 2.0);
+      r.ground_with_version = version;
+      r.ground_with_source = "option";
+      ASSERT_TRUE(store->insert_run(r).ok());
+    }
+  }
+  auto runs_of = [&](const std::string& filter) {
+    CommandResult r = run_command("runs spc --part intake_flat --lobe 1 --json " + filter + data_);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json j = nlohmann::json::parse(r.output, nullptr, false);
+    return j.is_discarded() || !j.contains("runs") ? -1 : j["runs"].get<int>();
+  };
+  EXPECT_EQ(runs_of(""), 5);
+  EXPECT_EQ(runs_of("--ground-with-from 2"), 2) << "the runs ground from the design or an unknown table left out";
+  EXPECT_EQ(runs_of("--ground-with-from 3"), 1);
+  EXPECT_EQ(runs_of("--status measured"), 5);
+  CommandResult pushed = run_command("runs spc --part intake_flat --lobe 1 --status pushed" + data_);
+  EXPECT_EQ(pushed.exit_code, 0) << pushed.output;
+  EXPECT_TRUE(has(pushed.output, "(no runs of intake_flat lobe 1 match")) << pushed.output;
+  EXPECT_EQ(run_command("runs spc --part intake_flat --lobe 1 --status held" + data_).exit_code, 2);
+  EXPECT_EQ(run_command("runs spc --part intake_flat --lobe 1 --ground-with-from 0" + data_).exit_code, 2);
+}
+
 // A stored run of `part` lobe `lobe` whose only characteristic is the whole-turn lift error
 // `value_um`, judged against `limits`.
 RunRecord run_with_lift_error(const std::string& part, int lobe, const std::string& started, double value_um,

@@ -274,6 +274,44 @@ TEST(DfqRoundTrip, APinsBlockSaysPinAndTitlesItsRoundnessAsThePins) {
   EXPECT_EQ(file.characteristics[1].fields.at("K2002"), "Pin diameter error");
 }
 
+// The title of an error characteristic names the curve it judged, as every other view of the run
+// does, when the block's runs agree on it; the history that does not say leaves it out.
+TEST(DfqRoundTrip, AnErrorCharacteristicsTitleNamesTheCurveItsRunsJudged) {
+  auto lobe_runs = [](std::optional<LiftErrorReference> first, std::optional<LiftErrorReference> second) {
+    std::vector<RunCharacteristics> runs = {
+        run(1, "2026-11-22T02:34:44Z", "", "",
+            {characteristic("lift_error", "um", 4.0, -12.0, 12.0),
+             characteristic("lift_error.closing_ramp", "um", -3.0, -8.0, 8.0),
+             characteristic("phase", "deg", 0.01, -0.1, 0.1)}),
+        run(2, "2026-11-22T02:40:00Z", "", "",
+            {characteristic("lift_error", "um", 5.0, -12.0, 12.0),
+             characteristic("lift_error.closing_ramp", "um", -2.0, -8.0, 8.0),
+             characteristic("phase", "deg", 0.02, -0.1, 0.1)}),
+    };
+    runs[0].run.lift_error_reference = first;
+    runs[1].run.lift_error_reference = second;
+    return runs;
+  };
+  DfqFile file = written_and_read(lobe_runs(LiftErrorReference::kBestFit, LiftErrorReference::kBestFit));
+  ASSERT_EQ(file.characteristics.size(), 3u);
+  EXPECT_EQ(file.characteristics[0].fields.at("K2002"), "Lift error, whole turn (after best-fit phase)");
+  EXPECT_EQ(file.characteristics[1].fields.at("K2002"), "Lift error, closing ramp (after best-fit phase)");
+  EXPECT_EQ(file.characteristics[2].fields.at("K2002"), "Phase (timing) error") << "not an error curve's figure";
+  file = written_and_read(lobe_runs(LiftErrorReference::kNominal, LiftErrorReference::kNominal));
+  EXPECT_EQ(file.characteristics[0].fields.at("K2002"), "Lift error, whole turn (at nominal timing)");
+  file = written_and_read(lobe_runs(LiftErrorReference::kNominal, LiftErrorReference::kBestFit));
+  EXPECT_EQ(file.characteristics[0].fields.at("K2002"), "Lift error, whole turn") << "the runs disagree";
+  file = written_and_read(lobe_runs(std::nullopt, std::nullopt));
+  EXPECT_EQ(file.characteristics[0].fields.at("K2002"), "Lift error, whole turn") << "the history does not say";
+
+  std::vector<RunCharacteristics> pin = {run(5, "2026-11-22T02:34:44Z", "", "",
+                                             {characteristic("roundness", "um", 3.5, std::nullopt, 4.0),
+                                              characteristic("diameter_error", "um", 0.15, -8.0, 8.0)})};
+  pin[0].run.lift_error_reference = LiftErrorReference::kBestFit;
+  file = written_and_read(pin);
+  EXPECT_EQ(file.characteristics[0].fields.at("K2002"), "Pin roundness (less LS circle)");
+}
+
 TEST(DfqRoundTrip, OneBlockOfRunsFromTwoMachinesHasNoPartMachine) {
   std::vector<RunCharacteristics> runs = hand_written_runs();
   runs[1].run.machine = "grinder-2";
