@@ -851,6 +851,10 @@ void add_measure_command(CLI::App& app, CommandAction& action) {
                       "`runs list --serial` finds it)");
   measure->add_option("--operator", measure_opts->operator_name,
                       "Who measures, stored with the run (free text, at most 64 characters)");
+  measure->add_option("--gauge-id", measure_opts->gauge_id,
+                      "The gauge's inventory number, printed on the run's report (at most 40 characters)");
+  measure->add_option("--gauge-calibrated", measure_opts->gauge_calibration_date,
+                      "The day of the gauge's last calibration, YYYY-MM-DD, printed on the run's report");
   auto as_service = std::make_shared<ServiceMeasureOptions>();
   CLI::Option* config = measure->add_option(
       "--config", as_service->config_path,

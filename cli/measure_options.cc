@@ -7,6 +7,7 @@
 #include "cli/embedded_defaults.h"
 #include "cli/pin_loop.h"
 #include "core/text_file.h"
+#include "core/utc_time.h"
 
 namespace gaugeloop {
 namespace {
@@ -30,7 +31,18 @@ Result<std::string> load_template(const std::string& path, std::string& name) {
 
 Status check_identity_options(const MeasureOptions& o) {
   if (Status s = check_run_identity("--serial", o.serial); !s) return s;
-  return check_run_identity("--operator", o.operator_name);
+  if (Status s = check_run_identity("--operator", o.operator_name); !s) return s;
+  if (Status s = check_run_identity("--gauge-id", o.gauge_id); !s) return s;
+  if (o.gauge_id.size() > 40) {
+    return make_error(ErrorCode::kInvalidInput, "--gauge-id: at most 40 characters, the gauge's inventory number");
+  }
+  if (!o.gauge_calibration_date.empty() &&
+      (!is_calendar_date(o.gauge_calibration_date) || o.gauge_calibration_date > utc_now().substr(0, 10))) {
+    return make_error(ErrorCode::kInvalidInput, "--gauge-calibrated " + o.gauge_calibration_date +
+                                                    ": not a past day as YYYY-MM-DD; give the date on the gauge's "
+                                                    "calibration certificate");
+  }
+  return {};
 }
 
 void add_program_options(CLI::App& cmd, MeasureOptions& o) {
@@ -134,6 +146,8 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
   js.note = o.note;
   js.serial = o.serial;
   js.operator_name = o.operator_name;
+  js.gauge_id = o.gauge_id;
+  js.gauge_calibration_date = o.gauge_calibration_date;
   js.build_on_table_in_force = build_on_table_in_force;
   js.ground_with_version = o.ground_with;
   js.ground_with_source = "option";

@@ -35,9 +35,12 @@ struct MeasureOptions {
   bool inspect = false;            // measure only
   std::string serial;              // measure only: the part's serial number
   std::string operator_name;       // measure only: who measures
+  std::string gauge_id;                // measure only: the gauge's inventory number
+  std::string gauge_calibration_date;  // measure only: YYYY-MM-DD
 };
 
-// --serial and --operator, checked before anything is read, naming the option at fault.
+// --serial, --operator, --gauge-id and --gauge-calibrated, checked before anything is read,
+// naming the option at fault.
 Status check_identity_options(const MeasureOptions& o);
 
 // The options of what is written to the control: --data-dir, --nc-dir, --template,

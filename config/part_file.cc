@@ -1,10 +1,12 @@
 // toml++ reading of part files, with the file, line and key in every message.
 #include "config/part_file.h"
 
+#include <algorithm>
 #include <array>
 #include <cctype>
 #include <cmath>
 #include <sstream>
+#include <utility>
 
 #include "compensation/pin_kinematics.h"
 #include "config/toml_reader.h"
@@ -299,6 +301,21 @@ PinTolerances read_pin_tolerances(TomlReader& pin, std::string_view source) {
   return t;
 }
 
+// drawing_number and drawing_revision: printable text of up to 40 characters, for the reports.
+void read_drawing(TomlReader& r, Part& p) {
+  for (auto [key, out] : {std::pair<const char*, std::string*>{"drawing_number", &p.drawing_number},
+                          std::pair<const char*, std::string*>{"drawing_revision", &p.drawing_revision}}) {
+    *out = r.text(key, "");
+    const bool printable = std::all_of(out->begin(), out->end(),
+                                       [](char c) { return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f; });
+    if (out->size() > 40 || !printable) {
+      r.fail(r.where(key) +
+             ": up to 40 printable characters (no tabs or line breaks), as the drawing's title block "
+             "gives it");
+    }
+  }
+}
+
 // A part file with [pin]: a crankpin. The lobe's keys mean nothing for it and are refused by
 // name rather than ignored, so a lobe file with a stray [pin] is never ground as a pin unseen.
 Result<PartFile> parse_pin_part(const toml::table& table, std::string_view source) {
@@ -313,10 +330,11 @@ Result<PartFile> parse_pin_part(const toml::table& table, std::string_view sourc
     r.fail(r.where(key) + ": a lobe's key, and this file describes a crankpin ([pin]); " + instead +
            " (docs/parts.md)");
   }
-  r.allow_only({"name", "pin_number", "nc_program", "speed", "pin", "grinding"});
+  r.allow_only({"name", "pin_number", "nc_program", "speed", "pin", "grinding", "drawing_number", "drawing_revision"});
   PartFile out;
   Part& p = out.part;
   p.name = r.text("name", std::nullopt);
+  read_drawing(r, p);
   p.lobe = static_cast<int>(r.integer("pin_number", 1, 1, 64));
   out.nc_program = r.text("nc_program", std::nullopt);
   if (!r.error && !valid_program_name(out.nc_program)) {
@@ -389,10 +407,11 @@ Result<PartFile> parse_part_toml(std::string_view text, std::string_view source_
   TomlReader r(table, source_name);
   r.allow_only({"name", "lobe", "lift_table", "follower", "follower_radius_mm", "base_circle_radius_mm",
                 "wheel_radius_mm", "rotation_sense", "c_offset_deg", "probe_offset_deg", "nc_program", "tolerance",
-                "speed", "grinding", "correction_layer"});
+                "speed", "grinding", "correction_layer", "drawing_number", "drawing_revision"});
   PartFile out;
   Part& p = out.part;
   p.name = r.text("name", std::nullopt);
+  read_drawing(r, p);
   p.lobe = static_cast<int>(r.integer("lobe", 1, 1, 64));
   const std::string table_path = r.text("lift_table", std::nullopt);
   const std::string follower = r.choice("follower", std::nullopt, {"flat", "roller", "knife_edge"});

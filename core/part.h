@@ -31,6 +31,10 @@ struct Part {
   double probe_offset_deg = 0.0;
   // What the lobe is judged against ([tolerance] in the part file); none: nothing judged.
   LobeTolerances tolerances;
+  // The drawing the part is made to (part file drawing_number, drawing_revision), printed on
+  // its reports; empty: not given.
+  std::string drawing_number;
+  std::string drawing_revision;
 };
 
 std::string_view follower_kind_name(FollowerKind kind);

@@ -39,6 +39,12 @@ bool is_utc_timestamp(std::string_view s) {
          second <= 60;  // 60: a leap second
 }
 
+bool is_calendar_date(std::string_view s) {
+  if (s.size() != 10 || !is_utc_timestamp(std::string(s) + "T00:00:00Z")) return false;
+  const std::optional<std::time_t> t = epoch_of_utc(std::string(s) + "T00:00:00Z");
+  return t && format_utc(*t).substr(0, 10) == s;  // timegm carries 02-30 into March
+}
+
 std::optional<std::time_t> epoch_of_utc(const std::string& utc) {
   std::tm tm{};
   int consumed = 0;

@@ -21,6 +21,9 @@ std::string utc_file_stamp();
 // Exactly "YYYY-MM-DDTHH:MM:SSZ" with plausible field ranges (a second of 60: a leap second).
 bool is_utc_timestamp(std::string_view s);
 
+// Exactly "YYYY-MM-DD", a day of the calendar (2026-02-30 is not).
+bool is_calendar_date(std::string_view s);
+
 // Seconds since the epoch of a "YYYY-MM-DDTHH:MM:SSZ"; empty if it is not one.
 std::optional<std::time_t> epoch_of_utc(const std::string& utc);
 

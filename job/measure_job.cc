@@ -78,6 +78,12 @@ std::string settings_text(const JobSettings& s) {
     line("part.c_offset_deg", num(s.part.c_offset_deg));
     line("part.probe_offset_deg", num(s.part.probe_offset_deg));
   }
+  // What the reports print of the drawing and the gauge, only where given (older settings
+  // hash as before).
+  if (!s.part.drawing_number.empty()) line("part.drawing_number", s.part.drawing_number);
+  if (!s.part.drawing_revision.empty()) line("part.drawing_revision", s.part.drawing_revision);
+  if (!s.gauge_id.empty()) line("gauge.id", s.gauge_id);
+  if (!s.gauge_calibration_date.empty()) line("gauge.calibration_date", s.gauge_calibration_date);
   line("poller.mode", std::string(sampling_mode_name(s.poller.mode)));
   line("poller.revolutions", std::to_string(s.poller.revolutions));
   line("analysis.base_circle_center_deg", num(s.analysis.base_circle_center_deg));

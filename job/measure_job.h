@@ -68,6 +68,11 @@ inline constexpr double kPinCommandErrorBoundUm = 0.1;
 
 struct JobSettings {
   Part part;
+  // The gauge's identity for the reports (the service's [gauge] id and calibration_date, the
+  // CLI's --gauge-id and --gauge-calibrated): its inventory number and the date of its last
+  // calibration, YYYY-MM-DD; empty: not given. Kept in the run's settings.
+  std::string gauge_id;
+  std::string gauge_calibration_date;
   LiftTable design;  // the part's design lift table, already read (unused for a pin)
   // A crankpin instead of a lobe (the part file's [pin], docs/crankpins.md); part then holds
   // the name, the pin number (lobe) and nothing else the job reads. The gauge is read through

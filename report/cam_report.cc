@@ -4,8 +4,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <optional>
 #include <set>
+#include <string_view>
+#include <utility>
 
 #include "compensation/inspection.h"
 #include "compensation/judgement.h"
@@ -282,14 +285,15 @@ void draw_header(cairo_t* cr, const StoredRun& run, const CamReportWords& w) {
               {"Serial", s.serial},
               {"Operator", s.operator_name},
               {"Machine", s.machine}});
-  fields(63, {{"Run", std::to_string(s.id)},
+  fields(62, {{"Run", std::to_string(s.id)},
               {"Started", started_text(s.started_utc)},
               {"Revolutions", std::to_string(s.revolutions)},
               {"Note", s.note}});
+  fields(74, w.traceability);
   chart::set_colour(cr, chart::kGrid);
   cairo_set_line_width(cr, 0.8);
-  cairo_move_to(cr, kMargin, 70);
-  cairo_line_to(cr, right, 70);
+  cairo_move_to(cr, kMargin, 79);
+  cairo_line_to(cr, right, 79);
   cairo_stroke(cr);
 }
 
@@ -578,7 +582,50 @@ CamReportWords pin_words(const StoredRun& run, const RunPart& part) {
   return w;
 }
 
+// The value of `key` in a run's settings text ("key = value" lines); empty if not there.
+std::string setting_of(const std::string& settings, std::string_view key) {
+  std::size_t at = 0;
+  while (at < settings.size()) {
+    const std::size_t end = std::min(settings.find('\n', at), settings.size());
+    const std::string_view line(settings.data() + at, end - at);
+    if (line.size() > key.size() + 3 && line.substr(0, key.size()) == key && line.substr(key.size(), 3) == " = ") {
+      return std::string(line.substr(key.size() + 3));
+    }
+    at = end + 1;
+  }
+  return {};
+}
+
+std::vector<std::pair<std::string, std::string>> traceability_of(const StoredRun& run, bool pin) {
+  const std::string number = setting_of(run.settings, "part.drawing_number");
+  const std::string revision = setting_of(run.settings, "part.drawing_revision");
+  const std::string drawing = number.empty() ? "" : revision.empty() ? number : number + " rev " + revision;
+  const std::string gauge_id = setting_of(run.settings, "gauge.id");
+  const std::string calibrated = setting_of(run.settings, "gauge.calibration_date");
+  std::string gauge = gauge_id;
+  if (!calibrated.empty()) gauge += (gauge.empty() ? "" : ", ") + std::string("calibrated ") + calibrated;
+  std::vector<std::pair<std::string, std::string>> out = {
+      {"Drawing", drawing}, {"Gauge", gauge}, {"Report", report_id(run.summary)}};
+  if (!pin) {
+    const LobeAnalysis& a = run.analysis;
+    const double nominal = *std::max_element(a.design_lift_mm.begin(), a.design_lift_mm.end());
+    const double measured = *std::max_element(a.mean_lift_mm.begin(), a.mean_lift_mm.end());
+    out.emplace_back("Nose lift", format_fixed(measured, 3) + " mm (drawing " + format_fixed(nominal, 3) + ")");
+    const std::string rb = setting_of(run.settings, "part.base_circle_radius_mm");
+    char* end = nullptr;
+    const double rb_mm = std::strtod(rb.c_str(), &end);
+    out.emplace_back("Base circle r", rb.empty() || *end != '\0' ? "" : format_fixed(rb_mm, 3) + " mm");
+  }
+  return out;
+}
+
 }  // namespace
+
+std::string report_id(const RunSummary& run) {
+  std::string id = run.machine + "-" + std::to_string(run.id);
+  if (run.uuid.size() >= 8) id += "-" + run.uuid.substr(0, 8);
+  return id;
+}
 
 Status check_page_file_name(const std::filesystem::path& out) {
   if (Result<chart::PageFormat> format = chart::page_format_for(out); !format) return format.error();
@@ -597,6 +644,7 @@ CamReportWords cam_report_words(const StoredRun& run) {
     marked = true;
   }
   if (marked) w.table_note = "* of the " + judged_error(run).name;
+  w.traceability = traceability_of(run, part.pin());
   return w;
 }
 

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/result.h"
@@ -59,7 +60,16 @@ struct CamReportWords {
   std::string table_note;     // beside the table's title: "* of the lift error after the best-fit phase"
   std::string footer_judged;  // the footer's first line
   std::string footer_detail;  // and its second
+  // The header's third line, label and value: the drawing (number and revision from the part
+  // file), the gauge (inventory number and calibration day), the report's id (machine, run and
+  // the run's UUID, one per run everywhere), and a lobe's nose lift (measured against the
+  // drawing's) and base circle radius. "–" where the run's settings do not say.
+  std::vector<std::pair<std::string, std::string>> traceability;
 };
+
+// The id a run's report carries: "<machine>-<run id>-<first 8 hex digits of its UUID>"
+// (without the UUID's part for a run stored without one).
+std::string report_id(const RunSummary& run);
 CamReportWords cam_report_words(const StoredRun& run);
 
 // Where the report draws the lift error chart, for checking a rendered page: the plot area

@@ -65,6 +65,24 @@ TEST(PartFile, ReadsEveryKeyAndTheDefaults) {
   EXPECT_EQ(knife->part.follower, FollowerKind::kKnifeEdge);
 }
 
+// The drawing a part is made to, for its reports: optional, printable, at most 40 characters.
+TEST(PartFile, ReadsTheDrawingAndRefusesOneThatCannotBePrinted) {
+  Result<PartFile> f = parse(flat_part("drawing_number = \"CS-4711-01\"\ndrawing_revision = \"C\"\n"));
+  ASSERT_TRUE(f.ok()) << f.error().message;
+  EXPECT_EQ(f->part.drawing_number, "CS-4711-01");
+  EXPECT_EQ(f->part.drawing_revision, "C");
+  f = parse(flat_part());
+  ASSERT_TRUE(f.ok()) << f.error().message;
+  EXPECT_EQ(f->part.drawing_number, "") << "not given";
+  for (const std::string& bad :
+       {std::string("drawing_number = \"A\\tB\"\n"), "drawing_revision = \"" + std::string(41, 'R') + "\"\n"}) {
+    f = parse(flat_part(bad));
+    ASSERT_FALSE(f.ok()) << bad;
+    EXPECT_NE(f.error().message.find("part.toml:9: key `drawing_"), std::string::npos) << f.error().message;
+    EXPECT_NE(f.error().message.find("up to 40 printable characters"), std::string::npos) << f.error().message;
+  }
+}
+
 TEST(PartFile, RefusesMistakesNamingFileLineAndKey) {
   struct Case {
     std::string text;

@@ -100,6 +100,21 @@ TEST_F(ServiceConfigTest, AMinimalFileTakesTheDocumentedDefaults) {
   EXPECT_FALSE(c->parts[0].plc_part_number.has_value());
 }
 
+// The gauge's identity for the reports: a calibration day that is no day, or is still to come,
+// is refused at its key.
+TEST_F(ServiceConfigTest, TheGaugesIdAndCalibrationDayAreReadAndABadDayRefused) {
+  auto c = read("[gauge]\nid = \"LVDT-07\"\ncalibration_date = \"2026-10-01\"\n" + kIntake + kNc);
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->job.gauge_id, "LVDT-07");
+  EXPECT_EQ(c->job.gauge_calibration_date, "2026-10-01");
+  for (const char* day : {"2026-02-30", "01.10.2026", "2999-01-01"}) {
+    c = read("[gauge]\ncalibration_date = \"" + std::string(day) + "\"\n" + kIntake + kNc);
+    ASSERT_FALSE(c.ok()) << day;
+    EXPECT_NE(c.error().message.find(at(2, "gauge.calibration_date")), std::string::npos) << c.error().message;
+    EXPECT_NE(c.error().message.find("is not a past day as YYYY-MM-DD"), std::string::npos) << c.error().message;
+  }
+}
+
 TEST_F(ServiceConfigTest, AFullFileIsReadBackFieldByField) {
   dir_.write("gauge.toml", "[link]\nhost = \"127.0.0.1\"\nport = 1502\nunit_id = 9\n");
   write_secret("token", std::string(kStrongToken) + "\n");

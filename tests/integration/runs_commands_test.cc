@@ -152,9 +152,13 @@ TEST_F(RunsCommandsTest, MeasureStoresTheSerialAndOperatorAndRefusesBadOnesBefor
   bad = run_command(measure + " --operator \"$(printf 'anna\\tbert')\"");
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_TRUE(has(bad.output, "--operator has a control character at character 5")) << bad.output;
+  bad = run_command(measure + " --gauge-calibrated 2026-02-30");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_TRUE(has(bad.output, "--gauge-calibrated 2026-02-30: not a past day as YYYY-MM-DD")) << bad.output;
   EXPECT_FALSE(fs::exists(fresh / "gaugeloop.sqlite")) << "refused before anything was opened";
 
-  CommandResult r = run_command(measure + " --serial 'CS 0042' --operator 'Anna K.'");
+  CommandResult r = run_command(
+      measure + " --serial 'CS 0042' --operator 'Anna K.' --gauge-id LVDT-07 --gauge-calibrated 2026-10-01");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   Result<RunStore> store = RunStore::open(fresh / "gaugeloop.sqlite");
   ASSERT_TRUE(store.ok()) << store.error().message;
@@ -163,6 +167,14 @@ TEST_F(RunsCommandsTest, MeasureStoresTheSerialAndOperatorAndRefusesBadOnesBefor
   ASSERT_EQ(runs->size(), 1u);
   EXPECT_EQ((*runs)[0].serial, "CS 0042");
   EXPECT_EQ((*runs)[0].operator_name, "Anna K.");
+  // The gauge's identity and the part file's drawing are kept with the run's settings, where
+  // its report reads them.
+  Result<StoredRun> stored = store->load_run((*runs)[0].id);
+  ASSERT_TRUE(stored.ok()) << stored.error().message;
+  for (const char* line : {"gauge.id = LVDT-07\n", "gauge.calibration_date = 2026-10-01\n",
+                           "part.drawing_number = CS-4711-01\n", "part.drawing_revision = C\n"}) {
+    EXPECT_TRUE(has(stored->settings, line)) << line << stored->settings;
+  }
 }
 
 TEST_F(RunsCommandsTest, BadTimeIsBadInputSayingWhatToWrite) {

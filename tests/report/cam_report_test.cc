@@ -267,6 +267,9 @@ TEST(CamReport, LongIdentityStaysOnThePage) {
   run.summary.operator_name = std::string(64, 'O');
   run.summary.machine = std::string(64, 'M');
   run.summary.note = std::string(200, 'N');
+  run.settings = "part.drawing_number = " + std::string(40, 'D') + "\npart.drawing_revision = " + std::string(40, 'R') +
+                 "\ngauge.id = " + std::string(40, 'G') + "\ngauge.calibration_date = 2026-10-01\n";
+  run.summary.machine += std::string(1, 'X');
   testing::TempDir dir;
   const fs::path out = dir / "long.png";
   ASSERT_TRUE(write_cam_report(run, out).ok());
@@ -274,7 +277,7 @@ TEST(CamReport, LongIdentityStaysOnThePage) {
   Png png(out);
   ASSERT_TRUE(png.ok());
   // The right margin (the last 20 points) stays white over the identity lines.
-  for (int y = static_cast<int>(40 * kReportPngPixelsPerPoint); y < static_cast<int>(66 * kReportPngPixelsPerPoint);
+  for (int y = static_cast<int>(40 * kReportPngPixelsPerPoint); y < static_cast<int>(77 * kReportPngPixelsPerPoint);
        ++y) {
     for (int x = png.width() - static_cast<int>(20 * kReportPngPixelsPerPoint); x < png.width(); ++x) {
       ASSERT_TRUE(Png::close(png.at_px(x, y), kWhite, 6)) << "ink at " << x << "," << y;
@@ -415,6 +418,35 @@ TEST(CamReport, ALobeRunKeepsTheCamWords) {
   EXPECT_EQ(w.table_note, "* of the lift error after the best-fit phase");
   EXPECT_EQ(w.footer_judged.rfind("judged: lift error after the best-fit phase (+0.125 deg removed)", 0), 0u)
       << w.footer_judged;
+}
+
+// What a cam checker's report carries beside the figures: the drawing and its revision, the
+// gauge and its calibration day, the report's own id, the nose lift measured against the
+// drawing's and the base circle radius; said as not given where the run's settings do not say.
+TEST(CamReport, TheHeaderNamesTheDrawingTheGaugeAndTheReport) {
+  StoredRun r = out_of_tolerance_run();
+  r.summary.uuid = "6f1c2e0a-1b2c-4d5e-8f90-a1b2c3d4e5f6";
+  r.settings =
+      "part.base_circle_radius_mm = 18.000000\npart.drawing_number = 4711-0815\npart.drawing_revision = C\n"
+      "gauge.id = LVDT-07\ngauge.calibration_date = 2026-10-01\n";
+  for (std::size_t d = 0; d < 360; ++d) r.analysis.mean_lift_mm[d] = r.analysis.design_lift_mm[d] + 0.0021;
+  std::vector<std::pair<std::string, std::string>> t = cam_report_words(r).traceability;
+  const std::vector<std::pair<std::string, std::string>> expected = {{"Drawing", "4711-0815 rev C"},
+                                                                     {"Gauge", "LVDT-07, calibrated 2026-10-01"},
+                                                                     {"Report", "grinder-1-42-6f1c2e0a"},
+                                                                     {"Nose lift", "8.002 mm (drawing 8.000)"},
+                                                                     {"Base circle r", "18.000 mm"}};
+  EXPECT_EQ(t, expected);
+  EXPECT_EQ(report_id(r.summary), "grinder-1-42-6f1c2e0a");
+
+  r.settings = "compensation.gain = 1\n";
+  r.summary.uuid.clear();
+  t = cam_report_words(r).traceability;
+  ASSERT_EQ(t.size(), 5u);
+  EXPECT_EQ(t[0].second, "") << "no drawing given";
+  EXPECT_EQ(t[1].second, "") << "no gauge given";
+  EXPECT_EQ(t[2].second, "grinder-1-42") << "a run stored without a UUID";
+  EXPECT_EQ(t[4].second, "") << "no radius recorded";
 }
 
 TEST(CamReport, AnotherExtensionIsRefusedAndNothingWritten) {
