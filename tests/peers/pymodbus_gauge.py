@@ -14,9 +14,12 @@ Holding registers (function 03), 0-based:
           degree uint16, then the reading float32 CDAB.
 
 The lobe: lift_mm(deg) below. Usage: pymodbus_gauge.py [speed_rpm] [--revolution-lag-deg D]
-[--fault-at-rev R] [--freeze-at-rev R] (revolutions from the start; a freeze stops every
-register, the sample number too). Prints "port N" once listening on 127.0.0.1 (port chosen
-by the system); serves until its stdin closes.
+[--fault-at-rev R] [--freeze-at-rev R] [--degrees-per-read D] (revolutions from the start; a
+freeze stops every register, the sample number too). With --degrees-per-read the spindle's
+clock is the reads, not the wall clock: each read of the angle register turns it D degrees
+(the sample number and time follow at speed_rpm), so a client slowed by a loaded machine
+still sees every degree. Prints "port N" once listening on 127.0.0.1 (port chosen by the
+system); serves until its stdin closes.
 """
 import argparse
 import asyncio
@@ -34,6 +37,7 @@ ARGS.add_argument("speed_rpm", type=float, nargs="?", default=60.0)
 ARGS.add_argument("--revolution-lag-deg", type=float, default=0.0)
 ARGS.add_argument("--fault-at-rev", type=float, default=None)
 ARGS.add_argument("--freeze-at-rev", type=float, default=None)
+ARGS.add_argument("--degrees-per-read", type=float, default=None)
 OPTS = ARGS.parse_args()
 SPEED_RPM = OPTS.speed_rpm
 RING = 400
@@ -69,14 +73,20 @@ class Gauge(ModbusSequentialDataBlock):
     def __init__(self):
         super().__init__(0, [0] * 4000)
         self.t0 = time.monotonic()
+        self.reads = 0
         self.latched = 0
 
     def getValues(self, address, count=1):
+        if OPTS.degrees_per_read is not None and address <= 12 < address + count:
+            self.reads += 1
         self.update()
         return super().getValues(address, count)
 
     def update(self):
-        t = time.monotonic() - self.t0
+        if OPTS.degrees_per_read is None:
+            t = time.monotonic() - self.t0
+        else:
+            t = self.reads * OPTS.degrees_per_read / 360.0 * 60.0 / SPEED_RPM
         turns = t * SPEED_RPM / 60.0
         if OPTS.freeze_at_rev is not None and turns >= OPTS.freeze_at_rev:
             return  # frozen: the registers keep their last values
