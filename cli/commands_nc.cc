@@ -453,15 +453,26 @@ int cmd_pending(const PendingOptions& o) {
     std::cout << out.dump(2) << "\n";
     return kExitOk;
   }
-  std::printf("%5s  %8s  %-20s  %-16s  %-7s  %-10s  %s\n", "id", "run", "created (UTC)", "program", "verdict", "status",
-              "reason");
+  // With --all, who decided and when: "anna 2026-12-05T10:00:00Z", a superseded table's
+  // successor, "-" while it waits.
+  std::printf("%5s  %8s  %-20s  %-16s  %-7s  %-10s  ", "id", "run", "created (UTC)", "program", "verdict", "status");
+  if (o.all) std::printf("%-32s  ", "decided");
+  std::printf("reason\n");
   for (const PendingTable& t : *tables) {
     // A gear's stroke names its gear run: "gear 3".
     const std::string run = t.gear_run_id != 0 ? "gear " + std::to_string(t.gear_run_id) : std::to_string(t.run_id);
-    std::printf("%5lld  %8s  %-20s  %-16s  %-7s  %-10s  %s\n", static_cast<long long>(t.id), run.c_str(),
+    std::printf("%5lld  %8s  %-20s  %-16s  %-7s  %-10s  ", static_cast<long long>(t.id), run.c_str(),
                 t.created_utc.c_str(), std::filesystem::path(t.nc_file).stem().string().c_str(),
                 std::string(pending_verdict_name(t.verdict)).c_str(),
-                std::string(pending_status_name(t.status)).c_str(), t.reason.c_str());
+                std::string(pending_status_name(t.status)).c_str());
+    if (o.all) {
+      const std::string decided = t.status == PendingStatus::kPending ? "-"
+                                  : t.status == PendingStatus::kSuperseded && t.superseded_by
+                                      ? "by table " + std::to_string(*t.superseded_by) + " " + t.decided_utc
+                                      : (t.decided_by.empty() ? "?" : t.decided_by) + " " + t.decided_utc;
+      std::printf("%-32s  ", decided.c_str());
+    }
+    std::printf("%s\n", t.reason.c_str());
   }
   if (tables->empty()) std::printf(o.all ? "(no pending tables)\n" : "(no table waits for approval)\n");
   return kExitOk;

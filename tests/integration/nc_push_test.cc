@@ -391,12 +391,20 @@ TEST_F(NcPushTest, ApprovalRequiredHoldsTheTableUntilApproved) {
   ASSERT_TRUE(next.ok()) << next.error().message;
   ASSERT_TRUE(next->pending_id.has_value());
   const std::string before = slurp(nc_file());
-  CommandResult rejected = run_command("nc reject " + std::to_string(*next->pending_id) + " --note noisy " + data());
+  CommandResult rejected =
+      run_command("nc reject " + std::to_string(*next->pending_id) + " --by bert --note noisy " + data());
   ASSERT_EQ(rejected.exit_code, 0) << rejected.output;
   EXPECT_EQ(slurp(nc_file()), before);
   CommandResult late = run_command("nc approve " + std::to_string(*next->pending_id) + " " + data());
   EXPECT_EQ(late.exit_code, 2) << late.output;
   EXPECT_EQ(slurp(nc_file()), before);
+
+  // Every decision listed says who made it.
+  CommandResult all = run_command("nc pending --all " + data());
+  ASSERT_EQ(all.exit_code, 0) << all.output;
+  EXPECT_NE(all.output.find("decided"), std::string::npos) << all.output;
+  EXPECT_NE(all.output.find("approved    anna 20"), std::string::npos) << all.output;
+  EXPECT_NE(all.output.find("rejected    bert 20"), std::string::npos) << all.output;
 }
 
 // Axis guards are checked on the design before any measurement: a slide limit the design
