@@ -519,6 +519,20 @@ void draw_footer(cairo_t* cr, const CamReportWords& w) {
               Align::kRight);
 }
 
+// The value of `key` in a run's settings text ("key = value" lines); empty if not there.
+std::string setting_of(const std::string& settings, std::string_view key) {
+  std::size_t at = 0;
+  while (at < settings.size()) {
+    const std::size_t end = std::min(settings.find('\n', at), settings.size());
+    const std::string_view line(settings.data() + at, end - at);
+    if (line.size() > key.size() + 3 && line.substr(0, key.size()) == key && line.substr(key.size(), 3) == " = ") {
+      return std::string(line.substr(key.size() + 3));
+    }
+    at = end + 1;
+  }
+  return {};
+}
+
 CamReportWords lobe_words(const StoredRun& run) {
   const LobeAnalysis& a = run.analysis;
   const bool best_fit = run.lift_error_reference == LiftErrorReference::kBestFit && !best_fit_missing(run);
@@ -549,6 +563,20 @@ CamReportWords lobe_words(const StoredRun& run) {
   w.footer_judged = judged + " \u00b7 repeatability " + format_fixed(a.repeatability_um, 2) + " \u00b5m";
   w.footer_detail =
       "velocity, acceleration: harmonics 1\u201330" + derivative_noise_text(run) + " \u00b7 gauge " + run.gauge;
+  // A lobe ground at a work speed program says so: its finish and timing are that program's.
+  if (!setting_of(run.settings, "speed.base_speed_rpm").empty()) {
+    const std::string flank = setting_of(run.settings, "speed.flank_speed_mm_per_min");
+    const std::string lobe = setting_of(run.settings, "speed.lobe_speed_mm_per_min");
+    auto mm_per_min = [](const std::string& v) {
+      char* end = nullptr;
+      const double x = std::strtod(v.c_str(), &end);
+      return v.empty() || *end != '\0' ? v : format_fixed(x, 0);
+    };
+    w.footer_detail +=
+        " \u00b7 ground at a work speed program (" +
+        (!flank.empty() ? "flanks at " + mm_per_min(flank) + " mm/min" : "lobe at " + mm_per_min(lobe) + " mm/min") +
+        ")";
+  }
   return w;
 }
 
@@ -580,20 +608,6 @@ CamReportWords pin_words(const StoredRun& run, const RunPart& part) {
   w.footer_detail =
       "crankpin, " + mode + "; raw: the radius error as measured, circle included \u00b7 gauge " + run.gauge;
   return w;
-}
-
-// The value of `key` in a run's settings text ("key = value" lines); empty if not there.
-std::string setting_of(const std::string& settings, std::string_view key) {
-  std::size_t at = 0;
-  while (at < settings.size()) {
-    const std::size_t end = std::min(settings.find('\n', at), settings.size());
-    const std::string_view line(settings.data() + at, end - at);
-    if (line.size() > key.size() + 3 && line.substr(0, key.size()) == key && line.substr(key.size(), 3) == " = ") {
-      return std::string(line.substr(key.size() + 3));
-    }
-    at = end + 1;
-  }
-  return {};
 }
 
 std::vector<std::pair<std::string, std::string>> traceability_of(const StoredRun& run, bool pin) {

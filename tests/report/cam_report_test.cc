@@ -418,6 +418,12 @@ TEST(CamReport, ALobeRunKeepsTheCamWords) {
   EXPECT_EQ(w.table_note, "* of the lift error after the best-fit phase");
   EXPECT_EQ(w.footer_judged.rfind("judged: lift error after the best-fit phase (+0.125 deg removed)", 0), 0u)
       << w.footer_judged;
+  EXPECT_EQ(w.footer_detail.find("work speed program"), std::string::npos) << w.footer_detail;
+  // Ground at a work speed program: the report says so, with the flanks' speed.
+  r.settings += "speed.base_speed_rpm = 30.000000\nspeed.hold = flanks\nspeed.flank_speed_mm_per_min = 1200.000000\n";
+  EXPECT_NE(cam_report_words(r).footer_detail.find("ground at a work speed program (flanks at 1200 mm/min)"),
+            std::string::npos)
+      << cam_report_words(r).footer_detail;
 }
 
 // What a cam checker's report carries beside the figures: the drawing and its revision, the
