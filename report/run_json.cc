@@ -292,6 +292,7 @@ std::string run_csv(const StoredRun& r, bool comments) {
   o.imbue(std::locale::classic());
   const bool cam_frame_raw = r.geometry.has_value();
   const bool pruned = !s.raw_pruned_utc.empty();
+  const JudgedError judged = judged_error(r);
   if (comments) {
     o << "# gaugeloop run " << s.id << ": " << s.part << " lobe " << s.lobe << " on " << s.machine << ", started "
       << s.started_utc << ", status " << s.status << kEol;
@@ -300,6 +301,7 @@ std::string run_csv(const StoredRun& r, bool comments) {
          "circle (gauge reading minus zero_offset_mm "
       << format_fixed(r.analysis.zero_offset_mm, 6) << "); error = mean - design; spread = standard deviation across "
       << "revolutions." << kEol;
+    o << "# judged_error_um: the " << judged.name << ", the curve the run's verdicts judge." << kEol;
     if (pruned) {
       o << "# Raw revolutions were pruned on " << s.raw_pruned_utc << ": the revN columns are empty." << kEol;
     } else if (cam_frame_raw) {
@@ -321,7 +323,8 @@ std::string run_csv(const StoredRun& r, bool comments) {
   for (std::size_t i = 0; i < rev_columns; ++i) {
     o << ",rev" << (i + 1) << (cam_frame_raw ? "_lift_mm" : "_at_machine_deg_lift_mm");
   }
-  o << ",mean_lift_mm,spread_um,error_um,correction_um,run_id,machine,part,lobe,started_utc,serial,operator,note"
+  o << ",mean_lift_mm,spread_um,error_um,judged_error_um,correction_um,run_id,machine,part,lobe,started_utc,serial,"
+       "operator,note"
     << kEol;
   // The run's identity on every row: exports of several runs can be pasted into one sheet.
   std::ostringstream id;
@@ -340,8 +343,8 @@ std::string run_csv(const StoredRun& r, bool comments) {
       o << format_fixed(cam_frame_raw ? raw_at_cam_deg(rev, *r.geometry, d) : rev.lift_mm[k], 7);
     }
     o << "," << format_fixed(r.analysis.mean_lift_mm[k], 7) << "," << format_fixed(r.analysis.spread_um[k], 4) << ","
-      << format_fixed(r.analysis.error_um[k], 4) << "," << format_fixed(r.correction_um[k], 4) << "," << identity
-      << kEol;
+      << format_fixed(r.analysis.error_um[k], 4) << "," << format_fixed(judged.error_um[k], 4) << ","
+      << format_fixed(r.correction_um[k], 4) << "," << identity << kEol;
   }
   return o.str();
 }

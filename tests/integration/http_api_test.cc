@@ -357,9 +357,10 @@ TEST_F(HttpApiTest, ExportIsTheCsvOfRunsExport) {
   Answer a = get("/api/runs/" + std::to_string(ids_[1]) + "/export");
   ASSERT_EQ(a.status, 200) << a.body;
   EXPECT_TRUE(has(a.content_type, "text/csv")) << a.content_type;
-  EXPECT_EQ(a.body.rfind("cam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,"
-                         "error_um,correction_um,run_id,machine,part,lobe,started_utc,serial,operator,note\r\n",
-                         0),
+  EXPECT_EQ(a.body.rfind(
+                "cam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,"
+                "error_um,judged_error_um,correction_um,run_id,machine,part,lobe,started_utc,serial,operator,note\r\n",
+                0),
             0u)
       << a.body.substr(0, 800);
   EXPECT_TRUE(has(a.body, "\r\n359,")) << "one row per cam degree";

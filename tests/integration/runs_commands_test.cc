@@ -329,18 +329,19 @@ TEST_F(RunsCommandsTest, ExportMapsRevolutionsToTheCamFrameWhenTheFrameIsKnown) 
   std::optional<std::vector<testing::CsvRecord>> rows = testing::read_csv(r.output);
   ASSERT_TRUE(rows.has_value()) << "not RFC 4180 CSV:\n" << r.output.substr(0, 600);
   ASSERT_EQ(rows->size(), 361u);
-  EXPECT_EQ((*rows)[0], (testing::CsvRecord{"cam_deg", "design_lift_mm", "rev1_lift_mm", "rev2_lift_mm", "rev3_lift_mm",
-                                            "mean_lift_mm", "spread_um", "error_um", "correction_um", "run_id",
-                                            "machine", "part", "lobe", "started_utc", "serial", "operator", "note"}));
-  for (const testing::CsvRecord& row : *rows) ASSERT_EQ(row.size(), 17u);
+  EXPECT_EQ((*rows)[0],
+            (testing::CsvRecord{"cam_deg", "design_lift_mm", "rev1_lift_mm", "rev2_lift_mm", "rev3_lift_mm",
+                                "mean_lift_mm", "spread_um", "error_um", "judged_error_um", "correction_um", "run_id",
+                                "machine", "part", "lobe", "started_utc", "serial", "operator", "note"}));
+  for (const testing::CsvRecord& row : *rows) ASSERT_EQ(row.size(), 18u);
   // c0 = 10, sense +1, probe 0: cam degree 5 was read at machine degree 15.
   const testing::CsvRecord& row5 = (*rows)[6];
   EXPECT_EQ(row5[0], "5");
   EXPECT_NEAR(std::stod(row5[2]), raw_mm(0, 15), 1e-7);
   EXPECT_NEAR(std::stod(row5[4]), raw_mm(2, 15), 1e-7);
   EXPECT_NEAR(std::stod(row5[7]), 12.0 * std::sin(5 * 0.0174533), 1e-4);
-  EXPECT_EQ(row5[9], std::to_string(ids_[0]));
-  EXPECT_EQ(row5[11], "intake");
+  EXPECT_EQ(row5[10], std::to_string(ids_[0]));
+  EXPECT_EQ(row5[12], "intake");
   r = run_command("runs export --comments " + std::to_string(ids_[0]) + data_);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(r.output.rfind("# gaugeloop run " + std::to_string(ids_[0]) + ": intake lobe 1 on g1", 0), 0u)
@@ -416,11 +417,12 @@ TEST_F(RunsCommandsTest, PruneDropsOldRawSamplesAndKeepsTheSummary) {
   r = run_command("runs export --comments " + std::to_string(ids_[0]) + data_);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(has(r.output, "Raw revolutions were pruned")) << r.output.substr(0, 800);
+  EXPECT_TRUE(has(r.output, "# judged_error_um: the lift error")) << r.output.substr(0, 800);
   // The same columns as before pruning, the revolutions' fields empty.
-  EXPECT_TRUE(has(
-      r.output,
-      "\r\ncam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,"
-      "error_um,correction_um,run_id,machine,part,lobe,started_utc,serial,operator,note\r\n0,0.5000000,,,,0.5000000,"))
+  EXPECT_TRUE(has(r.output,
+                  "\r\ncam_deg,design_lift_mm,rev1_lift_mm,rev2_lift_mm,rev3_lift_mm,mean_lift_mm,spread_um,"
+                  "error_um,judged_error_um,correction_um,run_id,machine,part,lobe,started_utc,serial,operator,"
+                  "note\r\n0,0.5000000,,,,0.5000000,"))
       << r.output.substr(0, 1200);
   const nlohmann::json j = json_of("runs show --json " + std::to_string(ids_[0]));
   EXPECT_EQ(j["max_abs_error_um"], 12.0);

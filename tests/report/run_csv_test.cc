@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "report/judged_error.h"
 #include "report/run_json.h"
 #include "storage/run_store.h"
 #include "tests/report/stored_run_test.h"
@@ -67,8 +68,8 @@ TEST_F(RunCsvTest, TheHeaderIsTheFirstLineAndANoteRoundTrips) {
   const std::vector<CsvRecord> rows = records_of(csv);
   ASSERT_EQ(rows.size(), 361u);
   EXPECT_EQ(rows[0], (CsvRecord{"cam_deg", "design_lift_mm", "rev1_lift_mm", "rev2_lift_mm", "rev3_lift_mm",
-                                "mean_lift_mm", "spread_um", "error_um", "correction_um", "run_id", "machine", "part",
-                                "lobe", "started_utc", "serial", "operator", "note"}));
+                                "mean_lift_mm", "spread_um", "error_um", "judged_error_um", "correction_um", "run_id",
+                                "machine", "part", "lobe", "started_utc", "serial", "operator", "note"}));
   for (std::size_t d = 0; d < 360; ++d) {
     const CsvRecord& row = rows[d + 1];
     ASSERT_EQ(row[0], std::to_string(d));
@@ -81,6 +82,11 @@ TEST_F(RunCsvTest, TheHeaderIsTheFirstLineAndANoteRoundTrips) {
   // c0 = 10, sense +1, probe 0: cam degree 5 was read at machine degree 15.
   EXPECT_NEAR(std::stod(rows[6][2]), testing::raw_mm(0, 15), 1e-7);
   EXPECT_NEAR(std::stod(rows[6][column(rows[0], "error_um")]), 5.0 * std::sin(5 * 0.0174533), 1e-4);
+  // The judged curve beside it, degree for degree the one the run's JSON names.
+  const JudgedError judged = judged_error(load(id));
+  for (std::size_t d = 0; d < 360; ++d) {
+    EXPECT_NEAR(std::stod(rows[d + 1][column(rows[0], "judged_error_um")]), judged.error_um[d], 0.5e-4) << d;
+  }
   EXPECT_EQ(csv.find('#'), std::string::npos) << "no comment lines unless asked";
 }
 
@@ -140,8 +146,9 @@ TEST_F(RunCsvTest, CommentsComeBeforeTheHeaderOnlyWhenAsked) {
     EXPECT_EQ(csv[at], '#') << "a line before the header that is no comment";
     ++lines;
   }
-  EXPECT_EQ(lines, 4u);
+  EXPECT_EQ(lines, 5u);
   EXPECT_NE(csv.find("mapped to the CAM frame"), std::string::npos);
+  EXPECT_NE(csv.find("# judged_error_um: the "), std::string::npos);
   // Without the comment lines, the rest is the plain export.
   EXPECT_EQ(csv.substr(header + 2), run_csv(load(id)));
 }
