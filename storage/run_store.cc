@@ -61,6 +61,9 @@ void load_nc_directory(Connection& conn) {
 
 Status note_nc_directory(Connection& conn, std::string_view nc_file, const std::string& operation) {
   if (nc_file.empty() || nc_bare_name(nc_file)) return {};
+  // What the file says now, inside the caller's transaction: a write rolled back earlier may
+  // have left this connection believing a directory the file never kept.
+  load_nc_directory(conn);
   const std::filesystem::path dir = std::filesystem::path(nc_file).parent_path();  // as given, as it is read back
   const std::filesystem::path dir_absolute = nc_normal_absolute(dir);
   const bool first = conn.nc_recorded.empty() && conn.nc_dir.empty();
