@@ -36,8 +36,7 @@ Status check_identity_options(const MeasureOptions& o) {
   if (o.gauge_id.size() > 40) {
     return make_error(ErrorCode::kInvalidInput, "--gauge-id: at most 40 characters, the gauge's inventory number");
   }
-  if (!o.gauge_calibration_date.empty() &&
-      (!is_calendar_date(o.gauge_calibration_date) || o.gauge_calibration_date > utc_now().substr(0, 10))) {
+  if (!o.gauge_calibration_date.empty() && !is_past_calendar_date(o.gauge_calibration_date)) {
     return make_error(ErrorCode::kInvalidInput, "--gauge-calibrated " + o.gauge_calibration_date +
                                                     ": not a past day as YYYY-MM-DD; give the date on the gauge's "
                                                     "calibration certificate");

@@ -301,19 +301,10 @@ PinTolerances read_pin_tolerances(TomlReader& pin, std::string_view source) {
   return t;
 }
 
-// drawing_number and drawing_revision: printable text of up to 40 characters, for the reports.
+// drawing_number and drawing_revision, for the reports.
 void read_drawing(TomlReader& r, Part& p) {
-  for (auto [key, out] : {std::pair<const char*, std::string*>{"drawing_number", &p.drawing_number},
-                          std::pair<const char*, std::string*>{"drawing_revision", &p.drawing_revision}}) {
-    *out = r.text(key, "");
-    const bool printable = std::all_of(out->begin(), out->end(),
-                                       [](char c) { return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f; });
-    if (out->size() > 40 || !printable) {
-      r.fail(r.where(key) +
-             ": up to 40 printable characters (no tabs or line breaks), as the drawing's title block "
-             "gives it");
-    }
-  }
+  p.drawing_number = r.label("drawing_number", "as the drawing's title block gives it");
+  p.drawing_revision = r.label("drawing_revision", "as the drawing's title block gives it");
 }
 
 // A part file with [pin]: a crankpin. The lobe's keys mean nothing for it and are refused by

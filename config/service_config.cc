@@ -77,15 +77,9 @@ Status read_gauge_table(TomlReader& top, const ConfigFile& f, ServiceConfig& c) 
   TomlReader gr(*g, f.source, "gauge.");
   gr.allow_only({"config", "mode", "revolutions", "id", "calibration_date"});
   const std::string gauge_file = gr.text("config", "");
-  c.job.gauge_id = gr.text("id", "");
-  if (c.job.gauge_id.size() > 40 || !std::all_of(c.job.gauge_id.begin(), c.job.gauge_id.end(), [](char ch) {
-        return static_cast<unsigned char>(ch) >= 0x20 && ch != 0x7f;
-      })) {
-    gr.fail(gr.where("id") + ": up to 40 printable characters, the gauge's inventory number");
-  }
+  c.job.gauge_id = gr.label("id", "the gauge's inventory number");
   c.job.gauge_calibration_date = gr.text("calibration_date", "");
-  if (!c.job.gauge_calibration_date.empty() &&
-      (!is_calendar_date(c.job.gauge_calibration_date) || c.job.gauge_calibration_date > utc_now().substr(0, 10))) {
+  if (!c.job.gauge_calibration_date.empty() && !is_past_calendar_date(c.job.gauge_calibration_date)) {
     gr.fail(gr.where("calibration_date") + ": `" + c.job.gauge_calibration_date +
             "` is not a past day as YYYY-MM-DD; give the date on the gauge's calibration certificate");
   }

@@ -1,6 +1,8 @@
 // TomlReader: typed key access with messages that say where and what is allowed.
 #include "config/toml_reader.h"
 
+#include <algorithm>
+
 #include <cmath>
 #include <sstream>
 
@@ -59,6 +61,16 @@ std::string TomlReader::text(std::string_view key, std::optional<std::string> fa
   if (auto v = n->value<std::string>()) return *v;
   fail(where(key) + ": expected a string in quotes");
   return {};
+}
+
+std::string TomlReader::label(std::string_view key, std::string_view what) {
+  std::string v = text(key, "");
+  const bool printable =
+      std::all_of(v.begin(), v.end(), [](char c) { return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f; });
+  if (v.size() > 40 || !printable) {
+    fail(where(key) + ": up to 40 printable characters (no tabs or line breaks), " + std::string(what));
+  }
+  return v;
 }
 
 const toml::table* TomlReader::subtable(std::string_view key) {

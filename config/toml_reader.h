@@ -33,6 +33,9 @@ class TomlReader {
   void allow_only(std::initializer_list<std::string_view> known);
 
   std::string text(std::string_view key, std::optional<std::string> fallback);
+  // An optional label printed on reports ("" when absent): at most 40 printable characters,
+  // no tabs or line breaks; else fails saying so and what the label is (`what`).
+  std::string label(std::string_view key, std::string_view what);
   // The table under `key` ([key]); nullptr if absent, or (failing) if not a table.
   const toml::table* subtable(std::string_view key);
   // A TOML boolean, true or false.

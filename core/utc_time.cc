@@ -45,6 +45,8 @@ bool is_calendar_date(std::string_view s) {
   return t && format_utc(*t).substr(0, 10) == s;  // timegm carries 02-30 into March
 }
 
+bool is_past_calendar_date(std::string_view s) { return is_calendar_date(s) && s <= utc_now().substr(0, 10); }
+
 std::optional<std::time_t> epoch_of_utc(const std::string& utc) {
   std::tm tm{};
   int consumed = 0;

@@ -24,6 +24,9 @@ bool is_utc_timestamp(std::string_view s);
 // Exactly "YYYY-MM-DD", a day of the calendar (2026-02-30 is not).
 bool is_calendar_date(std::string_view s);
 
+// A calendar day (is_calendar_date) that is today or earlier, UTC: a calibration date.
+bool is_past_calendar_date(std::string_view s);
+
 // Seconds since the epoch of a "YYYY-MM-DDTHH:MM:SSZ"; empty if it is not one.
 std::optional<std::time_t> epoch_of_utc(const std::string& utc);
 
