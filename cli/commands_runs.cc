@@ -233,13 +233,13 @@ int cmd_show(const RunOptions& o) {
   std::printf("  settings          %s\n", s.settings_hash.empty() ? "not recorded" : s.settings_hash.c_str());
   if (pin) {
     std::printf("analysis (%s)\n", kPinFrame);
-    std::printf("  largest radius error %.2f um at pin %zu deg (%+.2f um)\n", s.max_abs_error_um, worst,
+    std::printf("  largest radius error %.2f um at pin %d deg (%+.2f um)\n", s.max_abs_error_um, signed_degree(worst),
                 a.error_um[worst]);
     std::printf("  RMS radius error  %.2f um\n", s.rms_error_um);
   } else {
-    std::printf("analysis (cam frame, 0 deg at the nose)\n");
-    std::printf("  max lift error    %.2f um at cam %zu deg (%+.2f um), raw: at nominal timing\n", s.max_abs_error_um,
-                worst, a.error_um[worst]);
+    std::printf("analysis (cam frame, 0 deg at the nose, opening side negative)\n");
+    std::printf("  max lift error    %.2f um at cam %d deg (%+.2f um), raw: at nominal timing\n", s.max_abs_error_um,
+                signed_degree(worst), a.error_um[worst]);
     std::printf("  RMS lift error    %.2f um, raw\n", s.rms_error_um);
   }
   std::printf("  peak to valley    %.2f um%s\n", s.peak_to_valley_um, pin ? "" : ", raw");
@@ -249,8 +249,8 @@ int cmd_show(const RunOptions& o) {
                 judged.name.c_str(), judged.max_abs_um, at, judged.max_abs_at_deg, judged.rms_um,
                 judged.peak_to_valley_um);
   }
-  std::printf("  repeatability     %.2f um (largest per-degree standard deviation, at %s %zu deg)\n",
-              s.repeatability_um, at, worst_spread);
+  std::printf("  repeatability     %.2f um (largest per-degree standard deviation, at %s %d deg)\n", s.repeatability_um,
+              at, signed_degree(worst_spread));
   if (pin) {
     print_pin_figures(r.characteristics);
   } else {
@@ -267,7 +267,8 @@ int cmd_show(const RunOptions& o) {
     std::printf("  largest harmonics%s um\n", h.c_str());
   }
   std::printf("%s\n", pin ? "correction (in pin degrees)" : "correction (cam frame)");
-  std::printf("  largest           %.2f um at %s %zu deg, %s\n", std::abs(r.correction_um[worst_corr]), at, worst_corr,
+  std::printf("  largest           %.2f um at %s %d deg, %s\n", std::abs(r.correction_um[worst_corr]), at,
+              signed_degree(worst_corr),
               r.correction_in_force_run ? ("built on run " + std::to_string(*r.correction_in_force_run) +
                                            "'s (the table that ground the part)")
                                               .c_str()
@@ -395,8 +396,9 @@ int cmd_compare(const CompareOptions& o) {
     }
     j["change_b_minus_a"] = changes;
     j["same_part_and_lobe"] = same_lobe;
-    j["error_difference"] = {{"max_abs_um", std::abs(d_error[we])}, {"at_cam_deg", we}, {"rms_um", rms_diff}};
-    j["correction_difference"] = {{"max_abs_um", std::abs(d_corr[wc])}, {"at_cam_deg", wc}};
+    j["error_difference"] = {
+        {"max_abs_um", std::abs(d_error[we])}, {"at_cam_deg", signed_degree(we)}, {"rms_um", rms_diff}};
+    j["correction_difference"] = {{"max_abs_um", std::abs(d_corr[wc])}, {"at_cam_deg", signed_degree(wc)}};
     j["settings_same"] = A.summary.settings_hash == B.summary.settings_hash;
     j["settings_only_in_a"] = only_a;
     j["settings_only_in_b"] = only_b;
@@ -423,8 +425,9 @@ int cmd_compare(const CompareOptions& o) {
   if (!same_lobe)
     std::printf("note: the runs are of different parts or lobes; per-degree differences compare unlike lobes\n");
   std::printf("per degree (cam frame):\n");
-  std::printf("  error difference      max %.2f um at cam %zu deg, RMS %.2f um\n", std::abs(d_error[we]), we, rms_diff);
-  std::printf("  correction difference max %.2f um at cam %zu deg\n", std::abs(d_corr[wc]), wc);
+  std::printf("  error difference      max %.2f um at cam %d deg, RMS %.2f um\n", std::abs(d_error[we]),
+              signed_degree(we), rms_diff);
+  std::printf("  correction difference max %.2f um at cam %d deg\n", std::abs(d_corr[wc]), signed_degree(wc));
   if (A.summary.settings_hash == B.summary.settings_hash) {
     std::printf("settings: %s\n", A.summary.settings_hash.empty() ? "not recorded for either run" : "the same");
   } else {

@@ -127,7 +127,7 @@ Result<CompensationDecision> learning_step(const LearningStep& step, const Degre
         !std::isfinite(in_force_um[d])) {
       return make_error(ErrorCode::kInvalidInput,
                         "compensation: NaN or infinity in the error or in the correction in force at " +
-                            std::string(step.degree_name) + " " + std::to_string(d));
+                            std::string(step.degree_name) + " " + std::to_string(signed_degree(d)));
     }
   }
   if (!std::isfinite(step.repeatability_um)) {
@@ -155,17 +155,17 @@ Result<CompensationDecision> learning_step(const LearningStep& step, const Degre
     if (std::abs(form_change_um[d]) > std::abs(form_change_um[worst_form_change])) worst_form_change = d;
   }
   out.largest_correction_um = out.correction_um[worst_correction];
-  out.largest_correction_deg = static_cast<int>(worst_correction);
+  out.largest_correction_deg = signed_degree(worst_correction);
   out.largest_change_um = out.change_um[worst_change];
-  out.largest_change_deg = static_cast<int>(worst_change);
+  out.largest_change_deg = signed_degree(worst_change);
   out.largest_form_change_um = form_change_um[worst_form_change];
-  out.largest_form_change_deg = static_cast<int>(worst_form_change);
+  out.largest_form_change_deg = signed_degree(worst_form_change);
 
   const std::string degree(step.degree_name);
   if (std::abs(out.largest_correction_um) > s.max_correction_um) {
     out.findings.push_back({CompensationGuard::kCorrectionLimit, CompensationVerdict::kRefuse,
                             "the correction would reach " + format_fixed(out.largest_correction_um, 1) + " um at " +
-                                degree + " " + std::to_string(worst_correction) + ", beyond the " +
+                                degree + " " + std::to_string(out.largest_correction_deg) + ", beyond the " +
                                 format_fixed(s.max_correction_um, 1) +
                                 " um the wheel path may carry; check the measurement and the setup, or have an "
                                 "operator raise the limit"});
@@ -173,7 +173,7 @@ Result<CompensationDecision> learning_step(const LearningStep& step, const Degre
   if (std::abs(out.largest_form_change_um) > s.max_change_um) {
     out.findings.push_back({CompensationGuard::kChangeLimit, CompensationVerdict::kHold,
                             "the correction would move by " + format_fixed(out.largest_form_change_um, 1) + " um at " +
-                                degree + " " + std::to_string(worst_form_change) + " from the one in force" +
+                                degree + " " + std::to_string(out.largest_form_change_deg) + " from the one in force" +
                                 step.change_note + ", more than the " + format_fixed(s.max_change_um, 1) +
                                 " um allowed from one part to the next; check the wheel (dressed, changed?) and "
                                 "measure again, or have an operator approve it"});
@@ -320,8 +320,8 @@ Result<std::vector<double>> roller_lift_correction_um(const LiftTable& design, c
 Status check_finite(const DegreeTable& correction_um) {
   for (size_t d = 0; d < kDegrees; ++d) {
     if (!std::isfinite(correction_um[d])) {
-      return make_error(ErrorCode::kInvalidInput,
-                        "corrected lift: the correction at cam degree " + std::to_string(d) + " is NaN or infinite");
+      return make_error(ErrorCode::kInvalidInput, "corrected lift: the correction at cam degree " +
+                                                      std::to_string(signed_degree(d)) + " is NaN or infinite");
     }
   }
   return {};

@@ -102,7 +102,7 @@ struct CompensationDecision {
   CompensationVerdict verdict = CompensationVerdict::kApply;  // the strongest finding's, or kApply
   DegreeTable correction_um{};  // proposed: in force + gain * step (see decide_correction)
   DegreeTable change_um{};      // correction_um - correction in force
-  // The value of largest magnitude (signed) and its cam degree.
+  // The value of largest magnitude (signed) and its cam degree (signed_degree).
   double largest_correction_um = 0.0;
   int largest_correction_deg = 0;
   double largest_change_um = 0.0;

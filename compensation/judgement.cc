@@ -10,11 +10,6 @@
 namespace gaugeloop {
 namespace {
 
-int wrapped(int d) { return ((d % kDegreesPerRevolution) + kDegreesPerRevolution) % kDegreesPerRevolution; }
-
-// A cam degree in (-180, 180], as the nose-centred view and the zone arcs name it.
-int signed_deg(int d) { return d > 180 ? d - kDegreesPerRevolution : d; }
-
 std::string zone_where(const ZoneTolerance& z) {
   std::string what = "tolerance zone " + std::string(lobe_zone_name(z.zone));
   if (z.by_lift) {
@@ -30,7 +25,7 @@ std::array<bool, kDegreesPerRevolution> zone_members(const ZoneTolerance& z, con
     const bool opening_side = z.zone == LobeZone::kOpeningRamp || z.zone == LobeZone::kOpeningFlank;
     const bool closing_side = z.zone == LobeZone::kClosingRamp || z.zone == LobeZone::kClosingFlank;
     for (int d = 0; d < kDegreesPerRevolution; ++d) {
-      const int x = signed_deg(d);
+      const int x = signed_degree(d);
       if (opening_side && x > 0) continue;
       if (closing_side && x < 0) continue;
       const double lift = design_lift_mm[static_cast<size_t>(d)];
@@ -44,7 +39,7 @@ std::array<bool, kDegreesPerRevolution> zone_members(const ZoneTolerance& z, con
     in.fill(true);
     return in;
   }
-  for (int d = static_cast<int>(std::ceil(z.from_deg)); d <= end; ++d) in[static_cast<size_t>(wrapped(d))] = true;
+  for (int d = static_cast<int>(std::ceil(z.from_deg)); d <= end; ++d) in[degree_index(d)] = true;
   return in;
 }
 
@@ -88,7 +83,7 @@ Result<std::vector<ZoneArc>> zone_arcs(const LobeTolerances& tolerances, const D
     for (int d = 0; d < kDegreesPerRevolution; ++d) {
       if (!in[static_cast<size_t>(d)]) continue;
       ++count;
-      if (!in[static_cast<size_t>(wrapped(d - 1))]) {
+      if (!in[degree_index(d - 1)]) {
         ++starts;
         start = d;
       }
@@ -104,17 +99,17 @@ Result<std::vector<ZoneArc>> zone_arcs(const LobeTolerances& tolerances, const D
                                                       "angle_deg instead of lift_mm");
     }
     for (int i = 0; i < count; ++i) {
-      const int d = wrapped(start + i);
+      const int d = static_cast<int>(degree_index(start + i));
       if (const ZoneTolerance* other = owner[static_cast<size_t>(d)]) {
         return make_error(ErrorCode::kInvalidInput, zone_where(*z) + " and " + zone_where(*other) +
-                                                        " share cam degree " + std::to_string(signed_deg(d)) +
+                                                        " share cam degree " + std::to_string(signed_degree(d)) +
                                                         "; zones must not overlap: move their bounds apart");
       }
       owner[static_cast<size_t>(d)] = z;
       arc.degrees.push_back(d);
     }
-    arc.from_deg = signed_deg(arc.degrees.front());
-    arc.to_deg = signed_deg(arc.degrees.back());
+    arc.from_deg = signed_degree(arc.degrees.front());
+    arc.to_deg = signed_degree(arc.degrees.back());
     arcs.push_back(std::move(arc));
   }
   return arcs;

@@ -17,6 +17,17 @@ inline constexpr std::size_t kDegrees = static_cast<std::size_t>(kDegreesPerRevo
 // One value per whole degree, index = degree in [0, 360).
 using DegreeTable = std::array<double, kDegreesPerRevolution>;
 
+// The one angle convention of every angle shown (charts, polar views, texts, JSON): a lobe's
+// cam angle from the nose, a pin's angle from the crank radius outward, in (-180, 180], the
+// opening side negative. A DegreeTable (and a per-degree CSV, as the drawing's lift tables)
+// indexes the same angle taken modulo 360.
+constexpr int signed_degree(int index) { return index > 180 ? index - kDegreesPerRevolution : index; }
+constexpr int signed_degree(std::size_t index) { return signed_degree(static_cast<int>(index)); }
+// The table index of a signed (or any whole) degree.
+constexpr std::size_t degree_index(int degree) {
+  return static_cast<std::size_t>(((degree % kDegreesPerRevolution) + kDegreesPerRevolution) % kDegreesPerRevolution);
+}
+
 // Gauge readings of one revolution of the work spindle, one per whole machine degree of C.
 // Units: mm of gauge reading (probe lift), not yet zeroed.
 struct RevolutionSamples {

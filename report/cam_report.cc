@@ -44,9 +44,6 @@ constexpr double kTableTop = 292.0;
 constexpr double kTableBottom = 556.0;
 constexpr double kRowPt = 9.2;
 
-// A nose-centred cam angle (-180..180) as the cam frame index (0..359).
-std::size_t frame_index(int x_deg) { return static_cast<std::size_t>((x_deg % 360 + 360) % 360); }
-
 std::string display_unit(const std::string& unit) {
   if (unit == "um") return "\u00b5m";
   if (unit == "mm/deg^2") return "mm/deg\u00b2";
@@ -89,15 +86,14 @@ struct DegreeCurve {
   double at(int x) const { return value[static_cast<std::size_t>(x + 180)]; }
 };
 
-DegreeCurve nose_centred(const DegreeTable& t, double scale) {
+DegreeCurve nose_centred(const DegreeTable& t) {
   DegreeCurve c;
-  for (int x = -180; x <= 180; ++x) c.value[static_cast<std::size_t>(x + 180)] = t[frame_index(x)] * scale;
+  for (int x = -180; x <= 180; ++x) c.value[static_cast<std::size_t>(x + 180)] = t[degree_index(x)];
   return c;
 }
 
 // The y range showing the curves and the finite limits, widened to round ticks.
-void curve_range(const std::vector<const DegreeCurve*>& curves, const DegreeLimits& limits, double scale, double& lo,
-                 double& hi) {
+void curve_range(const std::vector<const DegreeCurve*>& curves, const DegreeLimits& limits, double& lo, double& hi) {
   lo = 0.0;
   hi = 0.0;
   for (const DegreeCurve* c : curves) {
@@ -107,8 +103,8 @@ void curve_range(const std::vector<const DegreeCurve*>& curves, const DegreeLimi
     }
   }
   for (const Limits& l : limits) {
-    if (l.lower) lo = std::min(lo, *l.lower * scale);
-    if (l.upper) hi = std::max(hi, *l.upper * scale);
+    if (l.lower) lo = std::min(lo, *l.lower);
+    if (l.upper) hi = std::max(hi, *l.upper);
   }
   const double pad = (hi - lo) * 0.06;
   lo -= pad;
@@ -117,7 +113,7 @@ void curve_range(const std::vector<const DegreeCurve*>& curves, const DegreeLimi
 }
 
 // The allowed region per degree, filled, and its limits as lines.
-void draw_band(cairo_t* cr, const Frame& f, const DegreeLimits& limits, double scale) {
+void draw_band(cairo_t* cr, const Frame& f, const DegreeLimits& limits) {
   chart::clip_to(cr, f);
   for (int x = -179; x <= 180;) {
     const Limits& l = limits[static_cast<std::size_t>(x + 179)];
@@ -130,8 +126,8 @@ void draw_band(cairo_t* cr, const Frame& f, const DegreeLimits& limits, double s
     if (l.any()) {
       const double x0 = f.px(x - 0.5);
       const double x1 = f.px(end + 0.5);
-      const double y_top = l.upper ? f.py(*l.upper * scale) : f.box.top;
-      const double y_bottom = l.lower ? f.py(*l.lower * scale) : f.box.bottom();
+      const double y_top = l.upper ? f.py(*l.upper) : f.box.top;
+      const double y_bottom = l.lower ? f.py(*l.lower) : f.box.bottom();
       chart::set_colour(cr, chart::kBand);
       cairo_rectangle(cr, x0, y_top, x1 - x0, y_bottom - y_top);
       cairo_fill(cr);
@@ -169,13 +165,17 @@ void draw_curve(cairo_t* cr, const Frame& f, const DegreeCurve& c, chart::Rgb co
 }
 
 // Red ticks along the bottom of the plot at the degrees outside their limits.
-int mark_out_of_tolerance(cairo_t* cr, const Frame& f, const DegreeCurve& c, const DegreeLimits& limits, double scale) {
+bool outside(const DegreeCurve& c, const DegreeLimits& limits, int x) {
+  const Limits& l = limits[static_cast<std::size_t>(x + 179)];
+  const double v = c.at(x);
+  return (l.lower && v < *l.lower) || (l.upper && v > *l.upper);
+}
+
+int mark_out_of_tolerance(cairo_t* cr, const Frame& f, const DegreeCurve& c, const DegreeLimits& limits) {
   int out = 0;
   chart::set_colour(cr, chart::kOut);
   for (int x = -179; x <= 180; ++x) {
-    const Limits& l = limits[static_cast<std::size_t>(x + 179)];
-    const double v = c.at(x);
-    if ((l.lower && v < *l.lower * scale) || (l.upper && v > *l.upper * scale)) {
+    if (outside(c, limits, x)) {
       cairo_rectangle(cr, f.px(x - 0.5), f.box.bottom() - 4.0, std::max(0.6, f.px(x + 0.5) - f.px(x - 0.5)), 4.0);
       ++out;
     }
@@ -215,13 +215,13 @@ DegreeTable charted_lift_error_um(const StoredRun& run) { return judged_error(ru
 
 struct ReportData {
   const StoredRun* run = nullptr;
-  DegreeCurve judged_um, raw_um, velocity_um_per_deg, acceleration_um_per_deg2;
+  DegreeCurve judged_um, raw_um, velocity_mm_per_deg, acceleration_mm_per_deg2;
   DegreeLimits lift_limits{}, velocity_limits{}, acceleration_limits{};
 };
 
 Frame lift_frame(const ReportData& d) {
   Frame f{kLiftBox, -180.0, 180.0, 0.0, 1.0};
-  curve_range({&d.judged_um, &d.raw_um}, d.lift_limits, 1.0, f.y_min, f.y_max);
+  curve_range({&d.judged_um, &d.raw_um}, d.lift_limits, f.y_min, f.y_max);
   return f;
 }
 
@@ -229,14 +229,14 @@ Frame lift_frame(const ReportData& d) {
 ReportData report_data(const StoredRun& run, const ErrorDerivatives* derivatives) {
   ReportData d;
   d.run = &run;
-  d.judged_um = nose_centred(charted_lift_error_um(run), 1.0);
-  d.raw_um = nose_centred(run.analysis.error_um, 1.0);
+  d.judged_um = nose_centred(charted_lift_error_um(run));
+  d.raw_um = nose_centred(run.analysis.error_um);
   d.lift_limits = limits_per_degree(run.characteristics, "lift_error");
   if (derivatives != nullptr) {
-    // Velocity and acceleration are charted in um per degree: in mm their ticks would need
-    // five or six decimals.
-    d.velocity_um_per_deg = nose_centred(derivatives->velocity_error_mm_per_deg, 1000.0);
-    d.acceleration_um_per_deg2 = nose_centred(derivatives->acceleration_error_mm_per_deg2, 1000.0);
+    // Velocity and acceleration are charted in mm per degree, as the part file's limits, the
+    // table beside them and every other view give them.
+    d.velocity_mm_per_deg = nose_centred(derivatives->velocity_error_mm_per_deg);
+    d.acceleration_mm_per_deg2 = nose_centred(derivatives->acceleration_error_mm_per_deg2);
     d.velocity_limits = limits_per_degree(run.characteristics, "velocity_error");
     d.acceleration_limits = limits_per_degree(run.characteristics, "acceleration_error");
   }
@@ -299,30 +299,30 @@ void draw_header(cairo_t* cr, const StoredRun& run, const CamReportWords& w) {
 
 void draw_lift_chart(cairo_t* cr, const ReportData& d, const CamReportWords& w) {
   const Frame f = lift_frame(d);
-  draw_band(cr, f, d.lift_limits, 1.0);
+  draw_band(cr, f, d.lift_limits);
   chart::draw_axes(cr, f, cam_angle_ticks(), w.angle_axis, w.error_axis, w.error_chart);
   draw_curve(cr, f, d.raw_um, chart::kFaint, 0.8);
   draw_curve(cr, f, d.judged_um, chart::kCurve, 1.5);
-  const int out = mark_out_of_tolerance(cr, f, d.judged_um, d.lift_limits, 1.0);
-  // Legend on the title line, right-aligned.
-  const std::string raw_label = "raw";
-  const std::string last_label = out > 0 ? std::to_string(out) + "\u00b0 out" : "tolerance";
-  const double width = 3 * 21 + chart::text_width(cr, "judged", 6.5) + chart::text_width(cr, raw_label, 6.5) +
-                       chart::text_width(cr, last_label, 6.5);
+  const int out = mark_out_of_tolerance(cr, f, d.judged_um, d.lift_limits);
+  // Legend on the title line, right-aligned: w.lift_legend, the band's entry red when degrees
+  // are out.
+  double width = 0.0;
+  for (const std::string& label : w.lift_legend) width += 21 + chart::text_width(cr, label, 6.5);
   double x = kLiftBox.right() - width + 8;
-  x = legend_entry(cr, x, kLiftBox.top - 5, chart::kCurve, "judged", false);
-  x = legend_entry(cr, x, kLiftBox.top - 5, chart::kFaint, raw_label, false);
-  legend_entry(cr, x, kLiftBox.top - 5, out > 0 ? chart::kOut : chart::kBand, last_label, true);
+  const chart::Rgb colours[] = {chart::kCurve, chart::kFaint, out > 0 ? chart::kOut : chart::kBand};
+  for (std::size_t i = 0; i < w.lift_legend.size() && i < std::size(colours); ++i) {
+    x = legend_entry(cr, x, kLiftBox.top - 5, colours[i], w.lift_legend[i], i == 2);
+  }
 }
 
 void draw_derivative_chart(cairo_t* cr, const Box& box, const DegreeCurve& c, const DegreeLimits& limits,
                            const std::string& y_title, const std::string& title) {
   Frame f{box, -180.0, 180.0, 0.0, 1.0};
-  curve_range({&c}, limits, 1000.0, f.y_min, f.y_max);
-  draw_band(cr, f, limits, 1000.0);
+  curve_range({&c}, limits, f.y_min, f.y_max);
+  draw_band(cr, f, limits);
   chart::draw_axes(cr, f, cam_angle_ticks(), kCamAngleTitle, y_title, title, 4);
   draw_curve(cr, f, c, chart::kCurve, 1.2);
-  mark_out_of_tolerance(cr, f, c, limits, 1000.0);
+  mark_out_of_tolerance(cr, f, c, limits);
 }
 
 void draw_polar(cairo_t* cr, const ReportData& d, const CamReportWords& w) {
@@ -351,7 +351,8 @@ void draw_polar(cairo_t* cr, const ReportData& d, const CamReportWords& w) {
     cairo_arc(cr, cx, cy, r0 + ring * kPolarRingStep, 0, 2 * M_PI);
     cairo_stroke(cr);
   }
-  // Nose up; cam angle grows clockwise, as the chart's x axis grows to the right.
+  // Nose up; the angle grows clockwise, so the opening side lies left of the nose as in the
+  // charts (one convention with the pages and `runs plot`: signed_degree).
   auto point = [&](double deg, double r) {
     const double a = deg * M_PI / 180.0;
     return std::pair<double, double>{cx + r * std::sin(a), cy - r * std::cos(a)};
@@ -492,7 +493,7 @@ void draw_table(cairo_t* cr, const StoredRun& run, const CamReportWords& w) {
 // The noise the derivatives carry, from the gauge noise the revolutions show: the RMS over the
 // turn of the per-degree spread across revolutions, averaged over the run's revolutions
 // (derivative_noise_rms). Empty when it cannot be said (fewer than 2 revolutions stored).
-// Charted in um per degree, as the charts are.
+// In mm per degree, as the charts and the table are.
 std::string derivative_noise_text(const StoredRun& run) {
   const LobeAnalysis& a = run.analysis;
   double squares = 0.0;
@@ -501,8 +502,7 @@ std::string derivative_noise_text(const StoredRun& run) {
   Result<double> velocity = derivative_noise_rms(noise_um, run.summary.revolutions, 1);
   Result<double> acceleration = derivative_noise_rms(noise_um, run.summary.revolutions, 2);
   if (run.summary.revolutions < 2 || !velocity || !acceleration) return "";
-  return ", noise " + format_fixed(*velocity * 1000.0, 3) + " \u00b5m/deg, " + format_fixed(*acceleration * 1000.0, 4) +
-         " \u00b5m/deg\u00b2 RMS";
+  return ", noise " + format_fixed(*velocity, 6) + " mm/deg, " + format_fixed(*acceleration, 7) + " mm/deg\u00b2 RMS";
 }
 
 void draw_footer(cairo_t* cr, const CamReportWords& w) {
@@ -659,6 +659,18 @@ CamReportWords cam_report_words(const StoredRun& run) {
   }
   if (marked) w.table_note = "* of the " + judged_error(run).name;
   w.traceability = traceability_of(run, part.pin());
+  // The lift chart's legend; the band's entry only where a band is drawn (a pin's roundness
+  // judges the whole curve: no band per degree), counting the degrees out as the chart marks.
+  w.lift_legend = {"judged", "raw"};
+  const DegreeLimits limits = limits_per_degree(run.characteristics, "lift_error");
+  const DegreeCurve judged = nose_centred(charted_lift_error_um(run));
+  int out = 0;
+  for (int x = -179; x <= 180; ++x) out += outside(judged, limits, x) ? 1 : 0;
+  if (out > 0) {
+    w.lift_legend.push_back(std::to_string(out) + "\u00b0 out");
+  } else if (std::any_of(limits.begin(), limits.end(), [](const Limits& l) { return l.any(); })) {
+    w.lift_legend.emplace_back("tolerance");
+  }
   return w;
 }
 
@@ -680,10 +692,10 @@ Status write_cam_report(const StoredRun& run, const std::filesystem::path& out) 
     draw_header(cr, run, w);
     draw_lift_chart(cr, d, w);
     if (w.derivative_charts) {
-      draw_derivative_chart(cr, kVelocityBox, d.velocity_um_per_deg, d.velocity_limits, "velocity error, \u00b5m/deg",
+      draw_derivative_chart(cr, kVelocityBox, d.velocity_mm_per_deg, d.velocity_limits, "velocity error, mm/deg",
                             "Velocity error (d/d\u03b8 of the judged lift error)");
-      draw_derivative_chart(cr, kAccelerationBox, d.acceleration_um_per_deg2, d.acceleration_limits,
-                            "accel. error, \u00b5m/deg\u00b2", "Acceleration error (d\u00b2/d\u03b8\u00b2)");
+      draw_derivative_chart(cr, kAccelerationBox, d.acceleration_mm_per_deg2, d.acceleration_limits,
+                            "accel. error, mm/deg\u00b2", "Acceleration error (d\u00b2/d\u03b8\u00b2)");
     }
     draw_polar(cr, d, w);
     draw_harmonics(cr, run, w);

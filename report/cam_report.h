@@ -65,6 +65,9 @@ struct CamReportWords {
   // the run's UUID, one per run everywhere), and a lobe's nose lift (measured against the
   // drawing's) and base circle radius. "–" where the run's settings do not say.
   std::vector<std::pair<std::string, std::string>> traceability;
+  // The lift chart's legend: "judged", "raw", then "tolerance" (or "N° out") only where the
+  // chart draws a band.
+  std::vector<std::string> lift_legend;
 };
 
 // The id a run's report carries: "<machine>-<run id>-<first 8 hex digits of its UUID>"

@@ -52,16 +52,16 @@ JudgedError judged_error(const StoredRun& run) {
   double sum_sq = 0.0;
   double lo = j.error_um[0];
   double hi = j.error_um[0];
+  std::size_t worst = 0;
   for (std::size_t d = 0; d < j.error_um.size(); ++d) {
     const double v = j.error_um[d];
     sum_sq += v * v;
     lo = std::min(lo, v);
     hi = std::max(hi, v);
-    if (std::abs(v) > std::abs(j.error_um[static_cast<std::size_t>(j.max_abs_at_deg)])) {
-      j.max_abs_at_deg = static_cast<int>(d);
-    }
+    if (std::abs(v) > std::abs(j.error_um[worst])) worst = d;
   }
-  j.max_abs_um = std::abs(j.error_um[static_cast<std::size_t>(j.max_abs_at_deg)]);
+  j.max_abs_at_deg = signed_degree(worst);
+  j.max_abs_um = std::abs(j.error_um[worst]);
   j.rms_um = std::sqrt(sum_sq / static_cast<double>(j.error_um.size()));
   j.peak_to_valley_um = hi - lo;
   return j;

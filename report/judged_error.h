@@ -35,7 +35,7 @@ struct JudgedError {
   // "after best-fit phase", "at nominal timing", "less LS circle".
   std::string reference;
   double max_abs_um = 0.0;
-  int max_abs_at_deg = 0;
+  int max_abs_at_deg = 0;  // where, signed (signed_degree)
   double rms_um = 0.0;
   double peak_to_valley_um = 0.0;
 };

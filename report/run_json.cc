@@ -93,7 +93,7 @@ json run_detail_json(const StoredRun& r) {
   j["reconnects"] = r.reconnects;
   j["discarded_revolutions"] = r.discarded_revolutions;
   j["zero_offset_mm"] = a.zero_offset_mm;
-  j["max_abs_error_at_cam_deg"] = argmax_abs(a.error_um);
+  j["max_abs_error_at_cam_deg"] = signed_degree(argmax_abs(a.error_um));
   j["correction_max_um"] = std::abs(r.correction_um[argmax_abs(r.correction_um)]);
   j["correction_in_force_run"] = opt_json(r.correction_in_force_run);
   j["ground_with_version"] = opt_json(r.ground_with_version);
@@ -296,7 +296,9 @@ std::string run_csv(const StoredRun& r, bool comments) {
   if (comments) {
     o << "# gaugeloop run " << s.id << ": " << s.part << " lobe " << s.lobe << " on " << s.machine << ", started "
       << s.started_utc << ", status " << s.status << kEol;
-    o << "# One row per cam degree (cam frame: 0 at the nose, counter-clockwise)." << kEol;
+    o << "# One row per cam degree (cam frame: 0 at the nose); row k is cam angle k, or k - 360 above 180 (the "
+         "opening side, negative on the charts), as the lift tables are indexed."
+      << kEol;
     o << "# design_lift_mm, mean_lift_mm, spread_um, error_um, correction_um: cam frame. mean is zeroed on the base "
          "circle (gauge reading minus zero_offset_mm "
       << format_fixed(r.analysis.zero_offset_mm, 6) << "); error = mean - design; spread = standard deviation across "

@@ -78,8 +78,9 @@ double nice_step(double span) {
   return 10.0 * decade;
 }
 
-// Cam angle (degrees, counter-clockwise, 0 at the nose drawn at the top) to the page.
-double polar_x(double deg, double r) { return kPolarCx - r * std::sin(deg * std::numbers::pi / 180.0); }
+// Cam angle (degrees, 0 at the nose drawn at the top, growing clockwise so that the opening
+// side lies left of the nose as in the linear panel) to the page.
+double polar_x(double deg, double r) { return kPolarCx + r * std::sin(deg * std::numbers::pi / 180.0); }
 double polar_y(double deg, double r) { return kPolarCy - r * std::cos(deg * std::numbers::pi / 180.0); }
 
 struct Text {
@@ -175,14 +176,15 @@ std::string start_document(const std::string& title, const std::string& subtitle
   return svg;
 }
 
-// A panel of lift error (-scale..+scale um, grid every `step`) over cam degrees 0..360.
+// A panel of lift error (-scale..+scale um, grid every `step`) over the signed cam angle
+// -180..180 (signed_degree), the nose in the middle.
 struct DegreePanel {
   double left, right, top, bottom;
   double scale, step;
   std::string y_title = "lift error (\u00b5m)";
-  std::string x_title = "cam angle (deg, 0 = nose)";
+  std::string x_title = "cam angle (deg, 0 = nose, opening side negative)";
 
-  double x_of(double deg) const { return left + (right - left) * deg / 360.0; }
+  double x_of(double deg) const { return left + (right - left) * (deg + 180.0) / 360.0; }
   double y_of(double um) const { return (top + bottom) / 2.0 - um * (bottom - top) / (2.0 * scale); }
 
   // Grid, scale labels, frame and axis titles.
@@ -192,7 +194,7 @@ struct DegreePanel {
       add_line(svg, left, y_of(e), right, y_of(e), zero ? "#8a949e" : kGridColour, zero ? 1.2 : 0.8);
       add_text(svg, {left - 8, y_of(e) + 4, (e > 0 ? "+" : "") + num(e, step < 1 ? 1 : 0), 11, "end", kMutedColour});
     }
-    for (int deg = 0; deg <= 360; deg += 30) {
+    for (int deg = -180; deg <= 180; deg += 30) {
       add_line(svg, x_of(deg), top, x_of(deg), bottom, kGridColour, 0.8);
       add_text(svg, {x_of(deg), bottom + 18, std::to_string(deg), 11, "middle", kMutedColour});
     }
@@ -205,12 +207,11 @@ struct DegreePanel {
            "</text>\n";
   }
 
-  // Polyline points of a table; the last point repeats the first at 360 deg (periodic).
+  // Polyline points of a table from -180 to 180 deg (the value at 180 drawn at both ends).
   std::string points(const DegreeTable& t) const {
     std::string pts;
-    for (int deg = 0; deg <= kDegreesPerRevolution; ++deg) {
-      const double v = t[static_cast<std::size_t>(deg % kDegreesPerRevolution)];
-      pts += num(x_of(deg), 2) + "," + num(y_of(v), 2) + " ";
+    for (int deg = -180; deg <= 180; ++deg) {
+      pts += num(x_of(deg), 2) + "," + num(y_of(t[degree_index(deg)]), 2) + " ";
     }
     return pts;
   }
@@ -248,7 +249,8 @@ std::string uniform_limits_text(const ErrorPlot& p) {
   return uniform ? "\u00b1" + num(*first.upper, 1) + " \u00b5m" : std::string();
 }
 
-// Runs of whole degrees [from, to] with the same limits, in order; only those with limits.
+// Runs of whole signed degrees [from, to] (-179..180) with the same limits, in order; only
+// those with limits.
 struct LimitRun {
   int from = 0;
   int to = 0;
@@ -257,11 +259,11 @@ struct LimitRun {
 
 std::vector<LimitRun> limit_runs(const ErrorPlot& p) {
   std::vector<LimitRun> runs;
-  for (int d = 0; d < kDegreesPerRevolution;) {
-    const Limits l = limits_at(p, static_cast<std::size_t>(d));
+  for (int d = -179; d <= 180;) {
+    const Limits l = limits_at(p, degree_index(d));
     int end = d;
-    while (end + 1 < kDegreesPerRevolution) {
-      const Limits n = limits_at(p, static_cast<std::size_t>(end + 1));
+    while (end < 180) {
+      const Limits n = limits_at(p, degree_index(end + 1));
       if (n.lower != l.lower || n.upper != l.upper) break;
       ++end;
     }
@@ -306,7 +308,7 @@ ErrorScale error_scale(const ErrorPlot& p) {
 // or not; under it, which error that is.
 void draw_error_verdict(std::string& svg, const ErrorPlot& p, const ErrorScale& s) {
   std::string verdict = "max |error| " + num(std::abs(p.error_um[s.worst]), 2) + " \u00b5m at " + p.angle_word + " " +
-                        std::to_string(s.worst) + "\u00b0";
+                        std::to_string(signed_degree(s.worst)) + "\u00b0";
   if (has_limits(p)) {
     const std::string band = uniform_limits_text(p);
     const std::string limits = band.empty() ? std::string("their limits") : band;
@@ -324,7 +326,7 @@ void draw_polar_band(std::string& svg, const ErrorPlot& p, double scale, double 
   const auto radius = [&](const std::optional<double>& limit, double edge_um) {
     return std::max(1.0, kPolarR0 + limit.value_or(edge_um) * k);
   };
-  if (runs.size() == 1 && runs.front().from == 0 && runs.front().to == kDegreesPerRevolution - 1) {
+  if (runs.size() == 1 && runs.front().from == -179 && runs.front().to == 180) {
     const Limits& l = runs.front().limits;
     svg += "<path d=\"" + circle_path(radius(l.upper, scale)) + circle_path(radius(l.lower, -scale)) + "\" fill=\"" +
            kToleranceColour + "\" fill-rule=\"evenodd\" stroke=\"none\"/>\n";
@@ -361,7 +363,7 @@ void draw_polar_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s)
            (zero ? std::string("#8a949e") : std::string(kGridColour)) + "\" stroke-width=\"" + (zero ? "1.2" : "0.8") +
            "\"/>\n";
   }
-  for (int deg = 0; deg < 360; deg += 30) {
+  for (int deg = -150; deg <= 180; deg += 30) {
     const double r_in = kPolarR0 - scale * k;
     const double r_out = kPolarR0 + scale * k;
     add_line(svg, polar_x(deg, r_in), polar_y(deg, r_in), polar_x(deg, r_out), polar_y(deg, r_out), kGridColour, 0.8);
@@ -393,7 +395,7 @@ void draw_polar_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s)
            num(polar_y(static_cast<double>(d), r), 2) + "\" r=\"2\" fill=\"" + kOutColour + "\"/>\n";
   }
   add_text(svg, {kPolarCx, kPolarCy + 4, "0\u00b0 at the top", 11, "middle", kMutedColour});
-  add_text(svg, {kPolarCx, kPolarCy + 20, "angles counter-clockwise", 11, "middle", kMutedColour});
+  add_text(svg, {kPolarCx, kPolarCy + 20, "angles clockwise", 11, "middle", kMutedColour});
   add_text(svg,
            {kPolarCx, 604, "radial scale " + num(step, step < 1 ? 1 : 0) + " \u00b5m per ring, outward = more material",
             12, "middle", kMutedColour});
@@ -402,19 +404,19 @@ void draw_polar_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s)
 // The spread as a band around the error, in the linear panel.
 std::string spread_band_points(const ErrorPlot& p, const DegreePanel& panel) {
   std::string band;
-  for (int deg = 0; deg <= kDegreesPerRevolution; ++deg) {
-    const auto d = static_cast<std::size_t>(deg % kDegreesPerRevolution);
+  for (int deg = -180; deg <= 180; ++deg) {
+    const std::size_t d = degree_index(deg);
     band += num(panel.x_of(deg), 2) + "," + num(panel.y_of(p.error_um[d] + (*p.spread_um)[d]), 2) + " ";
   }
-  for (int deg = kDegreesPerRevolution; deg >= 0; --deg) {
-    const auto d = static_cast<std::size_t>(deg % kDegreesPerRevolution);
+  for (int deg = 180; deg >= -180; --deg) {
+    const std::size_t d = degree_index(deg);
     band += num(panel.x_of(deg), 2) + "," + num(panel.y_of(p.error_um[d] - (*p.spread_um)[d]), 2) + " ";
   }
   return band;
 }
 
 // The band of limits in the linear panel: a strip per run of degrees with the same limits, each
-// degree from half a degree before it to half after (degree 0 at both ends of the axis); a
+// degree from half a degree before it to half after (degree 180 at both ends of the axis); a
 // one-sided limit reaches the panel's edge.
 void draw_linear_band(std::string& svg, const ErrorPlot& p, const DegreePanel& panel) {
   const auto strip = [&](double from_deg, double to_deg, const Limits& l) {
@@ -425,12 +427,12 @@ void draw_linear_band(std::string& svg, const ErrorPlot& p, const DegreePanel& p
            "\" fill=\"" + kToleranceColour + "\"/>\n";
   };
   for (const LimitRun& r : limit_runs(p)) {
-    if (r.from == 0 && r.to == kDegreesPerRevolution - 1) {
-      strip(0.0, kDegreesPerRevolution, r.limits);
+    if (r.from == -179 && r.to == 180) {
+      strip(-180.0, 180.0, r.limits);
       continue;
     }
-    strip(std::max(0.0, r.from - 0.5), r.to + 0.5, r.limits);
-    if (r.from == 0) strip(kDegreesPerRevolution - 0.5, kDegreesPerRevolution, r.limits);
+    strip(r.from - 0.5, std::min(180.0, r.to + 0.5), r.limits);
+    if (r.to == 180) strip(-180.0, -179.5, r.limits);
   }
 }
 
@@ -460,19 +462,20 @@ void draw_linear_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s
   }
   for (std::size_t d = 0; d < p.error_um.size(); ++d) {
     if (!out_of_tolerance(p, d)) continue;
-    svg += "<circle cx=\"" + num(x_of(static_cast<double>(d)), 2) + "\" cy=\"" + num(y_of(p.error_um[d]), 2) +
+    svg += "<circle cx=\"" + num(x_of(signed_degree(d)), 2) + "\" cy=\"" + num(y_of(p.error_um[d]), 2) +
            "\" r=\"2\" fill=\"" + kOutColour + "\"/>\n";
   }
   // The worst degree, marked and labelled on the side with room.
   const std::size_t worst = s.worst;
-  const double wx = x_of(static_cast<double>(worst));
+  const int worst_deg = signed_degree(worst);
+  const double wx = x_of(worst_deg);
   const double wy = y_of(p.error_um[worst]);
   svg += "<circle cx=\"" + num(wx, 2) + "\" cy=\"" + num(wy, 2) + "\" r=\"4.5\" fill=\"none\" stroke=\"" + kTextColour +
          "\" stroke-width=\"1.4\"/>\n";
-  const bool label_left = worst > 250;
+  const bool label_left = worst_deg > 70;
   const double ly = p.error_um[worst] >= 0 ? wy - 10 : wy + 20;
   add_text(svg, {wx + (label_left ? -8 : 8), ly,
-                 num(p.error_um[worst], 2) + " \u00b5m at " + std::to_string(worst) + "\u00b0", 12,
+                 num(p.error_um[worst], 2) + " \u00b5m at " + std::to_string(worst_deg) + "\u00b0", 12,
                  label_left ? "end" : "start", kTextColour, "bold"});
 }
 

@@ -25,8 +25,8 @@ struct ErrorPlot {
   // less a least-squares circle): drawn thin and grey, labelled, never judged on the picture.
   std::optional<DegreeTable> raw_error_um;
   std::string axis_label = "lift error (\u00b5m)";
-  std::string angle_title = "cam angle (deg, 0 = nose)";
-  std::string angle_word = "cam";  // "max |error| ... at cam 59°"
+  std::string angle_title = "cam angle (deg, 0 = nose, opening side negative)";
+  std::string angle_word = "cam";  // "max |error| ... at cam -59°" (signed_degree)
   std::string frame_note = "cam frame, 0\u00b0 at the nose";
   // Per-degree standard deviation across revolutions, um: drawn as a band around the error.
   std::optional<DegreeTable> spread_um;

@@ -376,6 +376,8 @@ TEST(CamReport, APinRunSpeaksOfThePinAndLeavesOutTheLobesFigures) {
                                                                "Pin stroke (throw) error", "Pin index error"}));
   EXPECT_EQ(w.table_note, "* of the radius error less the least-squares circle");
   EXPECT_NE(w.footer_detail.find("C-X"), std::string::npos) << w.footer_detail;
+  EXPECT_EQ(w.lift_legend, (std::vector<std::string>{"judged", "raw"}))
+      << "roundness judges the whole curve: no band drawn, none named";
   const std::string words = all_words(w);
   for (const char* lobe_word :
        {"lift", "Lift", "cam", "nose", "phase", "runout", "base circle", "Base circle", "velocity", "acceleration"}) {
@@ -416,6 +418,8 @@ TEST(CamReport, ALobeRunKeepsTheCamWords) {
     EXPECT_EQ(t.size() > 2 && t.substr(t.size() - 2) == " *", of_curve) << t;
   }
   EXPECT_EQ(w.table_note, "* of the lift error after the best-fit phase");
+  ASSERT_EQ(w.lift_legend.size(), 3u);
+  EXPECT_TRUE(w.lift_legend.back().ends_with("\u00b0 out")) << w.lift_legend.back() << ": a band, degrees out of it";
   EXPECT_EQ(w.footer_judged.rfind("judged: lift error after the best-fit phase (+0.125 deg removed)", 0), 0u)
       << w.footer_judged;
   EXPECT_EQ(w.footer_detail.find("work speed program"), std::string::npos) << w.footer_detail;

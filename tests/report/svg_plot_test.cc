@@ -171,10 +171,10 @@ TEST(ErrorPlotSvg, ShowsTheToleranceBandAndTheWorstDegree) {
   EXPECT_EQ(count(svg, "fill=\"#d7efd9\""), 3) << "polar ring, linear strip, legend swatch";
   EXPECT_NE(svg.find("tolerance \u00b15.0 \u00b5m"), std::string::npos);
   // The worst degree: the verdict, the ring around it and its label.
-  EXPECT_NE(svg.find("max |error| 7.00 \u00b5m at cam 200\u00b0"), std::string::npos);
+  EXPECT_NE(svg.find("max |error| 7.00 \u00b5m at cam -160\u00b0"), std::string::npos) << "degree 200 is cam -160";
   EXPECT_NE(svg.find("judged: lift error = measured \u2212 design, cam frame"), std::string::npos);
   EXPECT_EQ(count(svg, "r=\"4.5\""), 1);
-  EXPECT_NE(svg.find(">-7.00 \u00b5m at 200\u00b0</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">-7.00 \u00b5m at -160\u00b0</text>"), std::string::npos);
   // Only degree 200 is outside +-5 um: one mark on each panel, and the verdict says so.
   EXPECT_EQ(count(svg, "r=\"2\" fill=\"#c62828\""), 2);
   EXPECT_NE(svg.find("1 degrees outside \u00b15.0 \u00b5m"), std::string::npos);
@@ -202,7 +202,7 @@ TEST(ErrorPlotSvg, TheBandTheMarksAndTheHeadlineAreOfTheJudgedCurve) {
   p.tolerance_um = 10.0;
   const std::string svg = render_error_plot_svg(p);
   EXPECT_EQ(xml_problem(svg), "");
-  EXPECT_NE(svg.find("max |error| 7.00 \u00b5m at cam 200\u00b0 \u00b7 within \u00b110.0 \u00b5m"), std::string::npos)
+  EXPECT_NE(svg.find("max |error| 7.00 \u00b5m at cam -160\u00b0 \u00b7 within \u00b110.0 \u00b5m"), std::string::npos)
       << "the raw 16 um is not what the band judges";
   EXPECT_NE(svg.find("judged: lift error after the best-fit phase"), std::string::npos);
   EXPECT_EQ(count(svg, "#c62828"), 0) << "no degree of the judged curve is outside";
@@ -228,17 +228,46 @@ TEST(ErrorPlotSvg, AZonesLimitsAreDrawnAndCountedOverItsArc) {
   EXPECT_EQ(expected, 19);
   EXPECT_EQ(count(svg, "r=\"2\" fill=\"#c62828\""), 2 * expected);
   EXPECT_NE(svg.find(std::to_string(expected) + " degrees outside their limits"), std::string::npos);
-  // Three runs of equal limits (0..29, 30..60, 61..359): three strips (degree 0's half degree
-  // before it drawn at the axis' end, a fourth), three polar sectors and the legend's swatch.
+  // Three runs of equal limits (-179..29, 30..60, 61..180): three strips (degree 180's half
+  // degree beyond it drawn at the axis' start, a fourth), three polar sectors and the swatch.
   EXPECT_EQ(count(svg, "fill=\"#d7efd9\""), 8);
   EXPECT_NE(svg.find("tolerance, per zone"), std::string::npos);
   EXPECT_EQ(bad_number(svg), "");
 }
 
+// One angle convention on both panels, as the printed report draws it: cam -60 (table index 300)
+// is left of the nose on the linear panel's -180..180 axis and, on the polar panel with the nose
+// at the top and the angle growing clockwise, up and to the left of the centre.
+TEST(ErrorPlotSvg, BothPanelsDrawTheSignedCamAngleTheReportDraws) {
+  ErrorPlot p;
+  p.title = "spike";
+  p.error_um[300] = 9.0;
+  p.tolerance_um = 5.0;
+  const std::string svg = render_error_plot_svg(p);
+  const std::regex mark("<circle cx=\"([0-9.]+)\" cy=\"([0-9.]+)\" r=\"2\" fill=\"#c62828\"/>");
+  std::vector<std::pair<double, double>> marks;
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), mark); it != std::sregex_iterator(); ++it) {
+    marks.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
+  }
+  ASSERT_EQ(marks.size(), 2u) << "one mark on each panel";
+  // Polar first (centre 300, 345; zero circle 125 px, +9 um of a 10 um scale outward).
+  const double r = std::hypot(marks[0].first - 300.0, marks[0].second - 345.0);
+  EXPECT_NEAR(std::atan2(marks[0].first - 300.0, 345.0 - marks[0].second) * 180.0 / 3.14159265358979, -60.0, 0.1)
+      << "clockwise from the top: -60 is up and to the left";
+  EXPECT_GT(r, 125.0);
+  // Linear: the axis 640..1160 px spans -180..180.
+  EXPECT_NEAR(marks[1].first, 640.0 + 520.0 * 120.0 / 360.0, 0.05);
+  EXPECT_NE(svg.find("at cam -60\u00b0"), std::string::npos);
+  for (const char* tick : {">-180</text>", ">-90</text>", ">0</text>", ">180</text>", ">-60\u00b0</text>"}) {
+    EXPECT_NE(svg.find(tick), std::string::npos) << tick;
+  }
+  EXPECT_EQ(svg.find(">270</text>"), std::string::npos) << "no 0..360 axis";
+}
+
 TEST(ErrorPlotSvg, LabelsTheAxesWithUnits) {
   const std::string svg = render_error_plot_svg(sample_plot(3.0, 7.0));
   EXPECT_NE(svg.find(">lift error (\u00b5m)</text>"), std::string::npos);
-  EXPECT_NE(svg.find(">cam angle (deg, 0 = nose)</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">cam angle (deg, 0 = nose, opening side negative)</text>"), std::string::npos);
   EXPECT_NE(svg.find("\u00b5m per ring"), std::string::npos) << "the polar panel's radial scale";
 }
 
@@ -290,7 +319,7 @@ TEST(LoopPlotSvg, IsWellFormedWithAProfilePerPartAndTheConvergence) {
   EXPECT_EQ(bad_number(svg), "");
   EXPECT_NE(svg.find("max |error| 27.00 \u2192 1.00 \u00b5m \u00b7 floor 0.40 \u00b5m"), std::string::npos);
   EXPECT_NE(svg.find(">lift error (\u00b5m)</text>"), std::string::npos);
-  EXPECT_NE(svg.find(">cam angle (deg, 0 = nose)</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">cam angle (deg, 0 = nose, opening side negative)</text>"), std::string::npos);
   EXPECT_EQ(count(svg, "r=\"3.5\""), 4) << "one measured point per part";
   for (int i = 0; i < 4; ++i) {
     EXPECT_NE(svg.find(">part " + std::to_string(i) + " \u00b7 v" + std::to_string(i) + "</text>"), std::string::npos);
