@@ -38,8 +38,8 @@ void ModbusPlcLink::disconnect() { ctx_->close(); }
 bool ModbusPlcLink::connected() const { return ctx_->is_open(); }
 
 Result<PlcRequestWords> ModbusPlcLink::read_request() {
-  // The whole block in one request, so part, lobe, serial and operator are from one moment:
-  // the PLC's words are 0-2 and 12-36.
+  // The whole block in one request, so part, lobe, serial, operator and part temperature are
+  // from one moment: the PLC's words are 0-2 and 12-37.
   std::array<std::uint16_t, plc_registers::kBlockWords> regs{};
   if (Status s = ctx_->read_registers(RegisterTable::kHolding, settings_.base_address, plc_registers::kBlockWords,
                                       regs.data());
@@ -53,6 +53,7 @@ Result<PlcRequestWords> ModbusPlcLink::read_request() {
   w.ground_with = regs[plc_registers::kGroundWith];
   std::copy_n(regs.begin() + plc_registers::kSerialFirst, plc_registers::kSerialWords, w.serial.begin());
   std::copy_n(regs.begin() + plc_registers::kOperatorFirst, plc_registers::kOperatorWords, w.operator_name.begin());
+  w.part_temperature = regs[plc_registers::kPartTemperature];
   return w;
 }
 

@@ -31,7 +31,7 @@ class PlcRegisters {
 struct PlcLinkSettings {
   // Transport, TCP host and port or serial line, unit id, response timeout; `map` unused.
   ModbusSettings link;
-  int base_address = 0;  // holding register of word 0 (the request); the block is 37 words
+  int base_address = 0;  // holding register of word 0 (the request); the block is 38 words
 };
 
 // Owns one libmodbus context. Not thread-safe: one thread polls the PLC.

@@ -2,7 +2,11 @@
 // in the block as the PLC and the service write them.
 #include "core/plc_registers.h"
 
+#include <cmath>
 #include <cstdio>
+
+#include "core/number_text.h"
+#include "core/part_temperature.h"
 
 namespace gaugeloop {
 
@@ -28,6 +32,8 @@ std::string_view plc_result_name(PlcResultCode code) {
       return "other fault";
     case PlcResultCode::kBadIdentity:
       return "bad serial number or operator";
+    case PlcResultCode::kBadPartTemperature:
+      return "bad part temperature";
   }
   return "unknown result code";
 }
@@ -71,6 +77,33 @@ Result<std::string> decode_plc_text(std::span<const std::uint16_t> words, int fi
   const std::size_t first = text.find_first_not_of(' ');
   if (first == std::string::npos) return std::string();
   return text.substr(first, text.find_last_not_of(' ') - first + 1);
+}
+
+Result<std::optional<double>> decode_plc_part_temperature(std::uint16_t word, int base_address) {
+  namespace r = plc_registers;
+  if (word == r::kPartTemperatureNotGiven) return std::optional<double>();
+  const int tenths = word >= 0x8000 ? static_cast<int>(word) - 0x10000 : static_cast<int>(word);
+  const double temperature_c = tenths / 10.0;
+  if (temperature_c < kPartTemperatureMinC || temperature_c > kPartTemperatureMaxC) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "PLC part temperature: word " + std::to_string(r::kPartTemperature) + " (holding register " +
+                          std::to_string(base_address + r::kPartTemperature) + ") is " + std::to_string(tenths) + ", " +
+                          format_fixed(temperature_c, 1) + " deg C, outside " + format_fixed(kPartTemperatureMinC, 1) +
+                          " to " + format_fixed(kPartTemperatureMaxC, 1) +
+                          " deg C; the PLC program must write the part's temperature there in tenths of a degree "
+                          "Celsius as a signed 16-bit word (214 = 21.4 deg C), or -32768 (0x8000) when it has none");
+  }
+  return std::optional<double>(temperature_c);
+}
+
+Result<std::uint16_t> encode_plc_part_temperature(std::optional<double> temperature_c) {
+  if (!temperature_c) return plc_registers::kPartTemperatureNotGiven;
+  const double tenths = std::round(*temperature_c * 10.0);
+  if (!std::isfinite(tenths) || tenths < -32767.0 || tenths > 32767.0) {
+    return make_error(ErrorCode::kInvalidInput, "part temperature " + format_fixed(*temperature_c, 1) +
+                                                    " deg C does not fit the PLC's word (an int16 in 0.1 deg C)");
+  }
+  return static_cast<std::uint16_t>(static_cast<std::int16_t>(tenths));
 }
 
 std::array<std::uint16_t, plc_registers::kServiceWords> encode_service_words(const PlcServiceWords& w) {

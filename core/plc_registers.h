@@ -15,8 +15,8 @@
 namespace gaugeloop {
 
 // Offsets from the configured base address, in the PLC's holding registers (function 03 to
-// read, 16 to write). Words 0-2 and 12-36 are the PLC's; 3-11 the service's, written in one
-// request. The service reads the whole block, words 0-36, in one request.
+// read, 16 to write). Words 0-2 and 12-37 are the PLC's; 3-11 the service's, written in one
+// request. The service reads the whole block, words 0-37, in one request.
 namespace plc_registers {
 inline constexpr int kRequest = 0;        // PLC: bit 0 = measure; a rising edge is one request
 inline constexpr int kPartNumber = 1;     // PLC: uint16, the [[part]] plc_part_number
@@ -45,10 +45,16 @@ inline constexpr int kSerialFirst = 13;
 inline constexpr int kSerialWords = 16;  // words 13..28, 32 characters
 inline constexpr int kOperatorFirst = kSerialFirst + kSerialWords;
 inline constexpr int kOperatorWords = 8;  // words 29..36, 16 characters
-inline constexpr int kPlcWords = 3;       // words 0..2
+// PLC: the part's temperature at measurement, int16 in 0.1 deg C (214 = 21.4 deg C, -15 =
+// -1.5 deg C); kPartTemperatureNotGiven (0x8000, -32768): not given. Set with the part and
+// lobe numbers, before the request rises. Values outside kPartTemperatureMinC..MaxC
+// (core/part_temperature.h) fault the request (PlcResultCode::kBadPartTemperature).
+inline constexpr int kPartTemperature = kOperatorFirst + kOperatorWords;  // word 37
+inline constexpr std::uint16_t kPartTemperatureNotGiven = 0x8000;
+inline constexpr int kPlcWords = 3;  // words 0..2
 inline constexpr int kServiceFirst = kHeartbeat;
-inline constexpr int kServiceWords = 9;                              // words 3..11
-inline constexpr int kBlockWords = kOperatorFirst + kOperatorWords;  // 37
+inline constexpr int kServiceWords = 9;                   // words 3..11
+inline constexpr int kBlockWords = kPartTemperature + 1;  // 38
 // One read (function 03) carries at most 125 registers: the block is read in one request so
 // the PLC's words are always from one moment.
 static_assert(kBlockWords <= 125, "the handshake block must fit one Modbus read");
@@ -56,21 +62,22 @@ inline constexpr std::uint16_t kMeasureBit = 0x0001;
 }  // namespace plc_registers
 
 // What became of one PLC request. 0-2: done (a run was stored); 3 and up: fault (no run, or
-// one stored whose table could not be written).
+// one stored whose table could not be written). Codes are only ever added, never renumbered.
 enum class PlcResultCode : std::uint16_t {
-  kTablePushed = 0,   // run stored, its curve table pushed
-  kTableHeld = 1,     // run stored, table kept for approval (`gaugeloop nc approve`)
-  kTableRefused = 2,  // run stored, the correction refused: the table in force stays
-  kUnknownPart = 3,   // part number or lobe not in the configuration; nothing measured
-  kGaugeFault = 4,    // the gauge did not answer or the run was incomplete; nothing stored
-  kStorageFault = 5,  // the run database refused the run
-  kNcFault = 6,       // the NC program could not be written
-  kNotNow = 7,        // another run in progress (HTTP, by hand) or the service stopping
-  kOtherFault = 8,    // anything else: the service log and `gaugeloop events` say what
-  kBadIdentity = 9,   // the serial number or operator words hold a byte that is not text; nothing measured
+  kTablePushed = 0,          // run stored, its curve table pushed
+  kTableHeld = 1,            // run stored, table kept for approval (`gaugeloop nc approve`)
+  kTableRefused = 2,         // run stored, the correction refused: the table in force stays
+  kUnknownPart = 3,          // part number or lobe not in the configuration; nothing measured
+  kGaugeFault = 4,           // the gauge did not answer or the run was incomplete; nothing stored
+  kStorageFault = 5,         // the run database refused the run
+  kNcFault = 6,              // the NC program could not be written
+  kNotNow = 7,               // another run in progress (HTTP, by hand) or the service stopping
+  kOtherFault = 8,           // anything else: the service log and `gaugeloop events` say what
+  kBadIdentity = 9,          // the serial number or operator words hold a byte that is not text; nothing measured
+  kBadPartTemperature = 10,  // the part temperature word is outside -40.0..150.0 deg C; nothing measured
 };
 
-// The PLC's words (0-2, 12-36), as read.
+// The PLC's words (0-2, 12-37), as read.
 struct PlcRequestWords {
   std::uint16_t request = 0;
   std::uint16_t part_number = 0;
@@ -78,6 +85,7 @@ struct PlcRequestWords {
   std::uint16_t ground_with = 0;                                             // word 12, as read
   std::array<std::uint16_t, plc_registers::kSerialWords> serial{};           // words 13..28, as read
   std::array<std::uint16_t, plc_registers::kOperatorWords> operator_name{};  // words 29..36, as read
+  std::uint16_t part_temperature = plc_registers::kPartTemperatureNotGiven;  // word 37, as read
   bool measure() const { return (request & plc_registers::kMeasureBit) != 0; }
   // The table version that ground the part: empty when not said (0), 0 for the design.
   std::optional<int> ground_with_version() const {
@@ -113,6 +121,17 @@ Status encode_plc_text(std::string_view text, std::span<std::uint16_t> words);
 // byte (high, low) and its value.
 Result<std::string> decode_plc_text(std::span<const std::uint16_t> words, int first_word, int base_address,
                                     std::string_view what);
+
+// The part temperature the PLC wrote into word 37 (kPartTemperature), deg C: empty when not
+// given (kPartTemperatureNotGiven). kInvalidInput naming the word, its holding register
+// (`base_address` + 37), the value read and what to write, when it is outside
+// kPartTemperatureMinC..kPartTemperatureMaxC.
+Result<std::optional<double>> decode_plc_part_temperature(std::uint16_t word, int base_address);
+
+// Word 37 as the PLC writes it for `temperature_c` (rounded to 0.1 deg C; empty: not given).
+// Any value an int16 in 0.1 deg C holds is written, also one the service refuses, so a test can
+// play a PLC that writes nonsense. kInvalidInput for a value not finite or beyond the word.
+Result<std::uint16_t> encode_plc_part_temperature(std::optional<double> temperature_c);
 
 // Words 3..11 in register order (run id high word first); decode is the inverse.
 std::array<std::uint16_t, plc_registers::kServiceWords> encode_service_words(const PlcServiceWords& w);

@@ -27,6 +27,8 @@ Result<std::unique_ptr<PlcSimulator>> PlcSimulator::start(const PlcSimulatorSett
       !s) {
     return s.error();
   }
+  // A PLC that gives no part temperature: word 37 holds "not given", not 0.0 deg C.
+  sim->mapping_->tab_registers[r::kPartTemperature] = r::kPartTemperatureNotGiven;
   if (Status s = sim->listen(); !s) return s.error();
   sim->thread_ = start_guarded_thread("PLC simulator", [raw = sim.get()] { raw->serve(); }, {});
   return sim;
@@ -102,6 +104,14 @@ Status PlcSimulator::set_identity(std::string_view serial, std::string_view oper
   return {};
 }
 
+Status PlcSimulator::set_part_temperature_c(std::optional<double> temperature_c) {
+  Result<std::uint16_t> word = encode_plc_part_temperature(temperature_c);
+  if (!word) return word.error();
+  std::lock_guard lock(mutex_);
+  mapping_->tab_registers[r::kPartTemperature] = *word;
+  return {};
+}
+
 void PlcSimulator::clear_request() {
   std::lock_guard lock(mutex_);
   mapping_->tab_registers[r::kRequest] &= static_cast<std::uint16_t>(~r::kMeasureBit);
@@ -116,6 +126,7 @@ PlcRequestWords PlcSimulator::plc_words() const {
   w.ground_with = mapping_->tab_registers[r::kGroundWith];
   std::copy_n(mapping_->tab_registers + r::kSerialFirst, r::kSerialWords, w.serial.begin());
   std::copy_n(mapping_->tab_registers + r::kOperatorFirst, r::kOperatorWords, w.operator_name.begin());
+  w.part_temperature = mapping_->tab_registers[r::kPartTemperature];
   return w;
 }
 

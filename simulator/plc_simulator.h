@@ -29,7 +29,7 @@ struct PlcSimulatorSettings {
   int unit_id = 1;       // answered whatever the request's unit id (as most PLCs do over TCP)
 };
 
-// Serves the block's holding registers, base_address .. base_address + 36 (and nothing else:
+// Serves the block's holding registers, base_address .. base_address + 37 (and nothing else:
 // other addresses get exception 2, illegal data address) on its own thread from start() until
 // stop() or destruction. Thread-safe: every method may be called from any thread. Each write
 // by a client wakes the waiters, so tests wait on state, never on time.
@@ -54,6 +54,12 @@ class PlcSimulator {
   // written, when a text is longer than its words hold (32 and 16 characters). Set them
   // before request(), as a PLC program does.
   Status set_identity(std::string_view serial, std::string_view operator_name);
+  // Word 37: the part's temperature, deg C, as the PLC writes it (encode_plc_part_temperature:
+  // 0.1 deg C an increment; empty writes "not given", 0x8000, as a fresh simulator holds).
+  // Values the service refuses (beyond -40.0..150.0) are written as they are, for a test.
+  // kInvalidInput, nothing written, for a value not finite or beyond the int16 word. Set it
+  // before request(), as a PLC program does.
+  Status set_part_temperature_c(std::optional<double> temperature_c);
   void clear_request();
   PlcRequestWords plc_words() const;
   // The service's words as last written.

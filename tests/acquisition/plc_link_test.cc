@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
+#include <optional>
 #include <string>
 
 #include "simulator/plc_simulator.h"
@@ -120,6 +122,51 @@ TEST_F(PlcLinkTest, AThirtyTwoCharacterSerialFillsEveryWordAndComesBackWhole) {
   EXPECT_EQ(sim_->plc_words().serial.back(), ('U' << 8) | 'V') << "nothing written";
 }
 
+// Word 37 comes in the same read as the rest of the block: a simulated PLC that gives no
+// temperature holds 0x8000, "not given"; 21.4 deg C is 214, -1.5 is -15 as an int16.
+TEST_F(PlcLinkTest, CarriesThePartTemperatureWordInTheSameRead) {
+  ModbusPlcLink link(settings());
+  ASSERT_TRUE(link.connect().ok());
+  auto read_word = [&link]() -> std::uint16_t {
+    Result<PlcRequestWords> req = link.read_request();
+    EXPECT_TRUE(req.ok()) << req.error().message;
+    return req ? req->part_temperature : 0;
+  };
+  EXPECT_EQ(read_word(), plc_registers::kPartTemperatureNotGiven) << "a fresh PLC gives none";
+  Result<std::optional<double>> none = decode_plc_part_temperature(read_word(), 400);
+  ASSERT_TRUE(none.ok()) << none.error().message;
+  EXPECT_FALSE(none->has_value());
+
+  ASSERT_TRUE(sim_->set_part_temperature_c(21.4).ok());
+  EXPECT_EQ(read_word(), 214);
+  Result<std::optional<double>> warm = decode_plc_part_temperature(read_word(), 400);
+  ASSERT_TRUE(warm.ok()) << warm.error().message;
+  ASSERT_TRUE(warm->has_value());
+  EXPECT_DOUBLE_EQ(**warm, 21.4);
+
+  ASSERT_TRUE(sim_->set_part_temperature_c(-1.5).ok());
+  EXPECT_EQ(read_word(), 0xFFF1);
+  Result<std::optional<double>> cold = decode_plc_part_temperature(read_word(), 400);
+  ASSERT_TRUE(cold.ok() && cold->has_value());
+  EXPECT_DOUBLE_EQ(**cold, -1.5);
+
+  // A value the service refuses still goes into the word; one the word cannot hold does not.
+  ASSERT_TRUE(sim_->set_part_temperature_c(200.0).ok());
+  EXPECT_EQ(read_word(), 2000);
+  Result<std::optional<double>> hot = decode_plc_part_temperature(read_word(), 400);
+  ASSERT_FALSE(hot.ok());
+  EXPECT_NE(hot.error().message.find("word 37 (holding register 437) is 2000, 200.0 deg C"), std::string::npos)
+      << hot.error().message;
+  EXPECT_FALSE(sim_->set_part_temperature_c(4000.0).ok());
+  EXPECT_FALSE(sim_->set_part_temperature_c(std::nan("")).ok());
+  EXPECT_EQ(read_word(), 2000) << "nothing written";
+
+  ASSERT_TRUE(sim_->set_part_temperature_c(std::nullopt).ok());
+  EXPECT_EQ(read_word(), plc_registers::kPartTemperatureNotGiven);
+  EXPECT_EQ(sim_->plc_words().part_temperature, plc_registers::kPartTemperatureNotGiven);
+  EXPECT_EQ(sim_->service_writes(), 0) << "the PLC's words are only read";
+}
+
 TEST_F(PlcLinkTest, AllZeroIdentityWordsAreNoSerialAndNoOperator) {
   ModbusPlcLink link(settings());
   ASSERT_TRUE(link.connect().ok());
@@ -173,7 +220,7 @@ TEST_F(PlcLinkTest, AWrongBaseAddressIsAnExceptionThatNamesTheKey) {
   ASSERT_FALSE(req.ok());
   EXPECT_EQ(req.error().code, ErrorCode::kInvalidInput);
   EXPECT_NE(req.error().message.find("base_address"), std::string::npos) << req.error().message;
-  EXPECT_NE(req.error().message.find("0..36"), std::string::npos)
+  EXPECT_NE(req.error().message.find("0..37"), std::string::npos)
       << "the whole block in one read: " << req.error().message;
   EXPECT_TRUE(link.connected()) << "an exception reply leaves the link usable";
 }

@@ -467,8 +467,8 @@ TEST_F(ServiceConfigTest, AValueOutOfRangeSaysWhatIsAllowed) {
                                           "adaptive-spline"));
   EXPECT_TRUE(refused(read(ok + "[http]\nport = 65536\n"), ErrorCode::kInvalidInput,
                       at(7, "http.port") + ": 65536 is out of range; allowed [0, 65535]"));
-  EXPECT_TRUE(refused(read(ok + "[plc]\nbase_address = 65500\n"), ErrorCode::kInvalidInput,
-                      at(7, "plc.base_address") + ": 65500 is out of range; allowed [0, 65499]"));
+  EXPECT_TRUE(refused(read(ok + "[plc]\nbase_address = 65499\n"), ErrorCode::kInvalidInput,
+                      at(7, "plc.base_address") + ": 65499 is out of range; allowed [0, 65498]"));
   EXPECT_TRUE(refused(read(ok + "[plc]\npoll_interval_ms = 5\n"), ErrorCode::kInvalidInput,
                       at(7, "plc.poll_interval_ms") + ": 5 is out of range; allowed [10, 10000]"));
   EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + "plc_part_number = 0\n" + kNc), ErrorCode::kInvalidInput,
