@@ -597,6 +597,9 @@ int cmd_measure_as_service(const ServiceMeasureOptions& so, const MeasureOptions
   js.note = by_hand.note;
   js.serial = by_hand.serial;
   js.operator_name = by_hand.operator_name;
+  Result<std::optional<PartTemperature>> temperature = part_temperature_option(by_hand);
+  if (!temperature) return report_error(temperature.error());
+  js.part_temperature = *temperature;
   js.ground_with_version = by_hand.ground_with;
   js.ground_with_source = "option";
   js.inspect = by_hand.inspect;
@@ -855,12 +858,15 @@ void add_measure_command(CLI::App& app, CommandAction& action) {
                       "The gauge's inventory number, printed on the run's report (at most 40 characters)");
   measure->add_option("--gauge-calibrated", measure_opts->gauge_calibration_date,
                       "The day of the gauge's last calibration, YYYY-MM-DD, printed on the run's report");
+  measure->add_option("--part-temperature-c", measure_opts->part_temperature_c,
+                      "The part's temperature at measurement, deg C (-40.0 to 150.0, kept to 0.1), stored with the "
+                      "run and printed on its report as given by the operator");
   auto as_service = std::make_shared<ServiceMeasureOptions>();
   CLI::Option* config = measure->add_option(
       "--config", as_service->config_path,
       "The service's config (TOML, docs/service.md): measure as `gaugeloop serve` does, with its gauge, settings, "
       "database and NC directory; with --part-name and --lobe, and only --note, --serial, --operator, "
-      "--ground-with, --inspect");
+      "--part-temperature-c, --ground-with, --inspect");
   measure->add_option("--part-name", as_service->part_name, "With --config: the part's name")->needs(config);
   measure->add_option("--lobe", as_service->lobe, "With --config: the lobe number")->needs(config);
   measure->callback([&action, measure, measure_opts, gauge_address, as_service] {
@@ -869,7 +875,8 @@ void add_measure_command(CLI::App& app, CommandAction& action) {
       for (const CLI::Option* o : measure->get_options()) {
         const std::string name = o->get_name();
         if (o->count() == 0 || name == "--config" || name == "--part-name" || name == "--lobe" || name == "--note" ||
-            name == "--serial" || name == "--operator" || name == "--ground-with" || name == "--inspect")
+            name == "--serial" || name == "--operator" || name == "--part-temperature-c" || name == "--ground-with" ||
+            name == "--inspect")
           continue;
         action = [name] {
           return report_error(

@@ -224,6 +224,7 @@ int cmd_show(const RunOptions& o) {
   std::printf("  gauge             %s\n", r.gauge.c_str());
   std::printf("  serial            %s\n", s.serial.empty() ? "not given" : s.serial.c_str());
   std::printf("  operator          %s\n", s.operator_name.empty() ? "not given" : s.operator_name.c_str());
+  std::printf("  part temperature  %s\n", part_temperature_text(run_part_temperature(r), "degC").c_str());
   if (!s.note.empty()) std::printf("  note              %s\n", s.note.c_str());
   std::printf("  revolutions       %d (%lld discarded, %lld reconnects, %lld polls)%s\n", s.revolutions,
               static_cast<long long>(r.discarded_revolutions), static_cast<long long>(r.reconnects),

@@ -41,7 +41,15 @@ Status check_identity_options(const MeasureOptions& o) {
                                                     ": not a past day as YYYY-MM-DD; give the date on the gauge's "
                                                     "calibration certificate");
   }
+  if (Result<std::optional<PartTemperature>> t = part_temperature_option(o); !t) return t.error();
   return {};
+}
+
+Result<std::optional<PartTemperature>> part_temperature_option(const MeasureOptions& o) {
+  if (!o.part_temperature_c) return std::optional<PartTemperature>();
+  Result<double> c = checked_part_temperature_c(*o.part_temperature_c, "--part-temperature-c");
+  if (!c) return c.error();
+  return std::optional<PartTemperature>(PartTemperature{*c, PartTemperatureSource::kOperator});
 }
 
 void add_program_options(CLI::App& cmd, MeasureOptions& o) {
@@ -147,6 +155,9 @@ Result<JobSettings> job_settings_for(const LoadedPart& lp, const MeasureOptions&
   js.operator_name = o.operator_name;
   js.gauge_id = o.gauge_id;
   js.gauge_calibration_date = o.gauge_calibration_date;
+  Result<std::optional<PartTemperature>> temperature = part_temperature_option(o);
+  if (!temperature) return temperature.error();
+  js.part_temperature = *temperature;
   js.build_on_table_in_force = build_on_table_in_force;
   js.ground_with_version = o.ground_with;
   js.ground_with_source = "option";

@@ -37,11 +37,16 @@ struct MeasureOptions {
   std::string operator_name;           // measure only: who measures
   std::string gauge_id;                // measure only: the gauge's inventory number
   std::string gauge_calibration_date;  // measure only: YYYY-MM-DD
+  std::optional<double> part_temperature_c;  // measure only: the part's temperature, deg C
 };
 
-// --serial, --operator, --gauge-id and --gauge-calibrated, checked before anything is read,
-// naming the option at fault.
+// --serial, --operator, --gauge-id, --gauge-calibrated and --part-temperature-c, checked
+// before anything is read, naming the option at fault.
 Status check_identity_options(const MeasureOptions& o);
+
+// --part-temperature-c as the run keeps it (rounded to 0.1 deg C, given by the operator);
+// empty when not given. kInvalidInput naming the option for a value not finite or out of range.
+Result<std::optional<PartTemperature>> part_temperature_option(const MeasureOptions& o);
 
 // The options of what is written to the control: --data-dir, --nc-dir, --template,
 // --main-template, --table, --table-step-deg, --command-error-um, --int-incr-per-mm,

@@ -259,6 +259,10 @@ Result<Prepared> check_names_and_prepare(const JobSettings& s) {
   if (Status n = check_name(s.machine, "machine name"); !n) return n.error();
   if (Status n = check_run_identity("serial", s.serial); !n) return n.error();
   if (Status n = check_run_identity("operator", s.operator_name); !n) return n.error();
+  if (s.part_temperature) {
+    Result<double> t = checked_part_temperature_c(s.part_temperature->temperature_c, "part temperature");
+    if (!t) return t.error();
+  }
   return prepare(s);
 }
 

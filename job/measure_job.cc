@@ -84,6 +84,10 @@ std::string settings_text(const JobSettings& s) {
   if (!s.part.drawing_revision.empty()) line("part.drawing_revision", s.part.drawing_revision);
   if (!s.gauge_id.empty()) line("gauge.id", s.gauge_id);
   if (!s.gauge_calibration_date.empty()) line("gauge.calibration_date", s.gauge_calibration_date);
+  if (s.part_temperature) {
+    line("part.temperature_c", part_temperature_c_text(s.part_temperature->temperature_c));
+    line("part.temperature_source", std::string(part_temperature_source_name(s.part_temperature->source)));
+  }
   line("poller.mode", std::string(sampling_mode_name(s.poller.mode)));
   line("poller.revolutions", std::to_string(s.poller.revolutions));
   line("analysis.base_circle_center_deg", num(s.analysis.base_circle_center_deg));

@@ -17,6 +17,7 @@
 #include "core/grinding_cycle.h"
 #include "core/lift_table.h"
 #include "core/part.h"
+#include "core/part_temperature.h"
 #include "core/pin.h"
 #include "core/result.h"
 #include "core/run.h"
@@ -140,6 +141,11 @@ struct JobSettings {
   // given. Free text, checked before the gauge is read (check_run_identity, storage/run_store.h).
   std::string serial;
   std::string operator_name;
+  // The part's temperature at measurement and who gave it (the PLC's word 37, or a person:
+  // `measure --part-temperature-c`, the HTTP API's `part_temperature_c`); empty: not given.
+  // Kept in the run's settings (part.temperature_c, part.temperature_source) for its reports.
+  // Checked before the gauge is read (checked_part_temperature_c).
+  std::optional<PartTemperature> part_temperature;
   // True (measuring a part the machine ground): the new correction builds on the correction
   // of the table that ground the part (ground_with), by default the table in force, that of
   // the last run of this machine, part and lobe whose table was pushed.

@@ -5,6 +5,7 @@
 #include "report/judged_error.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <locale>
@@ -82,6 +83,32 @@ RunPart run_part(const StoredRun& run) {
   return part;
 }
 
+RunPartTemperature run_part_temperature(const StoredRun& run) {
+  RunPartTemperature t;
+  std::istringstream in(run.settings);
+  constexpr std::string_view kTemperature = "part.temperature_c = ";
+  constexpr std::string_view kSource = "part.temperature_source = ";
+  for (std::string line; std::getline(in, line);) {
+    const std::string_view l(line);
+    if (l.rfind(kTemperature, 0) == 0) {
+      const std::string_view text = l.substr(kTemperature.size());
+      double value = 0.0;
+      const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+      if (ec == std::errc() && end == text.data() + text.size() && std::isfinite(value)) t.temperature_c = value;
+    } else if (l.rfind(kSource, 0) == 0) {
+      t.source = std::string(l.substr(kSource.size()));
+    }
+  }
+  if (!t.temperature_c) t.source.clear();
+  return t;
+}
+
+std::string part_temperature_text(const RunPartTemperature& t, std::string_view unit) {
+  if (!t.temperature_c) return "not given";
+  const std::string who = t.source == "plc" ? "PLC" : t.source.empty() ? "source not recorded" : t.source;
+  return format_fixed(*t.temperature_c, 1) + " " + std::string(unit) + " (" + who + ")";
+}
+
 json run_detail_json(const StoredRun& r) {
   const LobeAnalysis& a = r.analysis;
   // Runs stored before schema version 2 computed no inspection figures, harmonics included.
@@ -105,6 +132,9 @@ json run_detail_json(const StoredRun& r) {
       has_inspection ? json(std::vector<double>(a.harmonic_amplitude_um.begin(), a.harmonic_amplitude_um.end()))
                      : json(nullptr);
   j["settings"] = text_or_null(r.settings);
+  const RunPartTemperature temperature = run_part_temperature(r);
+  j["part_temperature_c"] = opt_json(temperature.temperature_c);
+  j["part_temperature_source"] = text_or_null(temperature.source);
   if (r.geometry) {
     j["frame"] = {{"rotation_sense", r.geometry->rotation_sense},
                   {"c_offset_deg", r.geometry->c_offset_deg},

@@ -5,6 +5,7 @@
 
 #include <ctime>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -27,6 +28,18 @@ struct RunPart {
   bool pin() const { return kind == PartKind::kPin; }
 };
 RunPart run_part(const StoredRun& run);
+
+// The part's temperature at measurement as a run keeps it (the settings lines
+// part.temperature_c and part.temperature_source, job/measure_job.cc): temperature_c empty when
+// not given (runs stored before it was kept too), source "plc" or "operator".
+struct RunPartTemperature {
+  std::optional<double> temperature_c;
+  std::string source;
+};
+RunPartTemperature run_part_temperature(const StoredRun& run);
+// "21.4 °C (PLC)", "21.4 °C (operator)" or "not given"; `unit` after the number: "\u00b0C"
+// on a page, "degC" on a terminal.
+std::string part_temperature_text(const RunPartTemperature& t, std::string_view unit);
 
 // One row of `runs list --json` and `runs trend --json`. Figures a run did not record (phase,
 // runout, settings hash, prune time) are null.

@@ -126,13 +126,16 @@ TEST_F(RunsCommandsTest, ListBySerialFindsOnlyThatPartsRunsAndShowsTheSerial) {
   ASSERT_EQ(show.exit_code, 0) << show.output;
   EXPECT_TRUE(has(show.output, "serial            CS-0042\n")) << show.output;
   EXPECT_TRUE(has(show.output, "operator          anna\n")) << show.output;
+  EXPECT_TRUE(has(show.output, "part temperature  not given\n")) << show.output;
   const nlohmann::json old = json_of("runs show --json " + std::to_string(ids_[0]));
   EXPECT_TRUE(old.contains("serial") && old["serial"].is_null()) << old.dump();
   EXPECT_TRUE(old.contains("operator") && old["operator"].is_null()) << old.dump();
+  EXPECT_TRUE(old.contains("part_temperature_c") && old["part_temperature_c"].is_null()) << old.dump();
 }
 
-// `measure --serial --operator`: the real binary against the simulated gauge stores both.
-TEST_F(RunsCommandsTest, MeasureStoresTheSerialAndOperatorAndRefusesBadOnesBeforeTheGauge) {
+// `measure --serial --operator --part-temperature-c`: the real binary against the simulated
+// gauge stores them.
+TEST_F(RunsCommandsTest, MeasureStoresTheSerialOperatorAndPartTemperatureAndRefusesBadOnesBeforeTheGauge) {
   const fs::path part = fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml";
   Result<PartFile> pf = read_part_file(part);
   ASSERT_TRUE(pf.ok()) << pf.error().message;
@@ -155,10 +158,23 @@ TEST_F(RunsCommandsTest, MeasureStoresTheSerialAndOperatorAndRefusesBadOnesBefor
   bad = run_command(measure + " --gauge-calibrated 2026-02-30");
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_TRUE(has(bad.output, "--gauge-calibrated 2026-02-30: not a past day as YYYY-MM-DD")) << bad.output;
+  for (const char* t : {"150.1", "-40.1", "nan", "inf"}) {
+    bad = run_command(measure + " --part-temperature-c=" + t);
+    EXPECT_EQ(bad.exit_code, 2) << t << ": " << bad.output;
+    EXPECT_TRUE(has(bad.output,
+                    ": not a part temperature; give the part's temperature in degrees Celsius, -40.0 to "
+                    "150.0"))
+        << t << ": " << bad.output;
+    EXPECT_TRUE(has(bad.output, "--part-temperature-c ")) << bad.output;
+  }
+  bad = run_command(measure + " --part-temperature-c 21,4");
+  EXPECT_NE(bad.exit_code, 0) << bad.output;
+  EXPECT_TRUE(has(bad.output, "--part-temperature-c")) << bad.output;
   EXPECT_FALSE(fs::exists(fresh / "gaugeloop.sqlite")) << "refused before anything was opened";
 
-  CommandResult r = run_command(
-      measure + " --serial 'CS 0042' --operator 'Anna K.' --gauge-id LVDT-07 --gauge-calibrated 2026-10-01");
+  CommandResult r = run_command(measure +
+                                " --serial 'CS 0042' --operator 'Anna K.' --gauge-id LVDT-07 --gauge-calibrated "
+                                "2026-10-01 --part-temperature-c 21.44");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   Result<RunStore> store = RunStore::open(fresh / "gaugeloop.sqlite");
   ASSERT_TRUE(store.ok()) << store.error().message;
@@ -171,10 +187,22 @@ TEST_F(RunsCommandsTest, MeasureStoresTheSerialAndOperatorAndRefusesBadOnesBefor
   // its report reads them.
   Result<StoredRun> stored = store->load_run((*runs)[0].id);
   ASSERT_TRUE(stored.ok()) << stored.error().message;
-  for (const char* line : {"gauge.id = LVDT-07\n", "gauge.calibration_date = 2026-10-01\n",
-                           "part.drawing_number = CS-4711-01\n", "part.drawing_revision = C\n"}) {
+  for (const char* line :
+       {"gauge.id = LVDT-07\n", "gauge.calibration_date = 2026-10-01\n", "part.drawing_number = CS-4711-01\n",
+        "part.drawing_revision = C\n", "part.temperature_c = 21.4\npart.temperature_source = operator\n"}) {
     EXPECT_TRUE(has(stored->settings, line)) << line << stored->settings;
   }
+  // Shown where the run is read: `runs show`, its JSON (the run page's), kept to 0.1 deg C.
+  const std::string show = "runs show " + std::to_string((*runs)[0].id) + " --data-dir " + fresh.string();
+  CommandResult shown = run_command(show);
+  ASSERT_EQ(shown.exit_code, 0) << shown.output;
+  EXPECT_TRUE(has(shown.output, "part temperature  21.4 degC (operator)\n")) << shown.output;
+  CommandResult as_json = run_command(show + " --json");
+  ASSERT_EQ(as_json.exit_code, 0) << as_json.output;
+  const nlohmann::json j = nlohmann::json::parse(as_json.output, nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << as_json.output;
+  EXPECT_EQ(j["part_temperature_c"], 21.4) << as_json.output;
+  EXPECT_EQ(j["part_temperature_source"], "operator") << as_json.output;
 }
 
 TEST_F(RunsCommandsTest, BadTimeIsBadInputSayingWhatToWrite) {

@@ -43,7 +43,9 @@ const std::set<std::string> kSummaryKeys = {"id",
                                             "raw_pruned_utc"};
 
 // docs/http_api.md, GET /api/runs/{id}: the summary's keys plus these.
-const std::set<std::string> kDetailKeys = {"lift_error_reference",
+const std::set<std::string> kDetailKeys = {"part_temperature_c",
+                                           "part_temperature_source",
+                                           "lift_error_reference",
                                            "judged_error",
                                            "harmonics_fed_back",
                                            "harmonic_threshold_um",
@@ -94,7 +96,7 @@ void expect_units_in_names(const json& j, const std::string& key = "") {
   } else if (j.is_array()) {
     for (const json& v : j) expect_units_in_names(v, key);
   } else if (j.is_number_float()) {
-    EXPECT_TRUE(ends_with(key, "_um") || ends_with(key, "_mm") || ends_with(key, "_deg"))
+    EXPECT_TRUE(ends_with(key, "_um") || ends_with(key, "_mm") || ends_with(key, "_deg") || ends_with(key, "_c"))
         << "`" << key << "` holds a figure but names no unit";
   } else if (j.is_string() && j.get<std::string>().size() == 20 && j.get<std::string>()[10] == 'T') {
     EXPECT_TRUE(ends_with(key, "_utc")) << "`" << key << "` holds a time but is not named _utc";
@@ -108,6 +110,7 @@ TEST_F(RunJsonTest, AStoredRunHasEveryDocumentedKeyAndItsFigures) {
   record.note = "first";
   record.ground_with_version = 1;
   record.ground_with_source = "plc";
+  record.settings += "part.temperature_c = 21.4\npart.temperature_source = plc\n";
   const std::int64_t first = insert(testing::sample_run("intake_flat", 1, "grinder-1", "2026-11-22T01:00:00Z", 6.0));
   record.correction_in_force_run = first;
   const std::int64_t id = insert(record);
@@ -147,6 +150,8 @@ TEST_F(RunJsonTest, AStoredRunHasEveryDocumentedKeyAndItsFigures) {
   EXPECT_EQ(j["correction_in_force_run"], first);
   EXPECT_EQ(j["ground_with_version"], 1);
   EXPECT_EQ(j["ground_with_source"], "plc");
+  EXPECT_EQ(j["part_temperature_c"], 21.4);
+  EXPECT_EQ(j["part_temperature_source"], "plc");
   EXPECT_EQ(j["inspection"], false);
   ASSERT_TRUE(j["harmonic_amplitude_um"].is_array());
   EXPECT_EQ(j["harmonic_amplitude_um"].size(), 31u);
