@@ -83,8 +83,9 @@ Result<std::unique_ptr<HttpApi>> start_http(Service& service, PlcTrigger* plc, c
                                             const std::filesystem::path& db_path) {
   HttpWrites writes;
   writes.trigger_measure = [&service](const std::string& part, int lobe, const std::string& note,
-                                      const std::string& serial, const std::string& operator_name) {
-    return service.measure(part, lobe, note, serial, operator_name);
+                                      const std::string& serial, const std::string& operator_name,
+                                      std::optional<double> part_temperature_c) {
+    return service.measure(part, lobe, note, serial, operator_name, part_temperature_c);
   };
   writes.approve = [&service](std::int64_t id, const std::string& by, const std::string& note) {
     return service.approve(id, by, note);

@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,10 +26,12 @@ namespace gaugeloop {
 // kIo 503, a gauge error 502, anything else 500. An empty hook answers 501.
 // Thread: called on the API's worker threads, possibly several at once; only after the token
 // was checked and the body parsed (part, program and by not empty; lobe and version >= 1;
-// serial and operator empty or checked by check_run_identity).
+// serial and operator empty or checked by check_run_identity; part_temperature_c empty or
+// checked and rounded by checked_part_temperature_c).
 struct HttpWrites {
   std::function<Result<nlohmann::json>(const std::string& part, int lobe, const std::string& note,
-                                       const std::string& serial, const std::string& operator_name)>
+                                       const std::string& serial, const std::string& operator_name,
+                                       std::optional<double> part_temperature_c)>
       trigger_measure;
   std::function<Result<nlohmann::json>(std::int64_t pending_id, const std::string& by, const std::string& note)>
       approve;

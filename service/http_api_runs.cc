@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/part_temperature.h"
 #include "report/cam_report.h"
 #include "report/gear_report.h"
 #include "report/run_json.h"
@@ -268,8 +269,9 @@ void HttpApi::Impl::trend_plot(const httplib::Request& req, httplib::Response& r
 
 void HttpApi::Impl::measure(const httplib::Request&, const std::string& text, httplib::Response& res) {
   if (!writes.trigger_measure) return send_error(res, 501, "this service does not take measurement triggers");
-  Result<json> body = body_object(text, {"part", "lobe", "note", "serial", "operator"},
-                                  R"({"part": "intake_flat", "lobe": 1, "serial": "A123", "operator": "anna"})");
+  Result<json> body = body_object(
+      text, {"part", "lobe", "note", "serial", "operator", "part_temperature_c"},
+      R"({"part": "intake_flat", "lobe": 1, "serial": "A123", "operator": "anna", "part_temperature_c": 21.4})");
   if (!body) return send_error(res, body.error());
   Result<std::string> part = string_field(*body, "part", true);
   if (!part) return send_error(res, part.error());
@@ -284,7 +286,14 @@ void HttpApi::Impl::measure(const httplib::Request&, const std::string& text, ht
   Result<std::string> operator_name = string_field(*body, "operator", false);
   if (!operator_name) return send_error(res, operator_name.error());
   if (Status s = check_run_identity("`operator`", *operator_name); !s) return send_error(res, s.error());
-  answer(res, writes.trigger_measure(*part, *lobe, *note, *serial, *operator_name));
+  Result<std::optional<double>> temperature = number_field(*body, "part_temperature_c");
+  if (!temperature) return send_error(res, temperature.error());
+  if (*temperature) {
+    Result<double> c = checked_part_temperature_c(**temperature, "`part_temperature_c`");
+    if (!c) return send_error(res, c.error());
+    *temperature = *c;
+  }
+  answer(res, writes.trigger_measure(*part, *lobe, *note, *serial, *operator_name, *temperature));
 }
 
 }  // namespace gaugeloop

@@ -145,6 +145,16 @@ Result<bool> bool_field(const json& body, const std::string& name) {
   return it->get<bool>();
 }
 
+Result<std::optional<double>> number_field(const json& body, const std::string& name) {
+  const auto it = body.find(name);
+  if (it == body.end() || it->is_null()) return std::optional<double>();
+  if (!it->is_number()) {
+    return bad_request("`" + name + "` must be a number, not " +
+                       it->dump(-1, ' ', false, json::error_handler_t::replace));
+  }
+  return std::optional<double>(it->get<double>());
+}
+
 bool iequals(std::string_view a, std::string_view b) {
   return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
            return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));

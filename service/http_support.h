@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <string>
 #include <string_view>
@@ -140,6 +141,9 @@ Result<int> int_field(const json& body, const std::string& name, int min, int ma
 
 // An optional boolean field: false when missing or null.
 Result<bool> bool_field(const json& body, const std::string& name);
+
+// An optional number field: empty when missing or null; kInvalidInput naming it for another type.
+Result<std::optional<double>> number_field(const json& body, const std::string& name);
 
 bool iequals(std::string_view a, std::string_view b);
 

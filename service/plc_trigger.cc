@@ -79,6 +79,13 @@ Result<PlcIdentity> plc_identity(const PlcRequestWords& request, int base_addres
   return who;
 }
 
+Result<std::optional<PartTemperature>> plc_part_temperature(const PlcRequestWords& request, int base_address) {
+  Result<std::optional<double>> c = decode_plc_part_temperature(request.part_temperature, base_address);
+  if (!c) return c.error();
+  if (!*c) return std::optional<PartTemperature>();
+  return std::optional<PartTemperature>(PartTemperature{**c, PartTemperatureSource::kPlc});
+}
+
 // ---- ServiceCycleRunner ----
 
 ServiceCycleRunner::~ServiceCycleRunner() {
@@ -96,6 +103,8 @@ std::optional<PlcCycleOutcome> ServiceCycleRunner::start(const PlcRequestWords& 
   if (!part) return PlcCycleOutcome{PlcResultCode::kUnknownPart, 0, 0, part.error().message};
   Result<PlcIdentity> identity = plc_identity(request, base_address_);
   if (!identity) return PlcCycleOutcome{PlcResultCode::kBadIdentity, 0, 0, identity.error().message};
+  Result<std::optional<PartTemperature>> temperature = plc_part_temperature(request, base_address_);
+  if (!temperature) return PlcCycleOutcome{PlcResultCode::kBadPartTemperature, 0, 0, temperature.error().message};
   Result<RunReservation> reservation = service_.reserve_run();
   if (!reservation) {
     // A damaged database refuses every run until a person restores it: a fault, not "ask again".
@@ -114,10 +123,10 @@ std::optional<PlcCycleOutcome> ServiceCycleRunner::start(const PlcRequestWords& 
   auto held = std::make_shared<RunReservation>(std::move(*reservation));
   worker_ = start_guarded_thread(
       "measuring",
-      [this, held, name, lobe, note, ground_with, who = std::move(*identity)] {
+      [this, held, name, lobe, note, ground_with, who = std::move(*identity), temperature = *temperature] {
         std::optional<std::int64_t> stored_run;
         Result<JobReport> report = service_.run_reserved(std::move(*held), name, lobe, note, &stored_run, ground_with,
-                                                         who.serial, who.operator_name);
+                                                         who.serial, who.operator_name, temperature);
         finish(plc_outcome(report, stored_run));
       },
       [this, held](std::string_view thread_name, std::string_view what) {

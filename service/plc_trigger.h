@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "config/service_config.h"
+#include "core/part_temperature.h"
 #include "service/plc_handshake.h"
 #include "service/service.h"
 
@@ -34,6 +35,11 @@ struct PlcIdentity {
 };
 Result<PlcIdentity> plc_identity(const PlcRequestWords& request, int base_address);
 
+// The part temperature a PLC request carries (word 37), as the run keeps it: empty when not
+// given. kInvalidInput naming the word, its holding register (`base_address` + 37) and the value
+// when it is out of range (decode_plc_part_temperature).
+Result<std::optional<PartTemperature>> plc_part_temperature(const PlcRequestWords& request, int base_address);
+
 // Runs a PLC request's cycle on a worker thread, so the handshake keeps polling (and the
 // heartbeat counting) while the lobe is measured. Used by the PLC trigger's thread only.
 class ServiceCycleRunner final : public PlcCycleRunner {
@@ -45,7 +51,8 @@ class ServiceCycleRunner final : public PlcCycleRunner {
 
   // While the service stops: kNotNow at once, whatever the PLC asks for. Then at once: an
   // unknown part or lobe (kUnknownPart), serial number or operator words that are not text
-  // (kBadIdentity, plc_identity), another run in progress (kNotNow).
+  // (kBadIdentity, plc_identity), a part temperature out of range (kBadPartTemperature,
+  // plc_part_temperature), another run in progress (kNotNow).
   std::optional<PlcCycleOutcome> start(const PlcRequestWords& request) override;
   std::optional<PlcCycleOutcome> poll() override;
 

@@ -311,11 +311,14 @@ void Service::release_run() {
 }
 
 Result<json> Service::measure(const std::string& part_name, int lobe, const std::string& note,
-                              const std::string& serial, const std::string& operator_name) {
+                              const std::string& serial, const std::string& operator_name,
+                              std::optional<double> part_temperature_c) {
   Result<RunReservation> reservation = reserve_run();
   if (!reservation) return reservation.error();
-  Result<JobReport> report =
-      run_reserved(std::move(*reservation), part_name, lobe, note, nullptr, std::nullopt, serial, operator_name);
+  std::optional<PartTemperature> temperature;
+  if (part_temperature_c) temperature = PartTemperature{*part_temperature_c, PartTemperatureSource::kOperator};
+  Result<JobReport> report = run_reserved(std::move(*reservation), part_name, lobe, note, nullptr, std::nullopt, serial,
+                                          operator_name, temperature);
   if (!flush_events()) spdlog::warn("the run's events still wait for the database; they are written later");
   if (!report) return report.error();
   return job_report_json(*report);
@@ -324,7 +327,8 @@ Result<json> Service::measure(const std::string& part_name, int lobe, const std:
 Result<JobReport> Service::run_reserved(RunReservation reservation, const std::string& part_name, int lobe,
                                         const std::string& note, std::optional<std::int64_t>* stored_run,
                                         std::optional<int> ground_with, const std::string& serial,
-                                        const std::string& operator_name) {
+                                        const std::string& operator_name,
+                                        std::optional<PartTemperature> part_temperature) {
   const RunReservation held = std::move(reservation);  // released when this run ends, however
   const std::shared_ptr<const ServiceConfig> c = config();
   Result<const ServicePart*> part = find_part(*c, part_name, lobe);
@@ -337,6 +341,7 @@ Result<JobReport> Service::run_reserved(RunReservation reservation, const std::s
   js.note = note;
   js.serial = serial;
   js.operator_name = operator_name;
+  js.part_temperature = part_temperature;
   js.ground_with_version = ground_with;
   js.ground_with_source = "plc";
   js.check_integrity = false;  // checked whole at start

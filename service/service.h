@@ -99,19 +99,23 @@ class Service {
   // One measurement run over HTTP: run_reserved's report as JSON (job_report_json). Returns
   // once the run's events are written too (flush_events), so the caller that is answered
   // finds them in the database.
-  // `serial` and `operator_name` are stored with the run (empty: not given).
+  // `serial` and `operator_name` are stored with the run (empty: not given), and so is
+  // `part_temperature_c` as given by a person (checked_part_temperature_c's already; empty:
+  // not given).
   Result<nlohmann::json> measure(const std::string& part_name, int lobe, const std::string& note,
-                                 const std::string& serial = {}, const std::string& operator_name = {});
+                                 const std::string& serial = {}, const std::string& operator_name = {},
+                                 std::optional<double> part_temperature_c = std::nullopt);
 
   // One measurement run, end to end, on a reservation it ends. `stored_run`, when given,
   // receives the run's id as soon as it is stored, so a push that fails after that can still
   // name the run. `ground_with`: the table version that ground the part, as the PLC said it
-  // (0: the design); empty: not said. `serial`, `operator_name`: stored with the run (empty:
-  // not given; the PLC gives neither).
+  // (0: the design); empty: not said. `serial`, `operator_name`, `part_temperature`: stored
+  // with the run (empty: not given).
   Result<JobReport> run_reserved(RunReservation reservation, const std::string& part_name, int lobe,
                                  const std::string& note, std::optional<std::int64_t>* stored_run = nullptr,
                                  std::optional<int> ground_with = std::nullopt, const std::string& serial = {},
-                                 const std::string& operator_name = {});
+                                 const std::string& operator_name = {},
+                                 std::optional<PartTemperature> part_temperature = std::nullopt);
 
   // A pending table approved over HTTP; the same as `gaugeloop nc approve` (no overwriting
   // of a hand-edited program over HTTP: that needs the command and its flag).

@@ -394,6 +394,8 @@ async function runPage(id) {
     <dl class="kv">
       <dt>Started</dt><dd>${utc(r.started_utc)} UTC</dd><dt>Finished</dt><dd>${utc(r.finished_utc)} UTC</dd>
       <dt>Operator</dt><dd>${esc(r.operator ?? "–")}</dd><dt>Gauge</dt><dd>${esc(r.gauge)}</dd>
+      <dt>Part temperature</dt><dd id="run-part-temperature">${r.part_temperature_c == null ? "not given"
+        : `${r.part_temperature_c.toFixed(1)} °C (${r.part_temperature_source === "plc" ? "PLC" : esc(r.part_temperature_source ?? "source not recorded")})`}</dd>
       <dt>Status</dt><dd>${esc(r.status)}</dd><dt>Note</dt><dd>${esc(r.note || "–")}</dd>
       <dt>Zero offset</dt><dd>${fig(r.zero_offset_mm, "mm", 4)}</dd>
       <dt>Ground with table</dt><dd>${r.ground_with_version ? "version " + esc(r.ground_with_version) : "–"}</dd>
@@ -895,7 +897,8 @@ function kvList(obj) {
 async function statePage() {
   page().innerHTML = `<h1>Service</h1><div id="state-out"><p>Loading…</p></div>
     <h2>Measure now</h2><form class="filters" id="measure-form"><label>Lobe<select name="lobe-of" id="measure-lobe"></select></label>
-      <label>Serial<input name="serial"></label><label>Operator<input name="operator"></label><label>Note<input name="note"></label>
+      <label>Serial<input name="serial"></label><label>Operator<input name="operator"></label>
+      <label>Part °C<input name="part_temperature_c" inputmode="decimal" size="6"></label><label>Note<input name="note"></label>
       <button type="submit" class="write" id="measure-button">${writeLabel("Measure")}</button></form><div id="measure-message"></div>`;
   let lobesFilled = false;
   const refresh = async () => {
@@ -935,7 +938,10 @@ async function statePage() {
     message(msg, "Measuring…");
     button.disabled = true;  // one measurement at a time: the service refuses a second (409)
     try {
-      const r = await write("/api/measure", {part, lobe: Number(lobe), serial: f.serial, operator: f.operator, note: f.note});
+      // Empty: not given; text that is no number goes as it is, for the service to refuse by name.
+      const t = (f.part_temperature_c || "").trim();
+      const part_temperature_c = t === "" ? null : Number.isFinite(Number(t)) ? Number(t) : t;
+      const r = await write("/api/measure", {part, lobe: Number(lobe), serial: f.serial, operator: f.operator, part_temperature_c, note: f.note});
       // What became of its table, from the answer: written, waiting for approval, or neither and why.
       const table = r.pushed ? `version ${r.table_version} of ${programOf(r.nc_file)} written to the control`
         : r.pending_id ? `its table waits for approval (table ${r.pending_id})`

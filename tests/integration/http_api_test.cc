@@ -12,10 +12,12 @@
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "core/number_text.h"
 #include "job/measure_job.h"
 #include "service/service.h"
 #include "storage/run_store.h"
@@ -119,10 +121,12 @@ class HttpApiTest : public ::testing::Test {
   HttpWrites logging_writes() {
     HttpWrites w;
     w.trigger_measure = [this](const std::string& part, int lobe, const std::string& note, const std::string& serial,
-                               const std::string& operator_name) -> Result<json> {
+                               const std::string& operator_name,
+                               std::optional<double> part_temperature_c) -> Result<json> {
       log_.add("measure " + part + " " + std::to_string(lobe) + " " + note +
                (serial.empty() ? "" : " serial=" + serial) +
-               (operator_name.empty() ? "" : " operator=" + operator_name));
+               (operator_name.empty() ? "" : " operator=" + operator_name) +
+               (part_temperature_c ? " part_temperature_c=" + format_fixed(*part_temperature_c, 2) : ""));
       return json{{"queued", true}};
     };
     w.approve = [this](std::int64_t id, const std::string& by, const std::string& note) -> Result<json> {
@@ -258,6 +262,27 @@ TEST_F(HttpApiTest, MeasurePassesSerialAndOperatorAndRefusesBadOnesWith400) {
   EXPECT_TRUE(has(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1, "serial": 42})", "t"), 400),
                   "`serial` must be a string, not number"));
   EXPECT_EQ(log_.all().size(), 2u) << "a refused request queues no run";
+}
+
+// The part's temperature, deg C, given with the request: passed on rounded to 0.1; missing or
+// null is not given; a value out of range, not a number, is a 400 naming the field, no run.
+TEST_F(HttpApiTest, MeasurePassesThePartTemperatureAndRefusesABadOneWith400) {
+  start("t", logging_writes());
+  ASSERT_EQ(post("/api/measure", R"({"part": "intake", "lobe": 1, "part_temperature_c": 21.43})", "t").status, 200);
+  ASSERT_EQ(post("/api/measure", R"({"part": "intake", "lobe": 1, "part_temperature_c": -5})", "t").status, 200);
+  ASSERT_EQ(post("/api/measure", R"({"part": "intake", "lobe": 1, "part_temperature_c": null})", "t").status, 200);
+  EXPECT_EQ(log_.all(), (std::vector<std::string>{"measure intake 1  part_temperature_c=21.40",
+                                                  "measure intake 1  part_temperature_c=-5.00", "measure intake 1 "}));
+  EXPECT_TRUE(
+      has(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1, "part_temperature_c": 150.1})", "t"), 400),
+          "`part_temperature_c` 150.1: not a part temperature"));
+  EXPECT_TRUE(
+      has(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1, "part_temperature_c": -40.5})", "t"), 400),
+          "-40.0 to 150.0"));
+  EXPECT_TRUE(
+      has(error_of(post("/api/measure", R"({"part": "intake", "lobe": 1, "part_temperature_c": "21,4"})", "t"), 400),
+          "`part_temperature_c` must be a number, not \"21,4\""));
+  EXPECT_EQ(log_.all().size(), 3u) << "a refused request queues no run";
 }
 
 TEST_F(HttpApiTest, GearRunsListFilterAndShowWithTheirTraces) {
@@ -546,8 +571,8 @@ TEST_F(HttpApiTest, WritesNeedTheConfiguredTokenAndPassTheirArgumentsToTheHooks)
 
 TEST_F(HttpApiTest, HookErrorsChooseTheStatusAndKeepTheirMessage) {
   HttpWrites w;
-  w.trigger_measure = [](const std::string&, int, const std::string&, const std::string&,
-                         const std::string&) -> Result<json> {
+  w.trigger_measure = [](const std::string&, int, const std::string&, const std::string&, const std::string&,
+                         std::optional<double>) -> Result<json> {
     return make_error(ErrorCode::kRefused, "a measurement of intake lobe 1 is running; try again when it is done");
   };
   w.approve = [](std::int64_t, const std::string&, const std::string&) -> Result<json> {

@@ -544,6 +544,7 @@ TEST_F(PlcServiceTest, PlcRequestRunNcFileDoneWithTheRunIdThenCleared) {
   ASSERT_GT(port, 0) << log();
   wait_until_polled();
 
+  ASSERT_TRUE(plc_->set_part_temperature_c(21.4).ok());  // word 37 = 214, with part and lobe
   plc_->request(7, 1);
   auto acked = plc_->wait_until([](const PlcServiceWords& w) { return w.ack; }, kGenerous);
   ASSERT_TRUE(acked.has_value()) << log();
@@ -568,6 +569,11 @@ TEST_F(PlcServiceTest, PlcRequestRunNcFileDoneWithTheRunIdThenCleared) {
   ASSERT_TRUE(parsed.ok()) << parsed.error().message;
   EXPECT_TRUE(verify_table_checksum(*parsed, "pushed for the PLC").ok());
   EXPECT_EQ(parsed->header.at("run_id"), std::to_string(out->run_id));
+  // The part temperature the PLC gave is kept with the run, said to be the PLC's.
+  auto stored = store->load_run(static_cast<std::int64_t>(out->run_id));
+  ASSERT_TRUE(stored.ok()) << stored.error().message;
+  EXPECT_NE(stored->settings.find("\npart.temperature_c = 21.4\npart.temperature_source = plc\n"), std::string::npos)
+      << stored->settings;
 
   // The request held high after done is not a new one: polls go on, no second run.
   const std::uint16_t heartbeat = out->heartbeat;
@@ -591,6 +597,11 @@ TEST_F(PlcServiceTest, PlcRequestRunNcFileDoneWithTheRunIdThenCleared) {
   json h = json::parse(health->body);
   EXPECT_EQ(h["plc"]["connected"], true) << health->body;
   EXPECT_EQ(h["plc"]["requests"], 1) << health->body;
+  auto run_page = cli.Get("/api/runs/" + std::to_string(out->run_id));
+  ASSERT_TRUE(run_page);
+  json rj = json::parse(run_page->body);
+  EXPECT_EQ(rj["part_temperature_c"], 21.4) << run_page->body;
+  EXPECT_EQ(rj["part_temperature_source"], "plc") << run_page->body;
 
   // Every step of the cycle, in order, in the database and in the log, the run named from
   // the moment it is stored.
@@ -686,7 +697,7 @@ TEST_F(PlcServiceTest, TheNextPartGroundFromThePushedTableComesOutUnder26Um) {
   EXPECT_EQ(service.wait(), 0) << log();
 }
 
-TEST_F(PlcServiceTest, UnknownPartNumberIsAFaultAndNoRunAndALostLinkComesBack) {
+TEST_F(PlcServiceTest, UnknownPartOrPartTemperatureOutOfRangeIsAFaultAndNoRunAndALostLinkComesBack) {
   ServiceProcess service(dir_ / "gaugeloop.toml", dir_ / "serve.log");
   ASSERT_GT(service.port(), 0) << log();
   wait_until_polled();
@@ -716,6 +727,18 @@ TEST_F(PlcServiceTest, UnknownPartNumberIsAFaultAndNoRunAndALostLinkComesBack) {
   out = plc_->wait_for_outcome(kGenerous);
   ASSERT_TRUE(out.has_value()) << log();
   EXPECT_EQ(out->result_code, PlcResultCode::kUnknownPart);
+  plc_->clear_request();
+  ASSERT_TRUE(plc_->wait_until([](const PlcServiceWords& w) { return !w.ack && !w.fault; }, kGenerous).has_value());
+
+  // A part temperature word out of range (150.1 deg C): fault, its own result code, no run, and
+  // the event names the word and its holding register (base address 100).
+  ASSERT_TRUE(plc_->set_part_temperature_c(150.1).ok());
+  plc_->request(7, 1);
+  out = plc_->wait_for_outcome(kGenerous);
+  ASSERT_TRUE(out.has_value()) << log();
+  EXPECT_TRUE(out->fault);
+  EXPECT_EQ(out->result_code, PlcResultCode::kBadPartTemperature) << log();
+  EXPECT_EQ(out->run_id, 0u);
 
   auto store = RunStore::open(dir_ / "runs.sqlite");
   ASSERT_TRUE(store.ok());
@@ -725,6 +748,14 @@ TEST_F(PlcServiceTest, UnknownPartNumberIsAFaultAndNoRunAndALostLinkComesBack) {
   EXPECT_TRUE(wait_for_event(EventKind::kInfo, "plc fault")) << log();
   service.signal(SIGTERM);
   EXPECT_EQ(service.wait(), 0) << log();
+  // Its events are written by the time the service has exited.
+  bool named = false;
+  for (const StoredEvent& e : events(EventKind::kInfo)) {
+    named = named || (e.event.code == "plc fault" &&
+                      e.event.message.find("result code 10 (bad part temperature): PLC part temperature: word 37 "
+                                           "(holding register 137) is 1501, 150.1 deg C") != std::string::npos);
+  }
+  EXPECT_TRUE(named) << log();
 }
 
 TEST_F(PlcServiceTest, SigtermMidCycleStoresTheRunAndAnswersThePlcBeforeExiting) {

@@ -500,6 +500,73 @@ TEST_F(ServiceStateTest, APlcOperatorThatIsNotTextIsRefusedAtOnce) {
   EXPECT_TRUE(service.reserve_run().ok()) << "no run reserved";
 }
 
+// Word 37, the part temperature in 0.1 deg C: 214 is kept with the run as 21.4 given by the
+// PLC, a negative one as it is, 0x8000 is not given (no settings line).
+TEST_F(ServiceStateTest, APlcRunKeepsThePartTemperatureThePlcWrote) {
+  Service service(config_, design_gauge());
+  ServiceCycleRunner runner(service);
+  std::vector<std::int64_t> runs;
+  for (std::uint16_t word :
+       {std::uint16_t{214}, static_cast<std::uint16_t>(-15), plc_registers::kPartTemperatureNotGiven}) {
+    PlcRequestWords request = plc_request("", "");
+    request.part_temperature = word;
+    ASSERT_FALSE(runner.start(request).has_value()) << word;
+    const std::optional<PlcCycleOutcome> o = wait_for_outcome(runner);
+    ASSERT_TRUE(o.has_value());
+    ASSERT_TRUE(plc_result_is_done(o->code)) << o->message;
+    runs.push_back(o->run_id);
+  }
+  Result<RunStore> store = RunStore::open_read_only(db());
+  ASSERT_TRUE(store.ok()) << store.error().message;
+  auto settings_of = [&](std::int64_t id) {
+    Result<StoredRun> r = store->load_run(id);
+    EXPECT_TRUE(r.ok()) << r.error().message;
+    return r ? r->settings : std::string();
+  };
+  EXPECT_NE(settings_of(runs[0]).find("\npart.temperature_c = 21.4\npart.temperature_source = plc\n"),
+            std::string::npos)
+      << settings_of(runs[0]);
+  EXPECT_NE(settings_of(runs[1]).find("\npart.temperature_c = -1.5\n"), std::string::npos) << settings_of(runs[1]);
+  EXPECT_EQ(settings_of(runs[2]).find("part.temperature"), std::string::npos) << "not given: no line";
+}
+
+// A part temperature beyond -40.0..150.0 deg C (a word left unset, a scale slipped) refuses the
+// request at once with its own result code, the message naming the word, its register and the value.
+TEST_F(ServiceStateTest, APlcPartTemperatureOutOfRangeIsRefusedAtOnce) {
+  Service service(config_, design_gauge());
+  ServiceCycleRunner runner(service, 2000);
+  struct Case {
+    std::uint16_t word;
+    std::string said;
+  };
+  const Case cases[] = {
+      {1501, "word 37 (holding register 2037) is 1501, 150.1 deg C, outside -40.0 to 150.0 deg C"},
+      {static_cast<std::uint16_t>(-401), "is -401, -40.1 deg C"},
+      {0x7FFF, "is 32767, 3276.7 deg C"},
+      {0x8001, "is -32767, -3276.7 deg C"},
+  };
+  for (const Case& c : cases) {
+    PlcRequestWords request = plc_request("A123", "anna");
+    request.part_temperature = c.word;
+    const std::optional<PlcCycleOutcome> o = runner.start(request);
+    ASSERT_TRUE(o.has_value()) << "refused before a run starts: " << c.word;
+    EXPECT_EQ(o->code, PlcResultCode::kBadPartTemperature);
+    EXPECT_FALSE(plc_result_is_done(o->code)) << "answered with fault";
+    EXPECT_NE(o->message.find("PLC part temperature: "), std::string::npos) << o->message;
+    EXPECT_NE(o->message.find(c.said), std::string::npos) << o->message;
+    EXPECT_NE(o->message.find("-32768 (0x8000) when it has none"), std::string::npos) << o->message;
+  }
+  // The range's ends are temperatures.
+  for (std::uint16_t word : {static_cast<std::uint16_t>(-400), std::uint16_t{1500}}) {
+    Result<std::optional<double>> t = decode_plc_part_temperature(word, 0);
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    ASSERT_TRUE(t->has_value());
+  }
+  EXPECT_EQ(plc_result_name(PlcResultCode::kBadPartTemperature), "bad part temperature");
+  EXPECT_EQ(gauges_made_, 0);
+  EXPECT_TRUE(service.reserve_run().ok()) << "no run reserved";
+}
+
 TEST_F(ServiceStateTest, AnExceptionOnTheWorkerIsAFaultForThePlcAndTheServiceGoesOn) {
   int calls = 0;
   Service service(config_, [&calls, good = design_gauge()](const ServiceConfig& c) -> std::unique_ptr<GaugeClient> {
