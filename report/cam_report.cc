@@ -267,16 +267,37 @@ void draw_header(cairo_t* cr, const StoredRun& run, const CamReportWords& w) {
   cairo_set_source_rgb(cr, 1, 1, 1);
   chart::text(cr, right - box_w / 2, 29, verdict, 11, Align::kCentre, true);
 
-  // Identity: label and value pairs on two lines.
+  // Identity: label and value pairs on three lines.
   auto fields = [&](double y, const std::vector<std::pair<std::string, std::string>>& pairs) {
+    // Up to six values share a line of the page: none may push the next off it. Each is at
+    // most 130 points wide (the note 360), and the line's room is shared so that the narrow
+    // ones show whole and the widest are cut to an equal share of what is left.
+    const std::size_t n = pairs.size();
+    std::vector<double> wanted(n);
+    std::vector<std::size_t> narrowest_first(n);
+    double room = right - kMargin;
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& [label, value] = pairs[i];
+      room -= chart::text_width(cr, label + " ", 7.5) + 16;
+      const double widest = label == "Note" ? 360.0 : 130.0;
+      wanted[i] = std::min(widest, chart::text_width(cr, value.empty() ? "\u2013" : value, 8, true));
+      narrowest_first[i] = i;
+    }
+    std::sort(narrowest_first.begin(), narrowest_first.end(),
+              [&wanted](std::size_t a, std::size_t b) { return wanted[a] < wanted[b]; });
+    std::vector<double> width(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t i = narrowest_first[k];
+      width[i] = std::max(0.0, std::min(wanted[i], room / static_cast<double>(n - k)));
+      room -= width[i];
+    }
     double x = kMargin;
-    for (const auto& [label, value] : pairs) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& [label, value] = pairs[i];
       chart::set_colour(cr, chart::kNotJudged);
       x += chart::text(cr, x, y, label + " ", 7.5);
       chart::set_colour(cr, chart::kInk);
-      // Five values share a line of the page: none may push the next off it.
-      const double widest = label == "Note" ? 360.0 : 130.0;
-      const std::string shown = chart::fit_text(cr, value.empty() ? "\u2013" : value, 8, widest, true);
+      const std::string shown = chart::fit_text(cr, value.empty() ? "\u2013" : value, 8, width[i], true);
       x += chart::text(cr, x, y, shown, 8, Align::kLeft, true) + 16;
     }
   };
@@ -618,8 +639,10 @@ std::vector<std::pair<std::string, std::string>> traceability_of(const StoredRun
   const std::string calibrated = setting_of(run.settings, "gauge.calibration_date");
   std::string gauge = gauge_id;
   if (!calibrated.empty()) gauge += (gauge.empty() ? "" : ", ") + std::string("calibrated ") + calibrated;
+  // The part's temperature at measurement: a warm part's error told from a wrong table.
+  const std::string temperature = part_temperature_text(run_part_temperature(run), "\u00b0C");
   std::vector<std::pair<std::string, std::string>> out = {
-      {"Drawing", drawing}, {"Gauge", gauge}, {"Report", report_id(run.summary)}};
+      {"Drawing", drawing}, {"Gauge", gauge}, {"Part temperature", temperature}, {"Report", report_id(run.summary)}};
   if (!pin) {
     const LobeAnalysis& a = run.analysis;
     const double nominal = *std::max_element(a.design_lift_mm.begin(), a.design_lift_mm.end());

@@ -268,7 +268,8 @@ TEST(CamReport, LongIdentityStaysOnThePage) {
   run.summary.machine = std::string(64, 'M');
   run.summary.note = std::string(200, 'N');
   run.settings = "part.drawing_number = " + std::string(40, 'D') + "\npart.drawing_revision = " + std::string(40, 'R') +
-                 "\ngauge.id = " + std::string(40, 'G') + "\ngauge.calibration_date = 2026-10-01\n";
+                 "\ngauge.id = " + std::string(40, 'G') + "\ngauge.calibration_date = 2026-10-01\n" +
+                 "part.temperature_c = -39.9\npart.temperature_source = operator\n";
   run.summary.machine += std::string(1, 'X');
   testing::TempDir dir;
   const fs::path out = dir / "long.png";
@@ -443,6 +444,7 @@ TEST(CamReport, TheHeaderNamesTheDrawingTheGaugeAndTheReport) {
   std::vector<std::pair<std::string, std::string>> t = cam_report_words(r).traceability;
   const std::vector<std::pair<std::string, std::string>> expected = {{"Drawing", "4711-0815 rev C"},
                                                                      {"Gauge", "LVDT-07, calibrated 2026-10-01"},
+                                                                     {"Part temperature", "not given"},
                                                                      {"Report", "grinder-1-42-6f1c2e0a"},
                                                                      {"Nose lift", "8.002 mm (drawing 8.000)"},
                                                                      {"Base circle r", "18.000 mm"}};
@@ -452,11 +454,33 @@ TEST(CamReport, TheHeaderNamesTheDrawingTheGaugeAndTheReport) {
   r.settings = "compensation.gain = 1\n";
   r.summary.uuid.clear();
   t = cam_report_words(r).traceability;
-  ASSERT_EQ(t.size(), 5u);
+  ASSERT_EQ(t.size(), 6u);
   EXPECT_EQ(t[0].second, "") << "no drawing given";
   EXPECT_EQ(t[1].second, "") << "no gauge given";
-  EXPECT_EQ(t[2].second, "grinder-1-42") << "a run stored without a UUID";
-  EXPECT_EQ(t[4].second, "") << "no radius recorded";
+  EXPECT_EQ(t[2].second, "not given") << "no part temperature given";
+  EXPECT_EQ(t[3].second, "grinder-1-42") << "a run stored without a UUID";
+  EXPECT_EQ(t[5].second, "") << "no radius recorded";
+}
+
+// The part's temperature at measurement, as the PLC or the operator gave it: a cam checker's
+// report prints it so a warm part's error is told from a wrong table. A pin's report too.
+TEST(CamReport, TheHeaderSaysThePartTemperatureAndWhoGaveIt) {
+  StoredRun r = out_of_tolerance_run();
+  auto temperature = [](const StoredRun& run) {
+    for (const auto& [label, value] : cam_report_words(run).traceability) {
+      if (label == "Part temperature") return value;
+    }
+    return std::string("(no such field)");
+  };
+  r.settings = "gauge.id = LVDT-07\npart.temperature_c = 21.4\npart.temperature_source = plc\n";
+  EXPECT_EQ(temperature(r), "21.4 \u00b0C (PLC)");
+  r.settings = "part.temperature_c = -1.5\npart.temperature_source = operator\n";
+  EXPECT_EQ(temperature(r), "-1.5 \u00b0C (operator)");
+  r.settings = "part.temperature_c = warm\npart.temperature_source = operator\n";
+  EXPECT_EQ(temperature(r), "not given") << "a line that is no number is not shown as one";
+  r.characteristics.clear();
+  r.settings = "part.kind = pin\npin.mode = c-x\npart.temperature_c = 20.0\npart.temperature_source = plc\n";
+  EXPECT_EQ(temperature(r), "20.0 \u00b0C (PLC)");
 }
 
 TEST(CamReport, AnotherExtensionIsRefusedAndNothingWritten) {
