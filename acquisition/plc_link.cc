@@ -18,7 +18,7 @@ ModbusPeer plc_peer() {
       ErrorCode::kInvalidInput,
       "; check [plc] in the service config",
       "; check the PLC is on and its Modbus server is enabled",
-      "; check [plc] base_address against the PLC's register block",
+      "; check [plc] base_address (and part_temperature: 38 words, else 37) against the PLC's register block",
   };
 }
 
@@ -39,11 +39,10 @@ bool ModbusPlcLink::connected() const { return ctx_->is_open(); }
 
 Result<PlcRequestWords> ModbusPlcLink::read_request() {
   // The whole block in one request, so part, lobe, serial, operator and part temperature are
-  // from one moment: the PLC's words are 0-2 and 12-37.
-  std::array<std::uint16_t, plc_registers::kBlockWords> regs{};
-  if (Status s = ctx_->read_registers(RegisterTable::kHolding, settings_.base_address, plc_registers::kBlockWords,
-                                      regs.data());
-      !s) {
+  // from one moment: the PLC's words are 0-2 and 12-36 (37).
+  std::array<std::uint16_t, plc_registers::kBlockWordsWithTemperature> regs{};
+  const int words = settings_.part_temperature ? plc_registers::kBlockWordsWithTemperature : plc_registers::kBlockWords;
+  if (Status s = ctx_->read_registers(RegisterTable::kHolding, settings_.base_address, words, regs.data()); !s) {
     return s.error();
   }
   PlcRequestWords w;
@@ -53,7 +52,8 @@ Result<PlcRequestWords> ModbusPlcLink::read_request() {
   w.ground_with = regs[plc_registers::kGroundWith];
   std::copy_n(regs.begin() + plc_registers::kSerialFirst, plc_registers::kSerialWords, w.serial.begin());
   std::copy_n(regs.begin() + plc_registers::kOperatorFirst, plc_registers::kOperatorWords, w.operator_name.begin());
-  w.part_temperature = regs[plc_registers::kPartTemperature];
+  w.part_temperature =
+      settings_.part_temperature ? regs[plc_registers::kPartTemperature] : plc_registers::kPartTemperatureNotGiven;
   return w;
 }
 

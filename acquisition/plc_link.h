@@ -31,7 +31,10 @@ class PlcRegisters {
 struct PlcLinkSettings {
   // Transport, TCP host and port or serial line, unit id, response timeout; `map` unused.
   ModbusSettings link;
-  int base_address = 0;  // holding register of word 0 (the request); the block is 38 words
+  int base_address = 0;  // holding register of word 0 (the request)
+  // Whether the PLC writes the part temperature (word 37): the block is then 38 words, else 37
+  // and the temperature is not given.
+  bool part_temperature = false;
 };
 
 // Owns one libmodbus context. Not thread-safe: one thread polls the PLC.

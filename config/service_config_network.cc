@@ -232,12 +232,14 @@ Result<std::optional<PlcSettings>> read_plc_table(TomlReader& top, const ConfigF
   if (t == nullptr) return std::optional<PlcSettings>();
   TomlReader plr(*t, f.source, "plc.");
   plr.allow_only({"transport", "host", "port", "device", "baud", "parity", "data_bits", "stop_bits", "unit_id",
-                  "response_timeout_ms", "base_address", "poll_interval_ms"});
+                  "response_timeout_ms", "base_address", "poll_interval_ms", "part_temperature"});
   PlcSettings ps;
   ModbusSettings defaults;
   defaults.port = 502;
   read_modbus_link(plr, defaults, ps.link.link, "PLC");
-  ps.link.base_address = static_cast<int>(plr.integer("base_address", 0, 0, 65536 - plc_registers::kBlockWords));
+  ps.link.part_temperature = plr.flag("part_temperature", false);
+  const int words = ps.link.part_temperature ? plc_registers::kBlockWordsWithTemperature : plc_registers::kBlockWords;
+  ps.link.base_address = static_cast<int>(plr.integer("base_address", 0, 0, 65536 - words));
   ps.poll_interval = std::chrono::milliseconds(plr.integer("poll_interval_ms", 100, 10, 10000));
   if (plr.error) return *plr.error;
   return std::optional<PlcSettings>(std::move(ps));

@@ -15,8 +15,9 @@
 namespace gaugeloop {
 
 // Offsets from the configured base address, in the PLC's holding registers (function 03 to
-// read, 16 to write). Words 0-2 and 12-37 are the PLC's; 3-11 the service's, written in one
-// request. The service reads the whole block, words 0-37, in one request.
+// read, 16 to write). Words 0-2 and 12-36 (37 with the part temperature) are the PLC's; 3-11
+// the service's, written in one request. The service reads the whole block, words 0-36 (0-37),
+// in one request.
 namespace plc_registers {
 inline constexpr int kRequest = 0;        // PLC: bit 0 = measure; a rising edge is one request
 inline constexpr int kPartNumber = 1;     // PLC: uint16, the [[part]] plc_part_number
@@ -45,19 +46,23 @@ inline constexpr int kSerialFirst = 13;
 inline constexpr int kSerialWords = 16;  // words 13..28, 32 characters
 inline constexpr int kOperatorFirst = kSerialFirst + kSerialWords;
 inline constexpr int kOperatorWords = 8;  // words 29..36, 16 characters
-// PLC: the part's temperature at measurement, int16 in 0.1 deg C (214 = 21.4 deg C, -15 =
-// -1.5 deg C); kPartTemperatureNotGiven (0x8000, -32768): not given. Set with the part and
-// lobe numbers, before the request rises. Values outside kPartTemperatureMinC..MaxC
+// PLC, only with [plc] part_temperature = true (the block then has one word more, so a PLC
+// program written for the 37-word block keeps working without it): the part's temperature at
+// measurement, int16 in 0.1 deg C (214 = 21.4 deg C, -15 = -1.5 deg C);
+// kPartTemperatureNotGiven (0x8000, -32768): not given. Set with the part and lobe numbers,
+// before the request rises. Values outside kPartTemperatureMinC..MaxC
 // (core/part_temperature.h) fault the request (PlcResultCode::kBadPartTemperature).
 inline constexpr int kPartTemperature = kOperatorFirst + kOperatorWords;  // word 37
 inline constexpr std::uint16_t kPartTemperatureNotGiven = 0x8000;
 inline constexpr int kPlcWords = 3;  // words 0..2
 inline constexpr int kServiceFirst = kHeartbeat;
-inline constexpr int kServiceWords = 9;                   // words 3..11
-inline constexpr int kBlockWords = kPartTemperature + 1;  // 38
+inline constexpr int kServiceWords = 9;  // words 3..11
+// The block without the part temperature (37 words) and with it (38).
+inline constexpr int kBlockWords = kPartTemperature;
+inline constexpr int kBlockWordsWithTemperature = kPartTemperature + 1;
 // One read (function 03) carries at most 125 registers: the block is read in one request so
 // the PLC's words are always from one moment.
-static_assert(kBlockWords <= 125, "the handshake block must fit one Modbus read");
+static_assert(kBlockWordsWithTemperature <= 125, "the handshake block must fit one Modbus read");
 inline constexpr std::uint16_t kMeasureBit = 0x0001;
 }  // namespace plc_registers
 

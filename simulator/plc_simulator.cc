@@ -22,13 +22,14 @@ PlcSimulator::PlcSimulator(PlcSimulatorSettings settings) : settings_(std::move(
 
 Result<std::unique_ptr<PlcSimulator>> PlcSimulator::start(const PlcSimulatorSettings& settings) {
   std::unique_ptr<PlcSimulator> sim(new PlcSimulator(settings));
-  if (Status s = open_holding_register_server(settings.host, settings.port, settings.base_address, r::kBlockWords,
+  const int words = settings.part_temperature ? r::kBlockWordsWithTemperature : r::kBlockWords;
+  if (Status s = open_holding_register_server(settings.host, settings.port, settings.base_address, words,
                                               "PLC simulator", sim->ctx_, sim->mapping_, sim->wake_fd_);
       !s) {
     return s.error();
   }
   // A PLC that gives no part temperature: word 37 holds "not given", not 0.0 deg C.
-  sim->mapping_->tab_registers[r::kPartTemperature] = r::kPartTemperatureNotGiven;
+  if (settings.part_temperature) sim->mapping_->tab_registers[r::kPartTemperature] = r::kPartTemperatureNotGiven;
   if (Status s = sim->listen(); !s) return s.error();
   sim->thread_ = start_guarded_thread("PLC simulator", [raw = sim.get()] { raw->serve(); }, {});
   return sim;
@@ -105,6 +106,9 @@ Status PlcSimulator::set_identity(std::string_view serial, std::string_view oper
 }
 
 Status PlcSimulator::set_part_temperature_c(std::optional<double> temperature_c) {
+  if (!settings_.part_temperature) {
+    return make_error(ErrorCode::kInvalidInput, "PLC simulator: started without the part temperature word");
+  }
   Result<std::uint16_t> word = encode_plc_part_temperature(temperature_c);
   if (!word) return word.error();
   std::lock_guard lock(mutex_);
@@ -126,7 +130,8 @@ PlcRequestWords PlcSimulator::plc_words() const {
   w.ground_with = mapping_->tab_registers[r::kGroundWith];
   std::copy_n(mapping_->tab_registers + r::kSerialFirst, r::kSerialWords, w.serial.begin());
   std::copy_n(mapping_->tab_registers + r::kOperatorFirst, r::kOperatorWords, w.operator_name.begin());
-  w.part_temperature = mapping_->tab_registers[r::kPartTemperature];
+  w.part_temperature =
+      settings_.part_temperature ? mapping_->tab_registers[r::kPartTemperature] : r::kPartTemperatureNotGiven;
   return w;
 }
 

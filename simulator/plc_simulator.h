@@ -27,9 +27,13 @@ struct PlcSimulatorSettings {
   int port = 0;          // 0: the system picks a free port; read it back with port()
   int base_address = 0;  // holding register of the request word
   int unit_id = 1;       // answered whatever the request's unit id (as most PLCs do over TCP)
+  // A PLC program with the part temperature word (37): 38 registers; false: the 37 of a
+  // program written before it (a read of word 37 is then exception 2).
+  bool part_temperature = true;
 };
 
-// Serves the block's holding registers, base_address .. base_address + 37 (and nothing else:
+// Serves the block's holding registers, base_address .. base_address + 37 (+ 36 without the
+// part temperature; nothing else:
 // other addresses get exception 2, illegal data address) on its own thread from start() until
 // stop() or destruction. Thread-safe: every method may be called from any thread. Each write
 // by a client wakes the waiters, so tests wait on state, never on time.

@@ -125,7 +125,9 @@ TEST_F(PlcLinkTest, AThirtyTwoCharacterSerialFillsEveryWordAndComesBackWhole) {
 // Word 37 comes in the same read as the rest of the block: a simulated PLC that gives no
 // temperature holds 0x8000, "not given"; 21.4 deg C is 214, -1.5 is -15 as an int16.
 TEST_F(PlcLinkTest, CarriesThePartTemperatureWordInTheSameRead) {
-  ModbusPlcLink link(settings());
+  PlcLinkSettings with = settings();
+  with.part_temperature = true;
+  ModbusPlcLink link(with);
   ASSERT_TRUE(link.connect().ok());
   auto read_word = [&link]() -> std::uint16_t {
     Result<PlcRequestWords> req = link.read_request();
@@ -165,6 +167,34 @@ TEST_F(PlcLinkTest, CarriesThePartTemperatureWordInTheSameRead) {
   EXPECT_EQ(read_word(), plc_registers::kPartTemperatureNotGiven);
   EXPECT_EQ(sim_->plc_words().part_temperature, plc_registers::kPartTemperatureNotGiven);
   EXPECT_EQ(sim_->service_writes(), 0) << "the PLC's words are only read";
+}
+
+// A PLC program written for the 37-word block (no part temperature) keeps working with the
+// default settings; told to read the temperature word, the link gets the PLC's exception,
+// naming the setting.
+TEST(PlcLinkBlock, AProgramWithoutTheTemperatureWordAnswersTheDefaultBlock) {
+  PlcSimulatorSettings old;
+  old.part_temperature = false;
+  Result<std::unique_ptr<PlcSimulator>> sim = PlcSimulator::start(old);
+  ASSERT_TRUE(sim.ok()) << sim.error().message;
+  PlcLinkSettings s;
+  s.link.host = "127.0.0.1";
+  s.link.port = (*sim)->port();
+  s.link.response_timeout = milliseconds(2000);
+  ModbusPlcLink link(s);
+  ASSERT_TRUE(link.connect().ok());
+  Result<PlcRequestWords> req = link.read_request();
+  ASSERT_TRUE(req.ok()) << req.error().message;
+  EXPECT_EQ(req->part_temperature, plc_registers::kPartTemperatureNotGiven);
+  EXPECT_FALSE((*sim)->set_part_temperature_c(21.0).ok()) << "no such word on this PLC";
+
+  s.part_temperature = true;
+  ModbusPlcLink asks_for_it(s);
+  ASSERT_TRUE(asks_for_it.connect().ok());
+  req = asks_for_it.read_request();
+  ASSERT_FALSE(req.ok());
+  EXPECT_NE(req.error().message.find("part_temperature"), std::string::npos) << req.error().message;
+  EXPECT_NE(req.error().message.find("0..37"), std::string::npos) << req.error().message;
 }
 
 TEST_F(PlcLinkTest, AllZeroIdentityWordsAreNoSerialAndNoOperator) {
@@ -220,7 +250,7 @@ TEST_F(PlcLinkTest, AWrongBaseAddressIsAnExceptionThatNamesTheKey) {
   ASSERT_FALSE(req.ok());
   EXPECT_EQ(req.error().code, ErrorCode::kInvalidInput);
   EXPECT_NE(req.error().message.find("base_address"), std::string::npos) << req.error().message;
-  EXPECT_NE(req.error().message.find("0..37"), std::string::npos)
+  EXPECT_NE(req.error().message.find("0..36"), std::string::npos)
       << "the whole block in one read: " << req.error().message;
   EXPECT_TRUE(link.connected()) << "an exception reply leaves the link usable";
 }

@@ -222,6 +222,7 @@ poll_interval_ms = 50
   EXPECT_EQ(c->plc->link.link.unit_id, 3);
   EXPECT_EQ(c->plc->link.link.response_timeout.count(), 300);
   EXPECT_EQ(c->plc->link.base_address, 200);
+  EXPECT_FALSE(c->plc->link.part_temperature) << "a PLC program of the 37-word block by default";
   EXPECT_EQ(c->plc->poll_interval.count(), 50);
 }
 
@@ -467,8 +468,11 @@ TEST_F(ServiceConfigTest, AValueOutOfRangeSaysWhatIsAllowed) {
                                           "adaptive-spline"));
   EXPECT_TRUE(refused(read(ok + "[http]\nport = 65536\n"), ErrorCode::kInvalidInput,
                       at(7, "http.port") + ": 65536 is out of range; allowed [0, 65535]"));
-  EXPECT_TRUE(refused(read(ok + "[plc]\nbase_address = 65499\n"), ErrorCode::kInvalidInput,
-                      at(7, "plc.base_address") + ": 65499 is out of range; allowed [0, 65498]"));
+  EXPECT_TRUE(refused(read(ok + "[plc]\nbase_address = 65500\n"), ErrorCode::kInvalidInput,
+                      at(7, "plc.base_address") + ": 65500 is out of range; allowed [0, 65499]"));
+  EXPECT_TRUE(refused(read(ok + "[plc]\npart_temperature = true\nbase_address = 65499\n"), ErrorCode::kInvalidInput,
+                      at(8, "plc.base_address") + ": 65499 is out of range; allowed [0, 65498]"))
+      << "the block is a word longer with the part temperature";
   EXPECT_TRUE(refused(read(ok + "[plc]\npoll_interval_ms = 5\n"), ErrorCode::kInvalidInput,
                       at(7, "plc.poll_interval_ms") + ": 5 is out of range; allowed [10, 10000]"));
   EXPECT_TRUE(refused(read("[gauge]\n" + kIntake + "plc_part_number = 0\n" + kNc), ErrorCode::kInvalidInput,

@@ -403,8 +403,9 @@ class PlcServiceTest : public ServiceTest {
     const size_t at = config_text_.find(part_line);
     ASSERT_NE(at, std::string::npos);
     config_text_.insert(at + part_line.size(), "plc_part_number = 7\n");
-    config_text_ += "[plc]\nhost = \"127.0.0.1\"\nport = " + std::to_string(plc_->port()) +
-                    "\nbase_address = 100\npoll_interval_ms = 20\nresponse_timeout_ms = 2000\n";
+    config_text_ +=
+        "[plc]\nhost = \"127.0.0.1\"\nport = " + std::to_string(plc_->port()) +
+        "\nbase_address = 100\npoll_interval_ms = 20\nresponse_timeout_ms = 2000\npart_temperature = true\n";
     std::ofstream(dir_ / "gaugeloop.toml") << config_text_;
   }
 
