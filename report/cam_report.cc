@@ -17,6 +17,7 @@
 #include "report/chart_cairo.h"
 #include "report/judged_error.h"
 #include "report/run_json.h"
+#include "report/shaft.h"
 
 namespace gaugeloop {
 namespace {
@@ -279,7 +280,7 @@ void draw_header(cairo_t* cr, const StoredRun& run, const CamReportWords& w) {
     for (std::size_t i = 0; i < n; ++i) {
       const auto& [label, value] = pairs[i];
       room -= chart::text_width(cr, label + " ", 7.5) + 16;
-      const double widest = label == "Note" ? 360.0 : 130.0;
+      const double widest = label == "Note" ? 360.0 : label == "Lobe angle" ? 190.0 : 130.0;
       wanted[i] = std::min(widest, chart::text_width(cr, value.empty() ? "\u2013" : value, 8, true));
       narrowest_first[i] = i;
     }
@@ -306,10 +307,12 @@ void draw_header(cairo_t* cr, const StoredRun& run, const CamReportWords& w) {
               {"Serial", s.serial},
               {"Operator", s.operator_name},
               {"Machine", s.machine}});
-  fields(62, {{"Run", std::to_string(s.id)},
-              {"Started", started_text(s.started_utc)},
-              {"Revolutions", std::to_string(s.revolutions)},
-              {"Note", s.note}});
+  std::vector<std::pair<std::string, std::string>> second = {{"Run", std::to_string(s.id)},
+                                                             {"Started", started_text(s.started_utc)},
+                                                             {"Revolutions", std::to_string(s.revolutions)}};
+  if (!w.lobe_angle.empty()) second.emplace_back("Lobe angle", w.lobe_angle);
+  second.emplace_back("Note", s.note);
+  fields(62, second);
   fields(74, w.traceability);
   chart::set_colour(cr, chart::kGrid);
   cairo_set_line_width(cr, 0.8);
@@ -682,6 +685,13 @@ CamReportWords cam_report_words(const StoredRun& run) {
   }
   if (marked) w.table_note = "* of the " + judged_error(run).name;
   w.traceability = traceability_of(run, part.pin());
+  if (!part.pin()) {
+    const std::optional<NoseAngle> nose = nose_angle(run);
+    w.lobe_angle = nose ? "C " + format_fixed(nose->measured_c_deg, 3) + "\u00b0 from the datum (nominal " +
+                              format_fixed(nose->nominal_c_deg, 3) + "\u00b0, " +
+                              format_signed_fixed(nose->deviation_deg(), 3) + "\u00b0)"
+                        : "not known (no frame or phase recorded)";
+  }
   // The lift chart's legend; the band's entry only where a band is drawn (a pin's roundness
   // judges the whole curve: no band per degree), counting the degrees out as the chart marks.
   w.lift_legend = {"judged", "raw"};

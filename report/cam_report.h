@@ -68,6 +68,9 @@ struct CamReportWords {
   // The lift chart's legend: "judged", "raw", then "tolerance" (or "N° out") only where the
   // chart draws a band.
   std::vector<std::string> lift_legend;
+  // A lobe's angle against the datum, the header's second line: where its measured nose stands
+  // on the work spindle (nose_angle) against the drawing's, and the difference. Empty for a pin.
+  std::string lobe_angle;
 };
 
 // The id a run's report carries: "<machine>-<run id>-<first 8 hex digits of its UUID>"

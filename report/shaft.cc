@@ -28,6 +28,13 @@ double wrap_deg_180(double degrees) {
   return d;
 }
 
+std::optional<NoseAngle> nose_angle(const StoredRun& run) {
+  if (!run.geometry || !run.summary.phase_error_deg) return std::nullopt;
+  return NoseAngle{
+      wrap_deg_360(run.geometry->c_offset_deg),
+      wrap_deg_360(run.geometry->c_offset_deg + run.geometry->rotation_sense * *run.summary.phase_error_deg)};
+}
+
 ShaftRecord shaft_record(const ShaftLayout& layout, const std::string& serial,
                          const std::vector<std::optional<StoredRun>>& runs) {
   ShaftRecord out;
@@ -54,7 +61,7 @@ ShaftRecord shaft_record(const ShaftLayout& layout, const std::string& serial,
     } else if (!r.phase_deg) {
       r.note = "the run did not record its phase error";
     } else {
-      const double nose_c = run->geometry->c_offset_deg + run->geometry->rotation_sense * *r.phase_deg;
+      const double nose_c = nose_angle(*run)->measured_c_deg;
       r.nose_c_deg = wrap_deg_360(nose_c);
       r.index_error_deg = wrap_deg_180(nose_c - (layout.reference_c_deg + lobe.angle_deg));
       if (layout.index_tolerance_deg) {

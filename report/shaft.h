@@ -79,6 +79,16 @@ struct ShaftRecord {
 // `degrees` wrapped to (-180, 180].
 double wrap_deg_180(double degrees);
 
+// Where the run's measured nose stands on the work spindle, C = c0 + s * phase, against its
+// nominal c0 (both wrapped to [0, 360)) (c_offset_deg: the design nose's C from the spindle's zero, where the
+// part's datum is clamped). Empty without the run's frame mapping or phase.
+struct NoseAngle {
+  double nominal_c_deg = 0.0;
+  double measured_c_deg = 0.0;
+  double deviation_deg() const { return wrap_deg_180(measured_c_deg - nominal_c_deg); }
+};
+std::optional<NoseAngle> nose_angle(const StoredRun& run);
+
 // The record from the newest run of each layout lobe (runs[i] for layout.lobes[i]; empty:
 // not measured). A run's nose position needs its geometry (frame mapping) and its phase error
 // (summary.phase_error_deg); without them its index is not given and `note` says why.

@@ -462,6 +462,26 @@ TEST(CamReport, TheHeaderNamesTheDrawingTheGaugeAndTheReport) {
   EXPECT_EQ(t[5].second, "") << "no radius recorded";
 }
 
+// The lobe's angle against the datum, as a cam checker prints it: the measured nose on the work
+// spindle, C = c0 + s * phase, against the nominal c0 and the difference; a lobe measured
+// turning the other way (s = -1) moves the nose the other way. Not known without the run's
+// frame or phase.
+TEST(CamReport, TheHeaderGivesTheLobeAngleAgainstTheDatum) {
+  StoredRun r = out_of_tolerance_run();
+  r.summary.phase_error_deg = 0.125;
+  Part frame;
+  frame.c_offset_deg = 90.0;
+  frame.rotation_sense = 1;
+  r.geometry = frame;
+  EXPECT_EQ(cam_report_words(r).lobe_angle, "C 90.125\u00b0 from the datum (nominal 90.000\u00b0, +0.125\u00b0)");
+  r.geometry->rotation_sense = -1;
+  r.geometry->c_offset_deg = 0.0;
+  EXPECT_EQ(cam_report_words(r).lobe_angle, "C 359.875\u00b0 from the datum (nominal 0.000\u00b0, -0.125\u00b0)");
+  r.geometry.reset();
+  EXPECT_EQ(cam_report_words(r).lobe_angle, "not known (no frame or phase recorded)");
+  EXPECT_EQ(cam_report_words(pin_run()).lobe_angle, "") << "a pin's index is a characteristic of its own";
+}
+
 // The part's temperature at measurement, as the PLC or the operator gave it: a cam checker's
 // report prints it so a warm part's error is told from a wrong table. A pin's report too.
 TEST(CamReport, TheHeaderSaysThePartTemperatureAndWhoGaveIt) {
