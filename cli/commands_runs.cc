@@ -484,6 +484,7 @@ struct PlotOptions {
   std::string out;
   double tolerance_um = 0.0;  // 0: none
   bool no_correction = false;
+  std::string layout = "wide";
 };
 
 int cmd_plot(const PlotOptions& o) {
@@ -498,7 +499,8 @@ int cmd_plot(const PlotOptions& o) {
     p.tolerance_um = o.tolerance_um;
   }
   p.footer += " \u00b7 " + o.paths.db().string();
-  if (Status w = write_file_atomically(o.out, render_error_plot_svg(p)); !w) return report_file_error(w.error());
+  const PlotShape shape = o.layout == "narrow" ? PlotShape::kNarrow : PlotShape::kWide;
+  if (Status w = write_file_atomically(o.out, render_error_plot_svg(p, shape)); !w) return report_file_error(w.error());
   std::printf("run %lld plotted to %s\n", static_cast<long long>(o.id), o.out.c_str());
   return kExitOk;
 }
@@ -667,6 +669,12 @@ void add_runs_commands(CLI::App& app, CommandAction& action) {
                    "the degrees outside it")
       ->check(CLI::PositiveNumber);
   plot_cmd->add_flag("--no-correction", plot->no_correction, "Leave the correction curve out");
+  plot_cmd
+      ->add_option("--layout", plot->layout,
+                   "wide: polar and linear side by side, 1200 x 640 px (A4 landscape); narrow: stacked, 380 x 1060 px, "
+                   "for a phone")
+      ->check(CLI::IsMember({"wide", "narrow"}))
+      ->default_str("wide");
   plot_cmd->callback([&action, plot] { action = [plot] { return cmd_plot(*plot); }; });
 
   auto prune = std::make_shared<PruneOptions>();

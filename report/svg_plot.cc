@@ -16,20 +16,30 @@
 namespace gaugeloop {
 namespace {
 
-constexpr int kWidth = 1200;
-constexpr int kHeight = 640;
+// Where an error plot's parts go, px: wide, the panels side by side (1200 x 640: a screen or A4
+// landscape), or narrow, stacked (380 x 1060: a phone held upright, drawn at about the phone's
+// width so that its text reads at the size it is drawn). The loop plot is always wide.
+struct Layout {
+  int width, height;
+  double margin;               // left and right
+  double title_y, subtitle_y;  // baselines
+  int title_size, subtitle_size;
+  double verdict_y;                                 // the headline's first line
+  bool stacked;                                     // narrow: headline under the title, left-aligned
+  double polar_cx, polar_cy, polar_r0, polar_span;  // the zero-error circle and the room for +-scale
+  double polar_title_y, polar_scale_y;
+  double plot_left, plot_right, plot_top, plot_bottom, plot_title_y;  // the linear panel
+  int angle_label_step;                                               // degrees between its angle labels
+  int axis_title_size;
+  double legend_left, legend_y;
+};
 
-// Polar panel: the zero-error circle and the radial room for +-scale.
-constexpr double kPolarCx = 300.0;
-constexpr double kPolarCy = 345.0;
-constexpr double kPolarR0 = 125.0;
-constexpr double kPolarSpan = 85.0;
-
-// Linear panel.
-constexpr double kPlotLeft = 640.0;
-constexpr double kPlotRight = 1160.0;
-constexpr double kPlotTop = 120.0;
-constexpr double kPlotBottom = 540.0;
+constexpr Layout kWide{1200, 640, 40,  46,  72,   22,  14,  46,  false, 300, 345, 125,
+                       85,   104, 604, 640, 1160, 120, 540, 104, 30,    12,  600, 598};
+constexpr Layout kNarrow{380, 1060, 20,  32, 54,  16,  12,  84,  true, 190, 355, 100,
+                         55,  168,  556, 62, 360, 612, 860, 596, 60,   11,  20,  930};
+constexpr int kWidth = kWide.width;
+constexpr int kHeight = kWide.height;
 
 constexpr const char* kErrorColour = "#1f4e9c";
 constexpr const char* kSpreadColour = "#9db8e3";
@@ -80,8 +90,12 @@ double nice_step(double span) {
 
 // Cam angle (degrees, 0 at the nose drawn at the top, growing clockwise so that the opening
 // side lies left of the nose as in the linear panel) to the page.
-double polar_x(double deg, double r) { return kPolarCx + r * std::sin(deg * std::numbers::pi / 180.0); }
-double polar_y(double deg, double r) { return kPolarCy - r * std::cos(deg * std::numbers::pi / 180.0); }
+double polar_x(const Layout& L, double deg, double r) {
+  return L.polar_cx + r * std::sin(deg * std::numbers::pi / 180.0);
+}
+double polar_y(const Layout& L, double deg, double r) {
+  return L.polar_cy - r * std::cos(deg * std::numbers::pi / 180.0);
+}
 
 struct Text {
   double x, y;
@@ -110,23 +124,19 @@ void add_line(std::string& svg, double x1, double y1, double x2, double y2, cons
 
 // A closed ring of radius r(deg) around the polar centre, as path data.
 template <typename RadiusOf>
-std::string polar_ring(RadiusOf radius_of) {
+std::string polar_ring(const Layout& L, RadiusOf radius_of) {
   std::string d;
   for (int deg = 0; deg < kDegreesPerRevolution; ++deg) {
     const double r = radius_of(deg);
-    d += (deg == 0 ? "M" : "L") + num(polar_x(deg, r), 2) + "," + num(polar_y(deg, r), 2);
+    d += (deg == 0 ? "M" : "L") + num(polar_x(L, deg, r), 2) + "," + num(polar_y(L, deg, r), 2);
   }
   return d + "Z";
 }
 
-std::string circle_path(double r) {
-  return "M" + num(kPolarCx - r, 2) + "," + num(kPolarCy, 2) + "a" + num(r, 2) + "," + num(r, 2) + " 0 1,0 " +
+std::string circle_path(const Layout& L, double r) {
+  return "M" + num(L.polar_cx - r, 2) + "," + num(L.polar_cy, 2) + "a" + num(r, 2) + "," + num(r, 2) + " 0 1,0 " +
          num(2 * r, 2) + ",0a" + num(r, 2) + "," + num(r, 2) + " 0 1,0 " + num(-2 * r, 2) + ",0Z";
 }
-
-// Room for the subtitle: from the left margin to short of the right-aligned line beside it
-// (the legend of the lift error, about 430 px at 13 px).
-constexpr double kSubtitleWidthPx = 660.0;
 
 // The code points of `text` (a byte that starts no UTF-8 sequence counts as one).
 std::size_t code_points(const std::string& text) {
@@ -155,34 +165,71 @@ std::string fit_text(const std::string& text, double max_px, int font_px) {
   return text.substr(0, starts[fits - 1]) + "\u2026";
 }
 
-// The document, its white page, title and subtitle. A subtitle too long for its room (a long
-// note or serial) is cut with an ellipsis; the whole of it is the text's tooltip.
-std::string start_document(const std::string& title, const std::string& subtitle) {
+// `text` in lines of at most `max_px` at `font_px` (as fit_text measures), broken after the
+// " · " between its figures; a figure longer than a line is a line of its own.
+std::vector<std::string> wrapped_at_dots(const std::string& text, double max_px, int font_px) {
+  const std::string dot = " \u00b7 ";
+  const auto fits = static_cast<std::size_t>(max_px / (0.62 * font_px));
+  std::vector<std::string> lines;
+  std::string line;
+  for (std::size_t at = 0; at <= text.size();) {
+    std::size_t end = text.find(dot, at);
+    if (end == std::string::npos) end = text.size();
+    const std::string part = text.substr(at, end - at);
+    const std::string joined = line.empty() ? part : line + dot + part;
+    if (!line.empty() && code_points(joined) > fits) {
+      lines.push_back(line + " \u00b7");
+      line = part;
+    } else {
+      line = joined;
+    }
+    at = end + dot.size();
+  }
+  lines.push_back(line);
+  return lines;
+}
+
+// `text` at (x, y), cut to `max_px` with an ellipsis where it is too long for its room; the
+// whole of it is then the text's tooltip.
+void add_fitted_text(std::string& svg, Text t, double max_px) {
+  const std::string shown = fit_text(t.text, max_px, t.size);
+  if (shown == t.text) {
+    add_text(svg, t);
+    return;
+  }
+  svg += "<text x=\"" + num(t.x) + "\" y=\"" + num(t.y) + "\" font-size=\"" + std::to_string(t.size) +
+         "\" text-anchor=\"" + t.anchor + "\" fill=\"" + t.colour + "\" font-weight=\"" + t.weight + "\"><title>" +
+         escape(t.text) + "</title>" + escape(shown) + "</text>\n";
+}
+
+// The document, its white page, title and subtitle. A title or subtitle too long for its room
+// (a long note or serial) is cut with an ellipsis; the whole of it is the text's tooltip. The
+// subtitle's room on a wide page ends short of the headline beside it (about 430 px at 13 px).
+std::string start_document(const std::string& title, const std::string& subtitle, const Layout& L) {
   std::string svg;
   svg.reserve(64 * 1024);
   svg += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  svg += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(kWidth) + "\" height=\"" +
-         std::to_string(kHeight) + "\" viewBox=\"0 0 " + std::to_string(kWidth) + " " + std::to_string(kHeight) +
+  svg += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(L.width) + "\" height=\"" +
+         std::to_string(L.height) + "\" viewBox=\"0 0 " + std::to_string(L.width) + " " + std::to_string(L.height) +
          "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">\n";
   svg += "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n";
-  add_text(svg, {40, 46, title, 22, "start", kTextColour, "bold"});
-  const std::string shown = fit_text(subtitle, kSubtitleWidthPx, 14);
-  if (shown == subtitle) {
-    add_text(svg, {40, 72, subtitle, 14, "start", kMutedColour});
-  } else {
-    svg += "<text x=\"40\" y=\"72\" font-size=\"14\" text-anchor=\"start\" fill=\"" + std::string(kMutedColour) +
-           "\"><title>" + escape(subtitle) + "</title>" + escape(shown) + "</text>\n";
-  }
+  const double room = L.width - 2 * L.margin;
+  add_fitted_text(svg, {L.margin, L.title_y, title, L.title_size, "start", kTextColour, "bold"}, room);
+  add_fitted_text(svg, {L.margin, L.subtitle_y, subtitle, L.subtitle_size, "start", kMutedColour},
+                  L.stacked ? room : room - 460.0);
   return svg;
 }
 
 // A panel of lift error (-scale..+scale um, grid every `step`) over the signed cam angle
-// -180..180 (signed_degree), the nose in the middle.
+// -180..180 (signed_degree), the nose in the middle; a grid line every 30 degrees, labelled
+// every `label_step`.
 struct DegreePanel {
   double left, right, top, bottom;
   double scale, step;
   std::string y_title = "lift error (\u00b5m)";
   std::string x_title = "cam angle (deg, 0 = nose, opening side negative)";
+  int label_step = 30;
+  int title_size = 12;
 
   double x_of(double deg) const { return left + (right - left) * (deg + 180.0) / 360.0; }
   double y_of(double um) const { return (top + bottom) / 2.0 - um * (bottom - top) / (2.0 * scale); }
@@ -196,11 +243,13 @@ struct DegreePanel {
     }
     for (int deg = -180; deg <= 180; deg += 30) {
       add_line(svg, x_of(deg), top, x_of(deg), bottom, kGridColour, 0.8);
-      add_text(svg, {x_of(deg), bottom + 18, std::to_string(deg), 11, "middle", kMutedColour});
+      if ((deg + 180) % label_step == 0) {
+        add_text(svg, {x_of(deg), bottom + 18, std::to_string(deg), 11, "middle", kMutedColour});
+      }
     }
     svg += "<rect x=\"" + num(left) + "\" y=\"" + num(top) + "\" width=\"" + num(right - left) + "\" height=\"" +
            num(bottom - top) + "\" fill=\"none\" stroke=\"#8a949e\" stroke-width=\"1\"/>\n";
-    add_text(svg, {(left + right) / 2, bottom + 40, x_title, 12, "middle", kMutedColour});
+    add_text(svg, {(left + right) / 2, bottom + 40, x_title, title_size, "middle", kMutedColour});
     const double y0 = (top + bottom) / 2.0;
     svg += "<text x=\"" + num(left - 46) + "\" y=\"" + num(y0) + "\" font-size=\"12\" text-anchor=\"middle\" fill=\"" +
            kMutedColour + "\" transform=\"rotate(-90 " + num(left - 46) + " " + num(y0) + ")\">" + escape(y_title) +
@@ -304,32 +353,45 @@ ErrorScale error_scale(const ErrorPlot& p) {
   return s;
 }
 
-// The verdict at the top right, of the judged error: the largest and where, and the limits kept
-// or not; under it, which error that is.
-void draw_error_verdict(std::string& svg, const ErrorPlot& p, const ErrorScale& s) {
-  std::string verdict = "max |error| " + num(std::abs(p.error_um[s.worst]), 2) + " \u00b5m at " + p.angle_word + " " +
-                        std::to_string(signed_degree(s.worst)) + "\u00b0";
+// The verdict of the judged error: the largest and where, and the limits kept or not; under it,
+// which error that is. Wide: at the top right, one line each; narrow: under the title, each
+// part on a line of its own.
+void draw_error_verdict(std::string& svg, const ErrorPlot& p, const ErrorScale& s, const Layout& L) {
+  const std::string worst = "max |error| " + num(std::abs(p.error_um[s.worst]), 2) + " \u00b5m at " + p.angle_word +
+                            " " + std::to_string(signed_degree(s.worst)) + "\u00b0";
+  std::string limits_kept;
   if (has_limits(p)) {
     const std::string band = uniform_limits_text(p);
     const std::string limits = band.empty() ? std::string("their limits") : band;
-    verdict += s.outside == 0 ? " \u00b7 within " + limits
-                              : " \u00b7 " + std::to_string(s.outside) + " degrees outside " + limits;
+    limits_kept = s.outside == 0 ? "within " + limits : std::to_string(s.outside) + " degrees outside " + limits;
   }
-  add_text(svg, {kWidth - 40.0, 46, verdict, 16, "end", s.outside > 0 ? kOutColour : kTextColour, "bold"});
-  add_text(svg, {kWidth - 40.0, 72, "judged: " + p.error_name + ", " + p.frame_note, 13, "end", kMutedColour});
+  const char* colour = s.outside > 0 ? kOutColour : kTextColour;
+  const std::string judged = "judged: " + p.error_name;
+  if (!L.stacked) {
+    add_text(svg, {L.width - L.margin, L.verdict_y, worst + (limits_kept.empty() ? "" : " \u00b7 " + limits_kept), 16,
+                   "end", colour, "bold"});
+    add_text(svg, {L.width - L.margin, L.verdict_y + 26, judged + ", " + p.frame_note, 13, "end", kMutedColour});
+    return;
+  }
+  const double room = L.width - 2 * L.margin;
+  double y = L.verdict_y;
+  add_fitted_text(svg, {L.margin, y, worst, 14, "start", colour, "bold"}, room);
+  if (!limits_kept.empty()) add_fitted_text(svg, {L.margin, y += 18, limits_kept, 14, "start", colour, "bold"}, room);
+  add_fitted_text(svg, {L.margin, y += 18, judged, 12, "start", kMutedColour}, room);
+  add_fitted_text(svg, {L.margin, y + 16, p.frame_note, 12, "start", kMutedColour}, room);
 }
 
 // The band of limits in the polar panel: each run of degrees with the same limits an annular
 // sector (a one-sided limit reaches the panel's edge); one band all round, a ring.
-void draw_polar_band(std::string& svg, const ErrorPlot& p, double scale, double k) {
+void draw_polar_band(std::string& svg, const ErrorPlot& p, double scale, double k, const Layout& L) {
   const std::vector<LimitRun> runs = limit_runs(p);
   const auto radius = [&](const std::optional<double>& limit, double edge_um) {
-    return std::max(1.0, kPolarR0 + limit.value_or(edge_um) * k);
+    return std::max(1.0, L.polar_r0 + limit.value_or(edge_um) * k);
   };
   if (runs.size() == 1 && runs.front().from == -179 && runs.front().to == 180) {
     const Limits& l = runs.front().limits;
-    svg += "<path d=\"" + circle_path(radius(l.upper, scale)) + circle_path(radius(l.lower, -scale)) + "\" fill=\"" +
-           kToleranceColour + "\" fill-rule=\"evenodd\" stroke=\"none\"/>\n";
+    svg += "<path d=\"" + circle_path(L, radius(l.upper, scale)) + circle_path(L, radius(l.lower, -scale)) +
+           "\" fill=\"" + kToleranceColour + "\" fill-rule=\"evenodd\" stroke=\"none\"/>\n";
     return;
   }
   for (const LimitRun& r : runs) {
@@ -339,11 +401,11 @@ void draw_polar_band(std::string& svg, const ErrorPlot& p, double scale, double 
     const double from = r.from - 0.5;
     const double to = r.to + 0.5;
     for (double a = from;; a = std::min(to, a + 1.0)) {
-      pts += num(polar_x(a, outer), 2) + "," + num(polar_y(a, outer), 2) + " ";
+      pts += num(polar_x(L, a, outer), 2) + "," + num(polar_y(L, a, outer), 2) + " ";
       if (a >= to) break;
     }
     for (double a = to;; a = std::max(from, a - 1.0)) {
-      pts += num(polar_x(a, inner), 2) + "," + num(polar_y(a, inner), 2) + " ";
+      pts += num(polar_x(L, a, inner), 2) + "," + num(polar_y(L, a, inner), 2) + " ";
       if (a <= from) break;
     }
     svg += "<polygon points=\"" + pts + "\" fill=\"" + kToleranceColour + "\" stroke=\"none\"/>\n";
@@ -351,54 +413,58 @@ void draw_polar_band(std::string& svg, const ErrorPlot& p, double scale, double 
 }
 
 // The polar panel: the error as a ring around the zero circle, the limits as a band.
-void draw_polar_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s) {
+void draw_polar_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s, const Layout& L) {
   const double scale = s.scale;
   const double step = s.step;
-  const double k = kPolarSpan / scale;  // px per um
-  add_text(svg, {kPolarCx, 104, "Polar: error around the zero circle", 14, "middle", kTextColour, "bold"});
-  draw_polar_band(svg, p, scale, k);
+  const double k = L.polar_span / scale;  // px per um
+  add_text(svg,
+           {L.polar_cx, L.polar_title_y, "Polar: error around the zero circle", 14, "middle", kTextColour, "bold"});
+  draw_polar_band(svg, p, scale, k, L);
   for (double e = -scale; e <= scale + 1e-9; e += step) {
     const bool zero = std::abs(e) < 1e-9;
-    svg += "<path d=\"" + circle_path(kPolarR0 + e * k) + "\" fill=\"none\" stroke=\"" +
+    svg += "<path d=\"" + circle_path(L, L.polar_r0 + e * k) + "\" fill=\"none\" stroke=\"" +
            (zero ? std::string("#8a949e") : std::string(kGridColour)) + "\" stroke-width=\"" + (zero ? "1.2" : "0.8") +
            "\"/>\n";
   }
   for (int deg = -150; deg <= 180; deg += 30) {
-    const double r_in = kPolarR0 - scale * k;
-    const double r_out = kPolarR0 + scale * k;
-    add_line(svg, polar_x(deg, r_in), polar_y(deg, r_in), polar_x(deg, r_out), polar_y(deg, r_out), kGridColour, 0.8);
+    const double r_in = L.polar_r0 - scale * k;
+    const double r_out = L.polar_r0 + scale * k;
+    add_line(svg, polar_x(L, deg, r_in), polar_y(L, deg, r_in), polar_x(L, deg, r_out), polar_y(L, deg, r_out),
+             kGridColour, 0.8);
     const double r_label = r_out + 16;
-    add_text(svg, {polar_x(deg, r_label), polar_y(deg, r_label) + 4, std::to_string(deg) + "\u00b0", 11, "middle",
+    add_text(svg, {polar_x(L, deg, r_label), polar_y(L, deg, r_label) + 4, std::to_string(deg) + "\u00b0", 11, "middle",
                    kMutedColour});
   }
   // Radial scale labels along the 0 deg spoke, to its right.
   for (double e = -scale; e <= scale + 1e-9; e += step) {
-    add_text(svg, {kPolarCx + 4, kPolarCy - (kPolarR0 + e * k) + 4, (e > 0 ? "+" : "") + num(e, step < 1 ? 1 : 0), 10,
-                   "start", kMutedColour, "normal", true});
+    add_text(svg, {L.polar_cx + 4, L.polar_cy - (L.polar_r0 + e * k) + 4, (e > 0 ? "+" : "") + num(e, step < 1 ? 1 : 0),
+                   10, "start", kMutedColour, "normal", true});
   }
   if (p.raw_error_um) {
     const DegreeTable& raw = *p.raw_error_um;
-    svg += "<path d=\"" + polar_ring([&](int d) { return kPolarR0 + raw[static_cast<std::size_t>(d)] * k; }) +
+    svg += "<path d=\"" + polar_ring(L, [&](int d) { return L.polar_r0 + raw[static_cast<std::size_t>(d)] * k; }) +
            "\" fill=\"none\" stroke=\"" + kRawColour + "\" stroke-width=\"1\" stroke-linejoin=\"round\"/>\n";
   }
-  svg += "<path d=\"" + polar_ring([&](int d) { return kPolarR0 + p.error_um[static_cast<std::size_t>(d)] * k; }) +
+  svg += "<path d=\"" + polar_ring(L, [&](int d) { return L.polar_r0 + p.error_um[static_cast<std::size_t>(d)] * k; }) +
          "\" fill=\"none\" stroke=\"" + kErrorColour + "\" stroke-width=\"1.8\" stroke-linejoin=\"round\"/>\n";
   if (p.correction_um) {
     const DegreeTable& c = *p.correction_um;
-    svg += "<path d=\"" + polar_ring([&](int d) { return kPolarR0 + c[static_cast<std::size_t>(d)] * k; }) +
+    svg += "<path d=\"" + polar_ring(L, [&](int d) { return L.polar_r0 + c[static_cast<std::size_t>(d)] * k; }) +
            "\" fill=\"none\" stroke=\"" + kCorrectionColour + "\" stroke-width=\"1.2\" stroke-dasharray=\"5,3\"/>\n";
   }
   for (std::size_t d = 0; d < p.error_um.size(); ++d) {
     if (!out_of_tolerance(p, d)) continue;
-    const double r = kPolarR0 + p.error_um[d] * k;
-    svg += "<circle cx=\"" + num(polar_x(static_cast<double>(d), r), 2) + "\" cy=\"" +
-           num(polar_y(static_cast<double>(d), r), 2) + "\" r=\"2\" fill=\"" + kOutColour + "\"/>\n";
+    const double r = L.polar_r0 + p.error_um[d] * k;
+    svg += "<circle cx=\"" + num(polar_x(L, static_cast<double>(d), r), 2) + "\" cy=\"" +
+           num(polar_y(L, static_cast<double>(d), r), 2) + "\" r=\"2\" fill=\"" + kOutColour + "\"/>\n";
   }
-  add_text(svg, {kPolarCx, kPolarCy + 4, "0\u00b0 at the top", 11, "middle", kMutedColour});
-  add_text(svg, {kPolarCx, kPolarCy + 20, "angles clockwise", 11, "middle", kMutedColour});
-  add_text(svg,
-           {kPolarCx, 604, "radial scale " + num(step, step < 1 ? 1 : 0) + " \u00b5m per ring, outward = more material",
-            12, "middle", kMutedColour});
+  add_text(svg, {L.polar_cx, L.polar_cy + 4, "0\u00b0 at the top", 11, "middle", kMutedColour});
+  add_text(svg, {L.polar_cx, L.polar_cy + 20, "angles clockwise", 11, "middle", kMutedColour});
+  add_fitted_text(svg,
+                  {L.polar_cx, L.polar_scale_y,
+                   "radial scale " + num(step, step < 1 ? 1 : 0) + " \u00b5m per ring, outward = more material",
+                   L.stacked ? 10 : 12, "middle", kMutedColour},
+                  L.width - 2 * L.margin);
 }
 
 // The spread as a band around the error, in the linear panel.
@@ -439,11 +505,13 @@ void draw_linear_band(std::string& svg, const ErrorPlot& p, const DegreePanel& p
 // The linear panel: the judged error (the raw error beside it), spread and correction per
 // degree, the limits as a band, the degrees outside it marked, and the worst degree ringed and
 // labelled.
-void draw_linear_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s) {
-  const DegreePanel panel{kPlotLeft, kPlotRight, kPlotTop, kPlotBottom, s.scale, s.step, p.axis_label, p.angle_title};
+void draw_linear_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s, const Layout& L) {
+  const DegreePanel panel{L.plot_left, L.plot_right, L.plot_top,    L.plot_bottom,      s.scale,
+                          s.step,      p.axis_label, p.angle_title, L.angle_label_step, L.axis_title_size};
   const auto x_of = [&](double deg) { return panel.x_of(deg); };
   const auto y_of = [&](double um) { return panel.y_of(um); };
-  add_text(svg, {(kPlotLeft + kPlotRight) / 2, 104, "Linear: error per degree", 14, "middle", kTextColour, "bold"});
+  add_text(svg, {(L.plot_left + L.plot_right) / 2, L.plot_title_y, "Linear: error per degree", 14, "middle",
+                 kTextColour, "bold"});
   draw_linear_band(svg, p, panel);
   panel.draw_axes(svg);
   if (p.spread_um) {
@@ -481,13 +549,13 @@ void draw_linear_panel(std::string& svg, const ErrorPlot& p, const ErrorScale& s
 
 // The legend under the linear panel: a swatch and a label for each thing drawn, the judged
 // error first; an entry that does not fit on its row starts the next.
-void draw_error_legend(std::string& svg, const ErrorPlot& p) {
-  const double left = kPlotLeft - 40;
+void draw_error_legend(std::string& svg, const ErrorPlot& p, const Layout& L) {
+  const double left = L.legend_left;
   double lx = left;
-  double ly = 598;
+  double ly = L.legend_y;
   const auto legend = [&](const auto& swatch, const std::string& label) {
     const double width = 30 + 6.5 * static_cast<double>(code_points(label));
-    if (lx > left && lx + width > kWidth - 40.0) {
+    if (lx > left && lx + width > L.width - L.margin) {
       lx = left;
       ly += 16;
     }
@@ -519,14 +587,23 @@ void draw_error_legend(std::string& svg, const ErrorPlot& p) {
 
 }  // namespace
 
-std::string render_error_plot_svg(const ErrorPlot& p) {
+std::string render_error_plot_svg(const ErrorPlot& p, PlotShape shape) {
+  const Layout& L = shape == PlotShape::kNarrow ? kNarrow : kWide;
   const ErrorScale s = error_scale(p);
-  std::string svg = start_document(p.title, p.subtitle);
-  draw_error_verdict(svg, p, s);
-  draw_polar_panel(svg, p, s);
-  draw_linear_panel(svg, p, s);
-  draw_error_legend(svg, p);
-  add_text(svg, {40, kHeight - 10.0, p.footer, 11, "start", kMutedColour});
+  std::string svg = start_document(p.title, p.subtitle, L);
+  draw_error_verdict(svg, p, s, L);
+  draw_polar_panel(svg, p, s, L);
+  draw_linear_panel(svg, p, s, L);
+  draw_error_legend(svg, p, L);
+  // The footer: one line on a wide page; on a narrow one a line per figure where they would not
+  // fit, from the bottom up.
+  std::vector<std::string> lines{p.footer};
+  if (L.stacked) lines = wrapped_at_dots(p.footer, L.width - 2 * L.margin, 11);
+  double y = L.height - 10.0 - 15.0 * static_cast<double>(lines.size() - 1);
+  for (const std::string& line : lines) {
+    add_text(svg, {L.margin, y, line, 11, "start", kMutedColour});
+    y += 15.0;
+  }
   svg += "</svg>\n";
   return svg;
 }
@@ -562,7 +639,7 @@ std::string render_loop_plot_svg(const LoopPlot& p) {
   const double step = nice_step(2.0 * extent);
   const double scale = std::max(step, std::ceil(extent / step) * step);
 
-  std::string svg = start_document(p.title, p.subtitle);
+  std::string svg = start_document(p.title, p.subtitle, kWide);
 
   // ---- Error profiles ----
   const DegreePanel panel{kLeft, kRight, kTop, kBottom, scale, step};

@@ -40,10 +40,14 @@ struct ErrorPlot {
   std::string footer;  // one line of small print (figures, database, settings hash)
 };
 
-// A self-contained SVG 1.1 document (no scripts, no external fonts or files), 1200 x 640 px,
-// that prints on A4 landscape. Numbers use '.' whatever the C locale. Pure: no I/O.
-// Precondition: every value is finite.
-std::string render_error_plot_svg(const ErrorPlot& plot);
+// The error plot's layout: wide, the polar and linear panels side by side, 1200 x 640 px, that
+// prints on A4 landscape; narrow, the same stacked, 380 x 1060 px, for a phone held upright
+// (its text reads at the size drawn when the picture is as wide as the phone).
+enum class PlotShape { kWide, kNarrow };
+
+// A self-contained SVG 1.1 document (no scripts, no external fonts or files). Numbers use '.'
+// whatever the C locale. Pure: no I/O. Precondition: every value is finite.
+std::string render_error_plot_svg(const ErrorPlot& plot, PlotShape shape = PlotShape::kWide);
 
 // A stored run's error plot as `runs plot` and the run page draw it: title, subtitle (time,
 // status, serial and note), the judged error (judged_error) with its name, the raw error beside

@@ -163,7 +163,9 @@ struct HttpApi::Impl {
 
   // The run the path names, for an answer made of it alone (no query parameters); nullopt when
   // the error was sent.
-  std::optional<StoredRun> path_run(const httplib::Request& req, httplib::Response& res);
+  // The run the path names; `known`: the query parameters the endpoint takes (others are 400).
+  std::optional<StoredRun> path_run(const httplib::Request& req, httplib::Response& res,
+                                    std::vector<std::string> known = {});
 
   void run_plot(const httplib::Request& req, httplib::Response& res);
 

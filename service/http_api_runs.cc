@@ -205,8 +205,9 @@ void HttpApi::Impl::shaft(const httplib::Request& req, httplib::Response& res) {
   });
 }
 
-std::optional<StoredRun> HttpApi::Impl::path_run(const httplib::Request& req, httplib::Response& res) {
-  Result<Query> q = Query::of(req, {});
+std::optional<StoredRun> HttpApi::Impl::path_run(const httplib::Request& req, httplib::Response& res,
+                                                 std::vector<std::string> known) {
+  Result<Query> q = Query::of(req, std::move(known));
   if (!q) {
     send_error(res, q.error());
     return std::nullopt;
@@ -225,10 +226,18 @@ std::optional<StoredRun> HttpApi::Impl::path_run(const httplib::Request& req, ht
 }
 
 void HttpApi::Impl::run_plot(const httplib::Request& req, httplib::Response& res) {
-  const std::optional<StoredRun> run = path_run(req, res);
+  // ?layout=narrow: the panels stacked, for a phone held upright.
+  const std::string layout = req.has_param("layout") ? req.get_param_value("layout") : "wide";
+  if (layout != "wide" && layout != "narrow") {
+    send_error(res, bad_request("layout `" + layout + "`: give wide or narrow"));
+    return;
+  }
+  const std::optional<StoredRun> run = path_run(req, res, {"layout"});
   if (!run) return;
   res.status = 200;
-  res.set_content(render_error_plot_svg(run_error_plot(*run)), "image/svg+xml");
+  res.set_content(
+      render_error_plot_svg(run_error_plot(*run), layout == "narrow" ? PlotShape::kNarrow : PlotShape::kWide),
+      "image/svg+xml");
 }
 
 void HttpApi::Impl::run_report(const httplib::Request& req, httplib::Response& res) {

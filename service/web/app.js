@@ -125,10 +125,27 @@ function plotHtml(svg, path) {
     path ? `, or <a href="${esc(path)}" target="_blank">open it alone</a> to zoom` : ""}.</p><div class="plot-scroll">${svg}</div>`;
 }
 
-async function showSvg(el, path) {
+// A plot the service can also draw stacked for a phone (`narrowable`: its path takes
+// ?layout=narrow) is asked in the layout the screen wants, shown as wide as the screen (class
+// "fits"), and drawn again when the window crosses the narrow screen's width.
+const narrowScreen = window.matchMedia("(max-width: 700px)");
+const narrowablePlots = new Map();  // element -> path, while the element is on the page
+narrowScreen.addEventListener("change", () => {
+  for (const [el, path] of narrowablePlots) {
+    if (el.isConnected) showSvg(el, path, {narrowable: true});
+    else narrowablePlots.delete(el);
+  }
+});
+
+async function showSvg(el, path, {narrowable = false} = {}) {
+  const narrow = narrowable && narrowScreen.matches;
+  const shown = narrow ? path + (path.includes("?") ? "&" : "?") + "layout=narrow" : path;
+  if (narrowable) narrowablePlots.set(el, path);
   try {
-    el.innerHTML = plotHtml(await apiText(path), path);
+    const svg = await apiText(shown);
+    el.innerHTML = narrow ? `<div class="plot-scroll">${svg}</div>` : plotHtml(svg, shown);
     el.classList.add("plot");
+    el.classList.toggle("fits", narrow);
   } catch (e) {
     message(el, errorText(e), "error");
   }
@@ -401,7 +418,7 @@ async function runPage(id) {
       <dt>Ground with table</dt><dd>${r.ground_with_version ? "version " + esc(r.ground_with_version) : "–"}</dd>
       <dt>NC program</dt><dd>${esc(r.nc_file || "none written")}</dd>
     </dl>`;
-  showSvg(document.getElementById("plot"), `/api/runs/${r.id}/plot.svg`);
+  showSvg(document.getElementById("plot"), `/api/runs/${r.id}/plot.svg`, {narrowable: true});
 }
 
 // ---- Trend of a lobe ----

@@ -143,7 +143,7 @@ TEST(ErrorPlotSvg, ALongSubtitleIsCutBeforeTheTextToItsRight) {
   p.subtitle = "2026-11-22 02:34 UTC \u00b7 pushed \u00b7 " + note;
   const std::string svg = render_error_plot_svg(p);
   EXPECT_EQ(xml_problem(svg), "");
-  const std::string shown_start = "y=\"72\" font-size=\"14\" text-anchor=\"start\"";
+  const std::string shown_start = "y=\"72.0\" font-size=\"14\" text-anchor=\"start\"";
   const std::size_t at = svg.find(shown_start);
   ASSERT_NE(at, std::string::npos);
   const std::size_t title_end = svg.find("</title>", at);
@@ -262,6 +262,54 @@ TEST(ErrorPlotSvg, BothPanelsDrawTheSignedCamAngleTheReportDraws) {
     EXPECT_NE(svg.find(tick), std::string::npos) << tick;
   }
   EXPECT_EQ(svg.find(">270</text>"), std::string::npos) << "no 0..360 axis";
+}
+
+// The narrow layout for a phone: 380 px wide, every text inside it at 0.62 em a character
+// (wider than DejaVu Sans's average) whichever way it is anchored; the
+// headline's parts each on a line, the footer's figures all there, broken at their dots.
+TEST(ErrorPlotSvg, TheNarrowLayoutKeepsEveryTextInsideAPhonesWidth) {
+  ErrorPlot p = sample_plot(3.0, 7.0);
+  p.tolerance_um = 5.0;
+  p.title = "Run 1234 \u00b7 intake_flat lobe 1 \u00b7 grinder-with-a-long-name-7";
+  p.error_name = "lift error after the best-fit phase";
+  p.footer =
+      "judged: max 7.00 \u00b5m \u00b7 RMS 2.21 \u00b5m \u00b7 peak to valley 10.00 \u00b5m \u00b7 raw max 16.73 "
+      "\u00b5m "
+      "\u00b7 phase +0.125\u00b0 \u00b7 repeatability 0.31 \u00b5m \u00b7 3 revolutions";
+  const std::string svg = render_error_plot_svg(p, PlotShape::kNarrow);
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(bad_number(svg), "");
+  EXPECT_NE(svg.find("width=\"380\" height=\"1060\""), std::string::npos);
+  const std::regex text(
+      "<text x=\"([-0-9.]+)\" y=\"[-0-9.]+\" font-size=\"([0-9]+)\" "
+      "text-anchor=\"([a-z]+)\"[^>]*>(?:<title>[^<]*</title>)?([^<]*)</text>");
+  int texts = 0;
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), text); it != std::sregex_iterator(); ++it, ++texts) {
+    const double x = std::stod((*it)[1]);
+    const int size = std::stoi((*it)[2]);
+    EXPECT_GE(size, 10) << (*it)[4];
+    EXPECT_GE(x, 0.0) << (*it)[4];
+    EXPECT_LE(x, 380.0) << (*it)[4];
+    if (it->str().find("transform=") != std::string::npos) {  // the turned axis title: a glyph's em to its left
+      EXPECT_GE(x - size, 0.0) << (*it)[4];
+      continue;
+    }
+    std::size_t chars = 0;
+    for (unsigned char c : std::string((*it)[4])) chars += (c & 0xC0) != 0x80 ? 1 : 0;
+    const double w = 0.62 * size * static_cast<double>(chars);
+    const double left = (*it)[3] == "start" ? x : (*it)[3] == "middle" ? x - w / 2 : x - w;
+    EXPECT_GE(left, -1e-9) << (*it)[4];
+    EXPECT_LE(left + w, 380.0 + 1e-9) << (*it)[4];
+  }
+  EXPECT_GT(texts, 40);
+  EXPECT_NE(svg.find(">max |error| 7.00 \u00b5m at cam -160\u00b0</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">1 degrees outside \u00b15.0 \u00b5m</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">judged: lift error after the best-fit phase</text>"), std::string::npos);
+  for (const char* figure : {"judged: max 7.00 \u00b5m", "raw max 16.73 \u00b5m", "3 revolutions"}) {
+    EXPECT_NE(svg.find(figure), std::string::npos) << figure;
+  }
+  EXPECT_EQ(svg.find(">-150</text>"), std::string::npos) << "the narrow axis is labelled every 60 degrees";
+  EXPECT_NE(svg.find(">-120</text>"), std::string::npos);
 }
 
 TEST(ErrorPlotSvg, LabelsTheAxesWithUnits) {

@@ -184,6 +184,12 @@ TEST_F(HttpPagesTest, ARunsPlotIsItsErrorAsSvgWithItsToleranceBand) {
   EXPECT_TRUE(has(error_of(get("/api/runs/99/plot.svg"), 404), "GET /api/runs lists the ids"));
   EXPECT_TRUE(has(error_of(get("/api/runs/x/plot.svg"), 400), "run id 'x' is not a number"));
   EXPECT_TRUE(has(error_of(get("/api/runs/1/plot.svg?size=2"), 400), "unknown query parameter `size`"));
+  // For a phone: the same run, stacked in 380 px.
+  const auto narrow = get("/api/runs/" + std::to_string(ids_[0]) + "/plot.svg?layout=narrow");
+  EXPECT_EQ(narrow.status, 200);
+  EXPECT_TRUE(has(narrow.body, "width=\"380\"")) << narrow.body.substr(0, 300);
+  EXPECT_TRUE(has(narrow.body, "max 8.00 \u00b5m"));
+  EXPECT_TRUE(has(error_of(get("/api/runs/1/plot.svg?layout=tall"), 400), "layout `tall`: give wide or narrow"));
 }
 
 TEST_F(HttpPagesTest, ARunsReportIsAPdfFromATemporaryFileThatIsRemoved) {
