@@ -83,8 +83,8 @@ void add_db_commands(CLI::App& app, CommandAction& action) {
   auto check = std::make_shared<DbOptions>();
   CLI::App* check_cmd = db->add_subcommand(
       "check",
-      "Is the database sound? Reads every page (integrity_check) and every reference; exit status 4 if "
-      "it is damaged. Never writes the file: safe while gaugeloop runs.");
+      "Is the database sound? Reads every page (integrity_check), every reference and every run's stored numbers "
+      "against their checksum; exit status 4 if it is damaged. Never writes the file: safe while gaugeloop runs.");
   add_db_options(*check_cmd, *check);
   check_cmd->callback([&action, check] { action = [check] { return cmd_check(*check); }; });
 

@@ -4,10 +4,30 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 
 namespace gaugeloop::storage_internal {
 
 double degree_blob_limit(double counts_per_unit) { return static_cast<double>(INT32_MAX) / counts_per_unit; }
+
+std::int64_t blobs_checksum(std::initializer_list<std::optional<std::string_view>> parts) {
+  std::uint64_t h = 14695981039346656037ULL;
+  const auto add = [&h](unsigned char byte) {
+    h ^= byte;
+    h *= 1099511628211ULL;
+  };
+  for (const std::optional<std::string_view>& part : parts) {
+    const std::uint64_t length = part ? part->size() : ~std::uint64_t{0};
+    for (int i = 0; i < 8; ++i) add(static_cast<unsigned char>(length >> (8 * i)));
+    if (part) {
+      for (char c : *part) add(static_cast<unsigned char>(c));
+    }
+  }
+  std::int64_t out = 0;
+  static_assert(sizeof out == sizeof h);
+  std::memcpy(&out, &h, sizeof out);
+  return out;
+}
 
 Status append_degree_blob(const DegreeTable& table, double counts_per_unit, std::string_view what, std::string& blob) {
   blob.reserve(blob.size() + kDegreeBlobBytes);

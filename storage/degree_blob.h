@@ -3,7 +3,11 @@
 // (and its tests). docs/storage.md explains the layout and the views that decode it in SQL.
 #pragma once
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
+#include <initializer_list>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -30,5 +34,23 @@ Status append_degree_blob(const DegreeTable& table, double counts_per_unit, std:
 // Reads the table that starts `offset` bytes into `blob`. kInvalidInput if the blob is too
 // short to hold it.
 Result<DegreeTable> read_degree_blob(std::string_view blob, std::size_t offset, double counts_per_unit);
+
+// The checksum a run's stored per-degree BLOBs carry from schema 19 on (run_tables.checksum,
+// run_raw.checksum): FNV-1a 64 over `parts` in order, each preceded by its length (8 bytes,
+// little-endian; all ones for an absent part, a NULL column), so that where one part ends
+// counts. The unsigned value's bits as an int64, as SQLite keeps an INTEGER.
+std::int64_t blobs_checksum(std::initializer_list<std::optional<std::string_view>> parts);
+
+// run_raw.checksum: over amplifier_revolutions (its text) and lift.
+inline std::int64_t raw_checksum(std::string_view amplifier_revolutions, std::string_view lift) {
+  return blobs_checksum({amplifier_revolutions, lift});
+}
+
+// run_tables.checksum: over design_lift, mean_lift, spread, error, correction and
+// residual_error (empty: NULL), in that order.
+inline std::int64_t tables_checksum(const std::array<std::string_view, 5>& tables,
+                                    std::optional<std::string_view> residual_error) {
+  return blobs_checksum({tables[0], tables[1], tables[2], tables[3], tables[4], residual_error});
+}
 
 }  // namespace gaugeloop::storage_internal

@@ -744,8 +744,16 @@ Status bump_schema_cookie_v14(Connection& conn) {
   return bump_schema_cookie_after(conn, 14, {"runs"}, "''assumed'', ''main_program''");
 }
 
-const std::array<Migration, 18>& all_migrations() {
-  static const std::array<Migration, 18> kMigrations{{
+// A checksum over each run's per-degree BLOBs as stored (degree_blob.h): a page changed outside
+// SQLite's notice (its own checks read structure, not the numbers in a BLOB) is found when the
+// run is read and by `db check`. NULL for the rows stored before: not checked.
+constexpr std::string_view kSchemaV19 = R"sql(
+ALTER TABLE run_tables ADD COLUMN checksum INTEGER;
+ALTER TABLE run_raw ADD COLUMN checksum INTEGER;
+)sql";
+
+const std::array<Migration, 19>& all_migrations() {
+  static const std::array<Migration, 19> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -825,6 +833,11 @@ const std::array<Migration, 18>& all_migrations() {
       {18,
        "the NC directory the pushes go to (nc_directory); programs in it named by their file name",
        std::string(kSchemaV18),
+       nullptr,
+       {}},
+      {19,
+       "a checksum over each run's stored per-degree numbers (run_tables, run_raw), checked as they are read",
+       std::string(kSchemaV19),
        nullptr,
        {}},
   }};

@@ -52,11 +52,11 @@ VALUES (:started_utc, :finished_utc, :machine, :part, :lobe, :gauge, :note, 'mea
         :roundness_um, :uuid, :harmonics_fed_back, :harmonic_threshold_um))sql";
 
 constexpr std::string_view kInsertRaw = R"sql(
-INSERT INTO run_raw (run_id, amplifier_revolutions, lift) VALUES (?1, ?2, ?3))sql";
+INSERT INTO run_raw (run_id, amplifier_revolutions, lift, checksum) VALUES (?1, ?2, ?3, ?4))sql";
 
 constexpr std::string_view kInsertTables = R"sql(
-INSERT INTO run_tables (run_id, design_lift, mean_lift, spread, error, correction, residual_error)
-VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7))sql";
+INSERT INTO run_tables (run_id, design_lift, mean_lift, spread, error, correction, residual_error, checksum)
+VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8))sql";
 
 constexpr std::string_view kInsertCharacteristic = R"sql(
 INSERT INTO run_characteristics (run_id, position, key, unit, value, min_value, max_value,
@@ -266,12 +266,15 @@ Status update_catalogue(Connection& conn, const RunRecord& run, const Part& g, c
 Status insert_degree_rows(Connection& conn, std::int64_t run_id, const EncodedRun& e, const std::string& operation) {
   Result<Statement> raw = Statement::prepare(conn, kInsertRaw, operation);
   if (!raw.ok()) return raw.error();
-  raw->bind_all(run_id, std::string_view(e.amplifier), Blob{e.lift});
+  raw->bind_all(run_id, std::string_view(e.amplifier), Blob{e.lift},
+                storage_internal::raw_checksum(e.amplifier, e.lift));
   if (Status s = raw->run(); !s.ok()) return s;
   Result<Statement> tab = Statement::prepare(conn, kInsertTables, operation);
   if (!tab.ok()) return tab.error();
+  const std::int64_t checksum = storage_internal::tables_checksum(
+      {e.tables[0], e.tables[1], e.tables[2], e.tables[3], e.tables[4]}, std::string_view(e.tables[5]));
   tab->bind_all(run_id, Blob{e.tables[0]}, Blob{e.tables[1]}, Blob{e.tables[2]}, Blob{e.tables[3]}, Blob{e.tables[4]},
-                Blob{e.tables[5]});
+                Blob{e.tables[5]}, checksum);
   return tab->run();
 }
 
@@ -505,9 +508,14 @@ Status read_characteristics(PartStatements& st, std::int64_t run_id, StoredRun& 
   return {};
 }
 
+constexpr const char* kChecksumMismatch =
+    "its stored per-degree numbers do not match the checksum kept with them: a page of the file was changed "
+    "outside SQLite (a failing disk, a bad copy), so it is not used as the base of a correction";
+
 // The raw revolutions, unless prune_raw_samples removed them.
 Status read_raw(PartStatements& st, std::int64_t run_id, StoredRun& out) {
-  Result<Statement*> prepared = st.get("SELECT amplifier_revolutions, lift FROM run_raw WHERE run_id = :run_id");
+  Result<Statement*> prepared =
+      st.get("SELECT amplifier_revolutions, lift, checksum FROM run_raw WHERE run_id = :run_id");
   if (!prepared.ok()) return prepared.error();
   Statement& q = **prepared;
   q.bind(":run_id", run_id);
@@ -519,9 +527,13 @@ Status read_raw(PartStatements& st, std::int64_t run_id, StoredRun& out) {
     }
     return {};
   }
-  Result<std::vector<double>> counts = storage_internal::numbers_from_json(q.column<std::string>(0));
-  if (!counts.ok()) return damaged_run(st.conn(), run_id, "amplifier_revolutions: " + counts.error().message);
+  const std::string amplifier = q.column<std::string>(0);
   const std::string lift = q.column_blob(1);
+  if (!q.column_is_null(2) && q.column<std::int64_t>(2) != storage_internal::raw_checksum(amplifier, lift)) {
+    return damaged_run(st.conn(), run_id, kChecksumMismatch + std::string(" (its raw revolutions, run_raw)"));
+  }
+  Result<std::vector<double>> counts = storage_internal::numbers_from_json(amplifier);
+  if (!counts.ok()) return damaged_run(st.conn(), run_id, "amplifier_revolutions: " + counts.error().message);
   if (lift.size() != counts->size() * storage_internal::kDegreeBlobBytes) {
     return damaged_run(st.conn(), run_id,
                        "the raw lift BLOB holds " + std::to_string(lift.size()) + " bytes for " +
@@ -544,14 +556,26 @@ Status read_raw(PartStatements& st, std::int64_t run_id, StoredRun& out) {
 // The per-degree profile and correction (cam frame).
 Status read_profile(PartStatements& st, std::int64_t run_id, StoredRun& out) {
   Result<Statement*> prepared = st.get(
-      "SELECT design_lift, mean_lift, spread, error, correction, residual_error FROM run_tables WHERE run_id = "
-      ":run_id");
+      "SELECT design_lift, mean_lift, spread, error, correction, residual_error, checksum FROM run_tables WHERE "
+      "run_id = :run_id");
   if (!prepared.ok()) return prepared.error();
   Statement& q = **prepared;
   q.bind(":run_id", run_id);
   Result<bool> row = q.step();
   if (!row.ok()) return row.error();
   if (!*row) return damaged_run(st.conn(), run_id, "its profile (run_tables) is missing");
+  if (!q.column_is_null(6)) {
+    std::array<std::string, 5> blobs;
+    for (std::size_t i = 0; i < blobs.size(); ++i) blobs[i] = q.column_blob(static_cast<int>(i));
+    const std::string residual = q.column_is_null(5) ? std::string() : q.column_blob(5);
+    const std::int64_t expected = storage_internal::tables_checksum(
+        {blobs[0], blobs[1], blobs[2], blobs[3], blobs[4]},
+        q.column_is_null(5) ? std::nullopt : std::optional<std::string_view>(residual));
+    if (q.column<std::int64_t>(6) != expected) {
+      return damaged_run(st.conn(), run_id,
+                         kChecksumMismatch + std::string(" (its profile and correction, run_tables)"));
+    }
+  }
   const std::array<std::pair<DegreeTable*, double>, 5> tables = {{
       {&out.analysis.design_lift_mm, kCountsPerMm},
       {&out.analysis.mean_lift_mm, kCountsPerMm},

@@ -1,5 +1,6 @@
 // RunStore against real SQLite: round trips, listing, pushes, refusals and what they leave.
 #include "storage/run_store.h"
+#include "storage/db_maintenance.h"
 
 #include <gtest/gtest.h>
 #include <sqlite3.h>
@@ -685,6 +686,49 @@ TEST_F(RunStoreTest, LoadReportsRawSamplesDeletedByHandButNeverPruned) {
   EXPECT_EQ(loaded.error().code, ErrorCode::kStorage);
   EXPECT_NE(loaded.error().message.find("raw revolutions are missing but it was never pruned"), std::string::npos)
       << loaded.error().message;
+}
+
+// A page changed outside SQLite keeps the row's shape: a correction zeroed (as a zeroed page
+// did) or raw revolutions zeroed read as numbers. The checksum stored with them finds it: the
+// run is refused with a message naming it, and the full check lists it; a row stored before
+// checksums (NULL) is read as it is.
+TEST_F(RunStoreTest, NumbersChangedOutsideSqliteAreFoundByTheirChecksum) {
+  const std::int64_t id = insert_ok(store(), make_record("a", "2026-11-22T02:34:44Z"));
+  const std::int64_t other = insert_ok(store(), make_record("a", "2026-11-22T03:00:00Z"));
+  ASSERT_TRUE(store().load_run(id).ok());
+  {
+    RawDb raw(db_in(dir_));
+    ASSERT_EQ(raw.exec("UPDATE run_tables SET correction = zeroblob(1440) WHERE run_id = " + std::to_string(id)),
+              SQLITE_OK);
+    ASSERT_EQ(raw.exec("UPDATE run_raw SET lift = zeroblob(length(lift)) WHERE run_id = " + std::to_string(other)),
+              SQLITE_OK);
+  }
+  Result<StoredRun> loaded = store().load_run(id);
+  ASSERT_FALSE(loaded.ok());
+  EXPECT_EQ(loaded.error().code, ErrorCode::kStorage);
+  for (const char* part : {"run 1 is damaged", "do not match the checksum", "not used as the base of a correction",
+                           "run_tables", "restore a backup"}) {
+    EXPECT_NE(loaded.error().message.find(part), std::string::npos) << part << ": " << loaded.error().message;
+  }
+  Result<StoredRun> raw_loaded = store().load_run(other);
+  ASSERT_FALSE(raw_loaded.ok());
+  EXPECT_NE(raw_loaded.error().message.find("raw revolutions, run_raw"), std::string::npos)
+      << raw_loaded.error().message;
+
+  Result<IntegrityReport> report = check_database_file(db_in(dir_));
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(report->problems,
+            (std::vector<std::string>{
+                "run 2: its raw revolutions (run_raw) do not match the checksum stored with them (a page changed "
+                "outside SQLite)",
+                "run 1: its profile and correction (run_tables) do not match the checksum stored with them (a page "
+                "changed outside SQLite)"}));
+  Result<IntegrityReport> quick = check_database_file(db_in(dir_), IntegrityCheck::kQuick);
+  ASSERT_TRUE(quick.ok());
+  EXPECT_TRUE(quick->sound()) << "the quick check reads pages only";
+
+  RawDb(db_in(dir_)).exec("UPDATE run_tables SET checksum = NULL WHERE run_id = " + std::to_string(id));
+  ASSERT_TRUE(store().load_run(id).ok()) << "a row without a checksum is not checked";
 }
 
 TEST_F(RunStoreTest, TheSchemaRefusesABlobOfTheWrongLength) {
