@@ -174,6 +174,28 @@ Result<bool> holds_records(Connection& conn) {
 // stored before have none): a page changed outside SQLite, which its own checks do not see in a
 // BLOB's bytes, named by run.
 Status add_checksum_problems(Connection& conn, std::vector<std::string>& problems) {
+  // The program texts of the pushes against their hash (from version 3 on).
+  Result<std::int64_t> texts = query_number(
+      conn, "SELECT count(*) FROM pragma_table_info('nc_pushes') WHERE name = 'program_text'", "look for programs");
+  if (!texts.ok()) return texts.error();
+  if (*texts != 0) {
+    if (Status s = add_problems(
+            conn,
+            "SELECT id, nc_file, table_version, program_hash, program_text FROM nc_pushes "
+            "WHERE program_text IS NOT NULL AND program_text <> '' AND program_hash IS NOT NULL AND program_hash <> ''",
+            "check the pushed programs' hashes",
+            [](const Statement& st) {
+              return settings_hash(st.column<std::string>(4)) == st.column<std::string>(3)
+                         ? std::string()
+                         : "push " + std::to_string(st.column<std::int64_t>(0)) + " (table version " +
+                               std::to_string(st.column<std::int64_t>(2)) + " of " + st.column<std::string>(1) +
+                               "): its program text does not match the hash stored with it";
+            },
+            problems);
+        !s.ok()) {
+      return s;
+    }
+  }
   Result<std::int64_t> has = query_number(
       conn, "SELECT count(*) FROM pragma_table_info('run_tables') WHERE name = 'checksum'", "look for checksums");
   if (!has.ok() || *has == 0) return has.ok() ? Status{} : Status(has.error());

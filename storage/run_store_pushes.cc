@@ -1,5 +1,6 @@
 // RunStore's pushes: the NC programs written to the control (nc_pushes) and the push journal
 // that records each one before its file is renamed into place (nc_push_intents).
+#include <type_traits>
 #include <utility>
 
 #include "core/utc_time.h"
@@ -198,6 +199,29 @@ Result<std::string> versions_of(Connection& conn, const std::string& nc_file, co
   return versions;
 }
 
+// A program text read back must be the text whose hash was stored with it: one changed outside
+// SQLite (a damaged page) is never written to the control again.
+template <typename Push>
+Result<Push> checked_program_text(const Connection& conn, Push push) {
+  const auto check = [&conn](const NcPush& p) -> Status {
+    if (!p.program_text || p.program_text->empty() || p.program_hash.empty()) return {};
+    if (settings_hash(*p.program_text) == p.program_hash) return {};
+    return make_error(ErrorCode::kStorage, "run database " + conn.path.string() + ": table version " +
+                                               std::to_string(p.table_version) + " of " + p.nc_file +
+                                               ": its stored program text does not match the hash kept with it (a "
+                                               "page changed outside SQLite), so it is not written to the control; "
+                                               "restore a backup (gaugeloop db check lists what is damaged)");
+  };
+  if constexpr (std::is_same_v<Push, NcPush>) {
+    if (Status s = check(push); !s.ok()) return s.error();
+  } else {
+    if (push) {
+      if (Status s = check(*push); !s.ok()) return s.error();
+    }
+  }
+  return push;
+}
+
 }  // namespace
 
 Result<NcPush> RunStore::load_push(const std::string& nc_file, int table_version) const {
@@ -216,7 +240,7 @@ Result<NcPush> RunStore::load_push(const std::string& nc_file, int table_version
   Result<std::optional<NcPush>> push =
       q->first([](const Statement& s) { return storage_internal::read_push(s, true); });
   if (!push.ok()) return push.error();
-  if (*push) return std::move(**push);
+  if (*push) return checked_program_text(*conn_, std::move(**push));
 
   Result<std::string> versions = versions_of(conn, nc_file, operation);
   if (!versions.ok()) return versions.error();
@@ -242,7 +266,10 @@ Result<std::optional<NcPush>> RunStore::last_push(const std::string& nc_file) co
                                            "load the last push of " + nc_file);
   if (!q.ok()) return q.error();
   q->bind(":nc_file", storage_internal::nc_key(*conn_, nc_file));
-  return q->first([](const Statement& s) { return storage_internal::read_push(s, true); });
+  Result<std::optional<NcPush>> push =
+      q->first([](const Statement& s) { return storage_internal::read_push(s, true); });
+  if (!push.ok()) return push.error();
+  return checked_program_text(*conn_, std::move(*push));
 }
 
 // ---- the push journal ----

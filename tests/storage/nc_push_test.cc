@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include "storage/db_maintenance.h"
 #include "storage/migrations.h"
 #include "storage/run_store.h"
 #include "storage/sqlite_db.h"
@@ -145,6 +146,30 @@ TEST_F(NcPushTest, TwoWritersCannotBothClaimAVersion) {
   Result<NcPush> kept = store().load_push("/nc/A.SPF", 1);
   ASSERT_TRUE(kept.ok()) << kept.error().message;
   EXPECT_EQ(kept->program_text, "first");
+}
+
+// A program text changed outside SQLite (a damaged page) no longer matches the hash stored with
+// it: reading it back for a rollback, or as the last push, is refused naming the push; the full
+// check lists it.
+TEST_F(NcPushTest, AProgramTextChangedOutsideSqliteIsNeverReadBack) {
+  const std::int64_t run = add_run("2026-11-22T08:00:00Z");
+  push_next(run, "/nc/A.SPF");
+  ASSERT_TRUE(store().load_push("/nc/A.SPF", 1).ok());
+  RawDb(db_in(dir_)).exec("UPDATE nc_pushes SET program_text = replace(program_text, 'X', 'Y')");
+  Result<NcPush> loaded = store().load_push("/nc/A.SPF", 1);
+  ASSERT_FALSE(loaded.ok());
+  EXPECT_EQ(loaded.error().code, ErrorCode::kStorage);
+  EXPECT_NE(loaded.error().message.find("table version 1 of /nc/A.SPF: its stored program text does not match"),
+            std::string::npos)
+      << loaded.error().message;
+  EXPECT_NE(loaded.error().message.find("not written to the control"), std::string::npos);
+  EXPECT_FALSE(store().last_push("/nc/A.SPF").ok());
+  Result<IntegrityReport> report = check_database_file(db_in(dir_));
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  ASSERT_EQ(report->problems.size(), 1u);
+  EXPECT_NE(report->problems[0].find("push 1 (table version 1 of A.SPF): its program text does not match"),
+            std::string::npos)
+      << report->problems[0];
 }
 
 TEST_F(NcPushTest, ProgramTextRoundTripsByteForByte) {
