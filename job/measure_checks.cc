@@ -163,7 +163,9 @@ Result<Prepared> prepare(const JobSettings& s) {
 
 // Room a run and a program need, checked before measuring: a run of 3 revolutions is about
 // 20 KB in the database, its WAL pages and the push journal's copy of the program some more,
-// a program well under 64 KB. The margins cover a hundred revolutions and the largest tables.
+// a program well under 64 KB. The margins cover a hundred revolutions and the largest tables,
+// and the copy of the measurement kept in <data-dir>/unstored-runs/ (about 4 KB a revolution)
+// if the database refuses the run.
 constexpr std::uintmax_t kRoomForRunBytes = 2u * 1024u * 1024u;
 constexpr std::uintmax_t kRoomForProgramBytes = 512u * 1024u;
 

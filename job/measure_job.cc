@@ -285,9 +285,10 @@ Result<std::string> why_not_built_on(const RunStore& store, const GroundWith& g,
   return std::string();
 }
 
-// The measurement of a run the database did not take, as JSON, so it is not lost. Tried
-// beside the database, then in the NC directory, then in the temporary directory. Returns
-// the file written, or empty if none could be.
+// The measurement of a run the database did not take, as JSON, so it is not lost: in
+// `unstored-runs` beside the database (the data directory, whose room for a run was checked
+// before the gauge was read), never in the control's NC share or a temporary directory that a
+// service's private /tmp loses at stop. Returns the file written, or empty if it could not be.
 std::filesystem::path keep_unstored_measurement(const RunRecord& r, const JobSettings& s) {
   nlohmann::json j;
   j["kind"] = "gaugeloop unstored run";
@@ -310,13 +311,11 @@ std::filesystem::path keep_unstored_measurement(const RunRecord& r, const JobSet
   std::replace(name.begin(), name.end(), ':', '-');
   const std::filesystem::path db_dir =
       s.db_path.has_parent_path() ? s.db_path.parent_path() : std::filesystem::path(".");
-  for (const std::filesystem::path& dir :
-       {db_dir / "unstored-runs", s.nc_dir / "unstored-runs", std::filesystem::temp_directory_path()}) {
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
-    if (ec) continue;
-    if (write_file_atomically(dir / name, j.dump(1) + "\n")) return dir / name;
-  }
+  const std::filesystem::path dir = db_dir / "unstored-runs";
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return {};
+  if (write_file_atomically(dir / name, j.dump(1) + "\n")) return dir / name;
   return {};
 }
 

@@ -309,6 +309,21 @@ TEST_F(LoopGuardsTest, ARunTheDatabaseRefusesAfterMeasuringIsKeptInAFile) {
   EXPECT_NE(kept_json.find("\"revolutions\""), std::string::npos);
   EXPECT_NE(kept_json.find("\"intake_flat\""), std::string::npos);
   EXPECT_EQ(kept.parent_path(), dir_ / "unstored-runs");
+  EXPECT_FALSE(fs::exists(js.nc_dir / "unstored-runs")) << "never in the control's share";
+
+  // Where the data directory cannot hold it (a file in the way), the message says so; the
+  // measurement goes nowhere else: not into the NC share, not into a temporary directory.
+  fs::remove_all(dir_ / "unstored-runs");
+  std::ofstream(dir_ / "unstored-runs") << "in the way\n";
+  other = nullptr;
+  r = measure(js);
+  ASSERT_NE(other, nullptr);
+  sqlite3_exec(other, "ROLLBACK", nullptr, nullptr, nullptr);
+  sqlite3_close(other);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("the measurement could not be kept anywhere either"), std::string::npos)
+      << r.error().message;
+  EXPECT_FALSE(fs::exists(js.nc_dir / "unstored-runs"));
 }
 
 // Inputs are read only from regular files of a bounded size, with a clear message otherwise.
