@@ -15,6 +15,7 @@
 #include "storage/degree_blob.h"
 #include "storage/maintenance_internal.h"
 #include "storage/migrations.h"
+#include "storage/run_store_internal.h"
 #include "storage/sqlite_db.h"
 
 namespace gaugeloop {
@@ -221,13 +222,8 @@ Status add_checksum_problems(Connection& conn, std::vector<std::string>& problem
       "WHERE checksum IS NOT NULL",
       "check the per-degree tables' checksums",
       [&](const Statement& st) {
-        std::array<std::string, 5> blobs;
-        for (std::size_t i = 0; i < blobs.size(); ++i) blobs[i] = st.column_blob(static_cast<int>(i) + 1);
-        const std::string residual = st.column_is_null(6) ? std::string() : st.column_blob(6);
-        const std::int64_t expected =
-            tables_checksum({blobs[0], blobs[1], blobs[2], blobs[3], blobs[4]},
-                            st.column_is_null(6) ? std::nullopt : std::optional<std::string_view>(residual));
-        return mismatch(st, "its profile and correction (run_tables)", st.column<std::int64_t>(7) == expected);
+        return mismatch(st, "its profile and correction (run_tables)",
+                        st.column<std::int64_t>(7) == tables_checksum_of_row(st, 1));
       },
       problems);
 }

@@ -14,6 +14,10 @@
 
 namespace gaugeloop::storage_internal {
 
+// tables_checksum of the row's run_tables BLOBs, read from column `first` on in their order
+// (design_lift, mean_lift, spread, error, correction, residual_error; NULL residual: absent).
+std::int64_t tables_checksum_of_row(const Statement& st, int first);
+
 // NULL for empty text: the columns that say "not recorded" with NULL.
 inline std::optional<std::string_view> text_or_null(std::string_view text) {
   if (text.empty()) return std::nullopt;

@@ -508,6 +508,18 @@ Status read_characteristics(PartStatements& st, std::int64_t run_id, StoredRun& 
   return {};
 }
 
+}  // namespace
+
+std::int64_t storage_internal::tables_checksum_of_row(const Statement& st, int first) {
+  std::array<std::string, 5> blobs;
+  for (int i = 0; i < 5; ++i) blobs[static_cast<std::size_t>(i)] = st.column_blob(first + i);
+  const std::string residual = st.column_is_null(first + 5) ? std::string() : st.column_blob(first + 5);
+  return tables_checksum({blobs[0], blobs[1], blobs[2], blobs[3], blobs[4]},
+                         st.column_is_null(first + 5) ? std::nullopt : std::optional<std::string_view>(residual));
+}
+
+namespace {
+
 constexpr const char* kChecksumMismatch =
     "its stored per-degree numbers do not match the checksum kept with them: a page of the file was changed "
     "outside SQLite (a failing disk, a bad copy), so it is not used as the base of a correction";
@@ -565,13 +577,7 @@ Status read_profile(PartStatements& st, std::int64_t run_id, StoredRun& out) {
   if (!row.ok()) return row.error();
   if (!*row) return damaged_run(st.conn(), run_id, "its profile (run_tables) is missing");
   if (!q.column_is_null(6)) {
-    std::array<std::string, 5> blobs;
-    for (std::size_t i = 0; i < blobs.size(); ++i) blobs[i] = q.column_blob(static_cast<int>(i));
-    const std::string residual = q.column_is_null(5) ? std::string() : q.column_blob(5);
-    const std::int64_t expected = storage_internal::tables_checksum(
-        {blobs[0], blobs[1], blobs[2], blobs[3], blobs[4]},
-        q.column_is_null(5) ? std::nullopt : std::optional<std::string_view>(residual));
-    if (q.column<std::int64_t>(6) != expected) {
+    if (q.column<std::int64_t>(6) != storage_internal::tables_checksum_of_row(q, 0)) {
       return damaged_run(st.conn(), run_id,
                          kChecksumMismatch + std::string(" (its profile and correction, run_tables)"));
     }
