@@ -110,14 +110,15 @@ void print_json(const nlohmann::json& j);
 using CommandAction = std::function<int()>;
 
 // Each group adds its subcommands to `app`; the one named on the command line sets `action`.
-void add_measure_commands(CLI::App& app, CommandAction& action);  // demo, sim, measure
-void add_runs_commands(CLI::App& app, CommandAction& action);     // runs ...
-void add_profile_commands(CLI::App& app, CommandAction& action);  // profile
-void add_nc_commands(CLI::App& app, CommandAction& action);       // nc ...
-void add_serve_commands(CLI::App& app, CommandAction& action);    // serve
-void add_db_commands(CLI::App& app, CommandAction& action);       // db ...
-void add_token_commands(CLI::App& app, CommandAction& action);    // token new
-void add_plant_commands(CLI::App& app, CommandAction& action);    // plant sync
-void add_gear_commands(CLI::App& app, CommandAction& action);     // gear coupling
+void add_measure_commands(CLI::App& app, CommandAction& action);        // demo, sim, measure
+void add_runs_commands(CLI::App& app, CommandAction& action);           // runs ...
+void add_profile_commands(CLI::App& app, CommandAction& action);        // profile
+void add_nc_commands(CLI::App& app, CommandAction& action);             // nc ...
+void add_serve_commands(CLI::App& app, CommandAction& action);          // serve
+void add_db_commands(CLI::App& app, CommandAction& action);             // db ...
+void add_import_unstored_command(CLI::App& db, CommandAction& action);  // db import-unstored (commands_measure.cc)
+void add_token_commands(CLI::App& app, CommandAction& action);          // token new
+void add_plant_commands(CLI::App& app, CommandAction& action);          // plant sync
+void add_gear_commands(CLI::App& app, CommandAction& action);           // gear coupling
 
 }  // namespace gaugeloop

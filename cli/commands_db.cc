@@ -77,7 +77,7 @@ int cmd_upgrade(const DbOptions& o) {
 }  // namespace
 
 void add_db_commands(CLI::App& app, CommandAction& action) {
-  CLI::App* db = app.add_subcommand("db", "The run database file: check it, back it up, upgrade its schema.");
+  CLI::App* db = app.add_subcommand("db", "The run database file: check it, back it up, upgrade its schema, store the runs it refused.");
   db->require_subcommand(1);
 
   auto check = std::make_shared<DbOptions>();
@@ -105,6 +105,8 @@ void add_db_commands(CLI::App& app, CommandAction& action) {
                          "backing it up to <db>.schema<N>-backup-<UTC time>. Commands that write do the same.");
   add_db_options(*upgrade_cmd, *upgrade);
   upgrade_cmd->callback([&action, upgrade] { action = [upgrade] { return cmd_upgrade(*upgrade); }; });
+
+  add_import_unstored_command(*db, action);
 }
 
 }  // namespace gaugeloop

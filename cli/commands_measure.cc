@@ -610,6 +610,60 @@ int cmd_measure_as_service(const ServiceMeasureOptions& so, const MeasureOptions
   return report->pushed() || report->inspection ? kExitOk : kExitNotPushed;
 }
 
+// db import-unstored: the runs the database refused, from the measurements kept of them.
+struct ImportUnstoredOptions {
+  std::vector<std::string> files;
+  MeasureOptions by_hand;   // --part, --data-dir, --machine and the program options
+  std::string config_path;  // or the service's config: its parts, database and NC directory
+};
+
+int cmd_import_unstored(const ImportUnstoredOptions& o) {
+  std::optional<ServiceConfig> config;
+  std::optional<LoadedPart> lp;
+  if (!o.config_path.empty()) {
+    Result<ServiceConfig> read = read_service_config(o.config_path);
+    if (!read) return report_error(read.error());
+    config = std::move(*read);
+  } else if (!o.by_hand.part_path.empty()) {
+    Result<LoadedPart> loaded = load_part(o.by_hand.part_path);
+    if (!loaded) return report_error(loaded.error());
+    lp = std::move(*loaded);
+  } else {
+    return report_error(make_error(ErrorCode::kInvalidInput,
+                                   "give --part FILE (the part file the runs were measured with, with --data-dir) or "
+                                   "--config FILE (the service's)"));
+  }
+  int status = kExitOk;
+  for (const std::string& file : o.files) {
+    Result<UnstoredRun> kept = read_unstored_run(file);
+    Result<JobSettings> js = kept ? Result<JobSettings>(JobSettings{}) : Result<JobSettings>(kept.error());
+    if (js && config) {
+      Result<const ServicePart*> part = find_part(*config, kept->part, kept->lobe);
+      js = part ? Result<JobSettings>(job_for(*config, **part)) : Result<JobSettings>(part.error());
+    } else if (js) {
+      js = job_settings_for(*lp, o.by_hand, /*build_on_table_in_force=*/false);
+    }
+    Result<JobReport> report = js ? store_unstored_run(*kept, *js) : Result<JobReport>(js.error());
+    if (!report) {
+      const int failed = report_error(report.error());
+      if (status == kExitOk) status = failed;
+      continue;
+    }
+    // Stored: the file goes aside, so that a second import does not store the run twice.
+    const std::filesystem::path from(file);
+    const std::filesystem::path imported = from.parent_path() / "imported" / from.filename();
+    std::error_code ec;
+    std::filesystem::create_directories(imported.parent_path(), ec);
+    if (!ec) std::filesystem::rename(from, imported, ec);
+    std::printf(
+        "run %lld stored from %s (measured %s; an inspection: the table in force is unchanged)%s\n",
+        static_cast<long long>(report->run_id), file.c_str(), kept->started_utc.c_str(),
+        ec ? ("; the file could not be moved aside (" + ec.message() + "): remove it before importing again").c_str()
+           : ("; the file is now " + imported.string()).c_str());
+  }
+  return status;
+}
+
 // sim --grind: the machine beside the gauge. Whenever the program in the NC directory
 // changes (a new table pushed), the next part is ground from it on the virtual grinder and put
 // on the gauge; at the start, from the program found there, or from the design.
@@ -901,6 +955,24 @@ void add_measure_command(CLI::App& app, CommandAction& action) {
 }
 
 }  // namespace
+
+void add_import_unstored_command(CLI::App& db, CommandAction& action) {
+  auto o = std::make_shared<ImportUnstoredOptions>();
+  CLI::App* cmd = db.add_subcommand(
+      "import-unstored",
+      "Store the runs the database refused, from the measurements kept in <data-dir>/unstored-runs/: analysed and "
+      "judged with the part as measured, stored as inspections (the correction in force and the NC program "
+      "untouched); each file stored is moved to unstored-runs/imported/.");
+  cmd->add_option("files", o->files, "Kept measurements, e.g. gaugeloop-data/unstored-runs/*.json")
+      ->required()
+      ->check(CLI::ExistingFile);
+  CLI::Option* part = cmd->add_option("--part", o->by_hand.part_path, "The part file the runs were measured with");
+  add_program_options(*cmd, o->by_hand);
+  cmd->add_option("--config", o->config_path,
+                  "The service's config (TOML): its parts (by the files' part and lobe), database and NC directory")
+      ->excludes(part);
+  cmd->callback([&action, o] { action = [o] { return cmd_import_unstored(*o); }; });
+}
 
 void add_measure_commands(CLI::App& app, CommandAction& action) {
   add_demo_command(app, action);

@@ -26,6 +26,7 @@
 #include "compensation/wheel_path.h"
 #include "core/atomic_file.h"
 #include "core/number_text.h"
+#include "core/text_file.h"
 #include "core/verdict_text.h"
 #include "job/layer_files.h"
 #include "job/measure_checks.h"
@@ -285,13 +286,15 @@ Result<std::string> why_not_built_on(const RunStore& store, const GroundWith& g,
   return std::string();
 }
 
+constexpr const char* kUnstoredKind = "gaugeloop unstored run";
+
 // The measurement of a run the database did not take, as JSON, so it is not lost: in
 // `unstored-runs` beside the database (the data directory, whose room for a run was checked
 // before the gauge was read), never in the control's NC share or a temporary directory that a
 // service's private /tmp loses at stop. Returns the file written, or empty if it could not be.
 std::filesystem::path keep_unstored_measurement(const RunRecord& r, const JobSettings& s) {
   nlohmann::json j;
-  j["kind"] = "gaugeloop unstored run";
+  j["kind"] = kUnstoredKind;
   j["machine"] = r.machine;
   j["part"] = r.part;
   j["lobe"] = r.lobe;
@@ -302,6 +305,9 @@ std::filesystem::path keep_unstored_measurement(const RunRecord& r, const JobSet
   j["serial"] = r.serial;
   j["operator"] = r.operator_name;
   j["frame"] = "machine degrees of C, lift in mm";
+  j["polls"] = r.measured.polls;
+  j["reconnects"] = r.measured.reconnects;
+  j["discarded_revolutions"] = r.measured.discarded_revolutions;
   nlohmann::json revs = nlohmann::json::array();
   for (const RevolutionSamples& rev : r.measured.revolutions) {
     revs.push_back({{"amplifier_revolution", rev.revolution}, {"lift_mm", rev.lift_mm}});
@@ -319,7 +325,100 @@ std::filesystem::path keep_unstored_measurement(const RunRecord& r, const JobSet
   return {};
 }
 
+// No gauge: a kept measurement is stored without reading one (store_unstored_run).
+class NoGauge final : public GaugeClient {
+ public:
+  explicit NoGauge(std::string address) : address_(std::move(address)) {}
+  Status connect() override { return refused(); }
+  void disconnect() override {}
+  bool connected() const override { return false; }
+  Result<GaugeSnapshot> read_snapshot() override { return refused(); }
+  Result<LatchState> read_latch_state() override { return refused(); }
+  Result<std::vector<LatchedSample>> read_latched(int, int) override { return refused(); }
+  std::string address() const override { return address_; }
+
+ private:
+  static Error refused() {
+    return make_error(ErrorCode::kInvalidInput, "a kept measurement is stored without reading a gauge");
+  }
+  std::string address_;
+};
+
 }  // namespace
+
+Result<UnstoredRun> read_unstored_run(const std::filesystem::path& file) {
+  Result<std::string> text = read_regular_file(file, "kept measurement");
+  if (!text) return text.error();
+  const auto bad = [&file](const std::string& what) {
+    return make_error(ErrorCode::kInvalidInput,
+                      "kept measurement " + file.string() + ": " + what +
+                          "; give a file gaugeloop wrote in <data-dir>/unstored-runs/ when the database refused a run");
+  };
+  const nlohmann::json j = nlohmann::json::parse(*text, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return bad("not JSON (an object)");
+  if (j.value("kind", std::string()) != kUnstoredKind)
+    return bad("`kind` is not \"" + std::string(kUnstoredKind) + "\"");
+  UnstoredRun u;
+  for (auto [key, out] : {std::pair<const char*, std::string*>{"machine", &u.machine},
+                          {"part", &u.part},
+                          {"gauge", &u.gauge},
+                          {"started_utc", &u.started_utc},
+                          {"finished_utc", &u.finished_utc},
+                          {"note", &u.note},
+                          {"serial", &u.serial},
+                          {"operator", &u.operator_name}}) {
+    const auto it = j.find(key);
+    if (it == j.end() || !it->is_string()) return bad("`" + std::string(key) + "` is missing or not text");
+    *out = it->get<std::string>();
+  }
+  if (!j.contains("lobe") || !j["lobe"].is_number_integer()) return bad("`lobe` is missing or not a whole number");
+  u.lobe = j["lobe"].get<int>();
+  for (auto [key, out] : {std::pair<const char*, std::int64_t*>{"polls", &u.measured.polls},
+                          {"reconnects", &u.measured.reconnects},
+                          {"discarded_revolutions", &u.measured.discarded_revolutions}}) {
+    if (j.contains(key) && j[key].is_number_integer()) *out = j[key].get<std::int64_t>();
+  }
+  if (!j.contains("revolutions") || !j["revolutions"].is_array() || j["revolutions"].empty()) {
+    return bad("`revolutions` is missing or empty");
+  }
+  for (std::size_t i = 0; i < j["revolutions"].size(); ++i) {
+    const nlohmann::json& r = j["revolutions"][i];
+    const std::string where = "revolution " + std::to_string(i + 1);
+    if (!r.is_object() || !r.contains("amplifier_revolution") || !r["amplifier_revolution"].is_number_integer() ||
+        !r.contains("lift_mm") || !r["lift_mm"].is_array() || r["lift_mm"].size() != kDegrees) {
+      return bad(where + " is not {amplifier_revolution, lift_mm: 360 readings}");
+    }
+    RevolutionSamples rev;
+    rev.revolution = r["amplifier_revolution"].get<std::int64_t>();
+    for (std::size_t d = 0; d < kDegrees; ++d) {
+      const nlohmann::json& v = r["lift_mm"][d];
+      if (!v.is_number() || !std::isfinite(v.get<double>())) {
+        return bad(where + ", machine degree " + std::to_string(d) + ": not a finite number");
+      }
+      rev.lift_mm[d] = v.get<double>();
+    }
+    u.measured.revolutions.push_back(rev);
+  }
+  return u;
+}
+
+Result<JobReport> store_unstored_run(const UnstoredRun& kept, JobSettings settings) {
+  const auto other = [&kept](const std::string& what, const std::string& theirs, const std::string& ours) {
+    return make_error(ErrorCode::kInvalidInput, "the kept measurement of " + kept.started_utc + " is of " + what + " " +
+                                                    theirs + ", not " + ours +
+                                                    "; give the part file (or config) it was measured with");
+  };
+  if (kept.part != settings.part.name) return other("part", kept.part, settings.part.name);
+  if (kept.lobe != settings.part.lobe) {
+    return other("lobe", std::to_string(kept.lobe), std::to_string(settings.part.lobe));
+  }
+  if (!kept.machine.empty() && kept.machine != settings.machine)
+    return other("machine", kept.machine, settings.machine);
+  settings.inspect = true;
+  settings.replay = &kept;
+  NoGauge gauge(kept.gauge);
+  return run_measure_job(gauge, settings);
+}
 
 MainProgramSource main_program_source(const JobSettings& settings) {
   MainProgramSource m;
@@ -401,6 +500,7 @@ class JobRun {
   // The revolutions from the gauge, and the record as far as the measurement goes: kept
   // whatever happens next.
   Status acquire() {
+    if (s_.replay != nullptr) return take_kept_measurement(*s_.replay);
     const std::string started = format_utc(std::time(nullptr));
     const auto acquire_start = std::chrono::steady_clock::now();
     Poller poller(gauge_, s_.poller);
@@ -413,15 +513,34 @@ class JobRun {
              " s (" + std::to_string(measured->discarded_revolutions) + " discarded, " +
              std::to_string(measured->reconnects) + " reconnects, " + std::to_string(measured->polls) + " polls)");
     record_.started_utc = started;
-    record_.finished_utc = finished_utc_;
-    record_.machine = s_.machine;
-    record_.part = s_.part.name;
-    record_.lobe = s_.part.lobe;
     record_.gauge = gauge_.address();
     record_.note = s_.note;
     record_.serial = s_.serial;
     record_.operator_name = s_.operator_name;
     record_.measured = std::move(*measured);
+    return describe_run();
+  }
+
+  // A measurement kept when the database refused its run: the run as it was measured.
+  Status take_kept_measurement(const UnstoredRun& kept) {
+    finished_utc_ = kept.finished_utc;
+    step("acquired", std::to_string(kept.measured.revolutions.size()) + " revolutions kept from " + kept.started_utc +
+                         " (" + kept.gauge + "), not read from the gauge");
+    record_.started_utc = kept.started_utc;
+    record_.gauge = kept.gauge;
+    record_.note = kept.note;
+    record_.serial = kept.serial;
+    record_.operator_name = kept.operator_name;
+    record_.measured = kept.measured;
+    return describe_run();
+  }
+
+  // What the run is besides its measurement: the machine, part and settings.
+  Status describe_run() {
+    record_.finished_utc = finished_utc_;
+    record_.machine = s_.machine;
+    record_.part = s_.part.name;
+    record_.lobe = s_.part.lobe;
     record_.correction_in_force_run = ground_.run_id();
     // A pin's geometry is in its settings: the stored geometry is a lobe's frame mapping.
     if (!s_.pin) record_.geometry = s_.part;

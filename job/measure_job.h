@@ -67,6 +67,26 @@ struct JobStep {
 // 73 blocks in X and 52 in Y instead of 42 and 37 (docs/crankpins.md).
 inline constexpr double kPinCommandErrorBoundUm = 0.1;
 
+// A measurement kept in <data-dir>/unstored-runs/ because the database refused its run (the
+// JSON run_measure_job writes then), as store_unstored_run takes it back.
+struct UnstoredRun {
+  std::string machine;
+  std::string part;
+  int lobe = 0;
+  std::string gauge;
+  std::string started_utc;
+  std::string finished_utc;
+  std::string note;
+  std::string serial;
+  std::string operator_name;
+  MeasuredRun measured;  // machine degrees of C, lift in mm, as the gauge gave them
+};
+
+// Reads a kept measurement. kNotFound for no file; kInvalidInput naming the file and the key for
+// one that is not such a measurement (another JSON, a value of the wrong kind, a revolution
+// without 360 finite readings).
+Result<UnstoredRun> read_unstored_run(const std::filesystem::path& file);
+
 struct JobSettings {
   Part part;
   // The gauge's identity for the reports (the service's [gauge] id and calibration_date, the
@@ -162,6 +182,9 @@ struct JobSettings {
   // Measure, analyse and store only: the correction in force and the NC program are untouched
   // (`measure --inspect`).
   bool inspect = false;
+  // The measurement taken from a kept file instead of the gauge (store_unstored_run): its
+  // revolutions, times, gauge, serial, operator and note; null: read the gauge.
+  const UnstoredRun* replay = nullptr;
   // Read the whole database (PRAGMA quick_check) before measuring, refusing a damaged one.
   // The service checks once at start (integrity_check) and sets this false: the quick check
   // reads every page, a second or more on a database of years.
@@ -233,10 +256,16 @@ struct JobReport {
 // correction that compensation holds or refuses (decide_correction), that the geometry
 // refuses, or that would be built on a table that did not grind the part, is not an error:
 // the run is stored and the report says why nothing was pushed.
-// A run measured but not stored (the database failed) is written as JSON beside the database
-// (or in the NC directory, or the temporary directory) and the error names the file.
+// A run measured but not stored (the database failed) is written as JSON in
+// <data-dir>/unstored-runs/ and the error names the file (store_unstored_run takes it back).
 // Errors keep the code of the step that failed; their messages name the step.
 Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& settings);
+
+// Stores a kept measurement (read_unstored_run) as the run it would have been, as an inspection:
+// analysed and judged with `settings` (the part's, as measured), the correction in force and the
+// NC program untouched (a table built now from a part measured then could be stale). The
+// gauge is not read. kInvalidInput when the file's part, lobe or machine is not the settings'.
+Result<JobReport> store_unstored_run(const UnstoredRun& kept, JobSettings settings);
 
 // The checks run_measure_job makes before the first poll that need neither the database nor
 // the NC directory: for a service validating its configuration before it takes it into use.

@@ -326,6 +326,64 @@ TEST_F(LoopGuardsTest, ARunTheDatabaseRefusesAfterMeasuringIsKeptInAFile) {
   EXPECT_FALSE(fs::exists(js.nc_dir / "unstored-runs"));
 }
 
+// A kept measurement comes back as the run it would have been: analysed and judged, stored as
+// an inspection with the time, serial and revolutions of the measurement, the NC program as it
+// was; by `db import-unstored` too, which moves the file aside. Another file is refused by name.
+TEST_F(LoopGuardsTest, AKeptMeasurementIsStoredLaterAsTheRunItWas) {
+  sqlite3* other = nullptr;
+  JobSettings js = job_settings();
+  js.serial = "S-77";
+  js.on_step = [&](const JobStep& step) {
+    if (step.code != "compensated") return;
+    ASSERT_EQ(sqlite3_open((dir_ / "gaugeloop.sqlite").c_str(), &other), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(other, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr), SQLITE_OK);
+  };
+  Result<JobReport> refused = measure(js);
+  ASSERT_NE(other, nullptr);
+  sqlite3_exec(other, "ROLLBACK", nullptr, nullptr, nullptr);
+  sqlite3_close(other);
+  ASSERT_FALSE(refused.ok());
+  std::vector<fs::path> kept_files;
+  for (const auto& e : fs::directory_iterator(dir_ / "unstored-runs")) kept_files.push_back(e.path());
+  ASSERT_EQ(kept_files.size(), 1u);
+  const std::string program_before = fs::exists(nc_file()) ? slurp(nc_file()) : std::string();
+
+  Result<UnstoredRun> kept = read_unstored_run(kept_files[0]);
+  ASSERT_TRUE(kept.ok()) << kept.error().message;
+  EXPECT_EQ(kept->serial, "S-77");
+  js.on_step = nullptr;
+  Result<JobReport> stored = store_unstored_run(*kept, js);
+  ASSERT_TRUE(stored.ok()) << stored.error().message;
+  EXPECT_TRUE(stored->inspection);
+  Result<RunStore> store = RunStore::open(dir_ / "gaugeloop.sqlite");
+  ASSERT_TRUE(store.ok());
+  Result<StoredRun> run = store->load_run(stored->run_id);
+  ASSERT_TRUE(run.ok()) << run.error().message;
+  EXPECT_EQ(run->summary.started_utc, kept->started_utc);
+  EXPECT_EQ(run->summary.serial, "S-77");
+  EXPECT_EQ(run->revolutions.size(), kept->measured.revolutions.size());
+  for (std::size_t d = 0; d < kDegrees; ++d) {  // as stored: to the BLOB's 0.1 nm
+    EXPECT_NEAR(run->revolutions[0].lift_mm[d], kept->measured.revolutions[0].lift_mm[d], 1e-7) << d;
+  }
+  EXPECT_NE(run->summary.verdict, Verdict::kNotJudged) << "judged against the part's tolerances";
+  EXPECT_EQ(fs::exists(nc_file()) ? slurp(nc_file()) : std::string(), program_before) << "the program untouched";
+
+  // The command: the file stored again, then moved aside.
+  const std::string part = (fs::path(GAUGELOOP_SOURCE_DIR) / "examples" / "intake_flat.toml").string();
+  testing::CommandResult cli = testing::run_command("db import-unstored " + kept_files[0].string() + " --part " + part +
+                                                    " --data-dir " + dir_.string());
+  EXPECT_EQ(cli.exit_code, 0) << cli.output;
+  EXPECT_NE(cli.output.find("an inspection: the table in force is unchanged"), std::string::npos) << cli.output;
+  EXPECT_FALSE(fs::exists(kept_files[0]));
+  EXPECT_TRUE(fs::exists(dir_ / "unstored-runs" / "imported" / kept_files[0].filename()));
+
+  std::ofstream(dir_ / "other.json") << "{\"kind\": \"something else\"}\n";
+  cli = testing::run_command("db import-unstored " + (dir_ / "other.json").string() + " --part " + part +
+                             " --data-dir " + dir_.string());
+  EXPECT_EQ(cli.exit_code, 2) << cli.output;
+  EXPECT_NE(cli.output.find("other.json: `kind` is not \"gaugeloop unstored run\""), std::string::npos) << cli.output;
+}
+
 // Inputs are read only from regular files of a bounded size, with a clear message otherwise.
 TEST(BoundedInput, DevicesDirectoriesAndHugeFilesAreRefusedByName) {
   const testing::TempDir tmp;
