@@ -543,20 +543,6 @@ void draw_footer(cairo_t* cr, const CamReportWords& w) {
               Align::kRight);
 }
 
-// The value of `key` in a run's settings text ("key = value" lines); empty if not there.
-std::string setting_of(const std::string& settings, std::string_view key) {
-  std::size_t at = 0;
-  while (at < settings.size()) {
-    const std::size_t end = std::min(settings.find('\n', at), settings.size());
-    const std::string_view line(settings.data() + at, end - at);
-    if (line.size() > key.size() + 3 && line.substr(0, key.size()) == key && line.substr(key.size(), 3) == " = ") {
-      return std::string(line.substr(key.size() + 3));
-    }
-    at = end + 1;
-  }
-  return {};
-}
-
 CamReportWords lobe_words(const StoredRun& run) {
   const LobeAnalysis& a = run.analysis;
   const bool best_fit = run.lift_error_reference == LiftErrorReference::kBestFit && !best_fit_missing(run);
@@ -588,9 +574,9 @@ CamReportWords lobe_words(const StoredRun& run) {
   w.footer_detail =
       "velocity, acceleration: harmonics 1\u201330" + derivative_noise_text(run) + " \u00b7 gauge " + run.gauge;
   // A lobe ground at a work speed program says so: its finish and timing are that program's.
-  if (!setting_of(run.settings, "speed.base_speed_rpm").empty()) {
-    const std::string flank = setting_of(run.settings, "speed.flank_speed_mm_per_min");
-    const std::string lobe = setting_of(run.settings, "speed.lobe_speed_mm_per_min");
+  if (!run_setting(run.settings, "speed.base_speed_rpm").empty()) {
+    const std::string flank = run_setting(run.settings, "speed.flank_speed_mm_per_min");
+    const std::string lobe = run_setting(run.settings, "speed.lobe_speed_mm_per_min");
     auto mm_per_min = [](const std::string& v) {
       char* end = nullptr;
       const double x = std::strtod(v.c_str(), &end);
@@ -635,11 +621,11 @@ CamReportWords pin_words(const StoredRun& run, const RunPart& part) {
 }
 
 std::vector<std::pair<std::string, std::string>> traceability_of(const StoredRun& run, bool pin) {
-  const std::string number = setting_of(run.settings, "part.drawing_number");
-  const std::string revision = setting_of(run.settings, "part.drawing_revision");
+  const std::string number = run_setting(run.settings, "part.drawing_number");
+  const std::string revision = run_setting(run.settings, "part.drawing_revision");
   const std::string drawing = number.empty() ? "" : revision.empty() ? number : number + " rev " + revision;
-  const std::string gauge_id = setting_of(run.settings, "gauge.id");
-  const std::string calibrated = setting_of(run.settings, "gauge.calibration_date");
+  const std::string gauge_id = run_setting(run.settings, "gauge.id");
+  const std::string calibrated = run_setting(run.settings, "gauge.calibration_date");
   std::string gauge = gauge_id;
   if (!calibrated.empty()) gauge += (gauge.empty() ? "" : ", ") + std::string("calibrated ") + calibrated;
   // The part's temperature at measurement: a warm part's error told from a wrong table.
@@ -651,7 +637,7 @@ std::vector<std::pair<std::string, std::string>> traceability_of(const StoredRun
     const double nominal = *std::max_element(a.design_lift_mm.begin(), a.design_lift_mm.end());
     const double measured = *std::max_element(a.mean_lift_mm.begin(), a.mean_lift_mm.end());
     out.emplace_back("Nose lift", format_fixed(measured, 3) + " mm (drawing " + format_fixed(nominal, 3) + ")");
-    const std::string rb = setting_of(run.settings, "part.base_circle_radius_mm");
+    const std::string rb = run_setting(run.settings, "part.base_circle_radius_mm");
     char* end = nullptr;
     const double rb_mm = std::strtod(rb.c_str(), &end);
     out.emplace_back("Base circle r", rb.empty() || *end != '\0' ? "" : format_fixed(rb_mm, 3) + " mm");

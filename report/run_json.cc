@@ -71,35 +71,37 @@ json run_summary_json(const RunSummary& r) {
           {"raw_pruned_utc", text_or_null(r.raw_pruned_utc)}};
 }
 
+std::string run_setting(const std::string& settings, std::string_view key) {
+  std::size_t at = 0;
+  while (at < settings.size()) {
+    const std::size_t end = std::min(settings.find('\n', at), settings.size());
+    const std::string_view line(settings.data() + at, end - at);
+    if (line.size() > key.size() + 3 && line.substr(0, key.size()) == key && line.substr(key.size(), 3) == " = ") {
+      return std::string(line.substr(key.size() + 3));
+    }
+    at = end + 1;
+  }
+  return {};
+}
+
 RunPart run_part(const StoredRun& run) {
   RunPart part;
-  std::istringstream in(run.settings);
-  for (std::string line; std::getline(in, line);) {
-    if (line == "part.kind = pin") part.kind = PartKind::kPin;
-    constexpr std::string_view kMode = "pin.mode = ";
-    if (line.rfind(kMode, 0) == 0) part.pin_mode = pin_mode_from_name(std::string_view(line).substr(kMode.size()));
+  if (run_setting(run.settings, "part.kind") == "pin") {
+    part.kind = PartKind::kPin;
+    part.pin_mode = pin_mode_from_name(run_setting(run.settings, "pin.mode"));
   }
-  if (!part.pin()) part.pin_mode.reset();
   return part;
 }
 
 RunPartTemperature run_part_temperature(const StoredRun& run) {
   RunPartTemperature t;
-  std::istringstream in(run.settings);
-  constexpr std::string_view kTemperature = "part.temperature_c = ";
-  constexpr std::string_view kSource = "part.temperature_source = ";
-  for (std::string line; std::getline(in, line);) {
-    const std::string_view l(line);
-    if (l.rfind(kTemperature, 0) == 0) {
-      const std::string_view text = l.substr(kTemperature.size());
-      double value = 0.0;
-      const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-      if (ec == std::errc() && end == text.data() + text.size() && std::isfinite(value)) t.temperature_c = value;
-    } else if (l.rfind(kSource, 0) == 0) {
-      t.source = std::string(l.substr(kSource.size()));
-    }
+  const std::string text = run_setting(run.settings, "part.temperature_c");
+  double value = 0.0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (!text.empty() && ec == std::errc() && end == text.data() + text.size() && std::isfinite(value)) {
+    t.temperature_c = value;
+    t.source = run_setting(run.settings, "part.temperature_source");
   }
-  if (!t.temperature_c) t.source.clear();
   return t;
 }
 

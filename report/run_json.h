@@ -18,6 +18,10 @@
 
 namespace gaugeloop {
 
+// The value of `key` in a run's settings text ("key = value" lines, as the measure job writes
+// them); empty if not there.
+std::string run_setting(const std::string& settings, std::string_view key);
+
 // What a stored run measured, told from its settings text (the lines `part.kind = pin` and
 // `pin.mode = c-x` or `c-x-y`, as the measure job writes them): a lobe unless they say pin,
 // so runs stored before pins, and runs without settings, read as lobes. No schema change: the

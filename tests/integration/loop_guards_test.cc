@@ -47,6 +47,24 @@ class LoopGuardsTest : public testing::IntakeSimulatorJobTest {
   void expect_gauge_untouched(std::int64_t requests_before) {
     EXPECT_EQ(sim_->requests_served(), requests_before) << "the gauge was read before the check failed";
   }
+
+  // The job with the database locked by another connection once the run is compensated, so that
+  // storing the run it measured fails; the lock is released after.
+  Result<JobReport> measure_with_database_locked(JobSettings js) {
+    sqlite3* other = nullptr;
+    js.on_step = [&](const JobStep& step) {
+      if (step.code != "compensated") return;
+      ASSERT_EQ(sqlite3_open((dir_ / "gaugeloop.sqlite").c_str(), &other), SQLITE_OK);
+      ASSERT_EQ(sqlite3_exec(other, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr), SQLITE_OK);
+    };
+    Result<JobReport> r = measure(js);
+    EXPECT_NE(other, nullptr) << "the run was not compensated";
+    if (other != nullptr) {
+      sqlite3_exec(other, "ROLLBACK", nullptr, nullptr, nullptr);
+      sqlite3_close(other);
+    }
+    return r;
+  }
 };
 
 double largest_difference_um(const DegreeTable& a, const DegreeTable& b) {
@@ -288,17 +306,8 @@ TEST_F(LoopGuardsTest, NoRoomForARunIsFoundBeforeTheGauge) {
 // A run measured whose database then refuses it keeps its measurement in a file, named in the
 // error.
 TEST_F(LoopGuardsTest, ARunTheDatabaseRefusesAfterMeasuringIsKeptInAFile) {
-  sqlite3* other = nullptr;
-  JobSettings js = job_settings();
-  js.on_step = [&](const JobStep& step) {
-    if (step.code != "compensated") return;
-    ASSERT_EQ(sqlite3_open((dir_ / "gaugeloop.sqlite").c_str(), &other), SQLITE_OK);
-    ASSERT_EQ(sqlite3_exec(other, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr), SQLITE_OK);
-  };
-  Result<JobReport> r = measure(js);
-  ASSERT_NE(other, nullptr);
-  sqlite3_exec(other, "ROLLBACK", nullptr, nullptr, nullptr);
-  sqlite3_close(other);
+  const JobSettings js = job_settings();
+  Result<JobReport> r = measure_with_database_locked(js);
   ASSERT_FALSE(r.ok());
   const std::string& m = r.error().message;
   const std::size_t at = m.find("the measurement is kept in ");
@@ -315,11 +324,7 @@ TEST_F(LoopGuardsTest, ARunTheDatabaseRefusesAfterMeasuringIsKeptInAFile) {
   // measurement goes nowhere else: not into the NC share, not into a temporary directory.
   fs::remove_all(dir_ / "unstored-runs");
   std::ofstream(dir_ / "unstored-runs") << "in the way\n";
-  other = nullptr;
-  r = measure(js);
-  ASSERT_NE(other, nullptr);
-  sqlite3_exec(other, "ROLLBACK", nullptr, nullptr, nullptr);
-  sqlite3_close(other);
+  r = measure_with_database_locked(js);
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("the measurement could not be kept anywhere either"), std::string::npos)
       << r.error().message;
@@ -330,18 +335,9 @@ TEST_F(LoopGuardsTest, ARunTheDatabaseRefusesAfterMeasuringIsKeptInAFile) {
 // an inspection with the time, serial and revolutions of the measurement, the NC program as it
 // was; by `db import-unstored` too, which moves the file aside. Another file is refused by name.
 TEST_F(LoopGuardsTest, AKeptMeasurementIsStoredLaterAsTheRunItWas) {
-  sqlite3* other = nullptr;
   JobSettings js = job_settings();
   js.serial = "S-77";
-  js.on_step = [&](const JobStep& step) {
-    if (step.code != "compensated") return;
-    ASSERT_EQ(sqlite3_open((dir_ / "gaugeloop.sqlite").c_str(), &other), SQLITE_OK);
-    ASSERT_EQ(sqlite3_exec(other, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr), SQLITE_OK);
-  };
-  Result<JobReport> refused = measure(js);
-  ASSERT_NE(other, nullptr);
-  sqlite3_exec(other, "ROLLBACK", nullptr, nullptr, nullptr);
-  sqlite3_close(other);
+  Result<JobReport> refused = measure_with_database_locked(js);
   ASSERT_FALSE(refused.ok());
   std::vector<fs::path> kept_files;
   for (const auto& e : fs::directory_iterator(dir_ / "unstored-runs")) kept_files.push_back(e.path());
@@ -351,7 +347,6 @@ TEST_F(LoopGuardsTest, AKeptMeasurementIsStoredLaterAsTheRunItWas) {
   Result<UnstoredRun> kept = read_unstored_run(kept_files[0]);
   ASSERT_TRUE(kept.ok()) << kept.error().message;
   EXPECT_EQ(kept->serial, "S-77");
-  js.on_step = nullptr;
   Result<JobReport> stored = store_unstored_run(*kept, js);
   ASSERT_TRUE(stored.ok()) << stored.error().message;
   EXPECT_TRUE(stored->inspection);
