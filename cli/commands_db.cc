@@ -77,7 +77,8 @@ int cmd_upgrade(const DbOptions& o) {
 }  // namespace
 
 void add_db_commands(CLI::App& app, CommandAction& action) {
-  CLI::App* db = app.add_subcommand("db", "The run database file: check it, back it up, upgrade its schema, store the runs it refused.");
+  CLI::App* db = app.add_subcommand(
+      "db", "The run database file: check it, back it up, upgrade its schema, store the runs it refused.");
   db->require_subcommand(1);
 
   auto check = std::make_shared<DbOptions>();

@@ -28,15 +28,15 @@ struct MeasureOptions {
   std::string machine = "grinder-1";
   std::string note;
   int response_timeout_ms = 200;
-  int run_timeout_s = 0;               // 0: from the spindle speed (poller.h, run_timeout_at)
-  std::string mode = "latched";        // latched | live
-  std::string gauge_config;            // measure only
-  std::optional<int> ground_with;      // measure only: the table version that ground the part
-  bool inspect = false;                // measure only
-  std::string serial;                  // measure only: the part's serial number
-  std::string operator_name;           // measure only: who measures
-  std::string gauge_id;                // measure only: the gauge's inventory number
-  std::string gauge_calibration_date;  // measure only: YYYY-MM-DD
+  int run_timeout_s = 0;                     // 0: from the spindle speed (poller.h, run_timeout_at)
+  std::string mode = "latched";              // latched | live
+  std::string gauge_config;                  // measure only
+  std::optional<int> ground_with;            // measure only: the table version that ground the part
+  bool inspect = false;                      // measure only
+  std::string serial;                        // measure only: the part's serial number
+  std::string operator_name;                 // measure only: who measures
+  std::string gauge_id;                      // measure only: the gauge's inventory number
+  std::string gauge_calibration_date;        // measure only: YYYY-MM-DD
   std::optional<double> part_temperature_c;  // measure only: the part's temperature, deg C
 };
 
