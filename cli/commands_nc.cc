@@ -330,6 +330,16 @@ int cmd_check(const NcOptions& o) {
                  (**stale).main_file.string().c_str(), stale_main_text(**stale).c_str());
     return kExitNcOutput;
   }
+  // Every other file of the push in force (speed subprogram, Y table, main program) as it wrote it.
+  Result<std::vector<PushFileMismatch>> beside = compare_push_files(*store, *file);
+  if (!beside) return report_error(beside.error());
+  for (const PushFileMismatch& m : *beside) {
+    std::fprintf(stderr, "gaugeloop: %s: %s; %s\n", m.file.path.c_str(), push_file_mismatch_text(m).c_str(),
+                 m.missing || m.written_for ? "`gaugeloop nc reconcile` writes it again as that push wrote it"
+                                            : "no push of gaugeloop wrote what it holds (edited by hand?): copy it "
+                                              "elsewhere to keep it, then remove it and run `gaugeloop nc reconcile`");
+  }
+  if (!beside->empty()) return kExitNcOutput;
   // Temporary files of interrupted writes: harmless to the control, removed by reconciliation.
   for (const std::filesystem::path& path : files_of_push(*file)) {
     if (!std::filesystem::is_directory(path.parent_path())) break;
@@ -417,12 +427,17 @@ int cmd_reconcile(const ReconcileOptions& o) {
   for (const std::string& m : r->messages) std::printf("%s\n", m.c_str());
   const auto repointed =
       std::count_if(r->stale_mains.begin(), r->stale_mains.end(), [](const StaleMain& m) { return m.repointed; });
+  const auto put_back =
+      std::count_if(r->files.begin(), r->files.end(), [](const PushFileMismatch& m) { return m.restored; });
   std::printf(
       "%d interrupted push(es) recorded, %d abandoned, %d temporary file(s) removed, %d main program(s) written "
-      "again\n",
-      r->completed, r->abandoned, r->leftovers_removed, static_cast<int>(repointed));
-  // A main program still coupling another table than its subprogram defines: the control grinds that one.
-  return repointed == static_cast<long>(r->stale_mains.size()) ? kExitOk : kExitNcOutput;
+      "again, %d other file(s) of a push written again\n",
+      r->completed, r->abandoned, r->leftovers_removed, static_cast<int>(repointed), static_cast<int>(put_back));
+  // A main program still coupling another table than its subprogram defines (the control grinds
+  // that one), or a file of the push edited by hand: not in agreement.
+  return repointed == static_cast<long>(r->stale_mains.size()) && put_back == static_cast<long>(r->files.size())
+             ? kExitOk
+             : kExitNcOutput;
 }
 
 // ---- nc pending, approve, reject ----
@@ -565,8 +580,10 @@ void add_nc_commands(CLI::App& app, CommandAction& action) {
   auto check = std::make_shared<NcOptions>();
   CLI::App* check_cmd = nc->add_subcommand(
       "check",
-      "Is the program on disk the table last pushed? Reports a table edited by hand (exit status 2) and a main "
-      "program coupling another table than the one on the control, left by a cut push (exit status 5).");
+      "Is the program on disk the table last pushed? Reports a table edited by hand (exit status 2), a main "
+      "program coupling another table than the one on the control, left by a cut push, and any other file of the "
+      "push in force (main program, speed and Y subprograms) missing or not as that push wrote it (exit status "
+      "5).");
   add_nc_options(*check_cmd, *check);
   check_cmd->callback([&action, check] { action = [check] { return cmd_check(*check); }; });
 
@@ -576,7 +593,8 @@ void add_nc_commands(CLI::App& app, CommandAction& action) {
       "Finish pushes that were interrupted (kill, power cut, full disk, locked database): a program the control "
       "holds is recorded as pushed, one it never got is abandoned, leftover temporary files of the table, its main "
       "program, speed and Y subprograms are removed, and a main program coupling another table than the one on "
-      "the control is written again (exit status 5 if one is left). Every push and measurement does this for its "
+      "the control is written again, as is any other file of the push in force that is missing or another push's "
+      "(exit status 5 if one is left, or a file was edited by hand). Every push and measurement does this for its "
       "own program first.");
   add_data_options(*reconcile_cmd, reconcile->paths);
   reconcile_cmd->add_option("--main-template", reconcile->main_template_path, kMainTemplateHelp);

@@ -36,4 +36,20 @@ NcFiles& real_nc_files() {
   return files;
 }
 
+Status write_program_read_back(NcFiles& files, const std::filesystem::path& path, std::string_view text,
+                               std::string_view what) {
+  if (Status s = files.write_program(path, text, {}); !s) {
+    return make_error(s.error().code, path.string() + ": the " + std::string(what) + " was not written (" +
+                                          s.error().message + "); the one on the control, if any, stays");
+  }
+  Result<std::optional<std::string>> back = files.read_program(path);
+  if (!back) return back.error();
+  if (!*back || **back != text) {
+    return make_error(ErrorCode::kRefused, path.string() + ": the " + std::string(what) +
+                                               " read back differs from the one written; check the NC directory "
+                                               "(a share that rewrites files?) and push again");
+  }
+  return {};
+}
+
 }  // namespace gaugeloop

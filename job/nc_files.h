@@ -31,4 +31,11 @@ class NcFiles {
 // The file system itself, through core/atomic_file.h and core/text_file.h.
 NcFiles& real_nc_files();
 
+// Writes `text` to `path` (files.write_program, the caller holding the directory's lock), then
+// reads it back, which must give the text byte for byte. `what` names the file's role in
+// messages ("speed program", "Y table"). kIo for a write or read that failed (the file on the
+// control, if any, stays); kRefused if what was read back differs.
+Status write_program_read_back(NcFiles& files, const std::filesystem::path& path, std::string_view text,
+                               std::string_view what);
+
 }  // namespace gaugeloop

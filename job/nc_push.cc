@@ -46,6 +46,20 @@ std::string header_value(const std::map<std::string, std::string>& header, const
 
 std::string header_value(const ParsedTable& t, const std::string& key) { return header_value(t.header, key); }
 
+std::string_view push_file_what(PushFileRole role) {
+  switch (role) {
+    case PushFileRole::kMain:
+      return "main program";
+    case PushFileRole::kSpeed:
+      return "speed program";
+    case PushFileRole::kY:
+      return "Y table";
+    case PushFileRole::kTable:
+      break;
+  }
+  return "table";
+}
+
 // A program on the control, or as pushed, read for the hand-edit check: a curve table or a
 // gear's stroke.
 struct ProgramRead {
@@ -246,6 +260,43 @@ std::string stale_main_text(const StaleMain& stale) {
          std::to_string(stale.table_number) + "): the control grinds version " + std::to_string(stale.coupled_version);
 }
 
+std::string push_file_mismatch_text(const PushFileMismatch& m) {
+  const std::string name = std::filesystem::path(m.file.path).filename().string();
+  const std::string what = std::string(push_file_what(m.file.role));
+  const std::string version = std::to_string(m.file.table_version);
+  if (m.missing) return name + " is not on the control: the " + what + " of version " + version + " is missing";
+  if (m.written_for) {
+    return name + " holds the " + what + " written for version " + std::to_string(*m.written_for) +
+           ", not that of version " + version + ", the version in force";
+  }
+  return name + " is not the " + what + " version " + version + " wrote";
+}
+
+Result<std::vector<PushFileMismatch>> compare_push_files(const RunStore& store, const std::filesystem::path& nc_file,
+                                                         NcFiles& files) {
+  Result<std::vector<PushFile>> recorded = store.files_of_last_push(nc_file.string());
+  if (!recorded) return recorded.error();
+  std::vector<PushFileMismatch> out;
+  for (const PushFile& f : *recorded) {
+    if (f.role == PushFileRole::kTable) continue;
+    Result<std::optional<std::string>> held = files.read_program(f.path);
+    if (!held) return held.error();
+    PushFileMismatch m;
+    m.file = f;
+    if (!*held) {
+      m.missing = true;
+    } else {
+      const std::string hash = settings_hash(**held);
+      if (hash == f.hash) continue;
+      Result<std::optional<int>> wrote = store.version_that_wrote(f.path, hash);
+      if (!wrote) return wrote.error();
+      m.written_for = *wrote;
+    }
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
 Result<std::optional<StaleMain>> find_stale_main(const RunStore& store, const std::filesystem::path& nc_file,
                                                  NcFiles& files) {
   const std::filesystem::path main_file = main_program_path(nc_file);
@@ -292,7 +343,6 @@ Result<MainProgramSource> main_for_run(const RunStore& store, std::int64_t run_i
 // and `main` can render it; "" when written, otherwise why not.
 Result<std::string> repoint_main(const RunStore& store, const StaleMain& stale, const MainProgramSource& main,
                                  NcFiles& files) {
-  if (main.template_text.empty()) return std::string("no main program template to write it from");
   Result<std::optional<NcPush>> last = store.last_push(stale.nc_file.string());
   if (!last) return last.error();
   Result<std::optional<std::string>> on_control = files.read_program(stale.nc_file);
@@ -300,6 +350,17 @@ Result<std::string> repoint_main(const RunStore& store, const StaleMain& stale, 
   if (!*last || !(**last).program_text || !*on_control || **on_control != *(**last).program_text) {
     return std::string("the table on the control is not the one last pushed");
   }
+  // As the last push wrote it, when it recorded its files.
+  Result<std::vector<PushFile>> recorded = store.files_of_last_push(stale.nc_file.string());
+  if (!recorded) return recorded.error();
+  for (const PushFile& f : *recorded) {
+    if (f.role != PushFileRole::kMain || !f.text) continue;
+    if (Status w = write_program_read_back(files, stale.main_file, *f.text, "main program"); !w) {
+      return w.error().message;
+    }
+    return std::string();
+  }
+  if (main.template_text.empty()) return std::string("no main program template to write it from");
   // A job's own source knows its part (and a C-X-Y pin's Y table); a command's is completed from the run.
   Result<MainProgramSource> source =
       main.y_program_name.empty()
@@ -310,6 +371,26 @@ Result<std::string> repoint_main(const RunStore& store, const StaleMain& stale, 
   if (!text) return text.error().message;
   if (Status w = files.write_program(stale.main_file, *text, {}); !w) return w.error().message;
   return std::string();
+}
+
+// The files beside the table that the control does not hold as the last push wrote them, each
+// written again when it is missing or holds another push's file of ours (the directory's lock
+// held). skip_main: a stale main program was dealt with already.
+Result<std::vector<PushFileMismatch>> put_back_files(const RunStore& store, const std::filesystem::path& nc_file,
+                                                     NcFiles& files, bool skip_main) {
+  Result<std::vector<PushFileMismatch>> found = compare_push_files(store, nc_file, files);
+  if (!found) return found.error();
+  std::vector<PushFileMismatch> out;
+  for (PushFileMismatch& m : *found) {
+    if (m.file.role == PushFileRole::kMain && skip_main) continue;
+    if ((m.missing || m.written_for) && m.file.text) {
+      Status w = write_program_read_back(files, m.file.path, *m.file.text, push_file_what(m.file.role));
+      if (!w) return w.error();
+      m.restored = true;
+    }
+    out.push_back(std::move(m));
+  }
+  return out;
 }
 
 // reconcile_pushes with the directory's lock already held.
@@ -357,9 +438,8 @@ Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem:
   if (!stale) return stale.error();
   if (*stale) {
     StaleMain& found = **stale;
-    Result<std::string> not_repointed = main != nullptr
-                                            ? repoint_main(store, found, *main, files)
-                                            : Result<std::string>(std::string("no main program template given"));
+    Result<std::string> not_repointed =
+        repoint_main(store, found, main != nullptr ? *main : MainProgramSource{}, files);
     if (!not_repointed) return not_repointed.error();
     found.repointed = not_repointed->empty();
     report.messages.push_back(found.main_file.string() + ": " + stale_main_text(found) +
@@ -370,6 +450,15 @@ Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem:
                                          "): `gaugeloop nc reconcile` with the main template writes it again"));
     report.stale_mains.push_back(found);
   }
+  Result<std::vector<PushFileMismatch>> beside = put_back_files(store, nc_file, files, stale->has_value());
+  if (!beside) return beside.error();
+  for (PushFileMismatch& m : *beside) {
+    report.messages.push_back(m.file.path + ": " + push_file_mismatch_text(m) +
+                              (m.restored ? "; written again as that push wrote it"
+                                          : "; left as it is: no push of gaugeloop wrote what it holds (edited by "
+                                            "hand?); copy it elsewhere to keep it, remove it, and reconcile again"));
+    report.files.push_back(std::move(m));
+  }
   return report;
 }
 
@@ -378,6 +467,7 @@ void merge_into(ReconcileReport& total, ReconcileReport one) {
   total.abandoned += one.abandoned;
   total.leftovers_removed += one.leftovers_removed;
   for (StaleMain& s : one.stale_mains) total.stale_mains.push_back(std::move(s));
+  for (PushFileMismatch& f : one.files) total.files.push_back(std::move(f));
   for (std::string& m : one.messages) total.messages.push_back(std::move(m));
 }
 
@@ -667,6 +757,10 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   intent.pending_id = facts.pending_id;
   intent.approved_by = facts.approved_by;
   intent.note = facts.note;
+  for (const ProgramBeside& b : options.beside) {
+    intent.files.push_back(PushFile{b.role, b.path.string(), {}, b.text, 0});
+  }
+  if (with_main) intent.files.push_back(PushFile{PushFileRole::kMain, main_file.string(), {}, main_text, 0});
   if (with_main && !stroke) {
     if (Status r = repoint_stale_main(store, nc_file, options.main, number, files); !r) {
       Error e = r.error();
@@ -678,6 +772,21 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   Result<std::int64_t> intent_id = store.begin_push(intent);
   if (!intent_id) return not_pushed(intent_id.error());
   reached(PushStep::kIntentRecorded);
+
+  // The files beside first, so that a main program calling them never finds them missing;
+  // one not written: the push is abandoned and those written are put back.
+  for (const ProgramBeside& b : options.beside) {
+    Status w = write_program_read_back(files, b.path, b.text, push_file_what(b.role));
+    if (w) continue;
+    (void)store.abandon_push(*intent_id, "a file beside the table was not written: " + w.error().message);
+    Result<std::vector<PushFileMismatch>> put_back = put_back_files(store, nc_file, files, false);
+    Error e = w.error();
+    if (!put_back) {
+      e.message += "; the files beside the table could not be put back as the last push wrote them (" +
+                   put_back.error().message + "): `gaugeloop nc reconcile` does it";
+    }
+    return not_pushed(e);
+  }
 
   bool renamed = false;
   Status written = files.write_program(nc_file, *program, [&reached, &renamed](AtomicWriteStep step) {
@@ -705,6 +814,7 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
     // Best effort: should this fail too, the next push finds the intent open, the file
     // without its program, and abandons it then.
     (void)store.abandon_push(*intent_id, "the write failed: " + written.error().message);
+    if (!options.beside.empty()) (void)put_back_files(store, nc_file, files, false);
     return not_pushed(written.error());
   }
   Status main_written;

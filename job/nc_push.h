@@ -126,8 +126,19 @@ enum class PushStep {
 };
 std::string_view push_step_name(PushStep step);
 
+// A program written beside the table by the same push: a speed subprogram, a crankpin's Y
+// table. (The main program is push_program's own.)
+struct ProgramBeside {
+  PushFileRole role = PushFileRole::kSpeed;
+  std::filesystem::path path;
+  std::string text;
+};
+
 struct PushOptions {
   bool overwrite_edited = false;  // a person approved overwriting a program edited by hand
+  // Written after the intent is recorded and before the table, each atomically and read back;
+  // recorded with the intent, so that reconciliation and `nc check` hold them to the push.
+  std::vector<ProgramBeside> beside;
   std::function<void(PushStep step)> observer;
   NcFiles* files = nullptr;  // null: the real NC directory (real_nc_files)
   // Written after the table, beside it (main_program_path), coupling the table just written;
@@ -138,10 +149,13 @@ struct PushOptions {
 // The push as one recoverable step. Under the NC directory's lock (DirectoryLock, so one
 // push at a time): reconcile_pushes for the file, check_not_edited_by_hand (skipped with
 // overwrite_edited), take the next table version and render; record the intent with the
-// program in the journal (RunStore::begin_push); write the file atomically (temporary file,
-// fsync, rename: the control sees the old program or the new one, never a mixture); with a
-// main program, write it the same way after the table; then complete the intent, recording
-// the push (and an approval's decision) in one transaction.
+// program, and the hash and text of every other file it writes, in the journal
+// (RunStore::begin_push); write the programs beside (options.beside), then the table atomically
+// (temporary file, fsync, rename: the control sees the old program or the new one, never a
+// mixture); with a main program, write it the same way after the table; then complete the
+// intent, recording the push (and an approval's decision) in one transaction. A file beside
+// that cannot be written: the push is abandoned and the files beside are put back as the last
+// push wrote them (best effort; reconciliation does it otherwise).
 // The main program is rendered before anything is written (its errors refuse the push). A
 // main program left coupling the number the new table goes to (its write failed or was
 // interrupted after an earlier table) is first rewritten for the table last pushed, so the
@@ -181,23 +195,50 @@ std::string stale_main_text(const StaleMain& stale);
 Result<std::optional<StaleMain>> find_stale_main(const RunStore& store, const std::filesystem::path& nc_file,
                                                  NcFiles& files = real_nc_files());
 
+// A file the last push of a program wrote beside its table (main program, speed subprogram,
+// Y table) that the control does not hold as written.
+struct PushFileMismatch {
+  PushFile file;  // as the push recorded it, with its text
+  bool missing = false;
+  // The file holds what a push of ours wrote for this version (another push's file: put back
+  // by reconciliation); empty: no push of ours wrote it (a hand edit: left, and said).
+  std::optional<int> written_for;
+  bool restored = false;  // reconciliation wrote it again as the push recorded it
+};
+
+// "CAM_SPEED.SPF holds the speed subprogram written for version 3, not that of version 4, the
+// version in force"
+std::string push_file_mismatch_text(const PushFileMismatch& m);
+
+// Every file the last push of `nc_file` recorded beside its table, against the control: the
+// ones that differ. Empty for a program last pushed before pushes recorded their files, and
+// for the table itself (check_not_edited_by_hand holds it). kStorage for a recorded text that
+// fails its hash.
+Result<std::vector<PushFileMismatch>> compare_push_files(const RunStore& store, const std::filesystem::path& nc_file,
+                                                         NcFiles& files = real_nc_files());
+
 // What reconcile_pushes did.
 struct ReconcileReport {
   int completed = 0;                   // intents whose program the control holds: recorded as pushed
   int abandoned = 0;                   // intents whose program never reached the control
   int leftovers_removed = 0;           // temporary files of interrupted writes
   std::vector<StaleMain> stale_mains;  // found, repointed or not
-  std::vector<std::string> messages;   // one line per intent resolved, file removed or main program found
+  // Files beside a table that were not as its last push wrote them: put back (restored) or,
+  // edited by hand, left.
+  std::vector<PushFileMismatch> files;
+  std::vector<std::string> messages;  // one line per intent resolved, file removed or main program found
 };
 
 // Brings the journal and the control into agreement for `nc_file`, under the directory's
 // lock: an open intent whose program the file holds byte for byte is completed (recorded as
 // pushed, "found on the control"), any other open intent is abandoned, and leftover temporary
 // files of ours (of the table, its main program, its speed subprogram and a pin's Y table) are
-// removed. Then a stale main program (find_stale_main) is written again from `main` for the
-// table on the control, when `main` has a template and the table is not a crankpin's ground
-// C-X-Y (its Y table needs a measurement); otherwise it is reported and left. Nothing is ever
-// called edited by hand here.
+// removed. Then a stale main program (find_stale_main) is written again for the table on the
+// control: as the last push recorded it when it did, else from `main` when it has a template
+// and the table is not a crankpin's ground C-X-Y (its Y table needs a measurement); otherwise
+// it is reported and left. Then every other file the last push recorded (compare_push_files)
+// that is missing or holds another push's file of ours is written again as recorded; one
+// edited by hand is reported and left. The table itself is never called edited by hand here.
 Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file,
                                          NcFiles& files = real_nc_files(), const MainProgramSource* main = nullptr);
 

@@ -15,18 +15,7 @@ Status write_program_beside(const std::filesystem::path& path, std::string_view 
   Result<DirectoryLock> lock = files.lock_directory(path.parent_path());
   if (!lock) return lock.error();
   if (Result<int> removed = files.remove_leftovers(path); !removed) return removed.error();
-  if (Status s = files.write_program(path, text, {}); !s) {
-    return make_error(s.error().code, path.string() + ": the " + std::string(what) + " was not written (" +
-                                          s.error().message + "); the one on the control, if any, stays");
-  }
-  Result<std::optional<std::string>> back = files.read_program(path);
-  if (!back) return back.error();
-  if (!*back || **back != text) {
-    return make_error(ErrorCode::kRefused, path.string() + ": the " + std::string(what) +
-                                               " read back differs from the one written; check the NC directory "
-                                               "(a share that rewrites files?) and push again");
-  }
-  return {};
+  return write_program_read_back(files, path, text, what);
 }
 
 Result<PushCompletion> push_pin_programs(RunStore& store, const std::filesystem::path& nc_file, const PushFacts& facts,
@@ -51,8 +40,9 @@ Result<PushCompletion> push_pin_programs(RunStore& store, const std::filesystem:
   if (Status s = verify_table_checksum(*y, y_path.string()); !s) {
     return make_error(ErrorCode::kInvalidInput, s.error().message);
   }
-  if (Status s = write_program_beside(y_path, *y_text, "Y table", files); !s) return s.error();
-  Result<PushCompletion> done = push_program(store, nc_file, facts, render_x, options);
+  PushOptions with_y = options;
+  with_y.beside.push_back(ProgramBeside{PushFileRole::kY, y_path, *y_text});
+  Result<PushCompletion> done = push_program(store, nc_file, facts, render_x, with_y);
   if (!done) return done;
   if (done->table_version != *version) {
     return make_error(ErrorCode::kStorage, nc_file.string() + ": the X table became version " +

@@ -32,13 +32,13 @@ using RenderYForVersion = std::function<Result<std::string>(int table_version)>;
 // push_program for a C-X-Y pin: the Y table first, then the X table and the main program.
 // Pushes interrupted earlier are reconciled, the next table version of `nc_file` taken, the Y
 // program rendered for it and checked (a gaugeloop table program following Y, its checksum
-// sound), written (write_program_beside), and then the X table and the main program pushed
-// by push_program, which must give the same version. The Y table goes to the number of its
-// version, not the one a coupling holds, so a push stopped between the two leaves the
-// control grinding with the previous X and Y tables, a matched pair. The Y file is not in the
-// push history: it is written anew with every push, naming the run and version it belongs to.
-// Errors: as push_program and write_program_beside ("not pushed"); kStorage if the X table
-// was given another version than the Y table's (another push came between: push again).
+// sound), and pushed with the X table and the main program as one push (push_program, the Y
+// table beside the X table: written first and recorded with the push), which must give the
+// same version. The Y table goes to the number of its version, not the one a coupling holds, so
+// a push stopped between the two leaves the control grinding with the previous X and Y tables,
+// a matched pair, and reconciliation puts the previous Y file back. Errors: as push_program
+// ("not pushed"); kStorage if the X table was given another version than the Y table's
+// (another push came between: push again).
 Result<PushCompletion> push_pin_programs(RunStore& store, const std::filesystem::path& nc_file, const PushFacts& facts,
                                          const RenderForVersion& render_x, const RenderYForVersion& render_y,
                                          const PushOptions& options = {});

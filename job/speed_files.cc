@@ -34,7 +34,6 @@ Result<ParsedSpeedProgram> read_speed_program(const std::filesystem::path& nc_fi
 Result<PushCompletion> push_program_with_speed(RunStore& store, const std::filesystem::path& nc_file,
                                                const PushFacts& facts, const RenderForVersion& render,
                                                std::string_view speed_program, const PushOptions& options) {
-  NcFiles& files = options.files ? *options.files : real_nc_files();
   const std::filesystem::path speed_path = speed_program_path(nc_file);
   Result<ParsedSpeedProgram> parsed = parse_speed_program(speed_program, speed_path.string());
   if (!parsed) return parsed.error();
@@ -53,8 +52,9 @@ Result<PushCompletion> push_program_with_speed(RunStore& store, const std::files
       return s.error();
     }
   }
-  if (Status s = write_speed_program(nc_file, speed_program, files); !s) return s.error();
-  return push_program(store, nc_file, facts, render, options);
+  PushOptions with_speed = options;
+  with_speed.beside.push_back(ProgramBeside{PushFileRole::kSpeed, speed_path, std::string(speed_program)});
+  return push_program(store, nc_file, facts, render, with_speed);
 }
 
 }  // namespace gaugeloop

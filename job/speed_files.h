@@ -32,12 +32,11 @@ Result<ParsedSpeedProgram> read_speed_program(const std::filesystem::path& nc_fi
 
 // push_program with a speed program: before anything is written, checks that `speed_program`
 // is a gaugeloop speed program and that the main program (options.main, if a template is set)
-// calls the speed subprogram; then writes the speed file (write_speed_program), then pushes the
-// table and the main program as push_program does. The speed file goes first so that a main
-// program calling it never finds it missing. Stopped between the two, the control holds the new
-// speed and the previous table: the X table follows C by position, so the form is the previous
-// table's, ground at the new speed. The speed file is not in the push history: it is written
-// anew on every push. Errors: as push_program, and as write_speed_program ("not pushed").
+// calls the speed subprogram; then pushes it with the table and the main program as one push
+// (push_program, the speed file beside the table: written first, so that a main program calling
+// it never finds it missing, and recorded with the push). Stopped between the two, the control
+// holds the new speed and the previous table until reconciliation puts the speed file of the
+// push in force back. Errors: as push_program ("not pushed").
 Result<PushCompletion> push_program_with_speed(RunStore& store, const std::filesystem::path& nc_file,
                                                const PushFacts& facts, const RenderForVersion& render,
                                                std::string_view speed_program, const PushOptions& options = {});

@@ -197,6 +197,28 @@ Status add_checksum_problems(Connection& conn, std::vector<std::string>& problem
       return s;
     }
   }
+  // The files written beside a table (main program, speed subprogram, Y table), from version 20 on.
+  Result<std::int64_t> files = query_number(
+      conn, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'nc_push_files'", "look for files");
+  if (!files.ok()) return files.error();
+  if (*files != 0) {
+    if (Status s = add_problems(
+            conn,
+            "SELECT i.table_version, f.role, f.file, f.hash, f.text FROM nc_push_files AS f"
+            " JOIN nc_push_intents AS i ON i.id = f.intent_id WHERE f.text IS NOT NULL",
+            "check the hashes of the files pushed beside the tables",
+            [](const Statement& st) {
+              return settings_hash(st.column<std::string>(4)) == st.column<std::string>(3)
+                         ? std::string()
+                         : "the " + st.column<std::string>(1) + " file " + st.column<std::string>(2) +
+                               " of table version " + std::to_string(st.column<std::int64_t>(0)) +
+                               ": its text does not match the hash stored with it";
+            },
+            problems);
+        !s.ok()) {
+      return s;
+    }
+  }
   Result<std::int64_t> has = query_number(
       conn, "SELECT count(*) FROM pragma_table_info('run_tables') WHERE name = 'checksum'", "look for checksums");
   if (!has.ok() || *has == 0) return has.ok() ? Status{} : Status(has.error());

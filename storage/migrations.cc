@@ -752,8 +752,24 @@ ALTER TABLE run_tables ADD COLUMN checksum INTEGER;
 ALTER TABLE run_raw ADD COLUMN checksum INTEGER;
 )sql";
 
-const std::array<Migration, 19>& all_migrations() {
-  static const std::array<Migration, 19> kMigrations{{
+// Every file of a push, with the hash of what was written: the table, its main program, its speed
+// subprogram, a crankpin's Y table. The texts of the files beside the table are kept (the table's
+// is in nc_pushes.program_text), so that reconciliation can put back one left from another push.
+// Pushes recorded before: no rows, compared by their table alone.
+constexpr std::string_view kSchemaV20 = R"sql(
+CREATE TABLE nc_push_files (
+  intent_id INTEGER NOT NULL REFERENCES nc_push_intents (id),
+  role      TEXT    NOT NULL CHECK (role IN ('table', 'main', 'speed', 'y')),
+  file      TEXT    NOT NULL,  -- as nc_pushes.nc_file: the name inside the NC directory
+  hash      TEXT    NOT NULL,
+  text      TEXT,              -- NULL for the table
+  PRIMARY KEY (intent_id, role)
+) WITHOUT ROWID;
+CREATE INDEX nc_push_files_by_file ON nc_push_files (file, hash);
+)sql";
+
+const std::array<Migration, 20>& all_migrations() {
+  static const std::array<Migration, 20> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -838,6 +854,12 @@ const std::array<Migration, 19>& all_migrations() {
       {19,
        "a checksum over each run's stored per-degree numbers (run_tables, run_raw), checked as they are read",
        std::string(kSchemaV19),
+       nullptr,
+       {}},
+      {20,
+       "nc_push_files: every file of a push (table, main program, speed subprogram, Y table) with the hash of "
+       "what was written",
+       std::string(kSchemaV20),
        nullptr,
        {}},
   }};

@@ -152,6 +152,23 @@ struct NcPush {
   std::optional<std::string> program_text;
 };
 
+// One file of a push, recorded with its intent: the table itself, its main program, its speed
+// subprogram, a crankpin's Y table. Reconciliation and `nc check` compare every file on the
+// control with the push last recorded, not the table alone, and put back the ones left from
+// another push of ours.
+enum class PushFileRole { kTable, kMain, kSpeed, kY };
+std::string_view push_file_role_name(PushFileRole role);  // "table", "main", "speed", "y"
+
+struct PushFile {
+  PushFileRole role = PushFileRole::kTable;
+  std::string path;  // as nc_file: give every push the same path
+  std::string hash;  // settings_hash() of the text; begin_push computes it from text
+  // The text as written, kept so that reconciliation can put the file back (the table's is the
+  // push's program_text: not repeated here). Read back checked against hash.
+  std::optional<std::string> text;
+  int table_version = 0;  // read back: the version of the push that wrote it
+};
+
 // A push in the journal: recorded (begin_push) before its program is renamed into place on
 // the control, and resolved after: completed (complete_push: the nc_pushes row) or abandoned
 // (abandon_push: the control never got it). One intent at most is open per file.
@@ -167,6 +184,9 @@ struct PushIntent {
   std::optional<std::int64_t> pending_id;
   std::string approved_by;
   std::string note;
+  // Every file the push writes besides the table (the table is recorded from push). Read back
+  // only by push_files_of.
+  std::vector<PushFile> files;
 };
 
 // What completing an intent recorded.
@@ -637,6 +657,14 @@ class RunStore : public RunHistory {
   Status abandon_push(std::int64_t intent_id, const std::string& resolution);
   // Open intents, oldest first, with program_text; of one file, or of every file if empty.
   Result<std::vector<PushIntent>> open_push_intents(const std::string& nc_file = {}) const;
+  // The files the last completed push of `nc_file` recorded (the table first, with its hash
+  // and without text), with their texts checked against their hashes (kStorage names a
+  // damaged one). Empty for a file never pushed, or last pushed before pushes recorded their
+  // files.
+  Result<std::vector<PushFile>> files_of_last_push(const std::string& nc_file) const;
+  // The newest push of ours (completed or abandoned) that wrote `hash` to `path`, as a file of
+  // any role: its table version; empty when none did (a file edited by hand, or not ours).
+  Result<std::optional<int>> version_that_wrote(const std::string& path, const std::string& hash) const;
 
   // Stores a fault or refusal; returns its id. kInvalidInput for an empty message or code, a
   // malformed time; kStorage if run_id names no run.

@@ -353,6 +353,20 @@ Status require_no_open_intent(Connection& conn, const std::string& nc_file, cons
                         "was interrupted and must be reconciled first");
 }
 
+Status insert_push_file(Connection& conn, std::int64_t intent_id, const PushFile& f, const std::string& operation) {
+  Result<Statement> ins = Statement::prepare(conn,
+                                             "INSERT INTO nc_push_files (intent_id, role, file, hash, text)"
+                                             " VALUES (:intent_id, :role, :file, :hash, :text)",
+                                             operation);
+  if (!ins.ok()) return ins.error();
+  ins->bind(":intent_id", intent_id);
+  ins->bind(":role", push_file_role_name(f.role));
+  ins->bind(":file", storage_internal::nc_key(conn, f.path));
+  ins->bind(":hash", std::string_view(f.hash));
+  ins->bind(":text", f.role == PushFileRole::kTable ? std::optional<std::string>() : f.text);
+  return ins->run();
+}
+
 Result<std::int64_t> insert_intent(Connection& conn, const PushIntent& intent, const std::string& operation) {
   const NcPush& p = intent.push;
   Result<Statement> ins = Statement::prepare(conn, kInsertIntent, operation);
@@ -398,6 +412,21 @@ Result<std::int64_t> RunStore::begin_push(const PushIntent& intent) {
   }
   Result<std::int64_t> id = insert_intent(conn, intent, operation);
   if (!id.ok()) return id.error();
+  PushFile table;
+  table.role = PushFileRole::kTable;
+  table.path = p.nc_file;
+  table.hash = settings_hash(*p.program_text);
+  if (Status s = insert_push_file(conn, *id, table, operation); !s.ok()) return s.error();
+  for (const PushFile& f : intent.files) {
+    if (f.role == PushFileRole::kTable || !f.text) {
+      return make_error(ErrorCode::kInvalidInput, "cannot " + operation + ": the " +
+                                                      std::string(push_file_role_name(f.role)) + " file " + f.path +
+                                                      " is given without its text, or as a second table");
+    }
+    PushFile beside = f;
+    beside.hash = settings_hash(*f.text);
+    if (Status s = insert_push_file(conn, *id, beside, operation); !s.ok()) return s.error();
+  }
   if (Status c = tx->commit(); !c.ok()) return c.error();
   return id;
 }
@@ -443,6 +472,78 @@ Status RunStore::abandon_push(std::int64_t intent_id, const std::string& resolut
   if (!tx.ok()) return tx.error();
   if (Status s = resolve_intent(conn, intent_id, "abandoned", resolution, std::nullopt, operation); !s.ok()) return s;
   return tx->commit();
+}
+
+std::string_view push_file_role_name(PushFileRole role) {
+  switch (role) {
+    case PushFileRole::kTable:
+      return "table";
+    case PushFileRole::kMain:
+      return "main";
+    case PushFileRole::kSpeed:
+      return "speed";
+    case PushFileRole::kY:
+      return "y";
+  }
+  return "table";
+}
+
+Result<std::vector<PushFile>> RunStore::files_of_last_push(const std::string& nc_file) const {
+  const std::string operation = "read the files of the last push of " + nc_file;
+  Result<Statement> q = Statement::prepare(*conn_,
+                                           "SELECT f.role, f.file, f.hash, f.text, p.table_version"
+                                           " FROM nc_pushes AS p"
+                                           " JOIN nc_push_intents AS i ON i.push_id = p.id"
+                                           " JOIN nc_push_files AS f ON f.intent_id = i.id"
+                                           " WHERE p.id = (SELECT id FROM nc_pushes WHERE nc_file = :nc_file"
+                                           "               ORDER BY table_version DESC LIMIT 1)"
+                                           " ORDER BY f.role = 'table' DESC, f.role",
+                                           operation);
+  if (!q.ok()) return q.error();
+  q->bind(":nc_file", storage_internal::nc_key(*conn_, nc_file));
+  Result<std::vector<PushFile>> files = q->collect([](const Statement& s) {
+    PushFile f;
+    const std::string role = s.column<std::string>(0);
+    f.role = role == "main"    ? PushFileRole::kMain
+             : role == "speed" ? PushFileRole::kSpeed
+             : role == "y"     ? PushFileRole::kY
+                               : PushFileRole::kTable;
+    f.path = storage_internal::nc_path_column(s, 1);
+    f.hash = s.column<std::string>(2);
+    f.text = s.column<std::optional<std::string>>(3);
+    f.table_version = s.column<int>(4);
+    return f;
+  });
+  if (!files.ok()) return files.error();
+  for (const PushFile& f : *files) {
+    if (f.text && settings_hash(*f.text) != f.hash) {
+      return make_error(ErrorCode::kStorage, "run database " + conn_->path.string() + ": the " +
+                                                 std::string(push_file_role_name(f.role)) + " file " + f.path +
+                                                 " of table version " + std::to_string(f.table_version) +
+                                                 ": its stored text does not match the hash kept with it (a page "
+                                                 "changed outside SQLite), so it is not written to the control; "
+                                                 "restore a backup (gaugeloop db check lists what is damaged)");
+    }
+  }
+  return files;
+}
+
+Result<std::optional<int>> RunStore::version_that_wrote(const std::string& path, const std::string& hash) const {
+  Result<Statement> q = Statement::prepare(*conn_,
+                                           "SELECT max(v) FROM ("
+                                           " SELECT i.table_version AS v FROM nc_push_files AS f"
+                                           " JOIN nc_push_intents AS i ON i.id = f.intent_id"
+                                           " WHERE f.file = :file AND f.hash = :hash"
+                                           " UNION ALL SELECT table_version FROM nc_pushes"
+                                           " WHERE nc_file = :file AND program_hash = :hash)",
+                                           "look for the push that wrote " + path);
+  if (!q.ok()) return q.error();
+  q->bind(":file", storage_internal::nc_key(*conn_, path));
+  q->bind(":hash", std::string_view(hash));
+  Result<std::optional<std::optional<int>>> v =
+      q->first([](const Statement& s) { return s.column<std::optional<int>>(0); });
+  if (!v.ok()) return v.error();
+  return *v ? **v : std::nullopt;
 }
 
 Result<std::vector<PushIntent>> RunStore::open_push_intents(const std::string& nc_file) const {

@@ -259,6 +259,27 @@ TEST_F(PushJournalTest, APushKilledBeforeItsMainProgramIsFoundByCheckAndRepaired
   const auto again = testing::run_command("nc check" + data);
   EXPECT_EQ(again.exit_code, 0) << again.output;
   EXPECT_NE(again.output.find("table version 2 as pushed"), std::string::npos) << again.output;
+  // The main program written again is the one the push recorded, byte for byte.
+  Result<RunStore> store = RunStore::open(db());
+  ASSERT_TRUE(store.ok());
+  Result<std::vector<PushFile>> recorded = store->files_of_last_push(nc_file().string());
+  ASSERT_TRUE(recorded.ok()) << recorded.error().message;
+  ASSERT_EQ(recorded->size(), 2u);
+  EXPECT_EQ((*recorded)[1].text, std::optional<std::string>(slurp(main_file)));
+
+  // A main program gone from the control: nc check names it (exit 5), reconciliation puts it back.
+  const std::string main_v2 = slurp(main_file);
+  fs::remove(main_file);
+  const auto gone = testing::run_command("nc check" + data);
+  EXPECT_EQ(gone.exit_code, 5) << gone.output;
+  EXPECT_NE(gone.output.find("CAM_TEST_MAIN.MPF is not on the control: the main program of version 2 is missing"),
+            std::string::npos)
+      << gone.output;
+  const auto put_back = testing::run_command("nc reconcile --data-dir " + dir_.string());
+  ASSERT_EQ(put_back.exit_code, 0) << put_back.output;
+  EXPECT_NE(put_back.output.find("1 other file(s) of a push written again"), std::string::npos) << put_back.output;
+  EXPECT_EQ(slurp(main_file), main_v2);
+  EXPECT_EQ(testing::run_command("nc check" + data).exit_code, 0);
 }
 
 // A data directory copied elsewhere keeps the paths of the control it was kept for: asked about

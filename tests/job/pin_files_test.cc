@@ -172,9 +172,8 @@ TEST_F(PinFilesTest, AYTemplateThatDefinesAnXTableIsRefusedBeforeAnythingIsWritt
 }
 
 // The Y table is written first, to the number of the new version; the X table's write then
-// fails. The control holds the new Y file beside the previous X table and a main program that
-// still couples the previous X and Y numbers: the Y table the new file defines is not the one
-// coupled, so the control still grinds with the previous X and Y tables, a matched pair.
+// fails, and the push puts the previous Y file back: the control holds the previous X and Y
+// tables, a matched pair, and a main program that couples them.
 TEST_F(PinFilesTest, AnXTableNotWrittenLeavesTheControlGrindingThePreviousMatchedPair) {
   testing::FailingNcFiles files;
   ASSERT_TRUE(push(files).ok());  // version 1: X table 1, Y table 3
@@ -189,8 +188,8 @@ TEST_F(PinFilesTest, AnXTableNotWrittenLeavesTheControlGrindingThePreviousMatche
   EXPECT_NE(second.error().message.find("not pushed"), std::string::npos) << second.error().message;
 
   const ParsedTable y = parsed(y_file());
-  EXPECT_EQ(y.header.at("table_version"), "2") << "the Y file of the new version is on disk";
-  EXPECT_EQ(y.table_number, 4);
+  EXPECT_EQ(y.header.at("table_version"), "1") << "the Y file of the previous version is back";
+  EXPECT_EQ(y.table_number, 3);
   EXPECT_EQ(on_control(nc_file()), x_before) << "the X program is the previous one";
   EXPECT_EQ(on_control(main_file()), main_before) << "the main program is the previous one";
   EXPECT_EQ(y_coupled(on_control(main_file())), 3) << "it still couples the previous Y number";

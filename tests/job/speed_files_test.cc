@@ -64,11 +64,18 @@ class SpeedFilesTest : public testing::StoreTest {
     main_.lobe = 1;
     main_.created_utc = "2026-12-01T08:05:00Z";
 
+    Result<std::string> speed = speed_text(0);
+    ASSERT_TRUE(speed.ok()) << speed.error().message;
+    speed_text_ = *speed;
+  }
+
+  // The speed program as rendered for `table_version` (0: none named).
+  Result<std::string> speed_text(int table_version) const {
     Result<SpeedProfile> profile = write_speed_profile(program_);
-    ASSERT_TRUE(profile.ok()) << profile.error().message;
+    if (!profile) return profile.error();
     Result<std::string> speed_tmpl =
         read_regular_file(std::string(GAUGELOOP_SOURCE_DIR) + "/examples/sinumerik/cam_speed.spf", "speed template");
-    ASSERT_TRUE(speed_tmpl.ok()) << speed_tmpl.error().message;
+    if (!speed_tmpl) return speed_tmpl.error();
     const std::map<std::string, std::string> values = {{"program_name", "CAM_TEST"},
                                                        {"part", "intake"},
                                                        {"lobe", "1"},
@@ -76,16 +83,14 @@ class SpeedFilesTest : public testing::StoreTest {
                                                        {"run_id", std::to_string(run_)},
                                                        {"origin", "run " + std::to_string(run_)},
                                                        {"created_utc", "2026-12-01T08:05:00Z"}};
-    Result<std::string> speed = render_speed_program(*speed_tmpl, "cam_speed.spf", values, *profile, {run_, 0});
-    ASSERT_TRUE(speed.ok()) << speed.error().message;
-    speed_text_ = *speed;
+    return render_speed_program(*speed_tmpl, "cam_speed.spf", values, *profile, {run_, table_version});
   }
 
   fs::path nc_file() const { return dir_ / "nc" / "CAM_TEST.SPF"; }
   fs::path main_file() const { return dir_ / "nc" / "CAM_TEST_MAIN.MPF"; }
   fs::path speed_file() const { return dir_ / "nc" / "CAM_TEST_SPEED.SPF"; }
 
-  Result<PushCompletion> push(NcFiles& files) {
+  Result<PushCompletion> push(NcFiles& files, const std::string* speed = nullptr) {
     PushFacts facts;
     facts.run_id = run_;
     facts.reason = "run " + std::to_string(run_);
@@ -97,7 +102,7 @@ class SpeedFilesTest : public testing::StoreTest {
         [this](int version) {
           return testing::program_for(run_, version, 1.0 + version, {1, 2});
         },
-        speed_text_, options);
+        speed != nullptr ? *speed : speed_text_, options);
   }
 
   std::int64_t run_ = 0;
@@ -164,11 +169,81 @@ TEST_F(SpeedFilesTest, ASpeedFileNotWrittenLeavesTheTableInForceUntouched) {
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, ErrorCode::kIo);
   EXPECT_THAT(r.error().message, HasSubstr("speed program was not written"));
+  EXPECT_EQ(*read_regular_file(speed_file(), "speed"), speed_text_);
   EXPECT_EQ(*read_regular_file(nc_file(), "table"), table_before) << "no table pushed without its speed";
   Result<std::optional<NcPush>> last = store_->last_push(nc_file().string());
   ASSERT_TRUE(last.ok());
   ASSERT_TRUE(last->has_value());
   EXPECT_EQ((**last).table_version, 1);
+}
+
+// Every file of a push is recorded with it. A push whose table was not written puts the speed
+// file of the push in force back at once; one cut short (a kill: nothing puts it back) leaves
+// the new speed file beside the old table, which compare_push_files names and reconciliation
+// writes back as the push in force wrote it. A speed file edited by hand is named and left, and
+// a main program gone from the control comes back byte for byte.
+TEST_F(SpeedFilesTest, EveryFileOfThePushIsHeldToThePushInForce) {
+  testing::FailingNcFiles files;
+  Result<std::string> v1 = speed_text(1);
+  Result<std::string> v2 = speed_text(2);
+  ASSERT_TRUE(v1.ok() && v2.ok());
+  ASSERT_NE(*v1, *v2);
+  ASSERT_TRUE(push(files, &*v1).ok());  // version 1
+  const std::string main_v1 = *read_regular_file(main_file(), "main");
+  Result<std::vector<PushFile>> recorded = store_->files_of_last_push(nc_file().string());
+  ASSERT_TRUE(recorded.ok()) << recorded.error().message;
+  ASSERT_EQ(recorded->size(), 3u);  // the table, its main program and its speed program
+  EXPECT_EQ((*recorded)[0].role, PushFileRole::kTable);
+  EXPECT_EQ((*recorded)[0].hash, settings_hash(*read_regular_file(nc_file(), "table")));
+
+  files.fail_writes_ending_with = "CAM_TEST.SPF";  // the table, not CAM_TEST_SPEED.SPF
+  ASSERT_FALSE(push(files, &*v2).ok());
+  files.fail_writes_ending_with.clear();
+  EXPECT_EQ(*read_regular_file(speed_file(), "speed"), *v1) << "put back when the table was not written";
+
+  // A kill between the speed file and the table: version 2's speed beside version 1's table.
+  ASSERT_TRUE(write_file_atomically(speed_file(), *v2).ok());
+  Result<std::vector<PushFileMismatch>> found = compare_push_files(*store_, nc_file(), files);
+  ASSERT_TRUE(found.ok()) << found.error().message;
+  ASSERT_EQ(found->size(), 1u);
+  EXPECT_EQ((*found)[0].file.role, PushFileRole::kSpeed);
+  EXPECT_EQ((*found)[0].written_for, std::optional<int>(2));
+  EXPECT_EQ(push_file_mismatch_text((*found)[0]),
+            "CAM_TEST_SPEED.SPF holds the speed program written for version 2, not that of version 1, the version "
+            "in force");
+  Result<ReconcileReport> r = reconcile_pushes(*store_, nc_file(), files, &main_);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->files.size(), 1u);
+  EXPECT_TRUE(r->files[0].restored);
+  EXPECT_EQ(*read_regular_file(speed_file(), "speed"), *v1);
+  found = compare_push_files(*store_, nc_file(), files);
+  ASSERT_TRUE(found.ok());
+  EXPECT_TRUE(found->empty());
+
+  // Edited by hand: named, never overwritten.
+  std::string edited = *v1;
+  const size_t at = edited.find("F10800.0");
+  ASSERT_NE(at, std::string::npos) << edited;
+  edited.replace(at, 8, "F12000.0");
+  ASSERT_TRUE(write_file_atomically(speed_file(), edited).ok());
+  r = reconcile_pushes(*store_, nc_file(), files, &main_);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->files.size(), 1u);
+  EXPECT_FALSE(r->files[0].restored);
+  EXPECT_FALSE(r->files[0].written_for.has_value());
+  EXPECT_THAT(r->messages.back(), HasSubstr("edited by hand"));
+  EXPECT_EQ(*read_regular_file(speed_file(), "speed"), edited);
+  ASSERT_TRUE(write_file_atomically(speed_file(), *v1).ok());
+
+  // The main program gone: written again as the push wrote it.
+  fs::remove(main_file());
+  found = compare_push_files(*store_, nc_file(), files);
+  ASSERT_TRUE(found.ok());
+  ASSERT_EQ(found->size(), 1u);
+  EXPECT_TRUE((*found)[0].missing);
+  r = reconcile_pushes(*store_, nc_file(), files, nullptr);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(*read_regular_file(main_file(), "main"), main_v1);
 }
 
 TEST_F(SpeedFilesTest, AHandEditedSpeedFileIsReportedOnReadBack) {

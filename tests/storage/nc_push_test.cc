@@ -172,6 +172,65 @@ TEST_F(NcPushTest, AProgramTextChangedOutsideSqliteIsNeverReadBack) {
       << report->problems[0];
 }
 
+// The files of a push are recorded with its intent and read back once it is completed: the
+// table first, with its hash; the others with their texts. A text changed outside SQLite is
+// refused on read and listed by the full check; version_that_wrote finds the push behind a
+// file by its hash, completed or abandoned.
+TEST_F(NcPushTest, EveryFileOfAPushIsRecordedWithItsHashAndText) {
+  const std::int64_t run = add_run("2026-11-22T08:00:00Z");
+  PushIntent intent;
+  intent.run_id = run;
+  intent.push.nc_file = "/nc/A.SPF";
+  intent.push.table_version = 1;
+  intent.push.program_text = "N10 G1 X1\n";
+  intent.files.push_back(PushFile{PushFileRole::kSpeed, "/nc/A_SPEED.SPF", {}, std::string("N10 F100\n"), 0});
+  intent.files.push_back(PushFile{PushFileRole::kMain, "/nc/A_MAIN.MPF", {}, std::string("N10 CALL A\n"), 0});
+  Result<std::int64_t> id = store().begin_push(intent);
+  ASSERT_TRUE(id.ok()) << id.error().message;
+  Result<std::vector<PushFile>> open = store().files_of_last_push("/nc/A.SPF");
+  ASSERT_TRUE(open.ok());
+  EXPECT_TRUE(open->empty()) << "not the push in force before it is completed";
+  ASSERT_TRUE(store().complete_push(*id, "written").ok());
+  Result<std::vector<PushFile>> files = store().files_of_last_push("/nc/A.SPF");
+  ASSERT_TRUE(files.ok()) << files.error().message;
+  ASSERT_EQ(files->size(), 3u);
+  EXPECT_EQ((*files)[0].role, PushFileRole::kTable);
+  EXPECT_EQ((*files)[0].hash, settings_hash("N10 G1 X1\n"));
+  EXPECT_FALSE((*files)[0].text.has_value());
+  EXPECT_EQ((*files)[1].role, PushFileRole::kMain);
+  EXPECT_EQ((*files)[1].path, "/nc/A_MAIN.MPF");
+  EXPECT_EQ((*files)[1].text, std::optional<std::string>("N10 CALL A\n"));
+  EXPECT_EQ((*files)[1].table_version, 1);
+  EXPECT_EQ((*files)[2].role, PushFileRole::kSpeed);
+
+  // Version 2, abandoned: its speed text is still known as ours.
+  intent.push.table_version = 2;
+  intent.push.program_text = "N10 G1 X2\n";
+  intent.files[0].text = "N10 F200\n";
+  Result<std::int64_t> second = store().begin_push(intent);
+  ASSERT_TRUE(second.ok()) << second.error().message;
+  ASSERT_TRUE(store().abandon_push(*second, "not written").ok());
+  EXPECT_EQ(*store().version_that_wrote("/nc/A_SPEED.SPF", settings_hash("N10 F200\n")), std::optional<int>(2));
+  EXPECT_EQ(*store().version_that_wrote("/nc/A_SPEED.SPF", settings_hash("N10 F100\n")), std::optional<int>(1));
+  EXPECT_EQ(*store().version_that_wrote("/nc/A_SPEED.SPF", settings_hash("N10 F999\n")), std::nullopt);
+  EXPECT_EQ(*store().version_that_wrote("/nc/A.SPF", settings_hash("N10 G1 X1\n")), std::optional<int>(1));
+
+  RawDb(db_in(dir_)).exec("UPDATE nc_push_files SET text = 'N10 F1000\n' WHERE text = 'N10 F100\n'");
+  Result<std::vector<PushFile>> damaged = store().files_of_last_push("/nc/A.SPF");
+  ASSERT_FALSE(damaged.ok());
+  EXPECT_EQ(damaged.error().code, ErrorCode::kStorage);
+  EXPECT_NE(damaged.error().message.find("the speed file /nc/A_SPEED.SPF of table version 1: its stored text does "
+                                         "not match"),
+            std::string::npos)
+      << damaged.error().message;
+  Result<IntegrityReport> report = check_database_file(db_in(dir_));
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  ASSERT_EQ(report->problems.size(), 1u);
+  EXPECT_NE(report->problems[0].find("the speed file A_SPEED.SPF of table version 1: its text does not match"),
+            std::string::npos)
+      << report->problems[0];
+}
+
 TEST_F(NcPushTest, ProgramTextRoundTripsByteForByte) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   push_next(run, "/nc/A.SPF");
