@@ -84,8 +84,10 @@ void add_db_commands(CLI::App& app, CommandAction& action) {
   auto check = std::make_shared<DbOptions>();
   CLI::App* check_cmd = db->add_subcommand(
       "check",
-      "Is the database sound? Reads every page (integrity_check), every reference and every run's stored numbers "
-      "against their checksum; exit status 4 if it is damaged. Never writes the file: safe while gaugeloop runs.");
+      "Is the database sound? Reads every page (integrity_check), every reference, every run's stored numbers and "
+      "every pushed program against their checksum, and the ids handed out (<db>.ids) against those it holds "
+      "(commits lost with a deleted -wal); exit status 4 if it is damaged. Never writes the file: safe while "
+      "gaugeloop runs.");
   add_db_options(*check_cmd, *check);
   check_cmd->callback([&action, check] { action = [check] { return cmd_check(*check); }; });
 

@@ -118,6 +118,7 @@ void print_report(const JobReport& r, const Part& part, const std::string& machi
     }
   }
   std::printf("  database          %s\n", r.db_path.string().c_str());
+  if (!r.history_warning.empty()) std::fprintf(stderr, "gaugeloop: warning: %s\n", r.history_warning.c_str());
 }
 
 int run_job(GaugeClient& gauge, const LoadedPart& lp, const MeasureOptions& o, bool build_on_table_in_force) {

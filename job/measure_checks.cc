@@ -226,7 +226,7 @@ Status check_nc_directory(const std::filesystem::path& nc_dir, const std::filesy
 }
 
 Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem::path& nc_file,
-                                     std::optional<StaleMain>* stale) {
+                                     StoreFindings* found) {
   if (Status d = check_nc_directory(s.nc_dir, nc_file); !d) return d.error();
   if (s.db_path != ":memory:") {
     const std::filesystem::path db_dir = std::filesystem::absolute(s.db_path).parent_path();
@@ -248,10 +248,12 @@ Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem
   const MainProgramSource main = main_source(s, "");
   Result<ReconcileReport> r = reconcile_pushes(*store, nc_file, files, &main);
   if (!r) return r.error();
+  if (found == nullptr) return store;
   // Only a main program gaugeloop writes is known to couple the table of the version pushed.
   for (const StaleMain& m : r->stale_mains) {
-    if (stale != nullptr && m.nc_file == nc_file && !main.template_text.empty()) *stale = m;
+    if (m.nc_file == nc_file && !main.template_text.empty()) found->stale = m;
   }
+  found->lost_commits = r->lost_commits;
   return store;
 }
 

@@ -696,6 +696,7 @@ class JobRun {
   Status store_run() {
     Result<std::int64_t> run_id = store_.insert_run(record_);
     if (!run_id) return run_id.error();
+    (void)store_.mark_ids();  // best effort: a mark not written only means a loss of it goes unnoticed
     step("stored", "run " + std::to_string(*run_id) + " stored in " + store_.path().string(), *run_id);
     report_.run_id = *run_id;
     report_.measured = record_.measured;
@@ -883,9 +884,10 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
   // Absolute, so the push history names one file whatever directory a command runs in.
   const std::filesystem::path nc_file =
       std::filesystem::absolute(s.nc_dir / (s.nc_program + ".SPF")).lexically_normal();
-  std::optional<StaleMain> stale;
-  Result<RunStore> store = open_store_for_push(s, nc_file, &stale);
+  StoreFindings found;
+  Result<RunStore> store = open_store_for_push(s, nc_file, &found);
   if (!store) return store.error();
+  const std::optional<StaleMain>& stale = found.stale;
   // The main program coupled an older table than the history's: the part was ground with that
   // one, and a correction built on the newer table would be wrong (why_not_built_on holds it).
   JobSettings settings = s;
@@ -896,6 +898,7 @@ Result<JobReport> run_measure_job(GaugeClient& gauge, const JobSettings& s) {
   JobRun run(gauge, settings, *prepared, *store, nc_file);
   Result<JobReport> result = run.run();
   if (!result) record_failure(*store, s, result.error(), run.stored_run());
+  if (result && found.lost_commits) result->history_warning = lost_commits_text(store->path(), *found.lost_commits);
   return result;
 }
 

@@ -241,6 +241,9 @@ struct JobReport {
   std::string not_pushed_reason;  // empty when pushed
   std::optional<std::int64_t> pending_id;
   std::filesystem::path db_path;
+  // Noticed before the gauge was read: commits the database lost (lost_commits_text); empty
+  // when none. The run is stored all the same, with an id none of them had.
+  std::string history_warning;
 
   bool pushed() const { return !nc_file.empty(); }
 };
@@ -284,11 +287,16 @@ Status check_nc_directory(const std::filesystem::path& nc_dir, const std::filesy
 // anything is written: the NC directory takes a file (check_nc_directory), the database's
 // directory has room for a run, the database opens (created and upgraded if need be), is
 // sound (with check_integrity) and writable, and pushes of `nc_file` interrupted earlier are
-// reconciled (a stale main program written again from the settings' template). With `stale`,
-// the stale main program found for `nc_file`, if any: the part measured next was ground with
-// the table it coupled. Errors: kIo, kStorage, naming the file or directory.
+// reconciled (a stale main program written again from the settings' template). With `found`,
+// what reconciliation found: the stale main program for `nc_file`, if any (the part measured
+// next was ground with the table it coupled), and commits the database lost. Errors: kIo,
+// kStorage, naming the file or directory.
+struct StoreFindings {
+  std::optional<StaleMain> stale;
+  std::optional<LostCommits> lost_commits;
+};
 Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem::path& nc_file,
-                                     std::optional<StaleMain>* stale = nullptr);
+                                     StoreFindings* found = nullptr);
 
 // A part, machine or program name: 1 to 64 ASCII letters, digits, '_' or '-'. kInvalidInput
 // naming `what` and the offending character's position otherwise.

@@ -153,6 +153,25 @@ Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::pa
     // Its identity first: a gaugeloop program of another run or version copied in is not the
     // program last pushed, even with the same points.
     const std::string thing = on_control->stroke ? "stroke program" : "table";
+    // Sound, newer than any push the history holds, and of a run whose id the database handed
+    // out and no longer holds: a push the database lost, not a hand edit.
+    const std::string here_version = header_value(on_control->header, "table_version");
+    const std::string here_run = header_value(on_control->header, "run_id");
+    int version = 0;
+    std::int64_t run = 0;
+    std::from_chars(here_version.data(), here_version.data() + here_version.size(), version);
+    std::from_chars(here_run.data(), here_run.data() + here_run.size(), run);
+    Result<bool> lost = version > (**last).table_version ? store.lost_run(run) : Result<bool>(false);
+    if (!lost) return lost.error();
+    if (*lost) {
+      return refused(nc_file,
+                     "holds " + thing + " version " + here_version + " of run " + here_run +
+                         ", newer than any push the history holds",
+                     " (its last is version " + std::to_string((**last).table_version) +
+                         "): the run database lost that push (its write-ahead log deleted after a commit, or the "
+                         "file restored from an older copy; `gaugeloop events` names the commits lost)",
+                     on_control->stroke.has_value());
+    }
     for (const char* key : {"run_id", "table_version", "body_checksum_fnv1a64"}) {
       const std::string here = header_value(on_control->header, key);
       const std::string pushed_value = header_value(pushed->header, key);
@@ -397,6 +416,12 @@ Result<std::vector<PushFileMismatch>> put_back_files(const RunStore& store, cons
 Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem::path& nc_file, NcFiles& files,
                                          const MainProgramSource* main) {
   ReconcileReport report;
+  Result<std::optional<LostCommits>> lost = store.check_ids();
+  if (!lost) return lost.error();
+  if (*lost) {
+    report.lost_commits = **lost;
+    report.messages.push_back(lost_commits_text(store.path(), **lost));
+  }
   Result<std::vector<PushIntent>> open = store.open_push_intents(nc_file.string());
   if (!open) return open.error();
   if (!open->empty()) {
@@ -468,6 +493,7 @@ void merge_into(ReconcileReport& total, ReconcileReport one) {
   total.leftovers_removed += one.leftovers_removed;
   for (StaleMain& s : one.stale_mains) total.stale_mains.push_back(std::move(s));
   for (PushFileMismatch& f : one.files) total.files.push_back(std::move(f));
+  if (!total.lost_commits) total.lost_commits = one.lost_commits;
   for (std::string& m : one.messages) total.messages.push_back(std::move(m));
 }
 
@@ -492,6 +518,14 @@ Result<int> next_table_version_settled(RunStore& store, const std::filesystem::p
 }
 
 Result<ReconcileReport> reconcile_all_pushes(RunStore& store, const MainProgramSource* main, NcFiles& files) {
+  ReconcileReport total;
+  // Once before any file: a history that lost commits says so even with nothing pushed yet.
+  Result<std::optional<LostCommits>> lost = store.check_ids();
+  if (!lost) return lost.error();
+  if (*lost) {
+    total.lost_commits = **lost;
+    total.messages.push_back(lost_commits_text(store.path(), **lost));
+  }
   Result<std::vector<PushIntent>> open = store.open_push_intents();
   if (!open) return open.error();
   Result<std::vector<std::string>> pushed = store.pushed_files();
@@ -500,7 +534,6 @@ Result<ReconcileReport> reconcile_all_pushes(RunStore& store, const MainProgramS
   for (const PushIntent& i : *open) with_intent.insert(i.push.nc_file);
   std::set<std::string> nc_files(pushed->begin(), pushed->end());
   nc_files.insert(with_intent.begin(), with_intent.end());
-  ReconcileReport total;
   for (const std::string& nc_file : nc_files) {
     Result<ReconcileReport> one = reconcile_pushes(store, nc_file, files, main);
     if (!one && with_intent.count(nc_file) != 0) return one.error();
@@ -844,6 +877,8 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
     return e;
   }
   reached(PushStep::kRecorded);
+  // Best effort: the push is recorded; a mark not written only means a loss of it goes unnoticed.
+  (void)store.mark_ids();
   return done;
 }
 

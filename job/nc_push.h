@@ -226,11 +226,15 @@ struct ReconcileReport {
   // Files beside a table that were not as its last push wrote them: put back (restored) or,
   // edited by hand, left.
   std::vector<PushFileMismatch> files;
+  // Commits the database lost (RunStore::check_ids), noticed before anything else: the ids
+  // already go on past them and an event records it.
+  std::optional<LostCommits> lost_commits;
   std::vector<std::string> messages;  // one line per intent resolved, file removed or main program found
 };
 
 // Brings the journal and the control into agreement for `nc_file`, under the directory's
-// lock: an open intent whose program the file holds byte for byte is completed (recorded as
+// lock. First the ids the database handed out are held to its marks (RunStore::check_ids), so
+// a database that lost commits hands out none of their ids again. Then an open intent whose program the file holds byte for byte is completed (recorded as
 // pushed, "found on the control"), any other open intent is abandoned, and leftover temporary
 // files of ours (of the table, its main program, its speed subprogram and a pin's Y table) are
 // removed. Then a stale main program (find_stale_main) is written again for the table on the

@@ -246,6 +246,7 @@ json job_report_json(const JobReport& r) {
               {"table_version", if_pushed(r.table_version)},
               {"not_pushed_reason", r.pushed() ? json(nullptr) : json(r.not_pushed_reason)},
               {"pending_id", r.pending_id ? json(*r.pending_id) : json(nullptr)},
+              {"history_warning", r.history_warning.empty() ? json(nullptr) : json(r.history_warning)},
               {"tolerance_verdict", verdict_name(r.tolerance_verdict)},
               {"characteristics", characteristics_json(r.characteristics, part_kind_of(r.characteristics))}};
 }
@@ -384,6 +385,7 @@ Result<JobReport> Service::run_reserved(RunReservation reservation, const std::s
     ++runs_not_pushed_;
     spdlog::warn("run {} stored, table not pushed: {}", report->run_id, report->not_pushed_reason);
   }
+  if (!report->history_warning.empty()) spdlog::error("{}", report->history_warning);
   return report;
 }
 

@@ -280,6 +280,13 @@ Result<std::vector<std::string>> find_problems(Connection& conn, IntegrityCheck 
   }
   if (depth == IntegrityCheck::kFull) {
     if (Status s = add_checksum_problems(conn, problems); !s.ok()) return s.error();
+    // Commits lost before any writer noticed them (a writer raises the ids past them).
+    Result<std::optional<LostCommits>> lost = find_lost_commits(conn);
+    if (!lost.ok()) {
+      problems.push_back(lost.error().message);
+    } else if (*lost) {
+      problems.push_back(lost_commits_text(conn.path, **lost));
+    }
   }
   return problems;
 }

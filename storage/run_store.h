@@ -169,6 +169,28 @@ struct PushFile {
   int table_version = 0;  // read back: the version of the push that wrote it
 };
 
+// The ids a run database has handed out, kept outside it, beside it (<db>.ids, written atomically
+// after a run is stored and after a push is recorded), so that commits the database lost are
+// noticed: its write-ahead log deleted after a commit, or the file restored from an older copy.
+struct IdMarks {
+  std::int64_t run_id = 0;   // the highest run id handed out
+  std::int64_t push_id = 0;  // the highest push id handed out
+};
+
+// <db>.ids.
+std::filesystem::path id_marks_path(const std::filesystem::path& db_path);
+
+// Commits a database lost: what <db>.ids says was handed out, what the database holds.
+struct LostCommits {
+  IdMarks marked;
+  IdMarks held;
+};
+
+// "run database D lost commits: D.ids says run ids up to 12 and push ids up to 7 were handed
+// out, the database holds them up to 10 and 6 (...); runs 11 to 12 and push 7 are not in the
+// history"
+std::string lost_commits_text(const std::filesystem::path& db_path, const LostCommits& lost);
+
 // A push in the journal: recorded (begin_push) before its program is renamed into place on
 // the control, and resolved after: completed (complete_push: the nc_pushes row) or abandoned
 // (abandon_push: the control never got it). One intent at most is open per file.
@@ -665,6 +687,21 @@ class RunStore : public RunHistory {
   // The newest push of ours (completed or abandoned) that wrote `hash` to `path`, as a file of
   // any role: its table version; empty when none did (a file edited by hand, or not ours).
   Result<std::optional<int>> version_that_wrote(const std::string& path, const std::string& hash) const;
+
+  // Writes the ids handed out so far (the AUTOINCREMENT sequences of runs and pushes) to
+  // id_marks_path(path()), atomically; nothing for an in-memory database. kIo if it cannot.
+  Status mark_ids() const;
+  // <db>.ids against the database. When it marks ids the database no longer holds, in one
+  // transaction: the sequences are raised past the marks (no run or push id is handed out
+  // twice) and a fault event (code "lost commits") records lost_commits_text; what was found
+  // is returned. Empty when they agree or there is no mark. kInvalidInput for a marks file
+  // that does not read, naming its line.
+  Result<std::optional<LostCommits>> check_ids();
+  // As check_ids, changing nothing (db check).
+  Result<std::optional<LostCommits>> find_lost_commits() const;
+  // True when run `run_id` is not in the database though its id was handed out (up to the
+  // runs' sequence or <db>.ids): a run of a lost commit, not another database's.
+  Result<bool> lost_run(std::int64_t run_id) const;
 
   // Stores a fault or refusal; returns its id. kInvalidInput for an empty message or code, a
   // malformed time; kStorage if run_id names no run.

@@ -42,6 +42,9 @@ void load_nc_directory(Connection& conn);
 // moved), or when the history recorded none.
 Status note_nc_directory(Connection& conn, std::string_view nc_file, const std::string& operation);
 
+// <db>.ids against the database's sequences (RunStore::find_lost_commits).
+Result<std::optional<LostCommits>> find_lost_commits(Connection& conn);
+
 // kStorage: run `run_id` has rows that contradict each other or are missing.
 Error damaged_run(const Connection& conn, std::int64_t run_id, const std::string& what);
 

@@ -156,6 +156,64 @@ TEST_F(PushJournalTest, APushKilledAfterEveryStepIsReconciledByTheNextCommand) {
   }
 }
 
+// The database's write-ahead log deleted after a run and a push were committed to it (the
+// process killed before a checkpoint, then the -wal removed): the history silently lost them.
+// The marks beside the database notice it: `db check` names what was lost, the next
+// writer records it as an event and hands out none of the lost ids again, and the program the
+// lost push wrote is refused as newer than the history, not called edited by hand.
+TEST_F(PushJournalTest, AWriteAheadLogDeletedAfterACommitIsNoticedAndNoIdIsHandedOutTwice) {
+  const std::int64_t first = stored_run("2026-11-30T08:00:00Z");
+  ASSERT_TRUE(push(first).ok());  // version 1, and the marks
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    Result<RunStore> store = RunStore::open(db());
+    if (!store) ::_exit(2);
+    Result<std::int64_t> run =
+        store->insert_run(testing::sample_run("intake", 1, "grinder-1", "2026-11-30T09:00:00Z", 5.0));
+    if (!run || !store->mark_ids()) ::_exit(3);
+    PushFacts facts;
+    facts.run_id = *run;
+    Result<PushCompletion> pushed =
+        push_program(*store, nc_file(), facts, [&run](int version) { return program_for(*run, version, 1.3); });
+    ::_exit(pushed.ok() && pushed->table_version == 2 ? 0 : 4);  // no checkpoint: the commits stay in the -wal
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << WEXITSTATUS(status);
+  ASSERT_TRUE(fs::exists(db().string() + "-wal"));
+  fs::remove(db().string() + "-wal");
+  fs::remove(db().string() + "-shm");
+
+  const auto checked = testing::run_command("db check --data-dir " + dir_.string());
+  EXPECT_NE(checked.exit_code, 0) << checked.output;
+  EXPECT_NE(checked.output.find("lost commits: gaugeloop.sqlite.ids says run ids up to 2 and push ids up to 2 "
+                                "were handed out, the database holds them up to 1 and 1"),
+            std::string::npos)
+      << checked.output;
+  EXPECT_NE(checked.output.find("run 2 and push 2 are not in the history"), std::string::npos) << checked.output;
+
+  const auto nc = testing::run_command("nc check --data-dir " + dir_.string() + " --program CAM_TEST");
+  EXPECT_NE(nc.exit_code, 0) << nc.output;
+  EXPECT_NE(nc.output.find("holds table version 2 of run 2, newer than any push the history holds"), std::string::npos)
+      << nc.output;
+  EXPECT_EQ(nc.output.find("edited by hand"), std::string::npos) << nc.output;
+
+  const auto reconciled = testing::run_command("nc reconcile --data-dir " + dir_.string());
+  EXPECT_NE(reconciled.output.find("lost commits"), std::string::npos) << reconciled.output;
+  EXPECT_EQ(stored_run("2026-11-30T10:00:00Z"), 3) << "run id 2 was handed out before: never again";
+  Result<RunStore> store = RunStore::open(db());
+  ASSERT_TRUE(store.ok());
+  EventQuery q;
+  Result<std::vector<StoredEvent>> events = store->list_events(q);
+  ASSERT_TRUE(events.ok()) << events.error().message;
+  int lost = 0;
+  for (const StoredEvent& e : *events) lost += e.event.code == "lost commits" ? 1 : 0;
+  EXPECT_EQ(lost, 1) << "recorded once, by the first writer that noticed";
+  const auto after = testing::run_command("db check --data-dir " + dir_.string());
+  EXPECT_EQ(after.exit_code, 0) << after.output;
+}
+
 // `gaugeloop nc reconcile` finishes an interrupted push by itself, and says what it did.
 TEST_F(PushJournalTest, ReconcileRecordsAProgramTheControlHoldsAndRemovesLeftovers) {
   const std::int64_t run = stored_run("2026-11-30T08:00:00Z");
