@@ -35,6 +35,7 @@ packages=(
   postgresql-15      # a real PostgreSQL server the plant tests start in a temporary directory
   openssl            # self-signed certificates for the HTTPS and broker TLS tests; `gaugeloop token new` needs none
   curl               # an independent HTTP client: tests talk to the service with it
+  strace             # syscall fault injection (--inject): tests/fault kills and fails a push at every step
   locales            # a decimal-comma locale, to test that output ignores the C locale
   chromium chromium-driver python3-selenium  # a headless browser: tests/web drives the service's pages
   librsvg2-bin       # rsvg-convert: view a `gaugeloop runs plot` SVG as PNG; not needed to build or test
