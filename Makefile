@@ -16,7 +16,9 @@ REALTIME_TESTS := ^(LiveLink\.|PymodbusPeer\.|SimulatorFaults/LiveOutageTest\.)
 # A plant of grinders, a broker and PostgreSQL as processes, through outages (examples/plant):
 # what it tests of our code under the sanitizers the plant tests test in-process; normal build only.
 # The pages in headless Chromium (tests/web) likewise: their endpoints run in-process in tests/service.
-PROCESS_TESTS := ^(PlantRun|WebPages)\.
+# The push under strace's injected faults (tests/fault) too: LeakSanitizer does not run under
+# ptrace, and tests/integration cuts the push's steps in-process.
+PROCESS_TESTS := ^(PlantRun|WebPages|PushFaults)\.
 # The tests of the service's threads (HTTP server, PLC trigger and handshake, the run) and of
 # the guard every thread starts through, the systemd watchdog's, the outbox sender's and the
 # central sync's: the ones ThreadSanitizer runs.
