@@ -322,8 +322,8 @@ def choose_faults(calls):
     count once), with all three faults: to gaugeloop a transaction failed or was cut short
     whichever of its writes it was; how SQLite recovers from a torn one is SQLite's to test.
     97 cases for the push of a lobe's table and main program, each about 1 s of CPU (two
-    measurements, one traced, and six to eight short commands), two at a time: about 80 s on
-    a 2-core machine beside another build, 45 s on two idle cores. Every call of ours of every
+    measurements, one traced, and six to eight short commands), two at a time: 80 to 95 s on
+    a 2-core machine beside another build, about 45 s on two idle cores. Every call of ours of every
     kind would be about 450 cases, 330 of them SQLite's writes.
     """
     pwrite_runs = []
