@@ -73,6 +73,10 @@ Status write_file_atomically(const std::filesystem::path& path, std::string_view
   if (dfd >= 0) {
     if (::fsync(dfd) != 0) flush_error = errno;
     ::close(dfd);
+  } else if (errno != EACCES && errno != EPERM) {
+    // A directory we may write but not read (a drop-box share) cannot be flushed, and is taken
+    // as it is; any other failure to open it (EIO) leaves the rename not known to be on disk.
+    flush_error = errno;
   }
   reached(AtomicWriteStep::kRenamed);
   // Some file systems (network shares among them) do not fsync a directory: as before. Any

@@ -197,6 +197,26 @@ Status add_checksum_problems(Connection& conn, std::vector<std::string>& problem
       return s;
     }
   }
+  // The settings texts against the hash each is stored under (from version 2 on).
+  Result<std::int64_t> settings = query_number(
+      conn, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'settings'", "look for settings");
+  if (!settings.ok()) return settings.error();
+  if (*settings != 0) {
+    if (Status s = add_problems(
+            conn,
+            "SELECT hash, text FROM settings", "check the settings texts against their hashes",
+            [](const Statement& st) {
+              return settings_hash(st.column<std::string>(1)) == st.column<std::string>(0)
+                         ? std::string()
+                         : "settings " + st.column<std::string>(0) +
+                               ": the text does not match the hash it is stored under (every run stored with these "
+                               "settings is refused when read)";
+            },
+            problems);
+        !s.ok()) {
+      return s;
+    }
+  }
   // The files written beside a table (main program, speed subprogram, Y table), from version 20 on.
   Result<std::int64_t> files = query_number(
       conn, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'nc_push_files'", "look for files");

@@ -115,11 +115,16 @@ std::string lost_commits_text(const std::filesystem::path& db_path, const LostCo
 
 Status RunStore::mark_ids() const {
   if (conn_->path == ":memory:" || conn_->path.empty()) return {};
+  // Under the database's write lock: one writer marks at a time, so the marks never go back
+  // and a temporary file left by a writer killed while marking is ours to remove.
+  Result<Transaction> tx = Transaction::begin(*conn_, Transaction::Mode::kWrite, "mark the ids handed out");
+  if (!tx.ok()) return tx.error();
   Result<IdMarks> now = sequences(*conn_);
   if (!now.ok()) return now.error();
-  return write_file_atomically(id_marks_path(conn_->path), std::string(kMarksHeader) + "runs " +
-                                                               std::to_string(now->run_id) + "\npushes " +
-                                                               std::to_string(now->push_id) + "\n");
+  const std::filesystem::path path = id_marks_path(conn_->path);
+  if (Result<int> removed = remove_atomic_leftovers(path); !removed.ok()) return removed.error();
+  return write_file_atomically(path, std::string(kMarksHeader) + "runs " + std::to_string(now->run_id) + "\npushes " +
+                                         std::to_string(now->push_id) + "\n");
 }
 
 Result<std::optional<LostCommits>> storage_internal::find_lost_commits(Connection& conn) {
@@ -159,11 +164,21 @@ Result<bool> RunStore::lost_run(std::int64_t run_id) const {
 }
 
 Result<std::optional<LostCommits>> RunStore::check_ids() {
-  Result<std::optional<LostCommits>> lost = find_lost_commits();
-  if (!lost.ok() || !*lost) return lost;
-  const std::string operation = "note the commits the run database lost";
+  if (conn_->path == ":memory:" || conn_->path.empty()) return std::optional<LostCommits>();
+  // The write lock only when there is something to do: a reader's check must not wait on a writer.
+  const std::filesystem::path path = id_marks_path(conn_->path);
+  Result<std::vector<std::filesystem::path>> leftovers = atomic_leftovers(path);
+  if (!leftovers.ok()) return leftovers.error();
+  Result<std::optional<LostCommits>> seen = storage_internal::find_lost_commits(*conn_);
+  if (!seen.ok()) return seen.error();
+  if (leftovers->empty() && !*seen) return std::optional<LostCommits>();
+  const std::string operation = "check the ids handed out against the run database";
   Result<Transaction> tx = Transaction::begin(*conn_, Transaction::Mode::kWrite, operation);
   if (!tx.ok()) return tx.error();
+  // A writer killed while marking left its temporary file: under the write lock, no one is marking.
+  if (Result<int> removed = remove_atomic_leftovers(path); !removed.ok()) return removed.error();
+  Result<std::optional<LostCommits>> lost = storage_internal::find_lost_commits(*conn_);
+  if (!lost.ok() || !*lost) return lost;
   if (Status s = raise_sequence(*conn_, "runs", (**lost).marked.run_id, operation); !s.ok()) return s.error();
   if (Status s = raise_sequence(*conn_, "nc_pushes", (**lost).marked.push_id, operation); !s.ok()) return s.error();
   EventRecord event;

@@ -475,6 +475,13 @@ Status read_details(PartStatements& st, std::int64_t run_id, StoredRun& out) {
   out.discarded_revolutions = q.column<std::int64_t>(4);
   out.correction_in_force_run = q.column<std::optional<std::int64_t>>(5);
   out.settings = q.column<std::string>(6);
+  // The text is stored under its hash: one changed outside SQLite no longer matches it.
+  if (!out.settings.empty() && !out.summary.settings_hash.empty() &&
+      settings_hash(out.settings) != out.summary.settings_hash) {
+    return damaged_run(st.conn(), run_id,
+                       "its settings text does not match the hash " + out.summary.settings_hash +
+                           " it is stored under (a page changed outside SQLite)");
+  }
   if (std::optional<std::string> json = q.column<std::optional<std::string>>(7)) {
     Result<std::vector<double>> h = storage_internal::numbers_from_json(*json);
     if (!h.ok() || h->size() != out.analysis.harmonic_amplitude_um.size()) {

@@ -731,6 +731,27 @@ TEST_F(RunStoreTest, NumbersChangedOutsideSqliteAreFoundByTheirChecksum) {
   ASSERT_TRUE(store().load_run(id).ok()) << "a row without a checksum is not checked";
 }
 
+// A settings text changed outside SQLite (a zeroed overflow page leaves NUL characters, flipped
+// bytes invalid UTF-8) no longer matches the hash it is stored under: every run using it is
+// refused when read, naming it, and the full check lists it.
+TEST_F(RunStoreTest, ASettingsTextChangedOutsideSqliteIsFoundByItsHash) {
+  RunRecord record = make_record("a", "2026-11-22T02:34:44Z");
+  record.settings = "[part]\nname = \"a\"\n";
+  const std::int64_t id = insert_ok(store(), record);
+  ASSERT_TRUE(store().load_run(id).ok());
+  RawDb(db_in(dir_)).exec("UPDATE settings SET text = CAST(CAST(text AS BLOB) || X'9A' AS TEXT)");
+  Result<StoredRun> loaded = store().load_run(id);
+  ASSERT_FALSE(loaded.ok());
+  EXPECT_EQ(loaded.error().code, ErrorCode::kStorage);
+  EXPECT_NE(loaded.error().message.find("its settings text does not match the hash"), std::string::npos)
+      << loaded.error().message;
+  Result<IntegrityReport> report = check_database_file(db_in(dir_));
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  ASSERT_EQ(report->problems.size(), 1u);
+  EXPECT_NE(report->problems[0].find("the text does not match the hash it is stored under"), std::string::npos)
+      << report->problems[0];
+}
+
 TEST_F(RunStoreTest, TheSchemaRefusesABlobOfTheWrongLength) {
   insert_ok(store(), make_record("a", "2026-11-22T02:34:44Z"));
   RawDb raw(db_in(dir_));
