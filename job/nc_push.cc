@@ -851,12 +851,26 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
     return not_pushed(written.error());
   }
   Status main_written;
+  bool main_renamed = false;
   if (with_main) {
-    main_written = files.write_program(main_file, main_text, {});
+    main_written = files.write_program(main_file, main_text, [&main_renamed](AtomicWriteStep step) {
+      if (step == AtomicWriteStep::kRenamed) main_renamed = true;
+    });
     if (main_written) reached(PushStep::kMainWritten);
   }
   Result<PushCompletion> done = store.complete_push(
       *intent_id, main_written ? "written" : "written; the main program was not: " + main_written.error().message);
+  if (done && !main_written && main_renamed) {
+    // In place but not known to be on disk (its directory not flushed): after a power cut the
+    // control may hold the previous main program again, which reconciliation writes anew.
+    Error e = main_written.error();
+    e.message = what + " was written to " + nc_file.string() + " and recorded, and the main program " +
+                main_file.string() + " coupling it is in place, but not known to be on the control's disk (" +
+                e.message +
+                "); should a power cut bring the previous one back, `gaugeloop nc check` names it and "
+                "`gaugeloop nc reconcile` (or the next push) writes it again";
+    return e;
+  }
   if (done && !main_written) {
     // The table is on the control and recorded; the main program still couples the previous
     // table, which the new one did not redefine (another number), so the machine grinds with

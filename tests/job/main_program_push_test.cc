@@ -143,6 +143,30 @@ TEST_F(MainProgramPushTest, ARenameTheDirectoryCannotFlushIsNeitherPushedNorAban
   EXPECT_EQ((**last).table_version, 2);
 }
 
+// The main program renamed into place after its table, its directory then not flushed: the push
+// is recorded (the table is on the control) and the error says the main program coupling it is
+// in place but may not survive a power cut, not that it still couples the previous table.
+TEST_F(MainProgramPushTest, AMainProgramTheDirectoryCannotFlushIsSaidToBeInPlace) {
+  testing::FailingNcFiles files;
+  ASSERT_TRUE(push(files).ok());
+  files.fail_directory_flush_ending_with = "_MAIN.MPF";
+  Result<PushCompletion> r = push(files);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::kIo);
+  EXPECT_NE(r.error().message.find("coupling it is in place, but not known to be on the control's disk"),
+            std::string::npos)
+      << r.error().message;
+  EXPECT_EQ(r.error().message.find("still couples the previous table"), std::string::npos) << r.error().message;
+  EXPECT_EQ(coupled(), 2);
+  Result<std::optional<NcPush>> last = store_->last_push(nc_file().string());
+  ASSERT_TRUE(last.ok() && last->has_value());
+  EXPECT_EQ((**last).table_version, 2);
+  files.fail_directory_flush_ending_with.clear();
+  Result<std::vector<PushFileMismatch>> beside = compare_push_files(*store_, nc_file(), files);
+  ASSERT_TRUE(beside.ok());
+  EXPECT_TRUE(beside->empty()) << "the main program on the control is the one the push recorded";
+}
+
 TEST_F(MainProgramPushTest, AMainTemplateWithAnUnknownPlaceholderIsRefusedBeforeAnythingIsWritten) {
   testing::FailingNcFiles files;
   main_.template_text += "; {{wheel_speed}}\n";

@@ -22,6 +22,8 @@ class FailingNcFiles final : public NcFiles {
   // Writes go through, and then fail as a directory that cannot be flushed does (EIO after the
   // rename, write_file_atomically): the file is in place, the error says it may not stay.
   bool fail_directory_flush = false;
+  // The same for a file whose name ends with this ("_MAIN.MPF") alone; empty: none.
+  std::string fail_directory_flush_ending_with;
 
   Result<DirectoryLock> lock_directory(const std::filesystem::path& dir) override {
     calls.push_back(Op::kLock);
@@ -42,7 +44,10 @@ class FailingNcFiles final : public NcFiles {
       return Error{ErrorCode::kIo, "No space left on device (scripted)"};
     }
     Status written = real_nc_files().write_program(path, contents, observer);
-    if (written && fail_directory_flush) {
+    const bool flush_fails =
+        fail_directory_flush || (!fail_directory_flush_ending_with.empty() &&
+                                 path.filename().string().ends_with(fail_directory_flush_ending_with));
+    if (written && flush_fails) {
       return Error{ErrorCode::kIo,
                    "renamed into place, but the directory could not be flushed (Input/output error, scripted)"};
     }
