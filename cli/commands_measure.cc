@@ -619,8 +619,9 @@ struct ImportUnstoredOptions {
 };
 
 int cmd_import_unstored(const ImportUnstoredOptions& o) {
+  // With --config each run's part is looked up in it; with --part one job serves every file.
   std::optional<ServiceConfig> config;
-  std::optional<LoadedPart> lp;
+  std::optional<JobSettings> by_hand;
   if (!o.config_path.empty()) {
     Result<ServiceConfig> read = read_service_config(o.config_path);
     if (!read) return report_error(read.error());
@@ -628,26 +629,37 @@ int cmd_import_unstored(const ImportUnstoredOptions& o) {
   } else if (!o.by_hand.part_path.empty()) {
     Result<LoadedPart> loaded = load_part(o.by_hand.part_path);
     if (!loaded) return report_error(loaded.error());
-    lp = std::move(*loaded);
+    Result<JobSettings> js = job_settings_for(*loaded, o.by_hand, /*build_on_table_in_force=*/false);
+    if (!js) return report_error(js.error());
+    by_hand = std::move(*js);
   } else {
     return report_error(make_error(ErrorCode::kInvalidInput,
                                    "give --part FILE (the part file the runs were measured with, with --data-dir) or "
                                    "--config FILE (the service's)"));
   }
   int status = kExitOk;
+  const auto failed = [&status](const Error& e) {
+    const int code = report_error(e);
+    if (status == kExitOk) status = code;
+  };
   for (const std::string& file : o.files) {
     Result<UnstoredRun> kept = read_unstored_run(file);
-    Result<JobSettings> js = kept ? Result<JobSettings>(JobSettings{}) : Result<JobSettings>(kept.error());
-    if (js && config) {
-      Result<const ServicePart*> part = find_part(*config, kept->part, kept->lobe);
-      js = part ? Result<JobSettings>(job_for(*config, **part)) : Result<JobSettings>(part.error());
-    } else if (js) {
-      js = job_settings_for(*lp, o.by_hand, /*build_on_table_in_force=*/false);
+    if (!kept) {
+      failed(kept.error());
+      continue;
     }
-    Result<JobReport> report = js ? store_unstored_run(*kept, *js) : Result<JobReport>(js.error());
+    std::optional<JobSettings> from_config;
+    if (config) {
+      Result<const ServicePart*> part = find_part(*config, kept->part, kept->lobe);
+      if (!part) {
+        failed(part.error());
+        continue;
+      }
+      from_config = job_for(*config, **part);
+    }
+    Result<JobReport> report = store_unstored_run(*kept, from_config ? *from_config : *by_hand);
     if (!report) {
-      const int failed = report_error(report.error());
-      if (status == kExitOk) status = failed;
+      failed(report.error());
       continue;
     }
     // Stored: the file goes aside, so that a second import does not store the run twice.

@@ -412,16 +412,22 @@ Result<std::vector<PushFileMismatch>> put_back_files(const RunStore& store, cons
   return out;
 }
 
-// reconcile_pushes with the directory's lock already held.
-Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem::path& nc_file, NcFiles& files,
-                                         const MainProgramSource* main) {
-  ReconcileReport report;
+// RunStore::check_ids, what it found said in `report`.
+Status check_ids_into(RunStore& store, ReconcileReport& report) {
   Result<std::optional<LostCommits>> lost = store.check_ids();
   if (!lost) return lost.error();
   if (*lost) {
     report.lost_commits = **lost;
     report.messages.push_back(lost_commits_text(store.path(), **lost));
   }
+  return {};
+}
+
+// reconcile_pushes with the directory's lock already held.
+Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem::path& nc_file, NcFiles& files,
+                                         const MainProgramSource* main) {
+  ReconcileReport report;
+  if (Status ids = check_ids_into(store, report); !ids) return ids.error();
   Result<std::vector<PushIntent>> open = store.open_push_intents(nc_file.string());
   if (!open) return open.error();
   if (!open->empty()) {
@@ -520,12 +526,7 @@ Result<int> next_table_version_settled(RunStore& store, const std::filesystem::p
 Result<ReconcileReport> reconcile_all_pushes(RunStore& store, const MainProgramSource* main, NcFiles& files) {
   ReconcileReport total;
   // Once before any file: a history that lost commits says so even with nothing pushed yet.
-  Result<std::optional<LostCommits>> lost = store.check_ids();
-  if (!lost) return lost.error();
-  if (*lost) {
-    total.lost_commits = **lost;
-    total.messages.push_back(lost_commits_text(store.path(), **lost));
-  }
+  if (Status ids = check_ids_into(store, total); !ids) return ids.error();
   Result<std::vector<PushIntent>> open = store.open_push_intents();
   if (!open) return open.error();
   Result<std::vector<std::string>> pushed = store.pushed_files();

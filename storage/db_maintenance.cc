@@ -171,73 +171,67 @@ Result<bool> holds_records(Connection& conn) {
   return *found != 0;
 }
 
-// Every run's stored per-degree numbers against the checksum kept with them (schema 19 on; rows
-// stored before have none): a page changed outside SQLite, which its own checks do not see in a
-// BLOB's bytes, named by run.
+// A text kept with the hash of what was written: `select`'s rows give the hash (column 0) and the
+// text (column 1), then what `problem` names a mismatch by. Nothing when `present` (a count)
+// finds no such table or column (a schema before it).
+template <typename Problem>
+Status add_hash_problems(Connection& conn, const char* present, const char* select, std::string_view operation,
+                         Problem problem, std::vector<std::string>& problems) {
+  Result<std::int64_t> there = query_number(conn, present, operation);
+  if (!there.ok()) return there.error();
+  if (*there == 0) return {};
+  return add_problems(
+      conn, select, operation,
+      [&problem](const Statement& st) {
+        return settings_hash(st.column<std::string>(1)) == st.column<std::string>(0) ? std::string() : problem(st);
+      },
+      problems);
+}
+
+// Every stored text against its hash, and every run's per-degree numbers against the checksum
+// kept with them (schema 19 on; rows stored before have none): a page changed outside SQLite,
+// which its own checks do not see in a text's or a BLOB's bytes, named by what it damaged.
 Status add_checksum_problems(Connection& conn, std::vector<std::string>& problems) {
-  // The program texts of the pushes against their hash (from version 3 on).
-  Result<std::int64_t> texts = query_number(
-      conn, "SELECT count(*) FROM pragma_table_info('nc_pushes') WHERE name = 'program_text'", "look for programs");
-  if (!texts.ok()) return texts.error();
-  if (*texts != 0) {
-    if (Status s = add_problems(
-            conn,
-            "SELECT id, nc_file, table_version, program_hash, program_text FROM nc_pushes "
-            "WHERE program_text IS NOT NULL AND program_text <> '' AND program_hash IS NOT NULL AND program_hash <> ''",
-            "check the pushed programs' hashes",
-            [](const Statement& st) {
-              return settings_hash(st.column<std::string>(4)) == st.column<std::string>(3)
-                         ? std::string()
-                         : "push " + std::to_string(st.column<std::int64_t>(0)) + " (table version " +
-                               std::to_string(st.column<std::int64_t>(2)) + " of " + st.column<std::string>(1) +
-                               "): its program text does not match the hash stored with it";
-            },
-            problems);
-        !s.ok()) {
-      return s;
-    }
+  // The program texts of the pushes (from version 3 on), the settings texts (version 2 on) and
+  // the files written beside a table (main program, speed subprogram, Y table; version 20 on).
+  if (Status s = add_hash_problems(
+          conn, "SELECT count(*) FROM pragma_table_info('nc_pushes') WHERE name = 'program_text'",
+          "SELECT program_hash, program_text, id, nc_file, table_version FROM nc_pushes "
+          "WHERE program_text IS NOT NULL AND program_text <> '' AND program_hash IS NOT NULL AND program_hash <> ''",
+          "check the pushed programs' hashes",
+          [](const Statement& st) {
+            return "push " + std::to_string(st.column<std::int64_t>(2)) + " (table version " +
+                   std::to_string(st.column<std::int64_t>(4)) + " of " + st.column<std::string>(3) +
+                   "): its program text does not match the hash stored with it";
+          },
+          problems);
+      !s.ok()) {
+    return s;
   }
-  // The settings texts against the hash each is stored under (from version 2 on).
-  Result<std::int64_t> settings = query_number(
-      conn, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'settings'", "look for settings");
-  if (!settings.ok()) return settings.error();
-  if (*settings != 0) {
-    if (Status s = add_problems(
-            conn,
-            "SELECT hash, text FROM settings", "check the settings texts against their hashes",
-            [](const Statement& st) {
-              return settings_hash(st.column<std::string>(1)) == st.column<std::string>(0)
-                         ? std::string()
-                         : "settings " + st.column<std::string>(0) +
-                               ": the text does not match the hash it is stored under (every run stored with these "
-                               "settings is refused when read)";
-            },
-            problems);
-        !s.ok()) {
-      return s;
-    }
+  if (Status s = add_hash_problems(
+          conn, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'settings'",
+          "SELECT hash, text FROM settings", "check the settings texts against their hashes",
+          [](const Statement& st) {
+            return "settings " + st.column<std::string>(0) +
+                   ": the text does not match the hash it is stored under (every run stored with these settings is "
+                   "refused when read)";
+          },
+          problems);
+      !s.ok()) {
+    return s;
   }
-  // The files written beside a table (main program, speed subprogram, Y table), from version 20 on.
-  Result<std::int64_t> files = query_number(
-      conn, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'nc_push_files'", "look for files");
-  if (!files.ok()) return files.error();
-  if (*files != 0) {
-    if (Status s = add_problems(
-            conn,
-            "SELECT i.table_version, f.role, f.file, f.hash, f.text FROM nc_push_files AS f"
-            " JOIN nc_push_intents AS i ON i.id = f.intent_id WHERE f.text IS NOT NULL",
-            "check the hashes of the files pushed beside the tables",
-            [](const Statement& st) {
-              return settings_hash(st.column<std::string>(4)) == st.column<std::string>(3)
-                         ? std::string()
-                         : "the " + st.column<std::string>(1) + " file " + st.column<std::string>(2) +
-                               " of table version " + std::to_string(st.column<std::int64_t>(0)) +
-                               ": its text does not match the hash stored with it";
-            },
-            problems);
-        !s.ok()) {
-      return s;
-    }
+  if (Status s = add_hash_problems(
+          conn, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'nc_push_files'",
+          "SELECT f.hash, f.text, i.table_version, f.role, f.file FROM nc_push_files AS f"
+          " JOIN nc_push_intents AS i ON i.id = f.intent_id WHERE f.text IS NOT NULL",
+          "check the hashes of the files pushed beside the tables",
+          [](const Statement& st) {
+            return "the " + st.column<std::string>(3) + " file " + st.column<std::string>(4) + " of table version " +
+                   std::to_string(st.column<std::int64_t>(2)) + ": its text does not match the hash stored with it";
+          },
+          problems);
+      !s.ok()) {
+    return s;
   }
   Result<std::int64_t> has = query_number(
       conn, "SELECT count(*) FROM pragma_table_info('run_tables') WHERE name = 'checksum'", "look for checksums");
