@@ -441,6 +441,7 @@ Result<ReconcileReport> reconcile_locked(RunStore& store, const std::filesystem:
             store.complete_push(i.id, "found on the control after an interrupted push; recorded by reconciliation");
         if (!done) return done.error();
         ++report.completed;
+        (void)store.mark_ids();  // best effort, as after any push recorded
         report.messages.push_back(nc_file.string() + ": " + what +
                                   " is on the control; its interrupted push is now recorded");
       } else {
@@ -861,6 +862,8 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   }
   Result<PushCompletion> done = store.complete_push(
       *intent_id, main_written ? "written" : "written; the main program was not: " + main_written.error().message);
+  // Best effort: the push is recorded; a mark not written only means a loss of it goes unnoticed.
+  if (done) (void)store.mark_ids();
   if (done && !main_written && main_renamed) {
     // In place but not known to be on disk (its directory not flushed): after a power cut the
     // control may hold the previous main program again, which reconciliation writes anew.
@@ -892,8 +895,6 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
     return e;
   }
   reached(PushStep::kRecorded);
-  // Best effort: the push is recorded; a mark not written only means a loss of it goes unnoticed.
-  (void)store.mark_ids();
   return done;
 }
 
