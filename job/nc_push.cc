@@ -1022,12 +1022,31 @@ Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_f
   facts.reason = "rollback to version " + std::to_string(table_version) + " by " + by;
   facts.table = old->table;
   const std::string& text = *old->program_text;
+  // The speed subprogram that version was pushed with goes back with it, naming the new version.
+  Result<std::vector<PushFile>> old_files = store.files_of_push(nc_file, table_version);
+  if (!old_files) return old_files.error();
+  std::optional<std::string> old_speed;
+  for (const PushFile& f : *old_files) {
+    if (f.role == PushFileRole::kSpeed && f.text) old_speed = *f.text;
+  }
   PushOptions options;
-  Result<MainProgramSource> m = main_for_run(store, old->run_id, main, nc_file, "rolled back", text);
+  MainProgramSource rolled_back_main = main;
+  if (old_speed && !main.speed_template_text.empty()) {
+    rolled_back_main.template_text = main.speed_template_text;
+    rolled_back_main.template_name = main.speed_template_name;
+  }
+  Result<MainProgramSource> m = main_for_run(store, old->run_id, rolled_back_main, nc_file, "rolled back", text);
   if (!m) return m.error();
   options.main = std::move(*m);
-  Result<PushCompletion> pushed = push_program(
-      store, nc_file, facts, [&text](int version) { return with_table_version(text, version); }, options);
+  const RenderForVersion render = [&text](int version) { return with_table_version(text, version); };
+  std::optional<std::string> speed;
+  if (old_speed) {
+    Result<int> next = next_table_version_settled(store, nc_file, options);
+    if (!next) return next.error();
+    speed = with_header_value(*old_speed, "table_version", std::to_string(*next));
+  }
+  Result<PushCompletion> pushed = speed ? push_program_with_speed(store, nc_file, facts, render, *speed, options)
+                                        : push_program(store, nc_file, facts, render, options);
   if (!pushed) return pushed.error();
   return PushOutcome{nc_file, pushed->table_version, old->run_id, true, is_stroke_program(text)};
 }

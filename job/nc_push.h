@@ -282,8 +282,10 @@ Result<PushOutcome> approve_pending(RunStore& store, std::int64_t pending_id, co
 
 // `gaugeloop nc rollback` and POST /api/nc/rollback: pushes the program of `table_version`
 // of `nc_file` again, as a new version (header updated, body untouched); its run becomes the
-// one in force. kNotFound for a version never pushed or pushed without its text; kRefused for
-// the table of a crankpin ground C-X-Y (its Y table would not follow).
+// one in force. A version pushed with a speed subprogram (recorded with its push) gets it back,
+// naming the new version, with main.speed_template_text as the main template when given, as
+// an approval does. kNotFound for a version never pushed or pushed without its text; kRefused
+// for the table of a crankpin ground C-X-Y (its Y table would not follow).
 Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_file, int table_version,
                                         const std::string& by, const MainProgramSource& main = {});
 

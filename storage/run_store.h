@@ -684,6 +684,9 @@ class RunStore : public RunHistory {
   // damaged one). Empty for a file never pushed, or last pushed before pushes recorded their
   // files.
   Result<std::vector<PushFile>> files_of_last_push(const std::string& nc_file) const;
+  // The same for the push of `table_version` of `nc_file` (a rollback writes its files again);
+  // empty when it recorded none.
+  Result<std::vector<PushFile>> files_of_push(const std::string& nc_file, int table_version) const;
   // The newest push of ours (completed or abandoned) that wrote `hash` to `path`, as a file of
   // any role: its table version; empty when none did (a file edited by hand, or not ours).
   Result<std::optional<int>> version_that_wrote(const std::string& path, const std::string& hash) const;

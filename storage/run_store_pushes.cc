@@ -489,18 +489,27 @@ std::string_view push_file_role_name(PushFileRole role) {
 }
 
 Result<std::vector<PushFile>> RunStore::files_of_last_push(const std::string& nc_file) const {
-  const std::string operation = "read the files of the last push of " + nc_file;
+  return files_of_push(nc_file, 0);
+}
+
+Result<std::vector<PushFile>> RunStore::files_of_push(const std::string& nc_file, int table_version) const {
+  const std::string operation =
+      "read the files of " +
+      (table_version > 0 ? "table version " + std::to_string(table_version) : std::string("the last push")) + " of " +
+      nc_file;
   Result<Statement> q = Statement::prepare(*conn_,
                                            "SELECT f.role, f.file, f.hash, f.text, p.table_version"
                                            " FROM nc_pushes AS p"
                                            " JOIN nc_push_intents AS i ON i.push_id = p.id"
                                            " JOIN nc_push_files AS f ON f.intent_id = i.id"
                                            " WHERE p.id = (SELECT id FROM nc_pushes WHERE nc_file = :nc_file"
+                                           "               AND (:version = 0 OR table_version = :version)"
                                            "               ORDER BY table_version DESC LIMIT 1)"
                                            " ORDER BY f.role = 'table' DESC, f.role",
                                            operation);
   if (!q.ok()) return q.error();
   q->bind(":nc_file", storage_internal::nc_key(*conn_, nc_file));
+  q->bind(":version", table_version);
   Result<std::vector<PushFile>> files = q->collect([](const Statement& s) {
     PushFile f;
     const std::string role = s.column<std::string>(0);

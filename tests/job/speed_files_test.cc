@@ -246,6 +246,36 @@ TEST_F(SpeedFilesTest, EveryFileOfThePushIsHeldToThePushInForce) {
   EXPECT_EQ(*read_regular_file(main_file(), "main"), main_v1);
 }
 
+// A rollback to a version pushed with its speed subprogram writes that speed program again
+// (naming the new version), not leaving the newer version's speed beside the older table.
+TEST_F(SpeedFilesTest, ARollbackWritesTheSpeedProgramOfTheVersionRolledBackTo) {
+  testing::FailingNcFiles files;
+  Result<std::string> v1 = speed_text(1);
+  ASSERT_TRUE(v1.ok()) << v1.error().message;
+  ASSERT_TRUE(push(files, &*v1).ok());   // version 1, slow flanks
+  program_.speed_rpm.assign(360, 30.0);  // version 2: one speed all round
+  Result<std::string> v2 = speed_text(2);
+  ASSERT_TRUE(v2.ok()) << v2.error().message;
+  ASSERT_TRUE(push(files, &*v2).ok());
+  Result<ParsedSpeedProgram> before = read_speed_program(nc_file(), files);
+  ASSERT_TRUE(before.ok()) << before.error().message;
+
+  Result<PushOutcome> back = rollback_to_version(*store_, nc_file().string(), 1, "anna", main_);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->table_version, 3);
+  const std::string speed = *read_regular_file(speed_file(), "speed");
+  Result<ParsedSpeedProgram> now = read_speed_program(nc_file(), files);
+  ASSERT_TRUE(now.ok()) << now.error().message;
+  Result<ParsedSpeedProgram> first = parse_speed_program(*v1, "v1");
+  ASSERT_TRUE(first.ok());
+  EXPECT_EQ(now->body_checksum, first->body_checksum) << "version 1's speed program is back";
+  EXPECT_NE(now->body_checksum, before->body_checksum);
+  EXPECT_THAT(speed, HasSubstr("; gaugeloop table_version: 3"));
+  Result<std::vector<PushFileMismatch>> beside = compare_push_files(*store_, nc_file(), files);
+  ASSERT_TRUE(beside.ok());
+  EXPECT_TRUE(beside->empty());
+}
+
 TEST_F(SpeedFilesTest, AHandEditedSpeedFileIsReportedOnReadBack) {
   testing::FailingNcFiles files;
   ASSERT_TRUE(write_speed_program(nc_file(), speed_text_, files).ok());
