@@ -225,8 +225,7 @@ Status check_nc_directory(const std::filesystem::path& nc_dir, const std::filesy
   return check_room(nc_dir, kRoomForProgramBytes, "NC output directory");
 }
 
-Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem::path& nc_file,
-                                     StoreFindings* found) {
+Result<RunStore> open_store_for_push(const JobSettings& s, const std::filesystem::path& nc_file, StoreFindings* found) {
   if (Status d = check_nc_directory(s.nc_dir, nc_file); !d) return d.error();
   if (s.db_path != ":memory:") {
     const std::filesystem::path db_dir = std::filesystem::absolute(s.db_path).parent_path();

@@ -234,15 +234,16 @@ struct ReconcileReport {
 
 // Brings the journal and the control into agreement for `nc_file`, under the directory's
 // lock. First the ids the database handed out are held to its marks (RunStore::check_ids), so
-// a database that lost commits hands out none of their ids again. Then an open intent whose program the file holds byte for byte is completed (recorded as
-// pushed, "found on the control"), any other open intent is abandoned, and leftover temporary
-// files of ours (of the table, its main program, its speed subprogram and a pin's Y table) are
-// removed. Then a stale main program (find_stale_main) is written again for the table on the
-// control: as the last push recorded it when it did, else from `main` when it has a template
-// and the table is not a crankpin's ground C-X-Y (its Y table needs a measurement); otherwise
-// it is reported and left. Then every other file the last push recorded (compare_push_files)
-// that is missing or holds another push's file of ours is written again as recorded; one
-// edited by hand is reported and left. The table itself is never called edited by hand here.
+// a database that lost commits hands out none of their ids again. Then an open intent whose
+// program the file holds byte for byte is completed (recorded as pushed, "found on the
+// control"), any other open intent is abandoned, and leftover temporary files of ours (of the
+// table, its main program, its speed subprogram and a pin's Y table) are removed. Then a stale
+// main program (find_stale_main) is written again for the table on the control: as the last
+// push recorded it when it did, else from `main` when it has a template and the table is not a
+// crankpin's ground C-X-Y (its Y table needs a measurement); otherwise it is reported and left.
+// Then every other file the last push recorded (compare_push_files) that is missing or holds
+// another push's file of ours is written again as recorded; one edited by hand is reported and
+// left. The table itself is never called edited by hand here.
 Result<ReconcileReport> reconcile_pushes(RunStore& store, const std::filesystem::path& nc_file,
                                          NcFiles& files = real_nc_files(), const MainProgramSource* main = nullptr);
 
