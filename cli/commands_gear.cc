@@ -22,6 +22,7 @@
 #include "job/gear_run.h"
 #include "job/gear_stroke.h"
 #include "job/measure_job.h"
+#include "job/slide_files.h"
 #include "nc_out/stroke_program.h"
 #include "report/dfq.h"
 #include "report/gear_characteristics.h"
@@ -630,6 +631,22 @@ int run_gear_demo(const GearDemoOptions& o) {
     }
     std::fflush(stdout);
   };
+  // The slides first, as a shop would: a ZY ballbar, the tables fitted to it, the ballbar again.
+  const SlideErrors slides = seeded_slides(o.machine_seed);
+  Result<SlideRound> round =
+      run_slide_round(slides, s.nc_file.parent_path(), SlideTableLayout{}, "ZY ballbar of the virtual gear grinder");
+  if (!round) return report_error(round.error());
+  print_ballbar_figures("ZY ballbar before (radius 100 mm, 1000 mm/min)", round->before);
+  print_slide_identification(round->identified);
+  std::printf("  slide tables written: %s, %s\n",
+              slide_file(s.nc_file.parent_path(), SlideTableKind::kLeadscrew).string().c_str(),
+              slide_file(s.nc_file.parent_path(), SlideTableKind::kInterpolatory).string().c_str());
+  print_ballbar_figures("ZY ballbar after", round->after);
+  std::printf("ballbar roundness %.1f -> %.1f um (%.1f times), position error %.1f -> %.1f um\n",
+              round->before.roundness_um, round->after.roundness_um,
+              round->before.roundness_um / std::max(1e-9, round->after.roundness_um), round->before.position_error_um,
+              round->after.position_error_um);
+  std::fflush(stdout);
   Result<std::vector<GearLoopIteration>> r = run_gear_loop(ls, on_gear);
   if (!r) return report_error(r.error());
   const GearLoopIteration& a = r->front();
@@ -820,6 +837,8 @@ void add_gear_commands(CLI::App& app, CommandAction& action) {
                      "The gear was ground without a stroke from gaugeloop (SIM1 0); otherwise the stroke in force "
                      "is read from the history");
   identify->callback([&action, io] { action = [io] { return cmd_gear_identify(*io); }; });
+
+  add_gear_slide_commands(*gear, action);
 }
 
 }  // namespace gaugeloop

@@ -6,16 +6,20 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "cli/cli_common.h"
+#include "compensation/ballbar.h"
 #include "compensation/gear_lead.h"
 #include "config/gear_file.h"
 #include "job/gear_stroke.h"
+#include "nc_out/slide_compensation.h"
 #include "simulator/gear_grinder.h"
+#include "simulator/slide_ballbar.h"
 
 namespace gaugeloop {
 
@@ -71,5 +75,32 @@ struct GearDemoOptions {
   double z_increments_per_mm = 10000.0;
 };
 int run_gear_demo(const GearDemoOptions& o);
+
+// The slides' tables and the ballbar they are fitted to (commands_slides.cc).
+struct SlideTableLayout {
+  double radius_mm = 100.0;  // the ballbar's circle
+  double feed_mm_per_min = 1000.0;
+  double half_travel_mm = 150.0;  // the tables either side of the circle's centre
+  double step_mm = 2.0;
+  SlideAxisNames names;
+};
+
+// The slides' round of the demo: a ZY ballbar on the virtual machine's slides with the tables in
+// force in `nc_dir`, their geometry fitted, the tables written there (added to those in force),
+// and the ballbar again with them as read back. Errors: the tables in force's, the fit's, the
+// push's (nothing is written when the fit is refused).
+struct SlideRound {
+  BallbarTest test_before;
+  BallbarFigures before;
+  SlideIdentification identified;
+  BallbarFigures after;
+};
+Result<SlideRound> run_slide_round(const SlideErrors& slides, const std::filesystem::path& nc_dir,
+                                   const SlideTableLayout& layout, const std::string& source);
+void print_ballbar_figures(const char* label, const BallbarFigures& f);
+void print_slide_identification(const SlideIdentification& id);
+
+// gear ballbar and gear slides, under `gear`.
+void add_gear_slide_commands(CLI::App& gear, CommandAction& action);
 
 }  // namespace gaugeloop

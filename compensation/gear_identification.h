@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "compensation/ballbar.h"
 #include "compensation/gear_coupling.h"
 #include "compensation/gear_lead.h"
 #include "core/result.h"
@@ -28,14 +29,6 @@ struct ErrorTerm {
 // Parses "y:bow,y:linear,z:periodic@13.6,c:periodic@24" (axis y, z, b or c; kind linear, bow or
 // periodic@<pitch mm>). kInvalidInput naming the item.
 Result<std::vector<ErrorTerm>> parse_error_terms(std::string_view text);
-
-// A ballbar circle in the ZY plane around the stroke's middle, as the ballbar's software lists
-// it: the angle from +Y towards +Z and the bar's length less its nominal (um).
-struct BallbarCircle {
-  double radius_mm = 100.0;
-  std::vector<double> angle_deg;
-  std::vector<double> radial_um;
-};
 
 struct IdentifiedTerm {
   ErrorTerm term;

@@ -6,11 +6,13 @@
 #include <cstdlib>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "compensation/gear_coupling.h"
 #include "config/part_file.h"
 #include "config/toml_reader.h"
+#include "core/number_text.h"
 #include "core/text_file.h"
 
 namespace gaugeloop {
@@ -279,6 +281,73 @@ Result<BallbarCircle> read_ballbar_csv(const std::filesystem::path& path, double
   Result<std::string> text = read_regular_file(path, "ballbar circle");
   if (!text) return text.error();
   return parse_ballbar_csv(without_utf8_bom(*text), path.string(), radius_mm);
+}
+
+Result<BallbarTest> parse_ballbar_test_csv(std::string_view text, std::string_view source_name, double radius_mm,
+                                           double feed_mm_per_min) {
+  BallbarTest t;
+  t.radius_mm = radius_mm;
+  t.feed_mm_per_min = feed_mm_per_min;
+  // The comments that give the circle's radius and feed.
+  int line_no = 0;
+  for (std::size_t pos = 0; pos <= text.size();) {
+    const std::size_t nl = text.find('\n', pos);
+    std::string_view line = text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
+    pos = nl == std::string_view::npos ? text.size() + 1 : nl + 1;
+    ++line_no;
+    for (const auto& [key, field] : {std::pair<std::string_view, double*>{"# radius_mm:", &t.radius_mm},
+                                     std::pair<std::string_view, double*>{"# feed_mm_per_min:", &t.feed_mm_per_min}}) {
+      if (line.rfind(key, 0) != 0) continue;
+      std::string v(line.substr(key.size()));
+      v.erase(0, v.find_first_not_of(" \t"));
+      while (!v.empty() && (v.back() == '\r' || v.back() == ' ')) v.pop_back();
+      char* end = nullptr;
+      const double x = std::strtod(v.c_str(), &end);
+      if (v.empty() || end != v.c_str() + v.size() || !(x > 0.0) || !std::isfinite(x)) {
+        return make_error(ErrorCode::kInvalidInput, std::string(source_name) + ":" + std::to_string(line_no) + ": `" +
+                                                        std::string(line) + "`: expected a positive number");
+      }
+      *field = x;
+    }
+  }
+  t.ccw.radius_mm = t.cw.radius_mm = t.radius_mm;
+  const std::vector<std::string> names{"direction", "angle_deg", "radial_um"};
+  Status read = for_each_row(text, source_name, names, "one row per point, ccw or cw",
+                             [&](int line, const std::vector<std::string>& cells) -> Status {
+                               BallbarCircle* c = cells[0] == "ccw" ? &t.ccw : cells[0] == "cw" ? &t.cw : nullptr;
+                               if (c == nullptr) {
+                                 return make_error(ErrorCode::kInvalidInput,
+                                                   std::string(source_name) + ":" + std::to_string(line) +
+                                                       ": column direction: `" + cells[0] + "`; expected ccw or cw");
+                               }
+                               Result<double> a = number_cell(source_name, line, names, cells, 1);
+                               if (!a) return a.error();
+                               Result<double> r = number_cell(source_name, line, names, cells, 2);
+                               if (!r) return r.error();
+                               c->angle_deg.push_back(*a);
+                               c->radial_um.push_back(*r);
+                               return {};
+                             });
+  if (!read) return read.error();
+  return t;
+}
+
+Result<BallbarTest> read_ballbar_test_csv(const std::filesystem::path& path, double radius_mm, double feed_mm_per_min) {
+  Result<std::string> text = read_regular_file(path, "ballbar test");
+  if (!text) return text.error();
+  return parse_ballbar_test_csv(without_utf8_bom(*text), path.string(), radius_mm, feed_mm_per_min);
+}
+
+std::string ballbar_test_csv(const BallbarTest& t, std::string_view title) {
+  std::string out = "# " + std::string(title) + "\n# radius_mm: " + format_fixed(t.radius_mm, 3) +
+                    "\n# feed_mm_per_min: " + format_fixed(t.feed_mm_per_min, 1) + "\ndirection,angle_deg,radial_um\n";
+  for (const auto& [name, c] : {std::pair<const char*, const BallbarCircle*>{"ccw", &t.ccw},
+                                std::pair<const char*, const BallbarCircle*>{"cw", &t.cw}}) {
+    for (std::size_t i = 0; i < c->angle_deg.size(); ++i) {
+      out += std::string(name) + "," + format_fixed(c->angle_deg[i], 3) + "," + format_fixed(c->radial_um[i], 2) + "\n";
+    }
+  }
+  return out;
 }
 
 Result<std::vector<LeadTrace>> read_lead_traces_csv(const std::filesystem::path& path) {

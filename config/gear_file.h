@@ -59,4 +59,16 @@ Result<std::vector<LeadTrace>> read_lead_traces_csv(const std::filesystem::path&
 Result<BallbarCircle> parse_ballbar_csv(std::string_view text, std::string_view source_name, double radius_mm);
 Result<BallbarCircle> read_ballbar_csv(const std::filesystem::path& path, double radius_mm);
 
+// A ballbar test run both ways, CSV: a header naming direction, angle_deg and radial_um, then one
+// row per point; direction is ccw or cw (+Y towards +Z, and back). Comment lines may say
+// `# radius_mm: 100` and `# feed_mm_per_min: 1000` (ballbar_test_csv writes them); without them
+// `radius_mm` and `feed_mm_per_min` hold. kInvalidInput naming the line and column of what is
+// wrong, or a comment's value that is not a positive number.
+Result<BallbarTest> parse_ballbar_test_csv(std::string_view text, std::string_view source_name, double radius_mm,
+                                           double feed_mm_per_min);
+Result<BallbarTest> read_ballbar_test_csv(const std::filesystem::path& path, double radius_mm, double feed_mm_per_min);
+// The test as parse_ballbar_test_csv reads it, `title` as its first comment line; angles to
+// 0.001 deg, radial deviations to 0.01 um.
+std::string ballbar_test_csv(const BallbarTest& test, std::string_view title);
+
 }  // namespace gaugeloop

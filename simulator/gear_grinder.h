@@ -54,11 +54,11 @@ struct GearMachineErrors {
   AxisErrors at(double z_mm, int gap) const;
 };
 
-// A machine drawn from `seed` within stated ranges (docs/gears.md): Y's guide bowed 3-8 um over
-// the stroke and squareness 0.1-0.2 um/mm, Z's screw 1.5-3 um at a 10-16 mm pitch and 10-30 ppm,
-// B drifting 0.001-0.002 deg over the stroke, C's drive 0.001-0.002 deg at a 20-30 mm period;
-// the fast terms 0.2-0.4 um equivalent on Y and a few ten-thousandths of a degree on B and C; the
-// checker's noise 0.3 um. Lags and offsets of a few um and thousandths of a degree.
+// A machine drawn from `seed` within stated ranges (docs/gears.md): Y's guide bowed 10-25 um over
+// 15 mm and squareness 0.3-0.6 um/mm; Z's screw 3-6 um at a 10-16 mm pitch and 30-60 ppm; B
+// drifting 0.004-0.008 deg over 30 mm; C's drive 0.003-0.006 deg at a 20-30 mm period; the fast
+// terms 0.2-0.4 um on Y and a few ten-thousandths of a degree of C from B and C; the checker's
+// noise 0.3 um. Lags and offsets of a few um and thousandths of a degree.
 GearMachineErrors seeded_gear_machine(std::uint64_t seed);
 
 // The gear as ground: at each height z of the face and tooth gap, how far C stood ahead of where

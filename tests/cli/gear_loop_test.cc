@@ -121,6 +121,11 @@ TEST(GearLoop, TheDemoClosesTheLoopOnTheExampleGear) {
   EXPECT_NE(r.output.find("lead F_beta (mean of 8 flanks)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("not separable"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(dir.path() / "data" / "nc" / "GEAR_71_MAIN.MPF"));
+  // The slides first: a ZY ballbar, the tables fitted to it and written, the ballbar again.
+  EXPECT_NE(r.output.find("ZY ballbar before (radius 100 mm, 1000 mm/min): roundness"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("ballbar roundness "), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(dir.path() / "data" / "nc" / "AX_EEC.INI"));
+  EXPECT_TRUE(fs::exists(dir.path() / "data" / "nc" / "NC_CEC.INI"));
   testing::CommandResult h = testing::run_command("nc history" + data);
   ASSERT_EQ(h.exit_code, 0) << h.output;
   EXPECT_NE(h.output.find("mesh error identified"), std::string::npos) << h.output;
@@ -159,6 +164,43 @@ TEST(GearLoop, TheDemoClosesTheLoopOnTheExampleGear) {
   testing::CommandResult none = testing::run_command("gear runs spc --part gear_40" + data);
   EXPECT_EQ(none.exit_code, 2) << none.output;
   EXPECT_NE(none.output.find("no gear runs match"), std::string::npos) << none.output;
+}
+
+// The slides' commands as a shop runs them: a ballbar test written, the tables fitted to it and
+// written to the NC directory, the ballbar again with them loaded; a test in one direction is
+// refused before anything is written.
+TEST(GearLoop, TheSlideTablesFromABallbarCutItsRoundness) {
+  testing::TempDir dir("gear-slides");
+  const std::string data = " --data-dir " + (dir.path() / "data").string();
+  const fs::path test = dir.path() / "ballbar.csv";
+  testing::CommandResult before = testing::run_command("gear ballbar --machine-seed 3 --out " + test.string() + data);
+  ASSERT_EQ(before.exit_code, 0) << before.output;
+  auto roundness = [](const std::string& out) {
+    const std::size_t at = out.find("roundness ");
+    return at == std::string::npos ? -1.0 : std::stod(out.substr(at + 10));
+  };
+  const double r0 = roundness(before.output);
+  EXPECT_GT(r0, 40.0) << before.output;
+  // The same test in one direction: refused, nothing written.
+  const fs::path one_way = dir.path() / "ccw.csv";
+  ASSERT_EQ(testing::run_shell("grep -v '^cw,' " + test.string() + " > " + one_way.string()).exit_code, 0);
+  testing::CommandResult refused = testing::run_command("gear slides --ballbar " + one_way.string() + data);
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.output.find("the squareness and the servo mismatch act alike"), std::string::npos)
+      << refused.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "data" / "nc" / "NC_CEC.INI"));
+  testing::CommandResult slides = testing::run_command("gear slides --ballbar " + test.string() +
+                                                       " --y-screw-lead-mm 10 --z-screw-lead-mm 16" + data);
+  ASSERT_EQ(slides.exit_code, 0) << slides.output;
+  EXPECT_NE(slides.output.find("servo mismatch"), std::string::npos) << slides.output;
+  ASSERT_TRUE(fs::exists(dir.path() / "data" / "nc" / "AX_EEC.INI"));
+  ASSERT_TRUE(fs::exists(dir.path() / "data" / "nc" / "NC_CEC.INI"));
+  testing::CommandResult after = testing::run_command("gear ballbar --machine-seed 3" + data);
+  ASSERT_EQ(after.exit_code, 0) << after.output;
+  EXPECT_NE(after.output.find("the slide tables in"), std::string::npos) << after.output;
+  const double r1 = roundness(after.output);
+  EXPECT_GT(r1, 0.0) << after.output;
+  EXPECT_GE(r0 / r1, 3.6) << r0 << " -> " << r1;  // the paper's 50.2 -> 14.1 um
 }
 
 }  // namespace

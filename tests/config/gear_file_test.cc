@@ -155,5 +155,33 @@ TEST(BallbarCsv, AngleAndRadialErrorPerPointOrTheLineThatIsWrong) {
       << bad.error().message;
 }
 
+TEST(BallbarCsv, ATestBothWaysWithItsRadiusAndFeedReadsBackAsWritten) {
+  BallbarTest t;
+  t.radius_mm = 150.0;
+  t.feed_mm_per_min = 2000.0;
+  t.ccw.angle_deg = {0.0, 0.25};
+  t.ccw.radial_um = {1.25, -0.5};
+  t.cw.angle_deg = {0.0};
+  t.cw.radial_um = {2.0};
+  const std::string text = ballbar_test_csv(t, "a QC10 test");
+  Result<BallbarTest> back = parse_ballbar_test_csv(text, "bb.csv", 100.0, 1000.0);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->radius_mm, 150.0);
+  EXPECT_EQ(back->feed_mm_per_min, 2000.0);
+  EXPECT_EQ(back->ccw.radius_mm, 150.0);
+  EXPECT_EQ(back->ccw.angle_deg, t.ccw.angle_deg);
+  EXPECT_EQ(back->ccw.radial_um, t.ccw.radial_um);
+  EXPECT_EQ(back->cw.radial_um, t.cw.radial_um);
+  Result<BallbarTest> bad =
+      parse_ballbar_test_csv("direction,angle_deg,radial_um\nccw,0,1\nup,90,1\n", "bb.csv", 100, 1000);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("bb.csv:3: column direction: `up`; expected ccw or cw"), std::string::npos)
+      << bad.error().message;
+  bad = parse_ballbar_test_csv("# radius_mm: -5\ndirection,angle_deg,radial_um\n", "bb.csv", 100, 1000);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("bb.csv:1: `# radius_mm: -5`: expected a positive number"), std::string::npos)
+      << bad.error().message;
+}
+
 }  // namespace
 }  // namespace gaugeloop
