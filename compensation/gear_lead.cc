@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "core/angles.h"
 #include "core/number_text.h"
@@ -11,9 +12,10 @@
 namespace gaugeloop {
 namespace {
 
-Status check_trace(const LeadTrace& t) {
+// A trace's checks; `what` and `position` name it in messages ("lead", "Z"; "profile", "roll length").
+Status check_trace(const LeadTrace& t, const char* what = "lead", const char* position = "Z") {
   const std::string which =
-      "lead trace of gap " + std::to_string(t.gap) + ", " + std::string(flank_name(t.flank)) + " flank";
+      std::string(what) + " trace of gap " + std::to_string(t.gap) + ", " + std::string(flank_name(t.flank)) + " flank";
   if (t.z_mm.size() != t.deviation_um.size()) {
     return make_error(ErrorCode::kInvalidInput, which + ": " + std::to_string(t.z_mm.size()) + " positions but " +
                                                     std::to_string(t.deviation_um.size()) + " deviations");
@@ -23,7 +25,7 @@ Status check_trace(const LeadTrace& t) {
       return make_error(ErrorCode::kInvalidInput, which + ": point " + std::to_string(i + 1) + " is not finite");
     }
     if (i > 0 && !(t.z_mm[i] > t.z_mm[i - 1])) {
-      return make_error(ErrorCode::kInvalidInput, which + ": Z " + format_fixed(t.z_mm[i], 3) +
+      return make_error(ErrorCode::kInvalidInput, which + ": " + position + " " + format_fixed(t.z_mm[i], 3) +
                                                       " mm does not increase (point " + std::to_string(i + 1) + ")");
     }
   }
@@ -38,6 +40,57 @@ double base_radius_mm(const GearGeometry& g) {
   return g.teeth * g.normal_module_mm / std::cos(beta) / 2.0 * std::cos(alpha_t);
 }
 
+namespace {
+
+// The band, the band about the least-squares line, and that line's rise over [from, to], of the
+// points of (x, d) in [from, to]; fewer than 3 points: nullopt.
+struct Band {
+  double total = 0.0, form = 0.0, slope = 0.0;
+  int points = 0;
+};
+std::optional<Band> band_over(const std::vector<double>& xs, const std::vector<double>& ds, double from, double to) {
+  std::vector<double> x, d;
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    if (xs[i] >= from - 1e-9 && xs[i] <= to + 1e-9) {
+      x.push_back(xs[i]);
+      d.push_back(ds[i]);
+    }
+  }
+  if (x.size() < 3) return std::nullopt;
+  Band b;
+  b.points = static_cast<int>(x.size());
+  // The design line of an unmodified flank has the trace's nominal direction: deviation 0.
+  const auto [lo, hi] = std::minmax_element(d.begin(), d.end());
+  b.total = *hi - *lo;
+  const double n = static_cast<double>(x.size());
+  double sx = 0.0, sd = 0.0, sxx = 0.0, sxd = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    sx += x[i];
+    sd += d[i];
+    sxx += x[i] * x[i];
+    sxd += x[i] * d[i];
+  }
+  const double slope = (n * sxd - sx * sd) / (n * sxx - sx * sx);
+  const double intercept = (sd - slope * sx) / n;
+  double rmin = 0.0, rmax = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double r = d[i] - (intercept + slope * x[i]);
+    rmin = std::min(rmin, r);
+    rmax = std::max(rmax, r);
+  }
+  b.form = rmax - rmin;
+  b.slope = slope * (to - from);
+  return b;
+}
+
+std::string too_few(const char* what, int gap, Flank flank, int points, double from, double to) {
+  return std::string(what) + " trace of gap " + std::to_string(gap) + ", " + std::string(flank_name(flank)) +
+         " flank: " + std::to_string(points) + " points in the evaluation range " + format_fixed(from, 2) + " .. " +
+         format_fixed(to, 2) + " mm; at least 3 are needed";
+}
+
+}  // namespace
+
 Result<LeadFigures> lead_figures(const LeadTrace& t, const GearGeometry& g) {
   if (Status c = check_trace(t); !c) return c.error();
   const double b = g.face_width_mm;
@@ -45,44 +98,49 @@ Result<LeadFigures> lead_figures(const LeadTrace& t, const GearGeometry& g) {
   LeadFigures f;
   f.from_mm = -b / 2.0 + trim;
   f.to_mm = b / 2.0 - trim;
-  std::vector<double> z;
-  std::vector<double> d;
-  for (std::size_t i = 0; i < t.z_mm.size(); ++i) {
-    if (t.z_mm[i] >= f.from_mm - 1e-9 && t.z_mm[i] <= f.to_mm + 1e-9) {
-      z.push_back(t.z_mm[i]);
-      d.push_back(t.deviation_um[i]);
-    }
+  const std::optional<Band> band = band_over(t.z_mm, t.deviation_um, f.from_mm, f.to_mm);
+  if (!band) {
+    int in = 0;
+    for (const double z : t.z_mm) in += z >= f.from_mm - 1e-9 && z <= f.to_mm + 1e-9 ? 1 : 0;
+    return make_error(ErrorCode::kInvalidInput, too_few("lead", t.gap, t.flank, in, f.from_mm, f.to_mm));
   }
-  f.points = static_cast<int>(z.size());
-  if (z.size() < 3) {
-    return make_error(ErrorCode::kInvalidInput, "lead trace of gap " + std::to_string(t.gap) + ", " +
-                                                    std::string(flank_name(t.flank)) +
-                                                    " flank: " + std::to_string(z.size()) +
-                                                    " points in the evaluation range " + format_fixed(f.from_mm, 2) +
-                                                    " .. " + format_fixed(f.to_mm, 2) + " mm; at least 3 are needed");
+  f.points = band->points;
+  f.total_um = band->total;
+  f.form_um = band->form;
+  f.slope_um = band->slope;
+  return f;
+}
+
+ProfileRange profile_range(const GearGeometry& g) {
+  const double r_b = base_radius_mm(g);
+  const double r_p = g.teeth * g.normal_module_mm / std::cos(g.helix_angle_deg * kRadPerDeg) / 2.0;
+  auto roll = [&](double r) { return r > r_b ? std::sqrt(r * r - r_b * r_b) : 0.0; };
+  ProfileRange p;
+  p.start_roll_mm = roll(r_p - g.normal_module_mm);
+  p.tip_roll_mm = roll(r_p + g.normal_module_mm);
+  p.evaluation_end_roll_mm = p.start_roll_mm + 0.92 * (p.tip_roll_mm - p.start_roll_mm);
+  return p;
+}
+
+Result<ProfileFigures> profile_figures(const ProfileTrace& t, const GearGeometry& g) {
+  // The checks of a lead trace, on the roll lengths.
+  if (Status c = check_trace(LeadTrace{t.gap, t.flank, t.roll_mm, t.deviation_um}, "profile", "roll length"); !c) {
+    return c.error();
   }
-  // The design helix of an unmodified flank has the trace's nominal direction: deviation 0.
-  const auto [lo, hi] = std::minmax_element(d.begin(), d.end());
-  f.total_um = *hi - *lo;
-  // The mean helix: the least-squares line.
-  const double n = static_cast<double>(z.size());
-  double sz = 0.0, sd = 0.0, szz = 0.0, szd = 0.0;
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    sz += z[i];
-    sd += d[i];
-    szz += z[i] * z[i];
-    szd += z[i] * d[i];
+  const ProfileRange r = profile_range(g);
+  ProfileFigures f;
+  f.from_mm = r.start_roll_mm;
+  f.to_mm = r.evaluation_end_roll_mm;
+  const std::optional<Band> band = band_over(t.roll_mm, t.deviation_um, f.from_mm, f.to_mm);
+  if (!band) {
+    int in = 0;
+    for (const double x : t.roll_mm) in += x >= f.from_mm - 1e-9 && x <= f.to_mm + 1e-9 ? 1 : 0;
+    return make_error(ErrorCode::kInvalidInput, too_few("profile", t.gap, t.flank, in, f.from_mm, f.to_mm));
   }
-  const double slope = (n * szd - sz * sd) / (n * szz - sz * sz);
-  const double intercept = (sd - slope * sz) / n;
-  double rmin = 0.0, rmax = 0.0;
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    const double r = d[i] - (intercept + slope * z[i]);
-    rmin = std::min(rmin, r);
-    rmax = std::max(rmax, r);
-  }
-  f.form_um = rmax - rmin;
-  f.slope_um = slope * (f.to_mm - f.from_mm);
+  f.points = band->points;
+  f.total_um = band->total;
+  f.form_um = band->form;
+  f.slope_um = band->slope;
   return f;
 }
 

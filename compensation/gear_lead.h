@@ -37,6 +37,31 @@ struct LeadFigures {
 // is not increasing in Z.
 Result<LeadFigures> lead_figures(const LeadTrace& trace, const GearGeometry& gear);
 
+// The profile a checker traces at the face's middle: roll lengths from the root form circle (the
+// pitch radius less one module, not below the base circle) to the tip circle (the pitch radius
+// plus one module: a standard addendum), and ISO 1328-1's evaluation range, the first 92 % of
+// that from the root.
+struct ProfileRange {
+  double start_roll_mm = 0.0;
+  double tip_roll_mm = 0.0;
+  double evaluation_end_roll_mm = 0.0;
+};
+ProfileRange profile_range(const GearGeometry& gear);
+
+// ISO 1328-1's profile deviations over the evaluation range: the total F_alpha (the band
+// between two design involutes enclosing the trace), the form f_f_alpha (about the mean
+// profile, the least-squares line) and the slope f_H_alpha (the mean profile's rise over the
+// range, signed). kInvalidInput for fewer than 3 points in the range, a trace not increasing.
+struct ProfileFigures {
+  double total_um = 0.0;
+  double form_um = 0.0;
+  double slope_um = 0.0;
+  double from_mm = 0.0;  // roll lengths
+  double to_mm = 0.0;
+  int points = 0;
+};
+Result<ProfileFigures> profile_figures(const ProfileTrace& trace, const GearGeometry& gear);
+
 // The flank tolerance class of ISO 1328-1 for a total helix deviation: the smallest class A (1
 // to 11) whose tolerance F_betaT = (0.1 sqrt(d) + 0.63 sqrt(b) + 4.2) sqrt(2)^(A - 5) um holds
 // it (d the pitch diameter, b the face width, mm; the standard's rounding of tolerances is not

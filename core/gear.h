@@ -73,6 +73,16 @@ struct LeadTrace {
   std::vector<double> deviation_um;  // one per z_mm
 };
 
+// A flank along its involute at the face's middle (a profile trace) as a gear checker measures
+// it: deviations as LeadTrace's, at roll lengths roll_mm (along the base circle's tangent, from
+// where the involute leaves the base circle), increasing from the root towards the tip.
+struct ProfileTrace {
+  int gap = 0;
+  Flank flank = Flank::kLeft;
+  std::vector<double> roll_mm;
+  std::vector<double> deviation_um;
+};
+
 // The heights across the face a lead is measured at: from -b/2 every step_mm, up to +b/2.
 std::vector<double> lead_heights_mm(const GearGeometry& gear, double step_mm);
 

@@ -31,9 +31,9 @@ double AxisErrorTerms::at(double z, double gap_phase_rad) const {
          fast * std::sin(2.0 * kPi * z / fast_pitch_mm + fast_phase_rad + gap_phase_rad);
 }
 
-AxisErrors GearMachineErrors::at(double z, int gap) const {
+AxisErrors GearMachineErrors::at(double z, int gap, double worm_phase_rad) const {
   const double phase = gap_phase(gap);
-  return {y_mm.at(z, phase), z_mm.at(z, phase), b_deg.at(z, phase), c_deg.at(z, phase)};
+  return {y_mm.at(z, phase), z_mm.at(z, phase), b_deg.at(z, phase + worm_phase_rad), c_deg.at(z, phase)};
 }
 
 GearMachineErrors seeded_gear_machine(std::uint64_t seed) {
@@ -86,8 +86,17 @@ double GroundGear::sim_deg(double z) const {
   return a.sim_deg + (z - a.z_mm) / (b.z_mm - a.z_mm) * (b.sim_deg - a.sim_deg);
 }
 
-double GroundGear::mesh_error_deg(double z, int gap) const {
-  return sim_deg(z) - equivalent_sim_deg(coupling_, machine_.at(z, gap));
+double GroundGear::mesh_error_deg(double z, int gap, double worm_phase_rad) const {
+  return sim_deg(z) - equivalent_sim_deg(coupling_, machine_.at(z, gap, worm_phase_rad));
+}
+
+double GroundGear::profile_deviation_um(double roll_mm, int gap, Flank flank) const {
+  const ProfileRange r = profile_range(part_.gear);
+  const double r_b = base_radius_mm(part_.gear);
+  // A transverse base pitch is 2 pi r_b / teeth of roll; the worm turns once per `starts` of them.
+  const double worm_phase =
+      (roll_mm - 0.5 * (r.start_roll_mm + r.tip_roll_mm)) * part_.gear.teeth / (r_b * part_.worm.starts);
+  return flank_sign(flank) * r_b * 1000.0 * kPi / 180.0 * mesh_error_deg(0.0, gap, worm_phase);
 }
 
 Result<GroundGear> grind_gear(const GearPart& part, const GearMachineErrors& machine, const std::string& stroke_file) {
@@ -110,6 +119,34 @@ double probed_deviation_um(const GroundGear& gear, std::uint64_t measurement, in
   const std::uint64_t index =
       seeded::mix((static_cast<std::uint64_t>(gap) << 1 | (flank == Flank::kLeft ? 0u : 1u)) ^ seeded::mix(z_units));
   return gear.flank_deviation_um(z_mm, gap, flank) + gear.checker_noise_um() * seeded::normal(noise_seed, index);
+}
+
+std::vector<ProfileTrace> measure_profile(const GroundGear& gear, const std::vector<int>& gaps, double step_mm,
+                                          std::uint64_t measurement) {
+  const ProfileRange r = profile_range(gear.part().gear);
+  const std::uint64_t noise_seed = seeded::mix(gear.machine_seed() ^ seeded::mix(measurement + 0x9f0f11eULL));
+  std::vector<ProfileTrace> out;
+  for (int gap : gaps) {
+    for (Flank f : {Flank::kLeft, Flank::kRight}) {
+      ProfileTrace t;
+      t.gap = gap;
+      t.flank = f;
+      for (double roll = r.start_roll_mm; roll <= r.tip_roll_mm + 1e-9; roll += step_mm) {
+        const auto units = static_cast<std::uint64_t>(std::llround(roll * 1e4));
+        const std::uint64_t index = seeded::mix((static_cast<std::uint64_t>(gap) << 1 | (f == Flank::kLeft ? 0u : 1u)) ^
+                                                seeded::mix(units + (1ULL << 50)));
+        t.roll_mm.push_back(roll);
+        t.deviation_um.push_back(gear.profile_deviation_um(roll, gap, f) +
+                                 gear.checker_noise_um() * seeded::normal(noise_seed, index));
+      }
+      double mean = 0.0;
+      for (const double d : t.deviation_um) mean += d;
+      mean /= static_cast<double>(std::max<std::size_t>(1, t.deviation_um.size()));
+      for (double& d : t.deviation_um) d -= mean;
+      out.push_back(std::move(t));
+    }
+  }
+  return out;
 }
 
 std::vector<LeadTrace> measure_lead(const GroundGear& gear, const std::vector<int>& gaps, double step_mm,

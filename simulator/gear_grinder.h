@@ -50,8 +50,9 @@ struct GearMachineErrors {
   AxisErrorTerms c_deg;
   double checker_noise_um = 0.3;  // the gear checker's probe, one sigma
   std::uint64_t seed = 1;
-  // The axes' errors at z for gap `gap` (its phase for the fast terms).
-  AxisErrors at(double z_mm, int gap) const;
+  // The axes' errors at z for gap `gap` (its phase for the fast terms); `worm_phase_rad` turns
+  // B's once-per-turn term on, as the worm turns while a profile is generated.
+  AxisErrors at(double z_mm, int gap, double worm_phase_rad = 0.0) const;
 };
 
 // A machine drawn from `seed` within stated ranges (docs/gears.md): Y's guide bowed 10-25 um over
@@ -67,10 +68,14 @@ GearMachineErrors seeded_gear_machine(std::uint64_t seed);
 class GroundGear {
  public:
   GroundGear(GearPart part, GearCoupling coupling, GearMachineErrors machine, std::vector<StrokeProgramPoint> stroke);
-  double mesh_error_deg(double z_mm, int gap) const;
+  double mesh_error_deg(double z_mm, int gap, double worm_phase_rad = 0.0) const;
   // What a probe finds on `flank` of `gap` at height z, without noise: flank_sign(flank) r_b
   // mesh (radians), um.
   double flank_deviation_um(double z_mm, int gap, Flank flank) const;
+  // The same at roll length `roll_mm` of the profile at the face's middle: generating the profile
+  // from the root to the tip, the worm turns once per transverse base pitch over its starts, and
+  // B's once-per-turn error goes round with it; the slower terms are those at the middle.
+  double profile_deviation_um(double roll_mm, int gap, Flank flank) const;
   const GearPart& part() const { return part_; }
   std::uint64_t machine_seed() const { return machine_.seed; }
   double checker_noise_um() const { return machine_.checker_noise_um; }
@@ -93,6 +98,12 @@ Result<GroundGear> grind_gear(const GearPart& part, const GearMachineErrors& mac
 // taken in, so the probe over Modbus (simulator/gear_probe_simulator.h) reads what the
 // checker below reads.
 double probed_deviation_um(const GroundGear& gear, std::uint64_t measurement, int gap, Flank flank, double z_mm);
+
+// The gear checker's profile: each gap in `gaps`, left and right flank, at the face's middle,
+// every step_mm of roll length over profile_range (noise as probed_deviation_um's, seeded apart),
+// each trace aligned on its tooth (its mean taken out).
+std::vector<ProfileTrace> measure_profile(const GroundGear& gear, const std::vector<int>& gaps, double step_mm,
+                                          std::uint64_t measurement);
 
 // The gear checker: the lead of each gap in `gaps` (1-based), left and right flank, at every
 // step_mm across the face (from -b/2 to +b/2), with the checker's noise (seeded by the machine's

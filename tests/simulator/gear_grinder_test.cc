@@ -75,6 +75,47 @@ TEST(GearGrinder, TheCheckerSeesTheFlanksOppositeAndAlignsEachTrace) {
   EXPECT_GT(traces[0].deviation_um.back(), 1.6) << "0.0012 deg at 12 mm: 1.68 um on the left flank (r_b 80.09 mm)";
 }
 
+// The profile at the face's middle: the worm's once-per-turn error of B goes round once per
+// transverse base pitch of roll (one start), through the gearbox's S_BC into C; the slow errors
+// and SIM1 turn the whole profile at that height, which the checker's alignment takes out.
+TEST(GearGrinder, TheProfileSeesTheWormsOncePerTurnErrorAndNotTheStroke) {
+  GearPart part;
+  GearMachineErrors m;
+  m.b_deg.fast = 0.015;
+  m.checker_noise_um = 0.0;
+  testing::TempDir dir("gear-profile");
+  Result<GroundGear> gear = grind_gear(part, m, stroke_file(dir, {{-15.0, 0.0}, {15.0, 0.0}}));
+  ASSERT_TRUE(gear.ok()) << gear.error().message;
+  const ProfileRange r = profile_range(part.gear);
+  // r_p 86.027 mm, r_b 80.096 mm: roll sqrt(83.777^2 - r_b^2) at r_p - m, sqrt(88.277^2 - r_b^2) at the tip.
+  EXPECT_NEAR(r.start_roll_mm, 24.57, 0.01);
+  EXPECT_NEAR(r.tip_roll_mm, 37.12, 0.01);
+  const std::vector<ProfileTrace> traces = measure_profile(*gear, {1, 20}, 0.1, 0);
+  ASSERT_EQ(traces.size(), 4u);
+  const testing::NumericFactors k = testing::numeric_factors(testing::GeneratingModel(part));
+  // Over 1.6 worm turns of roll the band is the sine's: 2 r_b |S_BC| B's amplitude (rad), less
+  // what the 0.1 mm sampling (0.089 rad of the worm a step) misses of each peak: under 0.1 %.
+  const double expected_um = 2.0 * base_radius_mm(part.gear) * 1000.0 * std::abs(k.s_bc) * 0.015 * kPi / 180.0;
+  for (const ProfileTrace& t : traces) {
+    Result<ProfileFigures> f = profile_figures(t, part.gear);
+    ASSERT_TRUE(f.ok()) << f.error().message;
+    EXPECT_NEAR(f->total_um, expected_um, 0.003 * expected_um) << "gap " << t.gap;
+  }
+  // The stroke's slow errors and another SIM1 leave the profile as it was.
+  GearMachineErrors slow = m;
+  slow.y_mm.bow_per_mm2 = 1e-4;
+  slow.c_deg.offset = 0.003;
+  slow.z_mm.slow = 0.004;
+  Result<GroundGear> other = grind_gear(part, slow, stroke_file(dir, {{-15.0, 0.002}, {15.0, -0.001}}));
+  ASSERT_TRUE(other.ok());
+  const std::vector<ProfileTrace> again = measure_profile(*other, {1, 20}, 0.1, 0);
+  for (std::size_t i = 0; i < traces.size(); ++i) {
+    for (std::size_t j = 0; j < traces[i].deviation_um.size(); ++j) {
+      EXPECT_NEAR(again[i].deviation_um[j], traces[i].deviation_um[j], 1e-9);
+    }
+  }
+}
+
 TEST(GearGrinder, AStrokeEditedByHandIsNotGround) {
   testing::TempDir dir("gear-edited");
   const std::string path = stroke_file(dir, {{-15.0, 0.0}, {15.0, 0.001}});
