@@ -34,7 +34,7 @@ inline constexpr int kAll = INT_MAX;
 inline constexpr int kMaxLimit = 100000;
 // A trend's window unless `limit` says otherwise: about three weeks of a lobe measured every
 // half hour, drawn readably, and read in a few milliseconds at any size of the history.
-inline constexpr int kTrendDefaultRuns = 1000;
+inline constexpr int kTrendDefaultRuns = 200;
 inline constexpr int kMaxLobe = 1000;  // as `runs list --lobe`
 inline constexpr std::size_t kMaxBodyBytes = 64 * 1024;
 inline constexpr const char* kDocs = "see docs/http_api.md";

@@ -16,6 +16,7 @@
 #include <benchmark/benchmark.h>
 #include <mosquitto.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -24,6 +25,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <pqxx/pqxx>
@@ -328,8 +331,11 @@ BENCHMARK(BM_BarePqxxCopy)->Arg(6)->Arg(25)->UseManualTime()->Iterations(3)->Uni
 
 // The central history with kCentralRuns runs: its schema made by a real sync of 8 runs, the
 // rest generated in SQL (20 machines, 5 parts of 8 lobes, a run every 30 s per machine).
+bool million_built = false;  // whether a benchmark asked for the history (print_server_times)
+
 const std::string& million_url() {
   static const std::string url = [] {
+    million_built = true;
     const std::string u = new_database("million");
     const fs::path db = scratch("million") / "runs.sqlite";
     RunStore store = store_with_runs(db, 8, false);
@@ -364,6 +370,9 @@ const std::string& million_url() {
     pqxx::nontransaction(c).exec("VACUUM ANALYZE run_characteristic_sets");
     // The generated gigabyte written out now, not by a checkpoint during the measurements.
     pqxx::nontransaction(c).exec("CHECKPOINT");
+    // Every statement of the queries' sessions in the server's log with its duration: the
+    // server's own time, printed at the end (server_times).
+    pqxx::nontransaction(c).exec("ALTER DATABASE " + std::string(c.dbname()) + " SET log_min_duration_statement = 0");
     return u;
   }();
   return url;
@@ -408,6 +417,18 @@ void BM_CentralTrend30DaysAllMachines(benchmark::State& state) {
   run_query(state, q, true);
 }
 BENCHMARK(BM_CentralTrend30DaysAllMachines)->Unit(benchmark::kMillisecond);
+
+// The same 30 days, the newest 1,000 runs of them (`runs trend --limit 1000`; its default is 200).
+void BM_CentralTrend30DaysDefaultWindow(benchmark::State& state) {
+  RunQuery q;
+  q.part = "cam_3";
+  q.lobe = 4;
+  q.since_utc = "2026-01-10T00:00:00Z";
+  q.until_utc = "2026-02-09T00:00:00Z";
+  q.limit = 1000;
+  run_query(state, q, true);
+}
+BENCHMARK(BM_CentralTrend30DaysDefaultWindow)->Unit(benchmark::kMillisecond);
 
 void BM_CentralLastRunsOfOneMachine(benchmark::State& state) {
   RunQuery q;
@@ -477,6 +498,51 @@ void BM_BareSelectOneRunByUuid(benchmark::State& state) {
 }
 BENCHMARK(BM_BareSelectOneRunByUuid)->Unit(benchmark::kMillisecond);
 
+// The server's own time for each statement the 1,000,000-run history answered, from its log
+// (log_min_duration_statement = 0 on that database): the medians of parse, bind (planning) and
+// execute, per statement and parameters, printed after the benchmarks.
+void print_server_times() {
+  if (!million_built) return;
+  std::ifstream log(servers().postgres.log_path());
+  std::map<std::string, std::vector<double>> phases;  // "<phase> <statement>" -> ms
+  std::string line, pending_phase, pending_sql;
+  double pending_ms = 0.0;
+  auto flush = [&](const std::string& parameters) {
+    if (pending_phase.empty()) return;
+    phases[pending_sql + (parameters.empty() ? "" : " [" + parameters + "]") + "\t" + pending_phase].push_back(
+        pending_ms);
+    pending_phase.clear();
+  };
+  while (std::getline(log, line)) {
+    const std::size_t d = line.find("duration: ");
+    const std::size_t p = line.find("DETAIL:  parameters: ");
+    if (p != std::string::npos) {
+      flush(line.substr(p + 21));
+      continue;
+    }
+    flush("");
+    if (d == std::string::npos) continue;
+    const double ms = std::strtod(line.c_str() + d + 10, nullptr);
+    for (const char* phase : {"parse", "bind", "execute"}) {
+      const std::size_t at = line.find(std::string("ms  ") + phase + " ");
+      if (at == std::string::npos) continue;
+      const std::size_t colon = line.find(": ", at);
+      if (colon == std::string::npos) break;
+      pending_sql = line.substr(colon + 2, 40);
+      pending_phase = phase;
+      pending_ms = ms;
+    }
+  }
+  flush("");
+  if (phases.empty()) return;
+  std::printf("\nserver time of each statement on the 1,000,000-run history (its log; median ms of n):\n");
+  for (auto& [key, v] : phases) {
+    if (v.size() < 10) continue;
+    std::sort(v.begin(), v.end());
+    std::printf("  %-8.3f n=%-6zu %s\n", v[v.size() / 2], v.size(), key.c_str());
+  }
+}
+
 }  // namespace
 }  // namespace gaugeloop
 
@@ -484,6 +550,7 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
+  gaugeloop::print_server_times();
   std::filesystem::remove_all(std::filesystem::temp_directory_path() /
                               ("gaugeloop-plant-bench-" + std::to_string(::getpid())));
   return 0;

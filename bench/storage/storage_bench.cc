@@ -2,13 +2,14 @@
 //  - storing one run (3 x 360 raw samples, profile, correction, figures) through
 //    RunStore::insert_run, against a baseline in the same run: a bare sqlite3 INSERT of the
 //    same number of bytes as one BLOB, in its own durable transaction, on the same file system;
-//  - on a database of 100,000 runs (built once, in one transaction, and cached): the last 50
-//    runs of a lobe, a 30-day trend of a lobe, and one whole run, each through RunStore as the
-//    command line does, against a baseline: a bare SELECT of one runs row by primary key;
+//  - on a database of 100,000 runs (GAUGELOOP_BENCH_RUNS; built once, in one transaction, and
+//    cached): the last 50 runs of a lobe, of a verdict no run has, a 30-day trend of a lobe, SPC
+//    of a lobe and one whole run, each through RunStore as the command line does, against a
+//    baseline: a bare SELECT of one runs row by primary key;
 //  - bytes stored per run, for this schema (version 2) and for version 1's layout.
 //
-// GAUGELOOP_BENCH_DB: where the 100,000-run database is kept between runs
-// (default: <tmp>/gaugeloop-bench-100k.sqlite); delete it to rebuild.
+// GAUGELOOP_BENCH_DB: where the database is kept between runs (default:
+// <tmp>/gaugeloop-bench-<runs>.sqlite); delete it to rebuild.
 #include <benchmark/benchmark.h>
 #include <sqlite3.h>
 
@@ -29,19 +30,29 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kRuns = 100000;
 constexpr int kMachines = 4;
 constexpr int kParts = 5;
 constexpr int kLobes = 8;                           // per part: 160 lobes, 625 runs each
 constexpr std::int64_t kFirstRunUnix = 1767225600;  // 2026-01-01T00:00:00Z
-constexpr std::int64_t kRunSpacingS = 300;          // a run every 5 minutes: 100,000 runs in 347 days
-constexpr int kCharacteristics = 25;                // a judged lobe's: whole turn, zones, velocity, roundness
+constexpr std::int64_t kRunSpacingS = 300;  // a run every 5 minutes: 100,000 runs in 347 days, 1,000,000 in 9.5 years
+constexpr int kCharacteristics = 25;        // a judged lobe's: whole turn, zones, velocity, roundness
 
 [[noreturn]] void die(const std::string& what) {
   std::fprintf(stderr, "storage_bench: %s\n", what.c_str());
   std::abort();  // a benchmark on a database that failed to build measures nothing
 }
 
+// The history's size: GAUGELOOP_BENCH_RUNS runs (default 100,000; 1,000000 for a grinder's ten
+// years at a run every 5 minutes).
+int runs_count() {
+  static const int n = [] {
+    const char* env = std::getenv("GAUGELOOP_BENCH_RUNS");
+    const long v = env != nullptr ? std::strtol(env, nullptr, 10) : 100000;
+    if (v < 1000 || v > 10000000) die("GAUGELOOP_BENCH_RUNS must be 1000 to 10,000,000");
+    return static_cast<int>(v);
+  }();
+  return n;
+}
 std::string utc(std::int64_t unix_s) {
   const auto t = static_cast<std::time_t>(unix_s);
   std::tm tm{};
@@ -159,7 +170,7 @@ void build_history(const fs::path& path) {
     harmonics += (h ? "," : "") + std::to_string(15.0 / (1.0 + static_cast<double>(h)));
   harmonics += "]";
   const std::string hash = settings_hash(r.settings);
-  exec(db, "INSERT INTO settings VALUES ('" + hash + "', 'bench')");
+  exec(db, "INSERT INTO settings VALUES ('" + hash + "', '" + r.settings + "')");
 
   sqlite3_stmt* run = prepare(
       db,
@@ -169,10 +180,17 @@ void build_history(const fs::path& path) {
       " harmonic_amplitude_um, rotation_sense, c_offset_deg, probe_offset_deg)"
       " VALUES (?1, ?1, ?2, ?3, ?4, 'tcp:10.0.0.7:502', '', ?5, 3, 1080, 410, 0, 0, 0.25, ?6, 7.1, 29.9, 0.7, ?7,"
       " ?8, ?9, 1.2, ?10, 1, 0, 0)");
-  sqlite3_stmt* raw = prepare(db, "INSERT INTO run_raw VALUES (?1, '[100,101,102]', ?2)");
+  // With the checksums a run stored today carries (schema 19), which reading a run checks.
+  const std::int64_t raw_sum = storage_internal::raw_checksum("[100,101,102]", lift);
+  const std::int64_t tables_sum = storage_internal::tables_checksum(
+      {std::string_view(design).substr(0, 1440), std::string_view(mean).substr(0, 1440),
+       std::string_view(spread).substr(0, 1440), std::string_view(error).substr(0, 1440),
+       std::string_view(correction).substr(0, 1440)},
+      std::nullopt);
+  sqlite3_stmt* raw = prepare(db, "INSERT INTO run_raw VALUES (?1, '[100,101,102]', ?2, ?3)");
   sqlite3_stmt* tables = prepare(db,
-                                 "INSERT INTO run_tables (run_id, design_lift, mean_lift, spread, error, correction)"
-                                 " VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+                                 "INSERT INTO run_tables (run_id, design_lift, mean_lift, spread, error, correction,"
+                                 " checksum) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
   sqlite3_stmt* push =
       prepare(db,
               "INSERT INTO nc_pushes (run_id, pushed_utc, nc_file, point_count, correction_max_um, program_hash,"
@@ -182,7 +200,7 @@ void build_history(const fs::path& path) {
               " 'run ' || ?1, 'cspline', 55, 0.47)");
   sqlite3_stmt* characteristic =
       prepare(db, "INSERT INTO run_characteristics VALUES (?1, ?2, ?3, 'um', ?4, ?4, ?4, -12.0, 12.0, ?5, NULL, NULL)");
-  for (int i = 0; i < kRuns; ++i) {
+  for (int i = 0; i < runs_count(); ++i) {
     const std::string started = utc(kFirstRunUnix + static_cast<std::int64_t>(i) * kRunSpacingS);
     const std::string machine = "grinder-" + std::to_string(1 + i % kMachines);
     const std::string part = part_name((i / kMachines) % kParts);
@@ -207,6 +225,7 @@ void build_history(const fs::path& path) {
     const sqlite3_int64 id = sqlite3_last_insert_rowid(db);
     sqlite3_bind_int64(raw, 1, id);
     sqlite3_bind_blob(raw, 2, lift.data(), static_cast<int>(lift.size()), SQLITE_STATIC);
+    sqlite3_bind_int64(raw, 3, raw_sum);
     step_done(db, raw);
     sqlite3_bind_int64(tables, 1, id);
     sqlite3_bind_blob(tables, 2, design.data(), 1440, SQLITE_STATIC);
@@ -214,6 +233,7 @@ void build_history(const fs::path& path) {
     sqlite3_bind_blob(tables, 4, spread.data(), 1440, SQLITE_STATIC);
     sqlite3_bind_blob(tables, 5, error.data(), 1440, SQLITE_STATIC);
     sqlite3_bind_blob(tables, 6, correction.data(), 1440, SQLITE_STATIC);
+    sqlite3_bind_int64(tables, 7, tables_sum);
     step_done(db, tables);
     if (pushed) {
       sqlite3_bind_int64(push, 1, id);
@@ -236,12 +256,13 @@ void build_history(const fs::path& path) {
   exec(db, "COMMIT; PRAGMA wal_checkpoint(TRUNCATE)");
   sqlite3_close(db);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::fprintf(stderr, "storage_bench: built %d runs in %s in %.1f s\n", kRuns, path.c_str(), s);
+  std::fprintf(stderr, "storage_bench: built %d runs in %s in %.1f s\n", runs_count(), path.c_str(), s);
 }
 
 fs::path history_path() {
   const char* env = std::getenv("GAUGELOOP_BENCH_DB");
-  return env != nullptr ? fs::path(env) : fs::temp_directory_path() / "gaugeloop-bench-100k.sqlite";
+  return env != nullptr ? fs::path(env)
+                        : fs::temp_directory_path() / ("gaugeloop-bench-" + std::to_string(runs_count()) + ".sqlite");
 }
 
 // The cached database, rebuilt when missing, incomplete or of another schema version.
@@ -253,8 +274,8 @@ const fs::path& history() {
       sqlite3* db = nullptr;
       if (sqlite3_open_v2(p.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
         ok = query_int(db, "PRAGMA user_version") == storage_internal::latest_schema_version() &&
-             query_int(db, "SELECT count(*) FROM runs") == kRuns &&
-             query_int(db, "SELECT count(*) FROM run_characteristics") == std::int64_t{kRuns} * kCharacteristics;
+             query_int(db, "SELECT count(*) FROM runs") == runs_count() &&
+             query_int(db, "SELECT count(*) FROM run_characteristics") == std::int64_t{runs_count()} * kCharacteristics;
       }
       sqlite3_close(db);
     }
@@ -320,7 +341,7 @@ void BM_Baseline_BareInsertOfTheSameBytes(benchmark::State& state) {
   sqlite3_close(db);
 }
 
-// ---- Queries on 100,000 runs ----
+// ---- Queries on the history ----
 
 class History : public benchmark::Fixture {
  public:
@@ -357,8 +378,20 @@ BENCHMARK_DEFINE_F(History, ListLast50RunsOfALobe)(benchmark::State& state) {
   }
 }
 
+// `runs list --verdict in` where no run is judged: the filter an index serves finds none at once.
+BENCHMARK_DEFINE_F(History, ListAVerdictNoRunHas)(benchmark::State& state) {
+  for (auto _ : state) {
+    RunQuery q;
+    q.verdict = Verdict::kIn;
+    q.limit = 50;
+    Result<std::vector<RunSummary>> runs = store_->list_runs(q);
+    if (!runs || !runs->empty()) die("the verdict filter found runs where none is judged");
+    benchmark::DoNotOptimize(runs->data());
+  }
+}
+
 BENCHMARK_DEFINE_F(History, Trend30DaysOfALobe)(benchmark::State& state) {
-  const std::int64_t last = kFirstRunUnix + static_cast<std::int64_t>(kRuns - 1) * kRunSpacingS;
+  const std::int64_t last = kFirstRunUnix + static_cast<std::int64_t>(runs_count() - 1) * kRunSpacingS;
   std::size_t points = 0;
   for (auto _ : state) {
     RunQuery q;
@@ -376,7 +409,7 @@ BENCHMARK_DEFINE_F(History, Trend30DaysOfALobe)(benchmark::State& state) {
 
 BENCHMARK_DEFINE_F(History, ShowOneRun)(benchmark::State& state) {
   for (auto _ : state) {
-    Result<StoredRun> run = store_->load_run(1 + static_cast<std::int64_t>(next() % kRuns));
+    Result<StoredRun> run = store_->load_run(1 + static_cast<std::int64_t>(next() % runs_count()));
     if (!run) die(run.error().message);
     benchmark::DoNotOptimize(run->analysis.error_um.data());
   }
@@ -445,13 +478,13 @@ BENCHMARK_DEFINE_F(History, Baseline_BareSelectByPrimaryKey)(benchmark::State& s
   sqlite3_open_v2(history().c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
   for (auto _ : state) {
     sqlite3_stmt* s = prepare(db, "SELECT * FROM runs WHERE id = ?1");
-    sqlite3_bind_int64(s, 1, 1 + static_cast<std::int64_t>(next() % kRuns));
+    sqlite3_bind_int64(s, 1, 1 + static_cast<std::int64_t>(next() % runs_count()));
     if (sqlite3_step(s) != SQLITE_ROW) die("no row");
     benchmark::DoNotOptimize(sqlite3_column_double(s, 14));
     sqlite3_finalize(s);
   }
   sqlite3_close(db);
-  state.counters["bytes_per_run"] = static_cast<double>(fs::file_size(history())) / kRuns;
+  state.counters["bytes_per_run"] = static_cast<double>(fs::file_size(history())) / runs_count();
 }
 
 // ---- Bytes per run, version 1 layout against version 2, same 1,000 runs ----
@@ -531,6 +564,7 @@ BENCHMARK_REGISTER_F(History, ListLast50RunsOfALobe)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
+BENCHMARK_REGISTER_F(History, ListAVerdictNoRunHas)->Unit(benchmark::kMillisecond);
 BENCHMARK_REGISTER_F(History, Trend30DaysOfALobe)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5)

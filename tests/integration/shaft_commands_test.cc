@@ -268,9 +268,9 @@ TEST_F(ShaftCommandsTest, SpcTakesTheNewest125RunsUnlessToldOtherwise) {
   }
 }
 
-// 1001 runs: `runs trend` takes the newest 1000 unless told otherwise, and an SPC window of more
-// than 1000 runs says what it read.
-TEST_F(ShaftCommandsTest, TheTrendTakesTheNewest1000AndAWideSpcWindowSaysSo) {
+// 1001 runs: `runs trend` takes the newest 200 unless told otherwise and says so, and an SPC
+// window of more than 1000 runs says what it read.
+TEST_F(ShaftCommandsTest, TheTrendTakesTheNewest200AndAWideSpcWindowSaysSo) {
   Result<RunStore> store = RunStore::open(tmp_.path() / "gaugeloop.sqlite");
   ASSERT_TRUE(store.ok()) << store.error().message;
   for (int i = 0; i < 1001; ++i) {
@@ -285,8 +285,13 @@ TEST_F(ShaftCommandsTest, TheTrendTakesTheNewest1000AndAWideSpcWindowSaysSo) {
   ASSERT_EQ(trend.exit_code, 0) << trend.output.substr(0, 400);
   const nlohmann::json runs = nlohmann::json::parse(trend.output, nullptr, false);
   ASSERT_TRUE(runs.is_array()) << trend.output.substr(0, 400);
-  EXPECT_EQ(runs.size(), 1000u);
-  EXPECT_EQ(runs.front()["started_utc"], "2020-01-01T01:00:00Z") << "the oldest of the newest 1000: the second run";
+  EXPECT_EQ(runs.size(), 200u);
+  EXPECT_EQ(runs.front()["started_utc"], "2020-04-04T09:00:00Z") << "the oldest of the newest 200: run 802";
+  CommandResult all = run_command("runs trend --part long_part --lobe 1 --limit 1001 --json" + data_);
+  ASSERT_EQ(all.exit_code, 0);
+  EXPECT_EQ(nlohmann::json::parse(all.output, nullptr, false).size(), 1001u);
+  CommandResult text = run_command("runs trend --part long_part --lobe 1" + data_);
+  EXPECT_TRUE(has(text.output, "note: the newest 200 runs")) << text.output.substr(text.output.size() - 300);
 
   CommandResult wide = run_command("runs spc --part long_part --lobe 1 --last 2000 --json" + data_);
   ASSERT_EQ(wide.exit_code, 0) << wide.output;
@@ -294,8 +299,8 @@ TEST_F(ShaftCommandsTest, TheTrendTakesTheNewest1000AndAWideSpcWindowSaysSo) {
   EXPECT_EQ(j["runs"], 1001);
   ASSERT_TRUE(j["note"].is_string()) << wide.output;
   EXPECT_TRUE(has(j["note"].get<std::string>(), "summed up over 1001 runs")) << wide.output;
-  CommandResult text = run_command("runs spc --part long_part --lobe 1 --last 1001" + data_);
-  EXPECT_TRUE(has(text.output, "note: summed up over 1001 runs")) << text.output;
+  CommandResult spc_text = run_command("runs spc --part long_part --lobe 1 --last 1001" + data_);
+  EXPECT_TRUE(has(spc_text.output, "note: summed up over 1001 runs")) << spc_text.output;
   CommandResult narrow = run_command("runs spc --part long_part --lobe 1" + data_);
   EXPECT_FALSE(has(narrow.output, "note:")) << narrow.output;
 }

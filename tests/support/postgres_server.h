@@ -29,6 +29,8 @@ class PostgresServer {
   std::string start_again();
 
   bool running() const { return running_; }
+  // The server's log (pg_ctl -l), in its directory: removed with it by stop().
+  std::filesystem::path log_path() const { return dir_ / "server.log"; }
   int port() const { return port_; }
   // postgresql://postgres@127.0.0.1:<port>/<database>
   std::string url(const std::string& database) const;
