@@ -4,7 +4,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <optional>
 
 #include "core/angles.h"
 #include "core/number_text.h"
@@ -42,13 +41,10 @@ double base_radius_mm(const GearGeometry& g) {
 
 namespace {
 
-// The band, the band about the least-squares line, and that line's rise over [from, to], of the
-// points of (x, d) in [from, to]; fewer than 3 points: nullopt.
-struct Band {
-  double total = 0.0, form = 0.0, slope = 0.0;
-  int points = 0;
-};
-std::optional<Band> band_over(const std::vector<double>& xs, const std::vector<double>& ds, double from, double to) {
+// The figures of the points of (x, d) in [from, to]: the band, the band about the least-squares
+// line, that line's rise over the range. kInvalidInput naming the trace for fewer than 3 points.
+Result<FlankLineFigures> figures_over(const char* what, int gap, Flank flank, const std::vector<double>& xs,
+                                      const std::vector<double>& ds, double from, double to) {
   std::vector<double> x, d;
   for (std::size_t i = 0; i < xs.size(); ++i) {
     if (xs[i] >= from - 1e-9 && xs[i] <= to + 1e-9) {
@@ -56,12 +52,20 @@ std::optional<Band> band_over(const std::vector<double>& xs, const std::vector<d
       d.push_back(ds[i]);
     }
   }
-  if (x.size() < 3) return std::nullopt;
-  Band b;
-  b.points = static_cast<int>(x.size());
+  FlankLineFigures f;
+  f.from_mm = from;
+  f.to_mm = to;
+  f.points = static_cast<int>(x.size());
+  if (x.size() < 3) {
+    return make_error(ErrorCode::kInvalidInput, std::string(what) + " trace of gap " + std::to_string(gap) + ", " +
+                                                    std::string(flank_name(flank)) +
+                                                    " flank: " + std::to_string(x.size()) +
+                                                    " points in the evaluation range " + format_fixed(from, 2) +
+                                                    " .. " + format_fixed(to, 2) + " mm; at least 3 are needed");
+  }
   // The design line of an unmodified flank has the trace's nominal direction: deviation 0.
   const auto [lo, hi] = std::minmax_element(d.begin(), d.end());
-  b.total = *hi - *lo;
+  f.total_um = *hi - *lo;
   const double n = static_cast<double>(x.size());
   double sx = 0.0, sd = 0.0, sxx = 0.0, sxd = 0.0;
   for (std::size_t i = 0; i < x.size(); ++i) {
@@ -78,15 +82,9 @@ std::optional<Band> band_over(const std::vector<double>& xs, const std::vector<d
     rmin = std::min(rmin, r);
     rmax = std::max(rmax, r);
   }
-  b.form = rmax - rmin;
-  b.slope = slope * (to - from);
-  return b;
-}
-
-std::string too_few(const char* what, int gap, Flank flank, int points, double from, double to) {
-  return std::string(what) + " trace of gap " + std::to_string(gap) + ", " + std::string(flank_name(flank)) +
-         " flank: " + std::to_string(points) + " points in the evaluation range " + format_fixed(from, 2) + " .. " +
-         format_fixed(to, 2) + " mm; at least 3 are needed";
+  f.form_um = rmax - rmin;
+  f.slope_um = slope * (to - from);
+  return f;
 }
 
 }  // namespace
@@ -95,20 +93,7 @@ Result<LeadFigures> lead_figures(const LeadTrace& t, const GearGeometry& g) {
   if (Status c = check_trace(t); !c) return c.error();
   const double b = g.face_width_mm;
   const double trim = std::min(0.05 * b, g.normal_module_mm);
-  LeadFigures f;
-  f.from_mm = -b / 2.0 + trim;
-  f.to_mm = b / 2.0 - trim;
-  const std::optional<Band> band = band_over(t.z_mm, t.deviation_um, f.from_mm, f.to_mm);
-  if (!band) {
-    int in = 0;
-    for (const double z : t.z_mm) in += z >= f.from_mm - 1e-9 && z <= f.to_mm + 1e-9 ? 1 : 0;
-    return make_error(ErrorCode::kInvalidInput, too_few("lead", t.gap, t.flank, in, f.from_mm, f.to_mm));
-  }
-  f.points = band->points;
-  f.total_um = band->total;
-  f.form_um = band->form;
-  f.slope_um = band->slope;
-  return f;
+  return figures_over("lead", t.gap, t.flank, t.z_mm, t.deviation_um, -b / 2.0 + trim, b / 2.0 - trim);
 }
 
 ProfileRange profile_range(const GearGeometry& g) {
@@ -123,25 +108,11 @@ ProfileRange profile_range(const GearGeometry& g) {
 }
 
 Result<ProfileFigures> profile_figures(const ProfileTrace& t, const GearGeometry& g) {
-  // The checks of a lead trace, on the roll lengths.
   if (Status c = check_trace(LeadTrace{t.gap, t.flank, t.roll_mm, t.deviation_um}, "profile", "roll length"); !c) {
     return c.error();
   }
   const ProfileRange r = profile_range(g);
-  ProfileFigures f;
-  f.from_mm = r.start_roll_mm;
-  f.to_mm = r.evaluation_end_roll_mm;
-  const std::optional<Band> band = band_over(t.roll_mm, t.deviation_um, f.from_mm, f.to_mm);
-  if (!band) {
-    int in = 0;
-    for (const double x : t.roll_mm) in += x >= f.from_mm - 1e-9 && x <= f.to_mm + 1e-9 ? 1 : 0;
-    return make_error(ErrorCode::kInvalidInput, too_few("profile", t.gap, t.flank, in, f.from_mm, f.to_mm));
-  }
-  f.points = band->points;
-  f.total_um = band->total;
-  f.form_um = band->form;
-  f.slope_um = band->slope;
-  return f;
+  return figures_over("profile", t.gap, t.flank, t.roll_mm, t.deviation_um, r.start_roll_mm, r.evaluation_end_roll_mm);
 }
 
 double helix_tolerance_um(int tolerance_class, double d, double b) {

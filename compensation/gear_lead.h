@@ -22,17 +22,19 @@ namespace gaugeloop {
 // The gear's base radius: d2 / 2 cos(alpha_t), tan(alpha_t) = tan(alpha_n) / cos(beta).
 double base_radius_mm(const GearGeometry& gear);
 
-// ISO 1328-1's helix evaluation range: the face less, at each end, the smaller of 5 % of the
-// face width and one module.
-struct LeadFigures {
-  double total_um = 0.0;  // F_beta: the band between two design helices (lines of the design
-                          // slope) that encloses the trace
-  double form_um = 0.0;   // f_f_beta: the band between two mean helices (the least-squares line)
-  double slope_um = 0.0;  // f_H_beta: the mean helix's rise over the range, signed
+// What ISO 1328-1 makes of a flank line over its evaluation range: a lead's (F_beta, f_f_beta,
+// f_H_beta; the range the face less, at each end, the smaller of 5 % of the face width and one
+// module; positions Z) or a profile's (F_alpha, f_f_alpha, f_H_alpha; roll lengths).
+struct FlankLineFigures {
+  double total_um = 0.0;  // the band between two design lines (of the design slope) enclosing the trace
+  double form_um = 0.0;   // the band between two mean lines (the least-squares line)
+  double slope_um = 0.0;  // the mean line's rise over the range, signed
   double from_mm = 0.0;
   double to_mm = 0.0;
   int points = 0;
 };
+using LeadFigures = FlankLineFigures;
+using ProfileFigures = FlankLineFigures;
 // kInvalidInput when fewer than 3 points of the trace fall in the evaluation range or the trace
 // is not increasing in Z.
 Result<LeadFigures> lead_figures(const LeadTrace& trace, const GearGeometry& gear);
@@ -48,18 +50,8 @@ struct ProfileRange {
 };
 ProfileRange profile_range(const GearGeometry& gear);
 
-// ISO 1328-1's profile deviations over the evaluation range: the total F_alpha (the band
-// between two design involutes enclosing the trace), the form f_f_alpha (about the mean
-// profile, the least-squares line) and the slope f_H_alpha (the mean profile's rise over the
-// range, signed). kInvalidInput for fewer than 3 points in the range, a trace not increasing.
-struct ProfileFigures {
-  double total_um = 0.0;
-  double form_um = 0.0;
-  double slope_um = 0.0;
-  double from_mm = 0.0;  // roll lengths
-  double to_mm = 0.0;
-  int points = 0;
-};
+// ISO 1328-1's profile deviations over the evaluation range, the design line an involute.
+// kInvalidInput for fewer than 3 points in the range, a trace not increasing.
 Result<ProfileFigures> profile_figures(const ProfileTrace& trace, const GearGeometry& gear);
 
 // The flank tolerance class of ISO 1328-1 for a total helix deviation: the smallest class A (1

@@ -16,13 +16,15 @@ std::vector<double> lead_heights_mm(const GearGeometry& gear, double step_mm) {
   return z;
 }
 
-void align_on_tooth(LeadTrace& trace) {
-  if (trace.deviation_um.empty()) return;
+void align_on_tooth(std::vector<double>& deviation_um) {
+  if (deviation_um.empty()) return;
   double mean = 0.0;
-  for (double d : trace.deviation_um) mean += d;
-  mean /= static_cast<double>(trace.deviation_um.size());
-  for (double& d : trace.deviation_um) d -= mean;
+  for (double d : deviation_um) mean += d;
+  mean /= static_cast<double>(deviation_um.size());
+  for (double& d : deviation_um) d -= mean;
 }
+
+void align_on_tooth(LeadTrace& trace) { align_on_tooth(trace.deviation_um); }
 
 std::optional<Hand> hand_from_name(std::string_view name) {
   if (name == "right") return Hand::kRight;

@@ -89,5 +89,7 @@ std::vector<double> lead_heights_mm(const GearGeometry& gear, double step_mm);
 // Aligns a trace on its tooth as a gear checker does: its mean taken out of every deviation (the
 // probe's zero and the tooth's thickness are not lead).
 void align_on_tooth(LeadTrace& trace);
+// The same for a trace's deviations alone (a profile trace's).
+void align_on_tooth(std::vector<double>& deviation_um);
 
 }  // namespace gaugeloop

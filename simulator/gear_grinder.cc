@@ -112,12 +112,20 @@ double GroundGear::flank_deviation_um(double z_mm, int gap, Flank flank) const {
   return flank_sign(flank) * base_radius_mm(part_.gear) * 1000.0 * kPi / 180.0 * mesh_error_deg(z_mm, gap);
 }
 
+namespace {
+
+// A checker point's own index for its noise: the gap, the flank and its position to 0.1 um (Z,
+// or roll length with `domain` set apart), whatever order points are taken in.
+std::uint64_t point_index(int gap, Flank flank, double position_mm, std::uint64_t domain) {
+  const auto units = static_cast<std::uint64_t>(std::llround(position_mm * 1e4) + (1LL << 40)) + domain;
+  return seeded::mix((static_cast<std::uint64_t>(gap) << 1 | (flank == Flank::kLeft ? 0u : 1u)) ^ seeded::mix(units));
+}
+
+}  // namespace
+
 double probed_deviation_um(const GroundGear& gear, std::uint64_t measurement, int gap, Flank flank, double z_mm) {
   const std::uint64_t noise_seed = seeded::mix(gear.machine_seed() ^ seeded::mix(measurement + 0x51ed));
-  // The point's own index: the gap, the flank and Z to 0.1 um, whatever order points are taken in.
-  const auto z_units = static_cast<std::uint64_t>(std::llround(z_mm * 1e4) + (1LL << 40));
-  const std::uint64_t index =
-      seeded::mix((static_cast<std::uint64_t>(gap) << 1 | (flank == Flank::kLeft ? 0u : 1u)) ^ seeded::mix(z_units));
+  const std::uint64_t index = point_index(gap, flank, z_mm, 0);
   return gear.flank_deviation_um(z_mm, gap, flank) + gear.checker_noise_um() * seeded::normal(noise_seed, index);
 }
 
@@ -132,17 +140,12 @@ std::vector<ProfileTrace> measure_profile(const GroundGear& gear, const std::vec
       t.gap = gap;
       t.flank = f;
       for (double roll = r.start_roll_mm; roll <= r.tip_roll_mm + 1e-9; roll += step_mm) {
-        const auto units = static_cast<std::uint64_t>(std::llround(roll * 1e4));
-        const std::uint64_t index = seeded::mix((static_cast<std::uint64_t>(gap) << 1 | (f == Flank::kLeft ? 0u : 1u)) ^
-                                                seeded::mix(units + (1ULL << 50)));
         t.roll_mm.push_back(roll);
         t.deviation_um.push_back(gear.profile_deviation_um(roll, gap, f) +
-                                 gear.checker_noise_um() * seeded::normal(noise_seed, index));
+                                 gear.checker_noise_um() *
+                                     seeded::normal(noise_seed, point_index(gap, f, roll, 1ULL << 50)));
       }
-      double mean = 0.0;
-      for (const double d : t.deviation_um) mean += d;
-      mean /= static_cast<double>(std::max<std::size_t>(1, t.deviation_um.size()));
-      for (double& d : t.deviation_um) d -= mean;
+      align_on_tooth(t.deviation_um);
       out.push_back(std::move(t));
     }
   }
