@@ -14,8 +14,9 @@ double SlideCompensationTable::taken_out_mm(double position_mm) const {
   if (error_mm.empty()) return 0.0;
   if (position_mm <= min_mm || error_mm.size() == 1) return error_mm.front();
   const double u = (position_mm - min_mm) / step_mm;
+  // Beyond the last point, and a position that is not a number, hold the last value.
+  if (!(u < static_cast<double>(error_mm.size() - 1))) return error_mm.back();
   const auto i = static_cast<std::size_t>(std::floor(u));
-  if (i + 1 >= error_mm.size()) return error_mm.back();
   const double t = u - static_cast<double>(i);
   return error_mm[i] + t * (error_mm[i + 1] - error_mm[i]);
 }
