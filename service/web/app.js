@@ -137,17 +137,21 @@ narrowScreen.addEventListener("change", () => {
   }
 });
 
+// The newest request for an element wins: a plot asked for again (the window crossed the narrow
+// width, and back) before the first answer came is not overwritten by that older answer.
 async function showSvg(el, path, {narrowable = false} = {}) {
   const narrow = narrowable && narrowScreen.matches;
   const shown = narrow ? path + (path.includes("?") ? "&" : "?") + "layout=narrow" : path;
   if (narrowable) narrowablePlots.set(el, path);
+  const ticket = (el.plotTicket = (el.plotTicket ?? 0) + 1);
   try {
     const svg = await apiText(shown);
+    if (el.plotTicket !== ticket) return;
     el.innerHTML = narrow ? `<div class="plot-scroll">${svg}</div>` : plotHtml(svg, shown);
     el.classList.add("plot");
     el.classList.toggle("fits", narrow);
   } catch (e) {
-    message(el, errorText(e), "error");
+    if (el.plotTicket === ticket) message(el, errorText(e), "error");
   }
 }
 
