@@ -75,21 +75,19 @@ namespace {
 struct BallbarOptions {
   DataPaths paths;
   std::uint64_t machine_seed = 1;
-  double radius_mm = 100.0;
-  double feed_mm_per_min = 1000.0;
-  SlideAxisNames names;
+  SlideTableLayout layout;  // the circle, its feed and the axes' names (not the tables' travel)
   std::string out_path;
 };
 
 int cmd_gear_ballbar(const BallbarOptions& o) {
-  Result<std::vector<SlideCompensationTable>> in_force = slide_tables_in_force(o.paths.nc(), o.names);
+  Result<std::vector<SlideCompensationTable>> in_force = slide_tables_in_force(o.paths.nc(), o.layout.names);
   if (!in_force) return report_error(in_force.error());
   const SlideErrors slides = seeded_slides(o.machine_seed);
-  const BallbarTest t = run_ballbar(slides, *in_force, o.radius_mm, o.feed_mm_per_min);
+  const BallbarTest t = run_ballbar(slides, *in_force, o.layout.radius_mm, o.layout.feed_mm_per_min);
   Result<BallbarFigures> f = ballbar_figures(t);
   if (!f) return report_error(f.error());
   std::printf("virtual gear grinder, machine seed %llu: ZY ballbar, radius %.4g mm, %.4g mm/min, both directions; %s\n",
-              static_cast<unsigned long long>(o.machine_seed), o.radius_mm, o.feed_mm_per_min,
+              static_cast<unsigned long long>(o.machine_seed), o.layout.radius_mm, o.layout.feed_mm_per_min,
               in_force->empty() ? "no slide tables in force"
                                 : ("the slide tables in " + o.paths.nc().string() + " loaded").c_str());
   print_ballbar_figures("ballbar", *f);
@@ -166,14 +164,7 @@ void add_gear_slide_commands(CLI::App& gear, CommandAction& action) {
       "Run a ZY ballbar on the virtual gear grinder's slides (the machine of `demo --machine-seed`) with the slide "
       "tables in the NC directory loaded: roundness and position error; --out writes the test for `gear slides`");
   ballbar->add_option("--machine-seed", bo->machine_seed, "The virtual machine")->capture_default_str();
-  ballbar->add_option("--radius-mm", bo->radius_mm, "The circle's radius")
-      ->capture_default_str()
-      ->check(CLI::Range(10.0, 1000.0));
-  ballbar->add_option("--feed-mm-per-min", bo->feed_mm_per_min, "The feed")
-      ->capture_default_str()
-      ->check(CLI::Range(1.0, 100000.0));
-  ballbar->add_option("--y-axis-name", bo->names.y, "Y's machine axis name in the tables")->capture_default_str();
-  ballbar->add_option("--z-axis-name", bo->names.z, "Z's machine axis name in the tables")->capture_default_str();
+  add_layout_options(*ballbar, bo->layout);
   ballbar->add_option("--out", bo->out_path, "Write the test here (CSV: direction, angle_deg, radial_um)");
   add_data_options(*ballbar, bo->paths);
   ballbar->add_option("--nc-dir", bo->paths.nc_dir, "Directory of the slide tables in force [<data-dir>/nc]");
