@@ -842,7 +842,7 @@ void add_demo_command(CLI::App& app, CommandAction& action) {
   demo->add_option("--base-speed-rpm", loop->base_speed_rpm,
                    "Speed program: the most the work spindle turns [the part file's [speed], else 120]")
       ->check(CLI::Range(1.0, 1000.0));
-  demo->callback([&action, demo, demo_opts, demo_sim, loop] {
+  demo->callback([&action, demo_opts, demo_sim, loop] {
     if (loop->speed_program && loop->iterations == 0) loop->iterations = 1;
     if (loop->iterations > 0) {
       action = [demo_opts, demo_sim, loop] { return cmd_demo_loop(*demo_opts, *demo_sim, *loop); };

@@ -563,11 +563,14 @@ Result<CurveTable> adaptive_spline_from_c0(const SampledPath& path, const Adapti
             if (!trial) return trial.error();
             const std::size_t lo = fewer[i >= 9 ? i - 9 : 0];
             const std::size_t hi = fewer[std::min(i + 8, fewer.size() - 1)];
+            // The table taken out of its Result once: at -O1 (the sanitizer builds) each access
+            // through the Result is a call, most of this loop's time.
+            const TableInterpolant& trial_nc = *trial;
             bool keeps = true;
             std::size_t segment = 0;
             for (std::size_t j = lo; j <= hi && keeps; ++j) {
               const double c = j == n ? 360.0 : path.c_deg(j);
-              keeps = std::abs(trial->x_mm_at(c, segment) - path.x_mm[j % n]) <= bound_mm;
+              keeps = std::abs(trial_nc.x_mm_at(c, segment) - path.x_mm[j % n]) <= bound_mm;
             }
             if (keeps) {
               pruned = std::move(fewer);

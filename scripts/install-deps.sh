@@ -8,6 +8,7 @@ packages=(
   # toolchain
   g++ cmake ninja-build make pkgconf
   ccache             # the compiler cache (CMakeLists.txt): a rebuild of what was built before is a cache hit
+  clang libclang-rt-dev llvm  # the sanitizer builds' compiler, its sanitizer runtimes, llvm-symbolizer for their reports
   # libraries the product links
   libmodbus-dev      # gauge link and simulator (Modbus TCP/RTU)
   libeigen3-dev      # spline, kinematics, FFT
