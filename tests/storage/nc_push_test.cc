@@ -35,7 +35,7 @@ std::string sample_program(int version) {
   return p;
 }
 
-class NcPushTest : public testing::StoreTest {
+class NcPushStoreTest : public testing::StoreTest {
  protected:
   std::int64_t add_run(const std::string& started, int lobe = 2, const std::string& machine = "grinder-1") {
     RunRecord r = make_record("intake_flat", started);
@@ -65,7 +65,7 @@ class NcPushTest : public testing::StoreTest {
   }
 };
 
-TEST_F(NcPushTest, TableVersionsCountUpPerFile) {
+TEST_F(NcPushStoreTest, TableVersionsCountUpPerFile) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   Result<int> first = store().next_table_version("/nc/A.SPF");
   ASSERT_TRUE(first.ok()) << first.error().message;
@@ -103,7 +103,7 @@ TEST_F(NcPushTest, TableVersionsCountUpPerFile) {
       << "an unsaid reason is the run pushed";
 }
 
-TEST_F(NcPushTest, AVersionThatIsNotNextIsRefusedAndRecordsNothing) {
+TEST_F(NcPushStoreTest, AVersionThatIsNotNextIsRefusedAndRecordsNothing) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   const std::int64_t other = add_run("2026-11-22T09:00:00Z");
   push_next(run, "/nc/A.SPF");
@@ -126,7 +126,7 @@ TEST_F(NcPushTest, AVersionThatIsNotNextIsRefusedAndRecordsNothing) {
       << "the run is not marked pushed by a refused push";
 }
 
-TEST_F(NcPushTest, TwoWritersCannotBothClaimAVersion) {
+TEST_F(NcPushStoreTest, TwoWritersCannotBothClaimAVersion) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   Result<RunStore> second = RunStore::open(db_in(dir_));
   ASSERT_TRUE(second.ok()) << second.error().message;
@@ -151,7 +151,7 @@ TEST_F(NcPushTest, TwoWritersCannotBothClaimAVersion) {
 // A program text changed outside SQLite (a damaged page) no longer matches the hash stored with
 // it: reading it back for a rollback, or as the last push, is refused naming the push; the full
 // check lists it.
-TEST_F(NcPushTest, AProgramTextChangedOutsideSqliteIsNeverReadBack) {
+TEST_F(NcPushStoreTest, AProgramTextChangedOutsideSqliteIsNeverReadBack) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   push_next(run, "/nc/A.SPF");
   ASSERT_TRUE(store().load_push("/nc/A.SPF", 1).ok());
@@ -176,7 +176,7 @@ TEST_F(NcPushTest, AProgramTextChangedOutsideSqliteIsNeverReadBack) {
 // table first, with its hash; the others with their texts. A text changed outside SQLite is
 // refused on read and listed by the full check; version_that_wrote finds the push behind a
 // file by its hash, completed or abandoned.
-TEST_F(NcPushTest, EveryFileOfAPushIsRecordedWithItsHashAndText) {
+TEST_F(NcPushStoreTest, EveryFileOfAPushIsRecordedWithItsHashAndText) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   PushIntent intent;
   intent.run_id = run;
@@ -231,7 +231,7 @@ TEST_F(NcPushTest, EveryFileOfAPushIsRecordedWithItsHashAndText) {
       << report->problems[0];
 }
 
-TEST_F(NcPushTest, ProgramTextRoundTripsByteForByte) {
+TEST_F(NcPushStoreTest, ProgramTextRoundTripsByteForByte) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   push_next(run, "/nc/A.SPF");
   Result<NcPush> loaded = store().load_push("/nc/A.SPF", 1);
@@ -252,7 +252,7 @@ TEST_F(NcPushTest, ProgramTextRoundTripsByteForByte) {
   EXPECT_EQ((*last)->program_text, p.program_text);
 }
 
-TEST_F(NcPushTest, ListLoadAndLastPush) {
+TEST_F(NcPushStoreTest, ListLoadAndLastPush) {
   const std::int64_t r1 = add_run("2026-11-22T08:00:00Z", 2);
   const std::int64_t r2 = add_run("2026-11-22T09:00:00Z", 3);
   const std::int64_t r3 = add_run("2026-11-22T10:00:00Z", 2, "grinder-2");
@@ -328,7 +328,7 @@ TEST_F(NcPushTest, ListLoadAndLastPush) {
   EXPECT_FALSE(run->pushes[1].program_text.has_value());
 }
 
-TEST_F(NcPushTest, TheTableInForceAfterARollbackIsTheRolledBackRun) {
+TEST_F(NcPushStoreTest, TheTableInForceAfterARollbackIsTheRolledBackRun) {
   const std::int64_t run1 = add_run("2026-11-22T08:00:00Z");
   const std::int64_t run2 = add_run("2026-11-22T09:00:00Z");
   push_next(run1, "/nc/A.SPF");
@@ -380,7 +380,7 @@ std::string pending_row(RawDb& raw, std::int64_t id) {
       std::to_string(id));
 }
 
-TEST_F(NcPushTest, ANewerPendingTableSupersedesTheOlderOneForTheSameFile) {
+TEST_F(NcPushStoreTest, ANewerPendingTableSupersedesTheOlderOneForTheSameFile) {
   const std::int64_t run1 = add_run("2026-11-22T08:00:00Z");
   const std::int64_t run2 = add_run("2026-11-22T09:00:00Z");
   PendingTable first = pending_for(run1, "/nc/A.SPF", sample_program(1));
@@ -433,7 +433,7 @@ TEST_F(NcPushTest, ANewerPendingTableSupersedesTheOlderOneForTheSameFile) {
             SQLITE_OK);
 }
 
-TEST_F(NcPushTest, RejectingIsOnlyFromPendingAndARefusalChangesNothing) {
+TEST_F(NcPushStoreTest, RejectingIsOnlyFromPendingAndARefusalChangesNothing) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   Result<std::int64_t> a = store().add_pending(pending_for(run, "/nc/A.SPF", "A1"));
   ASSERT_TRUE(a.ok()) << a.error().message;
@@ -466,7 +466,7 @@ TEST_F(NcPushTest, RejectingIsOnlyFromPendingAndARefusalChangesNothing) {
   EXPECT_EQ(store().load_pending(*b)->status, PendingStatus::kPending);
 }
 
-TEST_F(NcPushTest, AnApprovedPushIsRecordedAndMarkedInOneStep) {
+TEST_F(NcPushStoreTest, AnApprovedPushIsRecordedAndMarkedInOneStep) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   Result<std::int64_t> a = store().add_pending(pending_for(run, "/nc/A.SPF", "as rendered"));
   ASSERT_TRUE(a.ok()) << a.error().message;
@@ -498,7 +498,7 @@ TEST_F(NcPushTest, AnApprovedPushIsRecordedAndMarkedInOneStep) {
   EXPECT_EQ(store().load_run(run)->summary.status, "pushed");
 }
 
-TEST_F(NcPushTest, AFailedApprovedPushLeavesTheTablePendingAndNoPush) {
+TEST_F(NcPushStoreTest, AFailedApprovedPushLeavesTheTablePendingAndNoPush) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   Result<std::int64_t> a = store().add_pending(pending_for(run, "/nc/A.SPF", "A1"));
   ASSERT_TRUE(a.ok()) << a.error().message;
@@ -532,7 +532,7 @@ TEST_F(NcPushTest, AFailedApprovedPushLeavesTheTablePendingAndNoPush) {
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM nc_pushes"), 0);
 }
 
-TEST_F(NcPushTest, PendingTablesAreRefusedWhenIncomplete) {
+TEST_F(NcPushStoreTest, PendingTablesAreRefusedWhenIncomplete) {
   const std::int64_t run = add_run("2026-11-22T08:00:00Z");
   PendingTable no_text = pending_for(run, "/nc/A.SPF", "");
   EXPECT_EQ(store().add_pending(no_text).error().code, ErrorCode::kInvalidInput);
