@@ -16,6 +16,7 @@
 #include <unsupported/Eigen/FFT>
 
 #include "compensation/inspection.h"
+#include "compensation/least_squares.h"
 #include "compensation/message_text.h"
 #include "compensation/thread_fft.h"
 #include "core/angles.h"
@@ -149,7 +150,7 @@ BaseCircleHarmonic fit_base_circle_harmonic(const DegreeTable& error_um, const D
     a(row, 2) = trig.sin[deg];
     b(row) = error_um[static_cast<size_t>(used[i])];
   }
-  const Eigen::Vector3d c = a.colPivHouseholderQr().solve(b);
+  const Eigen::VectorXd c = least_squares(a, b);
   out.zero_um = c(0);
   out.cos_um = c(1);
   out.sin_um = c(2);

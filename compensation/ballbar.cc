@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "compensation/least_squares.h"
 #include "core/angles.h"
 #include "core/number_text.h"
 
@@ -193,20 +194,9 @@ Result<SlideIdentification> identify_slides(const BallbarTest& t, const SlideMod
     y(row) = r;
     ++row;
   });
-  Eigen::VectorXd scale(columns);
-  for (int c = 0; c < columns; ++c) {
-    const double norm = a.col(c).norm();
-    scale(c) = norm > 0.0 ? 1.0 / norm : 1.0;
-  }
-  const Eigen::MatrixXd an = a * scale.asDiagonal();
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(an, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const Eigen::VectorXd& sv = svd.singularValues();
-  const double largest = sv(0);
+  const ScaledFit fit = scaled_least_squares(a, y);
   std::string what;
-  std::vector<int> all_alike;
-  for (int i = 0; i < sv.size(); ++i) {
-    if (sv(i) > 1e-9 * largest) continue;
-    const Eigen::VectorXd vi = svd.matrixV().col(i);
+  for (const Eigen::VectorXd& vi : fit.null_directions) {
     std::vector<int> group;
     std::string names;
     for (int j = 0; j < columns; ++j) {
@@ -224,7 +214,7 @@ Result<SlideIdentification> identify_slides(const BallbarTest& t, const SlideMod
     return make_error(ErrorCode::kRefused,
                       "the ballbar test cannot tell these apart: " + what + ". Nothing was written");
   }
-  const Eigen::VectorXd x = scale.asDiagonal() * an.colPivHouseholderQr().solve(y);
+  const Eigen::VectorXd& x = fit.x;
   const Eigen::VectorXd res = a * x - y;
   auto value = [&](int c) {
     const auto it = std::find(used.begin(), used.end(), c);
@@ -245,7 +235,7 @@ Result<SlideIdentification> identify_slides(const BallbarTest& t, const SlideMod
   id.model = m;
   id.radius_mm = t.radius_mm;
   id.residual_rms_um = std::sqrt(res.squaredNorm() / rows);
-  id.condition = sv(sv.size() - 1) > 0.0 ? largest / sv(sv.size() - 1) : 0.0;
+  id.condition = fit.condition;
   id.samples = rows;
   return id;
 }

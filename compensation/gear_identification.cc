@@ -6,6 +6,7 @@
 #include <cctype>
 #include <cmath>
 
+#include "compensation/least_squares.h"
 #include "core/angles.h"
 #include "core/number_text.h"
 
@@ -203,19 +204,9 @@ Result<AxisIdentification> identify_axis_errors(const GearCoupling& k, double r_
     ++row;
   }
   // Scaled to unit columns, the singular values say what the data can tell apart.
-  Eigen::VectorXd scale(columns);
-  for (int c = 0; c < columns; ++c) {
-    const double n = a.col(c).norm();
-    scale(c) = n > 0.0 ? 1.0 / n : 1.0;
-  }
-  const Eigen::MatrixXd an = a * scale.asDiagonal();
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(an, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const Eigen::VectorXd& sv = svd.singularValues();
-  const double largest = sv.size() > 0 ? sv(0) : 0.0;
+  const ScaledFit fit = scaled_least_squares(a, y);
   std::vector<std::vector<std::string>> groups;
-  for (int i = 0; i < sv.size(); ++i) {
-    if (sv(i) > 1e-9 * largest) continue;
-    const Eigen::VectorXd v = svd.matrixV().col(i);
+  for (const Eigen::VectorXd& v : fit.null_directions) {
     std::vector<std::string> group;
     for (std::size_t j = 0; j < terms.size(); ++j) {
       double weight = 0.0;
@@ -249,13 +240,12 @@ Result<AxisIdentification> identify_axis_errors(const GearCoupling& k, double r_
                           (ballbar == nullptr ? ", or add a ballbar (--ballbar)" : std::string()) +
                           ". Nothing was written");
   }
-  const Eigen::VectorXd xn = an.colPivHouseholderQr().solve(y);
-  const Eigen::VectorXd x = scale.asDiagonal() * xn;
+  const Eigen::VectorXd& x = fit.x;
   const Eigen::VectorXd r = a * x - y;
   AxisIdentification out;
   out.lead_samples = lead_rows;
   out.ballbar_samples = ballbar_rows;
-  out.condition = sv(sv.size() - 1) > 0.0 ? largest / sv(sv.size() - 1) : 0.0;
+  out.condition = fit.condition;
   out.lead_residual_rms_um = std::sqrt(r.head(lead_rows).squaredNorm() / std::max(1, lead_rows));
   if (ballbar_rows > 0) out.ballbar_residual_rms_um = std::sqrt(r.tail(ballbar_rows).squaredNorm() / ballbar_rows);
   for (std::size_t j = 0; j < terms.size(); ++j) {

@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 #include <unsupported/Eigen/FFT>
 
+#include "compensation/least_squares.h"
 #include "compensation/message_text.h"
 #include "compensation/thread_fft.h"
 #include "core/angles.h"
@@ -94,7 +95,7 @@ std::vector<double> without_eccentricity(const DegreeTable& error_um, const std:
     values(r) = error_um[degrees[static_cast<size_t>(r)]];
   }
   // QR with pivoting: a short arc makes cos and sin nearly collinear with the constant.
-  const Eigen::VectorXd fit = basis.colPivHouseholderQr().solve(values);
+  const Eigen::VectorXd fit = least_squares(basis, values);
   const Eigen::VectorXd residual = values - basis * fit;
   return {residual.data(), residual.data() + n};
 }
