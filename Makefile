@@ -76,8 +76,8 @@ test-tsan: build-tsan
 # them; then the others $(TEST_JOBS) at a time, the longest first (ctest's cost data in
 # $(BUILD_DIR)/Testing, which a new build directory starts from tests/ctest-costs.txt). A ctest
 # test is a GoogleTest suite, `Suite.*`, its tests in one process (tests/discover_suites.cmake).
-# Both ctest runs run to the end; the phase fails if either failed. run-serial and run-parallel are its two halves: `make test`
-# runs them apart (scripts/make-test.sh).
+# Both ctest runs run to the end; the phase fails if either failed. run-serial and run-parallel
+# are its two halves: `make test` runs them apart (scripts/make-test.sh).
 run-normal:
 	$(MAKE) --no-print-directory run-serial; serial=$$?; \
 	  $(MAKE) --no-print-directory run-parallel; rest=$$?; [ $$serial -eq 0 ] && [ $$rest -eq 0 ]

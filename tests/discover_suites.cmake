@@ -5,9 +5,9 @@
 #   cmake -D TEST_EXECUTABLE=<path> -D CTEST_FILE=<path> -D WORKING_DIR=<dir> -D SERIAL=<TRUE|FALSE>
 #         -P discover_suites.cmake
 #
-# A suite's tests run in one process (`--gtest_filter=Suite.*`), the suites apart: a process per
-# test case cost the sanitizer builds about half their test time in starting and ending
-# processes (docs/building.md). The ctest name is the suite's, with `.*`: `GrindingLoopTest.*`.
+# A suite's tests run in one process (`--gtest_filter=Suite.*`), the suites apart: under
+# AddressSanitizer a process per test case cost the storage tests half their CPU time in
+# starting and ending processes (docs/building.md). The ctest name is the suite's, with `.*`: `GrindingLoopTest.*`.
 # Its timeout grows with its number of tests (300 s and 60 s a test, at most 1800 s).
 
 foreach(var TEST_EXECUTABLE CTEST_FILE WORKING_DIR SERIAL)
