@@ -77,31 +77,72 @@ std::vector<CurvePoint> points_at_rows(const SampledPath& path, const std::vecto
   return out;
 }
 
-// Signed error (interpolant - X) in mm at every fine row 0..n (row n is C360 against row 0).
-std::vector<double> row_errors_mm(const SampledPath& path, const TableInterpolant& nc) {
+// Signed error (interpolant - X) in mm at every fine row 0..n (row n is C360 against row 0),
+// into `e`, whose storage is reused: a path has 36,000 rows, and a writer that judges many
+// tables would otherwise ask the allocator for (and the kernel to map) 288 KB each time.
+void fill_row_errors_mm(const SampledPath& path, const TableInterpolant& nc, std::vector<double>& e) {
   const std::size_t n = path.size();
-  std::vector<double> e(n + 1);
+  e.resize(n + 1);
   std::size_t segment = 0;
   for (std::size_t j = 0; j <= n; ++j) {
     const double c = j == n ? 360.0 : path.c_deg(j);
     e[j] = nc.x_mm_at(c, segment) - path.x_mm[j % n];
   }
+}
+
+std::vector<double> row_errors_mm(const SampledPath& path, const TableInterpolant& nc) {
+  std::vector<double> e;
+  fill_row_errors_mm(path, nc, e);
   return e;
 }
 
-CommandError summarise(const SampledPath& path, const TableInterpolant& nc, const std::vector<double>& e) {
+// The command position error of `nc` on `path` from the error at each row 0..n, error_at(j).
+template <typename ErrorAt>
+CommandError summarise_rows(const SampledPath& path, const TableInterpolant& nc, ErrorAt error_at) {
+  const std::size_t n = path.size();
   CommandError out;
   std::size_t worst = 0;
-  for (std::size_t j = 0; j < e.size(); ++j) {
-    if (std::abs(e[j]) > std::abs(e[worst])) worst = j;
+  double worst_abs_mm = std::abs(error_at(0));
+  for (std::size_t j = 1; j <= n; ++j) {
+    const double v = std::abs(error_at(j));
+    if (v > worst_abs_mm) {
+      worst = j;
+      worst_abs_mm = v;
+    }
   }
-  out.max_abs_um = std::abs(e[worst]) * kUmPerMm;
-  out.at_c_deg = worst + 1 == e.size() ? 360.0 : path.c_deg(worst);
+  out.max_abs_um = worst_abs_mm * kUmPerMm;
+  out.at_c_deg = worst == n ? 360.0 : path.c_deg(worst);
   double x2 = 0.0;
   for (double v : path.d2x_dc2_mm_per_deg2) x2 = std::max(x2, std::abs(v));
   const double h = path.c_step_deg;
   out.between_rows_um = h * h / 8.0 * (x2 + nc.max_abs_d2_mm_per_deg2()) * kUmPerMm;
   return out;
+}
+
+CommandError summarise(const SampledPath& path, const TableInterpolant& nc, const std::vector<double>& e) {
+  return summarise_rows(path, nc, [&e](std::size_t j) { return e[j]; });
+}
+
+// The same, the interpolant evaluated row by row and nothing kept.
+CommandError command_error_of(const SampledPath& path, const TableInterpolant& nc) {
+  const std::size_t n = path.size();
+  std::size_t segment = 0;
+  return summarise_rows(path, nc, [&](std::size_t j) {
+    const double c = j == n ? 360.0 : path.c_deg(j);
+    return nc.x_mm_at(c, segment) - path.x_mm[j % n];
+  });
+}
+
+// Whether `nc` keeps within bound_mm of the path at every row lo..hi (row n is C360).
+bool keeps_bound_on_rows(const SampledPath& path, const TableInterpolant& nc, std::size_t lo, std::size_t hi,
+                         double bound_mm) {
+  const std::size_t n = path.size();
+  std::size_t segment = 0;
+  for (std::size_t j = lo; j <= hi; ++j) {
+    const double c = j == n ? 360.0 : path.c_deg(j);
+    if (!(std::abs(nc.x_mm_at(c, segment) - path.x_mm[j % n]) <= bound_mm)) return false;
+  }
+  return true;
 }
 
 Result<CurveTable> table_at_rows(const SampledPath& path, const std::vector<std::size_t>& rows,
@@ -112,7 +153,7 @@ Result<CurveTable> table_at_rows(const SampledPath& path, const std::vector<std:
   t.writer = std::move(writer);
   Result<TableInterpolant> nc = TableInterpolant::of(t.points, interpolation);
   if (!nc) return nc.error();
-  t.error = summarise(path, *nc, row_errors_mm(path, *nc));
+  t.error = command_error_of(path, *nc);
   return t;
 }
 
@@ -217,22 +258,50 @@ CurveTable moved_back(CurveTable t, double c0_deg, const CurveTableFormat& forma
   return t;
 }
 
+// The path turned to start at c0_deg (a row of the path), for writers whose tables are moved
+// back: turned once however many tables are written over it (the default choice's CSPLINE
+// candidates share one).
+class TurnedPath {
+ public:
+  static Result<TurnedPath> of(const SampledPath& path, double c0_deg) {
+    TurnedPath out;
+    out.path_ = &path;
+    out.c0_deg_ = c0_deg;
+    if (c0_deg == 0.0) return out;
+    const std::optional<std::size_t> k0 = row_at(path, c0_deg);
+    if (!k0) {
+      return make_error(ErrorCode::kInvalidInput, "table start C" + format_fixed(c0_deg, 6) + " is not a row of the " +
+                                                      format_fixed(path.c_step_deg, 4) + " deg path");
+    }
+    out.turned_ = turned(path, *k0);
+    return out;
+  }
+
+  // `write` run over the turned path, its table moved back.
+  template <typename Write>
+  Result<CurveTable> write(const CurveTableFormat& format, Write write) const {
+    if (!turned_) return write(*path_);
+    Result<CurveTable> t = write(*turned_);
+    if (!t) {
+      Error e = t.error();
+      e.message += " (C counted from the table's start C" + format_fixed(c0_deg_, 3) + ")";
+      return e;
+    }
+    return moved_back(std::move(*t), c0_deg_, format);
+  }
+
+ private:
+  const SampledPath* path_ = nullptr;
+  std::optional<SampledPath> turned_;
+  double c0_deg_ = 0.0;
+};
+
 // A writer run over the path turned to start at c0_deg (a row of the path), its table moved back.
 template <typename Write>
 Result<CurveTable> written_from(const SampledPath& path, double c0_deg, const CurveTableFormat& format, Write write) {
-  if (c0_deg == 0.0) return write(path);
-  const std::optional<std::size_t> k0 = row_at(path, c0_deg);
-  if (!k0) {
-    return make_error(ErrorCode::kInvalidInput, "table start C" + format_fixed(c0_deg, 6) + " is not a row of the " +
-                                                    format_fixed(path.c_step_deg, 4) + " deg path");
-  }
-  Result<CurveTable> t = write(turned(path, *k0));
-  if (!t) {
-    Error e = t.error();
-    e.message += " (C counted from the table's start C" + format_fixed(c0_deg, 3) + ")";
-    return e;
-  }
-  return moved_back(std::move(*t), c0_deg, format);
+  Result<TurnedPath> from = TurnedPath::of(path, c0_deg);
+  if (!from) return from.error();
+  return from->write(format, write);
 }
 
 }  // namespace
@@ -364,7 +433,7 @@ Result<CommandError> command_position_error(const SampledPath& path, const std::
   if (Status s = validate_curve_points(points); !s) return make_error(ErrorCode::kInvalidInput, s.error().message);
   Result<TableInterpolant> nc = TableInterpolant::of(points, interpolation);
   if (!nc) return nc.error();
-  return summarise(path, *nc, row_errors_mm(path, *nc));
+  return command_error_of(path, *nc);
 }
 
 Result<std::vector<double>> command_error_per_degree_um(const SampledPath& path, const CurveTable& table) {
@@ -437,11 +506,21 @@ double spline_start_c_deg(const SampledPath& path) {
   return path.c_deg((best_first + (best_length - 1) / 2) % n);
 }
 
+namespace {
+
+// A CSPLINE table of step c_step_deg over the path turned to its seam.
+Result<CurveTable> spline_over(const TurnedPath& seam, double c_step_deg, const CurveTableFormat& format) {
+  return seam.write(
+      format, [&](const SampledPath& p) { return write_uniform(p, c_step_deg, format, Interpolation::kCubicSpline); });
+}
+
+}  // namespace
+
 Result<CurveTable> write_spline_table(const SampledPath& path, double c_step_deg, const CurveTableFormat& format) {
   if (Status s = check_inputs(path, format); !s) return s.error();
-  return written_from(path, spline_start_c_deg(path), format, [&](const SampledPath& p) {
-    return write_uniform(p, c_step_deg, format, Interpolation::kCubicSpline);
-  });
+  Result<TurnedPath> seam = TurnedPath::of(path, spline_start_c_deg(path));
+  if (!seam) return seam.error();
+  return spline_over(*seam, c_step_deg, format);
 }
 
 Result<CurveTable> write_adaptive_linear_table(const SampledPath& path, const AdaptiveSettings& settings,
@@ -519,12 +598,13 @@ Result<CurveTable> adaptive_spline_from_c0(const SampledPath& path, const Adapti
     if (r == 0 || n / r < 3) continue;
     std::vector<std::size_t> rows;
     for (std::size_t k = 0; k <= n; k += r) rows.push_back(k);
+    std::vector<double> e;  // each round's row errors, one buffer
     // Halve each segment that breaks the bound; 40 rounds halve a segment far below a row.
     for (int round = 0; round < 40; ++round) {
       const std::vector<CurvePoint> pts = points_at_rows(path, rows, format);
       Result<TableInterpolant> nc = TableInterpolant::of(pts, Interpolation::kCubicSpline);
       if (!nc) return nc.error();
-      const std::vector<double> e = row_errors_mm(path, *nc);
+      fill_row_errors_mm(path, *nc, e);
       std::vector<std::size_t> next{rows.front()};
       bool split = false;
       bool stuck = false;
@@ -550,41 +630,31 @@ Result<CurveTable> adaptive_spline_from_c0(const SampledPath& path, const Adapti
           // one. The pruned table is then evaluated in full, and kept only if it holds.
           std::vector<std::size_t> pruned = rows;
           std::vector<CurvePoint> pruned_points = pts;  // each point depends on its row alone
+          std::vector<std::size_t> fewer;               // a trial's rows and points, their storage reused
+          std::vector<CurvePoint> fewer_points;
           for (std::size_t i = 1; i + 1 < pruned.size();) {
             if (pruned[i + 1] - pruned[i - 1] > max_rows || pruned.size() <= 4) {
               ++i;
               continue;
             }
-            std::vector<std::size_t> fewer = pruned;
+            fewer.assign(pruned.begin(), pruned.end());
             fewer.erase(fewer.begin() + static_cast<std::ptrdiff_t>(i));
-            std::vector<CurvePoint> fewer_points = pruned_points;
+            fewer_points.assign(pruned_points.begin(), pruned_points.end());
             fewer_points.erase(fewer_points.begin() + static_cast<std::ptrdiff_t>(i));
             Result<TableInterpolant> trial = TableInterpolant::of(fewer_points, Interpolation::kCubicSpline);
             if (!trial) return trial.error();
             const std::size_t lo = fewer[i >= 9 ? i - 9 : 0];
             const std::size_t hi = fewer[std::min(i + 8, fewer.size() - 1)];
-            // The table taken out of its Result once: at -O1 (the sanitizer builds) each access
-            // through the Result is a call, most of this loop's time.
-            const TableInterpolant& trial_nc = *trial;
-            bool keeps = true;
-            std::size_t segment = 0;
-            for (std::size_t j = lo; j <= hi && keeps; ++j) {
-              const double c = j == n ? 360.0 : path.c_deg(j);
-              keeps = std::abs(trial_nc.x_mm_at(c, segment) - path.x_mm[j % n]) <= bound_mm;
-            }
-            if (keeps) {
-              pruned = std::move(fewer);
-              pruned_points = std::move(fewer_points);
+            if (keeps_bound_on_rows(path, *trial, lo, hi, bound_mm)) {
+              std::swap(pruned, fewer);
+              std::swap(pruned_points, fewer_points);
             } else {
               ++i;
             }
           }
           Result<TableInterpolant> full = TableInterpolant::of(pruned_points, Interpolation::kCubicSpline);
           if (!full) return full.error();
-          const std::vector<double> fe = row_errors_mm(path, *full);
-          if (std::all_of(fe.begin(), fe.end(), [&](double v) { return std::abs(v) <= bound_mm; })) {
-            rows = std::move(pruned);
-          }
+          if (keeps_bound_on_rows(path, *full, 0, n, bound_mm)) rows = std::move(pruned);
           Result<CurveTable> t = table_at_rows(path, rows, Interpolation::kCubicSpline, format,
                                                "adaptive spline from " + format_fixed(start_deg, 3) + " deg, bound " +
                                                    format_fixed(settings.bound_um, 3) + " um");
@@ -607,13 +677,20 @@ Result<CurveTable> adaptive_spline_from_c0(const SampledPath& path, const Adapti
   return std::move(*best);
 }
 
+// The adaptive CSPLINE table over the path turned to its seam.
+Result<CurveTable> adaptive_spline_over(const TurnedPath& seam, const AdaptiveSettings& settings,
+                                        const CurveTableFormat& format) {
+  return seam.write(format, [&](const SampledPath& p) { return adaptive_spline_from_c0(p, settings, format); });
+}
+
 }  // namespace
 
 Result<CurveTable> write_adaptive_spline_table(const SampledPath& path, const AdaptiveSettings& settings,
                                                const CurveTableFormat& format) {
   if (Status s = check_inputs(path, format); !s) return s.error();
-  return written_from(path, spline_start_c_deg(path), format,
-                      [&](const SampledPath& p) { return adaptive_spline_from_c0(p, settings, format); });
+  Result<TurnedPath> seam = TurnedPath::of(path, spline_start_c_deg(path));
+  if (!seam) return seam.error();
+  return adaptive_spline_over(*seam, settings, format);
 }
 
 namespace {
@@ -656,11 +733,12 @@ Result<CurveTable> refine_points_in_force(const SampledPath& path, const TablePo
   const std::size_t points_in_force = rows.size();
   const double bound_mm = settings.bound_um / kUmPerMm;
   const std::size_t max_rows = widest_rows(path, settings);
+  std::vector<double> e;  // each round's row errors, one buffer
   for (int round = 0; round < 40; ++round) {
     Result<TableInterpolant> nc =
         TableInterpolant::of(points_at_rows(path, rows, format, in_force.interpolation), in_force.interpolation);
     if (!nc) return nc.error();
-    const std::vector<double> e = row_errors_mm(path, *nc);
+    fill_row_errors_mm(path, *nc, e);
     std::vector<std::size_t> next{rows.front()};
     bool split = false;
     for (std::size_t i = 0; i + 1 < rows.size(); ++i) {
@@ -718,13 +796,16 @@ Result<std::vector<TableCandidate>> default_table_candidates(const SampledPath& 
   }
   if (Status s = add("adaptive linear", write_adaptive_linear_table(path, adaptive, format)); !s) return s.error();
   if (settings.allow_spline) {
+    // One seam and one turned path for every CSPLINE candidate.
+    Result<TurnedPath> seam = TurnedPath::of(path, spline_start_c_deg(path));
+    if (!seam) return seam.error();
     for (double step : {5.0, 4.0, 3.0, 2.0, 1.0, 0.5}) {
       if (step > settings.max_step_deg || rows_per_step(path, step) == 0) continue;
-      if (Status s = add("spline " + step_text(step) + " deg", write_spline_table(path, step, format)); !s) {
+      if (Status s = add("spline " + step_text(step) + " deg", spline_over(*seam, step, format)); !s) {
         return s.error();
       }
     }
-    if (Status s = add("adaptive spline", write_adaptive_spline_table(path, adaptive, format)); !s) return s.error();
+    if (Status s = add("adaptive spline", adaptive_spline_over(*seam, adaptive, format)); !s) return s.error();
   }
   return out;
 }
