@@ -55,7 +55,7 @@ int cmd_trend_plot(const DataPaths& paths, const std::string& db_url, const RunQ
   if (Status s = check_out("--plot", out); !s) return report_error(s.error());
   Result<std::unique_ptr<RunHistory>> history = open_run_history(paths, db_url);
   if (!history) return report_error(history.error());
-  Result<std::vector<RunCharacteristics>> runs = (*history)->characteristics(query);
+  Result<std::vector<RunCharacteristics>> runs = trend_plot_runs(**history, query, key);
   if (!runs) return report_error(runs.error());
   if (runs->empty()) {
     return report_error(make_error(ErrorCode::kNotFound, "no runs of " + query.part + " lobe " +

@@ -196,7 +196,8 @@ Result<std::vector<RunSummary>> CentralHistory::trend(const RunQuery& q) const {
   }
 }
 
-Result<std::vector<RunCharacteristics>> CentralHistory::characteristics(const RunQuery& q) const {
+Result<std::vector<RunCharacteristics>> CentralHistory::characteristics(const RunQuery& q,
+                                                                        const std::string& key) const {
   try {
     // One snapshot for both statements, as RunStore reads them in one transaction.
     pqxx::transaction<pqxx::repeatable_read, pqxx::readwrite_policy::read_only> tx(*conn_->conn);
@@ -205,11 +206,16 @@ Result<std::vector<RunCharacteristics>> CentralHistory::characteristics(const Ru
     Result<Filter> f = run_filter(q);
     if (!f.ok()) return f.error();
     const std::string chosen = chosen_runs(*f, q.limit);
+    std::string only_key;
+    if (!key.empty()) {
+      only_key = " WHERE c.key = $" + std::to_string(f->next++);
+      f->params.text(key);
+    }
     pqxx::result rows = central_internal::exec(
         tx,
         "SELECT c.run_uuid, c.key, c.unit, c.value, c.min_value, c.max_value, c.lower_limit, c.upper_limit, "
         "c.verdict, c.from_deg, c.to_deg FROM run_characteristics AS c JOIN (" +
-            chosen + ") AS r ON r.uuid = c.run_uuid ORDER BY c.run_uuid, c.position",
+            chosen + ") AS r ON r.uuid = c.run_uuid" + only_key + " ORDER BY c.run_uuid, c.position",
         f->params);
     std::map<std::string, std::vector<Characteristic>> by_run;
     for (const pqxx::row& row : rows) {

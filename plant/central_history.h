@@ -52,7 +52,8 @@ class CentralHistory : public RunHistory {
 
   Result<std::vector<RunSummary>> list_runs(const RunQuery& q) const override;
   Result<std::vector<RunSummary>> trend(const RunQuery& q) const override;
-  Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q) const override;
+  using RunHistory::characteristics;
+  Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q, const std::string& key) const override;
   Result<CharacteristicSummaries> characteristic_summaries(const RunQuery& q) const override;
 
   const CentralUrl& url() const;

@@ -12,6 +12,7 @@
 
 #include "compensation/inspection.h"
 #include "compensation/judgement.h"
+#include "core/atomic_file.h"
 #include "core/number_text.h"
 #include "core/tolerance.h"
 #include "report/chart_cairo.h"
@@ -725,9 +726,21 @@ Status write_cam_report(const StoredRun& run, const std::filesystem::path& out) 
 
 // ---- The trend plot ----
 
-Status write_trend_plot(const std::vector<RunCharacteristics>& runs, const std::string& key,
-                        const std::filesystem::path& out) {
-  if (Result<chart::PageFormat> format = chart::page_format_for(out); !format) return format.error();
+Result<std::vector<RunCharacteristics>> trend_plot_runs(const RunHistory& history, const RunQuery& q,
+                                                        const std::string& key) {
+  Result<std::vector<RunCharacteristics>> runs = history.characteristics(q, key);
+  if (!runs) return runs.error();
+  const bool any =
+      std::any_of(runs->begin(), runs->end(), [](const RunCharacteristics& r) { return !r.characteristics.empty(); });
+  if (any || runs->empty()) return runs;
+  return history.characteristics(q);
+}
+
+namespace {
+
+// The trend plot's page in `format`'s bytes.
+Result<std::string> render_trend_plot(const std::vector<RunCharacteristics>& runs, const std::string& key,
+                                      chart::PageFormat format) {
   if (runs.empty()) return make_error(ErrorCode::kNotFound, "no runs to plot: no run matches the filters");
   struct Point {
     const RunSummary* run;
@@ -770,7 +783,7 @@ Status write_trend_plot(const std::vector<RunCharacteristics>& runs, const std::
   f.y_max = hi;
   const RunSummary& first = *points.front().run;
 
-  return chart::write_page(out, kTrendWidthPt, kTrendHeightPt, [&](cairo_t* cr) {
+  return chart::render_page(format, kTrendWidthPt, kTrendHeightPt, [&](cairo_t* cr) {
     chart::set_colour(cr, chart::kInk);
     chart::text(cr, 30, 28, characteristic_title(key) + ", " + display_unit(unit), 14, Align::kLeft, true);
     chart::text(cr, 30, 43,
@@ -812,13 +825,16 @@ Status write_trend_plot(const std::vector<RunCharacteristics>& runs, const std::
       }
     }
     cairo_stroke(cr);
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const auto x = static_cast<double>(i);
-      const Verdict v = points[i].c->verdict;
+    // The dots one fill per verdict (one path each in an SVG, not one per run), out of
+    // tolerance last so that they stay on top.
+    for (const Verdict v : {Verdict::kNotJudged, Verdict::kIn, Verdict::kOut}) {
       const double r = v == Verdict::kOut ? 4.0 : 2.6;
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        if (points[i].c->verdict != v) continue;
+        cairo_new_sub_path(cr);
+        cairo_arc(cr, f.px(static_cast<double>(i)), f.py(points[i].c->value), r, 0, 2 * M_PI);
+      }
       chart::set_colour(cr, v == Verdict::kOut ? chart::kOut : v == Verdict::kIn ? chart::kCurve : chart::kNotJudged);
-      cairo_new_sub_path(cr);
-      cairo_arc(cr, f.px(x), f.py(points[i].c->value), r, 0, 2 * M_PI);
       cairo_fill(cr);
     }
     cairo_restore(cr);
@@ -850,6 +866,24 @@ Status write_trend_plot(const std::vector<RunCharacteristics>& runs, const std::
     const Limits& last = points.back().c->limits;
     chart::text(cr, lx + 18, ly, "limits (newest: " + limits_text(last, dec) + " " + display_unit(unit) + ")", 6.5);
   });
+}
+
+}  // namespace
+
+Status write_trend_plot(const std::vector<RunCharacteristics>& runs, const std::string& key,
+                        const std::filesystem::path& out) {
+  Result<chart::PageFormat> format = chart::page_format_for(out);
+  if (!format) return format.error();
+  Result<std::string> page = render_trend_plot(runs, key, *format);
+  if (!page && page.error().code == ErrorCode::kIo) {
+    return make_error(ErrorCode::kIo, page.error().message + " (writing " + out.string() + ")");
+  }
+  if (!page) return page.error();
+  return write_file_atomically(out, *page);
+}
+
+Result<std::string> trend_plot_svg(const std::vector<RunCharacteristics>& runs, const std::string& key) {
+  return render_trend_plot(runs, key, chart::PageFormat::kSvg);
 }
 
 }  // namespace gaugeloop

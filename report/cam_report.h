@@ -93,6 +93,12 @@ ChartPlacement cam_report_lift_chart(const StoredRun& run);
 inline constexpr double kTrendWidthPt = 841.89;
 inline constexpr double kTrendHeightPt = 473.0;
 
+// The runs of a plot of characteristic `key`: those `q` selects, oldest first, each with only
+// that characteristic (one row a run read); when none has it, with all of theirs, so that
+// write_trend_plot names the keys they have.
+Result<std::vector<RunCharacteristics>> trend_plot_runs(const RunHistory& history, const RunQuery& q,
+                                                        const std::string& key);
+
 // Writes the plot of characteristic `key` over `runs` (oldest first, as
 // RunStore::characteristics returns them) to `out` (PDF, SVG or PNG by its extension): its
 // value per run in run order (run ids and dates on the x axis) with its limits as lines and
@@ -101,5 +107,9 @@ inline constexpr double kTrendHeightPt = 473.0;
 // there are no runs; kInvalidInput for another extension; kIo if the file cannot be written.
 Status write_trend_plot(const std::vector<RunCharacteristics>& runs, const std::string& key,
                         const std::filesystem::path& out);
+
+// The same page as SVG text, written nowhere (what the HTTP API sends). The same errors but
+// kInvalidInput and kIo for the file.
+Result<std::string> trend_plot_svg(const std::vector<RunCharacteristics>& runs, const std::string& key);
 
 }  // namespace gaugeloop

@@ -262,15 +262,14 @@ void HttpApi::Impl::trend_plot(const httplib::Request& req, httplib::Response& r
   }
   const std::string key = q->text("key").empty() ? std::string("lift_error") : q->text("key");
   Result<std::vector<RunCharacteristics>> runs =
-      read_history([&](const RunHistory& history) { return history.characteristics(*rq); });
+      read_history([&](const RunHistory& history) { return trend_plot_runs(history, *rq, key); });
   if (!runs) return send_error(res, runs.error());
   if (runs->empty()) {
     return send_error(res, 404,
                       "no runs of " + rq->part + " lobe " + std::to_string(rq->lobe) +
                           " match; GET /api/runs lists which parts and lobes have runs");
   }
-  Result<std::string> svg =
-      file_written_by([&](const fs::path& out) { return write_trend_plot(*runs, key, out); }, "trend.svg");
+  Result<std::string> svg = trend_plot_svg(*runs, key);
   if (!svg) return send_error(res, svg.error());
   res.status = 200;
   res.set_content(std::move(*svg), "image/svg+xml");

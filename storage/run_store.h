@@ -544,7 +544,10 @@ class RunHistory {
   virtual ~RunHistory() = default;
   virtual Result<std::vector<RunSummary>> list_runs(const RunQuery& q) const = 0;
   virtual Result<std::vector<RunSummary>> trend(const RunQuery& q) const = 0;
-  virtual Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q) const = 0;
+  // The runs q selects, oldest first, each with its characteristics in the order stored; with a
+  // key, only that characteristic (a trend plot's one line: a run without it has none).
+  virtual Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q, const std::string& key) const = 0;
+  Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q) const { return characteristics(q, {}); }
   // Over the same runs as characteristics(q), each key summed up: the file reads the window's
   // characteristics in one statement and sums them up as they come, PostgreSQL sums them up
   // itself, so the rows never cross the network.
@@ -725,7 +728,8 @@ class RunStore : public RunHistory {
   Result<std::vector<RunSummary>> trend(const RunQuery& q) const override;
 
   // The runs trend() returns (oldest first), each with its characteristics.
-  Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q) const override;
+  using RunHistory::characteristics;
+  Result<std::vector<RunCharacteristics>> characteristics(const RunQuery& q, const std::string& key) const override;
   Result<CharacteristicSummaries> characteristic_summaries(const RunQuery& q) const override;
 
   // Deletes the raw samples of runs started before `cutoff_utc` (exclusive), keeping every

@@ -464,6 +464,43 @@ BENCHMARK_DEFINE_F(History, Baseline_BareSelectOfTheSpcRows)(benchmark::State& s
   sqlite3_close(db);
 }
 
+// What a trend plot reads (`runs trend --plot`, /api/trend.svg): the newest state.range(0)
+// runs of a lobe, oldest first, each with the one characteristic plotted.
+BENCHMARK_DEFINE_F(History, TrendPlotRunsOfALobe)(benchmark::State& state) {
+  for (auto _ : state) {
+    RunQuery q;
+    q.part = part_name(static_cast<int>(next() % kParts));
+    q.lobe = 1 + static_cast<int>(next() % kLobes);
+    q.limit = static_cast<int>(state.range(0));
+    Result<std::vector<RunCharacteristics>> runs = store_->characteristics(q, "lift_error.zone3");
+    if (!runs || runs->size() != static_cast<std::size_t>(q.limit) || runs->back().characteristics.size() != 1) {
+      die("the trend plot read no runs or not their one characteristic");
+    }
+    benchmark::DoNotOptimize(runs->data());
+  }
+}
+
+// Baseline: the same runs' values of that key, bare sqlite3.
+BENCHMARK_DEFINE_F(History, Baseline_BareSelectOfTheTrendPlotRows)(benchmark::State& state) {
+  sqlite3* db = nullptr;
+  sqlite3_open_v2(history().c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
+  for (auto _ : state) {
+    sqlite3_stmt* s = prepare(db,
+                              "SELECT c.value FROM (SELECT id FROM runs WHERE part = ?1 AND lobe = ?2"
+                              " ORDER BY started_utc DESC, id DESC LIMIT ?3) AS w"
+                              " JOIN run_characteristics AS c ON c.run_id = w.id AND c.key = 'lift_error.zone3'");
+    const std::string part = part_name(static_cast<int>(next() % kParts));
+    sqlite3_bind_text(s, 1, part.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_int(s, 2, 1 + static_cast<int>(next() % kLobes));
+    sqlite3_bind_int64(s, 3, state.range(0));
+    double sum = 0.0;
+    while (sqlite3_step(s) == SQLITE_ROW) sum += sqlite3_column_double(s, 0);
+    benchmark::DoNotOptimize(sum);
+    sqlite3_finalize(s);
+  }
+  sqlite3_close(db);
+}
+
 // What the command line pays before its query: opening the file and checking the schema.
 BENCHMARK_DEFINE_F(History, OpenTheDatabase)(benchmark::State& state) {
   for (auto _ : state) {
@@ -572,6 +609,8 @@ BENCHMARK_REGISTER_F(History, Trend30DaysOfALobe)
 BENCHMARK_REGISTER_F(History, SpcOfALobe)->Arg(125)->Arg(625)->Unit(benchmark::kMillisecond);
 BENCHMARK_REGISTER_F(History, SpcOfALobeFromEveryRun)->Arg(125)->Arg(625)->Unit(benchmark::kMillisecond);
 BENCHMARK_REGISTER_F(History, Baseline_BareSelectOfTheSpcRows)->Arg(125)->Arg(625)->Unit(benchmark::kMillisecond);
+BENCHMARK_REGISTER_F(History, TrendPlotRunsOfALobe)->Arg(200)->Unit(benchmark::kMillisecond);
+BENCHMARK_REGISTER_F(History, Baseline_BareSelectOfTheTrendPlotRows)->Arg(200)->Unit(benchmark::kMillisecond);
 BENCHMARK_REGISTER_F(History, ShowOneRun)->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true);
 BENCHMARK_REGISTER_F(History, OpenTheDatabase)
     ->Unit(benchmark::kMillisecond)

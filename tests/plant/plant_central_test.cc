@@ -773,6 +773,8 @@ TEST_F(CentralTest, EveryQueryAnswersWithTheLocalFilesRowsInItsOrder) {
     EXPECT_EQ(rows(central->list_runs(query)), local_list) << what;
     EXPECT_EQ(rows(central->trend(query)), rows(g.store->trend(query))) << what;
     EXPECT_EQ(rows(central->characteristics(query)), rows(g.store->characteristics(query))) << what;
+    EXPECT_EQ(rows(central->characteristics(query, "lift_error")), rows(g.store->characteristics(query, "lift_error")))
+        << what;
   }
   // The comparison compares something: the queries select different, non-empty sets.
   EXPECT_EQ(rows(g.store->list_runs(queries[0])).size(), 29u);

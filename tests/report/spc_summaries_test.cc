@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "report/cam_report.h"
 #include "report/spc.h"
 #include "storage/run_store.h"
 #include "tests/support/sample_runs.h"
@@ -144,6 +145,46 @@ TEST_F(SpcSummariesTest, EveryFilterAndWindowSumsUpTheSameRuns) {
   ASSERT_TRUE(empty.ok());
   EXPECT_EQ(empty->runs, 0);
   EXPECT_TRUE(empty->by_key.empty());
+}
+
+TEST_F(SpcSummariesTest, ATrendPlotReadsItsKeyOfEveryRunAndEveryKeyWhenNoRunHasIt) {
+  const RunQuery q = lobe_one();
+  Result<std::vector<RunCharacteristics>> all = store_->characteristics(q);
+  ASSERT_TRUE(all.ok()) << all.error().message;
+  ASSERT_EQ(all->size(), 40u);
+  // One key: the same runs in the same order, each with that characteristic alone (the nose's
+  // velocity from run 30 on, none before), as read with every other.
+  Result<std::vector<RunCharacteristics>> nose = trend_plot_runs(*store_, q, "velocity_error.nose");
+  ASSERT_TRUE(nose.ok()) << nose.error().message;
+  ASSERT_EQ(nose->size(), all->size());
+  int with_key = 0;
+  for (std::size_t i = 0; i < all->size(); ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ((*nose)[i].run.id, (*all)[i].run.id);
+    const Characteristic* expected = nullptr;
+    for (const Characteristic& c : (*all)[i].characteristics) {
+      if (c.key == "velocity_error.nose") expected = &c;
+    }
+    ASSERT_EQ((*nose)[i].characteristics.size(), expected ? 1u : 0u);
+    if (!expected) continue;
+    ++with_key;
+    const Characteristic& got = (*nose)[i].characteristics.front();
+    EXPECT_EQ(got.key, expected->key);
+    EXPECT_EQ(got.value, expected->value);
+    EXPECT_EQ(got.limits.upper, expected->limits.upper);
+    EXPECT_EQ(got.verdict, expected->verdict);
+  }
+  EXPECT_EQ(with_key, 10);
+  // A key no run has: every characteristic, so that the plot's refusal names those they have.
+  Result<std::vector<RunCharacteristics>> none = trend_plot_runs(*store_, q, "lift_error.zone9");
+  ASSERT_TRUE(none.ok()) << none.error().message;
+  ASSERT_EQ(none->size(), all->size());
+  EXPECT_EQ(none->back().characteristics.size(), all->back().characteristics.size());
+  const testing::TempDir out;
+  const Status refused = write_trend_plot(*none, "lift_error.zone9", out.path() / "trend.svg");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("they have: dial_runout, lift_error, phase, roundness"), std::string::npos)
+      << refused.error().message;
 }
 
 TEST_F(SpcSummariesTest, TheFiguresFromTheSummariesAreTheFiguresFromTheRuns) {
