@@ -850,10 +850,12 @@ Result<std::string> render_trend_plot(const std::vector<RunCharacteristics>& run
     for (std::size_t i = 0; i < points.size(); i += every) {
       const double x = f.px(static_cast<double>(i));
       chart::text(cr, x, f.box.bottom() + 9, "run " + std::to_string(points[i].run->id), 6.5, Align::kCentre);
-      chart::text(cr, x, f.box.bottom() + 17.5, points[i].run->started_utc.substr(0, 10), 6, Align::kCentre);
+      chart::text(cr, x, f.box.bottom() + 17.5, points[i].run->started_utc.substr(0, 10), 6.5, Align::kCentre);
     }
-    chart::text(cr, f.box.left + f.box.width / 2, f.box.bottom() + 31, "runs in the order measured (started, UTC)", 7,
-                Align::kCentre);
+    // The run labels, the dates and this line in the ticks' size: an SVG carries the outline of
+    // every glyph once per size, most of its bytes and of the time it takes to write.
+    chart::text(cr, f.box.left + f.box.width / 2, f.box.bottom() + 31, "runs in the order measured (started, UTC)",
+                6.5, Align::kCentre);
     // Legend.
     double lx = f.box.left;
     const double ly = kTrendHeightPt - 22;

@@ -133,6 +133,12 @@ Result<std::unique_ptr<Connection>> Connection::open(const std::string& file, Op
   } else if (mode != OpenMode::kBackupCopy) {
     sqlite3_busy_timeout(conn->db, kBusyTimeoutMs);
   }
+  // Up to 8 MiB of pages kept between statements (SQLite's default is 2 MiB, fewer pages than a
+  // trend of 200 runs with their characteristics touches at a million runs, so each request
+  // read them again from the file). Filled only as pages are read; kept while the file does not
+  // change. A hint: it reads the schema, so a file that is not a database fails it, and the
+  // caller's first statement reports that as it would have.
+  (void)sqlite3_exec(conn->db, "PRAGMA cache_size = -8192", nullptr, nullptr, nullptr);
   return conn;
 }
 
