@@ -180,11 +180,14 @@ void print_trace_table(const std::vector<GearTraceRecord>& traces) {
   }
 }
 
-// "in (class 5 asked)", "out (class 5 asked)", "not judged (the part names no tolerance_class)".
+// "in (class 5 asked: F_beta within 20.50 um)", with the profile's F_alpha when the profiles
+// were measured; "not judged (the part names no tolerance_class)".
 std::string gear_verdict_text(const GearRunRecord& r) {
   if (!r.required_class) return "not judged (the part names no tolerance_class)";
+  std::string asked = "F_beta within " + format_fixed(r.total_tolerance_um.value_or(0.0), 2) + " um";
+  if (r.profile_tolerance_um) asked += ", F_alpha within " + format_fixed(*r.profile_tolerance_um, 2) + " um";
   return std::string(r.verdict == Verdict::kIn ? "in" : "out") + " (class " + std::to_string(*r.required_class) +
-         " asked: F_beta within " + format_fixed(r.total_tolerance_um.value_or(0.0), 2) + " um)";
+         " asked: " + asked + ")";
 }
 
 // Keeps a measured gear as a gear run (judged against the part's class, ground with the stroke
@@ -475,6 +478,21 @@ int cmd_gear_runs_show(const GearRunsOptions& o) {
   print_trace_table(r.traces);
   std::printf("F_beta %.2f um at worst, %.2f mean (class %d); f_f_beta %.2f um mean, |f_H_beta| %.2f um mean\n",
               r.total_max_um, r.total_mean_um, r.tolerance_class, r.form_mean_um, r.slope_mean_abs_um);
+  if (r.profiles.empty()) {
+    std::printf("profile: not measured (the traces are leads only)\n");
+  } else {
+    std::printf("profile at the face's middle, ISO 1328-1 over roll lengths %.2f .. %.2f mm:\n",
+                r.profiles.front().from_roll_mm, r.profiles.front().to_roll_mm);
+    std::printf("  %5s  %-6s  %10s  %10s  %10s  %6s\n", "gap", "flank", "F_alpha um", "f_f_alpha", "f_H_alpha",
+                "class");
+    for (const GearProfileRecord& p : r.profiles) {
+      std::printf("  %5d  %-6s  %10.2f  %10.2f  %+10.2f  %6d\n", p.gap, p.flank.c_str(), p.total_um, p.form_um,
+                  p.slope_um, p.tolerance_class);
+    }
+    const GearProfileFigures f = gear_profile_figures(r);
+    std::printf("F_alpha %.2f um at worst, %.2f mean (class %d); f_f_alpha %.2f um mean, |f_H_alpha| %.2f um mean\n",
+                f.total_max_um, f.total_mean_um, f.tolerance_class, f.form_mean_um, f.slope_mean_abs_um);
+  }
   std::printf("verdict: %s\n", gear_verdict_text(r).c_str());
   if (g->pushed_version) {
     std::printf("stroke version %d was pushed from it (mesh error fit: residual %.2f um RMS)\n", *g->pushed_version,

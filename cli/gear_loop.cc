@@ -36,23 +36,6 @@ Result<GearLeadSummary> summarize_lead(const std::vector<LeadTrace>& traces, con
   return summary_of(*r);
 }
 
-Result<GearProfileSummary> summarize_profile(const std::vector<ProfileTrace>& traces, const GearPart& part) {
-  GearProfileSummary s;
-  for (const ProfileTrace& t : traces) {
-    Result<ProfileFigures> f = profile_figures(t, part.gear);
-    if (!f) return f.error();
-    s.total_mean_um += f->total_um;
-    s.total_max_um = std::max(s.total_max_um, f->total_um);
-    s.form_mean_um += f->form_um;
-    s.slope_mean_abs_um += std::abs(f->slope_um);
-  }
-  const double n = static_cast<double>(std::max<std::size_t>(1, traces.size()));
-  s.total_mean_um /= n;
-  s.form_mean_um /= n;
-  s.slope_mean_abs_um /= n;
-  return s;
-}
-
 Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& settings,
                                                      const std::function<void(const GearLoopIteration&)>& on_gear) {
   const GearPart& part = settings.part.part;
@@ -103,7 +86,11 @@ Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& set
     origin.serial = "GEAR-" + std::to_string(it);
     origin.nc_file = settings.stroke.nc_file;
     origin.ground_with_version = version;
-    Result<GearRunRecord> measured = judge_gear(part, traces, origin);
+    // The profile at the face's middle, as the checker traces it on the same gaps: kept with the
+    // leads, and judged with them.
+    const std::vector<ProfileTrace> profiles =
+        measure_profile(*gear, settings.gaps, 0.25, static_cast<std::uint64_t>(it));
+    Result<GearRunRecord> measured = judge_gear(part, traces, origin, profiles);
     if (!measured) return measured.error();
     g.measured = summary_of(*measured);
     if (settings.stroke.store != nullptr) {
@@ -118,11 +105,7 @@ Result<std::vector<GearLoopIteration>> run_gear_loop(const GearLoopSettings& set
                        part, settings.part.tolerance_class);
     if (!ground) return ground.error();
     g.ground = *ground;
-    // The profile at the face's middle, as the checker traces it on the same gaps.
-    Result<GearProfileSummary> profile =
-        summarize_profile(measure_profile(*gear, settings.gaps, 0.25, static_cast<std::uint64_t>(it)), part);
-    if (!profile) return profile.error();
-    g.profile = *profile;
+    g.profile = gear_profile_figures(*measured);
     if (it < settings.iterations) {
       std::string gaps;
       for (int gap : settings.gaps) gaps += (gaps.empty() ? "" : ", ") + std::to_string(gap);

@@ -18,6 +18,8 @@
 #include "config/gear_file.h"
 #include "job/gear_stroke.h"
 #include "nc_out/slide_compensation.h"
+#include "report/gear_characteristics.h"
+#include "report/gear_characteristics.h"
 #include "simulator/gear_grinder.h"
 #include "simulator/slide_ballbar.h"
 
@@ -43,23 +45,13 @@ struct GearLeadSummary {
   Verdict verdict = Verdict::kNotJudged;  // against the part's tolerance_class
 };
 
-// ISO 1328-1's profile deviations over every profile trace measured (at the face's middle).
-struct GearProfileSummary {
-  double total_mean_um = 0.0;  // F_alpha
-  double total_max_um = 0.0;
-  double form_mean_um = 0.0;       // f_f_alpha
-  double slope_mean_abs_um = 0.0;  // |f_H_alpha|
-};
-// Errors: profile_figures'.
-Result<GearProfileSummary> summarize_profile(const std::vector<ProfileTrace>& traces, const GearPart& part);
-
 struct GearLoopIteration {
   int iteration = 0;
   int ground_from_version = 0;                   // the stroke version in force when it was ground
   GearLeadSummary measured;                      // as the checker measured it (its noise included)
   std::int64_t gear_run_id = 0;                  // the measured gear as stored; 0: no store
   GearLeadSummary ground;                        // the gear as ground: the same traces without the checker's noise
-  GearProfileSummary profile;                    // the checker's profiles of the same gaps, with its noise
+  GearProfileFigures profile;                    // the checker's profiles of the same gaps, with its noise
   std::optional<MeshIdentification> identified;  // not after the last gear
   int pushed_version = 0;                        // the corrected stroke's version; 0: none
   double sim_max_abs_deg = 0.0;                  // of the corrected stroke

@@ -126,6 +126,17 @@ int helix_tolerance_class(double total_um, double d, double b) {
   return 12;
 }
 
+double profile_tolerance_um(int tolerance_class, double m_n, double d) {
+  return (3.2 * std::sqrt(m_n) + 0.22 * std::sqrt(d) + 0.7) * std::pow(std::sqrt(2.0), tolerance_class - 5);
+}
+
+int profile_tolerance_class(double total_um, double m_n, double d) {
+  for (int a = 1; a <= 11; ++a) {
+    if (total_um <= profile_tolerance_um(a, m_n, d)) return a;
+  }
+  return 12;
+}
+
 Result<MeshIdentification> identify_mesh_error(const std::vector<LeadTrace>& traces,
                                                const std::vector<double>& spline_z, double r_b) {
   if (traces.empty()) return make_error(ErrorCode::kInvalidInput, "no lead trace to identify the mesh error from");

@@ -61,6 +61,11 @@ Result<ProfileFigures> profile_figures(const ProfileTrace& trace, const GearGeom
 int helix_tolerance_class(double total_um, double pitch_diameter_mm, double face_width_mm);
 double helix_tolerance_um(int tolerance_class, double pitch_diameter_mm, double face_width_mm);
 
+// The same for a total profile deviation: F_alphaT = (3.2 sqrt(m_n) + 0.22 sqrt(d) + 0.7)
+// sqrt(2)^(A - 5) um (m_n the normal module, d the pitch diameter, mm).
+int profile_tolerance_class(double total_um, double normal_module_mm, double pitch_diameter_mm);
+double profile_tolerance_um(int tolerance_class, double normal_module_mm, double pitch_diameter_mm);
+
 // The gearbox's mesh error at the stroke's spline points, identified from lead traces.
 struct MeshIdentification {
   std::vector<double> z_mm;      // the spline points

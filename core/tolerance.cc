@@ -127,34 +127,45 @@ Characteristic single_characteristic(std::string key, std::string unit, double v
 
 namespace {
 
-// A gear's "lead." keys (characteristic_title); nullopt for another key.
-std::optional<std::string> lead_title(std::string_view key) {
-  constexpr std::string_view kLead = "lead.";
-  if (key.substr(0, kLead.size()) != kLead) return std::nullopt;
+// A gear's "lead." and "profile." keys (characteristic_title); nullopt for another key.
+std::optional<std::string> gear_title(std::string_view key) {
+  struct Figure {
+    std::string_view kind;  // "lead" or "profile"
+    std::string_view name;  // the figure's part of the key
+    std::string_view title;
+  };
+  static constexpr Figure kFigures[] = {
+      {"lead", "F_beta", "Total helix deviation F_beta"},
+      {"lead", "f_f_beta", "Helix form deviation f_f_beta"},
+      {"lead", "f_H_beta", "Helix slope deviation f_H_beta"},
+      {"profile", "F_alpha", "Total profile deviation F_alpha"},
+      {"profile", "f_f_alpha", "Profile form deviation f_f_alpha"},
+      {"profile", "f_H_alpha", "Profile slope deviation f_H_alpha"},
+  };
+  const size_t first_dot = key.find('.');
+  if (first_dot == std::string_view::npos) return std::nullopt;
+  const std::string_view kind = key.substr(0, first_dot);
   std::vector<std::string_view> parts;
-  for (std::string_view rest = key.substr(kLead.size());;) {
+  for (std::string_view rest = key.substr(first_dot + 1);;) {
     const size_t dot = rest.find('.');
     parts.push_back(rest.substr(0, dot));
     if (dot == std::string_view::npos) break;
     rest = rest.substr(dot + 1);
   }
-  std::string figure;
-  if (parts[0] == "F_beta") {
-    figure = "Total helix deviation F_beta";
-  } else if (parts[0] == "f_f_beta") {
-    figure = "Helix form deviation f_f_beta";
-  } else if (parts[0] == "f_H_beta") {
-    figure = "Helix slope deviation f_H_beta";
-  } else {
-    return std::nullopt;
+  const Figure* figure = nullptr;
+  for (const Figure& f : kFigures) {
+    if (f.kind == kind && f.name == parts[0]) figure = &f;
   }
-  if (parts.size() == 1 && parts[0] == "F_beta") return figure + ", worst flank";
-  if (parts.size() == 2 && parts[1] == "mean") return figure + ", mean of the flanks";
-  if (parts.size() == 2 && parts[1] == "mean_abs") return figure + ", mean size over the flanks";
+  if (figure == nullptr) return std::nullopt;
+  const std::string title(figure->title);
+  const bool total = parts[0] == "F_beta" || parts[0] == "F_alpha";
+  if (parts.size() == 1 && total) return title + ", worst flank";
+  if (parts.size() == 2 && parts[1] == "mean") return title + ", mean of the flanks";
+  if (parts.size() == 2 && parts[1] == "mean_abs") return title + ", mean size over the flanks";
   const bool gap =
       parts.size() == 3 && !parts[1].empty() && parts[1].find_first_not_of("0123456789") == std::string_view::npos;
   if (gap && (parts[2] == "left" || parts[2] == "right")) {
-    return figure + ", gap " + std::string(parts[1]) + ", " + std::string(parts[2]) + " flank";
+    return title + ", gap " + std::string(parts[1]) + ", " + std::string(parts[2]) + " flank";
   }
   return std::nullopt;
 }
@@ -162,7 +173,7 @@ std::optional<std::string> lead_title(std::string_view key) {
 }  // namespace
 
 std::string characteristic_title(std::string_view key, PartKind kind) {
-  if (std::optional<std::string> lead = lead_title(key)) return *lead;
+  if (std::optional<std::string> gear = gear_title(key)) return *gear;
   std::string_view base = key;
   std::string_view zone;
   if (const size_t dot = key.find('.'); dot != std::string_view::npos) {
@@ -204,7 +215,7 @@ std::string characteristic_title(std::string_view key, PartKind kind) {
 PartKind part_kind_of(const std::vector<Characteristic>& characteristics) {
   for (const Characteristic& c : characteristics) {
     if (c.key == "diameter_error" || c.key == "stroke_error" || c.key == "index_error") return PartKind::kPin;
-    if (c.key.rfind("lead.", 0) == 0) return PartKind::kGear;
+    if (c.key.rfind("lead.", 0) == 0 || c.key.rfind("profile.", 0) == 0) return PartKind::kGear;
   }
   return PartKind::kLobe;
 }

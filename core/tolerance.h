@@ -121,7 +121,8 @@ int figure_decimals(std::string_view unit);
 Characteristic single_characteristic(std::string key, std::string unit, double value, const Limits& limits);
 
 // What a run measured. A few keys mean a different thing on each: "roundness" is of a
-// lobe's base circle and of a pin's whole circumference. A gear's keys are its own ("lead.").
+// lobe's base circle and of a pin's whole circumference. A gear's keys are its own ("lead.",
+// "profile.").
 enum class PartKind { kLobe, kPin, kGear };
 
 // "Lift error, opening flank", "Phase (timing) error"...: a key as a report or a DFQ
@@ -129,13 +130,15 @@ enum class PartKind { kLobe, kPin, kGear };
 // error, an export's extra characteristic) is "Lift error, harmonic k". On a pin, "roundness"
 // is "Pin roundness"; every other key reads the same on both. A gear's lead: "lead.F_beta"
 // (the worst flank), "lead.F_beta.mean", "lead.f_f_beta.mean", "lead.f_H_beta.mean_abs", and per
-// trace "lead.<figure>.<gap>.<left|right>" ("Total helix deviation F_beta, gap 1, left flank").
+// trace "lead.<figure>.<gap>.<left|right>" ("Total helix deviation F_beta, gap 1, left flank");
+// its profile the same under "profile." with F_alpha, f_f_alpha and f_H_alpha.
 // An unknown key comes back as it is.
 std::string characteristic_title(std::string_view key, PartKind kind = PartKind::kLobe);
 
 // What a run's characteristics tell of its part, where its settings are not at hand (SPC, the
 // AQDEF export): a pin's carry keys only a pin has (diameter_error, stroke_error,
-// index_error), a gear's its lead ("lead."); anything else, none included, is a lobe's.
+// index_error), a gear's its lead and profile ("lead.", "profile."); anything else, none
+// included, is a lobe's.
 PartKind part_kind_of(const std::vector<Characteristic>& characteristics);
 
 }  // namespace gaugeloop

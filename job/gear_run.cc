@@ -10,7 +10,7 @@
 namespace gaugeloop {
 
 Result<GearRunRecord> judge_gear(const GearPart& part, const std::vector<LeadTrace>& traces,
-                                 const GearRunOrigin& origin) {
+                                 const GearRunOrigin& origin, const std::vector<ProfileTrace>& profiles) {
   if (traces.empty()) {
     return make_error(ErrorCode::kInvalidInput, "gear of part " + origin.part_name + ": no lead trace to judge");
   }
@@ -55,9 +55,35 @@ Result<GearRunRecord> judge_gear(const GearPart& part, const std::vector<LeadTra
   r.form_mean_um /= n;
   r.slope_mean_abs_um /= n;
   r.tolerance_class = helix_tolerance_class(r.total_max_um, d, b);
+  double profile_max_um = 0.0;
+  for (const ProfileTrace& t : profiles) {
+    Result<ProfileFigures> f = profile_figures(t, part.gear);
+    if (!f) {
+      return make_error(f.error().code, "profile of gap " + std::to_string(t.gap) + ", " +
+                                            std::string(flank_name(t.flank)) + " flank: " + f.error().message);
+    }
+    GearProfileRecord pr;
+    pr.gap = t.gap;
+    pr.flank = std::string(flank_name(t.flank));
+    pr.total_um = f->total_um;
+    pr.form_um = f->form_um;
+    pr.slope_um = f->slope_um;
+    pr.tolerance_class = profile_tolerance_class(f->total_um, part.gear.normal_module_mm, d);
+    pr.from_roll_mm = f->from_mm;
+    pr.to_roll_mm = f->to_mm;
+    pr.roll_mm = t.roll_mm;
+    pr.deviation_um = t.deviation_um;
+    profile_max_um = std::max(profile_max_um, pr.total_um);
+    r.profiles.push_back(std::move(pr));
+  }
   if (r.required_class) {
     r.total_tolerance_um = helix_tolerance_um(*r.required_class, d, b);
-    r.verdict = r.total_max_um <= *r.total_tolerance_um ? Verdict::kIn : Verdict::kOut;
+    bool in = r.total_max_um <= *r.total_tolerance_um;
+    if (!r.profiles.empty()) {
+      r.profile_tolerance_um = profile_tolerance_um(*r.required_class, part.gear.normal_module_mm, d);
+      in = in && profile_max_um <= *r.profile_tolerance_um;
+    }
+    r.verdict = in ? Verdict::kIn : Verdict::kOut;
   }
   return r;
 }

@@ -30,11 +30,13 @@ struct GearRunOrigin {
   std::string started_utc;                 // empty: now
 };
 
-// The record of a gear measured as `traces`: every trace's figures, F_beta's maximum and mean,
-// the means of f_f_beta and |f_H_beta|, the worst flank's class, and the verdict (in when every
-// flank's F_beta is within the required class's tolerance). kInvalidInput for no trace, or
-// lead_figures' error with the gap and flank of the trace it could not evaluate.
+// The record of a gear measured as `traces` (leads) and `profiles` (none: not measured): every
+// trace's figures, F_beta's maximum and mean, the means of f_f_beta and |f_H_beta|, the worst
+// flank's class, each profile's F_alpha, f_f_alpha, f_H_alpha and class, and the verdict (in when
+// every flank's F_beta, and every profile's F_alpha, is within the required class's tolerance).
+// kInvalidInput for no trace, or lead_figures' or profile_figures' error with the gap and flank
+// of the trace it could not evaluate.
 Result<GearRunRecord> judge_gear(const GearPart& part, const std::vector<LeadTrace>& traces,
-                                 const GearRunOrigin& origin);
+                                 const GearRunOrigin& origin, const std::vector<ProfileTrace>& profiles = {});
 
 }  // namespace gaugeloop

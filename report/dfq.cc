@@ -43,11 +43,13 @@ int harmonic_order(const std::string& key) {
 }
 
 // Figures that cannot be below 0: their lower boundary is natural, not a tolerance. A gear's
-// F_beta and f_f_beta are widths of bands; f_H_beta is signed (its mean over the flanks, a
-// size, is not).
+// F_beta, f_f_beta, F_alpha and f_f_alpha are widths of bands; f_H_beta and f_H_alpha are signed
+// (their means over the flanks, sizes, are not).
 bool has_natural_zero(const std::string& key) {
   return key == "base_circle_runout" || key == "base_circle_runout_h1" || key == "roundness" || is_harmonic(key) ||
-         key.rfind("lead.F_beta", 0) == 0 || key.rfind("lead.f_f_beta", 0) == 0 || key == "lead.f_H_beta.mean_abs";
+         key.rfind("lead.F_beta", 0) == 0 || key.rfind("lead.f_f_beta", 0) == 0 || key == "lead.f_H_beta.mean_abs" ||
+         key.rfind("profile.F_alpha", 0) == 0 || key.rfind("profile.f_f_alpha", 0) == 0 ||
+         key == "profile.f_H_alpha.mean_abs";
 }
 
 std::string run_name(const RunSummary& r) { return "run " + std::to_string(r.id); }

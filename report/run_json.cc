@@ -1,5 +1,6 @@
 // JSON and CSV of stored runs, pushes, pending tables and events; UTC time bounds.
 #include "report/run_json.h"
+#include "report/gear_characteristics.h"
 
 #include "core/number_text.h"
 #include "report/judged_error.h"
@@ -256,7 +257,8 @@ json gear_run_json(const StoredGearRun& g, bool with_traces) {
          {"form_mean_um", r.form_mean_um},
          {"slope_mean_abs_um", r.slope_mean_abs_um},
          {"pushed_version", g.pushed_version ? json(*g.pushed_version) : nullptr},
-         {"mesh_residual_rms_um", g.mesh_residual_rms_um ? json(*g.mesh_residual_rms_um) : nullptr}};
+         {"mesh_residual_rms_um", g.mesh_residual_rms_um ? json(*g.mesh_residual_rms_um) : nullptr},
+         {"profile_tolerance_um", r.profile_tolerance_um ? json(*r.profile_tolerance_um) : nullptr}};
   if (with_traces) {
     json traces = json::array();
     for (const GearTraceRecord& t : r.traces) {
@@ -272,6 +274,31 @@ json gear_run_json(const StoredGearRun& g, bool with_traces) {
                         {"deviation_um", t.deviation_um}});
     }
     j["traces"] = std::move(traces);
+    // The profiles at the face's middle: none for a gear traced along its leads only.
+    json profiles = json::array();
+    for (const GearProfileRecord& p : r.profiles) {
+      profiles.push_back({{"gap", p.gap},
+                          {"flank", p.flank},
+                          {"total_um", p.total_um},
+                          {"form_um", p.form_um},
+                          {"slope_um", p.slope_um},
+                          {"tolerance_class", p.tolerance_class},
+                          {"from_roll_mm", p.from_roll_mm},
+                          {"to_roll_mm", p.to_roll_mm},
+                          {"roll_mm", p.roll_mm},
+                          {"deviation_um", p.deviation_um}});
+    }
+    j["profiles"] = std::move(profiles);
+    if (r.profiles.empty()) {
+      j["profile"] = nullptr;
+    } else {
+      const GearProfileFigures f = gear_profile_figures(r);
+      j["profile"] = {{"tolerance_class", f.tolerance_class},
+                      {"total_max_um", f.total_max_um},
+                      {"total_mean_um", f.total_mean_um},
+                      {"form_mean_um", f.form_mean_um},
+                      {"slope_mean_abs_um", f.slope_mean_abs_um}};
+    }
   }
   return j;
 }

@@ -768,8 +768,29 @@ CREATE TABLE nc_push_files (
 CREATE INDEX nc_push_files_by_file ON nc_push_files (file, hash);
 )sql";
 
-const std::array<Migration, 20>& all_migrations() {
-  static const std::array<Migration, 20> kMigrations{{
+// A gear's profiles at the face's middle beside its leads, each with its ISO 1328-1 figures, and
+// the F_alpha tolerance of the class the gear was judged against. Gears stored before: no rows.
+constexpr std::string_view kSchemaV21 = R"sql(
+ALTER TABLE gear_runs ADD COLUMN profile_tolerance_um REAL CHECK (profile_tolerance_um > 0);
+CREATE TABLE gear_run_profiles (
+  run_id          INTEGER NOT NULL REFERENCES gear_runs (id) ON DELETE CASCADE,
+  gap             INTEGER NOT NULL CHECK (gap >= 1),
+  flank           TEXT    NOT NULL CHECK (flank IN ('left', 'right')),
+  total_um        REAL    NOT NULL,  -- F_alpha
+  form_um         REAL    NOT NULL,  -- f_f_alpha
+  slope_um        REAL    NOT NULL,  -- f_H_alpha
+  tolerance_class INTEGER NOT NULL CHECK (tolerance_class BETWEEN 1 AND 12),
+  from_roll_mm    REAL    NOT NULL,  -- the evaluation range along the roll length
+  to_roll_mm      REAL    NOT NULL,
+  roll_mm         TEXT    NOT NULL CHECK (json_valid(roll_mm) AND json_array_length(roll_mm) >= 3),
+  deviation_um    TEXT    NOT NULL
+                  CHECK (json_valid(deviation_um) AND json_array_length(deviation_um) = json_array_length(roll_mm)),
+  PRIMARY KEY (run_id, gap, flank)
+) WITHOUT ROWID;
+)sql";
+
+const std::array<Migration, 21>& all_migrations() {
+  static const std::array<Migration, 21> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -860,6 +881,12 @@ const std::array<Migration, 20>& all_migrations() {
        "nc_push_files: every file of a push (table, main program, speed subprogram, Y table) with the hash of "
        "what was written",
        std::string(kSchemaV20),
+       nullptr,
+       {}},
+      {21,
+       "gear runs: the profiles at the face's middle with their ISO 1328-1 figures, and the F_alpha tolerance "
+       "judged against",
+       std::string(kSchemaV21),
        nullptr,
        {}},
   }};

@@ -375,6 +375,20 @@ struct GearTraceRecord {
   std::vector<double> deviation_um;  // one per z_mm
 };
 
+// A profile trace at the face's middle and its ISO 1328-1 figures (schema 21).
+struct GearProfileRecord {
+  int gap = 0;                // the tooth gap, 1-based
+  std::string flank;          // "left" or "right"
+  double total_um = 0.0;      // F_alpha
+  double form_um = 0.0;       // f_f_alpha
+  double slope_um = 0.0;      // f_H_alpha, signed
+  int tolerance_class = 0;    // of F_alpha: 1 to 11, 12 beyond class 11
+  double from_roll_mm = 0.0;  // the evaluation range along the roll length
+  double to_roll_mm = 0.0;
+  std::vector<double> roll_mm;       // the trace from the root towards the tip, increasing
+  std::vector<double> deviation_um;  // one per roll_mm
+};
+
 struct GearRunRecord {
   std::string started_utc;  // ISO 8601 UTC
   std::string machine;
@@ -394,6 +408,11 @@ struct GearRunRecord {
   double form_mean_um = 0.0;
   double slope_mean_abs_um = 0.0;
   std::vector<GearTraceRecord> traces;  // at most one per gap and flank
+  // The profiles measured with the leads (none: not measured, as by a flank probe that traces
+  // leads only), at most one per gap and flank; with a required class, the verdict holds every
+  // F_alpha to profile_tolerance_um too.
+  std::vector<GearProfileRecord> profiles;
+  std::optional<double> profile_tolerance_um;  // F_alphaT of required_class; only with profiles
 };
 
 struct StoredGearRun {

@@ -1,5 +1,5 @@
-// RunStore's gear runs (schema 12): a gear checker's lead traces and what ISO 1328-1 makes of
-// them, with ids of their own.
+// RunStore's gear runs (schema 12; profiles from schema 21): a gear checker's lead and profile
+// traces and what ISO 1328-1 makes of them, with ids of their own.
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -57,6 +57,31 @@ Status check_trace(const GearTraceRecord& t) {
   return {};
 }
 
+Status check_profile(const GearProfileRecord& p) {
+  const std::string where = "the profile of gap " + std::to_string(p.gap) + ", " + p.flank + " flank";
+  if (p.gap < 1) return gear_run_refused("a profile's gap is " + std::to_string(p.gap) + "; gaps count from 1");
+  if (p.flank != "left" && p.flank != "right") {
+    return gear_run_refused("a profile's flank is '" + p.flank + "', not left or right");
+  }
+  if (p.tolerance_class < 1 || p.tolerance_class > 12) {
+    return gear_run_refused(where + " has tolerance class " + std::to_string(p.tolerance_class) + ", not 1 to 12");
+  }
+  if (p.roll_mm.size() < 3 || p.roll_mm.size() != p.deviation_um.size()) {
+    return gear_run_refused(where + " has " + std::to_string(p.roll_mm.size()) + " roll lengths and " +
+                            std::to_string(p.deviation_um.size()) + " deviations; it needs 3 or more of each, as many");
+  }
+  for (const auto& [value, name] :
+       {std::pair{p.total_um, "F_alpha"}, std::pair{p.form_um, "f_f_alpha"}, std::pair{p.slope_um, "f_H_alpha"},
+        std::pair{p.from_roll_mm, "its range's start"}, std::pair{p.to_roll_mm, "its range's end"}}) {
+    if (Status s = check_finite(value, where + "'s " + name); !s.ok()) return s;
+  }
+  for (std::size_t i = 0; i < p.roll_mm.size(); ++i) {
+    if (Status s = check_finite(p.roll_mm[i], where + "'s roll length " + std::to_string(i + 1)); !s.ok()) return s;
+    if (Status s = check_finite(p.deviation_um[i], where + "'s deviation " + std::to_string(i + 1)); !s.ok()) return s;
+  }
+  return {};
+}
+
 Status check_gear_run(const GearRunRecord& r) {
   if (!storage_internal::is_time_bound(r.started_utc) || r.started_utc.empty()) {
     return storage_internal::bad_bound("gear run not stored: started", r.started_utc);
@@ -93,16 +118,35 @@ Status check_gear_run(const GearRunRecord& r) {
       return gear_run_refused("two traces of gap " + std::to_string(t.gap) + ", " + t.flank + " flank");
     }
   }
+  if (r.profile_tolerance_um.has_value() != (r.required_class.has_value() && !r.profiles.empty()) ||
+      (r.profile_tolerance_um && !(*r.profile_tolerance_um > 0.0 && std::isfinite(*r.profile_tolerance_um)))) {
+    return gear_run_refused(
+        "a gear judged with profiles comes with its F_alpha tolerance, finite and above 0, and only then");
+  }
+  seen.clear();
+  for (const GearProfileRecord& p : r.profiles) {
+    if (Status s = check_profile(p); !s.ok()) return s;
+    if (!seen.insert({p.gap, p.flank}).second) {
+      return gear_run_refused("two profiles of gap " + std::to_string(p.gap) + ", " + p.flank + " flank");
+    }
+  }
   return {};
 }
 
 constexpr std::string_view kInsertGearRun = R"sql(
 INSERT INTO gear_runs (started_utc, machine, part, source, serial, operator, note, nc_file, ground_with_version,
                        required_class, total_tolerance_um, verdict, tolerance_class, total_max_um, total_mean_um,
-                       form_mean_um, slope_mean_abs_um)
+                       form_mean_um, slope_mean_abs_um, profile_tolerance_um)
 VALUES (:started_utc, :machine, :part, :source, :serial, :operator, :note, :nc_file, :ground_with_version,
         :required_class, :total_tolerance_um, :verdict, :tolerance_class, :total_max_um, :total_mean_um, :form_mean_um,
-        :slope_mean_abs_um)
+        :slope_mean_abs_um, :profile_tolerance_um)
+)sql";
+
+constexpr std::string_view kInsertGearProfile = R"sql(
+INSERT INTO gear_run_profiles (run_id, gap, flank, total_um, form_um, slope_um, tolerance_class, from_roll_mm,
+                               to_roll_mm, roll_mm, deviation_um)
+VALUES (:run_id, :gap, :flank, :total_um, :form_um, :slope_um, :tolerance_class, :from_roll_mm, :to_roll_mm,
+        :roll_mm, :deviation_um)
 )sql";
 
 constexpr std::string_view kInsertGearTrace = R"sql(
@@ -112,11 +156,12 @@ VALUES (:run_id, :gap, :flank, :total_um, :form_um, :slope_um, :tolerance_class,
         :deviation_um)
 )sql";
 
-// Columns 0..19 of gear_runs AS g, read by read_gear_run.
+// Columns 0..20 of gear_runs AS g, read by read_gear_run.
 constexpr std::string_view kGearRunColumns =
     "g.id, g.started_utc, g.machine, g.part, g.source, g.serial, g.operator, g.note, g.nc_file, "
     "g.ground_with_version, g.required_class, g.verdict, g.tolerance_class, g.total_max_um, g.total_mean_um, "
-    "g.form_mean_um, g.slope_mean_abs_um, g.pushed_version, g.mesh_residual_rms_um, g.total_tolerance_um";
+    "g.form_mean_um, g.slope_mean_abs_um, g.pushed_version, g.mesh_residual_rms_um, g.total_tolerance_um, "
+    "g.profile_tolerance_um";
 
 StoredGearRun read_gear_run(const Statement& s) {
   StoredGearRun g;
@@ -141,7 +186,30 @@ StoredGearRun read_gear_run(const Statement& s) {
   g.pushed_version = s.column<std::optional<int>>(17);
   g.mesh_residual_rms_um = s.column<std::optional<double>>(18);
   r.total_tolerance_um = s.column<std::optional<double>>(19);
+  r.profile_tolerance_um = s.column<std::optional<double>>(20);
   return g;
+}
+
+// A stored trace's positions (column `first`, named `positions_name`) and deviations (the
+// column after it), read back from their JSON arrays; kStorage naming `what` if they do not.
+struct TraceNumbers {
+  std::vector<double> positions;
+  std::vector<double> deviation_um;
+};
+
+Result<TraceNumbers> trace_numbers(const Statement& s, int first, const std::string& positions_name,
+                                   const std::string& what, const Connection& conn, const std::string& operation) {
+  Result<std::vector<double>> at = storage_internal::numbers_from_json(s.column<std::string>(first));
+  Result<std::vector<double>> d = storage_internal::numbers_from_json(s.column<std::string>(first + 1));
+  if (!at.ok() || !d.ok() || at->size() != d->size()) {
+    return make_error(ErrorCode::kStorage, "cannot " + operation + ": " + what + " in " + conn.path.string() +
+                                               " does not read back (" +
+                                               (!at.ok()  ? positions_name + ": " + at.error().message
+                                                : !d.ok() ? "deviation_um: " + d.error().message
+                                                          : std::string("positions and deviations differ in number")) +
+                                               "); restore a backup");
+  }
+  return TraceNumbers{std::move(*at), std::move(*d)};
 }
 
 Error gear_run_not_found(const Connection& conn, std::int64_t id, const std::string& operation) {
@@ -178,6 +246,7 @@ Result<std::int64_t> RunStore::insert_gear_run(const GearRunRecord& run) {
   ins->bind(":total_mean_um", run.total_mean_um);
   ins->bind(":form_mean_um", run.form_mean_um);
   ins->bind(":slope_mean_abs_um", run.slope_mean_abs_um);
+  ins->bind(":profile_tolerance_um", run.profile_tolerance_um);
   if (Status s = ins->run(); !s.ok()) return s.error();
   const std::int64_t id = conn.last_insert_rowid();
   Result<Statement> trace = Statement::prepare(conn, kInsertGearTrace, operation);
@@ -196,6 +265,25 @@ Result<std::int64_t> RunStore::insert_gear_run(const GearRunRecord& run) {
     trace->bind(":z_mm", storage_internal::numbers_to_json(t.z_mm));
     trace->bind(":deviation_um", storage_internal::numbers_to_json(t.deviation_um));
     if (Status s = trace->run(); !s.ok()) return s.error();
+  }
+  if (!run.profiles.empty()) {
+    Result<Statement> profile = Statement::prepare(conn, kInsertGearProfile, operation);
+    if (!profile.ok()) return profile.error();
+    for (const GearProfileRecord& p : run.profiles) {
+      profile->reset();
+      profile->bind(":run_id", id);
+      profile->bind(":gap", p.gap);
+      profile->bind(":flank", p.flank);
+      profile->bind(":total_um", p.total_um);
+      profile->bind(":form_um", p.form_um);
+      profile->bind(":slope_um", p.slope_um);
+      profile->bind(":tolerance_class", p.tolerance_class);
+      profile->bind(":from_roll_mm", p.from_roll_mm);
+      profile->bind(":to_roll_mm", p.to_roll_mm);
+      profile->bind(":roll_mm", storage_internal::numbers_to_json(p.roll_mm));
+      profile->bind(":deviation_um", storage_internal::numbers_to_json(p.deviation_um));
+      if (Status s = profile->run(); !s.ok()) return s.error();
+    }
   }
   if (Status s = tx->commit(); !s.ok()) return s.error();
   return id;
@@ -286,24 +374,44 @@ Result<StoredGearRun> RunStore::load_gear_run(std::int64_t id) const {
     r.tolerance_class = traces->column<int>(5);
     r.from_mm = traces->column<double>(6);
     r.to_mm = traces->column<double>(7);
-    Result<std::vector<double>> z = storage_internal::numbers_from_json(traces->column<std::string>(8));
-    Result<std::vector<double>> d = storage_internal::numbers_from_json(traces->column<std::string>(9));
-    if (!z.ok() || !d.ok() || z->size() != d->size()) {
-      return make_error(ErrorCode::kStorage,
-                        "cannot " + operation + ": the trace of gap " + std::to_string(r.gap) + ", " + r.flank +
-                            " flank in " + conn.path.string() + " does not read back (" +
-                            (!z.ok()   ? "z_mm: " + z.error().message
-                             : !d.ok() ? "deviation_um: " + d.error().message
-                                       : std::string("positions and deviations differ in number")) +
-                            "); restore a backup");
-    }
-    r.z_mm = std::move(*z);
-    r.deviation_um = std::move(*d);
+    Result<TraceNumbers> numbers = trace_numbers(
+        *traces, 8, "z_mm", "the trace of gap " + std::to_string(r.gap) + ", " + r.flank + " flank", conn, operation);
+    if (!numbers.ok()) return numbers.error();
+    r.z_mm = std::move(numbers->positions);
+    r.deviation_um = std::move(numbers->deviation_um);
     g.record.traces.push_back(std::move(r));
   }
   if (g.record.traces.empty()) {
     return make_error(ErrorCode::kStorage,
                       "cannot " + operation + ": it has no lead trace in " + conn.path.string() + "; restore a backup");
+  }
+  Result<Statement> profiles = Statement::prepare(conn,
+                                                  "SELECT gap, flank, total_um, form_um, slope_um, tolerance_class, "
+                                                  "from_roll_mm, to_roll_mm, roll_mm, deviation_um "
+                                                  "FROM gear_run_profiles WHERE run_id = :id ORDER BY gap, flank",
+                                                  operation);
+  if (!profiles.ok()) return profiles.error();
+  profiles->bind(":id", id);
+  for (;;) {
+    Result<bool> t = profiles->step();
+    if (!t.ok()) return t.error();
+    if (!*t) break;
+    GearProfileRecord p;
+    p.gap = profiles->column<int>(0);
+    p.flank = profiles->column<std::string>(1);
+    p.total_um = profiles->column<double>(2);
+    p.form_um = profiles->column<double>(3);
+    p.slope_um = profiles->column<double>(4);
+    p.tolerance_class = profiles->column<int>(5);
+    p.from_roll_mm = profiles->column<double>(6);
+    p.to_roll_mm = profiles->column<double>(7);
+    Result<TraceNumbers> numbers =
+        trace_numbers(*profiles, 8, "roll_mm",
+                      "the profile of gap " + std::to_string(p.gap) + ", " + p.flank + " flank", conn, operation);
+    if (!numbers.ok()) return numbers.error();
+    p.roll_mm = std::move(numbers->positions);
+    p.deviation_um = std::move(numbers->deviation_um);
+    g.record.profiles.push_back(std::move(p));
   }
   return g;
 }

@@ -139,17 +139,25 @@ TEST(GearLoop, TheDemoClosesTheLoopOnTheExampleGear) {
   ASSERT_EQ(runs.exit_code, 0) << runs.output;
   EXPECT_NE(runs.output.find("virtual gear grinder"), std::string::npos) << runs.output;
   EXPECT_NE(runs.output.find("GEAR-1"), std::string::npos) << runs.output;
-  // The gears for the plant's SPC: 2 gears of 8 flanks, 4 figures a gear and 3 a flank each.
+  // The gear as kept: its profiles beside its leads, judged against the class's F_alphaT too.
+  testing::CommandResult shown = testing::run_command("gear runs show 2" + data);
+  ASSERT_EQ(shown.exit_code, 0) << shown.output;
+  EXPECT_NE(shown.output.find("profile at the face's middle, ISO 1328-1 over roll lengths"), std::string::npos)
+      << shown.output;
+  EXPECT_NE(shown.output.find("F_alpha within "), std::string::npos) << shown.output;
+  // The gears for the plant's SPC: 2 gears of 8 flanks, 4 figures a gear and 3 a flank each, of
+  // the lead and of the profile.
   const fs::path dfq = dir.path() / "gears.dfq";
   testing::CommandResult exported = testing::run_command("gear runs export --out " + dfq.string() + data);
   ASSERT_EQ(exported.exit_code, 0) << exported.output;
   EXPECT_NE(exported.output.find("2 gear runs exported"), std::string::npos) << exported.output;
   const std::string text = testing::slurp(dfq);
   EXPECT_NE(text.find("K1002/1 gear teeth\r\n"), std::string::npos);
-  EXPECT_NE(text.find("K0100 28\r\n"), std::string::npos);
+  EXPECT_NE(text.find("K0100 56\r\n"), std::string::npos);
+  EXPECT_NE(text.find("Total profile deviation F_alpha, worst flank"), std::string::npos);
   std::size_t values = 0;
   for (std::size_t at = text.find("\nK0001/"); at != std::string::npos; at = text.find("\nK0001/", at + 1)) ++values;
-  EXPECT_EQ(values, 2u * 28u);
+  EXPECT_EQ(values, 2u * 56u);
   // SPC over the two gears: F_beta at worst against its tolerance, the uncompensated gear out.
   testing::CommandResult spc = testing::run_command("gear runs spc --part gear_71 --json" + data);
   ASSERT_EQ(spc.exit_code, 0) << spc.output;

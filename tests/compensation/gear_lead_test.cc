@@ -83,6 +83,21 @@ TEST(GearLead, TheToleranceClassOfATotalHelixDeviation) {
   EXPECT_EQ(helix_tolerance_class(1000.0, d, b), 12);
 }
 
+TEST(GearLead, TheToleranceClassOfATotalProfileDeviation) {
+  // The example gear: normal module 2.25 mm, d = 172.05 mm; ISO 1328-1's F_alphaT of class 5
+  // written out apart, doubling every two classes.
+  const double m = 2.25;
+  const double d = 172.054323;
+  const double class5 = 3.2 * std::sqrt(m) + 0.22 * std::sqrt(d) + 0.7;
+  EXPECT_NEAR(class5, 8.386, 1e-3);
+  EXPECT_NEAR(profile_tolerance_um(5, m, d), class5, 1e-12);
+  EXPECT_NEAR(profile_tolerance_um(3, m, d), class5 / 2.0, 1e-12);
+  EXPECT_EQ(profile_tolerance_class(class5 - 1e-6, m, d), 5);
+  EXPECT_EQ(profile_tolerance_class(class5 + 1e-6, m, d), 6);
+  EXPECT_EQ(profile_tolerance_class(0.1, m, d), 1);
+  EXPECT_EQ(profile_tolerance_class(1000.0, m, d), 12);
+}
+
 // Traces of two gaps, both flanks, from a mesh error linear between the spline points (-15 ..
 // 15 every mm) with an offset each: the identification gives the mesh error back, less its mean
 // over the points the face reaches, and holds the points beyond the face.

@@ -312,6 +312,18 @@ TEST_F(HttpApiTest, GearRunsListFilterAndShowWithTheirTraces) {
       t.z_mm = {-1.0, 0.0, 1.0};
       t.deviation_um = {-worst / 2, 0.0, worst / 2};
       g.traces = {t};
+      if (worst > 8.6) {
+        // The first gear's profile at the face's middle, judged against F_alphaT as well.
+        GearProfileRecord p;
+        p.gap = 1;
+        p.flank = "right";
+        p.total_um = 3.5;
+        p.tolerance_class = 4;
+        p.roll_mm = {10.0, 12.0, 14.0};
+        p.deviation_um = {-1.75, 0.0, 1.75};
+        g.profiles = {p};
+        g.profile_tolerance_um = 8.4;
+      }
       ASSERT_TRUE(store->insert_gear_run(g).ok());
     }
   }
@@ -335,6 +347,16 @@ TEST_F(HttpApiTest, GearRunsListFilterAndShowWithTheirTraces) {
   EXPECT_EQ(one.j["traces"][0]["flank"], "left");
   EXPECT_EQ(one.j["traces"][0]["deviation_um"][2], 6.25);
   EXPECT_EQ(one.j["total_tolerance_um"], 8.6);
+  ASSERT_EQ(one.j["profiles"].size(), 1u) << one.body;
+  EXPECT_EQ(one.j["profiles"][0]["flank"], "right");
+  EXPECT_EQ(one.j["profiles"][0]["roll_mm"][2], 14.0);
+  EXPECT_EQ(one.j["profile"]["total_max_um"], 3.5);
+  EXPECT_EQ(one.j["profile_tolerance_um"], 8.4);
+  Answer two = get("/api/gear-runs/2");
+  ASSERT_EQ(two.status, 200) << two.body;
+  EXPECT_TRUE(two.j["profiles"].empty());
+  EXPECT_TRUE(two.j["profile"].is_null());
+  EXPECT_TRUE(two.j["profile_tolerance_um"].is_null());
   EXPECT_TRUE(has(error_of(get("/api/gear-runs/9"), 404), "GET /api/gear-runs lists the ids"));
   Answer pdf = get("/api/gear-runs/1/report.pdf");
   ASSERT_EQ(pdf.status, 200) << pdf.body.substr(0, 200);

@@ -76,6 +76,63 @@ TEST(JudgeGear, AGearIsInWhenItsWorstFlankIsWithinTheClassAndOutJustBeyond) {
   }
 }
 
+// A straight profile rising `um_per_mm` over the example gear's roll lengths.
+ProfileTrace rising_profile(int gap, Flank flank, double um_per_mm, const GearPart& part) {
+  const ProfileRange range = profile_range(part.gear);
+  ProfileTrace t;
+  t.gap = gap;
+  t.flank = flank;
+  for (int i = 0; i <= 40; ++i) {
+    t.roll_mm.push_back(range.start_roll_mm + (range.tip_roll_mm - range.start_roll_mm) * i / 40.0);
+    t.deviation_um.push_back(um_per_mm * (t.roll_mm.back() - range.start_roll_mm));
+  }
+  return t;
+}
+
+TEST(JudgeGear, TheProfilesAreKeptAndAGearIsOutWhenAProfileIsBeyondTheClassesFAlphaT) {
+  Result<GearPartFile> gf = read_gear_part_file(kGearPart);
+  ASSERT_TRUE(gf.ok()) << gf.error().message;
+  // F_alphaT of class 5 from ISO 1328-1's formula, written out apart: m_n 2.25 mm, d as above.
+  const double d = 71 * 2.25 / std::cos(21.8 * M_PI / 180.0);
+  const double f_alpha_t = 3.2 * std::sqrt(2.25) + 0.22 * std::sqrt(d) + 0.7;
+  const std::vector<LeadTrace> leads = {rising(1, Flank::kLeft, 0.05), rising(1, Flank::kRight, -0.05)};
+  const ProfileRange range = profile_range(gf->part.gear);
+  // A straight profile's F_alpha is its rise over the evaluation range's outermost points.
+  for (const double over : {0.9, 1.1}) {
+    Result<ProfileFigures> unit = profile_figures(rising_profile(1, Flank::kLeft, 1.0, gf->part), gf->part.gear);
+    ASSERT_TRUE(unit.ok()) << unit.error().message;
+    const double slope = over * f_alpha_t / unit->total_um;
+    const std::vector<ProfileTrace> profiles = {rising_profile(1, Flank::kLeft, slope, gf->part),
+                                                rising_profile(1, Flank::kRight, 0.1 * slope, gf->part)};
+    Result<GearRunRecord> r = judge_gear(gf->part, leads, origin_of(*gf), profiles);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    ASSERT_EQ(r->profiles.size(), 2u);
+    EXPECT_NEAR(r->profiles[0].total_um, over * f_alpha_t, 1e-9);
+    EXPECT_EQ(r->profiles[0].tolerance_class, over < 1.0 ? 5 : 6);
+    EXPECT_EQ(r->profiles[1].flank, "right");
+    EXPECT_NEAR(r->profiles[0].to_roll_mm, range.evaluation_end_roll_mm, 0.1);
+    EXPECT_EQ(r->profiles[0].roll_mm.size(), 41u);
+    ASSERT_TRUE(r->profile_tolerance_um.has_value());
+    EXPECT_NEAR(*r->profile_tolerance_um, f_alpha_t, 1e-9);
+    // The leads alone are well within F_betaT: the profile decides.
+    EXPECT_EQ(r->verdict, over < 1.0 ? Verdict::kIn : Verdict::kOut) << over;
+  }
+  // Leads only: no profile, no F_alphaT, judged on the leads.
+  Result<GearRunRecord> leads_only = judge_gear(gf->part, leads, origin_of(*gf));
+  ASSERT_TRUE(leads_only.ok());
+  EXPECT_TRUE(leads_only->profiles.empty());
+  EXPECT_FALSE(leads_only->profile_tolerance_um.has_value());
+  EXPECT_EQ(leads_only->verdict, Verdict::kIn);
+  // A profile that cannot be evaluated is refused naming it.
+  ProfileTrace short_one = rising_profile(7, Flank::kRight, 1.0, gf->part);
+  short_one.roll_mm.resize(2);
+  short_one.deviation_um.resize(2);
+  Result<GearRunRecord> refused = judge_gear(gf->part, leads, origin_of(*gf), {short_one});
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("profile of gap 7, right flank"), std::string::npos)
+      << refused.error().message;
+}
+
 TEST(JudgeGear, WithoutAClassNothingIsJudged) {
   Result<GearPartFile> gf = read_gear_part_file(kGearPart);
   ASSERT_TRUE(gf.ok());

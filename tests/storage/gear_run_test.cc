@@ -2,8 +2,11 @@
 // and refused before a row is written when the record contradicts itself.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "storage/run_store.h"
@@ -99,6 +102,99 @@ TEST_F(GearRunStoreTest, AGearRunReadsBackAsStored) {
       EXPECT_NEAR(got.deviation_um[i], want.deviation_um[i], 0.5e-6);
     }
   }
+}
+
+// Profiles kept beside the leads: each as written, the F_alpha tolerance with them; a gear
+// without profiles reads back without (and older gears have none).
+TEST_F(GearRunStoreTest, AGearsProfilesReadBackAsStored) {
+  GearRunRecord in = sample_gear("gear_71", "2026-12-01T08:00:00Z", 4.5);
+  for (const auto& [gap, flank] : {std::pair{20, "left"}, std::pair{1, "right"}}) {
+    GearProfileRecord p;
+    p.gap = gap;
+    p.flank = flank;
+    p.total_um = 3.25 + gap;
+    p.form_um = 1.5;
+    p.slope_um = -2.125;
+    p.tolerance_class = 4;
+    p.from_roll_mm = 10.5;
+    p.to_roll_mm = 21.75;
+    for (int i = 0; i < 12; ++i) {
+      p.roll_mm.push_back(10.0 + i);
+      p.deviation_um.push_back(0.1 * i - 0.0000003 * gap);
+    }
+    in.profiles.push_back(p);
+  }
+  in.profile_tolerance_um = 8.4;
+  Result<std::int64_t> id = store().insert_gear_run(in);
+  ASSERT_TRUE(id.ok()) << id.error().message;
+  Result<StoredGearRun> out = store().load_gear_run(*id);
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  const GearRunRecord& r = out->record;
+  EXPECT_EQ(r.profile_tolerance_um, 8.4);
+  ASSERT_EQ(r.profiles.size(), 2u);
+  // Ordered by gap, then flank.
+  EXPECT_EQ(r.profiles[0].gap, 1);
+  EXPECT_EQ(r.profiles[0].flank, "right");
+  EXPECT_EQ(r.profiles[1].gap, 20);
+  EXPECT_DOUBLE_EQ(r.profiles[1].total_um, 23.25);
+  EXPECT_DOUBLE_EQ(r.profiles[1].slope_um, -2.125);
+  EXPECT_DOUBLE_EQ(r.profiles[1].to_roll_mm, 21.75);
+  EXPECT_EQ(r.profiles[1].tolerance_class, 4);
+  ASSERT_EQ(r.profiles[1].roll_mm.size(), 12u);
+  for (std::size_t i = 0; i < 12; ++i) {
+    EXPECT_NEAR(r.profiles[1].roll_mm[i], in.profiles[0].roll_mm[i], 0.5e-6);
+    EXPECT_NEAR(r.profiles[1].deviation_um[i], in.profiles[0].deviation_um[i], 0.5e-6);
+  }
+  Result<std::int64_t> bare = store().insert_gear_run(sample_gear("gear_71", "2026-12-02T08:00:00Z", 4.5));
+  ASSERT_TRUE(bare.ok()) << bare.error().message;
+  Result<StoredGearRun> without = store().load_gear_run(*bare);
+  ASSERT_TRUE(without.ok());
+  EXPECT_TRUE(without->record.profiles.empty());
+  EXPECT_FALSE(without->record.profile_tolerance_um.has_value());
+}
+
+// A profile that contradicts itself, or an F_alpha tolerance without profiles, is refused before
+// anything is written, naming what is wrong.
+TEST_F(GearRunStoreTest, AProfileThatCannotBeRightIsRefusedNamingIt) {
+  GearProfileRecord good;
+  good.gap = 3;
+  good.flank = "left";
+  good.tolerance_class = 5;
+  good.roll_mm = {10.0, 11.0, 12.0};
+  good.deviation_um = {0.0, 0.5, 1.0};
+  struct Case {
+    std::string want;
+    std::function<void(GearRunRecord&)> spoil;
+  };
+  const std::vector<Case> cases = {{"profile of gap 3, left flank has 3 roll lengths and 2 deviations",
+                                    [&](GearRunRecord& r) {
+                                      r.profiles = {good};
+                                      r.profiles[0].deviation_um.pop_back();
+                                      r.profile_tolerance_um = 8.4;
+                                    }},
+                                   {"two profiles of gap 3, left flank",
+                                    [&](GearRunRecord& r) {
+                                      r.profiles = {good, good};
+                                      r.profile_tolerance_um = 8.4;
+                                    }},
+                                   {"F_alpha tolerance", [&](GearRunRecord& r) { r.profile_tolerance_um = 8.4; }},
+                                   {"F_alpha tolerance", [&](GearRunRecord& r) { r.profiles = {good}; }},
+                                   {"roll length 2 is", [&](GearRunRecord& r) {
+                                      r.profiles = {good};
+                                      r.profiles[0].roll_mm[1] = std::nan("");
+                                      r.profile_tolerance_um = 8.4;
+                                    }}};
+  for (const Case& c : cases) {
+    GearRunRecord r = sample_gear("gear_71", "2026-12-01T08:00:00Z", 4.0);
+    c.spoil(r);
+    Result<std::int64_t> id = store().insert_gear_run(r);
+    ASSERT_FALSE(id.ok()) << c.want;
+    EXPECT_EQ(id.error().code, ErrorCode::kInvalidInput);
+    EXPECT_NE(id.error().message.find(c.want), std::string::npos) << id.error().message;
+  }
+  Result<std::vector<StoredGearRun>> all = store().list_gear_runs({});
+  ASSERT_TRUE(all.ok());
+  EXPECT_TRUE(all->empty());
 }
 
 TEST_F(GearRunStoreTest, ListsNewestFirstByPartVerdictSerialAndTime) {
