@@ -17,7 +17,8 @@ ScaledFit scaled_least_squares(const Eigen::MatrixXd& a, const Eigen::VectorXd& 
     scale(c) = norm > 0.0 ? 1.0 / norm : 1.0;
   }
   const Eigen::MatrixXd an = a * scale.asDiagonal();
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(an, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  // V (the null directions) and the singular values are all that is read: no U.
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(an, Eigen::ComputeThinV);
   const Eigen::VectorXd& sv = svd.singularValues();
   ScaledFit fit;
   const double largest = sv.size() > 0 ? sv(0) : 0.0;

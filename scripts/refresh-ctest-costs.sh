@@ -8,10 +8,11 @@ cd "$(dirname "$0")/.."
 dir="${1:-build-asan}"
 data="${dir}/Testing/Temporary/CTestCostData.txt"
 [ -f "${data}" ] || { echo "refresh-ctest-costs: no ${data}: run the tests in ${dir} first" >&2; exit 2; }
-ctest --test-dir "${dir}" -N | sed -n 's/^ *Test *#[0-9]*: //p' | sort > /tmp/refresh-ctest-costs.$$
+known="$(mktemp)"
+trap 'rm -f "${known}"' EXIT
+ctest --test-dir "${dir}" -N | sed -n 's/^ *Test *#[0-9]*: //p' | sort > "${known}"
 # Each registered test's cost, longest first; ctest's list of failed tests (after ---) left out.
 awk 'NR == FNR { known[$0] = 1; next } /^---/ { exit } ($1 in known) { printf "%s 1 %.1f\n", $1, $3 }' \
-  /tmp/refresh-ctest-costs.$$ "${data}" | sort -k3 -rn > tests/ctest-costs.txt
-rm -f /tmp/refresh-ctest-costs.$$
+  "${known}" "${data}" | sort -k3 -rn > tests/ctest-costs.txt
 echo "---" >> tests/ctest-costs.txt
 echo "refresh-ctest-costs: $(($(wc -l < tests/ctest-costs.txt) - 1)) suites written to tests/ctest-costs.txt"
