@@ -4,12 +4,14 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/number_text.h"
 #include "report/cam_report.h"
 #include "report/chart_cairo.h"
+#include "report/gear_characteristics.h"
 
 namespace gaugeloop {
 namespace {
@@ -41,8 +43,9 @@ void draw_header(cairo_t* cr, const StoredGearRun& g) {
   const GearRunRecord& r = g.record;
   chart::set_colour(cr, chart::kInk);
   chart::text(cr, kMarginPt, kMarginPt + 4,
-              "Gear run " + std::to_string(g.id) + ": " + r.part + " on " + r.machine + " - lead (helix) report", 15.0,
-              Align::kLeft, true);
+              "Gear run " + std::to_string(g.id) + ": " + r.part + " on " + r.machine +
+                  (r.profiles.empty() ? " - lead (helix) report" : " - lead (helix) and profile report"),
+              15.0, Align::kLeft, true);
   std::string who = "Measured " + r.started_utc + " by " + r.source;
   if (!r.serial.empty()) who += "; serial " + r.serial;
   if (!r.operator_name.empty()) who += "; operator " + r.operator_name;
@@ -65,6 +68,15 @@ void draw_header(cairo_t* cr, const StoredGearRun& g) {
                                     um_text(r.total_tolerance_um.value_or(0.0))
                               : std::string("the part names no tolerance class");
   chart::text(cr, kMarginPt + w + 10, kMarginPt + 56, against, 10.0);
+  // The profile's line: what it was, or that it was not measured.
+  std::string profile = "profile: not measured (the traces are leads only)";
+  if (!r.profiles.empty()) {
+    const GearProfileFigures p = gear_profile_figures(r);
+    profile = "profile: F_alpha " + um_text(p.total_max_um) + " at worst (class " + std::to_string(p.tolerance_class) +
+              "), " + um_text(p.total_mean_um) + " mean";
+    if (r.profile_tolerance_um) profile += "; F_alpha within " + um_text(*r.profile_tolerance_um) + " asked";
+  }
+  chart::text(cr, kMarginPt + w + 10, kMarginPt + 70, profile, 9.0);
 }
 
 // One gap's lead chart: Z up, the deviation across, left and right flank, the evaluation range.
@@ -112,18 +124,20 @@ void draw_gap(cairo_t* cr, const Box& box, int gap, const std::vector<const Gear
   cairo_restore(cr);
 }
 
-void draw_table(cairo_t* cr, double top, const GearRunRecord& r) {
-  const std::vector<std::string> head = {"gap", "flank", "F_beta um", "f_f_beta um", "f_H_beta um", "class", "verdict"};
+// A table of traces (leads or profiles: `head` names their figures), each judged against
+// `tolerance_um` (none: not judged); returns where the next line would go. Rows that do not fit
+// on the page are left out: the export has every trace.
+template <typename Trace>
+double draw_table(cairo_t* cr, double top, const std::vector<Trace>& traces, const std::vector<std::string>& head,
+                  std::optional<double> tolerance_um) {
   const std::vector<double> x = {kMarginPt,       kMarginPt + 40,  kMarginPt + 150, kMarginPt + 240,
-                                 kMarginPt + 330, kMarginPt + 390, kMarginPt + 440};
+                                 kMarginPt + 330, kMarginPt + 405, kMarginPt + 455};
   chart::set_colour(cr, chart::kInk);
   for (std::size_t c = 0; c < head.size(); ++c) chart::text(cr, x[c], top, head[c], 8.0, Align::kLeft, true);
   double y = top + 11;
-  for (const GearTraceRecord& t : r.traces) {
-    if (y > kPageHeightPt - kMarginPt + 10) break;  // the page is full; the export has every trace
-    const std::string judged = !r.total_tolerance_um                 ? "not judged"
-                               : t.total_um <= *r.total_tolerance_um ? "in"
-                                                                     : "out";
+  for (const Trace& t : traces) {
+    if (y > kPageHeightPt - kMarginPt + 10) break;
+    const std::string judged = !tolerance_um ? "not judged" : t.total_um <= *tolerance_um ? "in" : "out";
     chart::set_colour(cr, chart::kInk);
     const std::vector<std::string> row = {std::to_string(t.gap),       t.flank,
                                           format_fixed(t.total_um, 2), format_fixed(t.form_um, 2),
@@ -133,6 +147,7 @@ void draw_table(cairo_t* cr, double top, const GearRunRecord& r) {
     chart::text(cr, x[6], y, judged, 8.0);
     y += 10;
   }
+  return y;
 }
 
 }  // namespace
@@ -170,7 +185,15 @@ Status write_gear_report(const StoredGearRun& run, const std::filesystem::path& 
     chart::text(cr, kMarginPt + 60, kMarginPt + 330, "right flank", 8.0, Align::kLeft, true);
     chart::set_colour(cr, chart::kLimit);
     chart::text(cr, kMarginPt + 125, kMarginPt + 330, "- - evaluation range (ISO 1328-1)", 8.0);
-    draw_table(cr, kMarginPt + 350, run.record);
+    const GearRunRecord& r = run.record;
+    const double after = draw_table(cr, kMarginPt + 350, r.traces,
+                                    {"gap", "flank", "F_beta um", "f_f_beta um", "f_H_beta um", "class", "verdict"},
+                                    r.total_tolerance_um);
+    if (!r.profiles.empty() && after + 16 < kPageHeightPt - kMarginPt) {
+      draw_table(cr, after + 8, r.profiles,
+                 {"gap", "flank", "F_alpha um", "f_f_alpha um", "f_H_alpha um", "class", "verdict"},
+                 r.profile_tolerance_um);
+    }
   });
 }
 

@@ -686,5 +686,34 @@ TEST(GearReport, DrawsEveryGapsLeadAndTheVerdictInItsColour) {
   EXPECT_FALSE(fs::exists(dir / "bare.pdf"));
 }
 
+// A gear whose profiles were measured: their table after the leads', each row's verdict in its
+// colour; the same gear without profiles has none of those rows.
+TEST(GearReport, TablesTheProfilesWhenMeasured) {
+  testing::TempDir dir;
+  StoredGearRun g = report_gear_run(Verdict::kIn, 3.0);
+  ASSERT_TRUE(write_gear_report(g, dir / "leads.png").ok());
+  for (int gap : {1, 20}) {
+    for (const char* flank : {"left", "right"}) {
+      GearProfileRecord p;
+      p.gap = gap;
+      p.flank = flank;
+      p.total_um = 2.0;
+      p.tolerance_class = 2;
+      p.roll_mm = {25.0, 30.0, 35.0};
+      p.deviation_um = {-1.0, 0.0, 1.0};
+      g.record.profiles.push_back(p);
+    }
+  }
+  g.record.profile_tolerance_um = 8.4;
+  ASSERT_TRUE(write_gear_report(g, dir / "profiles.png").ok());
+  keep_picture(dir / "profiles.png");
+  const Png leads(dir / "leads.png");
+  const Png profiles(dir / "profiles.png");
+  ASSERT_TRUE(leads.ok() && profiles.ok());
+  // Four more "in" verdicts in green, and a header's and a table's more ink.
+  EXPECT_GT(count_colour(profiles, {26, 140, 51}, 30), count_colour(leads, {26, 140, 51}, 30) + 40);
+  EXPECT_GT(count_colour(profiles, {26, 26, 31}, 40), count_colour(leads, {26, 26, 31}, 40) + 500);
+}
+
 }  // namespace
 }  // namespace gaugeloop
