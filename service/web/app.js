@@ -326,7 +326,24 @@ async function gearRunPage(id) {
     message(document.getElementById("gear-message"), errorText(e), "error");
     return;
   }
-  const judged = g.required_class ? `class ${g.required_class} asked: F<sub>β</sub> within ${um(g.total_tolerance_um)}` : "the part names no tolerance class";
+  const judged = g.required_class
+    ? `class ${g.required_class} asked: F<sub>β</sub> within ${um(g.total_tolerance_um)}` +
+      (g.profile_tolerance_um != null ? `, F<sub>α</sub> within ${um(g.profile_tolerance_um)}` : "")
+    : "the part names no tolerance class";
+  // The profiles at the face's middle, when they were traced (a flank probe gives leads only).
+  const profiles = (g.profiles ?? []).length === 0
+    ? `<p class="muted" id="gear-profiles-none">Profile: not measured (the traces are leads only).</p>`
+    : `<div class="cards" id="gear-profile-figures">
+        ${card("Fα worst flank", um(g.profile.total_max_um) + ` (class ${g.profile.tolerance_class})`)}
+        ${card("Fα mean", um(g.profile.total_mean_um))}
+        ${card("ffα mean", um(g.profile.form_mean_um))}
+        ${card("|fHα| mean", um(g.profile.slope_mean_abs_um))}
+      </div>
+      <div class="scroll"><table id="gear-profiles">
+      <thead><tr><th>Gap</th><th>Flank</th><th>F<sub>α</sub></th><th>f<sub>fα</sub></th><th>f<sub>Hα</sub></th><th>Class</th><th>Range (roll, mm)</th></tr></thead>
+      <tbody>${g.profiles.map((t) => `<tr><td>${t.gap}</td><td>${esc(t.flank)}</td><td class="num">${um(t.total_um)}</td>
+        <td class="num">${um(t.form_um)}</td><td class="num">${um(t.slope_um)}</td><td class="num">${t.tolerance_class}</td>
+        <td>${t.from_roll_mm.toFixed(2)} … ${t.to_roll_mm.toFixed(2)}</td></tr>`).join("")}</tbody></table></div>`;
   page().innerHTML = `
     <h1 id="gear-title">Gear run ${g.id}: ${esc(g.part)} on ${esc(g.machine)}</h1>
     <p class="muted">Measured ${utc(g.started_utc)} by ${esc(g.source)}${g.serial ? `, serial ${esc(g.serial)}` : ""}${g.operator ? `, ${esc(g.operator)}` : ""}
@@ -345,7 +362,8 @@ async function gearRunPage(id) {
       <thead><tr><th>Gap</th><th>Flank</th><th>F<sub>β</sub></th><th>f<sub>fβ</sub></th><th>f<sub>Hβ</sub></th><th>Class</th><th>Range (mm)</th></tr></thead>
       <tbody>${g.traces.map((t) => `<tr><td>${t.gap}</td><td>${esc(t.flank)}</td><td class="num">${um(t.total_um)}</td>
         <td class="num">${um(t.form_um)}</td><td class="num">${um(t.slope_um)}</td><td class="num">${t.tolerance_class}</td>
-        <td>${t.from_mm.toFixed(2)} … ${t.to_mm.toFixed(2)}</td></tr>`).join("")}</tbody></table></div>`;
+        <td>${t.from_mm.toFixed(2)} … ${t.to_mm.toFixed(2)}</td></tr>`).join("")}</tbody></table></div>
+    ${profiles}`;
 }
 
 // ---- One run ----

@@ -700,7 +700,10 @@ def run_checks(svc, browser, shots):
     wait_until("the lead's 8 traces drawn and tabled", lambda: b.count("#lead-plot svg polyline") == 8
                and b.count("table#gear-traces tbody tr") == 8)
     figures = b.text("#gear-figures")
-    check("class 5 asked" in figures and "v2 pushed from it" in figures, f"the gear's figures: {figures}")
+    check("class 5 asked" in figures and "v2 pushed from it" in figures and "within" in figures,
+          f"the gear's figures: {figures}")
+    check(b.count("table#gear-profiles tbody tr") == 8, "the profiles of the 8 flanks tabled")
+    check("Fα worst flank" in b.text("#gear-profile-figures"), "the profile's figures shown")
     gear_pdf = b.driver.find_element(By.CSS_SELECTOR, "#gear-report-pdf").get_attribute("href")
     status, body, ctype = svc.request("GET", gear_pdf.replace(svc.base, ""))
     check(status == 200 and ctype == "application/pdf" and body.startswith(b"%PDF"),
