@@ -119,11 +119,21 @@ double helix_tolerance_um(int tolerance_class, double d, double b) {
   return (0.1 * std::sqrt(d) + 0.63 * std::sqrt(b) + 4.2) * std::pow(std::sqrt(2.0), tolerance_class - 5);
 }
 
-int helix_tolerance_class(double total_um, double d, double b) {
+namespace {
+
+// The smallest class 1..11 whose tolerance holds `total_um`; 12 when none does.
+template <typename Tolerance>
+int smallest_class(double total_um, Tolerance tolerance_um) {
   for (int a = 1; a <= 11; ++a) {
-    if (total_um <= helix_tolerance_um(a, d, b)) return a;
+    if (total_um <= tolerance_um(a)) return a;
   }
   return 12;
+}
+
+}  // namespace
+
+int helix_tolerance_class(double total_um, double d, double b) {
+  return smallest_class(total_um, [&](int a) { return helix_tolerance_um(a, d, b); });
 }
 
 double profile_tolerance_um(int tolerance_class, double m_n, double d) {
@@ -131,10 +141,7 @@ double profile_tolerance_um(int tolerance_class, double m_n, double d) {
 }
 
 int profile_tolerance_class(double total_um, double m_n, double d) {
-  for (int a = 1; a <= 11; ++a) {
-    if (total_um <= profile_tolerance_um(a, m_n, d)) return a;
-  }
-  return 12;
+  return smallest_class(total_um, [&](int a) { return profile_tolerance_um(a, m_n, d); });
 }
 
 Result<MeshIdentification> identify_mesh_error(const std::vector<LeadTrace>& traces,

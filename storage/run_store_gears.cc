@@ -32,52 +32,43 @@ Status check_finite(double value, const std::string& what) {
   return gear_run_refused(what + " is " + storage_internal::describe_non_finite(value));
 }
 
-Status check_trace(const GearTraceRecord& t) {
-  const std::string where = "the trace of gap " + std::to_string(t.gap) + ", " + t.flank + " flank";
-  if (t.gap < 1) return gear_run_refused("a trace's gap is " + std::to_string(t.gap) + "; gaps count from 1");
+// What a flank line is called in a refusal: a lead trace's words or a profile's.
+struct FlankLineWords {
+  const char* what;       // "trace", "profile"
+  const char* positions;  // "positions", "roll lengths"
+  const char* position;
+  const char* total;  // F_beta, F_alpha
+  const char* form;
+  const char* slope;
+};
+constexpr FlankLineWords kLeadWords{"trace", "positions", "position", "F_beta", "f_f_beta", "f_H_beta"};
+constexpr FlankLineWords kProfileWords{"profile", "roll lengths", "roll length", "F_alpha", "f_f_alpha", "f_H_alpha"};
+
+// A lead trace's or a profile's record: its gap, flank and class, as many positions as
+// deviations (3 or more), every number finite.
+template <typename Line>
+Status check_flank_line(const Line& t, double from, double to, const std::vector<double>& at, const FlankLineWords& w) {
+  const std::string what = w.what;
+  const std::string where = "the " + what + " of gap " + std::to_string(t.gap) + ", " + t.flank + " flank";
+  if (t.gap < 1) return gear_run_refused("a " + what + "'s gap is " + std::to_string(t.gap) + "; gaps count from 1");
   if (t.flank != "left" && t.flank != "right") {
-    return gear_run_refused("a trace's flank is '" + t.flank + "', not left or right");
+    return gear_run_refused("a " + what + "'s flank is '" + t.flank + "', not left or right");
   }
   if (t.tolerance_class < 1 || t.tolerance_class > 12) {
     return gear_run_refused(where + " has tolerance class " + std::to_string(t.tolerance_class) + ", not 1 to 12");
   }
-  if (t.z_mm.size() < 3 || t.z_mm.size() != t.deviation_um.size()) {
-    return gear_run_refused(where + " has " + std::to_string(t.z_mm.size()) + " positions and " +
+  if (at.size() < 3 || at.size() != t.deviation_um.size()) {
+    return gear_run_refused(where + " has " + std::to_string(at.size()) + " " + w.positions + " and " +
                             std::to_string(t.deviation_um.size()) + " deviations; it needs 3 or more of each, as many");
   }
   for (const auto& [value, name] :
-       {std::pair{t.total_um, "F_beta"}, std::pair{t.form_um, "f_f_beta"}, std::pair{t.slope_um, "f_H_beta"},
-        std::pair{t.from_mm, "its range's start"}, std::pair{t.to_mm, "its range's end"}}) {
+       {std::pair{t.total_um, w.total}, std::pair{t.form_um, w.form}, std::pair{t.slope_um, w.slope},
+        std::pair{from, "its range's start"}, std::pair{to, "its range's end"}}) {
     if (Status s = check_finite(value, where + "'s " + name); !s.ok()) return s;
   }
-  for (std::size_t i = 0; i < t.z_mm.size(); ++i) {
-    if (Status s = check_finite(t.z_mm[i], where + "'s position " + std::to_string(i + 1)); !s.ok()) return s;
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    if (Status s = check_finite(at[i], where + "'s " + w.position + " " + std::to_string(i + 1)); !s.ok()) return s;
     if (Status s = check_finite(t.deviation_um[i], where + "'s deviation " + std::to_string(i + 1)); !s.ok()) return s;
-  }
-  return {};
-}
-
-Status check_profile(const GearProfileRecord& p) {
-  const std::string where = "the profile of gap " + std::to_string(p.gap) + ", " + p.flank + " flank";
-  if (p.gap < 1) return gear_run_refused("a profile's gap is " + std::to_string(p.gap) + "; gaps count from 1");
-  if (p.flank != "left" && p.flank != "right") {
-    return gear_run_refused("a profile's flank is '" + p.flank + "', not left or right");
-  }
-  if (p.tolerance_class < 1 || p.tolerance_class > 12) {
-    return gear_run_refused(where + " has tolerance class " + std::to_string(p.tolerance_class) + ", not 1 to 12");
-  }
-  if (p.roll_mm.size() < 3 || p.roll_mm.size() != p.deviation_um.size()) {
-    return gear_run_refused(where + " has " + std::to_string(p.roll_mm.size()) + " roll lengths and " +
-                            std::to_string(p.deviation_um.size()) + " deviations; it needs 3 or more of each, as many");
-  }
-  for (const auto& [value, name] :
-       {std::pair{p.total_um, "F_alpha"}, std::pair{p.form_um, "f_f_alpha"}, std::pair{p.slope_um, "f_H_alpha"},
-        std::pair{p.from_roll_mm, "its range's start"}, std::pair{p.to_roll_mm, "its range's end"}}) {
-    if (Status s = check_finite(value, where + "'s " + name); !s.ok()) return s;
-  }
-  for (std::size_t i = 0; i < p.roll_mm.size(); ++i) {
-    if (Status s = check_finite(p.roll_mm[i], where + "'s roll length " + std::to_string(i + 1)); !s.ok()) return s;
-    if (Status s = check_finite(p.deviation_um[i], where + "'s deviation " + std::to_string(i + 1)); !s.ok()) return s;
   }
   return {};
 }
@@ -113,7 +104,7 @@ Status check_gear_run(const GearRunRecord& r) {
   }
   std::set<std::pair<int, std::string>> seen;
   for (const GearTraceRecord& t : r.traces) {
-    if (Status s = check_trace(t); !s.ok()) return s;
+    if (Status s = check_flank_line(t, t.from_mm, t.to_mm, t.z_mm, kLeadWords); !s.ok()) return s;
     if (!seen.insert({t.gap, t.flank}).second) {
       return gear_run_refused("two traces of gap " + std::to_string(t.gap) + ", " + t.flank + " flank");
     }
@@ -125,7 +116,7 @@ Status check_gear_run(const GearRunRecord& r) {
   }
   seen.clear();
   for (const GearProfileRecord& p : r.profiles) {
-    if (Status s = check_profile(p); !s.ok()) return s;
+    if (Status s = check_flank_line(p, p.from_roll_mm, p.to_roll_mm, p.roll_mm, kProfileWords); !s.ok()) return s;
     if (!seen.insert({p.gap, p.flank}).second) {
       return gear_run_refused("two profiles of gap " + std::to_string(p.gap) + ", " + p.flank + " flank");
     }

@@ -364,6 +364,29 @@ class History : public benchmark::Fixture {
     rng_ ^= rng_ << 17;
     return rng_;
   }
+
+  // A baseline, bare sqlite3: the characteristics' values of a random lobe's newest
+  // state.range(0) runs by the index (those `join` keeps of them), summed.
+  void bare_sum_of_window(benchmark::State& state, const std::string& join) {
+    sqlite3* db = nullptr;
+    sqlite3_open_v2(history().c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
+    const std::string sql =
+        "SELECT c.value FROM (SELECT id FROM runs WHERE part = ?1 AND lobe = ?2"
+        " ORDER BY started_utc DESC, id DESC LIMIT ?3) AS w JOIN run_characteristics AS c ON " +
+        join;
+    for (auto _ : state) {
+      sqlite3_stmt* s = prepare(db, sql);
+      const std::string part = part_name(static_cast<int>(next() % kParts));
+      sqlite3_bind_text(s, 1, part.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_int(s, 2, 1 + static_cast<int>(next() % kLobes));
+      sqlite3_bind_int64(s, 3, state.range(0));
+      double sum = 0.0;
+      while (sqlite3_step(s) == SQLITE_ROW) sum += sqlite3_column_double(s, 0);
+      benchmark::DoNotOptimize(sum);
+      sqlite3_finalize(s);
+    }
+    sqlite3_close(db);
+  }
 };
 
 BENCHMARK_DEFINE_F(History, ListLast50RunsOfALobe)(benchmark::State& state) {
@@ -445,23 +468,7 @@ BENCHMARK_DEFINE_F(History, SpcOfALobeFromEveryRun)(benchmark::State& state) {
 // Baseline: the same rows' values, bare sqlite3: the lobe's newest state.range(0) runs by
 // the index and their characteristics' values, summed.
 BENCHMARK_DEFINE_F(History, Baseline_BareSelectOfTheSpcRows)(benchmark::State& state) {
-  sqlite3* db = nullptr;
-  sqlite3_open_v2(history().c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
-  for (auto _ : state) {
-    sqlite3_stmt* s = prepare(db,
-                              "SELECT c.value FROM (SELECT id FROM runs WHERE part = ?1 AND lobe = ?2"
-                              " ORDER BY started_utc DESC, id DESC LIMIT ?3) AS w"
-                              " JOIN run_characteristics AS c ON c.run_id = w.id");
-    const std::string part = part_name(static_cast<int>(next() % kParts));
-    sqlite3_bind_text(s, 1, part.c_str(), -1, SQLITE_TRANSIENT);
-    sqlite3_bind_int(s, 2, 1 + static_cast<int>(next() % kLobes));
-    sqlite3_bind_int64(s, 3, state.range(0));
-    double sum = 0.0;
-    while (sqlite3_step(s) == SQLITE_ROW) sum += sqlite3_column_double(s, 0);
-    benchmark::DoNotOptimize(sum);
-    sqlite3_finalize(s);
-  }
-  sqlite3_close(db);
+  bare_sum_of_window(state, "c.run_id = w.id");
 }
 
 // What a trend plot reads (`runs trend --plot`, /api/trend.svg): the newest state.range(0)
@@ -482,23 +489,7 @@ BENCHMARK_DEFINE_F(History, TrendPlotRunsOfALobe)(benchmark::State& state) {
 
 // Baseline: the same runs' values of that key, bare sqlite3.
 BENCHMARK_DEFINE_F(History, Baseline_BareSelectOfTheTrendPlotRows)(benchmark::State& state) {
-  sqlite3* db = nullptr;
-  sqlite3_open_v2(history().c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
-  for (auto _ : state) {
-    sqlite3_stmt* s = prepare(db,
-                              "SELECT c.value FROM (SELECT id FROM runs WHERE part = ?1 AND lobe = ?2"
-                              " ORDER BY started_utc DESC, id DESC LIMIT ?3) AS w"
-                              " JOIN run_characteristics AS c ON c.run_id = w.id AND c.key = 'lift_error.zone3'");
-    const std::string part = part_name(static_cast<int>(next() % kParts));
-    sqlite3_bind_text(s, 1, part.c_str(), -1, SQLITE_TRANSIENT);
-    sqlite3_bind_int(s, 2, 1 + static_cast<int>(next() % kLobes));
-    sqlite3_bind_int64(s, 3, state.range(0));
-    double sum = 0.0;
-    while (sqlite3_step(s) == SQLITE_ROW) sum += sqlite3_column_double(s, 0);
-    benchmark::DoNotOptimize(sum);
-    sqlite3_finalize(s);
-  }
-  sqlite3_close(db);
+  bare_sum_of_window(state, "c.run_id = w.id AND c.key = 'lift_error.zone3'");
 }
 
 // What the command line pays before its query: opening the file and checking the schema.
