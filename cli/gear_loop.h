@@ -19,7 +19,6 @@
 #include "job/gear_stroke.h"
 #include "nc_out/slide_compensation.h"
 #include "report/gear_characteristics.h"
-#include "report/gear_characteristics.h"
 #include "simulator/gear_grinder.h"
 #include "simulator/slide_ballbar.h"
 

@@ -854,8 +854,8 @@ Result<std::string> render_trend_plot(const std::vector<RunCharacteristics>& run
     }
     // The run labels, the dates and this line in the ticks' size: an SVG carries the outline of
     // every glyph once per size, most of its bytes and of the time it takes to write.
-    chart::text(cr, f.box.left + f.box.width / 2, f.box.bottom() + 31, "runs in the order measured (started, UTC)",
-                6.5, Align::kCentre);
+    chart::text(cr, f.box.left + f.box.width / 2, f.box.bottom() + 31, "runs in the order measured (started, UTC)", 6.5,
+                Align::kCentre);
     // Legend.
     double lx = f.box.left;
     const double ly = kTrendHeightPt - 22;
