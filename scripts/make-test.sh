@@ -3,13 +3,13 @@
 # two cores stay busy:
 #   1. the AddressSanitizer build at nice 19, beside the normal build's tests but the real-time
 #      ones (run-parallel);
-#   2. the real-time tests (run-serial: ctest label `serial`, about 240 s mostly waiting on a
-#      simulated spindle) at normal priority, beside the AddressSanitizer tests and then the
-#      ThreadSanitizer tests at nice 10, and the ThreadSanitizer build at nice 19: the
+#   2. the real-time tests (run-serial: ctest label `serial`, about 200 s mostly waiting on a
+#      simulated spindle) at normal priority, beside the AddressSanitizer tests at nice 10: the
 #      real-time tests get a core whenever they want one (the scheduler weighs nice 10 at 110
-#      and nice 19 at 15 against nice 0's 1024), the sanitizer tests get the rest before the
-#      build does. The real-time tests run in the normal build directory, the sanitizer tests
-#      in theirs, so no two ctest runs share a Testing/ directory.
+#      against nice 0's 1024), the sanitizer tests get the rest. The real-time tests run in the
+#      normal build directory, the sanitizer tests in theirs, so no two ctest runs share a
+#      Testing/ directory.
+# The ThreadSanitizer phase is `make test-tsan`, apart (.ci/run runs it after `make test`).
 # A build's output goes to <build dir>/background-build.log, the real-time tests' to
 # <build dir>/serial-tests.log; each is printed in full if it failed (the tests' log always).
 # Every test run's output is also kept in <build dir>/<phase>-tests.log, and the script ends with
@@ -17,8 +17,7 @@
 # (all a CI page may show) say what failed. Every phase runs to its end; the script fails if any
 # build or test run failed.
 set -uo pipefail
-: "${MAKE:=make}" "${BUILD_DIR:=build}" "${ASAN_DIR:=build-asan}" "${TSAN_DIR:=build-tsan}" "${JOBS:=2}" "${TEST_JOBS:=4}"
-: "${TSAN_TARGETS:?set by the Makefile: what the ThreadSanitizer build builds}"
+: "${MAKE:=make}" "${BUILD_DIR:=build}" "${ASAN_DIR:=build-asan}" "${JOBS:=2}" "${TEST_JOBS:=4}"
 
 # build_beside DIR [cmake --build arguments...]: starts the build in the background; its pid in BUILD_PID.
 build_beside() {
@@ -71,14 +70,7 @@ echo "== the real-time tests at normal priority, beside the rest (${BUILD_DIR}/s
 serial_pid=$!
 
 if [ "${asan_built}" -eq 1 ]; then
-  # shellcheck disable=SC2086 # the targets are a list
-  build_beside "${TSAN_DIR}" --target ${TSAN_TARGETS}
   run_tests 10 asan "${ASAN_DIR}" ASAN_DIR="${ASAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
-  if finish_build "${TSAN_DIR}"; then
-    run_tests 10 tsan "${TSAN_DIR}" TSAN_DIR="${TSAN_DIR}" TEST_JOBS="${TEST_JOBS}" || status=1
-  else
-    status=1
-  fi
 fi
 
 echo "== waiting for the real-time tests"
@@ -90,8 +82,7 @@ cat "${BUILD_DIR}/serial-tests.log"
 
 if [ "${status}" -ne 0 ]; then
   echo "== what failed"
-  for log in "${BUILD_DIR}/parallel-tests.log" "${BUILD_DIR}/serial-tests.log" "${ASAN_DIR}/asan-tests.log" \
-    "${TSAN_DIR}/tsan-tests.log"; do
+  for log in "${BUILD_DIR}/parallel-tests.log" "${BUILD_DIR}/serial-tests.log" "${ASAN_DIR}/asan-tests.log"; do
     [ -f "${log}" ] || continue
     found="$(failed_tests "${log}")"
     [ -n "${found}" ] && printf '%s:\n%s\n' "${log}" "${found}"
