@@ -48,6 +48,12 @@ int cmd_sync(const SyncOptions& o) {
   line("runs", synced->runs);
   line("NC pushes", synced->pushes);
   line("events", synced->events);
+  if (synced->pruned > 0) {
+    std::printf(
+        "  %lld runs pruned on the grinder since they were copied: marked pruned, their raw revolutions "
+        "deleted\n",
+        static_cast<long long>(synced->pruned));
+  }
   if (!synced->caught_up) {
     std::printf("stopped after %d batches (--max-batches): run the sync again to copy the rest\n", synced->batches);
   }
@@ -84,6 +90,9 @@ void add_plant_commands(CLI::App& app, CommandAction& action) {
   sync_cmd->add_flag("--programs", sync->sync.programs,
                      "Copy each NC push's program text too (nc_pushes.program_text), and give it to pushes copied "
                      "before without it");
+  sync_cmd->add_flag("--per-degree", sync->sync.per_degree,
+                     "Copy each run's per-degree tables (design, mean, spread, error, correction, residual) and its "
+                     "raw revolutions unless pruned, and give them to runs copied before without them");
   sync_cmd->callback([&action, sync] { action = [sync] { return cmd_sync(*sync); }; });
 }
 

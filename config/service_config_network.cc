@@ -345,12 +345,13 @@ Result<MqttSettings> read_plant_mqtt(const TomlReader& top, const toml::table& t
 // like the broker's, never stands in the config: libpq reads it from a passfile.
 Result<CentralSyncSettings> read_plant_central(const toml::table& t, const ConfigFile& f) {
   TomlReader cr(t, f.source, "plant.central.");
-  cr.allow_only({"url", "interval_s", "batch_size", "programs"});
+  cr.allow_only({"url", "interval_s", "batch_size", "programs", "per_degree"});
   CentralSyncSettings c;
   c.url = cr.text("url", std::nullopt);
   c.interval = std::chrono::seconds(cr.integer("interval_s", 60, 10, 86400));
   c.batch_size = static_cast<int>(cr.integer("batch_size", 200, 1, 10000));
   c.programs = cr.flag("programs", false);
+  c.per_degree = cr.flag("per_degree", false);
   if (cr.error) return *cr.error;
   Result<CentralUrl> url = parse_central_url(c.url);
   if (!url) return make_error(ErrorCode::kInvalidInput, cr.where("url") + ": " + url.error().message);

@@ -218,13 +218,42 @@ constexpr std::string_view kCentralV6 = R"sql(
 ALTER TABLE nc_pushes ADD COLUMN program_text text;
 )sql";
 
-constexpr std::array<CentralMigration, 6> kMigrations{{
+// A run's per-degree tables and raw revolutions, copied when the sync is asked to (plant sync
+// --per-degree, [plant.central] per_degree = true): index d of a table is cam degree d (0..359),
+// lift_mm[r][d] is revolution r's reading at degree d of C (machine frame, as measured), the
+// values as the grinder's file reads them back. The raw revolutions are deleted here when the
+// grinder prunes them; sync_progress keeps where the sync of a file stands in its prunes.
+constexpr std::string_view kCentralV7 = R"sql(
+CREATE TABLE run_tables (
+  run_uuid          text COLLATE "C" PRIMARY KEY REFERENCES runs (uuid) ON DELETE CASCADE,
+  design_lift_mm    float8[] NOT NULL CHECK (array_ndims(design_lift_mm) = 1 AND cardinality(design_lift_mm) = 360),
+  mean_lift_mm      float8[] NOT NULL CHECK (array_ndims(mean_lift_mm) = 1 AND cardinality(mean_lift_mm) = 360),
+  spread_um         float8[] NOT NULL CHECK (array_ndims(spread_um) = 1 AND cardinality(spread_um) = 360),
+  error_um          float8[] NOT NULL CHECK (array_ndims(error_um) = 1 AND cardinality(error_um) = 360),
+  correction_um     float8[] NOT NULL CHECK (array_ndims(correction_um) = 1 AND cardinality(correction_um) = 360),
+  residual_error_um float8[] NOT NULL
+                    CHECK (array_ndims(residual_error_um) = 1 AND cardinality(residual_error_um) = 360)
+);
+CREATE TABLE run_raw (
+  run_uuid              text COLLATE "C" PRIMARY KEY REFERENCES runs (uuid) ON DELETE CASCADE,
+  amplifier_revolutions bigint[] NOT NULL
+                        CHECK (array_ndims(amplifier_revolutions) = 1 AND cardinality(amplifier_revolutions) >= 3),
+  lift_mm               float8[] NOT NULL
+                        CHECK (array_ndims(lift_mm) = 2 AND array_length(lift_mm, 2) = 360
+                               AND array_length(lift_mm, 1) = cardinality(amplifier_revolutions))
+);
+ALTER TABLE sync_progress ADD COLUMN pruned_through_utc text COLLATE "C", ADD COLUMN pruned_through_id bigint;
+)sql";
+
+constexpr std::array<CentralMigration, 7> kMigrations{{
     {1, "runs, run_characteristics, nc_pushes, events and sync_progress", kCentralV1},
     {2, "sync_progress: where a sync from the start stands (rescan_local_id, rescan_uuid)", kCentralV2},
     {3, "events: the run's UUID (run_uuid)", kCentralV3},
     {4, "runs: an index by part and time (runs_by_part_started)", kCentralV4},
     {5, "run_characteristic_sets: a run's characteristics in one row; run_characteristics a view of them", kCentralV5},
     {6, "nc_pushes: the program text (program_text), when synced", kCentralV6},
+    {7, "run_tables and run_raw: a run's per-degree tables and raw revolutions, when synced; the prunes followed",
+     kCentralV7},
 }};
 
 // Any 64-bit number of our own: held by whoever migrates, so two grinders syncing into an

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <filesystem>
 #include <future>
 #include <optional>
@@ -43,6 +44,18 @@ constexpr std::string_view kCharacteristicSetColumns =
     "run_uuid, key_list, unit_list, value_list, min_value_list, max_value_list, lower_limit_list, upper_limit_list, "
     "verdict_list, from_deg_list, to_deg_list";
 constexpr std::size_t kCharacteristicSetWidth = 11;
+
+// A run's per-degree tables and raw revolutions (central schema 7), with CentralSyncOptions::
+// per_degree: by COPY into temporary tables of their columns, then into theirs with ON CONFLICT
+// DO NOTHING, so that a sync from the start with them fills in runs copied before without them.
+// The raw revolutions only of a run the central history does not know as pruned.
+constexpr std::string_view kTableColumns =
+    "run_uuid, design_lift_mm, mean_lift_mm, spread_um, error_um, correction_um, residual_error_um";
+constexpr std::size_t kTableWidth = 7;
+constexpr std::string_view kIncomingTables = "sync_incoming_tables";
+constexpr std::string_view kRawColumns = "run_uuid, amplifier_revolutions, lift_mm";
+constexpr std::size_t kRawWidth = 3;
+constexpr std::string_view kIncomingRaw = "sync_incoming_raw";
 
 constexpr std::string_view kInsertPushHead = R"sql(
 INSERT INTO nc_pushes (uuid, run_uuid, machine, source_machine, source, local_id, local_run_id, pushed_utc, nc_file,
@@ -124,6 +137,25 @@ void append_array_element(std::string& list, const char* value, bool text) {
   list += '"';
 }
 
+// `table` as a float8 array literal, {v0,v1,...,v359}: each value the shortest text that reads
+// back as the same double, as the parameters are.
+void append_degree_array(std::string& out, const DegreeTable& table) {
+  char buf[40];
+  out += '{';
+  for (std::size_t d = 0; d < table.size(); ++d) {
+    if (d > 0) out += ',';
+    const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, table[d]);
+    out.append(buf, r.ptr);
+  }
+  out += '}';
+}
+
+std::string degree_array(const DegreeTable& table) {
+  std::string out;
+  append_degree_array(out, table);
+  return out;
+}
+
 std::string harmonics_json(const LobeAnalysis& a) {
   std::string out = "[";
   for (std::size_t h = 0; h < a.harmonic_amplitude_um.size(); ++h) {
@@ -141,12 +173,34 @@ struct OutgoingRun {
   std::string uuid;
   Params row;
   Params characteristics;  // the run_characteristic_sets row; none for a run without any
+  Params tables;           // the run_tables row, when the sync copies them
+  Params raw;              // the run_raw row, when the sync copies them and they were not pruned
 };
+
+// The run's per-degree tables and, unless pruned, its raw revolutions (revolution by row).
+void add_per_degree(OutgoingRun& out, const StoredRun& run) {
+  const LobeAnalysis& a = run.analysis;
+  out.tables.text(out.uuid).text(degree_array(a.design_lift_mm)).text(degree_array(a.mean_lift_mm));
+  out.tables.text(degree_array(a.spread_um)).text(degree_array(a.error_um)).text(degree_array(run.correction_um));
+  out.tables.text(degree_array(a.residual_error_um));
+  if (run.revolutions.empty()) return;
+  std::string counts = "{";
+  std::string lift = "{";
+  for (std::size_t i = 0; i < run.revolutions.size(); ++i) {
+    if (i > 0) {
+      counts += ',';
+      lift += ',';
+    }
+    counts += std::to_string(run.revolutions[i].revolution);
+    append_degree_array(lift, run.revolutions[i].lift_mm);
+  }
+  out.raw.text(out.uuid).text(counts + "}").text(lift + "}");
+}
 
 OutgoingRun outgoing_run(const StoredRun& run, const std::string& machine, const std::string& source) {
   const RunSummary& s = run.summary;
   const LobeAnalysis& a = run.analysis;
-  OutgoingRun out{s.id, s.uuid, {}, {}};
+  OutgoingRun out{s.id, s.uuid, {}, {}, {}, {}};
   Params& p = out.row;
   p.text(s.uuid).text(machine).text(source).integer(s.id).text(s.started_utc).text(run.finished_utc);
   p.text(s.machine).text(s.part).integer(std::int64_t{s.lobe}).text(run.gauge).text(s.note).text(s.status);
@@ -186,6 +240,35 @@ OutgoingRun outgoing_run(const StoredRun& run, const std::string& machine, const
   return out;
 }
 
+// The batch's per-degree tables and raw revolutions, if the sync copies them; a run's that are
+// there already stay as they are.
+void insert_per_degree(pqxx::work& tx, const std::vector<OutgoingRun>& runs) {
+  const bool any = std::any_of(runs.begin(), runs.end(), [](const OutgoingRun& r) { return r.tables.size() > 0; });
+  if (!any) return;
+  {
+    pqxx::stream_to copy = open_copy(tx, kIncomingTables, kTableColumns);
+    for (const OutgoingRun& r : runs) {
+      if (r.tables.size() > 0) copy_row<kTableWidth>(copy, r.tables);
+    }
+    copy.complete();
+  }
+  {
+    pqxx::stream_to copy = open_copy(tx, kIncomingRaw, kRawColumns);
+    for (const OutgoingRun& r : runs) {
+      if (r.raw.size() > 0) copy_row<kRawWidth>(copy, r.raw);
+    }
+    copy.complete();
+  }
+  tx.exec("INSERT INTO run_tables (" + std::string(kTableColumns) + ") SELECT " + std::string(kTableColumns) +
+          " FROM " + std::string(kIncomingTables) + " ON CONFLICT (run_uuid) DO NOTHING");
+  tx.exec("INSERT INTO run_raw (" + std::string(kRawColumns) +
+          ") SELECT i.run_uuid, i.amplifier_revolutions, i.lift_mm"
+          " FROM " +
+          std::string(kIncomingRaw) +
+          " AS i JOIN runs AS r ON r.uuid = i.run_uuid"
+          " WHERE r.raw_pruned_utc IS NULL ON CONFLICT (run_uuid) DO NOTHING");
+}
+
 // The runs, and the characteristics of those that were new (a run already there keeps its own:
 // DO NOTHING); the runs that were new.
 std::int64_t insert_runs(pqxx::work& tx, const std::vector<OutgoingRun>& runs, const std::string& now) {
@@ -209,6 +292,7 @@ std::int64_t insert_runs(pqxx::work& tx, const std::vector<OutgoingRun>& runs, c
     copy_row<kCharacteristicSetWidth>(copy, r.characteristics);
   }
   copy.complete();
+  insert_per_degree(tx, runs);
   return static_cast<std::int64_t>(inserted.size());
 }
 
@@ -398,6 +482,78 @@ class Syncer {
     }
   }
 
+  // Follows the grinder's prunes: each run whose raw samples were pruned (runs prune) after it
+  // was copied is marked so here too (raw_pruned_utc) and its raw revolutions are deleted here,
+  // in order of the prunes, from where the last sync of this file stopped following them
+  // (sync_progress.pruned_through_utc and pruned_through_id of its runs' row). A run copied
+  // after its prune came marked. False when max_batches stopped it.
+  Result<bool> follow_prunes(const RunStore& local) {
+    // A prune's runs are a UUID and a time each: many more to a transaction than runs.
+    const int limit = options_.batch_size * 25;
+    // A sync from the start follows them from the first prune (the file may be another one).
+    std::optional<std::pair<std::string, std::int64_t>> through;
+    if (options_.from_start) through.emplace("", 0);
+    for (;;) {
+      if (options_.max_batches > 0 && counts_.batches >= options_.max_batches) return false;
+      try {
+        pqxx::work tx(*c_.conn);
+        Params key;
+        key.text(machine_).text(source_).text("runs");
+        Params row = key;
+        row.text(utc_now());
+        central_internal::exec(tx,
+                               "INSERT INTO sync_progress (machine, source, table_name, updated_utc) "
+                               "VALUES ($1, $2, $3, $4) ON CONFLICT DO NOTHING",
+                               row);
+        const pqxx::result progress =
+            central_internal::exec(tx,
+                                   "SELECT coalesce(pruned_through_utc, ''), coalesce(pruned_through_id, 0) "
+                                   "FROM sync_progress WHERE machine = $1 AND source = $2 AND table_name = $3 "
+                                   "FOR UPDATE",
+                                   key);
+        if (!through) through.emplace(central_internal::text_of(progress[0][0]), progress[0][1].as<std::int64_t>());
+        Result<std::vector<PrunedRun>> pruned = local.runs_pruned_after(through->first, through->second, limit);
+        if (!pruned.ok()) return pruned.error();
+        if (pruned->empty()) return true;  // nothing new: the transaction rolls back
+        std::string uuids = "{";
+        std::string times = "{";
+        for (std::size_t i = 0; i < pruned->size(); ++i) {
+          if (i > 0) {
+            uuids += ',';
+            times += ',';
+          }
+          uuids += (*pruned)[i].uuid;
+          times += (*pruned)[i].pruned_utc;
+        }
+        Params lists;
+        lists.text(uuids + "}").text(times + "}");
+        const pqxx::result marked = central_internal::exec(
+            tx,
+            "UPDATE runs AS r SET raw_pruned_utc = p.pruned_utc FROM unnest($1::text[], $2::text[]) AS p (uuid, "
+            "pruned_utc) WHERE r.uuid = p.uuid AND r.raw_pruned_utc IS NULL RETURNING 1",
+            lists);
+        Params just_uuids;
+        just_uuids.text(uuids + "}");
+        central_internal::exec(tx, "DELETE FROM run_raw WHERE run_uuid = ANY ($1::text[])", just_uuids);
+        Params moved;
+        moved.text(pruned->back().pruned_utc).integer(pruned->back().id).text(utc_now()).append(key);
+        central_internal::exec(tx,
+                               "UPDATE sync_progress SET pruned_through_utc = $1, pruned_through_id = $2, "
+                               "updated_utc = $3 WHERE machine = $4 AND source = $5 AND table_name = $6 "
+                               // Forward only: a sync from the start that stops part-way leaves it.
+                               "AND (coalesce(pruned_through_utc, ''), coalesce(pruned_through_id, 0)) < ($1, $2)",
+                               moved);
+        tx.commit();
+        ++counts_.batches;
+        counts_.pruned += static_cast<std::int64_t>(marked.size());
+        through.emplace(pruned->back().pruned_utc, pruned->back().id);
+        if (static_cast<int>(pruned->size()) < limit) return true;
+      } catch (const std::exception& e) {
+        return committed_before(central_internal::database_error(c_.url, "follow the prunes of " + source_, e));
+      }
+    }
+  }
+
  private:
   // The record where the last sync stopped must still be there with its UUID; otherwise the
   // ids after it name other records than those the central history has, and some would never
@@ -478,22 +634,31 @@ Result<CentralSyncCounts> sync_to_central(const RunStore& local, const std::stri
       "runs",
       "run",
       [&](std::int64_t after, int limit) -> Result<std::vector<OutgoingRun>> {
-        Result<std::vector<StoredRun>> read = local.run_records_after(after, limit);
+        Result<std::vector<StoredRun>> read = local.run_records_after(after, limit, options.per_degree);
         if (!read.ok()) return read.error();
         std::vector<OutgoingRun> out;
         out.reserve(read->size());
-        for (const StoredRun& run : *read) out.push_back(outgoing_run(run, machine, counts.source));
+        for (const StoredRun& run : *read) {
+          out.push_back(outgoing_run(run, machine, counts.source));
+          if (options.per_degree) add_per_degree(out.back(), run);
+        }
         return out;
       },
       [](const OutgoingRun& r) { return r.id; },
       [](const OutgoingRun& r) { return r.uuid; },
-      [incoming_made = false](pqxx::work& tx, const std::vector<OutgoingRun>& batch, const std::string&,
-                              const std::string&, const std::string& now) mutable {
+      [incoming_made = false, &options](pqxx::work& tx, const std::vector<OutgoingRun>& batch, const std::string&,
+                                        const std::string&, const std::string& now) mutable {
         // Made by the first batch with runs, not by a sync that finds nothing new (the usual
         // one, every interval): a sync whose batch fails ends with its connection.
         if (!incoming_made) {
           tx.exec("CREATE TEMPORARY TABLE " + std::string(kIncomingRuns) + " ON COMMIT DELETE ROWS AS SELECT " +
                   std::string(kRunColumns) + " FROM runs WITH NO DATA");
+          if (options.per_degree) {
+            tx.exec("CREATE TEMPORARY TABLE " + std::string(kIncomingTables) + " ON COMMIT DELETE ROWS AS SELECT " +
+                    std::string(kTableColumns) + " FROM run_tables WITH NO DATA");
+            tx.exec("CREATE TEMPORARY TABLE " + std::string(kIncomingRaw) + " ON COMMIT DELETE ROWS AS SELECT " +
+                    std::string(kRawColumns) + " FROM run_raw WITH NO DATA");
+          }
           incoming_made = true;
         }
         return insert_runs(tx, batch, now);
@@ -517,6 +682,7 @@ Result<CentralSyncCounts> sync_to_central(const RunStore& local, const std::stri
   };
 
   Result<bool> done = syncer.sync(runs, counts.runs);
+  if (done.ok() && *done) done = syncer.follow_prunes(local);
   if (done.ok() && *done) done = syncer.sync(pushes, counts.pushes);
   if (done.ok() && *done) done = syncer.sync(events, counts.events);
   if (!done.ok()) return done.error();

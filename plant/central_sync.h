@@ -1,6 +1,7 @@
 // Copying one grinder's run database into the plant's central history (docs/plant.md,
-// "The central history"): runs (summary, settings and characteristics; not the per-degree
-// tables), NC pushes (without the program text) and events, each keyed by its UUID.
+// "The central history"): runs (summary, settings and characteristics; the per-degree tables
+// and raw revolutions when asked), NC pushes (the program text when asked) and events, each
+// keyed by its UUID; and the grinder's prunes of raw samples, followed.
 #pragma once
 
 #include <chrono>
@@ -23,6 +24,10 @@ struct CentralSyncOptions {
   // Copy each push's program text too (nc_pushes.program_text; NULL otherwise): the office can
   // read what was sent to the control. A push copied before without its text gets it.
   bool programs = false;
+  // Copy each run's per-degree tables (run_tables: design, mean, spread, error, correction,
+  // residual) and, unless pruned, its raw revolutions (run_raw): an office reads a run's lift
+  // and error curves without the grinder's file. A run copied before without them gets them.
+  bool per_degree = false;
   // Called before each batch's commit with the table ("runs", "nc_pushes", "events") and the
   // batch's number (1, 2... over the whole sync); an error aborts that batch's transaction and
   // ends the sync with it. For tests: a sync that fails half way.
@@ -35,8 +40,9 @@ struct CentralSyncSettings {
   // A sync at least this often; also right after each run the service stores, while the last
   // sync succeeded.
   std::chrono::seconds interval{60};
-  int batch_size = 200;   // as CentralSyncOptions
-  bool programs = false;  // as CentralSyncOptions
+  int batch_size = 200;     // as CentralSyncOptions
+  bool programs = false;    // as CentralSyncOptions
+  bool per_degree = false;  // as CentralSyncOptions
   // Not in the config file: the first wait after a failed sync, doubling up to `interval`.
   std::chrono::milliseconds retry_min{5000};
 };
@@ -53,6 +59,9 @@ struct CentralSyncTableCounts {
 struct CentralSyncCounts {
   std::string source;  // the file synced, as the central history names it (its absolute path)
   CentralSyncTableCounts runs, pushes, events;
+  // Runs copied before their raw samples were pruned on the grinder, marked pruned here by this
+  // sync (their raw revolutions deleted here too).
+  std::int64_t pruned = 0;
   int batches = 0;         // transactions committed
   bool caught_up = false;  // false: stopped by max_batches with records left to copy
 };
@@ -62,7 +71,7 @@ struct CentralSyncCounts {
 // Each batch is one PostgreSQL transaction that inserts its records (ON CONFLICT (uuid) DO
 // NOTHING) and advances sync_progress together: a sync that stops anywhere resumes where the
 // last committed batch ended and never copies a record twice. Runs first, then pushes (which
-// mark their run pushed), then events.
+// mark their run pushed), then the prunes followed, then events.
 // `machine` names the grinder (not empty, at most 64 characters, no control characters).
 // Errors: kInvalidInput for a bad URL, machine or option; kStorage for a server that cannot be
 // reached or fails (the batches committed before stay), a newer central schema; kRefused when

@@ -110,6 +110,7 @@ class CentralSyncer::Loop {
     CentralSyncOptions options;
     options.batch_size = settings_.batch_size;
     options.programs = settings_.programs;
+    options.per_degree = settings_.per_degree;
     options.max_batches = kBatchesPerCall;
     for (;;) {
       Result<CentralSyncCounts> counts = sync_to_central(*store_, settings_.url, machine_, options);

@@ -76,7 +76,7 @@ std::string mqtt_text(const std::optional<MqttSettings>& m) {
 std::string central_text(const std::optional<CentralSyncSettings>& c) {
   if (!c) return "";
   return c->url + " every " + std::to_string(c->interval.count()) + " s, batches of " + std::to_string(c->batch_size) +
-         (c->programs ? ", with program texts" : "");
+         (c->programs ? ", with program texts" : "") + (c->per_degree ? ", with per-degree tables" : "");
 }
 
 Result<std::unique_ptr<HttpApi>> start_http(Service& service, PlcTrigger* plc, const HttpSettings& settings,

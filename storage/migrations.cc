@@ -789,8 +789,14 @@ CREATE TABLE gear_run_profiles (
 ) WITHOUT ROWID;
 )sql";
 
-const std::array<Migration, 21>& all_migrations() {
-  static const std::array<Migration, 21> kMigrations{{
+// The runs whose raw samples were pruned, in the order the central sync follows the prunes in
+// (RunStore::runs_pruned_after); only those, so the index is empty until the first prune.
+constexpr std::string_view kSchemaV22 = R"sql(
+CREATE INDEX runs_by_raw_pruned ON runs (raw_pruned_utc, id) WHERE raw_pruned_utc IS NOT NULL;
+)sql";
+
+const std::array<Migration, 22>& all_migrations() {
+  static const std::array<Migration, 22> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -887,6 +893,11 @@ const std::array<Migration, 21>& all_migrations() {
        "gear runs: the profiles at the face's middle with their ISO 1328-1 figures, and the F_alpha tolerance "
        "judged against",
        std::string(kSchemaV21),
+       nullptr,
+       {}},
+      {22,
+       "runs: an index of the runs whose raw samples were pruned (runs_by_raw_pruned)",
+       std::string(kSchemaV22),
        nullptr,
        {}},
   }};

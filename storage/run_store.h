@@ -307,6 +307,13 @@ struct StoredRun {
   LiftErrorReference lift_error_reference = LiftErrorReference::kBestFit;
 };
 
+// A run whose raw samples `runs prune` removed, and when (runs.raw_pruned_utc).
+struct PrunedRun {
+  std::int64_t id = 0;
+  std::string uuid;
+  std::string pruned_utc;
+};
+
 // A run's summary and its characteristics, for SPC, the AQDEF export and shafts.
 struct RunCharacteristics {
   RunSummary run;
@@ -778,8 +785,10 @@ class RunStore : public RunHistory {
   // details and characteristics, which is what the central history copies. kNotFound if absent.
   Result<StoredRun> load_run_record(std::int64_t run_id) const;
   // The records (as load_run_record reads them) of the runs after `after_id` in id order, at
-  // most `limit`, in one snapshot: what the central sync copies in one batch.
-  Result<std::vector<StoredRun>> run_records_after(std::int64_t after_id, int limit) const;
+  // most `limit`, in one snapshot: what the central sync copies in one batch. With
+  // `per_degree`, their per-degree tables too, as load_run reads them (the raw revolutions
+  // unless pruned), but not their pushes.
+  Result<std::vector<StoredRun>> run_records_after(std::int64_t after_id, int limit, bool per_degree = false) const;
 
   // ---- gear runs (schema 12) ----
   // Stores a measured gear and its traces in one transaction. kInvalidInput for a record that
@@ -819,6 +828,11 @@ class RunStore : public RunHistory {
   // recorded without it).
   Result<std::vector<ReplicatedPush>> pushes_after(std::int64_t after_id, int limit, bool program_text = false) const;
   Result<std::vector<StoredEvent>> events_after(std::int64_t after_id, int limit) const;
+  // The runs whose raw samples were pruned, in order of (raw_pruned_utc, id), after the run
+  // `after_id` pruned at `after_utc` (empty and 0: from the first), at most `limit`: how the
+  // central sync follows the grinder's prunes (schema 22 indexes them).
+  Result<std::vector<PrunedRun>> runs_pruned_after(const std::string& after_utc, std::int64_t after_id,
+                                                   int limit) const;
 
   // Takes the write lock and lets it go again, writing nothing: before a measurement, so that
   // a database another program keeps locked (waiting up to 5 s, as every write does) is found

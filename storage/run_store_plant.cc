@@ -136,6 +136,24 @@ Result<std::vector<std::int64_t>> RunStore::run_ids_after(std::int64_t after_id,
   return st->collect([](const Statement& s) { return s.column<std::int64_t>(0); });
 }
 
+Result<std::vector<PrunedRun>> RunStore::runs_pruned_after(const std::string& after_utc, std::int64_t after_id,
+                                                           int limit) const {
+  if (Status s = check_limit(limit, "pruned runs"); !s.ok()) return s.error();
+  // (raw_pruned_utc, id) > (after_utc, after_id) as the index orders them: runs_by_raw_pruned.
+  Result<Statement> st =
+      Statement::prepare(*conn_,
+                         "SELECT id, uuid, raw_pruned_utc FROM runs WHERE raw_pruned_utc IS NOT NULL"
+                         " AND (raw_pruned_utc, id) > (:after_utc, :after_id) ORDER BY raw_pruned_utc, id LIMIT :limit",
+                         "read the pruned runs");
+  if (!st.ok()) return st.error();
+  st->bind(":after_utc", after_utc);
+  st->bind(":after_id", after_id);
+  st->bind(":limit", limit);
+  return st->collect([](const Statement& s) {
+    return PrunedRun{s.column<std::int64_t>(0), s.column<std::string>(1), s.column<std::string>(2)};
+  });
+}
+
 Result<std::set<std::string>> RunStore::runs_here(const std::vector<std::string>& uuids) const {
   Result<Statement> st = Statement::prepare(*conn_, "SELECT 1 FROM runs WHERE uuid = :uuid", "look runs up by UUID");
   if (!st.ok()) return st.error();

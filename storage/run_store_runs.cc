@@ -666,9 +666,13 @@ Result<StoredRun> RunStore::load_run_record(std::int64_t run_id) const {
   return load_one(*conn_, run_id, {read_summary_of_run, read_details, read_characteristics});
 }
 
-Result<std::vector<StoredRun>> RunStore::run_records_after(std::int64_t after_id, int limit) const {
-  return load_parts(*conn_, "read runs to replicate", [&] { return run_ids_after(after_id, limit); },
-                    {read_summary_of_run, read_details, read_characteristics});
+Result<std::vector<StoredRun>> RunStore::run_records_after(std::int64_t after_id, int limit, bool per_degree) const {
+  auto ids = [&] { return run_ids_after(after_id, limit); };
+  if (per_degree) {
+    return load_parts(*conn_, "read runs to replicate", ids,
+                      {read_summary_of_run, read_details, read_characteristics, read_raw, read_profile});
+  }
+  return load_parts(*conn_, "read runs to replicate", ids, {read_summary_of_run, read_details, read_characteristics});
 }
 
 Status check_run_query(const RunQuery& q) {

@@ -115,6 +115,29 @@ TEST_F(CentralCliTest, QueriesWithDbPrintExactlyWhatTheyPrintFromTheFile) {
   EXPECT_TRUE(has(again.output, "runs       0 copied, 0 already there (up to id 5)")) << again.output;
 }
 
+// `--per-degree` copies each run's per-degree tables and raw revolutions; a prune on the grinder
+// after the sync is followed by the next one, which says so.
+TEST_F(CentralCliTest, PerDegreeTablesAreCopiedAndAPruneIsFollowedAndSaid) {
+  CommandResult sync = run_command("plant sync --per-degree --to " + url_ + data_ + " --machine cell-1");
+  ASSERT_EQ(sync.exit_code, 0) << sync.output;
+  const std::string db = url_.substr(url_.rfind('/') + 1);
+  EXPECT_EQ(shared_postgres().psql(db, "SELECT count(*) FROM run_tables"), "5");
+  EXPECT_EQ(shared_postgres().psql(db, "SELECT count(*) FROM run_raw"), "5");
+  EXPECT_FALSE(has(sync.output, "pruned")) << sync.output;
+
+  CommandResult prune = run_command("runs prune --raw-older-than-days 0" + data_);
+  ASSERT_EQ(prune.exit_code, 0) << prune.output;
+  CommandResult again = run_command("plant sync --to " + url_ + data_ + " --machine cell-1");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_TRUE(has(again.output, "5 runs pruned on the grinder since they were copied")) << again.output;
+  EXPECT_EQ(shared_postgres().psql(db, "SELECT count(*) FROM run_raw"), "0");
+  EXPECT_EQ(shared_postgres().psql(db, "SELECT count(*) FROM runs WHERE raw_pruned_utc IS NOT NULL"), "5");
+  CommandResult local = run_command("runs list" + data_);
+  CommandResult central = run_command("runs list --db " + url_);
+  EXPECT_TRUE(has(local.output, "(raw pruned)")) << local.output;
+  EXPECT_EQ(central.output, local.output);
+}
+
 // The central history's rows, without the time of the sync.
 std::string central_contents(const std::string& url) {
   const std::string db = url.substr(url.rfind('/') + 1);

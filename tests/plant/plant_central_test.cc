@@ -399,6 +399,135 @@ TEST_F(CentralTest, ProgramTextsAreCopiedWhenAskedAndGivenToPushesCopiedWithout)
   EXPECT_EQ(text_of_version(1), hex_of(v1)) << "the text byte for byte";
 }
 
+// The numbers of a float8 array PostgreSQL printed (array_to_string, ' '): PostgreSQL prints
+// the shortest text that reads back as the same double, so equal numbers mean an exact copy.
+std::vector<double> numbers_in(const std::string& text) {
+  std::vector<double> out;
+  const char* p = text.c_str();
+  char* end = nullptr;
+  for (double v = std::strtod(p, &end); end != p; v = std::strtod(p, &end)) {
+    out.push_back(v);
+    p = end;
+  }
+  return out;
+}
+
+std::vector<double> as_vector(const DegreeTable& t) { return {t.begin(), t.end()}; }
+
+// A run's per-degree tables and raw revolutions are copied when asked (--per-degree), exactly
+// as the grinder's file reads them back; a later sync from the start with them gives the runs
+// copied without them theirs.
+TEST_F(CentralTest, PerDegreeTablesAreCopiedWhenAskedExactlyAndGivenToRunsCopiedWithout) {
+  Grinder g("central-per-degree");
+  fill(*g.store, "g1", "2026-11-22", 2);
+  ASSERT_TRUE(sync_to_central(*g.store, url_, "g1").ok());
+  EXPECT_EQ(count("SELECT count(*) FROM run_tables"), 0) << "not asked";
+  EXPECT_EQ(count("SELECT count(*) FROM run_raw"), 0) << "not asked";
+
+  fill(*g.store, "g1", "2026-11-22", 1, 2);
+  CentralSyncOptions with;
+  with.per_degree = true;
+  Result<CentralSyncCounts> s = sync_to_central(*g.store, url_, "g1", with);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->runs.inserted, 1);
+  EXPECT_EQ(count("SELECT count(*) FROM run_tables"), 1) << "the new run's";
+  EXPECT_EQ(count("SELECT count(*) FROM run_raw"), 1);
+
+  with.from_start = true;
+  s = sync_to_central(*g.store, url_, "g1", with);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->runs.inserted, 0);
+  EXPECT_EQ(s->runs.already_there, 3);
+  EXPECT_EQ(count("SELECT count(*) FROM run_tables"), 3) << "given to the runs copied before";
+  EXPECT_EQ(count("SELECT count(*) FROM run_raw"), 3);
+
+  for (std::int64_t id = 1; id <= 3; ++id) {
+    Result<StoredRun> run = g.store->load_run(id);
+    ASSERT_TRUE(run.ok()) << run.error().message;
+    const std::string where = " WHERE run_uuid = '" + run->summary.uuid + "'";
+    auto column = [&](const std::string& name, const std::string& table) {
+      return numbers_in(sql("SELECT array_to_string(" + name + ", ' ') FROM " + table + where));
+    };
+    const LobeAnalysis& a = run->analysis;
+    EXPECT_EQ(column("design_lift_mm", "run_tables"), as_vector(a.design_lift_mm)) << "run " << id;
+    EXPECT_EQ(column("mean_lift_mm", "run_tables"), as_vector(a.mean_lift_mm)) << "run " << id;
+    EXPECT_EQ(column("spread_um", "run_tables"), as_vector(a.spread_um)) << "run " << id;
+    EXPECT_EQ(column("error_um", "run_tables"), as_vector(a.error_um)) << "run " << id;
+    EXPECT_EQ(column("correction_um", "run_tables"), as_vector(run->correction_um)) << "run " << id;
+    EXPECT_EQ(column("residual_error_um", "run_tables"), as_vector(a.residual_error_um)) << "run " << id;
+    // Revolution by revolution: lift_mm[r][d] is revolution r's reading at degree d of C.
+    std::vector<double> lift;
+    std::vector<double> counts;
+    for (const RevolutionSamples& rev : run->revolutions) {
+      lift.insert(lift.end(), rev.lift_mm.begin(), rev.lift_mm.end());
+      counts.push_back(static_cast<double>(rev.revolution));
+    }
+    ASSERT_EQ(run->revolutions.size(), 3u);
+    EXPECT_EQ(column("lift_mm", "run_raw"), lift) << "run " << id;
+    EXPECT_EQ(column("amplifier_revolutions", "run_raw"), counts) << "run " << id;
+    EXPECT_EQ(sql("SELECT array_length(lift_mm, 1) || 'x' || array_length(lift_mm, 2) FROM run_raw" + where), "3x360");
+    // Degree 91 of the error as SQL reads it: index d + 1.
+    EXPECT_EQ(numbers_in(sql("SELECT error_um[91] FROM run_tables" + where)), std::vector<double>{a.error_um[90]});
+  }
+}
+
+// A prune on the grinder (runs prune) after its runs were copied is followed: the runs are
+// marked pruned at the prune's time and their raw revolutions deleted, by a sync with or
+// without the per-degree tables, once; a run pruned before it was copied comes marked and
+// without them; a sync from the start does not send the prunes' progress back.
+TEST_F(CentralTest, TheGrindersPrunesAreFollowedOnce) {
+  Grinder g("central-prunes");
+  fill(*g.store, "g1", "2026-11-20", 2);     // runs 1 and 2
+  fill(*g.store, "g1", "2026-11-22", 2, 2);  // runs 3 and 4
+  CentralSyncOptions with;
+  with.per_degree = true;
+  ASSERT_TRUE(sync_to_central(*g.store, url_, "g1", with).ok());
+  EXPECT_EQ(count("SELECT count(*) FROM run_raw"), 4);
+
+  ASSERT_TRUE(g.store->prune_raw_samples("2026-11-21T00:00:00Z", "2026-11-25T00:00:00Z").ok());
+  Result<CentralSyncCounts> s = sync_to_central(*g.store, url_, "g1", with);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->pruned, 2);
+  EXPECT_EQ(sql("SELECT string_agg(local_id || ':' || coalesce(raw_pruned_utc, '-'), ' ' ORDER BY local_id) FROM runs"),
+            "1:2026-11-25T00:00:00Z 2:2026-11-25T00:00:00Z 3:- 4:-");
+  EXPECT_EQ(sql("SELECT string_agg(r.local_id::text, ' ' ORDER BY r.local_id) FROM run_raw JOIN runs AS r ON "
+                "r.uuid = run_raw.run_uuid"),
+            "3 4");
+  EXPECT_EQ(count("SELECT count(*) FROM run_tables"), 4) << "the tables stay";
+  Result<CentralHistory> central = CentralHistory::open(url_);
+  ASSERT_TRUE(central.ok()) << central.error().message;
+  EXPECT_EQ(rows(central->list_runs(RunQuery{})), rows(g.store->list_runs(RunQuery{})));
+
+  s = sync_to_central(*g.store, url_, "g1", with);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->pruned, 0) << "followed once";
+
+  // A plain sync follows them too; a run pruned before its copy comes marked, without raw.
+  fill(*g.store, "g1", "2026-11-23", 1, 4);  // run 5, not copied yet
+  ASSERT_TRUE(g.store->prune_raw_samples("2026-11-24T00:00:00Z", "2026-11-26T00:00:00Z").ok());
+  s = sync_to_central(*g.store, url_, "g1");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->runs.inserted, 1);
+  EXPECT_EQ(s->pruned, 2) << "runs 3 and 4; run 5 came marked";
+  EXPECT_EQ(count("SELECT count(*) FROM run_raw"), 0);
+  EXPECT_EQ(count("SELECT count(*) FROM runs WHERE raw_pruned_utc = '2026-11-26T00:00:00Z'"), 3);
+  const std::string through =
+      "SELECT pruned_through_utc || ' ' || pruned_through_id FROM sync_progress WHERE "
+      "table_name = 'runs'";
+  EXPECT_EQ(sql(through), "2026-11-26T00:00:00Z 5");
+
+  // A sync from the start follows every prune again (finding them followed) and leaves the
+  // progress where it was ahead of it.
+  sql("UPDATE sync_progress SET pruned_through_id = 99 WHERE table_name = 'runs'");
+  CentralSyncOptions again;
+  again.from_start = true;
+  s = sync_to_central(*g.store, url_, "g1", again);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->pruned, 0);
+  EXPECT_EQ(sql(through), "2026-11-26T00:00:00Z 99") << "not moved back";
+  EXPECT_EQ(rows(central->list_runs(RunQuery{})), rows(g.store->list_runs(RunQuery{})));
+}
+
 TEST_F(CentralTest, AReplacedFileIsRefusedUntilSyncedFromTheStart) {
   auto g = std::make_unique<Grinder>("central-replaced");
   fill(*g->store, "g1", "2026-11-22", 4);

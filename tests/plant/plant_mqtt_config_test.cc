@@ -130,13 +130,16 @@ TEST_F(PlantCentralConfigTest, TheKeysAreReadWithTheirDefaults) {
   EXPECT_EQ(c->central->interval, std::chrono::seconds(60));
   EXPECT_EQ(c->central->batch_size, 200);
   EXPECT_FALSE(c->central->programs) << "program texts only when asked";
+  EXPECT_FALSE(c->central->per_degree) << "per-degree tables only when asked";
   EXPECT_FALSE(c->mqtt.has_value()) << "the central history needs no broker";
 
   c = read(kBase +
            "[plant.central]\nurl = \"postgresql://gaugeloop@central/plant?passfile=/etc/gaugeloop/pgpass\"\n"
-           "interval_s = 600\nbatch_size = 50\nprograms = true\n[plant.mqtt]\nhost = \"b\"\nsite = \"s\"\n");
+           "interval_s = 600\nbatch_size = 50\nprograms = true\nper_degree = true\n[plant.mqtt]\nhost = \"b\"\nsite = "
+           "\"s\"\n");
   ASSERT_TRUE(c.ok()) << c.error().message;
   EXPECT_TRUE(c->central->programs);
+  EXPECT_TRUE(c->central->per_degree);
   EXPECT_EQ(c->central->interval, std::chrono::seconds(600));
   EXPECT_EQ(c->central->batch_size, 50);
   EXPECT_TRUE(c->mqtt.has_value());

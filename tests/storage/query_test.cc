@@ -9,10 +9,12 @@
 
 #include "storage/run_store.h"
 #include "storage_test_support.h"
+#include "tests/support/text.h"
 
 namespace gaugeloop {
 namespace {
 
+using testing::has;
 using testing::make_record;
 using testing::RawDb;
 using testing::TempDir;
@@ -302,6 +304,50 @@ TEST_F(QueryTest, PruneRemovesOldRawSamplesAndKeepsEverythingElse) {
   RawDb raw(db_in(dir_));
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_samples WHERE run_id = " + std::to_string(old_run)), 0);
   EXPECT_EQ(raw.query_int("SELECT count(*) FROM run_profile WHERE run_id = " + std::to_string(old_run)), 360);
+}
+
+// The pruned runs in the order the central sync follows them, by prune time then id, after a
+// given (time, id), read through the index of pruned runs.
+TEST_F(QueryTest, PrunedRunsAreListedByPruneTimeThenIdAfterAGivenOne) {
+  const auto first = add("a", 1, "g1", "2026-10-01T10:00:00Z");
+  const auto second = add("a", 1, "g1", "2026-10-02T10:00:00Z");
+  const auto third = add("a", 1, "g1", "2026-10-20T10:00:00Z");
+  add("a", 1, "g1", "2026-11-20T10:00:00Z");  // never pruned
+  ASSERT_TRUE(store().prune_raw_samples("2026-10-10T00:00:00Z", "2026-11-22T00:00:00Z").ok());
+  ASSERT_TRUE(store().prune_raw_samples("2026-11-01T00:00:00Z", "2026-11-23T00:00:00Z").ok());
+
+  Result<std::vector<PrunedRun>> all = store().runs_pruned_after("", 0, 10);
+  ASSERT_TRUE(all.ok()) << all.error().message;
+  std::vector<std::string> listed;
+  for (const PrunedRun& p : *all) listed.push_back(std::to_string(p.id) + " " + p.pruned_utc);
+  EXPECT_EQ(listed, (std::vector<std::string>{std::to_string(first) + " 2026-11-22T00:00:00Z",
+                                              std::to_string(second) + " 2026-11-22T00:00:00Z",
+                                              std::to_string(third) + " 2026-11-23T00:00:00Z"}));
+  Result<StoredRun> loaded = store().load_run(first);
+  ASSERT_TRUE(loaded.ok());
+  EXPECT_EQ((*all)[0].uuid, loaded->summary.uuid);
+
+  // After the first run of the first prune: the second of it, then the later prune's.
+  Result<std::vector<PrunedRun>> after = store().runs_pruned_after("2026-11-22T00:00:00Z", first, 1);
+  ASSERT_TRUE(after.ok()) << after.error().message;
+  ASSERT_EQ(after->size(), 1u) << "the limit";
+  EXPECT_EQ((*after)[0].id, second);
+  after = store().runs_pruned_after("2026-11-22T00:00:00Z", second, 10);
+  ASSERT_TRUE(after.ok());
+  ASSERT_EQ(after->size(), 1u);
+  EXPECT_EQ((*after)[0].id, third);
+  after = store().runs_pruned_after("2026-11-23T00:00:00Z", third, 10);
+  ASSERT_TRUE(after.ok());
+  EXPECT_TRUE(after->empty());
+  EXPECT_FALSE(store().runs_pruned_after("", 0, 0).ok()) << "a limit below 1";
+
+  const std::string plan =
+      RawDb(db_in(dir_))
+          .query_plan(
+              "SELECT id, uuid, raw_pruned_utc FROM runs WHERE raw_pruned_utc IS NOT NULL AND (raw_pruned_utc, id) > "
+              "('2026-11-22T00:00:00Z', 1) ORDER BY raw_pruned_utc, id LIMIT 10");
+  EXPECT_TRUE(has(plan, "runs_by_raw_pruned")) << plan;
+  EXPECT_FALSE(has(plan, "TEMP B-TREE")) << plan;
 }
 
 // ---- Concurrency: two connections, real threads, no sleeps ----
