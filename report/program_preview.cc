@@ -90,15 +90,17 @@ Status write_program_preview(const ProgramPreviewPage& p, const std::filesystem:
     }
   }
   return chart::write_page(out, kReportWidthPt, kReportHeightPt, [&](cairo_t* cr) {
-    constexpr double kMargin = 36.0;
+    constexpr double kPreviewMarginPt = 36.0;
     chart::set_colour(cr, chart::kInk);
-    chart::text(cr, kMargin, 40.0, chart::fit_text(cr, p.title, 14.0, kReportWidthPt - 2 * kMargin, true), 14.0,
+    chart::text(cr, kPreviewMarginPt, 40.0,
+                chart::fit_text(cr, p.title, 14.0, kReportWidthPt - 2 * kPreviewMarginPt, true), 14.0,
                 chart::Align::kLeft, true);
-    chart::text(cr, kMargin, 56.0, chart::fit_text(cr, p.subtitle, 8.0, kReportWidthPt - 2 * kMargin), 8.0);
-    const double col_w = (kReportWidthPt - 2 * kMargin - 2 * 60.0) / 3.0;
+    chart::text(cr, kPreviewMarginPt, 56.0, chart::fit_text(cr, p.subtitle, 8.0, kReportWidthPt - 2 * kPreviewMarginPt),
+                8.0);
+    const double col_w = (kReportWidthPt - 2 * kPreviewMarginPt - 2 * 60.0) / 3.0;
     const double row_h = 170.0;
     auto box = [&](int col, int row) {
-      return Box{kMargin + 40.0 + col * (col_w + 60.0), 90.0 + row * (row_h + 70.0), col_w - 20.0, row_h};
+      return Box{kPreviewMarginPt + 40.0 + col * (col_w + 60.0), 90.0 + row * (row_h + 70.0), col_w - 20.0, row_h};
     };
     std::vector<Series> path{{&p.x_mm, chart::kCurve, p.y_mm.empty() ? std::string() : "X"}};
     if (!p.y_mm.empty()) path.push_back({&p.y_mm, chart::kLimit, "Y"});
@@ -112,8 +114,8 @@ Status write_program_preview(const ProgramPreviewPage& p, const std::filesystem:
     if (!p.y_command_error_um.empty()) error.push_back({&p.y_command_error_um, chart::kLimit, "Y table"});
     draw_chart(cr, box(2, 1), "Command position error per degree", "um", error, p.command_error_bound_um);
     chart::set_colour(cr, chart::kNotJudged);
-    chart::text(cr, kMargin, kReportHeightPt - 18.0, chart::fit_text(cr, p.footer, 7.0, kReportWidthPt - 2 * kMargin),
-                7.0);
+    chart::text(cr, kPreviewMarginPt, kReportHeightPt - 18.0,
+                chart::fit_text(cr, p.footer, 7.0, kReportWidthPt - 2 * kPreviewMarginPt), 7.0);
   });
 }
 

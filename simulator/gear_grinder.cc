@@ -12,10 +12,7 @@
 namespace gaugeloop {
 namespace {
 
-// A uniform deviate in [lo, hi) from (seed, index).
-double uniform(std::uint64_t seed, std::uint64_t index, double lo, double hi) {
-  return lo + (hi - lo) * seeded::unit_uniform(seeded::mix(seeded::mix(seed) ^ (index * 0x9e3779b97f4a7c15ULL)));
-}
+using seeded::uniform;
 
 // A sign drawn from (seed, index).
 double sign(std::uint64_t seed, std::uint64_t index) { return uniform(seed, index, 0.0, 1.0) < 0.5 ? -1.0 : 1.0; }

@@ -2,23 +2,23 @@
 // envelope of the wheel (pin_grinder.h).
 #include "simulator/pin_grinder.h"
 
-#include "compensation/analysis.h"
-#include "compensation/pin_analysis.h"
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
 #include <utility>
 
+#include "compensation/analysis.h"
+#include "compensation/pin_analysis.h"
 #include "compensation/pin_envelope.h"
 #include "compensation/pin_kinematics.h"
+#include "simulator/seeded_random.h"
 
 namespace gaugeloop {
 namespace {
 
-constexpr double kGridStepDeg = 0.1;
-constexpr int kGridRows = 3600;
+using seeded::kFineGridRows;
+using seeded::kFineGridStepDeg;
 
 Status named(const Status& s, const char* slide) {
   if (s) return s;
@@ -51,12 +51,12 @@ PinMachineErrorModel vibration_only(const PinMachineErrorModel& model) {
 Result<PinCommandedPath> pin_commanded_path_from_design(const PinGeometry& pin) {
   if (Status s = validate(pin); !s) return s.error();
   PinCommandedPath path;
-  path.c_step_deg = kGridStepDeg;
+  path.c_step_deg = kFineGridStepDeg;
   path.source = "design";
-  path.x_mm.resize(kGridRows);
-  path.y_mm.resize(kGridRows);
-  for (int k = 0; k < kGridRows; ++k) {
-    const PinPose pose = design_pin_pose(pin, k * kGridStepDeg);
+  path.x_mm.resize(kFineGridRows);
+  path.y_mm.resize(kFineGridRows);
+  for (int k = 0; k < kFineGridRows; ++k) {
+    const PinPose pose = design_pin_pose(pin, k * kFineGridStepDeg);
     path.x_mm[static_cast<size_t>(k)] = pose.x_mm;
     path.y_mm[static_cast<size_t>(k)] = pose.y_mm;
   }
@@ -70,7 +70,7 @@ Result<PinCommandedPath> pin_commanded_path_from_programs(const PinGeometry& pin
   Result<std::vector<double>> x = read_slide(x_program, "X");
   if (!x) return x.error();
   PinCommandedPath path;
-  path.c_step_deg = kGridStepDeg;
+  path.c_step_deg = kFineGridStepDeg;
   path.x_mm = std::move(*x);
   path.source = x_program.string();
   if (pin.mode == PinMode::kCXY) {
@@ -79,7 +79,7 @@ Result<PinCommandedPath> pin_commanded_path_from_programs(const PinGeometry& pin
     path.y_mm = std::move(*y);
     path.source += " and " + y_program.string();
   } else {
-    path.y_mm.assign(kGridRows, 0.0);
+    path.y_mm.assign(kFineGridRows, 0.0);
   }
   return path;
 }

@@ -22,6 +22,15 @@ inline double unit_uniform(std::uint64_t h) {
   return (static_cast<double>(h >> 11) + 0.5) * (1.0 / 9007199254740992.0);
 }
 
+// A uniform deviate in [lo, hi) from (seed, index).
+inline double uniform(std::uint64_t seed, std::uint64_t index, double lo, double hi) {
+  return lo + (hi - lo) * unit_uniform(mix(mix(seed) ^ (index * 0x9e3779b97f4a7c15ULL)));
+}
+
+// The grid the virtual grinders evaluate a turn of C on: 0.1 deg, 3600 rows.
+inline constexpr double kFineGridStepDeg = 0.1;
+inline constexpr int kFineGridRows = 3600;
+
 // A standard normal deviate (Box-Muller) from (seed, index).
 inline double normal(std::uint64_t seed, std::uint64_t index) {
   const double u1 = unit_uniform(mix(seed ^ mix(2 * index)));

@@ -9,11 +9,6 @@
 namespace gaugeloop {
 namespace {
 
-double uniform(std::uint64_t seed, std::uint64_t index, double lo, double hi) {
-  return lo + (hi - lo) *
-                  seeded::unit_uniform(seeded::mix(seeded::mix(seed ^ 0x511de5ULL) ^ (index * 0x9e3779b97f4a7c15ULL)));
-}
-
 double sign_of(double v) { return v > 0.0 ? 1.0 : v < 0.0 ? -1.0 : 0.0; }
 
 }  // namespace
@@ -31,7 +26,7 @@ SlideErrors seeded_slides(std::uint64_t seed) {
   SlideErrors s;
   s.seed = seed;
   std::uint64_t i = 0;
-  auto u = [&](double lo, double hi) { return uniform(seed, ++i, lo, hi); };
+  auto u = [&](double lo, double hi) { return seeded::uniform(seed ^ 0x511de5ULL, ++i, lo, hi); };
   auto sg = [&] { return u(0.0, 1.0) < 0.5 ? -1.0 : 1.0; };
   s.y_scale = sg() * u(20e-6, 50e-6);
   s.z_scale = sg() * u(20e-6, 50e-6);

@@ -20,8 +20,8 @@
 namespace gaugeloop {
 namespace {
 
-constexpr double kGridStepDeg = 0.1;
-constexpr int kGridRows = 3600;
+using seeded::kFineGridRows;
+using seeded::kFineGridStepDeg;
 
 using seeded::mix;
 using seeded::unit_uniform;
@@ -66,9 +66,9 @@ double periodic_cubic(const std::vector<double>& y, double u) {
 // The program's C speed at each row of the grid, deg/s, interpolated linearly between its rows.
 std::vector<double> omega_on_grid_deg_per_s(const WorkSpeedProgram& p) {
   const auto rows = static_cast<long>(p.speed_rpm.size());
-  std::vector<double> w(kGridRows);
-  for (int k = 0; k < kGridRows; ++k) {
-    const double u = k * kGridStepDeg / p.c_step_deg;
+  std::vector<double> w(kFineGridRows);
+  for (int k = 0; k < kFineGridRows; ++k) {
+    const double u = k * kFineGridStepDeg / p.c_step_deg;
     const double fl = std::floor(u + 1e-9);
     const double f = std::max(0.0, u - fl);
     const long i = static_cast<long>(fl) % rows;
@@ -87,24 +87,24 @@ std::vector<double> servo_response(const std::vector<double>& commanded_mm, cons
   if (m.servo_bandwidth_hz == 0.0) return commanded_mm;
   if (!m.speed_program) return periodic_response(commanded_mm, 60.0 / m.work_speed_rpm, m);
   const std::vector<double> w = omega_on_grid_deg_per_s(*m.speed_program);
-  std::vector<double> t(kGridRows + 1, 0.0);  // time at each C row, and at the end of the turn
-  for (int k = 0; k < kGridRows; ++k) {
+  std::vector<double> t(kFineGridRows + 1, 0.0);  // time at each C row, and at the end of the turn
+  for (int k = 0; k < kFineGridRows; ++k) {
     const auto j = static_cast<size_t>(k);
-    t[j + 1] = t[j] + kGridStepDeg * 0.5 * (1.0 / w[j] + 1.0 / w[(j + 1) % kGridRows]);
+    t[j + 1] = t[j] + kFineGridStepDeg * 0.5 * (1.0 / w[j] + 1.0 / w[(j + 1) % kFineGridRows]);
   }
-  const double period_s = t[kGridRows];
+  const double period_s = t[kFineGridRows];
   // Enough time samples that the fastest stretch is sampled about as finely in C as the grid
   // (the slowest to fastest ratio per row, at most 8: beyond that the fast stretch is the base
   // circle, where X barely moves).
   const auto [w_min, w_max] = std::minmax_element(w.begin(), w.end());
   const int per_row = std::clamp(static_cast<int>(std::ceil(*w_max / *w_min - 1e-9)), 1, 8);
-  const int samples = kGridRows * per_row;
+  const int samples = kFineGridRows * per_row;
   const double dt = period_s / samples;
   std::vector<double> x_in_time(static_cast<size_t>(samples));
   size_t seg = 0;
   for (int i = 0; i < samples; ++i) {
     const double ti = i * dt;
-    while (seg + 1 < static_cast<size_t>(kGridRows) && t[seg + 1] <= ti) ++seg;
+    while (seg + 1 < static_cast<size_t>(kFineGridRows) && t[seg + 1] <= ti) ++seg;
     const double f = (ti - t[seg]) / (t[seg + 1] - t[seg]);
     x_in_time[static_cast<size_t>(i)] = periodic_cubic(commanded_mm, static_cast<double>(seg) + f);
   }
@@ -112,7 +112,7 @@ std::vector<double> servo_response(const std::vector<double>& commanded_mm, cons
   std::vector<double> error_in_time(x_in_time.size());
   for (size_t i = 0; i < error_in_time.size(); ++i) error_in_time[i] = followed_in_time[i] - x_in_time[i];
   std::vector<double> followed(commanded_mm.size());
-  for (int k = 0; k < kGridRows; ++k) {
+  for (int k = 0; k < kFineGridRows; ++k) {
     const auto j = static_cast<size_t>(k);
     followed[j] = commanded_mm[j] + periodic_cubic(error_in_time, t[j] / dt);
   }
@@ -122,20 +122,20 @@ std::vector<double> servo_response(const std::vector<double>& commanded_mm, cons
 // The vibration of one part, um, on the C grid: harmonics with Rayleigh amplitudes and uniform
 // phases, scaled to the RMS asked for.
 std::vector<double> vibration_um(const MachineErrorModel& m, int part_index) {
-  std::vector<double> v(kGridRows, 0.0);
+  std::vector<double> v(kFineGridRows, 0.0);
   if (m.vibration_rms_um == 0.0) return v;
   const std::uint64_t part_seed = mix(m.seed ^ mix(0x7669627261ULL + static_cast<std::uint64_t>(part_index)));
   for (int k = m.vibration_min_harmonic; k <= m.vibration_max_harmonic; ++k) {
     const auto key = static_cast<std::uint64_t>(k);
     const double amplitude = std::sqrt(-2.0 * std::log(unit_uniform(mix(part_seed ^ (2 * key)))));
     const double phase = 2.0 * std::numbers::pi * unit_uniform(mix(part_seed ^ (2 * key + 1)));
-    for (int j = 0; j < kGridRows; ++j) {
-      v[static_cast<size_t>(j)] += amplitude * std::cos(k * deg_to_rad(j * kGridStepDeg) + phase);
+    for (int j = 0; j < kFineGridRows; ++j) {
+      v[static_cast<size_t>(j)] += amplitude * std::cos(k * deg_to_rad(j * kFineGridStepDeg) + phase);
     }
   }
   double sum_sq = 0.0;
   for (double x : v) sum_sq += x * x;
-  const double rms = std::sqrt(sum_sq / kGridRows);
+  const double rms = std::sqrt(sum_sq / kFineGridRows);
   for (double& x : v) x *= m.vibration_rms_um / rms;
   return v;
 }
@@ -179,12 +179,12 @@ Status validate(const MachineErrorModel& m) {
       }
     }
   }
-  if (m.vibration_min_harmonic < 1 || m.vibration_max_harmonic > kGridRows / 2 - 1 ||
+  if (m.vibration_min_harmonic < 1 || m.vibration_max_harmonic > kFineGridRows / 2 - 1 ||
       m.vibration_min_harmonic > m.vibration_max_harmonic) {
     return make_error(ErrorCode::kInvalidInput,
                       "machine error model: vibration harmonics " + std::to_string(m.vibration_min_harmonic) + ".." +
                           std::to_string(m.vibration_max_harmonic) +
-                          " must satisfy 1 <= min <= max <= " + std::to_string(kGridRows / 2 - 1));
+                          " must satisfy 1 <= min <= max <= " + std::to_string(kFineGridRows / 2 - 1));
   }
   return {};
 }
@@ -230,9 +230,9 @@ Result<ProgramSlidePath> slide_path_from_program(const std::filesystem::path& nc
   }
   ProgramSlidePath path;
   path.following_axis = table->following_axis;
-  path.position_mm.resize(kGridRows);
-  for (int k = 0; k < kGridRows; ++k) {
-    const double c = k * kGridStepDeg;
+  path.position_mm.resize(kFineGridRows);
+  for (int k = 0; k < kFineGridRows; ++k) {
+    const double c = k * kFineGridStepDeg;
     path.position_mm[static_cast<size_t>(k)] = nc->at(c).x_mm + (design ? design->nc.at(c).x_mm : 0.0);
   }
   return path;
@@ -241,21 +241,21 @@ Result<ProgramSlidePath> slide_path_from_program(const std::filesystem::path& nc
 Result<CommandedPath> commanded_path_from_program(const std::filesystem::path& nc_file) {
   Result<ProgramSlidePath> slide = slide_path_from_program(nc_file);
   if (!slide) return slide.error();
-  return CommandedPath{kGridStepDeg, std::move(slide->position_mm), nc_file.string()};
+  return CommandedPath{kFineGridStepDeg, std::move(slide->position_mm), nc_file.string()};
 }
 
 Result<CommandedPath> commanded_path_from_design(const Part& part, const LiftTable& design) {
   Result<PeriodicSpline> lift = PeriodicSpline::fit(design.angle_deg, design.lift_mm);
   if (!lift) return lift.error();
-  Result<MachinePath> exact = compute_machine_path(*lift, part, kGridStepDeg);
+  Result<MachinePath> exact = compute_machine_path(*lift, part, kFineGridStepDeg);
   if (!exact) return exact.error();
-  return CommandedPath{kGridStepDeg, std::move(exact->x_mm), "design"};
+  return CommandedPath{kFineGridStepDeg, std::move(exact->x_mm), "design"};
 }
 
 Result<FollowedSlide> follow_slide(const std::vector<double>& commanded_mm, double c_step_deg,
                                    const MachineErrorModel& m, int part_index, std::string_view source) {
   if (Status s = validate(m); !s) return s.error();
-  if (commanded_mm.size() != static_cast<size_t>(kGridRows) || c_step_deg != kGridStepDeg) {
+  if (commanded_mm.size() != static_cast<size_t>(kFineGridRows) || c_step_deg != kFineGridStepDeg) {
     return make_error(ErrorCode::kInvalidInput, "virtual grinder: the commanded path from " + std::string(source) +
                                                     " must have 3600 rows at 0.1 deg of C");
   }
@@ -264,11 +264,11 @@ Result<FollowedSlide> follow_slide(const std::vector<double>& commanded_mm, doub
   slide.followed_mm = servo_response(commanded_mm, m);
   const double max_mm = *std::max_element(commanded_mm.begin(), commanded_mm.end());
   const std::vector<double> vibration = vibration_um(m, part_index);
-  for (int k = 0; k < kGridRows; ++k) {
+  for (int k = 0; k < kFineGridRows; ++k) {
     const auto j = static_cast<size_t>(k);
     slide.largest_servo_error_um =
         std::max(slide.largest_servo_error_um, std::abs(slide.followed_mm[j] - commanded_mm[j]) * 1000.0);
-    const double c_rad = deg_to_rad(k * kGridStepDeg);
+    const double c_rad = deg_to_rad(k * kFineGridStepDeg);
     const double geometric_um = m.geometric_once_um * std::cos(c_rad + deg_to_rad(m.geometric_once_phase_deg)) +
                                 m.geometric_twice_um * std::cos(2.0 * c_rad + deg_to_rad(m.geometric_twice_phase_deg));
     const double drift_um = max_mm > 0.0 ? m.drift_um_per_part * part_index * commanded_mm[j] / max_mm : 0.0;
@@ -286,9 +286,9 @@ Result<GroundPart> grind_part(const Part& part, const CommandedPath& commanded, 
   ground.followed_x_mm = std::move(slide->followed_mm);
   ground.largest_servo_error_um = slide->largest_servo_error_um;
   // Row k of the followed path is the wheel at psi = s * (C - c0) in the cam frame.
-  std::vector<std::pair<double, double>> by_psi(kGridRows);
-  for (int k = 0; k < kGridRows; ++k) {
-    double psi = std::fmod(part.rotation_sense * (k * kGridStepDeg - part.c_offset_deg), 360.0);
+  std::vector<std::pair<double, double>> by_psi(kFineGridRows);
+  for (int k = 0; k < kFineGridRows; ++k) {
+    double psi = std::fmod(part.rotation_sense * (k * kFineGridStepDeg - part.c_offset_deg), 360.0);
     if (psi < 0.0) psi += 360.0;
     if (psi >= 360.0 - 1e-9) psi = 0.0;
     by_psi[static_cast<size_t>(k)] = {psi, ground.followed_x_mm[static_cast<size_t>(k)]};
