@@ -386,14 +386,7 @@ class Syncer {
       const std::string operation = "copy " + std::string(reader.table) + " of " + source_;
       try {
         pqxx::work tx(*c_.conn);
-        Params key;
-        key.text(machine_).text(source_).text(reader.table);
-        Params row = key;
-        row.text(utc_now());
-        central_internal::exec(tx,
-                               "INSERT INTO sync_progress (machine, source, table_name, updated_utc) "
-                               "VALUES ($1, $2, $3, $4) ON CONFLICT DO NOTHING",
-                               row);
+        const Params key = progress_row(tx, reader.table);
         // Locked until the commit: a second sync of the same file waits here and then goes on
         // from where this batch ends.
         pqxx::result progress = central_internal::exec(
@@ -497,14 +490,7 @@ class Syncer {
       if (options_.max_batches > 0 && counts_.batches >= options_.max_batches) return false;
       try {
         pqxx::work tx(*c_.conn);
-        Params key;
-        key.text(machine_).text(source_).text("runs");
-        Params row = key;
-        row.text(utc_now());
-        central_internal::exec(tx,
-                               "INSERT INTO sync_progress (machine, source, table_name, updated_utc) "
-                               "VALUES ($1, $2, $3, $4) ON CONFLICT DO NOTHING",
-                               row);
+        const Params key = progress_row(tx, "runs");
         const pqxx::result progress =
             central_internal::exec(tx,
                                    "SELECT coalesce(pruned_through_utc, ''), coalesce(pruned_through_id, 0) "
@@ -555,6 +541,20 @@ class Syncer {
   }
 
  private:
+  // The key of this file's sync_progress row for `table` (machine, source, table), the row
+  // made if it is not there yet.
+  Params progress_row(pqxx::work& tx, std::string_view table) {
+    Params key;
+    key.text(machine_).text(source_).text(table);
+    Params row = key;
+    row.text(utc_now());
+    central_internal::exec(tx,
+                           "INSERT INTO sync_progress (machine, source, table_name, updated_utc) "
+                           "VALUES ($1, $2, $3, $4) ON CONFLICT DO NOTHING",
+                           row);
+    return key;
+  }
+
   // The record where the last sync stopped must still be there with its UUID; otherwise the
   // ids after it name other records than those the central history has, and some would never
   // be copied.
