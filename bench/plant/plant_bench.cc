@@ -218,28 +218,35 @@ BENCHMARK(BM_BareMosquittoQos1)->UseManualTime()->Iterations(3)->Unit(benchmark:
 
 // ---- the sync into PostgreSQL ----
 
-// state.range(0): characteristics per run.
-void BM_SyncIntoCentral(benchmark::State& state) {
+// state.range(0): characteristics per run. With `per_degree`, each run's per-degree tables and
+// raw revolutions too (plant sync --per-degree).
+void sync_into_central(benchmark::State& state, bool per_degree) {
   const int characteristics = static_cast<int>(state.range(0));
-  const fs::path db = scratch("sync_" + std::to_string(characteristics)) / "runs.sqlite";
+  const std::string name = std::string(per_degree ? "sync_per_degree_" : "sync_") + std::to_string(characteristics);
+  const fs::path db = scratch(name) / "runs.sqlite";
   RunStore store = store_with_runs(db, kSyncRuns, false, characteristics);
-  const fs::path empty_db = scratch("sync_empty_" + std::to_string(characteristics)) / "runs.sqlite";
+  const fs::path empty_db = scratch(name + "_empty") / "runs.sqlite";
   RunStore empty = store_with_runs(empty_db, 0, false);
+  CentralSyncOptions options;
+  options.per_degree = per_degree;
   int iteration = 0;
   for (auto _ : state) {
-    const std::string url = new_database("sync_" + std::to_string(characteristics) + "_" + std::to_string(iteration++));
+    const std::string url = new_database(name + "_" + std::to_string(iteration++));
     // The central schema made first, untimed, as it is once for a plant: what is timed is the
     // copy (connecting, checking the schema, reading the file and writing PostgreSQL).
     if (Result<CentralSyncCounts> made = sync_to_central(empty, url, "schema-maker"); !made) die(made.error().message);
     const auto start = std::chrono::steady_clock::now();
-    Result<CentralSyncCounts> counts = sync_to_central(store, url, "grinder-01");
+    Result<CentralSyncCounts> counts = sync_to_central(store, url, "grinder-01", options);
     if (!counts) die(counts.error().message);
     state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     if (counts->runs.inserted != kSyncRuns) die("the sync copied " + std::to_string(counts->runs.inserted));
     state.SetItemsProcessed(state.items_processed() + kSyncRuns);
   }
 }
+void BM_SyncIntoCentral(benchmark::State& state) { sync_into_central(state, false); }
 BENCHMARK(BM_SyncIntoCentral)->Arg(6)->Arg(25)->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
+void BM_SyncIntoCentralPerDegree(benchmark::State& state) { sync_into_central(state, true); }
+BENCHMARK(BM_SyncIntoCentralPerDegree)->Arg(25)->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
 
 // The bare baselines' tables: runs of the central runs table's width (45 columns) and
 // characteristics of four, a primary key each.
