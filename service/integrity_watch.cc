@@ -48,6 +48,7 @@ void IntegrityWatch::stop() {
     std::lock_guard<std::mutex> lock(mutex_);
     stopping_ = true;
   }
+  cancel_.cancel();
   wake_.notify_all();
   if (thread_.joinable()) thread_.join();
 }
@@ -68,10 +69,7 @@ void IntegrityWatch::loop() {
       state_ = "checking";
     }
     const auto started = std::chrono::steady_clock::now();
-    Result<IntegrityReport> report = check_database_file(settings_.db_path, IntegrityCheck::kFull, [this] {
-      std::lock_guard<std::mutex> lock(mutex_);
-      return stopping_;
-    });
+    Result<IntegrityReport> report = check_database_file(settings_.db_path, IntegrityCheck::kFull, cancel_);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     std::string damaged;
     {

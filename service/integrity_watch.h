@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "core/guarded_thread.h"
+#include "storage/db_maintenance.h"
 
 namespace gaugeloop {
 
@@ -41,7 +42,8 @@ class IntegrityWatch {
   IntegrityWatch(const IntegrityWatch&) = delete;
   IntegrityWatch& operator=(const IntegrityWatch&) = delete;
 
-  // Cancels a check in progress (within a few thousand SQLite steps) and joins. Idempotent.
+  // Cancels a check in progress (SQLite interrupted where it is, within a few pages) and joins.
+  // Idempotent.
   void stop();
   // Until the first check has ended. For tests and for a caller that must know. Any thread.
   bool wait_for_first_check(std::chrono::milliseconds within);
@@ -65,6 +67,7 @@ class IntegrityWatch {
   std::string last_check_utc_, next_check_utc_, problem_;
   double last_duration_s_ = 0.0;
   long long checks_ = 0;
+  CheckCancel cancel_;  // cancelled by stop()
   std::thread thread_;
 };
 

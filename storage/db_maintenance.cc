@@ -352,12 +352,43 @@ Error damaged_database(const std::filesystem::path& db_path, const std::vector<s
                         "(`gaugeloop db check --db BACKUP` checks one, `gaugeloop db backup FILE` makes one)");
 }
 
-Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path, IntegrityCheck depth) {
-  return check_database_file(db_path, depth, {});
+void CheckCancel::cancel() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  cancelled_ = true;
+  if (db_ != nullptr) sqlite3_interrupt(db_);
 }
 
-Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path, IntegrityCheck depth,
-                                            const std::function<bool()>& cancelled) {
+bool CheckCancel::cancelled() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return cancelled_;
+}
+
+// The checking connection known to a CheckCancel while the check runs: detached before the
+// connection closes, so cancel() never interrupts a closed handle. The interrupt also sets
+// SQLite's flag for statements begun after it, until none runs: the progress handler catches
+// a cancel between two statements.
+struct CheckCancelScope {
+  CheckCancelScope(CheckCancel* c, sqlite3* db) : cancel(c) {
+    if (cancel == nullptr) return;
+    std::lock_guard<std::mutex> lock(cancel->mutex_);
+    cancel->db_ = db;
+    sqlite3_progress_handler(db, 1000, ask, cancel);
+  }
+  ~CheckCancelScope() {
+    if (cancel == nullptr) return;
+    std::lock_guard<std::mutex> lock(cancel->mutex_);
+    sqlite3_progress_handler(cancel->db_, 0, nullptr, nullptr);
+    cancel->db_ = nullptr;
+  }
+  CheckCancelScope(const CheckCancelScope&) = delete;
+  CheckCancelScope& operator=(const CheckCancelScope&) = delete;
+  static int ask(void* c) { return static_cast<CheckCancel*>(c)->cancelled() ? 1 : 0; }
+  CheckCancel* cancel;
+};
+
+namespace {
+
+Result<IntegrityReport> check_file(const std::filesystem::path& db_path, IntegrityCheck depth, CheckCancel* cancel) {
   if (!std::filesystem::exists(db_path)) {
     return make_error(ErrorCode::kNotFound, "no run database at " + db_path.string());
   }
@@ -378,17 +409,28 @@ Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path
       storage_internal::connect_for_checking(db_path, report.constraints_checked);
   if (!conn.ok()) return conn.error();
   if (Status foreign = storage_internal::refuse_foreign_database(**conn); !foreign.ok()) return foreign.error();
-  // SQLite calls this every few thousand virtual machine steps; non-zero interrupts the statement.
-  auto ask = [](void* fn) -> int { return (*static_cast<const std::function<bool()>*>(fn))() ? 1 : 0; };
-  if (cancelled) sqlite3_progress_handler((*conn)->db, 10000, ask, const_cast<std::function<bool()>*>(&cancelled));
-  Result<std::vector<std::string>> problems = storage_internal::find_problems(**conn, depth);
-  if (cancelled) sqlite3_progress_handler((*conn)->db, 0, nullptr, nullptr);
-  if (cancelled && cancelled()) {
+  Result<std::vector<std::string>> problems = [&] {
+    const CheckCancelScope scope(cancel, (*conn)->db);
+    if (cancel != nullptr && cancel->cancelled()) return Result<std::vector<std::string>>(std::vector<std::string>{});
+    return storage_internal::find_problems(**conn, depth);
+  }();
+  if (cancel != nullptr && cancel->cancelled()) {
     return make_error(ErrorCode::kRefused, "the check of " + db_path.string() + " was cancelled");
   }
   if (!problems.ok()) return problems.error();
   report.problems = std::move(*problems);
   return report;
+}
+
+}  // namespace
+
+Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path, IntegrityCheck depth) {
+  return check_file(db_path, depth, nullptr);
+}
+
+Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path, IntegrityCheck depth,
+                                            CheckCancel& cancel) {
+  return check_file(db_path, depth, &cancel);
 }
 
 Status check_database_header(const std::filesystem::path& db_path) {

@@ -4,11 +4,14 @@
 
 #include <filesystem>
 #include <functional>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "core/result.h"
 #include "storage/run_store.h"
+
+struct sqlite3;
 
 namespace gaugeloop {
 
@@ -32,11 +35,26 @@ struct IntegrityReport {
 // Errors: kNotFound if there is no file; kStorage if it cannot be read at all.
 Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path,
                                             IntegrityCheck depth = IntegrityCheck::kFull);
-// The same, asking `cancelled` every few thousand steps of SQLite's work: once it says true the
-// check stops and returns kRefused ("cancelled"), so a check of a large file never holds up a
-// service that is stopping.
+// Stops a check under way from another thread: cancel() interrupts SQLite where it is, within
+// a few pages even in the page walk of PRAGMA integrity_check (one step of SQLite's virtual
+// machine for the whole file, where no progress callback is asked), so a check of a large file
+// never holds up a service that is stopping. Any thread; cancel() before the check starts makes
+// it return at once.
+class CheckCancel {
+ public:
+  void cancel();
+  bool cancelled() const;
+
+ private:
+  friend struct CheckCancelScope;
+  mutable std::mutex mutex_;
+  bool cancelled_ = false;
+  sqlite3* db_ = nullptr;  // the checking connection while a check runs
+};
+
+// The same, stopped by `cancel` (kRefused, "cancelled") once it is cancelled.
 Result<IntegrityReport> check_database_file(const std::filesystem::path& db_path, IntegrityCheck depth,
-                                            const std::function<bool()>& cancelled);
+                                            CheckCancel& cancel);
 
 // What a service checks at start, in a moment at any size: the file is a SQLite database whose
 // header and schema read (sqlite_schema and user_version), of a schema this gaugeloop knows.

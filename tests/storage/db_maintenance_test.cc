@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 
 #include "storage/migrations.h"
 #include "storage/run_store.h"
@@ -89,6 +90,32 @@ TEST_F(DbMaintenance, FlippedBytesInTheRunsTableAreFoundByEveryCheck) {
     EXPECT_TRUE(has(s.error().message, "restore the last sound backup") ||
                 has(s.error().message, "put the last sound backup in its place"))
         << s.error().message;
+  }
+}
+
+// A cancelled check gives no verdict: not "sound", not a short list of problems. Cancelled
+// before it starts, it returns at once; cancelled from another thread while it runs, it either
+// ends cancelled or (had it finished first) gives the whole verdict an uncancelled check gives.
+TEST_F(DbMaintenance, ACancelledCheckGivesNoVerdict) {
+  damage();
+  CheckCancel before;
+  before.cancel();
+  Result<IntegrityReport> cancelled = check_database_file(db_in(dir_), IntegrityCheck::kFull, before);
+  ASSERT_FALSE(cancelled.ok()) << "a cancelled check gave a verdict";
+  EXPECT_EQ(cancelled.error().code, ErrorCode::kRefused);
+  EXPECT_TRUE(has(cancelled.error().message, "cancelled")) << cancelled.error().message;
+
+  Result<IntegrityReport> whole = check_database_file(db_in(dir_));
+  ASSERT_TRUE(whole.ok()) << whole.error().message;
+  ASSERT_FALSE(whole->sound());
+  CheckCancel during;
+  std::thread stopper([&during] { during.cancel(); });
+  Result<IntegrityReport> raced = check_database_file(db_in(dir_), IntegrityCheck::kFull, during);
+  stopper.join();
+  if (raced.ok()) {
+    EXPECT_EQ(raced->problems, whole->problems);
+  } else {
+    EXPECT_EQ(raced.error().code, ErrorCode::kRefused) << raced.error().message;
   }
 }
 
