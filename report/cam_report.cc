@@ -733,7 +733,11 @@ Result<std::vector<RunCharacteristics>> trend_plot_runs(const RunHistory& histor
   const bool any =
       std::any_of(runs->begin(), runs->end(), [](const RunCharacteristics& r) { return !r.characteristics.empty(); });
   if (any || runs->empty()) return runs;
-  return history.characteristics(q);
+  // The newest run alone, all of its characteristics: enough to name the keys to ask for, and
+  // a few rows, not every characteristic of the window.
+  RunQuery newest = q;
+  newest.limit = 1;
+  return history.characteristics(newest);
 }
 
 namespace {
@@ -747,19 +751,19 @@ Result<std::string> render_trend_plot(const std::vector<RunCharacteristics>& run
     const Characteristic* c;
   };
   std::vector<Point> points;
-  std::set<std::string> keys;
   for (const RunCharacteristics& r : runs) {
-    for (const Characteristic& c : r.characteristics) keys.insert(c.key);
     if (const Characteristic* c = find_characteristic(r.characteristics, key)) points.push_back({&r.run, c});
   }
   if (points.empty()) {
+    std::set<std::string> keys;  // of the newest run
+    for (const Characteristic& c : runs.back().characteristics) keys.insert(c.key);
     std::string present;
     for (const std::string& k : keys) present += (present.empty() ? "" : ", ") + k;
     return make_error(ErrorCode::kNotFound,
                       "no run of " + runs.front().run.part + " lobe " + std::to_string(runs.front().run.lobe) +
                           " has the characteristic " + key + "; " +
-                          (present.empty() ? "the runs have none (stored before tolerances were recorded)"
-                                           : "they have: " + present));
+                          (present.empty() ? "the newest run has none (stored before tolerances were recorded)"
+                                           : "the newest run has: " + present));
   }
   const std::string unit = points.front().c->unit;
   const int dec = decimals_for_unit(unit);

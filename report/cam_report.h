@@ -94,8 +94,8 @@ inline constexpr double kTrendWidthPt = 841.89;
 inline constexpr double kTrendHeightPt = 473.0;
 
 // The runs of a plot of characteristic `key`: those `q` selects, oldest first, each with only
-// that characteristic (one row a run read); when none has it, with all of theirs, so that
-// write_trend_plot names the keys they have.
+// that characteristic (one row a run read); when none has it, the newest run alone with all of
+// its characteristics, so that write_trend_plot names the keys it has.
 Result<std::vector<RunCharacteristics>> trend_plot_runs(const RunHistory& history, const RunQuery& q,
                                                         const std::string& key);
 

@@ -576,6 +576,28 @@ TEST(TrendPlot, WritesEachFormat) {
   EXPECT_EQ(files_in(dir.path()), 3u);
 }
 
+// An SVG page's text is SVG text, not glyph outlines: searchable, a fraction of the bytes, and
+// escaped where a name holds XML's own characters. The axis title keeps its quarter turn.
+TEST(TrendPlot, SvgTextIsText) {
+  std::vector<RunCharacteristics> runs = trend_runs();
+  for (RunCharacteristics& r : runs) r.run.part = "intake<flat> & co";
+  Result<std::string> svg = trend_plot_svg(runs, "lift_error");
+  ASSERT_TRUE(svg.ok()) << svg.error().message;
+  EXPECT_EQ(svg->find("glyph"), std::string::npos) << "cairo drew the text as outlines";
+  EXPECT_NE(svg->find(">intake&lt;flat&gt; &amp; co lobe 1 \u00b7 12 runs, oldest first"), std::string::npos);
+  EXPECT_EQ(svg->find("intake<flat>"), std::string::npos);
+  EXPECT_NE(svg->find("font-weight=\"bold\""), std::string::npos);  // the title
+  // The y-axis title: rotated by -90 deg, matrix(cos, sin, -sin, cos, x, y) = (0 -1 1 0 ...).
+  EXPECT_NE(svg->find("transform=\"matrix(0.000000 -1.000000 1.000000 0.000000 "), std::string::npos);
+  // Every <text> is closed, and the text sits inside the document.
+  std::size_t opened = 0, closed = 0;
+  for (std::size_t at = svg->find("<text "); at != std::string::npos; at = svg->find("<text ", at + 1)) ++opened;
+  for (std::size_t at = svg->find("</text>"); at != std::string::npos; at = svg->find("</text>", at + 1)) ++closed;
+  EXPECT_GT(opened, 10u);
+  EXPECT_EQ(opened, closed);
+  EXPECT_LT(svg->rfind("</text>"), svg->rfind("</svg>"));
+}
+
 // Pixels of a colour in a PNG.
 int count_colour(const Png& png, Png::Rgb want, int tol) {
   int n = 0;
