@@ -653,8 +653,8 @@ int run_gear_demo(const GearDemoOptions& o) {
   };
   // The slides first, as a shop would: a ZY ballbar, the tables fitted to it, the ballbar again.
   const SlideErrors slides = seeded_slides(o.machine_seed);
-  Result<SlideRound> round =
-      run_slide_round(slides, s.nc_file.parent_path(), SlideTableLayout{}, "ZY ballbar of the virtual gear grinder");
+  Result<SlideRound> round = run_slide_round(slides, *store, s.nc_file.parent_path(), SlideTableLayout{},
+                                             "ZY ballbar of the virtual gear grinder");
   if (!round) return report_error(round.error());
   print_ballbar_figures("ZY ballbar before (radius 100 mm, 1000 mm/min)", round->before);
   print_slide_identification(round->identified);

@@ -17,6 +17,7 @@
 #include "core/text_file.h"
 #include "job/layer_files.h"
 #include "job/nc_push.h"
+#include "nc_out/slide_compensation.h"
 #include "nc_out/stroke_program.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
@@ -29,7 +30,8 @@ using nlohmann::json;
 
 struct NcOptions {
   DataPaths paths;
-  std::string program;  // NAME: <nc-dir>/NAME.SPF; empty: the one program the history has
+  // NAME: <nc-dir>/NAME.SPF; NAME.EXT (AX_EEC.INI): that file; empty: the one program the history has
+  std::string program;
   bool json_out = false;
 };
 
@@ -37,7 +39,8 @@ void add_nc_options(CLI::App& cmd, NcOptions& o) {
   add_data_options(cmd, o.paths);
   cmd.add_option("--nc-dir", o.paths.nc_dir, "Directory the curve-table programs are written to [<data-dir>/nc]");
   cmd.add_option("--program", o.program,
-                 "Program name, e.g. CAM_INTAKE_L1 (the file <nc-dir>/NAME.SPF) [the only program pushed]");
+                 "Program name, e.g. CAM_INTAKE_L1 (the file <nc-dir>/NAME.SPF), or a file with its extension, e.g. "
+                 "AX_EEC.INI (the slide tables) [the only program pushed]");
 }
 
 std::string person(const std::string& given) {
@@ -51,7 +54,8 @@ Result<std::string> resolve_program(const RunStore& store, const NcOptions& o) {
   if (!o.program.empty()) {
     std::string name = o.program;
     if (name.size() > 4 && (name.ends_with(".SPF") || name.ends_with(".spf"))) name.resize(name.size() - 4);
-    return std::filesystem::absolute(o.paths.nc() / (name + ".SPF")).lexically_normal().string();
+    if (!std::filesystem::path(name).has_extension()) name += ".SPF";
+    return std::filesystem::absolute(o.paths.nc() / name).lexically_normal().string();
   }
   PushQuery q;
   q.limit = 100000;
@@ -64,7 +68,10 @@ Result<std::string> resolve_program(const RunStore& store, const NcOptions& o) {
     return make_error(ErrorCode::kNotFound, "no table was pushed yet; run `gaugeloop demo` or `gaugeloop measure`");
   }
   std::string list;
-  for (const std::string& f : files) list += (list.empty() ? "" : ", ") + std::filesystem::path(f).stem().string();
+  for (const std::string& f : files) {
+    const std::filesystem::path p(f);
+    list += (list.empty() ? "" : ", ") + (p.extension() == ".SPF" ? p.stem().string() : p.filename().string());
+  }
   return make_error(ErrorCode::kInvalidInput, "tables were pushed to several programs (" + list +
                                                   "): name one with --program, and --nc-dir if it is not the default");
 }
@@ -179,6 +186,68 @@ int diff_strokes(const DiffOptions& o, const std::string& file, const NcPush& pa
   return kExitOk;
 }
 
+// The slide tables a version of AX_EEC.INI pushed: its LEC tables and the CEC tables of the file
+// pushed beside it.
+Result<std::vector<SlideCompensationTable>> pushed_slides(const RunStore& store, const std::string& file,
+                                                          const NcPush& push) {
+  const std::string name = file + " version " + std::to_string(push.table_version);
+  Result<std::vector<SlideCompensationTable>> out = parse_slide_compensation(*push.program_text, name);
+  if (!out) return out.error();
+  Result<std::vector<PushFile>> files = store.files_of_push(file, push.table_version);
+  if (!files) return files.error();
+  for (const PushFile& f : *files) {
+    if (f.role != PushFileRole::kCec || !f.text) continue;
+    Result<std::vector<SlideCompensationTable>> cec = parse_slide_compensation(*f.text, f.path + " " + name);
+    if (!cec) return cec.error();
+    out->insert(out->end(), cec->begin(), cec->end());
+  }
+  return out;
+}
+
+// Two versions of the slides' tables: for each table, the largest change and where.
+int diff_slides(const DiffOptions& o, const RunStore& store, const std::string& file, const NcPush& pa,
+                const NcPush& pb) {
+  Result<std::vector<SlideCompensationTable>> a = pushed_slides(store, file, pa);
+  if (!a) return report_error(a.error());
+  Result<std::vector<SlideCompensationTable>> b = pushed_slides(store, file, pb);
+  if (!b) return report_error(b.error());
+  json rows = json::array();
+  for (const SlideCompensationTable& tb : *b) {
+    const auto ta = std::find_if(a->begin(), a->end(), [&tb](const SlideCompensationTable& t) {
+      return t.kind == tb.kind && t.input_axis == tb.input_axis && t.output_axis == tb.output_axis;
+    });
+    // Compared at B's points, A read as the control interpolates it (none: 0).
+    double worst_um = 0.0;
+    double at_mm = tb.min_mm;
+    for (std::size_t k = 0; k < tb.error_mm.size(); ++k) {
+      const double x = tb.min_mm + tb.step_mm * static_cast<double>(k);
+      const double d_um = (tb.error_mm[k] - (ta == a->end() ? 0.0 : ta->taken_out_mm(x))) * 1000.0;
+      if (std::abs(d_um) > std::abs(worst_um)) {
+        worst_um = d_um;
+        at_mm = x;
+      }
+    }
+    rows.push_back({{"kind", tb.kind == SlideTableKind::kLeadscrew ? "LEC" : "CEC"},
+                    {"input_axis", std::string(1, tb.input_axis)},
+                    {"output_axis", std::string(1, tb.output_axis)},
+                    {"in_a", ta != a->end()},
+                    {"largest_change_um", worst_um},
+                    {"at_mm", at_mm}});
+  }
+  if (o.json_out) {
+    print_json(json{{"nc_file", file}, {"a", nc_push_json(pa)}, {"b", nc_push_json(pb)}, {"tables", rows}});
+    return kExitOk;
+  }
+  std::printf("%s: slide tables version %d -> version %d (with the CEC file beside each)\n", file.c_str(), o.a, o.b);
+  for (const json& r : rows) {
+    std::printf("  %s %s over %s: largest change %+.1f um at %s %.1f mm%s\n", r["kind"].get<std::string>().c_str(),
+                r["output_axis"].get<std::string>().c_str(), r["input_axis"].get<std::string>().c_str(),
+                r["largest_change_um"].get<double>(), r["input_axis"].get<std::string>().c_str(),
+                r["at_mm"].get<double>(), r["in_a"].get<bool>() ? "" : " (new in B)");
+  }
+  return kExitOk;
+}
+
 int cmd_diff(const DiffOptions& o) {
   Result<RunStore> store = open_history_read_only(o.paths);
   if (!store) return report_error(store.error());
@@ -193,6 +262,9 @@ int cmd_diff(const DiffOptions& o) {
     if (!b) return report_error(b.error());
     if (is_stroke_program(*a->program_text) && is_stroke_program(*b->program_text)) {
       return diff_strokes(o, *file, *a, *b);
+    }
+    if (is_slide_compensation(*a->program_text) && is_slide_compensation(*b->program_text)) {
+      return diff_slides(o, *store, *file, *a, *b);
     }
   }
   Result<ParsedTable> ta = pushed_table(*store, *file, o.a, pa);
@@ -306,6 +378,13 @@ int cmd_rollback(const RollbackOptions& o) {
                 file->c_str(), pushed->table_version, o.version);
     return kExitOk;
   }
+  if (pushed->slides) {
+    std::printf(
+        "%s: slide tables version %d written with the CEC file beside it, the pair of version %d; load them with "
+        "compensation off (MD32700 and MD32710 0), then on\n",
+        file->c_str(), pushed->table_version, o.version);
+    return kExitOk;
+  }
   std::printf("%s: table version %d written, the table of version %d (%s); it is now the table in force\n",
               file->c_str(), pushed->table_version, o.version, origin_text(pushed->run_id).c_str());
   return kExitOk;
@@ -388,6 +467,11 @@ int cmd_check(const NcOptions& o) {
   if (is_stroke_program(*on_disk)) {
     std::printf("%s: stroke version %d as pushed (%s, %s)\n", file->c_str(), *last ? (**last).table_version : 0,
                 *last ? (**last).reason.c_str() : "-", *last ? (**last).pushed_utc.c_str() : "-");
+    return kExitOk;
+  }
+  if (is_slide_compensation(*on_disk)) {
+    std::printf("%s: slide tables version %d as pushed, the CEC file beside it too (%s, %s)\n", file->c_str(),
+                (**last).table_version, (**last).reason.c_str(), (**last).pushed_utc.c_str());
     return kExitOk;
   }
   // A correction layer: the design table it is added to must be there, the one written.

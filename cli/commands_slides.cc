@@ -13,6 +13,7 @@
 #include "config/gear_file.h"
 #include "core/atomic_file.h"
 #include "core/number_text.h"
+#include "job/measure_job.h"
 #include "job/slide_files.h"
 #include "simulator/slide_ballbar.h"
 
@@ -43,7 +44,7 @@ void print_slide_identification(const SlideIdentification& id) {
       id.servo_mismatch_ms, id.y_backlash_um, id.z_backlash_um);
 }
 
-Result<SlideRound> run_slide_round(const SlideErrors& slides, const std::filesystem::path& nc_dir,
+Result<SlideRound> run_slide_round(const SlideErrors& slides, RunStore& store, const std::filesystem::path& nc_dir,
                                    const SlideTableLayout& layout, const std::string& source) {
   Result<std::vector<SlideCompensationTable>> in_force = slide_tables_in_force(nc_dir, layout.names);
   if (!in_force) return in_force.error();
@@ -59,7 +60,9 @@ Result<SlideRound> run_slide_round(const SlideErrors& slides, const std::filesys
   Result<std::vector<SlideCompensationTable>> tables =
       slide_tables(*id, layout.half_travel_mm, layout.step_mm, *in_force);
   if (!tables) return tables.error();
-  if (Status s = push_slide_tables(nc_dir, *tables, layout.names, {{"source", source}}); !s) return s.error();
+  if (Result<PushCompletion> p = push_slide_tables(store, nc_dir, *tables, layout.names, SlidePush{source}); !p) {
+    return p.error();
+  }
   // The ballbar again, with the tables as the control reads them from the NC directory.
   Result<std::vector<SlideCompensationTable>> loaded = slide_tables_in_force(nc_dir, layout.names);
   if (!loaded) return loaded.error();
@@ -106,6 +109,7 @@ struct SlidesOptions {
   SlideModel model;
   SlideTableLayout layout;
   bool dry_run = false;
+  bool overwrite_edited = false;
 };
 
 int cmd_gear_slides(const SlidesOptions& o) {
@@ -130,17 +134,25 @@ int cmd_gear_slides(const SlidesOptions& o) {
   }
   std::error_code ec;
   std::filesystem::create_directories(nc, ec);
-  if (Status s = push_slide_tables(nc, *tables, o.layout.names, {{"source", o.ballbar_path}}); !s) {
-    return report_error(s.error());
-  }
+  const std::filesystem::path lec =
+      std::filesystem::absolute(slide_file(nc, SlideTableKind::kLeadscrew)).lexically_normal();
+  JobSettings js;
+  js.db_path = o.paths.db();
+  js.nc_dir = nc;
+  Result<RunStore> store = open_store_for_push(js, lec);
+  if (!store) return report_error(store.error());
+  Result<PushCompletion> pushed = push_slide_tables(*store, lec.parent_path(), *tables, o.layout.names,
+                                                    SlidePush{o.ballbar_path, o.overwrite_edited});
+  if (!pushed) return report_error(pushed.error());
   std::printf(
-      "written %s and %s (%s): %zu points a table every %.4g mm over +-%.4g mm about the circle's centre, "
-      "%s\n",
-      slide_file(nc, SlideTableKind::kLeadscrew).string().c_str(),
-      slide_file(nc, SlideTableKind::kInterpolatory).string().c_str(),
-      in_force->empty() ? "new" : "added to the tables in force", tables->front().error_mm.size(), o.layout.step_mm,
-      o.layout.half_travel_mm,
-      "load them with compensation off (MD32700 ENC_COMP_ENABLE and MD32710 CEC_ENABLE 0), then on");
+      "pushed %s with %s beside it as slide tables version %d (%s): %zu points a table every %.4g mm over +-%.4g "
+      "mm about the circle's centre, %s; `gaugeloop nc history --program %s` lists the versions, `nc "
+      "rollback` puts an earlier pair back\n",
+      lec.string().c_str(), slide_file(lec.parent_path(), SlideTableKind::kInterpolatory).string().c_str(),
+      pushed->table_version, in_force->empty() ? "new" : "added to the tables in force",
+      tables->front().error_mm.size(), o.layout.step_mm, o.layout.half_travel_mm,
+      "load them with compensation off (MD32700 ENC_COMP_ENABLE and MD32710 CEC_ENABLE 0), then on",
+      lec.filename().string().c_str());
   return kExitOk;
 }
 
@@ -196,8 +208,11 @@ void add_gear_slide_commands(CLI::App& gear, CommandAction& action) {
       ->check(CLI::Range(0.01, 1000.0));
   add_layout_options(*slides, so->layout);
   slides->add_flag("--dry-run", so->dry_run, "Fit and print; write nothing");
+  slides->add_flag("--overwrite-edited", so->overwrite_edited,
+                   "Overwrite slide tables on the control that were edited by hand (they are refused otherwise)");
   add_data_options(*slides, so->paths);
-  slides->add_option("--nc-dir", so->paths.nc_dir, "Directory the tables are written to [<data-dir>/nc]");
+  slides->add_option("--nc-dir", so->paths.nc_dir,
+                     "Directory the tables are pushed to [<data-dir>/nc]; the push is kept in <data-dir>'s database");
   slides->callback([&action, so] { action = [so] { return cmd_gear_slides(*so); }; });
 }
 

@@ -97,7 +97,7 @@ struct SlideRound {
   SlideIdentification identified;
   BallbarFigures after;
 };
-Result<SlideRound> run_slide_round(const SlideErrors& slides, const std::filesystem::path& nc_dir,
+Result<SlideRound> run_slide_round(const SlideErrors& slides, RunStore& store, const std::filesystem::path& nc_dir,
                                    const SlideTableLayout& layout, const std::string& source);
 void print_ballbar_figures(const char* label, const BallbarFigures& f);
 void print_slide_identification(const SlideIdentification& id);

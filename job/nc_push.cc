@@ -14,6 +14,7 @@
 #include "nc_out/infeed.h"
 #include "nc_out/main_program.h"
 #include "nc_out/nc_text.h"
+#include "nc_out/slide_compensation.h"
 #include "nc_out/stroke_program.h"
 #include "nc_out/table_layer.h"
 #include "nc_out/table_program.h"
@@ -24,15 +25,39 @@ namespace {
 
 constexpr std::string_view kVersionLine = "; gaugeloop table_version: ";
 
+// What a pushed program is: a curve table (a cam's, a pin's), a gear's stroke, or the slides'
+// compensation tables (their LEC file, the CEC file beside it).
+enum class ProgramKind { kTable, kStroke, kSlides };
+
+ProgramKind kind_of_program(std::string_view text) {
+  if (is_stroke_program(text)) return ProgramKind::kStroke;
+  if (is_slide_compensation(text)) return ProgramKind::kSlides;
+  return ProgramKind::kTable;
+}
+
+std::string_view program_kind_word(ProgramKind kind) {
+  switch (kind) {
+    case ProgramKind::kStroke:
+      return "stroke program";
+    case ProgramKind::kSlides:
+      return "slide tables";
+    case ProgramKind::kTable:
+      break;
+  }
+  return "table";
+}
+
 Error refused(const std::filesystem::path& nc_file, const std::string& what, const std::string& last,
-              bool stroke = false) {
-  return make_error(ErrorCode::kRefused,
-                    "NC program " + nc_file.string() + " " + what + last +
-                        ". gaugeloop does not overwrite it: to keep the change, copy the file elsewhere; then remove "
-                        "it and push again, or " +
-                        (stroke ? std::string("push the stroke with `gaugeloop gear stroke --overwrite-edited`")
-                                : std::string("approve the pending table with `gaugeloop nc approve ID "
-                                              "--overwrite-edited` (`gaugeloop nc pending` lists them)")));
+              ProgramKind kind = ProgramKind::kTable) {
+  const std::string again =
+      kind == ProgramKind::kStroke   ? "push the stroke with `gaugeloop gear stroke --overwrite-edited`"
+      : kind == ProgramKind::kSlides ? "write the slide tables with `gaugeloop gear slides --overwrite-edited`"
+                                     : "approve the pending table with `gaugeloop nc approve ID --overwrite-edited` "
+                                       "(`gaugeloop nc pending` lists them)";
+  return make_error(ErrorCode::kRefused, "NC program " + nc_file.string() + " " + what + last +
+                                             ". gaugeloop does not overwrite it: to keep the change, copy the file "
+                                             "elsewhere; then remove it and push again, or " +
+                                             again);
 }
 
 }  // namespace
@@ -54,18 +79,24 @@ std::string_view push_file_what(PushFileRole role) {
       return "speed program";
     case PushFileRole::kY:
       return "Y table";
+    case PushFileRole::kCec:
+      return "CEC table";
     case PushFileRole::kTable:
       break;
   }
   return "table";
 }
 
-// A program on the control, or as pushed, read for the hand-edit check: a curve table or a
-// gear's stroke.
+// A program on the control, or as pushed, read for the hand-edit check: a curve table, a
+// gear's stroke or the slides' tables.
 struct ProgramRead {
   std::map<std::string, std::string> header;
   std::optional<ParsedTable> table;
   std::optional<ParsedStrokeProgram> stroke;
+  std::optional<std::vector<SlideCompensationTable>> slides;
+  ProgramKind kind() const {
+    return stroke ? ProgramKind::kStroke : slides ? ProgramKind::kSlides : ProgramKind::kTable;
+  }
 };
 
 // Reads `text` as the program it says it is. `edited` is set when it reads but its body does
@@ -74,6 +105,16 @@ struct ProgramRead {
 Result<ProgramRead> read_program(std::string_view text, const std::string& name, bool& edited) {
   edited = false;
   ProgramRead r;
+  if (is_slide_compensation(text)) {
+    Result<std::vector<SlideCompensationTable>> t = parse_slide_compensation(text, name);
+    if (!t) {
+      edited = t.error().code == ErrorCode::kRefused;
+      return t.error();
+    }
+    r.header = program_header(text);
+    r.slides = std::move(*t);
+    return r;
+  }
   if (is_stroke_program(text)) {
     Result<ParsedStrokeProgram> p = parse_stroke_program(text, name);
     if (!p) {
@@ -99,10 +140,22 @@ Result<ProgramRead> read_program(std::string_view text, const std::string& name,
 // them, a stroke point for point as written.
 Status compare_points(const ProgramRead& here, const ProgramRead& pushed, const std::string& name) {
   if (here.table && pushed.table) return compare_table_points(*here.table, pushed.table->points, name);
-  if (!here.stroke || !pushed.stroke) {
-    return make_error(ErrorCode::kRefused, name + " holds a " + (here.stroke ? "stroke program" : "curve table") +
-                                               " where a " + (pushed.stroke ? "stroke program" : "curve table") +
-                                               " was pushed");
+  if (here.kind() != pushed.kind()) {
+    return make_error(ErrorCode::kRefused, name + " holds " + std::string(program_kind_word(here.kind())) + " where " +
+                                               std::string(program_kind_word(pushed.kind())) + " were pushed");
+  }
+  if (here.slides) {
+    // Table by table, value by value, as the control reads them.
+    const std::vector<SlideCompensationTable>& a = *here.slides;
+    const std::vector<SlideCompensationTable>& b = *pushed.slides;
+    for (std::size_t t = 0; t < std::max(a.size(), b.size()); ++t) {
+      if (t >= a.size() || t >= b.size() || a[t].kind != b[t].kind || a[t].input_axis != b[t].input_axis ||
+          a[t].output_axis != b[t].output_axis || a[t].min_mm != b[t].min_mm || a[t].step_mm != b[t].step_mm ||
+          a[t].error_mm != b[t].error_mm) {
+        return make_error(ErrorCode::kRefused, name + ": table " + std::to_string(t + 1) + " is not the one pushed");
+      }
+    }
+    return {};
   }
   const std::vector<StrokeProgramPoint>& a = here.stroke->points;
   const std::vector<StrokeProgramPoint>& b = pushed.stroke->points;
@@ -145,14 +198,14 @@ Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::pa
   if (!on_control) {
     return refused(nc_file,
                    edited ? "was edited by hand" : (*last ? "was changed by hand" : "was not written by gaugeloop"),
-                   since + " (" + on_control.error().message + ")", is_stroke_program(text));
+                   since + " (" + on_control.error().message + ")", kind_of_program(text));
   }
   if (*last && (**last).program_text) {
     Result<ProgramRead> pushed = read_program(*(**last).program_text, name + " as pushed", edited);
     if (!pushed) return pushed.error();
     // Its identity first: a gaugeloop program of another run or version copied in is not the
     // program last pushed, even with the same points.
-    const std::string thing = on_control->stroke ? "stroke program" : "table";
+    const std::string thing(program_kind_word(on_control->kind()));
     // Sound, newer than any push the history holds, and of a run whose id the database handed
     // out and no longer holds: a push the database lost, not a hand edit.
     const std::string here_version = header_value(on_control->header, "table_version");
@@ -170,7 +223,7 @@ Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::pa
                      " (its last is version " + std::to_string((**last).table_version) +
                          "): the run database lost that push (its write-ahead log deleted after a commit, or the "
                          "file restored from an older copy; `gaugeloop events` names the commits lost)",
-                     on_control->stroke.has_value());
+                     on_control->kind());
     }
     for (const char* key : {"run_id", "table_version", "body_checksum_fnv1a64"}) {
       const std::string here = header_value(on_control->header, key);
@@ -180,12 +233,12 @@ Status check_not_edited_by_hand(const RunStore& store, const std::filesystem::pa
                        since + " (its header says " + key + " " + here + ", the push recorded " + pushed_value +
                            "; it holds " + thing + " version " + header_value(on_control->header, "table_version") +
                            " of run " + header_value(on_control->header, "run_id") + ")",
-                       on_control->stroke.has_value());
+                       on_control->kind());
       }
     }
     if (Status c = compare_points(*on_control, *pushed, name); !c) {
       return refused(nc_file, "is not the " + thing + " last pushed", since + " (" + c.error().message + ")",
-                     on_control->stroke.has_value());
+                     on_control->kind());
     }
   }
   return {};
@@ -555,7 +608,12 @@ std::filesystem::path main_program_path(const std::filesystem::path& nc_file) {
 }
 
 std::vector<std::filesystem::path> files_of_push(const std::filesystem::path& nc_file) {
-  return {nc_file, main_program_path(nc_file), speed_program_path(nc_file), y_table_program_path(nc_file)};
+  std::vector<std::filesystem::path> out{nc_file, main_program_path(nc_file), speed_program_path(nc_file),
+                                         y_table_program_path(nc_file)};
+  if (nc_file.filename() == slide_compensation_file_name(SlideTableKind::kLeadscrew)) {
+    out.push_back(nc_file.parent_path() / std::string(slide_compensation_file_name(SlideTableKind::kInterpolatory)));
+  }
+  return out;
 }
 
 namespace {
@@ -759,8 +817,11 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
   Result<std::string> program = render(*version);
   if (!program) return program.error();
   // A gear's stroke couples no curve table: its main program has no table number to alternate.
-  const bool stroke = is_stroke_program(*program);
-  const bool with_main = !options.main.template_text.empty() || (stroke && !options.main.gear_template_text.empty());
+  // The slides' tables have no main program: the control loads them at a reset.
+  const ProgramKind kind = kind_of_program(*program);
+  const bool stroke = kind == ProgramKind::kStroke;
+  const bool with_main = kind != ProgramKind::kSlides &&
+                         (!options.main.template_text.empty() || (stroke && !options.main.gear_template_text.empty()));
   const std::filesystem::path main_file = main_program_path(nc_file);
   std::string main_text;
   int number = 0;
@@ -775,8 +836,9 @@ Result<PushCompletion> push_program(RunStore& store, const std::filesystem::path
       number = *n;
     }
   }
-  const std::string what = "run " + std::to_string(facts.run_id) + (stroke ? ": stroke version " : ": table version ") +
-                           std::to_string(*version);
+  const std::string what = "run " + std::to_string(facts.run_id) + ": " +
+                           (kind == ProgramKind::kTable ? std::string("table") : std::string(program_kind_word(kind))) +
+                           " version " + std::to_string(*version);
   auto not_pushed = [&what](Error e) {
     e.message = what + " was not pushed (the program on the control is unchanged): " + e.message;
     return e;
@@ -1026,10 +1088,21 @@ Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_f
   Result<std::vector<PushFile>> old_files = store.files_of_push(nc_file, table_version);
   if (!old_files) return old_files.error();
   std::optional<std::string> old_speed;
+  std::optional<PushFile> old_cec;  // the slides' CEC file, beside their LEC file
   for (const PushFile& f : *old_files) {
     if (f.role == PushFileRole::kSpeed && f.text) old_speed = *f.text;
+    if (f.role == PushFileRole::kCec && f.text) old_cec = f;
   }
   PushOptions options;
+  if (old_cec) {
+    Result<int> next = next_table_version_settled(store, nc_file, options);
+    if (!next) return next.error();
+    options.beside.push_back(
+        ProgramBeside{PushFileRole::kCec,
+                      std::filesystem::path(nc_file).parent_path() /
+                          std::string(slide_compensation_file_name(SlideTableKind::kInterpolatory)),
+                      with_header_value(*old_cec->text, "table_version", std::to_string(*next))});
+  }
   MainProgramSource rolled_back_main = main;
   if (old_speed && !main.speed_template_text.empty()) {
     rolled_back_main.template_text = main.speed_template_text;
@@ -1048,7 +1121,9 @@ Result<PushOutcome> rollback_to_version(RunStore& store, const std::string& nc_f
   Result<PushCompletion> pushed = speed ? push_program_with_speed(store, nc_file, facts, render, *speed, options)
                                         : push_program(store, nc_file, facts, render, options);
   if (!pushed) return pushed.error();
-  return PushOutcome{nc_file, pushed->table_version, old->run_id, true, is_stroke_program(text)};
+  PushOutcome out{nc_file, pushed->table_version, old->run_id, true, is_stroke_program(text)};
+  out.slides = is_slide_compensation(text);
+  return out;
 }
 
 }  // namespace gaugeloop

@@ -268,6 +268,7 @@ struct PushOutcome {
   // newer measurement superseded it); the push is then recorded alone.
   bool decision_recorded = true;
   bool stroke = false;           // a gear's stroke program (nc_out/stroke_program.h), not a curve table
+  bool slides = false;           // the slides' tables (AX_EEC.INI with NC_CEC.INI beside it)
   std::int64_t gear_run_id = 0;  // approval of a stroke: the gear run it was corrected from
 };
 

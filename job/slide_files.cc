@@ -25,40 +25,99 @@ Result<std::vector<SlideCompensationTable>> slide_tables_in_force(const std::fil
   return out;
 }
 
-Status push_slide_tables(const std::filesystem::path& nc_dir, const std::vector<SlideCompensationTable>& tables,
-                         const SlideAxisNames& names, const std::map<std::string, std::string>& header,
-                         NcFiles& files) {
-  Result<std::string> cec = render_slide_compensation(SlideTableKind::kInterpolatory, tables, names, header);
-  if (!cec) return cec.error();
-  Result<std::string> lec = render_slide_compensation(SlideTableKind::kLeadscrew, tables, names, header);
-  if (!lec) return lec.error();
+namespace {
+
+// A CEC file on the control that is not what gaugeloop last wrote there: its checksum broken, or
+// (with a push recorded) not the text of the push in force. Empty when it is, or absent.
+Result<std::string> cec_edited(const RunStore& store, const std::filesystem::path& lec_path,
+                               const std::filesystem::path& cec_path, const std::optional<std::string>& on_disk) {
+  if (!on_disk) return std::string();
+  if (Result<std::vector<SlideCompensationTable>> t = parse_slide_compensation(*on_disk, cec_path.string()); !t) {
+    return t.error().message;
+  }
+  Result<std::vector<PushFile>> last = store.files_of_last_push(lec_path.string());
+  if (!last) return last.error();
+  for (const PushFile& f : *last) {
+    if (f.role == PushFileRole::kCec && f.text && *f.text != *on_disk) {
+      return cec_path.string() + " is not the CEC file the last push of " + lec_path.filename().string() +
+             " wrote (version " + std::to_string(f.table_version) + ")";
+    }
+  }
+  return std::string();
+}
+
+}  // namespace
+
+Result<PushCompletion> push_slide_tables(RunStore& store, const std::filesystem::path& nc_dir,
+                                         const std::vector<SlideCompensationTable>& tables, const SlideAxisNames& names,
+                                         const SlidePush& push) {
+  NcFiles& files = push.files != nullptr ? *push.files : real_nc_files();
+  const std::filesystem::path cec_path = slide_file(nc_dir, SlideTableKind::kInterpolatory);
+  const std::filesystem::path lec_path = slide_file(nc_dir, SlideTableKind::kLeadscrew);
+  auto header_for = [&push](int version) {
+    return std::map<std::string, std::string>{
+        {"source", push.source}, {"run_id", "0"}, {"table_version", std::to_string(version)}};
+  };
+  // Both rendered first: a table the control cannot take writes nothing.
+  for (const SlideTableKind kind : {SlideTableKind::kInterpolatory, SlideTableKind::kLeadscrew}) {
+    if (Result<std::string> r = render_slide_compensation(kind, tables, names, header_for(0)); !r) return r.error();
+  }
   if (!files.is_directory(nc_dir)) {
     return make_error(ErrorCode::kIo, "NC directory " + nc_dir.string() + " is not a directory: nothing was written");
   }
-  Result<DirectoryLock> lock = files.lock_directory(nc_dir);
-  if (!lock) return lock.error();
-  const std::filesystem::path cec_path = slide_file(nc_dir, SlideTableKind::kInterpolatory);
-  const std::filesystem::path lec_path = slide_file(nc_dir, SlideTableKind::kLeadscrew);
   Result<std::optional<std::string>> cec_before = files.read_program(cec_path);
   if (!cec_before) return cec_before.error();
-  if (Status w = write_program_read_back(files, cec_path, *cec, "CEC table"); !w) return w;
-  Status w = write_program_read_back(files, lec_path, *lec, "LEC table");
-  if (w) return {};
-  // The pair stays a pair: the CEC file back as it was.
-  std::string put_back;
+  if (!push.overwrite_edited) {
+    Result<std::string> edited = cec_edited(store, lec_path, cec_path, *cec_before);
+    if (!edited) return edited.error();
+    if (!edited->empty()) {
+      return make_error(ErrorCode::kRefused,
+                        "NC program " + cec_path.string() + " was changed by hand (" + *edited +
+                            "). gaugeloop does not overwrite it: to keep the change, copy the file elsewhere; then "
+                            "remove it and push again, or write the slide tables with `gaugeloop gear slides "
+                            "--overwrite-edited`");
+    }
+  }
+  PushOptions options;
+  options.overwrite_edited = push.overwrite_edited;
+  options.files = &files;
+  Result<int> version = next_table_version_settled(store, lec_path, options);
+  if (!version) return version.error();
+  Result<std::string> cec =
+      render_slide_compensation(SlideTableKind::kInterpolatory, tables, names, header_for(*version));
+  if (!cec) return cec.error();
+  options.beside.push_back(ProgramBeside{PushFileRole::kCec, cec_path, *cec});
+  PushFacts facts;
+  facts.reason = "slide tables from " + push.source;
+  int points = 0;
+  for (const SlideCompensationTable& t : tables) points += static_cast<int>(t.error_mm.size());
+  facts.table.interpolation = "slides";  // the history's "table" column: what the file holds
+  facts.table.point_count = points;
+  const RenderForVersion render = [&](int v) {
+    return render_slide_compensation(SlideTableKind::kLeadscrew, tables, names, header_for(v));
+  };
+  Result<PushCompletion> pushed = push_program(store, lec_path, facts, render, options);
+  if (pushed) return pushed;
+  // The pair stays a pair: unless the new LEC file is in place, the CEC file goes back as it was
+  // (the journal puts back only what an earlier push of it wrote).
+  Error e = pushed.error();
+  Result<std::optional<std::string>> lec_now = files.read_program(lec_path);
+  Result<std::optional<std::string>> cec_now = files.read_program(cec_path);
+  if (!lec_now || !cec_now || (*lec_now && **lec_now == *render(*version))) return e;
+  if (*cec_now == *cec_before) return e;
   if (*cec_before) {
-    put_back = write_program_read_back(files, cec_path, **cec_before, "CEC table").ok()
-                   ? "; " + cec_path.string() + " was put back as it was"
-                   : "; " + cec_path.string() +
-                         " could not be put back: it holds the new CEC tables beside the old "
-                         "LEC tables, write both again";
+    e.message += write_program_read_back(files, cec_path, **cec_before, "CEC table").ok()
+                     ? "; " + cec_path.string() + " was put back as it was"
+                     : "; " + cec_path.string() +
+                           " could not be put back: it holds the new CEC tables beside the old LEC tables, push both "
+                           "again";
   } else {
     std::error_code ec;
     std::filesystem::remove(cec_path, ec);
-    put_back = ec ? "; " + cec_path.string() + " (new) could not be removed: " + ec.message()
-                  : "; " + cec_path.string() + " (new) was removed again";
+    e.message += ec ? "; " + cec_path.string() + " (new) could not be removed: " + ec.message()
+                    : "; " + cec_path.string() + " (new) was removed again";
   }
-  return make_error(w.error().code, w.error().message + put_back);
+  return e;
 }
 
 }  // namespace gaugeloop

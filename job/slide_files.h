@@ -1,6 +1,6 @@
 // The slides' compensation files in the NC directory (docs/gears.md, "The slides"): the tables
-// in force read back, and new ones written as a pair under the directory's lock, each atomically
-// and read back, the first put back as it was if the second cannot be written.
+// in force read back, and new ones pushed as a pair through the push journal, one version of
+// AX_EEC.INI with NC_CEC.INI beside it.
 #pragma once
 
 #include <filesystem>
@@ -11,6 +11,7 @@
 #include "core/result.h"
 #include "core/slide_table.h"
 #include "job/nc_files.h"
+#include "job/nc_push.h"
 #include "nc_out/slide_compensation.h"
 
 namespace gaugeloop {
@@ -25,11 +26,24 @@ Result<std::vector<SlideCompensationTable>> slide_tables_in_force(const std::fil
                                                                   const SlideAxisNames& names,
                                                                   NcFiles& files = real_nc_files());
 
-// Writes both files: the CEC file, then the LEC file. Each is rendered before anything is
-// written (kInvalidInput then, nothing written). If the LEC file cannot be written, the CEC
+// How a pair of slide tables is pushed.
+struct SlidePush {
+  std::string source;             // where the tables come from (a ballbar test's file): header and reason
+  bool overwrite_edited = false;  // a person approved overwriting files edited by hand
+  NcFiles* files = nullptr;       // null: the real NC directory
+};
+
+// Pushes both files as one version of <nc_dir>/AX_EEC.INI through the push journal, as a
+// measurement pushes a cam's table (push_program, job/nc_push.h): under the directory's lock,
+// the intent recorded with both texts, the CEC file written beside first, then the LEC file,
+// each atomically and read back; `nc history`, `nc check`, `nc reconcile` and `nc rollback`
+// (which puts the CEC file of that version back with it) work on AX_EEC.INI. Each file is
+// rendered before anything is written (kInvalidInput then, nothing written); a file edited by
+// hand (the LEC one, or the CEC one: not the one last pushed, or its checksum broken) is
+// refused (kRefused) unless push.overwrite_edited. If the LEC file cannot be written, the CEC
 // file is put back as it was (or removed when there was none) and the error says so.
-Status push_slide_tables(const std::filesystem::path& nc_dir, const std::vector<SlideCompensationTable>& tables,
-                         const SlideAxisNames& names, const std::map<std::string, std::string>& header,
-                         NcFiles& files = real_nc_files());
+Result<PushCompletion> push_slide_tables(RunStore& store, const std::filesystem::path& nc_dir,
+                                         const std::vector<SlideCompensationTable>& tables, const SlideAxisNames& names,
+                                         const SlidePush& push);
 
 }  // namespace gaugeloop

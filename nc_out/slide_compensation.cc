@@ -157,7 +157,10 @@ Result<std::string> render_slide_compensation(SlideTableKind kind, const std::ve
   out += kind == SlideTableKind::kLeadscrew ? "\n; the slides' leadscrew error compensation"
                                             : "\n; the slides' sag and angularity compensation";
   append_header_line(out, "kind", std::string(kKind));
-  for (const auto& [key, value] : header) append_header_line(out, key, value);
+  std::map<std::string, std::string> all = header;
+  all["y_axis_name"] = names.y;
+  all["z_axis_name"] = names.z;
+  for (const auto& [key, value] : all) append_header_line(out, key, value);
   append_header_line(out, "table_count", std::to_string(count));
   append_header_line(out, "point_count", std::to_string(points));
   append_header_line(out, "body_checksum_fnv1a64", table_body_checksum(body));
@@ -322,6 +325,31 @@ Result<std::vector<SlideCompensationTable>> parse_slide_compensation(std::string
     out.push_back(std::move(t));
   }
   return out;
+}
+
+std::map<std::string, std::string> program_header(std::string_view text) {
+  std::map<std::string, std::string> header;
+  for (const std::string_view line : lines_of(text)) {
+    const std::string_view l = trim(line);
+    if (read_header_line(l, header)) continue;
+    if (!l.empty() && l.front() != ';' && l.front() != '%') break;  // the body
+  }
+  return header;
+}
+
+bool is_slide_compensation(std::string_view text) {
+  const std::map<std::string, std::string> header = program_header(text);
+  const auto kind = header.find("kind");
+  return kind != header.end() && kind->second == kKind;
+}
+
+Result<std::vector<SlideCompensationTable>> parse_slide_compensation(std::string_view text,
+                                                                     std::string_view file_name) {
+  const std::map<std::string, std::string> header = program_header(text);
+  SlideAxisNames names;
+  if (const auto y = header.find("y_axis_name"); y != header.end()) names.y = y->second;
+  if (const auto z = header.find("z_axis_name"); z != header.end()) names.z = z->second;
+  return parse_slide_compensation(text, file_name, names);
 }
 
 }  // namespace gaugeloop

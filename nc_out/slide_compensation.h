@@ -40,11 +40,22 @@ Result<std::string> render_slide_compensation(SlideTableKind kind, const std::ve
 // The file name a control's file of that kind is loaded from: "AX_EEC.INI", "NC_CEC.INI".
 std::string_view slide_compensation_file_name(SlideTableKind kind);
 
+// Whether `text` is a slides' compensation file gaugeloop wrote: its header (before the body)
+// says `; gaugeloop kind: slide compensation`.
+bool is_slide_compensation(std::string_view text);
+
+// The `; gaugeloop key: value` lines before the body of a program or table file (a curve table,
+// a stroke, a slides' file): its header as written.
+std::map<std::string, std::string> program_header(std::string_view text);
+
 // Reads what render_slide_compensation writes (the tables with the errors they take out, in the
 // order written). Anything else is refused naming the line; kRefused when the body does not
 // match the header's checksum (edited by hand); kInvalidInput for a file without one, a table
 // whose MAX is not MIN + STEP x (points - 1), an axis not in `names`.
 Result<std::vector<SlideCompensationTable>> parse_slide_compensation(std::string_view text, std::string_view file_name,
                                                                      const SlideAxisNames& names);
+// The same with the axes' names the file's header gives (`y_axis_name`, `z_axis_name`, written
+// by render_slide_compensation); Y1 and Z1 for a file whose header has none.
+Result<std::vector<SlideCompensationTable>> parse_slide_compensation(std::string_view text, std::string_view file_name);
 
 }  // namespace gaugeloop

@@ -795,8 +795,26 @@ constexpr std::string_view kSchemaV22 = R"sql(
 CREATE INDEX runs_by_raw_pruned ON runs (raw_pruned_utc, id) WHERE raw_pruned_utc IS NOT NULL;
 )sql";
 
-const std::array<Migration, 22>& all_migrations() {
-  static const std::array<Migration, 22> kMigrations{{
+// The slides' compensation tables pushed as one version: the CEC file beside the LEC file
+// (role 'cec'). SQLite cannot change a CHECK constraint in place: the table is made anew.
+constexpr std::string_view kSchemaV23 = R"sql(
+CREATE TABLE nc_push_files_v23 (
+  intent_id INTEGER NOT NULL REFERENCES nc_push_intents (id),
+  role      TEXT    NOT NULL CHECK (role IN ('table', 'main', 'speed', 'y', 'cec')),
+  file      TEXT    NOT NULL,  -- as nc_pushes.nc_file: the name inside the NC directory
+  hash      TEXT    NOT NULL,
+  text      TEXT,              -- NULL for the table
+  PRIMARY KEY (intent_id, role)
+) WITHOUT ROWID;
+INSERT INTO nc_push_files_v23 (intent_id, role, file, hash, text)
+  SELECT intent_id, role, file, hash, text FROM nc_push_files;
+DROP TABLE nc_push_files;
+ALTER TABLE nc_push_files_v23 RENAME TO nc_push_files;
+CREATE INDEX nc_push_files_by_file ON nc_push_files (file, hash);
+)sql";
+
+const std::array<Migration, 23>& all_migrations() {
+  static const std::array<Migration, 23> kMigrations{{
       {1, "runs, run_revolutions, run_profile, run_samples view", std::string(kSchemaV1), nullptr, {}},
       {2,
        "compact per-degree BLOBs (run_raw, run_tables) behind views; parts, lobes, settings, inspection "
@@ -898,6 +916,11 @@ const std::array<Migration, 22>& all_migrations() {
       {22,
        "runs: an index of the runs whose raw samples were pruned (runs_by_raw_pruned)",
        std::string(kSchemaV22),
+       nullptr,
+       {}},
+      {23,
+       "nc_push_files: the slides' CEC file pushed beside their LEC file (role cec)",
+       std::string(kSchemaV23),
        nullptr,
        {}},
   }};

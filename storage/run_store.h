@@ -156,8 +156,9 @@ struct NcPush {
 // subprogram, a crankpin's Y table. Reconciliation and `nc check` compare every file on the
 // control with the push last recorded, not the table alone, and put back the ones left from
 // another push of ours.
-enum class PushFileRole { kTable, kMain, kSpeed, kY };
-std::string_view push_file_role_name(PushFileRole role);  // "table", "main", "speed", "y"
+// kCec: the slides' CEC file beside their LEC file (job/slide_files.h), pushed as one version.
+enum class PushFileRole { kTable, kMain, kSpeed, kY, kCec };
+std::string_view push_file_role_name(PushFileRole role);  // "table", "main", "speed", "y", "cec"
 
 struct PushFile {
   PushFileRole role = PushFileRole::kTable;

@@ -484,6 +484,8 @@ std::string_view push_file_role_name(PushFileRole role) {
       return "speed";
     case PushFileRole::kY:
       return "y";
+    case PushFileRole::kCec:
+      return "cec";
   }
   return "table";
 }
@@ -516,6 +518,7 @@ Result<std::vector<PushFile>> RunStore::files_of_push(const std::string& nc_file
     f.role = role == "main"    ? PushFileRole::kMain
              : role == "speed" ? PushFileRole::kSpeed
              : role == "y"     ? PushFileRole::kY
+             : role == "cec"   ? PushFileRole::kCec
                                : PushFileRole::kTable;
     f.path = storage_internal::nc_path_column(s, 1);
     f.hash = s.column<std::string>(2);

@@ -180,8 +180,9 @@ TEST(GearLoop, TheDemoClosesTheLoopOnTheExampleGear) {
 }
 
 // The slides' commands as a shop runs them: a ballbar test written, the tables fitted to it and
-// written to the NC directory, the ballbar again with them loaded; a test in one direction is
-// refused before anything is written.
+// pushed to the NC directory, the ballbar again with them loaded; a test in one direction is
+// refused before anything is written. The pair has a history: listed, compared, checked on the
+// control and rolled back to the empty start's first version, the ballbar then as before.
 TEST(GearLoop, TheSlideTablesFromABallbarCutItsRoundness) {
   testing::TempDir dir("gear-slides");
   const std::string data = " --data-dir " + (dir.path() / "data").string();
@@ -214,6 +215,34 @@ TEST(GearLoop, TheSlideTablesFromABallbarCutItsRoundness) {
   const double r1 = roundness(after.output);
   EXPECT_GT(r1, 0.0) << after.output;
   EXPECT_GE(r0 / r1, 3.6) << r0 << " -> " << r1;  // the paper's 50.2 -> 14.1 um
+
+  // A second round on the test with the tables loaded adds to them: version 2.
+  const fs::path again = dir.path() / "again.csv";
+  ASSERT_EQ(testing::run_command("gear ballbar --machine-seed 3 --out " + again.string() + data).exit_code, 0);
+  testing::CommandResult second = testing::run_command("gear slides --ballbar " + again.string() +
+                                                       " --y-screw-lead-mm 10 --z-screw-lead-mm 16" + data);
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_NE(second.output.find("as slide tables version 2 (added to the tables in force)"), std::string::npos)
+      << second.output;
+  const std::string slide_file = " --program AX_EEC.INI";
+  testing::CommandResult history = testing::run_command("nc history" + slide_file + data);
+  ASSERT_EQ(history.exit_code, 0) << history.output;
+  EXPECT_NE(history.output.find("slide tables from " + again.string()), std::string::npos) << history.output;
+  EXPECT_NE(history.output.find("slide tables from " + test.string()), std::string::npos) << history.output;
+  testing::CommandResult diff = testing::run_command("nc diff 1 2" + slide_file + data);
+  ASSERT_EQ(diff.exit_code, 0) << diff.output;
+  EXPECT_NE(diff.output.find("CEC Y over Z: largest change"), std::string::npos) << diff.output;
+  testing::CommandResult check = testing::run_command("nc check" + slide_file + data);
+  ASSERT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find("slide tables version 2 as pushed"), std::string::npos) << check.output;
+  testing::CommandResult rollback = testing::run_command("nc rollback 1" + slide_file + data);
+  ASSERT_EQ(rollback.exit_code, 0) << rollback.output;
+  EXPECT_NE(rollback.output.find("slide tables version 3 written with the CEC file beside it, the pair of version 1"),
+            std::string::npos)
+      << rollback.output;
+  testing::CommandResult rolled = testing::run_command("gear ballbar --machine-seed 3" + data);
+  ASSERT_EQ(rolled.exit_code, 0) << rolled.output;
+  EXPECT_EQ(roundness(rolled.output), r1) << "the pair of version 1 is back: the ballbar reads as it did then";
 }
 
 }  // namespace

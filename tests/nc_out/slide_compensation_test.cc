@@ -73,10 +73,18 @@ TEST(SlideCompensation, AFileEditedOrForeignIsRefusedNamingTheLine) {
   foreign.insert(foreign.find("$AA_ENC_COMP_STEP"), "$MA_BACKLASH[0,Z1]=0.002\n");
   r = parse_slide_compensation(foreign, "AX_EEC.INI", {});
   ASSERT_FALSE(r.ok());
-  EXPECT_THAT(r.error().message, HasSubstr("AX_EEC.INI:13: `$MA_BACKLASH`"));
+  EXPECT_THAT(r.error().message, HasSubstr("AX_EEC.INI:15: `$MA_BACKLASH`"));
   r = parse_slide_compensation(text, "AX_EEC.INI", {"Y1", "Z2"});
   ASSERT_FALSE(r.ok());
   EXPECT_THAT(r.error().message, HasSubstr("axis `Z1` is neither Y (Y1) nor Z (Z2)"));
+  // The file names its axes: read without being told them, it holds the tables written.
+  const std::string renamed = *render_slide_compensation(SlideTableKind::kLeadscrew, two_tables(), {"Y1", "Z2"});
+  EXPECT_THAT(renamed, HasSubstr("; gaugeloop z_axis_name: Z2\n"));
+  Result<std::vector<SlideCompensationTable>> own = parse_slide_compensation(renamed, "AX_EEC.INI");
+  ASSERT_TRUE(own.ok()) << own.error().message;
+  ASSERT_EQ(own->size(), 1u);  // the LEC file holds Z's table alone
+  EXPECT_EQ(own->front().output_axis, 'Z');
+  EXPECT_EQ(own->front().error_mm.size(), two_tables().front().error_mm.size());
   r = parse_slide_compensation("%_N_TOOL_INI\n", "T.INI", {});
   ASSERT_FALSE(r.ok());
   EXPECT_THAT(r.error().message, HasSubstr("T.INI:1: the file begins with `%_N_TOOL_INI`"));
