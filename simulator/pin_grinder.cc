@@ -12,13 +12,14 @@
 #include "compensation/pin_analysis.h"
 #include "compensation/pin_envelope.h"
 #include "compensation/pin_kinematics.h"
+#include "simulator/fine_grid.h"
 #include "simulator/seeded_random.h"
 
 namespace gaugeloop {
 namespace {
 
-using seeded::kFineGridRows;
-using seeded::kFineGridStepDeg;
+using fine_grid::kFineGridRows;
+using fine_grid::kFineGridStepDeg;
 
 Status named(const Status& s, const char* slide) {
   if (s) return s;

@@ -27,10 +27,6 @@ inline double uniform(std::uint64_t seed, std::uint64_t index, double lo, double
   return lo + (hi - lo) * unit_uniform(mix(mix(seed) ^ (index * 0x9e3779b97f4a7c15ULL)));
 }
 
-// The grid the virtual grinders evaluate a turn of C on: 0.1 deg, 3600 rows.
-inline constexpr double kFineGridStepDeg = 0.1;
-inline constexpr int kFineGridRows = 3600;
-
 // A standard normal deviate (Box-Muller) from (seed, index).
 inline double normal(std::uint64_t seed, std::uint64_t index) {
   const double u1 = unit_uniform(mix(seed ^ mix(2 * index)));

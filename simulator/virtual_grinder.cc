@@ -15,13 +15,14 @@
 #include "nc_out/table_layer.h"
 #include "nc_out/table_program.h"
 #include "nc_out/table_writer.h"
+#include "simulator/fine_grid.h"
 #include "simulator/seeded_random.h"
 
 namespace gaugeloop {
 namespace {
 
-using seeded::kFineGridRows;
-using seeded::kFineGridStepDeg;
+using fine_grid::kFineGridRows;
+using fine_grid::kFineGridStepDeg;
 
 using seeded::mix;
 using seeded::unit_uniform;
