@@ -486,6 +486,11 @@ class Syncer {
     // A sync from the start follows them from the first prune (the file may be another one).
     std::optional<std::pair<std::string, std::int64_t>> through;
     if (options_.from_start) through.emplace("", 0);
+    // A grinder that never pruned a run (the usual case): nothing to follow, and no transaction
+    // on the central server to find that out.
+    Result<std::vector<PrunedRun>> any = local.runs_pruned_after("", 0, 1);
+    if (!any.ok()) return any.error();
+    if (any->empty()) return true;
     for (;;) {
       if (options_.max_batches > 0 && counts_.batches >= options_.max_batches) return false;
       try {
