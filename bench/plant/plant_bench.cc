@@ -102,6 +102,8 @@ struct Servers {
   testing::PostgresServer postgres;
   Servers() {
     if (!broker.started()) die("the broker did not start");
+    // GAUGELOOP_BENCH_PG_DURABLE=1: the server flushes its commits (fsync on), as a plant's does.
+    postgres.durable = std::getenv("GAUGELOOP_BENCH_PG_DURABLE") != nullptr;
     if (std::string e = postgres.start(); !e.empty()) die("PostgreSQL did not start: " + e);
   }
 };

@@ -44,9 +44,11 @@ std::string read_all(const std::filesystem::path& p) {
 PostgresServer::~PostgresServer() { stop(); }
 
 std::string PostgresServer::server_options() const {
-  // fsync off: a test cluster need not survive a power cut, and the disk is shared. Commits
-  // stay synchronous, so a server stopped abruptly keeps every committed transaction.
-  return "-p " + std::to_string(port_) + " -k " + dir_.string() + " -c listen_addresses=127.0.0.1 -c fsync=off";
+  // fsync off unless durable: a test cluster need not survive a power cut, and the disk is
+  // shared. Commits stay synchronous, so a server stopped abruptly keeps every committed
+  // transaction.
+  return "-p " + std::to_string(port_) + " -k " + dir_.string() + " -c listen_addresses=127.0.0.1" +
+         (durable ? "" : " -c fsync=off");
 }
 
 std::string PostgresServer::run_as_owner(const std::string& command) const {

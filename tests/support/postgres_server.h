@@ -14,6 +14,9 @@ namespace gaugeloop::testing {
 class PostgresServer {
  public:
   PostgresServer() = default;
+  // Set before start(): the server flushes its commits to disk as a plant's would (fsync on).
+  // Off by default: a test cluster need not survive a power cut, and the disk is shared.
+  bool durable = false;
   ~PostgresServer();  // stops the server and removes its directory
   PostgresServer(const PostgresServer&) = delete;
   PostgresServer& operator=(const PostgresServer&) = delete;
