@@ -630,6 +630,7 @@ Result<CentralSyncCounts> sync_to_central(const RunStore& local, const std::stri
   Result<CentralConnection> c = central_internal::connect(*parsed);
   if (!c.ok()) return c.error();
   if (Status s = central_internal::migrate(*c); !s.ok()) return s.error();
+
   CentralSyncCounts counts;
   counts.source = source_of(local);
   Syncer syncer(*c, machine, counts.source, options, counts);
