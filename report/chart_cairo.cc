@@ -11,6 +11,7 @@
 
 #include "core/atomic_file.h"
 #include "core/number_text.h"
+#include "report/xml_text.h"
 
 namespace gaugeloop::chart {
 namespace {
@@ -46,24 +47,6 @@ const cairo_user_data_key_t kSvgTextKey{};
 
 SvgText* svg_text_of(cairo_t* cr) { return static_cast<SvgText*>(cairo_get_user_data(cr, &kSvgTextKey)); }
 
-void append_escaped(std::string& out, std::string_view s) {
-  for (char ch : s) {
-    switch (ch) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      default:
-        out += ch;
-    }
-  }
-}
-
 // One <text> at user-space (x, y) under the context's current matrix and source colour.
 void append_svg_text(cairo_t* cr, SvgText& sink, double x, double y, std::string_view s, double size_pt,
                      const char* anchor, bool bold) {
@@ -85,7 +68,7 @@ void append_svg_text(cairo_t* cr, SvgText& sink, double x, double y, std::string
   o += " fill=\"rgb(" + channel(r) + "," + channel(g) + "," + channel(b) + ")\"";
   if (a < 1.0) o += " fill-opacity=\"" + format_fixed(a, 3) + "\"";
   o += ">";
-  append_escaped(o, s);
+  o += xml_escaped(s);
   o += "</text>\n";
 }
 

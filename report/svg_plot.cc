@@ -1,8 +1,5 @@
 // The lobe error of one run as an SVG picture: polar and linear, with the tolerance band.
 #include "report/svg_plot.h"
-#include "core/number_text.h"
-#include "core/utf8.h"
-#include "report/judged_error.h"
 
 #include <algorithm>
 #include <array>
@@ -12,6 +9,11 @@
 #include <cstdio>
 #include <numbers>
 #include <vector>
+
+#include "core/number_text.h"
+#include "core/utf8.h"
+#include "report/judged_error.h"
+#include "report/xml_text.h"
 
 namespace gaugeloop {
 namespace {
@@ -55,28 +57,7 @@ constexpr const char* kMutedColour = "#5f6b76";
 // A coordinate or a figure on the plot: one decimal unless said.
 std::string num(double v, int decimals = 1) { return format_fixed(v, decimals); }
 
-std::string escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
+std::string escape(const std::string& text) { return xml_escaped(text); }
 
 // A round grid step: 1, 2 or 5 times a power of ten, so that `span` takes about 4 steps.
 double nice_step(double span) {
