@@ -151,6 +151,24 @@ TEST_F(DbCommandsTest, CheckAndBackupTakeTheServicesConfig) {
 
 // (The service starts beside a damaged file and finds it with its check on a thread of its own:
 // ServiceTest.ADamagedDatabaseIsFoundBesideTheRunningServiceAndRunsAreRefused.)
+// An upgrade checks the copy it makes first, and a damaged file's copy is damaged too: refused,
+// the file as it was (its schema version, its bytes), no backup left behind.
+TEST_F(DbCommandsTest, AnUpgradeOfADamagedFileIsRefusedAndChangesNothing) {
+  const int latest = storage_internal::latest_schema_version();
+  ASSERT_EQ(testing::sqlite_text(db_, "PRAGMA user_version = " + std::to_string(latest - 1)), "");
+  ASSERT_EQ(testing::sqlite_text(db_, "PRAGMA user_version"), std::to_string(latest - 1));
+  ASSERT_TRUE(testing::damage_runs_table(db_));
+  const std::string before = testing::slurp(db_);
+  CommandResult up = run_command("db upgrade --db " + db_.string());
+  EXPECT_NE(up.exit_code, 0) << up.output;
+  EXPECT_TRUE(has(up.output, "not upgraded from schema version " + std::to_string(latest - 1))) << up.output;
+  EXPECT_TRUE(has(up.output, "is damaged: ")) << up.output;
+  EXPECT_EQ(testing::slurp(db_), before) << "a refused upgrade changed the file";
+  for (const auto& e : fs::directory_iterator(db_.parent_path())) {
+    EXPECT_FALSE(e.path().filename().string().find("backup") != std::string::npos) << e.path();
+  }
+}
+
 TEST_F(DbCommandsTest, ADamagedDatabaseIsRefusedByCheck) {
   ASSERT_TRUE(testing::damage_runs_table(db_));
   ASSERT_NE(testing::sqlite_text(db_, "PRAGMA integrity_check"), "ok") << "the damage did not show";
