@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/number_text.h"
 #include "storage/migrations.h"
 #include "storage/run_store.h"
 #include "storage/sqlite_db.h"
@@ -121,10 +122,18 @@ TEST_F(DbCommandsTest, QueriesReadOnAReadOnlyMount) {
   EXPECT_TRUE(has(list.output, "\"id\": " + std::to_string(ids_[1]))) << list.output;
 }
 
+// It says first how large the file is and what that will take, and at the end what it read.
 TEST_F(DbCommandsTest, CheckSaysASoundDatabaseIsSound) {
   CommandResult r = run_command("db check" + data_);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(has(r.output, "database " + db_.string() + " is sound (schema version ")) << r.output;
+  const std::string mb = format_fixed(static_cast<double>(fs::file_size(db_)) / 1e6, 1) + " MB";
+  EXPECT_TRUE(has(r.output, "checking " + db_.string() + ": " + mb +
+                                ", every page read once or more: under a second if the file is in memory"))
+      << r.output;
+  const std::size_t read = r.output.find("\nread ");
+  ASSERT_NE(read, std::string::npos) << r.output;
+  EXPECT_LT(read, r.output.find(" is sound")) << "what it read comes before the verdict";
 }
 
 // The database the service's config names, whatever its file name; --db names a file itself,
