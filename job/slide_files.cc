@@ -98,13 +98,16 @@ Result<PushCompletion> push_slide_tables(RunStore& store, const std::filesystem:
   };
   Result<PushCompletion> pushed = push_program(store, lec_path, facts, render, options);
   if (pushed) return pushed;
-  // The pair stays a pair: unless the new LEC file is in place, the CEC file goes back as it was
-  // (the journal puts back only what an earlier push of it wrote).
+  // The pair stays a pair: unless the new LEC file is in place, the CEC file this push wrote goes
+  // back as it was (the journal puts back only what an earlier push of it wrote), under the
+  // directory's lock, so no other push's files are touched.
   Error e = pushed.error();
+  Result<DirectoryLock> lock = files.lock_directory(nc_dir);
+  if (!lock) return e;
   Result<std::optional<std::string>> lec_now = files.read_program(lec_path);
   Result<std::optional<std::string>> cec_now = files.read_program(cec_path);
   if (!lec_now || !cec_now || (*lec_now && **lec_now == *render(*version))) return e;
-  if (*cec_now == *cec_before) return e;
+  if (!*cec_now || **cec_now != *cec) return e;  // not this push's: put back already, or another's
   if (*cec_before) {
     e.message += write_program_read_back(files, cec_path, **cec_before, "CEC table").ok()
                      ? "; " + cec_path.string() + " was put back as it was"
