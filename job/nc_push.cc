@@ -47,17 +47,25 @@ std::string_view program_kind_word(ProgramKind kind) {
   return "table";
 }
 
+}  // namespace
+
+Error refused_as_edited(const std::filesystem::path& nc_file, const std::string& what, std::string_view again) {
+  return make_error(ErrorCode::kRefused, "NC program " + nc_file.string() + " " + what +
+                                             ". gaugeloop does not overwrite it: to keep the change, copy the file "
+                                             "elsewhere; then remove it and push again, or " +
+                                             std::string(again));
+}
+
+namespace {
+
 Error refused(const std::filesystem::path& nc_file, const std::string& what, const std::string& last,
               ProgramKind kind = ProgramKind::kTable) {
-  const std::string again =
+  const std::string_view again =
       kind == ProgramKind::kStroke   ? "push the stroke with `gaugeloop gear stroke --overwrite-edited`"
       : kind == ProgramKind::kSlides ? "write the slide tables with `gaugeloop gear slides --overwrite-edited`"
                                      : "approve the pending table with `gaugeloop nc approve ID --overwrite-edited` "
                                        "(`gaugeloop nc pending` lists them)";
-  return make_error(ErrorCode::kRefused, "NC program " + nc_file.string() + " " + what + last +
-                                             ". gaugeloop does not overwrite it: to keep the change, copy the file "
-                                             "elsewhere; then remove it and push again, or " +
-                                             again);
+  return refused_as_edited(nc_file, what + last, again);
 }
 
 }  // namespace

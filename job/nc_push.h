@@ -18,6 +18,10 @@
 
 namespace gaugeloop {
 
+// kRefused: NC program `nc_file` <what>, which gaugeloop does not overwrite; the message says how
+// to keep the change and, in `again`, the command that overwrites it ("push the stroke with ...").
+Error refused_as_edited(const std::filesystem::path& nc_file, const std::string& what, std::string_view again);
+
 // Refuses (kRefused) to overwrite `nc_file` when the program there is not the one last
 // pushed to it: its table was edited by hand (its body no longer matches its checksum, or
 // its points differ from the pushed program's), its header names another run, table version

@@ -71,11 +71,8 @@ Result<PushCompletion> push_slide_tables(RunStore& store, const std::filesystem:
     Result<std::string> edited = cec_edited(store, lec_path, cec_path, *cec_before);
     if (!edited) return edited.error();
     if (!edited->empty()) {
-      return make_error(ErrorCode::kRefused,
-                        "NC program " + cec_path.string() + " was changed by hand (" + *edited +
-                            "). gaugeloop does not overwrite it: to keep the change, copy the file elsewhere; then "
-                            "remove it and push again, or write the slide tables with `gaugeloop gear slides "
-                            "--overwrite-edited`");
+      return refused_as_edited(cec_path, "was changed by hand (" + *edited + ")",
+                               "write the slide tables with `gaugeloop gear slides --overwrite-edited`");
     }
   }
   PushOptions options;

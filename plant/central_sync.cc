@@ -513,8 +513,8 @@ class Syncer {
             uuids += ',';
             times += ',';
           }
-          uuids += (*pruned)[i].uuid;
-          times += (*pruned)[i].pruned_utc;
+          append_array_element(uuids, (*pruned)[i].uuid.c_str(), true);
+          append_array_element(times, (*pruned)[i].pruned_utc.c_str(), true);
         }
         Params lists;
         lists.text(uuids + "}").text(times + "}");

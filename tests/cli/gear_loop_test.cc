@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -232,6 +233,17 @@ TEST(GearLoop, TheSlideTablesFromABallbarCutItsRoundness) {
   testing::CommandResult diff = testing::run_command("nc diff 1 2" + slide_file + data);
   ASSERT_EQ(diff.exit_code, 0) << diff.output;
   EXPECT_NE(diff.output.find("CEC Y over Z: largest change"), std::string::npos) << diff.output;
+  // The two versions differ: the second round added to the tables (values to 0.1 um).
+  testing::CommandResult diff_json = testing::run_command("nc diff 1 2 --json" + slide_file + data);
+  ASSERT_EQ(diff_json.exit_code, 0) << diff_json.output;
+  const nlohmann::json changes = nlohmann::json::parse(diff_json.output, nullptr, false);
+  ASSERT_TRUE(changes.contains("tables")) << diff_json.output;
+  ASSERT_EQ(changes["tables"].size(), 4u) << diff_json.output;
+  double largest_um = 0.0;
+  for (const nlohmann::json& t : changes["tables"]) {
+    largest_um = std::max(largest_um, std::abs(t["largest_change_um"].get<double>()));
+  }
+  EXPECT_GE(largest_um, 0.1) << diff_json.output;
   testing::CommandResult check = testing::run_command("nc check" + slide_file + data);
   ASSERT_EQ(check.exit_code, 0) << check.output;
   EXPECT_NE(check.output.find("slide tables version 2 as pushed"), std::string::npos) << check.output;
